@@ -1,0 +1,120 @@
+"""DOF numbering, generic sparse assembly, and the global linear matrices of the string.
+
+Global DOF numbering: node ``i`` (0 at the top) owns DOFs ``6 i + k`` with
+``k = U, V, W, THETA_X, THETA_Y, THETA_Z`` (SPEC §2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from drillstring.fem.element import (
+    element_geometric_stiffness,
+    element_gravity_load,
+    element_mass,
+    element_stiffness,
+    place_planar,
+)
+from drillstring.fem.fluid import FluidCoefficients, fluid_planar_matrices
+from drillstring.fem.mesh import Mesh
+
+U, V, W, THETA_X, THETA_Y, THETA_Z = range(6)
+DOFS_PER_NODE = 6
+
+
+def dof(node: int | np.ndarray, kind: int) -> int | np.ndarray:
+    """Global index of DOF ``kind`` (``U`` … ``THETA_Z``) of ``node``."""
+    return DOFS_PER_NODE * np.asarray(node) + kind if np.ndim(node) else DOFS_PER_NODE * node + kind
+
+
+def element_dofs(element: int) -> np.ndarray:
+    """The 12 global DOFs of element ``element`` (its two nodes)."""
+    return np.arange(DOFS_PER_NODE * element, DOFS_PER_NODE * element + 12)
+
+
+def assemble_matrix(n_dofs: int, element_matrices: Iterable[np.ndarray]) -> sp.csr_matrix:
+    """Sum 12×12 element matrices (element e on nodes e, e+1) into a sparse n_dofs × n_dofs matrix."""
+    rows, cols, values = [], [], []
+    for e, ke in enumerate(element_matrices):
+        d = element_dofs(e)
+        rows.append(np.repeat(d, 12))
+        cols.append(np.tile(d, 12))
+        values.append(np.asarray(ke).ravel())
+    if not values:
+        return sp.csr_matrix((n_dofs, n_dofs))
+    return sp.coo_matrix(
+        (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))), shape=(n_dofs, n_dofs)
+    ).tocsr()
+
+
+def assemble_vector(n_dofs: int, element_vectors: Iterable[np.ndarray]) -> np.ndarray:
+    """Sum 12-component element vectors into a global vector."""
+    out = np.zeros(n_dofs)
+    for e, fe in enumerate(element_vectors):
+        out[element_dofs(e)] += fe
+    return out
+
+
+@dataclass(frozen=True)
+class Stabilizer:
+    """A linear lateral spring ``stiffness`` [N/m] on v and w of the node at ``position`` [m]."""
+
+    position: float
+    stiffness: float
+
+
+def stabilizer_stiffness(mesh: Mesh, stabilizers: Sequence[Stabilizer]) -> sp.csr_matrix:
+    """Diagonal stiffness of the stabilizers' lateral springs."""
+    diag = np.zeros(mesh.n_dofs)
+    for s in stabilizers:
+        node = mesh.node_index(s.position)
+        diag[dof(node, V)] += s.stiffness
+        diag[dof(node, W)] += s.stiffness
+    return sp.diags(diag).tocsr()
+
+
+def structural_matrices(mesh: Mesh) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Global elastic stiffness [K] and consistent mass [M] (no boundary conditions)."""
+    pairs = list(zip(mesh.element_sections(), mesh.element_lengths))
+    k = assemble_matrix(mesh.n_dofs, (element_stiffness(s, h) for s, h in pairs))
+    m = assemble_matrix(mesh.n_dofs, (element_mass(s, h) for s, h in pairs))
+    return k, m
+
+
+def geometric_stiffness(mesh: Mesh, nodal_axial_force: np.ndarray) -> sp.csr_matrix:
+    """Global [K_g] from the axial force at the nodes [N] (tension positive), linear in each element."""
+    return assemble_matrix(
+        mesh.n_dofs,
+        (
+            element_geometric_stiffness(s, h, nodal_axial_force[e], nodal_axial_force[e + 1])
+            for e, (s, h) in enumerate(zip(mesh.element_sections(), mesh.element_lengths))
+        ),
+    )
+
+
+def fluid_matrices(
+    mesh: Mesh, coefficients: Sequence[FluidCoefficients]
+) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
+    """Global fluid ``(M_f, C_f, K_f)``; ``coefficients`` holds one entry per mesh section."""
+    per_element = [
+        fluid_planar_matrices(s, h, coefficients[i])
+        for s, h, i in zip(mesh.element_sections(), mesh.element_lengths, mesh.element_section)
+    ]
+    return tuple(  # type: ignore[return-value]
+        assemble_matrix(mesh.n_dofs, (place_planar(m[k]) for m in per_element)) for k in range(3)
+    )
+
+
+def distributed_axial_load(mesh: Mesh, load_per_length: Sequence[float]) -> np.ndarray:
+    """Consistent nodal loads of a uniform axial load per section [N/m] along +x (gravity, fluid)."""
+    return assemble_vector(
+        mesh.n_dofs,
+        (
+            element_gravity_load(load_per_length[i], h, 1.0)
+            for h, i in zip(mesh.element_lengths, mesh.element_section)
+        ),
+    )

@@ -1,0 +1,206 @@
+"""Natural modes of the prestressed linear system with the dynamic boundary conditions (SPEC §7).
+
+Linear system (SPEC §3–§5): mass ``M + M_f``, stiffness ``K + K_stab + K_g(q_S) + K_f``.
+Dynamic boundary conditions: top ``v = w = 0`` and ``θx`` imposed (so its relative rotation is 0),
+top axially free; bit ``v = w = 0``, ``u`` and ``θx`` free; bending rotations free at both ends.
+
+In the linear model the axial, torsional and the two lateral planes are uncoupled (the coupling
+blocks of the matrices are exactly zero; :func:`family_coupling` checks it), so each family is solved
+as its own generalised symmetric eigenproblem. This classifies modes without ambiguity and separates
+the degenerate y/z lateral pairs cleanly. The axial family (both ends free) starts with the rigid
+axial translation, frequency 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from drillstring.fem.assembly import (
+    THETA_X,
+    THETA_Y,
+    THETA_Z,
+    U,
+    V,
+    W,
+    Stabilizer,
+    dof,
+    fluid_matrices,
+    geometric_stiffness,
+    stabilizer_stiffness,
+    structural_matrices,
+)
+from drillstring.fem.fluid import FluidCoefficients
+from drillstring.fem.mesh import Mesh
+from drillstring.statics import StaticState
+
+FAMILIES = ("axial", "torsional", "lateral_y", "lateral_z")
+#: Above this many DOFs in a family, use sparse shift-invert Lanczos (eigsh) instead of dense eigh.
+DENSE_LIMIT = 2500
+
+
+@dataclass(frozen=True)
+class LinearSystem:
+    """Global linear matrices of the prestressed string (sparse, no boundary conditions applied)."""
+
+    mesh: Mesh
+    static: StaticState
+    structural_mass: sp.csr_matrix  # M
+    fluid_mass: sp.csr_matrix  # M_f
+    elastic_stiffness: sp.csr_matrix  # K + K_stab
+    geometric_stiffness: sp.csr_matrix  # K_g(q_S)
+    fluid_stiffness: sp.csr_matrix  # K_f
+    fluid_damping: sp.csr_matrix  # C_f (Coriolis + viscous), non-symmetric
+
+    @property
+    def mass(self) -> sp.csr_matrix:
+        return (self.structural_mass + self.fluid_mass).tocsr()
+
+    @property
+    def stiffness(self) -> sp.csr_matrix:
+        return (self.elastic_stiffness + self.geometric_stiffness + self.fluid_stiffness).tocsr()
+
+
+def build_linear_system(
+    mesh: Mesh,
+    static: StaticState,
+    stabilizers: list[Stabilizer],
+    fluid: list[FluidCoefficients],
+    *,
+    prestress: bool = True,
+) -> LinearSystem:
+    """Assemble the prestressed linear system (``prestress=False`` drops ``K_g``)."""
+    k, m = structural_matrices(mesh)
+    m_f, c_f, k_f = fluid_matrices(mesh, fluid)
+    k_g = geometric_stiffness(mesh, static.axial_force if prestress else np.zeros(mesh.n_nodes))
+    return LinearSystem(mesh, static, m, m_f, (k + stabilizer_stiffness(mesh, stabilizers)).tocsr(),
+                        k_g, k_f, c_f)
+
+
+def family_dofs(mesh: Mesh, family: str) -> np.ndarray:
+    """Free DOFs of a mode family under the dynamic boundary conditions (sorted)."""
+    nodes = np.arange(mesh.n_nodes)
+    inner = nodes[1:-1]
+    if family == "axial":
+        return dof(nodes, U)
+    if family == "torsional":
+        return dof(nodes[1:], THETA_X)
+    if family == "lateral_y":
+        return np.sort(np.concatenate([dof(inner, V), dof(nodes, THETA_Z)]))
+    if family == "lateral_z":
+        return np.sort(np.concatenate([dof(inner, W), dof(nodes, THETA_Y)]))
+    raise ValueError(f"family = {family!r}: must be one of {', '.join(FAMILIES)}")
+
+
+def family_coupling(system: LinearSystem) -> float:
+    """Largest |entry| of M, K or C_f that couples two different families (0 for this model)."""
+    n = system.mesh.n_dofs
+    label = np.full(n, -1)
+    for i, family in enumerate(FAMILIES):
+        label[family_dofs(system.mesh, family)] = i
+    worst = 0.0
+    for matrix in (system.mass, system.stiffness, system.fluid_damping):
+        coo = matrix.tocoo()
+        mask = (label[coo.row] != label[coo.col]) & (label[coo.row] >= 0) & (label[coo.col] >= 0)
+        if mask.any():
+            worst = max(worst, float(np.abs(coo.data[mask]).max()))
+    return worst
+
+
+@dataclass(frozen=True)
+class ModeFamily:
+    """Modes of one family.
+
+    Attributes:
+        name: "axial", "torsional", "lateral_y" or "lateral_z".
+        angular_frequencies: ω [rad/s], ascending; negative values flag unstable (ω² < 0) modes,
+            reported as −sqrt(|ω²|).
+        shapes: (n_dofs, n_modes) global mode shapes, zero on constrained DOFs, normalised to unit
+            modal mass: φᵀ (M + M_f) φ = 1.
+    """
+
+    name: str
+    angular_frequencies: np.ndarray
+    shapes: np.ndarray
+
+    @property
+    def frequencies(self) -> np.ndarray:
+        """Natural frequencies [Hz]."""
+        return self.angular_frequencies / (2.0 * np.pi)
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        """ω² [rad²/s²] (signed)."""
+        return np.sign(self.angular_frequencies) * self.angular_frequencies**2
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Mode families of the prestressed string."""
+
+    axial: ModeFamily
+    torsional: ModeFamily
+    lateral_y: ModeFamily
+    lateral_z: ModeFamily
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def lateral(self) -> ModeFamily:
+        """One plane of the degenerate lateral pairs (each pair listed once)."""
+        return self.lateral_y
+
+
+def _eigen(k: np.ndarray | sp.spmatrix, m: np.ndarray | sp.spmatrix, count: int):
+    n = k.shape[0]
+    count = min(count, n)
+    if n <= DENSE_LIMIT or count >= n - 1:
+        kd = k.toarray() if sp.issparse(k) else k
+        md = m.toarray() if sp.issparse(m) else m
+        return sla.eigh(kd, md, subset_by_index=[0, count - 1])
+    # Shift below zero so a rigid mode (singular K) does not break the factorisation.
+    values, vectors = spla.eigsh(sp.csc_matrix(k), k=count, M=sp.csc_matrix(m), sigma=-1.0,
+                                 which="LM")
+    order = np.argsort(values)
+    return values[order], vectors[:, order]
+
+
+def family_modes(system: LinearSystem, family: str, count: int) -> ModeFamily:
+    """The ``count`` lowest modes of one family (``count`` may be 0)."""
+    dofs = family_dofs(system.mesh, family)
+    n_dofs = system.mesh.n_dofs
+    if count <= 0:
+        return ModeFamily(family, np.zeros(0), np.zeros((n_dofs, 0)))
+    k = system.stiffness[dofs][:, dofs]
+    m = system.mass[dofs][:, dofs]
+    values, vectors = _eigen(k, m, count)
+    shapes = np.zeros((n_dofs, len(values)))
+    shapes[dofs] = vectors
+    if family == "axial":
+        # Both ends free: the first mode is the rigid translation. Use it exactly.
+        rigid = np.zeros(n_dofs)
+        rigid[dofs] = 1.0
+        rigid /= np.sqrt(rigid @ (system.mass @ rigid))
+        shapes[:, 0] = rigid
+        values = values.copy()
+        values[0] = 0.0
+    # Unit modal mass (eigh already gives it; eigsh may not) and a deterministic sign.
+    mass_norm = np.sqrt(np.einsum("ij,ij->j", shapes, system.mass @ shapes))
+    shapes /= mass_norm
+    pivot = np.argmax(np.abs(shapes), axis=0)
+    shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
+    omega = np.sign(values) * np.sqrt(np.abs(values))
+    return ModeFamily(family, omega, shapes)
+
+
+def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int) -> Modes:
+    """Modes of every family: ``axial`` counts the rigid mode; ``lateral`` is per plane."""
+    return Modes(
+        axial=family_modes(system, "axial", axial),
+        torsional=family_modes(system, "torsional", torsional),
+        lateral_y=family_modes(system, "lateral_y", lateral),
+        lateral_z=family_modes(system, "lateral_z", lateral),
+    )
