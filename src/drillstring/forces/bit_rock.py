@@ -1,0 +1,260 @@
+"""Bit–rock interaction law (SPEC §6, ``f_br``).
+
+The law couples the axial and torsional motion of the bit node. It is the model of Tucker & Wang
+(R. W. Tucker, C. Wang, "An integrated model for drill-string dynamics", J. Sound Vib. 224(1), 1999;
+"Torsional vibration control and Cosserat dynamics of a drill-rig assembly", Meccanica 38, 2003) in the
+regularised form used by Ritto, Soize & Sampaio (T. G. Ritto, C. Soize, R. Sampaio, "Non-linear dynamics
+of a drill-string with uncertain model of the bit–rock interaction", Int. J. Non-Linear Mech. 44, 2009),
+written exactly as in SPEC §6::
+
+    f_xbit = − u̇_bit / (a2 Z²) + a3 θ̇_bit / (a2 Z) − a1/a2            [N]
+    t_xbit = − u̇_bit a4 Z² / θ̇_bit − a5 Z                              [N·m]
+    Z(θ̇) = θ̇ / sqrt(θ̇² + e²)                                          [-]
+
+Sign conventions (SPEC §2, §6): ``x`` points down, ``u̇_bit > 0`` is drilling (the bit moves down into the
+rock), ``θ̇_bit > 0`` turns with the top. ``f_xbit`` and ``t_xbit`` are the force and torque exerted **on the
+string** at the bit node, along / about ``+x``: in steady drilling ``f_xbit = −wob < 0`` (the rock pushes
+the bit up) and ``t_xbit = −TOB`` opposes the rotation.
+
+Numerically safe evaluation
+---------------------------
+The kernels never form ``Z`` and then divide by it. With ``h = hypot(θ̇, e) = sqrt(θ̇² + e²)`` (computed
+without overflow) they use the exact identities::
+
+    Z = θ̇ / h,      Z²/θ̇ = θ̇ / (θ̇² + e²) = Z / h,      θ̇/Z = h,      1/Z² = 1 + (e/θ̇)².
+
+All are finite at ``θ̇ = 0`` except ``1/Z²``, which grows like ``e²/θ̇²``: the law stiffens without bound as
+the bit sticks (``θ̇ -> 0``). Physically, a bit that does not turn cannot cut, so the law drives ``u̇_bit``
+to zero with an axial "viscous" coefficient ``1/(a2 Z²)`` that becomes infinite.
+
+**Stick handling (decision).** The exact law is kept for ``|θ̇| ≥ θ̇_floor``. Below it, ``1/Z²`` is evaluated
+with ``|θ̇|`` replaced by ``θ̇_floor`` (``1/Z² = 1 + (e/θ̇_floor)²``), so the force is finite and continuous
+for every finite input, including ``θ̇ = 0`` exactly. ``θ̇_floor = STICK_SPEED_FLOOR_RATIO · e`` by default
+(``1e-6 · e``, i.e. 2 µrad/s for the reference ``e = 2 rad/s``), giving at most ``1/Z² ≈ 1e12``: at
+``θ̇ = 0`` the axial force is ``−u̇ (1 + 1e12)/a2 + a3 e/a2 − a1/a2``, a very stiff finite reaction that
+stops penetration — the stick limit of the law, not a NaN. The other terms use their exact limits
+(``θ̇/Z -> e``, ``Z -> 0``, ``Z²/θ̇ -> 0``), so at stick the bit–rock torque is zero (the regularised law
+has no static friction at the bit). Callers that prefer a larger floor (an explicit integrator resolves
+the axial time scale ``m a2 Z²``, which collapses at stick) use :func:`bit_rock_force_floored` or
+``BitRockParameters.stick_speed_floor_ratio``.
+
+If ``e = 0`` (unregularised law, ``Z = sgn θ̇``) the kernels return ``Z = 0`` and ``1/Z² = 1`` at ``θ̇ = 0``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import astuple, dataclass
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "STICK_SPEED_FLOOR_RATIO",
+    "BitRockParameters",
+    "regularizer",
+    "bit_rock_force",
+    "bit_rock_force_floored",
+    "bit_rock_force_array",
+    "evaluate_bit_rock",
+    "steady_state",
+]
+
+#: Default ratio ``θ̇_floor / e`` below which ``1/Z²`` is frozen (see module docstring).
+STICK_SPEED_FLOOR_RATIO = 1.0e-6
+
+
+@dataclass(frozen=True)
+class BitRockParameters:
+    """Coefficients of the bit–rock law (SPEC §6, values for the reference case in SPEC §9).
+
+    Attributes
+    ----------
+    a1 : float
+        [m/s] ROP offset; the bit penetrates only if ``a2 · wob > a1`` (at high speed).
+    a2 : float
+        [m/(N·s)] ROP per unit weight-on-bit.
+    a3 : float
+        [m/rad] ROP per unit bit rotation speed (depth of cut per radian).
+    a4 : float
+        [N·rad] torque-on-bit per unit depth of cut per radian (``a4 · ROP/θ̇``).
+    a5 : float
+        [N·m] frictional (constant) part of the torque-on-bit.
+    e : float
+        [rad/s] regularisation speed of ``Z(θ̇) = θ̇/sqrt(θ̇² + e²)`` (Ritto, Soize & Sampaio 2009).
+    stick_speed_floor_ratio : float
+        [-] ``θ̇_floor / e``: below ``|θ̇| = θ̇_floor`` the term ``1/Z²`` is frozen so that the law stays
+        finite at stick (module docstring). Not part of :meth:`as_array`.
+    """
+
+    a1: float
+    a2: float
+    a3: float
+    a4: float
+    a5: float
+    e: float
+    stick_speed_floor_ratio: float = STICK_SPEED_FLOOR_RATIO
+
+    def __post_init__(self) -> None:
+        for name in ("a1", "a2", "a3", "a4", "a5", "e", "stick_speed_floor_ratio"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ValueError(f"{name} must be finite, got {value!r}")
+        if self.a2 <= 0.0:
+            raise ValueError(f"a2 must be > 0 (it divides the law), got {self.a2!r}")
+        if self.e < 0.0:
+            raise ValueError(f"e must be >= 0, got {self.e!r}")
+        if self.stick_speed_floor_ratio < 0.0:
+            raise ValueError("stick_speed_floor_ratio must be >= 0")
+
+    @classmethod
+    def reference(cls) -> "BitRockParameters":
+        """Reference-case coefficients (SPEC §9)."""
+        return cls(a1=3.429e-3, a2=5.672e-8, a3=1.374e-4, a4=9.537e6, a5=1.475e3, e=2.0)
+
+    @property
+    def stick_speed_floor(self) -> float:
+        """[rad/s] ``θ̇_floor = stick_speed_floor_ratio · e``."""
+        return self.stick_speed_floor_ratio * self.e
+
+    def as_array(self) -> np.ndarray:
+        """``[a1, a2, a3, a4, a5, e]`` as float64, the argument order of :func:`bit_rock_force`."""
+        return np.array(astuple(self)[:6], dtype=np.float64)
+
+    def kernel_args(self) -> tuple[float, ...]:
+        """``(a1, a2, a3, a4, a5, e, θ̇_floor)``, the trailing arguments of :func:`bit_rock_force_floored`."""
+        return (self.a1, self.a2, self.a3, self.a4, self.a5, self.e, self.stick_speed_floor)
+
+
+# --------------------------------------------------------------------------------------------------------
+# numba kernels (plain floats)
+# --------------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def regularizer(bit_speed, e):
+    """``Z = θ̇ / sqrt(θ̇² + e²)`` [-], odd in ``θ̇``, ``|Z| < 1``, ``Z -> ±1`` for ``|θ̇| >> e``.
+
+    ``bit_speed`` θ̇ [rad/s], ``e`` [rad/s]. Evaluated with ``hypot`` (no overflow); ``Z(0) = 0`` also
+    when ``e = 0``. Ritto, Soize & Sampaio (2009); SPEC §6.
+    """
+    h = math.hypot(bit_speed, e)
+    if h == 0.0:
+        return 0.0
+    return bit_speed / h
+
+
+@njit(cache=True)
+def bit_rock_force_floored(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e, speed_floor):
+    """Bit–rock force and torque on the string, with an explicit stick floor ``speed_floor`` [rad/s].
+
+    Same as :func:`bit_rock_force` (SPEC §6, Tucker & Wang 1999/2003, Ritto et al. 2009) except that
+    ``1/Z²`` uses ``max(|θ̇|, speed_floor)``. Returns ``(axial_force [N], torque [N·m])``.
+    """
+    h = math.hypot(bit_speed, e)
+    if h == 0.0:
+        z = 0.0
+        z2_over_speed = 0.0
+    else:
+        z = bit_speed / h
+        z2_over_speed = z / h  # = θ̇ / (θ̇² + e²) = Z²/θ̇
+    s = max(abs(bit_speed), speed_floor)
+    if s == 0.0:
+        if e == 0.0:
+            inv_z2 = 1.0
+        else:  # zero floor requested at θ̇ = 0: fall back on the default floor
+            ratio = 1.0 / STICK_SPEED_FLOOR_RATIO
+            inv_z2 = 1.0 + ratio * ratio
+    else:
+        q = e / s
+        inv_z2 = 1.0 + q * q  # = 1/Z² = (θ̇² + e²)/θ̇²
+    axial_force = (-bit_axial_velocity * inv_z2 + a3 * h - a1) / a2  # a3 θ̇/(a2 Z) = a3 h / a2
+    torque = -bit_axial_velocity * a4 * z2_over_speed - a5 * z
+    return axial_force, torque
+
+
+@njit(cache=True)
+def bit_rock_force(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e):
+    """Bit–rock axial force [N] and torque [N·m] exerted on the string (SPEC §6).
+
+    ``f = −u̇/(a2 Z²) + a3 θ̇/(a2 Z) − a1/a2``, ``t = −u̇ a4 Z²/θ̇ − a5 Z``, ``Z = θ̇/sqrt(θ̇² + e²)``
+    (Tucker & Wang 1999, 2003; regularised by Ritto, Soize & Sampaio 2009).
+
+    Parameters: ``bit_axial_velocity`` u̇_bit [m/s] (> 0 drilling, x down), ``bit_speed`` θ̇_bit [rad/s]
+    (> 0 with the top), ``a1`` [m/s], ``a2`` [m/(N·s)], ``a3`` [m/rad], ``a4`` [N·rad], ``a5`` [N·m],
+    ``e`` [rad/s]. Forces are along / about ``+x``. Finite for all finite inputs: below
+    ``|θ̇| = STICK_SPEED_FLOOR_RATIO · e`` the stiffening term ``1/Z²`` is frozen (module docstring).
+    """
+    return bit_rock_force_floored(
+        bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e, STICK_SPEED_FLOOR_RATIO * e
+    )
+
+
+@njit(cache=True)
+def bit_rock_force_array(
+    bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e, speed_floor, axial_force, torque
+):
+    """Loop of :func:`bit_rock_force_floored` over 1-D arrays; fills ``axial_force``/``torque`` in place."""
+    for i in range(bit_axial_velocity.shape[0]):
+        f, t = bit_rock_force_floored(
+            bit_axial_velocity[i], bit_speed[i], a1, a2, a3, a4, a5, e, speed_floor
+        )
+        axial_force[i] = f
+        torque[i] = t
+
+
+# --------------------------------------------------------------------------------------------------------
+# Python wrappers
+# --------------------------------------------------------------------------------------------------------
+
+
+def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
+    """Vectorised bit–rock law: ``(axial_force [N], torque [N·m])`` on the string, broadcast over inputs.
+
+    ``bit_axial_velocity`` [m/s] and ``bit_speed`` [rad/s] are array-likes (broadcast together). Scalars in,
+    0-d arrays out. Same law and stick handling as :func:`bit_rock_force` with the floor of ``params``.
+    """
+    u, w = np.broadcast_arrays(
+        np.asarray(bit_axial_velocity, dtype=np.float64), np.asarray(bit_speed, dtype=np.float64)
+    )
+    shape = u.shape
+    u_flat = np.ascontiguousarray(u).reshape(-1)
+    w_flat = np.ascontiguousarray(w).reshape(-1)
+    force = np.empty_like(u_flat)
+    torque = np.empty_like(u_flat)
+    bit_rock_force_array(u_flat, w_flat, *params.kernel_args(), force, torque)
+    return force.reshape(shape), torque.reshape(shape)
+
+
+def steady_state(weight_on_bit, bit_speed, params: BitRockParameters, allow_negative_rop: bool = False):
+    """Steady drilling state of the bit–rock law: ``(rate_of_penetration [m/s], torque_on_bit [N·m])``.
+
+    Closed forms from SPEC §6 (Tucker & Wang 1999/2003 with the regularisation of Ritto et al. 2009),
+    obtained by setting ``f_xbit = −wob`` and solving for ``u̇_bit``::
+
+        ROP = Z² (a2 · wob − a1) + Z a3 ω,        TOB = a4 · ROP · Z²/ω + a5 Z,     Z = Z(ω)
+
+    ``weight_on_bit`` wob [N] (> 0 pushes the bit down), ``bit_speed`` ω [rad/s]; array-likes broadcast.
+    ``TOB`` is the resisting torque magnitude for ``ω > 0``; the torque on the string is ``−TOB`` (odd in
+    ``ω``: for ``ω < 0`` TOB is negative, still opposing the rotation).
+
+    If the formula gives ``ROP < 0`` (``a2 · wob < a1`` and the speed term ``Z a3 ω`` too small), the law
+    would pull the bit up out of the rock; physically the bit does not penetrate. By default the ROP is then
+    clipped to 0 and ``TOB = a5 Z`` (friction only); in that case ``f_xbit(0, ω) ≠ −wob`` (the bit is not in
+    the drilling regime of the law). ``allow_negative_rop=True`` returns the raw formula.
+
+    At ``ω = 0``: ``Z = 0`` so ``ROP = 0`` and ``TOB = 0`` (``Z²/ω -> 0``). Scalars in, floats out.
+    """
+    wob = np.asarray(weight_on_bit, dtype=np.float64)
+    omega = np.asarray(bit_speed, dtype=np.float64)
+    h = np.hypot(omega, params.e)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = np.where(h > 0.0, omega / np.where(h > 0.0, h, 1.0), 0.0)
+        z2_over_omega = np.where(h > 0.0, z / np.where(h > 0.0, h, 1.0), 0.0)
+    rop = z * z * (params.a2 * wob - params.a1) + z * params.a3 * omega
+    if not allow_negative_rop:
+        rop = np.maximum(rop, 0.0)
+    tob = params.a4 * rop * z2_over_omega + params.a5 * z
+    if rop.ndim == 0:
+        return float(rop), float(tob)
+    return rop, tob

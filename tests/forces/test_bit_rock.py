@@ -1,0 +1,173 @@
+"""Tests of the bit–rock law (SPEC §6, §9, §10)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drillstring.forces.bit_rock import (
+    STICK_SPEED_FLOOR_RATIO,
+    BitRockParameters,
+    bit_rock_force,
+    bit_rock_force_floored,
+    evaluate_bit_rock,
+    regularizer,
+    steady_state,
+)
+
+RPM = 2.0 * math.pi / 60.0
+P = BitRockParameters.reference()
+ARGS = tuple(P.as_array())
+
+
+def test_as_array_order():
+    np.testing.assert_array_equal(P.as_array(), [3.429e-3, 5.672e-8, 1.374e-4, 9.537e6, 1.475e3, 2.0])
+    assert P.kernel_args()[-1] == pytest.approx(STICK_SPEED_FLOOR_RATIO * 2.0)
+
+
+def test_invalid_parameters():
+    with pytest.raises(ValueError):
+        BitRockParameters(1.0, 0.0, 1.0, 1.0, 1.0, 2.0)
+    with pytest.raises(ValueError):
+        BitRockParameters(1.0, 1.0, 1.0, 1.0, 1.0, -1.0)
+
+
+def test_reference_steady_state():
+    rop, tob = steady_state(100e3, 100 * RPM, P)
+    assert rop == pytest.approx(3.58e-3, rel=2e-3)
+    assert tob == pytest.approx(4.59e3, rel=2e-3)
+
+
+@pytest.mark.parametrize(
+    "wob, rpm",
+    [(100e3, 100.0), (60e3, 40.0), (150e3, 200.0), (80e3, 5.0), (120e3, -100.0)],
+)
+def test_force_law_at_steady_state(wob, rpm):
+    omega = rpm * RPM
+    rop, tob = steady_state(wob, omega, P)
+    assert rop > 0.0
+    f, t = bit_rock_force(rop, omega, *ARGS)
+    assert f == pytest.approx(-wob, rel=1e-10)
+    assert t == pytest.approx(-tob, rel=1e-10)
+
+
+def test_steady_state_closed_form_by_hand():
+    omega = 100 * RPM
+    z = omega / math.sqrt(omega**2 + P.e**2)
+    rop = z**2 * (P.a2 * 100e3 - P.a1) + z * P.a3 * omega
+    tob = P.a4 * rop * z**2 / omega + P.a5 * z
+    assert steady_state(100e3, omega, P) == pytest.approx((rop, tob), rel=1e-14)
+
+
+def test_steady_state_no_penetration_clipped():
+    # a2 wob < a1 and a slow bit: the raw formula is negative
+    wob, omega = 10e3, 0.5
+    raw_rop, _ = steady_state(wob, omega, P, allow_negative_rop=True)
+    assert raw_rop < 0.0
+    rop, tob = steady_state(wob, omega, P)
+    assert rop == 0.0
+    assert tob == pytest.approx(P.a5 * regularizer(omega, P.e), rel=1e-14)
+
+
+def test_steady_state_zero_speed_and_arrays():
+    assert steady_state(100e3, 0.0, P) == (0.0, 0.0)
+    wob = np.array([60e3, 100e3, 150e3])
+    rop, tob = steady_state(wob, 100 * RPM, P)
+    for i in range(3):
+        assert (rop[i], tob[i]) == pytest.approx(steady_state(wob[i], 100 * RPM, P), rel=1e-14)
+
+
+def test_regularizer_limits_and_oddness():
+    e = 2.0
+    assert regularizer(0.0, e) == 0.0
+    assert regularizer(0.0, 0.0) == 0.0
+    assert regularizer(1e6, e) == pytest.approx(1.0, abs=1e-11)
+    assert regularizer(-1e6, e) == pytest.approx(-1.0, abs=1e-11)
+    assert regularizer(e, e) == pytest.approx(1.0 / math.sqrt(2.0), rel=1e-15)
+    assert regularizer(1e-3, e) == pytest.approx(1e-3 / e, rel=1e-6)  # linear near 0, slope 1/e
+    for s in (1e-8, 0.3, 2.0, 17.0, 1e300):
+        z = regularizer(s, e)
+        assert regularizer(-s, e) == -z
+        assert abs(z) <= 1.0
+    assert regularizer(5.0, 0.0) == 1.0
+
+
+def test_law_matches_textbook_form_away_from_stick():
+    for u in (-2e-3, 0.0, 3.5e-3):
+        for w in (-15.0, -0.7, 0.05, 3.0, 10.0):
+            z = w / math.sqrt(w * w + P.e**2)
+            f_ref = -u / (P.a2 * z * z) + P.a3 * w / (P.a2 * z) - P.a1 / P.a2
+            t_ref = -u * P.a4 * z * z / w - P.a5 * z
+            f, t = bit_rock_force(u, w, *ARGS)
+            assert f == pytest.approx(f_ref, rel=1e-12, abs=1e-6)
+            assert t == pytest.approx(t_ref, rel=1e-12, abs=1e-9)
+
+
+def test_stick_is_finite_and_defined():
+    floor = STICK_SPEED_FLOOR_RATIO * P.e
+    inv_z2_max = 1.0 + (P.e / floor) ** 2
+    for u in (-1e-2, -1e-6, 0.0, 1e-6, 3.5e-3):
+        f, t = bit_rock_force(u, 0.0, *ARGS)
+        assert math.isfinite(f) and math.isfinite(t)
+        assert f == pytest.approx(-u * inv_z2_max / P.a2 + P.a3 * P.e / P.a2 - P.a1 / P.a2, rel=1e-12)
+        assert t == 0.0
+    # a drilling bit that sticks is pushed back hard (penetration stops); a lifting one is pulled down
+    assert bit_rock_force(1e-3, 0.0, *ARGS)[0] < -1e15
+    assert bit_rock_force(-1e-3, 0.0, *ARGS)[0] > 1e15
+    # continuous through the floor and through 0, no NaN/inf for tiny speeds
+    for w in (1e-300, -1e-300, 5e-324, 1e-12, floor * (1 - 1e-12), floor, floor * (1 + 1e-12), 1e-4):
+        f, t = bit_rock_force(1e-3, w, *ARGS)
+        assert math.isfinite(f) and math.isfinite(t)
+    f0 = bit_rock_force(1e-3, 0.0, *ARGS)[0]
+    assert bit_rock_force(1e-3, 1e-300, *ARGS)[0] == pytest.approx(f0, rel=1e-14)
+    below = bit_rock_force(1e-3, floor * (1 - 1e-9), *ARGS)[0]
+    above = bit_rock_force(1e-3, floor * (1 + 1e-9), *ARGS)[0]
+    assert below == pytest.approx(above, rel=1e-8)
+
+
+def test_finite_for_extreme_inputs():
+    for u, w in [(1.0, 1e200), (-1.0, -1e200), (1e-3, 1e-200), (0.0, 0.0), (1e3, 1e-10)]:
+        f, t = bit_rock_force(u, w, *ARGS)
+        assert math.isfinite(f) and math.isfinite(t)
+
+
+def test_unregularised_and_zero_floor():
+    args0 = ARGS[:5] + (0.0,)
+    f, t = bit_rock_force(1e-3, 0.0, *args0)  # e = 0 at θ̇ = 0: Z = 0, 1/Z² = 1
+    assert math.isfinite(f) and t == 0.0
+    f, t = bit_rock_force(1e-3, 3.0, *args0)  # e = 0: Z = 1
+    assert f == pytest.approx((-1e-3 + P.a3 * 3.0 - P.a1) / P.a2, rel=1e-14)
+    assert t == pytest.approx(-1e-3 * P.a4 / 3.0 - P.a5, rel=1e-14)
+    f, t = bit_rock_force_floored(1e-3, 0.0, *ARGS, 0.0)  # zero floor: falls back, still finite
+    assert math.isfinite(f)
+    f_big_floor = bit_rock_force_floored(1e-3, 0.0, *ARGS, 0.02)[0]
+    assert f_big_floor == pytest.approx((-1e-3 * (1 + (P.e / 0.02) ** 2) + P.a3 * P.e - P.a1) / P.a2)
+
+
+def test_negative_speed_symmetry():
+    """Torque opposes the rotation; the law is symmetric under θ̇ -> −θ̇ as the formula says."""
+    for u in (0.0, 1e-3, 4e-3):
+        for w in (0.5, 2.0, 10.0):
+            fp, tp = bit_rock_force(u, w, *ARGS)
+            fm, tm = bit_rock_force(u, -w, *ARGS)
+            assert fm == pytest.approx(fp, rel=1e-14)  # f is even in θ̇ (1/Z², θ̇/Z even)
+            assert tm == pytest.approx(-tp, rel=1e-14)  # t is odd in θ̇
+            if u >= 0.0:
+                assert tp < 0.0 < tm  # opposes the rotation
+
+
+def test_vectorised_wrapper_matches_kernel():
+    rng = np.random.default_rng(0)
+    u = rng.normal(2e-3, 3e-3, size=(4, 5))
+    w = rng.normal(5.0, 8.0, size=(4, 5))
+    w[0, 0] = 0.0
+    f, t = evaluate_bit_rock(u, w, P)
+    assert f.shape == t.shape == (4, 5)
+    for idx in np.ndindex(u.shape):
+        fk, tk = bit_rock_force(u[idx], w[idx], *ARGS)
+        assert f[idx] == fk and t[idx] == tk
+    fb, tb = evaluate_bit_rock(1e-3, np.array([0.0, 1.0, 10.0]), P)  # broadcasting
+    assert fb.shape == (3,)
+    assert tb[2] == bit_rock_force(1e-3, 10.0, *ARGS)[1]
+    fs, ts = evaluate_bit_rock(1e-3, 10.0, P)
+    assert fs.shape == () and float(fs) == bit_rock_force(1e-3, 10.0, *ARGS)[0]
