@@ -204,3 +204,12 @@ def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int
         lateral_y=family_modes(system, "lateral_y", lateral),
         lateral_z=family_modes(system, "lateral_z", lateral),
     )
+
+
+def case_linear_system(case, static: StaticState) -> LinearSystem:
+    """The prestressed linear system of a :class:`~drillstring.case.Case` around ``static``."""
+    from drillstring.fem.build import section_fluid_coefficients, stabilizers
+
+    return build_linear_system(
+        static.mesh, static, stabilizers(case), section_fluid_coefficients(case, static.mesh)
+    )

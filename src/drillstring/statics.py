@@ -101,3 +101,12 @@ def solve_statics(
     displacement = np.zeros(mesh.n_dofs)
     displacement[dof(np.arange(n), U)] = u
     return StaticState(mesh, displacement, axial_force, weight, weight_on_hook, weight_on_bit)
+
+
+def case_static_state(case, weight_on_bit: float | None = None, mesh: Mesh | None = None) -> StaticState:
+    """Static state of a :class:`~drillstring.case.Case` (``weight_on_bit`` [N] overrides the case's)."""
+    from drillstring.fem.build import axial_load_per_length, case_mesh
+
+    mesh = case_mesh(case) if mesh is None else mesh
+    wob = case.operation.weight_on_bit if weight_on_bit is None else weight_on_bit
+    return solve_statics(mesh, axial_load_per_length(case, mesh), wob)

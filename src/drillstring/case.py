@@ -1,0 +1,792 @@
+"""A validated description of a drilling case, loaded from TOML.
+
+A *case* holds everything needed to build and run the model: the string's sections and materials, the
+borehole, stabilizers, drilling fluid, bit-rock law, contact law, operating point, damping, model switches,
+mesh, reduced-order model, time integration and initial state. It is a tree of immutable pydantic models
+(``frozen=True``; unknown keys are refused). All values are stored in SI units.
+
+Units at the edge
+-----------------
+Every physical field accepts either a plain number, taken in SI units, or a string ``"value unit"``, e.g.
+``"100 rpm"``, ``"100 kN"``, ``"1400 m"``, ``"8.5 in"``, ``"1.5 m/s"``, ``"17.5 MN/m"``. The string is converted
+to SI when the case is validated; a unit of the wrong dimension, or an unknown unit, is refused with the list
+of allowed units. Units are case-sensitive (``mm`` is not ``Mm``); ``*`` and ``.`` both denote a product, and
+spaces inside the unit are ignored. The unit tables are in :data:`DIMENSIONS`.
+
+Errors
+------
+Every invalid case raises :class:`CaseError` (a ``ValueError``); its message lists every problem found, one per
+line, as ``<dotted.field.path> = <value>: <what is allowed>``, e.g.
+``sections[1].inner_diameter = 0.3: must be less than outer_diameter (0.2286 m)``. This holds for
+:func:`load_case`, :func:`case_from_dict` and for constructing any of the models directly in Python.
+Cross-field rules (which need the whole case) are checked only once every field is individually valid.
+
+Entry points: :func:`load_case`, :func:`case_from_dict`, :func:`builtin_cases`, :meth:`Case.to_toml`.
+
+This module imports nothing from the rest of ``drillstring``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+import typing
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal, Mapping
+
+import tomli_w
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
+
+__all__ = [
+    "DIMENSIONS",
+    "Acceleration",
+    "AngularSpeed",
+    "AxialDamping",
+    "ForceAngle",
+    "LengthPerAngle",
+    "LinearDamping",
+    "PenetrationPerForce",
+    "RotationalDamping",
+    "BitRock",
+    "Borehole",
+    "Case",
+    "CaseError",
+    "Contact",
+    "Damping",
+    "Density",
+    "Dimension",
+    "Dimensionless",
+    "Environment",
+    "Fluid",
+    "Force",
+    "Initial",
+    "Length",
+    "Material",
+    "Mesh",
+    "Model",
+    "Operation",
+    "Pressure",
+    "ReducedModel",
+    "Section",
+    "Simulation",
+    "Stabilizer",
+    "Stiffness",
+    "Time",
+    "Torque",
+    "Velocity",
+    "builtin_cases",
+    "case_from_dict",
+    "load_case",
+    "to_si",
+]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Errors
+# ---------------------------------------------------------------------------------------------------------
+
+
+class CaseError(ValueError):
+    """An invalid case, or a case file that cannot be read.
+
+    Attributes
+    ----------
+    problems:
+        One line per problem, ``<dotted.field.path> = <value>: <what is allowed>`` (or a plain sentence for
+        file-level problems such as a TOML syntax error).
+    source:
+        Where the case came from (a file name, ``"<dict>"``, ...).
+    """
+
+    def __init__(self, problems: list[str] | list[_Entry] | str, source: str = "<case>") -> None:
+        if isinstance(problems, str):
+            problems = [problems]
+        self.entries: list[_Entry] = [((), None, p) if isinstance(p, str) else p for p in problems]
+        self.problems: list[str] = [_format_entry(e) for e in self.entries]
+        self.source: str = source
+        n = len(self.problems)
+        head = f"invalid case {source}: {n} problem{'s' if n != 1 else ''}"
+        super().__init__("\n".join([head, *(f"  {p}" for p in self.problems)]))
+
+    def __reduce__(self) -> Any:  # picklable (worker processes)
+        return (type(self), (self.entries, self.source))
+
+
+#: One problem: (location, value as shown or None, what is allowed).
+_Entry = tuple[tuple[str | int, ...], str | None, str]
+
+
+def _format_entry(entry: _Entry) -> str:
+    loc, value, message = entry
+    if value is None:
+        return f"{_loc_to_path(loc)}: {message}" if loc else message
+    return f"{_loc_to_path(loc)} = {value}: {message}"
+
+
+class _Problems(ValueError):
+    """Cross-field problems raised from a model validator: ``(relative loc, value, message)`` triples.
+
+    Pydantic wraps it in a ``value_error`` whose context keeps this object, so :class:`CaseError` can expand it
+    into one line per problem with the full field path.
+    """
+
+    def __init__(self, problems: list[tuple[tuple[str | int, ...], Any, str]]) -> None:
+        self.entries: list[_Entry] = [(tuple(loc), _fmt_value(v), m) for loc, v, m in problems]
+        super().__init__("; ".join(_format_entry(e) for e in self.entries))
+
+
+def _loc_to_path(loc: tuple[str | int, ...]) -> str:
+    """``('sections', 1, 'inner_diameter')`` -> ``'sections[1].inner_diameter'``."""
+    out = ""
+    for item in loc:
+        if isinstance(item, int):
+            out += f"[{item}]"
+        else:
+            out += f".{item}" if out else str(item)
+    return out or "<case>"
+
+
+def _fmt_value(value: Any) -> str:
+    if isinstance(value, bool):
+        text = repr(value)
+    elif isinstance(value, float):
+        text = repr(float(f"{value:.12g}"))  # 0.30479999999999996 -> 0.3048
+    elif isinstance(value, BaseModel):
+        text = repr(value.model_dump())
+    else:
+        text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _fmt_limit(value: Any) -> str:
+    return f"{value:g}" if isinstance(value, (int, float)) and not isinstance(value, bool) else repr(value)
+
+
+def _unwrap(tp: Any) -> Any:
+    """Strip ``Annotated[...]`` and ``Optional[...]`` from a type annotation."""
+    while True:
+        origin = typing.get_origin(tp)
+        if origin is Annotated:
+            tp = typing.get_args(tp)[0]
+        elif origin is typing.Union:
+            args = [a for a in typing.get_args(tp) if a is not type(None)]
+            if len(args) != 1:
+                return tp
+            tp = args[0]
+        else:
+            return tp
+
+
+def _model_at(root: type[BaseModel], loc: tuple[str | int, ...]) -> type[BaseModel] | None:
+    """The model class found at ``loc`` below ``root`` (for listing allowed keys), or None."""
+    tp: Any = root
+    for item in loc:
+        tp = _unwrap(tp)
+        if isinstance(tp, type) and issubclass(tp, BaseModel):
+            if isinstance(item, str) and item in tp.model_fields:
+                tp = tp.model_fields[item].annotation
+                continue
+            return None
+        origin = typing.get_origin(tp)
+        args = typing.get_args(tp)
+        if origin in (list, tuple) and isinstance(item, int) and args:
+            tp = args[0]
+        elif origin is dict and len(args) == 2:
+            tp = args[1]
+        else:
+            return None
+    tp = _unwrap(tp)
+    return tp if isinstance(tp, type) and issubclass(tp, BaseModel) else None
+
+
+_OPS = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
+
+
+_NOT_FOUND = object()
+
+
+def _lookup(raw: Any, loc: tuple[str | int, ...]) -> Any:
+    """The raw input value at ``loc`` (before unit conversion), or ``_NOT_FOUND``."""
+    for item in loc:
+        try:
+            raw = raw[item]
+        except (KeyError, IndexError, TypeError):
+            return _NOT_FOUND
+    return raw
+
+
+def _entries_from_validation_error(exc: ValidationError, root: type[BaseModel], raw: Any = None) -> list[_Entry]:
+    """Pydantic's errors as :data:`_Entry` triples, with paths relative to ``root``.
+
+    ``raw`` is the input that was validated: where a constraint failed after unit conversion, the value is shown
+    as the user wrote it, followed by its SI value.
+    """
+    out: list[_Entry] = []
+    for err in exc.errors(include_url=False):
+        loc = tuple(err["loc"])
+        kind = err["type"]
+        ctx = err.get("ctx") or {}
+        inner = ctx.get("error")
+        # Structured problems from a model validator, or from a nested model's __init__ (see _Base).
+        if isinstance(inner, (_Problems, CaseError)):
+            out.extend((loc + tuple(rel), value, message) for rel, value, message in inner.entries)
+            continue
+        if kind == "missing":
+            out.append((loc, "(missing)", "required"))
+            continue
+        value = _fmt_value(err.get("input"))
+        original = _lookup(raw, loc)
+        if isinstance(original, str) and not isinstance(err.get("input"), str):
+            value = f"{_fmt_value(original)} (= {value} SI)"
+        elif isinstance(original, (int, float)) and not isinstance(original, bool):
+            value = _fmt_value(original)  # as written: 0, not 0.0
+        if kind == "extra_forbidden":
+            parent = _model_at(root, loc[:-1])
+            allowed = ", ".join(parent.model_fields) if parent is not None else "?"
+            out.append((loc, value, f"unknown key; allowed keys here: {allowed}"))
+        elif kind in _OPS:
+            out.append((loc, value, f"must be {_OPS[kind]} {_fmt_limit(next(iter(ctx.values())))}"))
+        elif kind == "too_short" and "min_length" in ctx:
+            n = ctx["min_length"]
+            out.append((loc, value, f"must have at least {n} item{'s' if n != 1 else ''}"))
+        elif isinstance(inner, Exception) and kind in ("value_error", "assertion_error"):
+            out.append((loc, value, str(inner)))
+        else:
+            msg = str(err["msg"])
+            if msg.startswith("Input should be "):
+                msg = "must be " + msg[len("Input should be ") :]
+            out.append((loc, value, msg))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Quantities with units
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """A physical dimension: its name and its units, each with the factor that converts it to SI."""
+
+    name: str
+    units: Mapping[str, float]
+
+    @property
+    def allowed(self) -> str:
+        return ", ".join(self.units) if self.units else "none (a plain number)"
+
+
+_TWO_PI = 2.0 * math.pi
+_LBF = 4.4482216152605  # N
+
+LENGTH = Dimension("length", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "km": 1e3, "in": 0.0254, "ft": 0.3048})
+FORCE = Dimension("force", {"N": 1.0, "kN": 1e3, "MN": 1e6, "lbf": _LBF, "klbf": 1e3 * _LBF})
+ANGULAR_SPEED = Dimension(
+    "angular speed", {"rad/s": 1.0, "rpm": _TWO_PI / 60.0, "rev/min": _TWO_PI / 60.0, "Hz": _TWO_PI, "rev/s": _TWO_PI}
+)
+VELOCITY = Dimension(
+    "velocity", {"m/s": 1.0, "m/min": 1.0 / 60.0, "m/h": 1.0 / 3600.0, "ft/s": 0.3048, "ft/h": 0.3048 / 3600.0}
+)
+STIFFNESS = Dimension("stiffness", {"N/m": 1.0, "kN/m": 1e3, "MN/m": 1e6})
+PRESSURE = Dimension("pressure", {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9})
+DENSITY = Dimension("density", {"kg/m3": 1.0, "kg/m^3": 1.0, "g/cm3": 1e3, "g/cm^3": 1e3})
+TIME = Dimension("time", {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
+TORQUE = Dimension("torque", {"N*m": 1.0, "N.m": 1.0, "kN*m": 1e3, "kN.m": 1e3})
+ACCELERATION = Dimension("acceleration", {"m/s2": 1.0, "m/s^2": 1.0})
+DIMENSIONLESS = Dimension("dimensionless number", {})
+# Coefficients that only ever appear in SI; the unit string is still accepted so a file can say what it means.
+AXIAL_DAMPING = Dimension("axial damping coefficient", {"N*s/m": 1.0, "N.s/m": 1.0})
+ROTATIONAL_DAMPING = Dimension("rotational damping coefficient", {"N*m*s/rad": 1.0, "N.m.s/rad": 1.0})
+LINEAR_DAMPING = Dimension("damping per unit length", {"N*s/m2": 1.0, "N*s/m^2": 1.0, "N.s/m2": 1.0})
+PENETRATION_PER_FORCE = Dimension("bit-rock coefficient a2", {"m/(N*s)": 1.0, "m/(N.s)": 1.0})
+LENGTH_PER_ANGLE = Dimension("length per angle", {"m/rad": 1.0})
+FORCE_ANGLE = Dimension("force times angle", {"N*rad": 1.0, "N.rad": 1.0})
+
+#: Every dimension, for error messages naming the dimension a misplaced unit belongs to.
+DIMENSIONS: tuple[Dimension, ...] = (
+    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION,
+    DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING, LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE,
+    FORCE_ANGLE,
+)  # fmt: skip
+
+_QUANTITY = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
+_UNIT_SUBST = {"·": "*", "⋅": "*", "²": "2", "³": "3"}
+
+
+def _normalise_unit(unit: str) -> str:
+    for old, new in _UNIT_SUBST.items():
+        unit = unit.replace(old, new)
+    return "".join(unit.split())
+
+
+def to_si(value: Any, dim: Dimension) -> float:
+    """Convert a plain number (taken as SI) or a ``"value unit"`` string of dimension ``dim`` to an SI float.
+
+    Raises ``ValueError`` with a one-line explanation (the allowed units) when the value cannot be converted.
+    """
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number, got a boolean; allowed units: {dim.allowed}")
+    if isinstance(value, (int, float)):
+        number = float(value)
+        unit = ""
+    elif isinstance(value, str):
+        match = _QUANTITY.match(value)
+        if match is None:
+            hint = f'a number or a "value unit" string (allowed units: {dim.allowed})'
+            if not dim.units:
+                hint = "a plain number"
+            raise ValueError(f"not {hint}")
+        number = float(match.group(1))
+        unit = _normalise_unit(match.group(2))
+    else:
+        try:  # numpy scalars and the like
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"expected a number, got {type(value).__name__}") from None
+        unit = ""
+    if not math.isfinite(number):
+        raise ValueError("must be a finite number")
+    if not unit:
+        return number
+    if unit in dim.units:
+        return number * dim.units[unit]
+    if not dim.units:
+        raise ValueError(f"a plain number without unit is expected ({dim.name}), got unit '{unit}'")
+    other = next((d for d in DIMENSIONS if unit in d.units), None)
+    if other is not None:
+        raise ValueError(f"unit '{unit}' is a {other.name} unit, not a {dim.name} unit; allowed units: {dim.allowed}")
+    raise ValueError(f"unknown unit '{unit}', not a {dim.name} unit; allowed units: {dim.allowed}")
+
+
+def _quantity(dim: Dimension) -> Any:
+    def convert(value: Any) -> Any:
+        return to_si(value, dim)
+
+    convert.__name__ = f"to_si_{dim.name.replace(' ', '_')}"
+    return Annotated[float, BeforeValidator(convert)]
+
+
+Length = _quantity(LENGTH)  #: [m]
+Force = _quantity(FORCE)  #: [N]
+AngularSpeed = _quantity(ANGULAR_SPEED)  #: [rad/s]
+Velocity = _quantity(VELOCITY)  #: [m/s]
+Stiffness = _quantity(STIFFNESS)  #: [N/m]
+Pressure = _quantity(PRESSURE)  #: [Pa]
+Density = _quantity(DENSITY)  #: [kg/m^3]
+Time = _quantity(TIME)  #: [s]
+Torque = _quantity(TORQUE)  #: [N*m]
+Acceleration = _quantity(ACCELERATION)  #: [m/s^2]
+Dimensionless = _quantity(DIMENSIONLESS)  #: [-]
+AxialDamping = _quantity(AXIAL_DAMPING)  #: [N*s/m]
+RotationalDamping = _quantity(ROTATIONAL_DAMPING)  #: [N*m*s/rad]
+LinearDamping = _quantity(LINEAR_DAMPING)  #: [N*s/m^2]
+PenetrationPerForce = _quantity(PENETRATION_PER_FORCE)  #: [m/(N*s)]
+LengthPerAngle = _quantity(LENGTH_PER_ANGLE)  #: [m/rad]
+ForceAngle = _quantity(FORCE_ANGLE)  #: [N*rad]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Models
+# ---------------------------------------------------------------------------------------------------------
+
+
+class _Base(BaseModel):
+    """Immutable, refuses unknown keys; validation failures raise :class:`CaseError`, never a raw pydantic error.
+
+    Because ``__init__`` is overridden, pydantic also calls it for nested models; the nested ``CaseError`` then
+    reaches the parent as a ``value_error`` and :func:`_entries_from_validation_error` re-roots its entries.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    def __init__(self, /, **data: Any) -> None:
+        try:
+            super().__init__(**data)
+        except ValidationError as exc:
+            entries = _entries_from_validation_error(exc, type(self), data)
+            raise CaseError(entries, source=f"<{type(self).__name__}>") from None
+
+    @classmethod
+    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Any:  # type: ignore[override]
+        try:
+            return super().model_validate(obj, *args, **kwargs)
+        except ValidationError as exc:
+            entries = _entries_from_validation_error(exc, cls, obj)
+            raise CaseError(entries, source=f"<{cls.__name__}>") from None
+
+
+class Material(_Base):
+    """Isotropic linear-elastic material."""
+
+    young_modulus: Pressure = Field(gt=0, description="Young's modulus E [Pa]")
+    density: Density = Field(gt=0, description="mass density rho [kg/m^3]")
+    poisson_ratio: Dimensionless = Field(gt=0, lt=0.5, description="Poisson's ratio nu [-]")
+
+    @property
+    def shear_modulus(self) -> float:
+        """Shear modulus G = E / (2 (1 + nu)) [Pa]."""
+        return self.young_modulus / (2.0 * (1.0 + self.poisson_ratio))
+
+
+class Section(_Base):
+    """A hollow circular section of the string (drill pipe, drill collar, ...), listed from top to bit."""
+
+    name: str
+    length: Length = Field(gt=0, description="length [m]")
+    outer_diameter: Length = Field(gt=0, description="outer diameter D_o [m]")
+    inner_diameter: Length = Field(ge=0, description="inner (bore) diameter D_i [m]; 0 for a solid section")
+    material: str = Field("steel", description="key into Case.materials")
+    shear_factor: Dimensionless = Field(6.0 / 7.0, gt=0, le=1, description="Timoshenko shear factor k_s [-]")
+
+    @model_validator(mode="after")
+    def _inner_less_than_outer(self) -> Section:
+        if self.inner_diameter >= self.outer_diameter:
+            raise _Problems(
+                [
+                    (
+                        ("inner_diameter",),
+                        self.inner_diameter,
+                        f"must be less than outer_diameter ({self.outer_diameter:g} m)",
+                    )
+                ]
+            )
+        return self
+
+    @property
+    def outer_area(self) -> float:
+        """pi D_o^2 / 4 [m^2]."""
+        return math.pi * self.outer_diameter**2 / 4.0
+
+    @property
+    def inner_area(self) -> float:
+        """pi D_i^2 / 4 [m^2] (the bore, where the mud flows down)."""
+        return math.pi * self.inner_diameter**2 / 4.0
+
+    @property
+    def area(self) -> float:
+        """Steel cross-section pi (D_o^2 - D_i^2) / 4 [m^2]."""
+        return self.outer_area - self.inner_area
+
+
+class Borehole(_Base):
+    """The (rigid, straight, vertical) borehole."""
+
+    diameter: Length = Field(gt=0, description="borehole diameter D_ch [m]")
+
+
+class Stabilizer(_Base):
+    """A stabilizer: linear lateral springs on v and w at one point of the string."""
+
+    position: Length = Field(description="x of the stabilizer, measured down from the top [m]; in (0, L]")
+    stiffness: Stiffness = Field(gt=0, description="lateral stiffness k_stab [N/m]")
+
+
+class Fluid(_Base):
+    """Drilling fluid (mud): flows down the bore at ``inlet_velocity`` and up the annulus."""
+
+    density: Density = Field(1200.0, ge=0, description="mud density rho_f [kg/m^3]")
+    inlet_velocity: Velocity = Field(1.5, ge=0, description="flow speed U_i inside the string [m/s]")
+    friction_coefficient: Dimensionless = Field(0.0125, ge=0, description="fluid friction coefficient C_f [-]")
+    viscous_coefficient: LinearDamping = Field(0.0, ge=0, description="viscous damping k [N*s/m^2]")
+    added_mass: bool = True
+    coriolis: bool = True
+    centrifugal: bool = True
+    viscous_damping: bool = True
+    axial_loads: bool = False
+
+
+class BitRock(_Base):
+    """Bit-rock interaction law (Tucker & Wang), coefficients a1..a5 and regularisation e."""
+
+    a1: Velocity = Field(3.429e-3, ge=0, description="a1 [m/s]")
+    a2: PenetrationPerForce = Field(5.672e-8, gt=0, description="a2 [m/(N*s)]")
+    a3: LengthPerAngle = Field(1.374e-4, ge=0, description="a3 [m/rad]")
+    a4: ForceAngle = Field(9.537e6, ge=0, description="a4 [N*rad]")
+    a5: Torque = Field(1.475e3, ge=0, description="a5 [N*m]")
+    regularization: AngularSpeed = Field(2.0, gt=0, description="e in Z = w / sqrt(w^2 + e^2) [rad/s]")
+
+
+class Contact(_Base):
+    """String-borehole shocks and rubbing."""
+
+    shock_stiffness: Stiffness = Field(1e8, ge=0, description="k_sh [N/m]")
+    friction_coefficient: Dimensionless = Field(0.0005, ge=0, description="mu_sh [-]")
+    tangential_friction: bool = False
+    speed_regularization: AngularSpeed = Field(
+        0.1, gt=0, description="regularises sign() of the spin speed in the friction torque [rad/s]"
+    )
+
+
+class Operation(_Base):
+    """Operating point: what the driller controls."""
+
+    top_speed: AngularSpeed = Field(
+        to_si("100 rpm", ANGULAR_SPEED), gt=0, description="rotation speed imposed at the top [rad/s]"
+    )
+    weight_on_bit: Force = Field(1e5, gt=0, description="initial (static) weight-on-bit [N]")
+
+
+class Damping(_Base):
+    """Structural damping: modal ratio on elastic modes, viscous coefficients on the rigid-body motions."""
+
+    modal_damping_ratio: Dimensionless = Field(0.3, ge=0, lt=1, description="xi [-]")
+    rigid_axial: AxialDamping = Field(0.05, ge=0, description="c1, rigid axial motion [N*s/m]")
+    rigid_rotation: RotationalDamping = Field(0.05, ge=0, description="c2, rigid rotation [N*m*s/rad]")
+
+
+class Environment(_Base):
+    gravity: Acceleration = Field(9.81, ge=0, description="gravitational acceleration g [m/s^2]")
+
+
+class Model(_Base):
+    """Model switches."""
+
+    gravity: bool = True
+    buoyancy: bool = False
+    nonlinear: Literal["bit_and_contact", "full"] = "bit_and_contact"
+
+
+class Mesh(_Base):
+    max_element_length: Length = Field(10.0, gt=0, description="largest finite element [m]")
+    probes: list[Length] = Field(
+        default_factory=lambda: [1560.0], description="x of the output probes, from the top [m]; in [0, L]"
+    )
+
+
+class ReducedModel(_Base):
+    """Number of normal modes kept per family (lateral: per plane)."""
+
+    axial_modes: int = Field(6, ge=0)
+    torsional_modes: int = Field(6, ge=1)
+    lateral_modes: int = Field(20, ge=0)
+
+
+class Simulation(_Base):
+    """Time integration (adaptive explicit Runge-Kutta)."""
+
+    t_end: Time = Field(20.0, gt=0, description="end time [s]")
+    output_step: Time = Field(0.01, gt=0, description="output sampling step [s]; <= t_end")
+    rtol: Dimensionless = Field(1e-6, gt=0, lt=1)
+    atol: Dimensionless = Field(1e-9, gt=0)
+    max_steps: int = Field(2_000_000, gt=0)
+    min_step: Time = Field(1e-12, gt=0, description="smallest step before giving up [s]")
+    method: Literal["dopri5", "bs32"] = "dopri5"
+
+    @model_validator(mode="after")
+    def _output_step_within_run(self) -> Simulation:
+        if self.output_step > self.t_end:
+            raise _Problems([(("output_step",), self.output_step, f"must be <= t_end ({self.t_end:g} s)")])
+        return self
+
+
+class Initial(_Base):
+    """Initial state: the static state spinning at the top speed, plus a seeded lateral perturbation."""
+
+    lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
+    seed: int = Field(0, ge=0)
+
+
+def _default_materials() -> dict[str, Material]:
+    return {"steel": Material(young_modulus=210e9, density=7850.0, poisson_ratio=0.29)}
+
+
+class Case(_Base):
+    """A complete drilling case. Sections are ordered from the top (x = 0) to the bit (x = L)."""
+
+    name: str
+    description: str = ""
+    materials: dict[str, Material] = Field(default_factory=_default_materials)
+    sections: list[Section] = Field(min_length=1)
+    borehole: Borehole
+    stabilizers: list[Stabilizer] = Field(default_factory=list)
+    fluid: Fluid = Field(default_factory=Fluid)
+    bit_rock: BitRock = Field(default_factory=BitRock)
+    contact: Contact = Field(default_factory=Contact)
+    operation: Operation = Field(default_factory=Operation)
+    damping: Damping = Field(default_factory=Damping)
+    environment: Environment = Field(default_factory=Environment)
+    model: Model = Field(default_factory=Model)
+    mesh: Mesh = Field(default_factory=Mesh)
+    reduced_model: ReducedModel = Field(default_factory=ReducedModel)
+    simulation: Simulation = Field(default_factory=Simulation)
+    initial: Initial = Field(default_factory=Initial)
+
+    # -- derived quantities ------------------------------------------------------------------------------
+
+    @property
+    def length(self) -> float:
+        """Total string length L [m]."""
+        return math.fsum(s.length for s in self.sections)
+
+    @property
+    def section_boundaries(self) -> tuple[float, ...]:
+        """x of the lower end of each section, top to bit [m]; the last one is ``length``."""
+        ends, x = [], 0.0
+        for s in self.sections:
+            x += s.length
+            ends.append(x)
+        return tuple(ends)
+
+    def material_of(self, section: Section | int) -> Material:
+        """The material of a section (given as a Section or as its index)."""
+        if isinstance(section, int):
+            section = self.sections[section]
+        return self.materials[section.material]
+
+    @property
+    def weight(self) -> float:
+        """Weight of the string [N]: sum of rho_eff g A L over sections.
+
+        ``rho_eff = rho - rho_fluid`` when ``model.buoyancy`` is on, else ``rho``; 0 when ``model.gravity`` is off.
+        """
+        if not self.model.gravity:
+            return 0.0
+        g = self.environment.gravity
+        total = 0.0
+        for s in self.sections:
+            rho = self.material_of(s).density
+            if self.model.buoyancy:
+                rho -= self.fluid.density
+            total += rho * g * s.area * s.length
+        return total
+
+    @property
+    def weight_on_hook(self) -> float:
+        """Static hook load, weight - weight_on_bit [N]."""
+        return self.weight - self.operation.weight_on_bit
+
+    # -- cross-field validation --------------------------------------------------------------------------
+
+    @model_validator(mode="after")
+    def _cross_field(self) -> Case:
+        problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        defined = ", ".join(self.materials) or "none"
+        for i, s in enumerate(self.sections):
+            if s.material not in self.materials:
+                problems.append(((("sections", i, "material")), s.material, f"unknown material; defined: {defined}"))
+            if s.outer_diameter >= self.borehole.diameter:
+                problems.append(
+                    (
+                        ("sections", i, "outer_diameter"),
+                        s.outer_diameter,
+                        f"must be less than the borehole diameter ({self.borehole.diameter:g} m)",
+                    )
+                )
+        L = self.length
+        for i, st in enumerate(self.stabilizers):
+            if not 0.0 < st.position <= L:
+                problems.append(
+                    (("stabilizers", i, "position"), st.position, f"must be within the string, 0 < x <= {L:g} m")
+                )
+        for i, p in enumerate(self.mesh.probes):
+            if not 0.0 <= p <= L:
+                problems.append((("mesh", "probes", i), p, f"must be within the string, 0 <= x <= {L:g} m"))
+        if problems:  # the rules below need valid materials and gaps
+            raise _Problems(problems)
+
+        # With gravity off the string weighs nothing and the hook pushes; the rule only applies with gravity.
+        if self.model.gravity:
+            w, wob = self.weight, self.operation.weight_on_bit
+            if wob >= w:
+                problems.append(
+                    (
+                        ("operation", "weight_on_bit"),
+                        wob,
+                        f"must be less than the string's weight: weight_on_bit {wob / 1e3:.4g} kN"
+                        f" >= weight {w / 1e3:.6g} kN",
+                    )
+                )
+        gaps = [(self.borehole.diameter - s.outer_diameter) / 2.0 for s in self.sections]
+        i_min = min(range(len(gaps)), key=gaps.__getitem__)
+        amp = self.initial.lateral_perturbation
+        if amp >= gaps[i_min]:
+            problems.append(
+                (
+                    ("initial", "lateral_perturbation"),
+                    amp,
+                    f"must be less than the smallest radial gap, {gaps[i_min]:.6g} m"
+                    f" (section {self.sections[i_min].name!r})",
+                )
+            )
+        if problems:
+            raise _Problems(problems)
+        return self
+
+    # -- serialisation -----------------------------------------------------------------------------------
+
+    def to_toml(self) -> str:
+        """The case as TOML text, every value a plain SI number; ``load_case`` reads it back to an equal Case."""
+        header = f"# drillstring case {self.name!r}; all numbers in SI units (m, N, Pa, kg/m3, s, rad/s).\n\n"
+        return header + tomli_w.dumps(self.model_dump(mode="python"))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Loading
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _cases_dir() -> Any:
+    return resources.files("drillstring").joinpath("cases")
+
+
+def builtin_cases() -> list[str]:
+    """Names of the built-in cases (``drillstring/cases/<name>.toml``), sorted."""
+    folder = _cases_dir()
+    try:
+        entries = list(folder.iterdir())
+    except (FileNotFoundError, NotADirectoryError):
+        return []
+    return sorted(e.name[: -len(".toml")] for e in entries if e.name.endswith(".toml") and e.is_file())
+
+
+def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
+    """Validate a (TOML-like) mapping into a :class:`Case`; raises :class:`CaseError` listing every problem."""
+    if not isinstance(data, Mapping):
+        raise CaseError(f"a case must be a table (mapping), got {type(data).__name__}", source=source)
+    try:
+        return Case.model_validate(dict(data))
+    except CaseError as exc:
+        raise CaseError(exc.entries, source=source) from None
+
+
+def _looks_like_path(source: str) -> bool:
+    return source.endswith(".toml") or "/" in source or "\\" in source or Path(source).is_file()
+
+
+def load_case(source: str | Path) -> Case:
+    """Load a case: a built-in name (see :func:`builtin_cases`, e.g. ``"reference"``) or a path to a TOML file.
+
+    A string is read as a path when it ends in ``.toml``, contains a path separator or names an existing
+    file; otherwise as a built-in name. Raises :class:`CaseError` for a missing file, an unknown built-in name,
+    a TOML syntax error or an invalid case.
+    """
+    if isinstance(source, Path) or _looks_like_path(str(source)):
+        path = Path(source)
+        label = str(path)
+        try:
+            raw = path.read_bytes()
+        except FileNotFoundError:
+            raise CaseError(f"case file not found: {label}", source=label) from None
+        except OSError as exc:
+            raise CaseError(f"cannot read case file {label}: {exc.strerror or exc}", source=label) from None
+    else:
+        name = str(source)
+        resource = _cases_dir().joinpath(f"{name}.toml")
+        label = f"{name} (built-in)"
+        if not resource.is_file():
+            known = ", ".join(builtin_cases()) or "none"
+            raise CaseError(
+                f"unknown built-in case {name!r}; built-in cases: {known} (or give the path to a .toml file)",
+                source=repr(name),
+            )
+        raw = resource.read_bytes()
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"{label}: not UTF-8 text ({exc.reason} at byte {exc.start})", source=label) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"{label}: TOML syntax error: {exc}", source=label) from None
+    return case_from_dict(data, source=label)

@@ -1,0 +1,430 @@
+"""Tests for drillstring.case: the reference case, units, TOML round trip and every refusal rule."""
+
+from __future__ import annotations
+
+import copy
+import math
+import pickle
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import pytest
+
+from drillstring.case import (
+    Case,
+    CaseError,
+    Fluid,
+    Material,
+    Section,
+    Simulation,
+    builtin_cases,
+    case_from_dict,
+    load_case,
+)
+
+RPM = 2.0 * math.pi / 60.0
+
+
+@pytest.fixture(scope="module")
+def reference() -> Case:
+    return load_case("reference")
+
+
+@pytest.fixture()
+def data() -> dict:
+    """The reference case as a raw TOML dict, fresh for each test to mutate."""
+    text = resources.files("drillstring").joinpath("cases", "reference.toml").read_text(encoding="utf-8")
+    return copy.deepcopy(tomllib.loads(text))
+
+
+def refused(data: dict) -> CaseError:
+    with pytest.raises(CaseError) as info:
+        case_from_dict(data)
+    return info.value
+
+
+def assert_problem(err: CaseError, path: str, value: str, *fragments: str) -> None:
+    """Some line of the message starts with ``path = value`` and contains every fragment.
+
+    (A value given with a unit is followed by its SI value: ``length = '-3 ft' (= -0.9144 SI): ...``.)
+    """
+    head = f"{path} = {value}"
+    lines = [p for p in err.problems if p.startswith(head + ":") or p.startswith(head + " (= ")]
+    assert lines, f"no problem line starting with {head!r} in:\n{err}"
+    assert all(f in lines[0] for f in fragments), lines[0]
+    assert head in str(err)
+
+
+# ---------------------------------------------------------------------------------------------- reference
+
+
+def test_builtin_cases_lists_reference():
+    assert "reference" in builtin_cases()
+
+
+def test_reference_loads(reference):
+    c = reference
+    assert c.name == "reference"
+    assert [s.name for s in c.sections] == ["drill pipe", "drill collar"]
+    dp, dc = c.sections
+    assert (dp.length, dp.outer_diameter, dp.inner_diameter) == (1400.0, 0.127, 0.095)
+    assert (dc.length, dc.outer_diameter, dc.inner_diameter) == (200.0, 0.2286, 0.0762)
+    assert dp.shear_factor == pytest.approx(6 / 7)
+    assert c.borehole.diameter == 0.3
+    assert len(c.stabilizers) == 1
+    assert c.stabilizers[0].position == 1400.0
+    assert c.stabilizers[0].stiffness == 17.5e6
+    steel = c.material_of(dp)
+    assert (steel.young_modulus, steel.density, steel.poisson_ratio) == (210e9, 7850.0, 0.29)
+    assert steel.shear_modulus == pytest.approx(210e9 / 2.58)
+    assert c.material_of(1) is steel
+    assert c.fluid.density == 1200.0 and c.fluid.inlet_velocity == 1.5
+    assert c.fluid.friction_coefficient == 0.0125 and c.fluid.viscous_coefficient == 0.0
+    assert c.damping.modal_damping_ratio == 0.3
+    assert c.damping.rigid_axial == 0.05 and c.damping.rigid_rotation == 0.05
+    assert c.contact.shock_stiffness == 1e8 and c.contact.friction_coefficient == 0.0005
+    assert c.operation.top_speed == pytest.approx(100 * RPM)
+    assert c.operation.weight_on_bit == 1e5
+    assert c.environment.gravity == 9.81
+    br = c.bit_rock
+    coefficients = (br.a1, br.a2, br.a3, br.a4, br.a5, br.regularization)
+    assert coefficients == (3.429e-3, 5.672e-8, 1.374e-4, 9.537e6, 1.475e3, 2.0)
+    assert c.mesh.probes == [1560.0]
+    assert c.initial.lateral_perturbation == pytest.approx(1e-4)
+
+
+def test_reference_geometry_and_weight(reference):
+    c = reference
+    assert c.length == 1600.0
+    assert c.section_boundaries == (1400.0, 1600.0)
+    dp = c.sections[0]
+    assert dp.inner_area == pytest.approx(math.pi * 0.095**2 / 4)
+    assert dp.outer_area == pytest.approx(math.pi * 0.127**2 / 4)
+    assert dp.area == pytest.approx(dp.outer_area - dp.inner_area)
+    assert c.weight == pytest.approx(1.1634e6, rel=1e-4)
+    assert c.weight_on_hook == pytest.approx(1.0634e6, rel=1e-4)
+    assert c.weight - c.weight_on_hook == pytest.approx(1e5)
+
+
+def test_weight_switches(reference):
+    buoyant = reference.model_copy(update={"model": reference.model.model_copy(update={"buoyancy": True})})
+    expected = sum((7850.0 - 1200.0) * 9.81 * s.area * s.length for s in reference.sections)
+    assert buoyant.weight == pytest.approx(expected)
+    weightless = reference.model_copy(update={"model": reference.model.model_copy(update={"gravity": False})})
+    assert weightless.weight == 0.0
+
+
+def test_reference_tables_equal_defaults(reference):
+    """Every optional table in reference.toml is written with its default values (the file documents them)."""
+    minimal = Case(name="m", sections=reference.sections, borehole=reference.borehole)
+    for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "environment", "model",
+                  "mesh", "reduced_model", "simulation", "initial"):  # fmt: skip
+        assert getattr(minimal, table) == getattr(reference, table), table
+
+
+def test_models_are_frozen(reference):
+    with pytest.raises(Exception):
+        reference.name = "other"  # type: ignore[misc]
+    with pytest.raises(Exception):
+        reference.fluid.density = 1.0  # type: ignore[misc]
+
+
+# -------------------------------------------------------------------------------------------------- units
+
+
+@pytest.mark.parametrize(
+    ("text", "si"),
+    [("100 rpm", 100 * RPM), ("1 Hz", 2 * math.pi), ("3 rad/s", 3.0), ("60 rev/min", 2 * math.pi), (5.0, 5.0)],
+)
+def test_angular_speed_units(data, text, si):
+    data["operation"]["top_speed"] = text
+    assert case_from_dict(data).operation.top_speed == pytest.approx(si)
+
+
+@pytest.mark.parametrize(("text", "si"), [("100 kN", 1e5), ("0.1 MN", 1e5), ("2e4 N", 2e4), (50000, 5e4)])
+def test_force_units(data, text, si):
+    data["operation"]["weight_on_bit"] = text
+    assert case_from_dict(data).operation.weight_on_bit == pytest.approx(si)
+
+
+@pytest.mark.parametrize(
+    ("text", "si"), [("8.5 in", 8.5 * 0.0254), ("5 in", 0.127), ("127 mm", 0.127), ("12.7 cm", 0.127)]
+)
+def test_length_units(data, text, si):
+    data["sections"][0]["outer_diameter"] = text
+    assert case_from_dict(data).sections[0].outer_diameter == pytest.approx(si)
+
+
+def test_other_units(data):
+    data["sections"][0]["length"] = "1.4 km"
+    data["stabilizers"][0]["position"] = "4593.175853018373 ft"
+    data["stabilizers"][0]["stiffness"] = "17500 kN/m"
+    data["materials"]["steel"]["young_modulus"] = "210000 MPa"
+    data["materials"]["steel"]["density"] = "7.85 g/cm3"
+    data["fluid"]["inlet_velocity"] = "5400 m/h"
+    data["simulation"]["t_end"] = "0.5 min"
+    data["simulation"]["output_step"] = "10 ms"
+    data["bit_rock"]["a5"] = "1.475 kN*m"
+    data["environment"]["gravity"] = "9.81 m/s^2"
+    c = case_from_dict(data)
+    assert c.sections[0].length == pytest.approx(1400.0)
+    assert c.stabilizers[0].position == pytest.approx(1400.0)
+    assert c.stabilizers[0].stiffness == pytest.approx(17.5e6)
+    assert c.materials["steel"].young_modulus == pytest.approx(210e9)
+    assert c.materials["steel"].density == pytest.approx(7850.0)
+    assert c.fluid.inlet_velocity == pytest.approx(1.5)
+    assert (c.simulation.t_end, c.simulation.output_step) == pytest.approx((30.0, 0.01))
+    assert c.bit_rock.a5 == pytest.approx(1475.0)
+    assert c.environment.gravity == pytest.approx(9.81)
+
+
+# ------------------------------------------------------------------------------------------- round trip
+
+
+def test_to_toml_round_trip(reference, tmp_path):
+    text = reference.to_toml()
+    tomllib.loads(text)  # valid TOML
+    path = tmp_path / "copy.toml"
+    path.write_text(text, encoding="utf-8")
+    again = load_case(path)
+    assert again == reference
+    assert load_case(str(path)) == reference
+    assert again.to_toml() == text
+
+
+def test_round_trip_of_a_modified_case(data, tmp_path):
+    data["operation"]["top_speed"] = "77 rpm"
+    data["materials"]["alloy"] = {"young_modulus": "70 GPa", "density": 2700, "poisson_ratio": 0.33}
+    data["sections"][0]["material"] = "alloy"
+    data["model"]["buoyancy"] = True
+    data["simulation"]["method"] = "bs32"
+    case = case_from_dict(data)
+    (tmp_path / "m.toml").write_text(case.to_toml(), encoding="utf-8")
+    assert load_case(tmp_path / "m.toml") == case
+
+
+def test_case_error_is_value_error_and_picklable(data):
+    data["sections"][0]["length"] = -1
+    err = refused(data)
+    assert isinstance(err, ValueError)
+    again = pickle.loads(pickle.dumps(err))
+    assert str(again) == str(err)
+
+
+# ----------------------------------------------------------------------------------------------- refusals
+
+
+@pytest.mark.parametrize("bad", [0, -5.0, "0 m", "-3 ft"])
+def test_refuses_non_positive_length(data, bad):
+    data["sections"][0]["length"] = bad
+    err = refused(data)
+    assert_problem(err, "sections[0].length", repr(bad), "must be > 0")
+
+
+def test_refuses_negative_inner_diameter(data):
+    data["sections"][1]["inner_diameter"] = "-1 in"
+    assert_problem(refused(data), "sections[1].inner_diameter", "'-1 in'", "must be >= 0")
+
+
+@pytest.mark.parametrize("bad", [0, -0.1])
+def test_refuses_non_positive_outer_diameter(data, bad):
+    data["sections"][0]["outer_diameter"] = bad
+    assert_problem(refused(data), "sections[0].outer_diameter", repr(bad), "must be > 0")
+
+
+def test_refuses_zero_borehole_diameter(data):
+    data["borehole"]["diameter"] = 0
+    assert_problem(refused(data), "borehole.diameter", "0", "must be > 0")
+
+
+@pytest.mark.parametrize("inner", ["0.127 m", "0.2 m"])
+def test_refuses_inner_not_less_than_outer(data, inner):
+    data["sections"][0]["inner_diameter"] = inner
+    err = refused(data)
+    assert_problem(err, "sections[0].inner_diameter", repr(float(inner.split()[0])), "outer_diameter", "0.127")
+
+
+@pytest.mark.parametrize("outer", ["0.3 m", "12 in"])
+def test_refuses_outer_not_less_than_borehole(data, outer):
+    data["sections"][1]["outer_diameter"] = outer
+    data["sections"][1]["inner_diameter"] = "0.1 m"
+    err = refused(data)
+    si = {"0.3 m": "0.3", "12 in": "0.3048"}[outer]
+    assert_problem(err, "sections[1].outer_diameter", si, "borehole", "0.3 m")
+
+
+@pytest.mark.parametrize(("position", "shown"), [("1700 m", "1700.0"), (0, "0.0"), (-10, "-10.0")])
+def test_refuses_stabilizer_outside_string(data, position, shown):
+    data["stabilizers"][0]["position"] = position
+    assert_problem(refused(data), "stabilizers[0].position", shown, "within the string", "1600 m")
+
+
+def test_refuses_probe_outside_string(data):
+    data["mesh"]["probes"] = ["10 m", "1601 m"]
+    assert_problem(refused(data), "mesh.probes[1]", "1601.0", "within the string", "1600 m")
+
+
+def test_probe_at_the_ends_is_allowed(data):
+    data["mesh"]["probes"] = [0, 1600]
+    assert case_from_dict(data).mesh.probes == [0.0, 1600.0]
+
+
+@pytest.mark.parametrize("wob", ["1163.5 kN", "2 MN"])
+def test_refuses_weight_on_bit_not_less_than_weight(data, wob):
+    data["operation"]["weight_on_bit"] = wob
+    err = refused(data)
+    shown = repr(float(wob.split()[0]) * {"kN": 1e3, "MN": 1e6}[wob.split()[1]])
+    assert_problem(err, "operation.weight_on_bit", shown, "weight", "kN", "1163.43 kN")
+
+
+def test_refuses_lateral_perturbation_not_less_than_gap(data):
+    data["initial"]["lateral_perturbation"] = "4 cm"
+    assert_problem(refused(data), "initial.lateral_perturbation", "0.04", "radial gap", "0.0357", "drill collar")
+
+
+def test_refuses_output_step_longer_than_run(data):
+    data["simulation"]["output_step"] = 30
+    assert_problem(refused(data), "simulation.output_step", "30.0", "t_end")
+
+
+def test_refuses_unknown_top_level_key(data):
+    data["colour"] = "red"
+    assert_problem(refused(data), "colour", "'red'", "unknown key", "sections", "borehole")
+
+
+def test_refuses_unknown_nested_key(data):
+    data["fluid"]["colour"] = "red"
+    data["sections"][1]["thickness"] = 3
+    err = refused(data)
+    assert_problem(err, "fluid.colour", "'red'", "unknown key", "inlet_velocity")
+    assert_problem(err, "sections[1].thickness", "3", "unknown key", "outer_diameter")
+
+
+def test_refuses_unknown_table(data):
+    data["bit"] = {"a1": 1}
+    assert_problem(refused(data), "bit", "{'a1': 1}", "unknown key", "bit_rock")
+
+
+def test_refuses_wrong_dimension_unit(data):
+    data["sections"][0]["length"] = "1400 kg"
+    data["operation"]["top_speed"] = "100 kN"
+    err = refused(data)
+    assert_problem(err, "sections[0].length", "'1400 kg'", "'kg'", "not a length unit", "m, cm, mm, km, in, ft")
+    assert_problem(err, "operation.top_speed", "'100 kN'", "'kN' is a force unit", "rpm")
+
+
+def test_refuses_unknown_unit(data):
+    data["borehole"]["diameter"] = "3 furlongs"
+    assert_problem(refused(data), "borehole.diameter", "'3 furlongs'", "unknown unit 'furlongs'", "in, ft")
+
+
+def test_refuses_unit_on_dimensionless(data):
+    data["materials"]["steel"]["poisson_ratio"] = "0.29 m"
+    assert_problem(refused(data), "materials.steel.poisson_ratio", "'0.29 m'", "plain number")
+
+
+@pytest.mark.parametrize("bad", ["fast", "nan", True, [1]])
+def test_refuses_non_numbers(data, bad):
+    data["fluid"]["inlet_velocity"] = bad
+    assert_problem(refused(data), "fluid.inlet_velocity", repr(bad))
+
+
+def test_refuses_unknown_material(data):
+    data["sections"][1]["material"] = "titanium"
+    assert_problem(refused(data), "sections[1].material", "'titanium'", "unknown material", "steel")
+
+
+def test_refuses_missing_required_and_empty_sections(data):
+    del data["borehole"]
+    data["sections"] = []
+    err = refused(data)
+    assert_problem(err, "borehole", "(missing)", "required")
+    assert_problem(err, "sections", "[]", "at least 1")
+
+
+def test_refuses_bad_choice(data):
+    data["simulation"]["method"] = "rk4"
+    data["model"]["nonlinear"] = "some"
+    err = refused(data)
+    assert_problem(err, "simulation.method", "'rk4'", "dopri5", "bs32")
+    assert_problem(err, "model.nonlinear", "'some'", "bit_and_contact", "full")
+
+
+def test_lists_every_problem_one_per_line(data):
+    data["sections"][0]["length"] = -1
+    data["fluid"]["density"] = -5
+    data["damping"]["modal_damping_ratio"] = 1.0
+    err = refused(data)
+    assert len(err.problems) == 3
+    lines = str(err).splitlines()
+    assert len(lines) == 4  # a heading, then one line per problem
+    assert "<dict>" in lines[0]
+    assert_problem(err, "fluid.density", "-5", "must be >= 0")
+    assert_problem(err, "damping.modal_damping_ratio", "1.0", "must be < 1")
+
+
+def test_direct_construction_raises_case_error():
+    with pytest.raises(CaseError) as info:
+        Section(name="s", length=1.0, outer_diameter=0.1, inner_diameter=0.1)
+    assert_problem(info.value, "inner_diameter", "0.1", "outer_diameter")
+    with pytest.raises(CaseError):
+        Material(young_modulus=1, density=1, poisson_ratio=0.5)
+    with pytest.raises(CaseError):
+        Fluid(colour=1)
+    with pytest.raises(CaseError):
+        Simulation(t_end=1.0, output_step=2.0)
+
+
+def test_case_from_dict_names_its_source(data):
+    data["sections"][0]["length"] = -1
+    with pytest.raises(CaseError, match="my-source"):
+        case_from_dict(data, source="my-source")
+    with pytest.raises(CaseError, match="table"):
+        case_from_dict([1, 2], source="x")  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------------------------------------------ loading
+
+
+def test_toml_syntax_error(tmp_path):
+    bad = tmp_path / "broken.toml"
+    bad.write_text('name = "x"\n[sections\n', encoding="utf-8")
+    with pytest.raises(CaseError) as info:
+        load_case(bad)
+    msg = str(info.value)
+    assert "broken.toml" in msg and "TOML syntax error" in msg and "line 2" in msg
+
+
+def test_missing_file(tmp_path):
+    missing = tmp_path / "nowhere.toml"
+    with pytest.raises(CaseError) as info:
+        load_case(missing)
+    assert "not found" in str(info.value) and "nowhere.toml" in str(info.value)
+    with pytest.raises(CaseError, match="nowhere.toml"):
+        load_case(str(missing))
+
+
+def test_unknown_builtin_name():
+    with pytest.raises(CaseError) as info:
+        load_case("no_such_case")
+    msg = str(info.value)
+    assert "no_such_case" in msg and "reference" in msg
+
+
+def test_invalid_file_names_the_file_and_field(tmp_path, data):
+    data["operation"]["weight_on_bit"] = "5 MN"
+    import tomli_w
+
+    path = tmp_path / "heavy.toml"
+    path.write_text(tomli_w.dumps(data), encoding="utf-8")
+    with pytest.raises(CaseError) as info:
+        load_case(path)
+    assert "heavy.toml" in str(info.value)
+    assert_problem(info.value, "operation.weight_on_bit", "5000000.0", "weight")
+
+
+def test_load_case_accepts_path_objects(tmp_path, reference):
+    path = Path(tmp_path) / "ref.toml"
+    path.write_text(reference.to_toml(), encoding="utf-8")
+    assert load_case(path).name == "reference"
