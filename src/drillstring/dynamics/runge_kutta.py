@@ -1,0 +1,863 @@
+"""Explicit embedded Runge–Kutta integration with adaptive step size and dense output (SPEC §7).
+
+Design (after SciPy's ``solve_ivp`` and diffrax): the *method* is data — a :class:`ButcherTableau` —, the
+*step-size controller* is a separate object (:class:`StepSizeController`), the *stepper*
+(:class:`RungeKuttaStepper`) performs one step attempt per :meth:`~RungeKuttaStepper.step` call, and the
+*driver* (:func:`integrate`) produces output on a user-set grid through the stepper's dense output.
+
+Methods
+-------
+- :data:`DORMAND_PRINCE_54` — J. R. Dormand & P. J. Prince, "A family of embedded Runge–Kutta formulae",
+  J. Comput. Appl. Math. 6 (1980) 19–26: 7 stages, FSAL, 5th-order solution, 4th-order embedded error
+  estimate ("local extrapolation"), with a 4th-order continuous extension (see below).
+- :data:`BOGACKI_SHAMPINE_32` — P. Bogacki & L. F. Shampine, "A 3(2) pair of Runge–Kutta formulas",
+  Appl. Math. Lett. 2 (1989) 321–325: 4 stages, FSAL, 3rd-order solution, 2nd-order embedded. It has no
+  tableau dense output; the stepper then uses the cubic Hermite interpolant of ``y`` and ``f`` at both ends
+  of the step, which is 3rd-order accurate, matching the method.
+
+Step-size control
+-----------------
+E. Hairer, S. P. Nørsett & G. Wanner, *Solving Ordinary Differential Equations I* (2nd ed., Springer 1993),
+§II.4: the error of a step is measured in the weighted RMS norm
+``‖err / (atol + rtol·max(|y|, |y_new|))‖_RMS`` and the step is accepted when that norm is ≤ 1; the initial
+step size comes from the algorithm of §II.4 ("Starting step size"). The new step size follows the
+proportional–integral (PI) controller of K. Gustafsson, "Control theoretic techniques for stepsize
+selection in explicit Runge–Kutta methods", ACM TOMS 17 (1991) 533–554 (see also Hairer–Wanner, *Solving
+ODEs II*, §IV.2)::
+
+    h_next = h · clip(safety · err_n^(−β1/k) · err_{n−1}^(β2/k), min_factor, max_factor),   k = q + 1
+
+with ``q`` the order of the error estimate (the lower of the two orders of the pair). After a rejected step
+the controller falls back to the pure integral rule ``safety · err^(−1/k)`` and forbids growth on the next
+accepted step (Hairer–Nørsett–Wanner §II.4).
+
+Dense output
+------------
+A continuous extension (HNW §II.6) replaces the weights ``b_i`` by polynomials
+``b_i(θ) = Σ_j dense[i, j−1] θ^j`` so that ``y(t + θh) ≈ y + h Σ_i b_i(θ) k_i``. It is of order ``p*`` when
+``Σ_i b_i(θ) Φ_i(τ) = θ^ρ(τ)/γ(τ)`` for every rooted tree ``τ`` with ``ρ(τ) ≤ p*`` and every θ. For
+Dormand–Prince 5(4) with ``b_2(θ) ≡ 0``, quartic ``b_i(θ)``, ``b_i(1) = b_i`` (continuity) and
+``b_i'(1) = δ_i7`` (C¹ continuity through the FSAL stage), these 4th-order conditions leave a two-parameter
+family (our own derivation in exact rational arithmetic). We take the member published by L. F. Shampine,
+"Some practical Runge–Kutta formulas", Math. Comp. 46 (1986) 135–150 (the one used by Hairer's DOPRI5
+code); its θ-averaged sum of squared 5th-order error coefficients is within 3 % of the minimum over the
+family.
+``tests/dynamics/test_runge_kutta.py`` checks all the order conditions, the continuity conditions, and the
+observed convergence order.
+
+Failures (SPEC §7: stick and impacts must not crash or hang)
+-----------------------------------------------------------
+A stage with non-finite values (NaN, ±inf, overflow; NumPy floating-point warnings are silenced inside a
+step) counts as a rejected step and shrinks the step by ``min_factor``. :class:`IntegrationError` is raised
+— carrying every output point computed so far in ``.solution`` — when the step size falls below
+``min_step``, when ``max_steps`` attempts are exceeded, or when the state itself becomes non-finite.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "ButcherTableau",
+    "DORMAND_PRINCE_54",
+    "BOGACKI_SHAMPINE_32",
+    "TABLEAUS",
+    "StepSizeController",
+    "RungeKuttaStepper",
+    "Solution",
+    "IntegrationError",
+    "integrate",
+]
+
+RHS = Callable[[float, np.ndarray], np.ndarray]
+
+_TABLEAU_TOL = 1e-12
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Butcher tableaus
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _readonly(x: Any, ndim: int) -> np.ndarray:
+    arr = np.array(x, dtype=np.float64)  # always a private copy
+    if arr.ndim != ndim:
+        raise ValueError(f"expected a {ndim}-D array, got shape {arr.shape}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class ButcherTableau:
+    """An explicit embedded Runge–Kutta pair as data.
+
+    Attributes
+    ----------
+    name:
+        Short name.
+    c:
+        Nodes, shape ``(s,)``.
+    a:
+        Stage coefficients, shape ``(s, s)``, strictly lower triangular.
+    b:
+        Weights of the propagated solution (the higher-order one, "local extrapolation").
+    b_hat:
+        Weights of the embedded solution; ``b − b_hat`` gives the error estimate.
+    order:
+        Order of ``b``.
+    error_order:
+        Order of ``b_hat``.
+    fsal:
+        "First same as last": the last stage is evaluated at the new solution (``c[-1] = 1`` and
+        ``a[-1] = b``), so it is the next step's first stage.
+    dense:
+        Continuous-extension coefficients, shape ``(s, p)``: ``b_i(θ) = Σ_{j=1..p} dense[i, j−1] θ^j`` and
+        ``y(t + θh) ≈ y + h Σ_i b_i(θ) k_i``; ``None`` when the tableau has none (the stepper then uses
+        cubic Hermite interpolation).
+
+    Construction checks the shapes, strict lower triangularity, ``Σ_j a_ij = c_i``, ``Σ b = Σ b_hat = 1``,
+    the FSAL structure when claimed, and ``b_i(1) = b_i`` for the dense output. Arrays are stored as
+    read-only copies.
+    """
+
+    name: str
+    c: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    b_hat: np.ndarray
+    order: int
+    error_order: int
+    fsal: bool = False
+    dense: np.ndarray | None = None
+    # derived (not init arguments)
+    error_weights: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        c = _readonly(self.c, 1)
+        a = _readonly(self.a, 2)
+        b = _readonly(self.b, 1)
+        b_hat = _readonly(self.b_hat, 1)
+        s = c.shape[0]
+        if s < 1 or a.shape != (s, s) or b.shape != (s,) or b_hat.shape != (s,):
+            raise ValueError(
+                f"{self.name}: inconsistent shapes c{c.shape}, a{a.shape}, b{b.shape}, b_hat{b_hat.shape}"
+            )
+        if np.any(np.triu(a) != 0.0):
+            raise ValueError(f"{self.name}: `a` must be strictly lower triangular (explicit method)")
+        if not np.allclose(a.sum(axis=1), c, rtol=0.0, atol=_TABLEAU_TOL):
+            raise ValueError(f"{self.name}: row sums of `a` must equal `c`")
+        if c[0] != 0.0:
+            raise ValueError(f"{self.name}: c[0] must be 0 for an explicit method")
+        if abs(b.sum() - 1.0) > _TABLEAU_TOL or abs(b_hat.sum() - 1.0) > _TABLEAU_TOL:
+            raise ValueError(f"{self.name}: `b` and `b_hat` must each sum to 1 (consistency)")
+        if np.array_equal(b, b_hat):
+            raise ValueError(f"{self.name}: `b_hat` equals `b`; no error estimate")
+        if not (int(self.order) >= 1 and int(self.error_order) >= 1):
+            raise ValueError(f"{self.name}: orders must be positive integers")
+        if self.fsal and (abs(c[-1] - 1.0) > _TABLEAU_TOL or not np.allclose(a[-1], b, rtol=0, atol=_TABLEAU_TOL)):
+            raise ValueError(f"{self.name}: FSAL requires c[-1] = 1 and a[-1] = b")
+        dense = None
+        if self.dense is not None:
+            dense = _readonly(self.dense, 2)
+            if dense.shape[0] != s or dense.shape[1] < 1:
+                raise ValueError(f"{self.name}: `dense` must have shape (s, p), got {dense.shape}")
+            if not np.allclose(dense.sum(axis=1), b, rtol=0.0, atol=_TABLEAU_TOL):
+                raise ValueError(f"{self.name}: dense output must reproduce `b` at θ = 1")
+        ew = b - b_hat
+        ew.setflags(write=False)
+        for name, value in (("c", c), ("a", a), ("b", b), ("b_hat", b_hat), ("dense", dense),
+                            ("order", int(self.order)), ("error_order", int(self.error_order)),
+                            ("fsal", bool(self.fsal)), ("error_weights", ew)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def n_stages(self) -> int:
+        return int(self.c.shape[0])
+
+    @property
+    def controller_order(self) -> int:
+        """Order ``q`` of the local error estimate (the lower order of the pair); the controller uses
+        exponents ``∝ 1/(q + 1)``."""
+        return min(self.order, self.error_order)
+
+    def dense_weights(self, theta: float | np.ndarray) -> np.ndarray:
+        """``b_i(θ)``, shape ``(s,)`` for scalar θ or ``(m, s)`` for an array of θ."""
+        if self.dense is None:
+            raise ValueError(f"{self.name} has no dense-output coefficients")
+        th = np.asarray(theta, dtype=np.float64)
+        powers = th[..., None] ** np.arange(1, self.dense.shape[1] + 1)
+        return powers @ self.dense.T
+
+
+def _fr(*xs: int | str) -> list[float]:
+    return [float(Fraction(x)) for x in xs]
+
+
+def _lower(rows: list[list[float]]) -> np.ndarray:
+    s = len(rows)
+    a = np.zeros((s, s))
+    for i, r in enumerate(rows):
+        a[i, : len(r)] = r
+    return a
+
+
+#: Dormand & Prince (1980) 5(4), FSAL, with Shampine's (1986) 4th-order continuous extension.
+DORMAND_PRINCE_54 = ButcherTableau(
+    name="dopri5",
+    c=_fr(0, "1/5", "3/10", "4/5", "8/9", 1, 1),
+    a=_lower(
+        [
+            [],
+            _fr("1/5"),
+            _fr("3/40", "9/40"),
+            _fr("44/45", "-56/15", "32/9"),
+            _fr("19372/6561", "-25360/2187", "64448/6561", "-212/729"),
+            _fr("9017/3168", "-355/33", "46732/5247", "49/176", "-5103/18656"),
+            _fr("35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84"),
+        ]
+    ),
+    b=_fr("35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84", 0),
+    b_hat=_fr("5179/57600", 0, "7571/16695", "393/640", "-92097/339200", "187/2100", "1/40"),
+    order=5,
+    error_order=4,
+    fsal=True,
+    dense=np.array(
+        [
+            _fr(1, "-8048581381/2820520608", "8663915743/2820520608", "-12715105075/11282082432"),
+            _fr(0, 0, 0, 0),
+            _fr(0, "131558114200/32700410799", "-68118460800/10900136933", "87487479700/32700410799"),
+            _fr(0, "-1754552775/470086768", "14199869525/1410260304", "-10690763975/1880347072"),
+            _fr(0, "127303824393/49829197408", "-318862633887/49829197408", "701980252875/199316789632"),
+            _fr(0, "-282668133/205662961", "2019193451/616988883", "-1453857185/822651844"),
+            _fr(0, "40617522/29380423", "-110615467/29380423", "69997945/29380423"),
+        ]
+    ),
+)
+
+#: Bogacki & Shampine (1989) 3(2), FSAL; dense output by cubic Hermite interpolation.
+BOGACKI_SHAMPINE_32 = ButcherTableau(
+    name="bs32",
+    c=_fr(0, "1/2", "3/4", 1),
+    a=_lower([[], _fr("1/2"), _fr(0, "3/4"), _fr("2/9", "1/3", "4/9")]),
+    b=_fr("2/9", "1/3", "4/9", 0),
+    b_hat=_fr("7/24", "1/4", "1/3", "1/8"),
+    order=3,
+    error_order=2,
+    fsal=True,
+    dense=None,
+)
+
+TABLEAUS: dict[str, ButcherTableau] = {"dopri5": DORMAND_PRINCE_54, "bs32": BOGACKI_SHAMPINE_32}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Errors and results
+# ---------------------------------------------------------------------------------------------------------
+
+
+class IntegrationError(RuntimeError):
+    """The integration could not continue. ``.solution`` holds the output computed so far
+    (status ``"failed"``); it is ``None`` when raised by a bare :class:`RungeKuttaStepper`."""
+
+    def __init__(self, message: str, solution: Solution | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.solution = solution
+
+
+@dataclass
+class Solution:
+    """Result of :func:`integrate`: outputs ``y[i] = observe(t[i], y(t[i]))`` (or the state itself)."""
+
+    t: np.ndarray
+    y: np.ndarray
+    status: str
+    message: str
+    n_rhs: int
+    n_accepted: int
+    n_rejected: int
+    wall_time: float
+
+    @property
+    def success(self) -> bool:
+        return self.status == "success"
+
+    @property
+    def stats(self) -> dict[str, Any]:
+        return {
+            "status": self.status,
+            "n_out": int(self.t.shape[0]),
+            "n_rhs": self.n_rhs,
+            "n_accepted": self.n_accepted,
+            "n_rejected": self.n_rejected,
+            "n_steps": self.n_accepted + self.n_rejected,
+            "wall_time": self.wall_time,
+        }
+
+
+def _describe_nonfinite(x: np.ndarray) -> str:
+    if np.isnan(x).any():
+        return "NaN"
+    return "inf"
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Step-size controller
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class StepSizeController:
+    """PI step-size controller (Gustafsson 1991; Hairer–Nørsett–Wanner I §II.4, II §IV.2).
+
+    ``beta1`` and ``beta2`` are the gains in units of ``1/k`` (``k = order + 1``, ``order`` being that of
+    the error estimate): the exponents are ``β1/k`` on the current error and ``β2/k`` on the previous
+    accepted error. The defaults ``β1 = 0.85, β2 = 0.2`` are those of Hairer's DOPRI5 code
+    (HNW I §II.4: ``α = 1/k − 0.75 β``, ``β = 0.04`` for ``k = 5``) scaled by ``k``; Gustafsson's own gains
+    ``k_I = 0.3, k_P = 0.4`` give ``β1 = k_I + k_P = 0.7, β2 = k_P = 0.4`` (smoother but ~30 % more steps:
+    with ``safety`` the PI loop settles at an error norm ``safety^(k/(β1−β2))``, 0.44 with the defaults,
+    0.17 with Gustafsson's); ``β1 = 1, β2 = 0`` is the classical integral (I) controller (0.59).
+
+    The controller keeps the previous accepted error norm and whether the last attempt was rejected;
+    call :meth:`reset` before reusing it for another integration.
+    """
+
+    rtol: float = 1e-6
+    atol: float | np.ndarray = 1e-9
+    safety: float = 0.9
+    min_factor: float = 0.2
+    max_factor: float = 10.0
+    beta1: float = 0.85
+    beta2: float = 0.2
+    max_step: float = math.inf
+    _err_prev: float = field(default=1.0, init=False, repr=False)
+    _rejected_last: bool = field(default=False, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if np.any(np.asarray(self.rtol) < 0) or np.any(np.asarray(self.atol) < 0):
+            raise ValueError("rtol and atol must be non-negative")
+        if not np.all(np.asarray(self.atol) + np.asarray(self.rtol) > 0):
+            raise ValueError("atol + rtol must be positive")
+        if not (0 < self.safety <= 1 and 0 < self.min_factor < 1 < self.max_factor):
+            raise ValueError("need 0 < safety <= 1 and 0 < min_factor < 1 < max_factor")
+        if not self.max_step > 0:
+            raise ValueError("max_step must be positive")
+        if not isinstance(self.atol, float | int):
+            self.atol = np.asarray(self.atol, dtype=np.float64)
+
+    def reset(self) -> None:
+        self._err_prev = 1.0
+        self._rejected_last = False
+
+    def _scale(self, y: np.ndarray, y_new: np.ndarray) -> np.ndarray:
+        return self.atol + self.rtol * np.maximum(np.abs(y), np.abs(y_new))
+
+    def error_norm(self, y: np.ndarray, y_new: np.ndarray, err: np.ndarray) -> float:
+        """RMS of ``err / (atol + rtol·max(|y|, |y_new|))`` (HNW I, eq. II.4.11)."""
+        r = np.abs(err) / self._scale(y, y_new)
+        return float(np.sqrt(np.mean(r * r))) if r.size else 0.0
+
+    def _norm(self, x: np.ndarray, scale: np.ndarray) -> float:
+        r = np.abs(x) / scale
+        return float(np.sqrt(np.mean(r * r))) if r.size else 0.0
+
+    def initial_step(self, rhs: RHS, t0: float, y0: np.ndarray, f0: np.ndarray, order: int,
+                     direction: float = 1.0) -> float:
+        """Starting step size, HNW I §II.4 (makes exactly one extra ``rhs`` call). Returns ``|h|``.
+
+        ``order`` is that of the error estimate (``q``); the exponent is ``1/(q + 1)``."""
+        scale = self.atol + self.rtol * np.abs(y0)
+        scale = np.broadcast_to(scale, np.shape(y0))
+        d0 = self._norm(y0, scale)
+        d1 = self._norm(f0, scale)
+        h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+        h0 = min(h0, self.max_step)
+        with np.errstate(all="ignore"):
+            try:
+                y1 = y0 + direction * h0 * f0
+                f1 = np.asarray(rhs(t0 + direction * h0, y1))
+                d2 = self._norm(f1 - f0, scale) / h0
+            except (FloatingPointError, OverflowError):
+                d2 = math.nan
+        if not math.isfinite(d2):
+            return h0
+        dmax = max(d1, d2)
+        h1 = max(1e-6, h0 * 1e-3) if dmax <= 1e-15 else (0.01 / dmax) ** (1.0 / (order + 1))
+        return float(min(100.0 * h0, h1, self.max_step))
+
+    def accept(self, error_norm: float, h: float, order: int) -> tuple[bool, float]:
+        """Decide on a step with error norm ``error_norm`` taken with size ``h`` (signed).
+
+        Returns ``(accepted, h_next)``; a non-finite ``error_norm`` is a rejection by ``min_factor``."""
+        k = order + 1.0
+        if not math.isfinite(error_norm):
+            self._rejected_last = True
+            return False, self._limit(h * self.min_factor)
+        if error_norm <= 1.0:
+            if error_norm == 0.0:
+                factor = self.max_factor
+            else:
+                factor = (self.safety * error_norm ** (-self.beta1 / k)
+                          * self._err_prev ** (self.beta2 / k))
+                factor = min(self.max_factor, max(self.min_factor, factor))
+            if self._rejected_last:
+                factor = min(1.0, factor)
+            self._err_prev = max(error_norm, 1e-4)
+            self._rejected_last = False
+            return True, self._limit(h * factor)
+        factor = max(self.min_factor, self.safety * error_norm ** (-1.0 / k))
+        self._rejected_last = True
+        return False, self._limit(h * factor)
+
+    def _limit(self, h: float) -> float:
+        return math.copysign(min(abs(h), self.max_step), h)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Stepper
+# ---------------------------------------------------------------------------------------------------------
+
+
+class RungeKuttaStepper:
+    """One explicit embedded Runge–Kutta step per :meth:`step` call.
+
+    Parameters
+    ----------
+    rhs:
+        ``rhs(t, y) -> dy/dt`` (array of the shape of ``y``). It must not modify ``y`` in place.
+    t0, y0:
+        Initial time and state (``y0`` is copied, 1-D).
+    tableau:
+        The method.
+    controller:
+        A :class:`StepSizeController`, or ``None`` for fixed steps of size ``h0`` (every step accepted; the
+        last one is shortened to land on ``t_bound``).
+    h0:
+        First step size (magnitude); ``None`` chooses it by :meth:`StepSizeController.initial_step`.
+    t_bound:
+        Steps never go past this time (default ``+inf``); it also sets the direction of integration.
+    min_step:
+        :class:`IntegrationError` when the step size to attempt falls below this (a last step shortened to
+        land on ``t_bound`` is exempt).
+
+    State: ``t``, ``y``, ``f`` (= ``rhs(t, y)``, reused as first stage, FSAL), ``h`` (next step to
+    attempt, signed), counters ``n_rhs``, ``n_accepted``, ``n_rejected``; ``last_error_norm`` and
+    ``last_cause`` (why the last attempt was rejected, or ``None``).
+    """
+
+    def __init__(self, rhs: RHS, t0: float, y0: np.ndarray, tableau: ButcherTableau,
+                 controller: StepSizeController | None, h0: float | None = None, *,
+                 t_bound: float = math.inf, min_step: float = 0.0) -> None:
+        self.rhs = rhs
+        self.tableau = tableau
+        self.controller = controller
+        self.t = float(t0)
+        self.t_bound = float(t_bound)
+        if self.t_bound == self.t:
+            raise ValueError("t_bound equals t0: nothing to integrate")
+        self.direction = 1.0 if self.t_bound > self.t else -1.0
+        self.min_step = float(min_step)
+        y = np.array(y0, dtype=np.result_type(np.asarray(y0), np.float64))
+        if y.ndim != 1:
+            raise ValueError(f"y0 must be 1-D, got shape {y.shape}")
+        self.y = y
+        self.n_rhs = 0
+        self.n_accepted = 0
+        self.n_rejected = 0
+        self.last_error_norm = math.nan
+        self.last_cause: str | None = None
+
+        with np.errstate(all="ignore"):
+            f = np.asarray(rhs(self.t, self.y), dtype=y.dtype)
+        self.n_rhs += 1
+        if f.shape != y.shape:
+            raise ValueError(f"rhs returned shape {f.shape}, expected {y.shape}")
+        if not np.isfinite(f).all():
+            raise IntegrationError(
+                f"non-finite right-hand side at the initial state, t = {self.t:.10g} s: "
+                f"{_describe_nonfinite(f)} in rhs(t0, y0)"
+            )
+        self.f = f
+
+        # method data laid out for the hot path
+        s = tableau.n_stages
+        self._s = s
+        self._c = tableau.c
+        self._a_rows = tuple(np.ascontiguousarray(tableau.a[i, :i]) for i in range(s))
+        self._b = tableau.b
+        self._e = tableau.error_weights
+        self._q = tableau.controller_order
+        self._k = np.empty((s, y.size), dtype=y.dtype)  # stages of the step being attempted
+        self._k_last = np.empty_like(self._k)  # stages of the last accepted step (dense output)
+
+        self._t0 = self.t
+        self._fixed = controller is None
+        self._stretch = 1e-6 if self._fixed else 0.01
+        if controller is None:
+            if h0 is None or not h0 > 0:
+                raise ValueError("fixed-step integration (controller=None) needs h0 > 0")
+            h = float(h0)
+        elif h0 is None:
+            h = controller.initial_step(rhs, self.t, self.y, self.f, self._q, self.direction)
+            self.n_rhs += 1
+            h = max(h, self.min_step)
+        else:
+            h = min(abs(float(h0)), controller.max_step)
+        if not h > 0:
+            raise ValueError("initial step size must be positive")
+        self.h = self.direction * h
+
+        # dense-output data of the last accepted step
+        self.t_old = math.nan
+        self.h_last = math.nan
+        self._y_old: np.ndarray | None = None
+        self._f_old: np.ndarray | None = None
+
+    # -- helpers -------------------------------------------------------------------------------------------
+    def _fail(self, cause: str, h: float | None = None) -> IntegrationError:
+        hh = abs(self.h if h is None else h)
+        return IntegrationError(f"integration failed at t = {self.t:.10g} s (h = {hh:.3g} s): {cause}")
+
+    @property
+    def finished(self) -> bool:
+        return self.t == self.t_bound
+
+    # -- the step ------------------------------------------------------------------------------------------
+    def step(self) -> bool:
+        """Attempt one step; return ``True`` when accepted (``t``, ``y``, ``f`` advance), ``False`` when
+        rejected (only ``h`` shrinks). Raises :class:`IntegrationError` when the step size falls below
+        ``min_step`` or the accepted state is non-finite."""
+        t, y = self.t, self.y
+        remaining = self.t_bound - t
+        if remaining == 0.0:
+            raise RuntimeError("the stepper has already reached t_bound")
+        h = self.h
+        # land exactly on t_bound, stretching the step slightly rather than leaving a sliver (Hairer's
+        # DOPRI5 stretches by up to 1 %; fixed steps only absorb round-off)
+        if abs(h) * (1.0 + self._stretch) >= abs(remaining):
+            h = remaining
+            last = True
+        else:
+            last = False
+            if abs(h) < self.min_step:
+                cause = f"step size fell below min_step = {self.min_step:.3g} s"
+                if self.last_cause:
+                    cause += f"; last rejection: {self.last_cause}"
+                raise self._fail(cause)
+            if t + h == t:
+                raise self._fail("step size below the floating-point resolution of t")
+
+        rhs, c, k, a_rows = self.rhs, self._c, self._k, self._a_rows
+        k[0] = self.f
+        cause = None
+        y_new = None
+        with np.errstate(all="ignore"):
+            try:
+                for i in range(1, self._s):
+                    yi = y + h * (a_rows[i] @ k[: i])
+                    k[i] = rhs(t + c[i] * h, yi)
+                self.n_rhs += self._s - 1
+                if not np.isfinite(k).all():
+                    bad = int(np.argmax(~np.isfinite(k).all(axis=1)))
+                    cause = f"{_describe_nonfinite(k[bad])} in the right-hand side (stage {bad + 1})"
+                else:
+                    # FSAL: the last stage argument *is* y_new; otherwise weight the stages with b
+                    y_new = yi if self.tableau.fsal else y + h * (self._b @ k)
+                    err = h * (self._e @ k)
+            except (FloatingPointError, OverflowError) as exc:
+                self.n_rhs += i  # stages evaluated, including the failing one
+                cause = f"{type(exc).__name__} in the right-hand side: {exc}"
+
+        ctrl = self.controller
+        if cause is not None:
+            self.last_cause = cause
+            self.last_error_norm = math.nan
+            if ctrl is None:
+                raise self._fail(cause, h)
+            self.n_rejected += 1
+            ctrl._rejected_last = True
+            self.h = ctrl._limit(h * ctrl.min_factor)
+            return False
+
+        if ctrl is None:
+            accepted, h_next = True, self.h
+            self.last_error_norm = math.nan
+        else:
+            with np.errstate(all="ignore"):
+                en = ctrl.error_norm(y, y_new, err)
+            self.last_error_norm = en
+            accepted, h_next = ctrl.accept(en, h, self._q)
+            if not accepted:
+                self.last_cause = (f"error estimate not met (error norm {en:.3g})" if math.isfinite(en)
+                                   else "non-finite error estimate")
+                self.n_rejected += 1
+                self.h = h_next
+                return False
+
+        if not np.isfinite(y_new).all():
+            raise self._fail(f"non-finite state ({_describe_nonfinite(y_new)}) after an accepted step", h)
+        if self.tableau.fsal:
+            f_new = k[-1].copy()
+        else:
+            with np.errstate(all="ignore"):
+                f_new = np.asarray(rhs(t + h, y_new), dtype=y.dtype)
+            self.n_rhs += 1
+            if not np.isfinite(f_new).all():
+                raise self._fail(f"{_describe_nonfinite(f_new)} in the right-hand side at the accepted state", h)
+
+        # commit; keep the accepted step's data for dense output
+        self._k, self._k_last = self._k_last, self._k
+        self.t_old, self.h_last = t, h
+        self._y_old, self._f_old = y, self.f
+        if last:
+            self.t = self.t_bound
+        elif self._fixed:  # t0 + n·h: no drift over many fixed steps
+            self.t = self._t0 + (self.n_accepted + 1) * h
+        else:
+            self.t = t + h
+        self.y, self.f = y_new, f_new
+        self.h = h_next
+        self.n_accepted += 1
+        self.last_cause = None
+        return True
+
+    # -- dense output --------------------------------------------------------------------------------------
+    def interpolate(self, t: float | np.ndarray) -> np.ndarray:
+        """State at time(s) ``t`` inside the last accepted step ``[t_old, t]``: shape ``(n,)`` for a
+        scalar, ``(m, n)`` for ``m`` times. Uses the tableau's continuous extension, or cubic Hermite
+        interpolation of ``y`` and ``f`` at both ends when the tableau has none. Valid until the next
+        accepted step."""
+        if self._y_old is None:
+            raise RuntimeError("no accepted step yet: nothing to interpolate")
+        tt = np.asarray(t, dtype=np.float64)
+        h = self.h_last
+        theta = (tt - self.t_old) / h
+        if np.any(theta < -1e-9) or np.any(theta > 1.0 + 1e-9):
+            raise ValueError("interpolate: time outside the last accepted step")
+        y0 = self._y_old
+        if self.tableau.dense is not None:
+            w = self.tableau.dense_weights(theta)  # (s,) or (m, s)
+            return y0 + h * (w @ self._k_last)
+        # cubic Hermite on (y0, f0), (y1, f1)
+        th = theta[..., None]
+        th2 = th * th
+        th3 = th2 * th
+        h00 = 2 * th3 - 3 * th2 + 1
+        h10 = th3 - 2 * th2 + th
+        h01 = -2 * th3 + 3 * th2
+        h11 = th3 - th2
+        out = h00 * y0 + (h * h10) * self._f_old + h01 * self.y + (h * h11) * self.f
+        return out
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Driver
+# ---------------------------------------------------------------------------------------------------------
+
+
+class _Rows:
+    """Output rows: preallocated for a known grid, grown by doubling otherwise."""
+
+    def __init__(self, capacity: int) -> None:
+        self.t = np.empty(max(capacity, 1))
+        self.y: np.ndarray | None = None
+        self.n = 0
+
+    def add(self, t: np.ndarray, rows: np.ndarray) -> None:
+        m = t.shape[0]
+        if m == 0:
+            return
+        if self.y is None:
+            self.y = np.empty((self.t.shape[0], rows.shape[1]), dtype=rows.dtype)
+        need = self.n + m
+        if need > self.t.shape[0]:
+            cap = max(need, 2 * self.t.shape[0])
+            self.t = np.resize(self.t, cap)
+            y = np.empty((cap, self.y.shape[1]), dtype=self.y.dtype)
+            y[: self.n] = self.y[: self.n]
+            self.y = y
+        self.t[self.n:need] = t
+        self.y[self.n:need] = rows
+        self.n = need
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        y = self.y[: self.n].copy() if self.y is not None else np.empty((0, 0))
+        return self.t[: self.n].copy(), y
+
+
+def _output_grid(t0: float, t_end: float, t_out: Any, output_step: float | None) -> np.ndarray | None:
+    span = t_end - t0
+    direction = 1.0 if span >= 0 else -1.0
+    if t_out is not None:
+        if output_step is not None:
+            raise ValueError("give t_out or output_step, not both")
+        g = np.array(t_out, dtype=np.float64).ravel()
+        tol = 1e-12 * max(abs(t0), abs(t_end), abs(span))
+        if g.size and np.any(np.diff(g) * direction <= 0):
+            raise ValueError("t_out must be strictly monotone in the direction of integration")
+        if g.size and (direction * (g[0] - t0) < -tol or direction * (g[-1] - t_end) > tol):
+            raise ValueError("t_out must lie inside t_span")
+        if g.size:  # snap round-off at the ends
+            g[0] = t0 if abs(g[0] - t0) <= tol else g[0]
+            g[-1] = t_end if abs(g[-1] - t_end) <= tol else g[-1]
+        return g
+    if output_step is not None:
+        dt = abs(float(output_step))
+        if not dt > 0:
+            raise ValueError("output_step must be positive")
+        n = int(math.floor(abs(span) / dt + 1e-9))
+        g = t0 + direction * dt * np.arange(n + 1)
+        if abs(g[-1] - t_end) <= 1e-9 * dt:
+            g[-1] = t_end
+        else:
+            g = np.append(g, t_end)
+        return g
+    return None
+
+
+def integrate(
+    rhs: RHS,
+    t_span: tuple[float, float],
+    y0: np.ndarray,
+    *,
+    t_out: np.ndarray | None = None,
+    output_step: float | None = None,
+    tableau: ButcherTableau | str = DORMAND_PRINCE_54,
+    rtol: float = 1e-6,
+    atol: float | np.ndarray = 1e-9,
+    max_step: float = math.inf,
+    min_step: float = 1e-12,
+    max_steps: int = 1_000_000,
+    first_step: float | None = None,
+    fixed_step: float | None = None,
+    progress: Callable[[float], None] | None = None,
+    observe: Callable[[float, np.ndarray], np.ndarray] | None = None,
+    raise_on_failure: bool = True,
+    controller: StepSizeController | None = None,
+) -> Solution:
+    """Integrate ``y' = rhs(t, y)`` over ``t_span = (t0, t_end)`` (``t_end < t0`` integrates backwards).
+
+    Output grid: ``t_out`` (monotone, inside ``t_span``), or ``t0 + k·output_step`` up to ``t_end``, with
+    ``t_end`` itself always included exactly (appended when the span is not a multiple of the step); with
+    neither, every accepted step is output. Values between steps come from the stepper's dense output.
+    ``observe(t, y)`` maps the state to what is stored (1-D; a scalar is stored as one column).
+
+    Step control: ``rtol``, ``atol`` (scalar or per-component), ``max_step``, ``first_step``; a fully
+    configured ``controller`` overrides those four. ``fixed_step`` switches control off (every step of
+    that size accepted, the last one shortened to land on ``t_end``) — for convergence studies.
+
+    Failure: when the step size falls below ``min_step``, after ``max_steps`` step attempts (accepted +
+    rejected), or when the state becomes non-finite, :class:`IntegrationError` is raised with the partial
+    :class:`Solution` in ``.solution``; with ``raise_on_failure=False`` that partial solution (status
+    ``"failed"``) is returned instead. ``progress(t)`` is called at most every 0.5 % of the span, and at
+    the end.
+    """
+    wall0 = time.perf_counter()
+    if isinstance(tableau, str):
+        try:
+            tableau = TABLEAUS[tableau]
+        except KeyError:
+            raise ValueError(f"unknown tableau {tableau!r}; known: {sorted(TABLEAUS)}") from None
+    t0, t_end = float(t_span[0]), float(t_span[1])
+    if not (math.isfinite(t0) and math.isfinite(t_end)):
+        raise ValueError("t_span must be finite")
+    y0 = np.asarray(y0)
+    y0 = y0.astype(np.result_type(y0, np.float64), copy=False)
+    span = abs(t_end - t0)
+    direction = 1.0 if t_end >= t0 else -1.0
+    grid = _output_grid(t0, t_end, t_out, output_step)
+
+    def obs(t: float, y: np.ndarray) -> np.ndarray:
+        if observe is None:
+            return y
+        return np.atleast_1d(np.asarray(observe(t, y))).ravel()
+
+    rows = _Rows(grid.shape[0] if grid is not None else 1024)
+    gi = 0  # next grid index to fill
+    if grid is None:
+        rows.add(np.array([t0]), obs(t0, y0)[None, :])
+    else:
+        while gi < grid.shape[0] and grid[gi] == t0:
+            rows.add(grid[gi: gi + 1], obs(t0, y0)[None, :])
+            gi += 1
+
+    stepper: RungeKuttaStepper | None = None
+
+    def result(status: str, message: str) -> Solution:
+        t_arr, y_arr = rows.arrays()
+        return Solution(
+            t=t_arr, y=y_arr, status=status, message=message,
+            n_rhs=stepper.n_rhs if stepper else 0,
+            n_accepted=stepper.n_accepted if stepper else 0,
+            n_rejected=stepper.n_rejected if stepper else 0,
+            wall_time=time.perf_counter() - wall0,
+        )
+
+    def failed(exc: IntegrationError) -> Solution:
+        sol = result("failed", exc.message)
+        exc.solution = sol
+        if raise_on_failure:
+            raise exc
+        return sol
+
+    if span == 0.0:
+        return result("success", "empty time span")
+
+    if fixed_step is not None:
+        ctrl = None
+        h0 = float(fixed_step)
+    else:
+        ctrl = controller if controller is not None else StepSizeController(
+            rtol=rtol, atol=atol, max_step=max_step)
+        ctrl.reset()
+        h0 = first_step
+    try:
+        stepper = RungeKuttaStepper(rhs, t0, y0, tableau, ctrl, h0, t_bound=t_end, min_step=min_step)
+    except IntegrationError as exc:
+        return failed(exc)
+
+    dgrid = direction * grid if grid is not None else None
+    prog_every = 0.005 * span
+    prog_last = t0
+    if progress is not None:
+        progress(t0)
+    try:
+        while not stepper.finished:
+            if stepper.n_accepted + stepper.n_rejected >= max_steps:
+                raise stepper._fail(f"maximum number of step attempts exceeded (max_steps = {max_steps})")
+            if not stepper.step():
+                continue
+            t_new = stepper.t
+            if grid is None:
+                rows.add(np.array([t_new]), obs(t_new, stepper.y)[None, :])
+            else:
+                j = int(np.searchsorted(dgrid, direction * t_new, side="right"))
+                if j > gi:
+                    tg = grid[gi:j]
+                    exact_end = tg[-1] == t_new
+                    inner = tg[:-1] if exact_end else tg
+                    if inner.size:
+                        ys = stepper.interpolate(inner)
+                        if observe is None:
+                            rows.add(inner, ys)
+                        else:
+                            rows.add(inner, np.stack([obs(ti, yi) for ti, yi in zip(inner, ys)]))
+                    if exact_end:
+                        rows.add(tg[-1:], obs(t_new, stepper.y)[None, :])
+                    gi = j
+            if progress is not None and abs(t_new - prog_last) >= prog_every:
+                progress(t_new)
+                prog_last = t_new
+    except IntegrationError as exc:
+        return failed(exc)
+
+    if progress is not None and prog_last != t_end:
+        progress(t_end)
+    return result("success", f"reached t_end = {t_end:.10g} s")
