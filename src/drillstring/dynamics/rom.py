@@ -1,0 +1,292 @@
+"""The reduced-order model (ROM) of the drill-string and its right-hand side (SPEC §6–§7).
+
+The response about the prestressed static state, ``q = q_S + q̄``, is projected on mass-normalised
+normal modes of the prestressed linear system (:mod:`drillstring.modal`):
+``q̄ = Φ η``, ``Φᵀ (M + M_f) Φ = I``, ``Φᵀ (K + K_g + K_f) Φ = diag(ω²)``. The basis holds the rigid
+axial translation, ``n_a`` elastic axial modes, ``n_t`` torsional modes (top fixed) and ``n_l``
+lateral modes in each plane. The reduced equations are
+
+    η̈ + (D + Φᵀ C_f Φ) η̇ + diag(ω²) η = Φᵀ (f_NL(q, q̇) + wob e_bit,u)
+
+where ``D`` is modal damping ``2 ξ ω_i`` on the elastic modes and ``c1 / m_string`` on the rigid axial
+mode, ``C_f`` the fluid (Coriolis + viscous) damping, and ``wob e_bit,u`` removes the static bit
+reaction that ``q_S`` already balances (the hook force stays equal to the static weight-on-hook,
+SPEC §7). The top rotation is imposed: ``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is
+``Ω + (Φ η̇)_θx``; the rigid rotation is prescribed, hence its damping coefficient ``c2`` does not
+enter the response (it only adds ``c2 Ω`` to the torque the rotary table supplies).
+
+``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
+the bit node and the borehole shocks and rubbing at every node, evaluated in physical DOFs and
+projected. The right-hand side is a Numba-compiled kernel over preallocated arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from drillstring.fem.assembly import THETA_X, U, V, W, dof
+from drillstring.forces.bit_rock import BitRockParameters, bit_rock_force_floored
+from drillstring.forces.contact import ContactParameters, contact_forces
+from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes
+from drillstring.statics import StaticState, case_static_state
+
+#: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
+OBSERVABLES = (
+    "rate_of_penetration",  # m/s, u̇ at the bit
+    "bit_speed",  # rad/s, θ̇x at the bit
+    "torque_on_bit",  # N·m, torque the rock applies against the rotation (−t_xbit)
+    "force_on_bit",  # N, axial force of the rock on the bit, upward positive (−f_xbit)
+    "bit_depth",  # m, bit displacement from the static state (advance of the bit)
+    "nodes_in_contact",  # number of nodes touching the borehole
+)
+
+
+@njit(cache=True)
+def _physical_state(y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin):
+    """Lateral displacements/velocities and spin speed at every node from modal state ``y``."""
+    eta = y[:n]
+    eta_dot = y[n:]
+    v[:] = phi_v @ eta
+    w[:] = phi_w @ eta
+    v_dot[:] = phi_v @ eta_dot
+    w_dot[:] = phi_w @ eta_dot
+    spin[:] = top_speed + phi_tx @ eta_dot
+    bit_velocity = bit_u @ eta_dot
+    bit_speed = top_speed + bit_t @ eta_dot
+    return bit_velocity, bit_speed
+
+
+@njit(cache=True)
+def _rhs_kernel(
+    y, out, omega2, damping, bit_u, bit_t, phi_v, phi_w, phi_tx, phi_vt, phi_wt, phi_txt,
+    gap, outer_diameter, top_speed, weight_on_bit, bit_args, contact_args, tangential,
+    v, w, v_dot, w_dot, spin, force_v, force_w, torque,
+):
+    n = omega2.shape[0]
+    bit_velocity, bit_speed = _physical_state(
+        y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin
+    )
+    axial_force, bit_torque = bit_rock_force_floored(
+        bit_velocity, bit_speed, bit_args[0], bit_args[1], bit_args[2], bit_args[3], bit_args[4],
+        bit_args[5], bit_args[6],
+    )
+    contact_forces(v, w, v_dot, w_dot, spin, gap, outer_diameter, contact_args[0], contact_args[1],
+                   contact_args[2], tangential, force_v, force_w, torque)
+    eta = y[:n]
+    eta_dot = y[n:]
+    generalized = phi_vt @ force_v + phi_wt @ force_w + phi_txt @ torque
+    generalized += bit_u * (axial_force + weight_on_bit) + bit_t * bit_torque
+    out[:n] = eta_dot
+    out[n:] = generalized - damping @ eta_dot - omega2 * eta
+
+
+@njit(cache=True)
+def _observe_kernel(
+    y, out, omega2, bit_u, bit_t, phi_v, phi_w, phi_tx, gap, top_speed, bit_args, probe_nodes,
+    v, w, v_dot, w_dot, spin, in_contact,
+):
+    n = omega2.shape[0]
+    bit_velocity, bit_speed = _physical_state(
+        y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin
+    )
+    axial_force, bit_torque = bit_rock_force_floored(
+        bit_velocity, bit_speed, bit_args[0], bit_args[1], bit_args[2], bit_args[3], bit_args[4],
+        bit_args[5], bit_args[6],
+    )
+    count = 0
+    for i in range(v.shape[0]):
+        in_contact[i] = np.sqrt(v[i] * v[i] + w[i] * w[i]) > gap[i]
+        count += in_contact[i]
+    out[0] = bit_velocity
+    out[1] = bit_speed
+    out[2] = -bit_torque
+    out[3] = -axial_force
+    out[4] = bit_u @ y[:n]
+    out[5] = count
+    for k in range(probe_nodes.shape[0]):
+        j = probe_nodes[k]
+        out[6 + k] = np.sqrt(v[j] * v[j] + w[j] * w[j])
+
+
+@dataclass
+class ReducedOrderModel:
+    """Modal model of one drilling configuration (SI units).
+
+    Attributes:
+        angular_frequencies: ω of each basis vector [rad/s] (0 for the rigid axial mode).
+        damping: reduced damping matrix (modal + rigid + fluid) [1/s].
+        basis: Φ, (n_dofs, n) global mode shapes.
+        family: family label of each basis vector.
+        probe_positions: x of the radial-displacement probes [m].
+    """
+
+    static: StaticState
+    system: LinearSystem
+    modes: Modes
+    basis: np.ndarray
+    family: tuple[str, ...]
+    angular_frequencies: np.ndarray
+    damping: np.ndarray
+    top_speed: float
+    weight_on_bit: float
+    bit_rock: BitRockParameters
+    contact: ContactParameters
+    gap: np.ndarray
+    outer_diameter: np.ndarray
+    probe_positions: np.ndarray
+    _work: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        mesh = self.static.mesh
+        nodes = np.arange(mesh.n_nodes)
+        phi = self.basis
+        self.omega2 = np.ascontiguousarray(np.sign(self.angular_frequencies) * self.angular_frequencies**2)
+        self.bit_u = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, U)])
+        self.bit_t = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, THETA_X)])
+        self.phi_v = np.ascontiguousarray(phi[dof(nodes, V)])
+        self.phi_w = np.ascontiguousarray(phi[dof(nodes, W)])
+        self.phi_tx = np.ascontiguousarray(phi[dof(nodes, THETA_X)])
+        self.probe_nodes = np.array([mesh.node_index(x) for x in self.probe_positions], dtype=np.int64)
+        self.bit_args = np.array(self.bit_rock.kernel_args(), dtype=float)
+        c = self.contact
+        self.contact_args = np.array([c.shock_stiffness, c.friction_coefficient,
+                                      c.speed_regularization])
+        n_nodes = mesh.n_nodes
+        self._buffers = tuple(np.zeros(n_nodes) for _ in range(8))
+        self._in_contact = np.zeros(n_nodes, dtype=np.bool_)
+        self._rhs_args = (
+            self.omega2, np.ascontiguousarray(self.damping), self.bit_u, self.bit_t, self.phi_v,
+            self.phi_w, self.phi_tx, np.ascontiguousarray(self.phi_v.T),
+            np.ascontiguousarray(self.phi_w.T), np.ascontiguousarray(self.phi_tx.T),
+            np.ascontiguousarray(self.gap), np.ascontiguousarray(self.outer_diameter),
+            float(self.top_speed), float(self.weight_on_bit), self.bit_args, self.contact_args,
+            bool(c.tangential_friction), *self._buffers,
+        )
+
+    @property
+    def size(self) -> int:
+        """Number of modal coordinates n (the state has 2n entries)."""
+        return len(self.angular_frequencies)
+
+    @property
+    def observable_names(self) -> tuple[str, ...]:
+        return OBSERVABLES
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """dy/dt for y = [η, η̇] (t enters only through the imposed top rotation, which drops out)."""
+        out = np.empty_like(y)
+        _rhs_kernel(y, out, *self._rhs_args)
+        return out
+
+    def observe(self, t: float, y: np.ndarray) -> np.ndarray:
+        """Observables (:data:`OBSERVABLES`) followed by the radial displacement at each probe [m]."""
+        out = np.empty(len(OBSERVABLES) + len(self.probe_nodes))
+        b = self._buffers
+        _observe_kernel(y, out, self.omega2, self.bit_u, self.bit_t, self.phi_v, self.phi_w,
+                        self.phi_tx, self.gap, float(self.top_speed), self.bit_args,
+                        self.probe_nodes, b[0], b[1], b[2], b[3], b[4], self._in_contact)
+        return out
+
+    def contact_mask(self) -> np.ndarray:
+        """Nodes in contact at the last :meth:`observe` call (a copy)."""
+        return self._in_contact.copy()
+
+    def initial_state(self, lateral_perturbation: float, seed: int) -> np.ndarray:
+        """Static state, the whole string spinning at Ω, zero axial speed (η = η̇ = 0), plus a seeded
+        lateral perturbation: a random combination of the lateral modes (standard-normal modal
+        amplitudes from ``numpy.random.default_rng(seed)``) scaled so the largest radial displacement
+        along the string equals ``lateral_perturbation`` [m]."""
+        y0 = np.zeros(2 * self.size)
+        lateral = np.array([f.startswith("lateral") for f in self.family])
+        if lateral_perturbation > 0 and lateral.any():
+            rng = np.random.default_rng(seed)
+            amplitudes = np.where(lateral, rng.standard_normal(self.size), 0.0)
+            radius = np.hypot(self.phi_v @ amplitudes, self.phi_w @ amplitudes)
+            y0[: self.size] = amplitudes * (lateral_perturbation / radius.max())
+        return y0
+
+    def energy(self, y: np.ndarray) -> float:
+        """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
+        n = self.size
+        return 0.5 * float(y[n:] @ y[n:] + self.omega2 @ (y[:n] ** 2))
+
+
+def reduced_model(
+    static: StaticState,
+    system: LinearSystem,
+    *,
+    axial_modes: int,
+    torsional_modes: int,
+    lateral_modes: int,
+    modal_damping_ratio: float,
+    rigid_axial_damping: float,
+    top_speed: float,
+    bit_rock: BitRockParameters,
+    contact: ContactParameters,
+    borehole_diameter: float,
+    probe_positions=(),
+) -> ReducedOrderModel:
+    """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one).
+
+    Args:
+        rigid_axial_damping: c1 [N·s/m], viscous resistance to the rigid axial motion.
+        top_speed: Ω [rad/s].
+        borehole_diameter: D_ch [m].
+    """
+    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes)
+    families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
+    basis = np.hstack([f.shapes for f in families])
+    omega = np.concatenate([f.angular_frequencies for f in families])
+    family = ["rigid_axial"] + ["axial"] * axial_modes
+    family += ["torsional"] * torsional_modes + ["lateral_y"] * lateral_modes + ["lateral_z"] * lateral_modes
+    damping = basis.T @ (system.fluid_damping @ basis)
+    elastic = np.arange(1, len(omega))
+    damping[elastic, elastic] += 2.0 * modal_damping_ratio * np.abs(omega[elastic])
+    mesh = static.mesh
+    string_mass = float(np.sum(system.structural_mass[dof(np.arange(mesh.n_nodes), U)]
+                               [:, dof(np.arange(mesh.n_nodes), U)]))
+    damping[0, 0] += rigid_axial_damping / string_mass
+    node_sections = mesh.node_section()
+    outer = np.array([mesh.sections[i].outer_diameter for i in node_sections])
+    return ReducedOrderModel(
+        static=static, system=system, modes=modes, basis=basis, family=tuple(family),
+        angular_frequencies=omega, damping=damping, top_speed=top_speed,
+        weight_on_bit=static.weight_on_bit, bit_rock=bit_rock, contact=contact,
+        gap=(borehole_diameter - outer) / 2.0, outer_diameter=outer,
+        probe_positions=np.asarray(probe_positions, dtype=float),
+    )
+
+
+def case_reduced_model(
+    case,
+    *,
+    weight_on_bit: float | None = None,
+    axial_modes: int | None = None,
+    torsional_modes: int | None = None,
+    lateral_modes: int | None = None,
+    static: StaticState | None = None,
+) -> ReducedOrderModel:
+    """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values."""
+    static = case_static_state(case, weight_on_bit) if static is None else static
+    system = case_linear_system(case, static)
+    r = case.reduced_model
+    b = case.bit_rock
+    c = case.contact
+    return reduced_model(
+        static,
+        system,
+        axial_modes=r.axial_modes if axial_modes is None else axial_modes,
+        torsional_modes=r.torsional_modes if torsional_modes is None else torsional_modes,
+        lateral_modes=r.lateral_modes if lateral_modes is None else lateral_modes,
+        modal_damping_ratio=case.damping.modal_damping_ratio,
+        rigid_axial_damping=case.damping.rigid_axial,
+        top_speed=case.operation.top_speed,
+        bit_rock=BitRockParameters(b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization),
+        contact=ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
+                                  c.tangential_friction),
+        borehole_diameter=case.borehole.diameter,
+        probe_positions=case.mesh.probes,
+    )
