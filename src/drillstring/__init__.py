@@ -4,6 +4,24 @@ The pipeline, one layer per subpackage or module (data flows down the list):
 case -> fem (sections, elements, mesh, assembly) -> statics -> modal -> forces ->
 dynamics (reduced model, Runge-Kutta) -> stochastic (MaxEnt, Monte Carlo, statistics) ->
 results, plots, report, cli.
+
+The notebook API: :func:`load_case`, :func:`simulate` (and :func:`study` for Monte Carlo studies).
 """
 
 __version__ = "0.1.0"
+
+
+def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the command line
+    if name == "load_case":
+        from drillstring.case import load_case
+
+        return load_case
+    if name == "simulate":
+        from drillstring.api import simulate
+
+        return simulate
+    if name == "study":
+        from drillstring.api import study
+
+        return study
+    raise AttributeError(f"module 'drillstring' has no attribute {name!r}")

@@ -1,0 +1,113 @@
+"""Time response of one drilling run: integrate the reduced-order model and collect observables."""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from drillstring.dynamics.rom import OBSERVABLES, ReducedOrderModel
+from drillstring.dynamics.runge_kutta import IntegrationError, integrate
+
+
+@dataclass
+class SimulationResult:
+    """Observables of one run on the output grid (SI units).
+
+    Attributes:
+        time: output times [s].
+        observables: name -> values on ``time`` (names in :data:`~drillstring.dynamics.rom.OBSERVABLES`).
+        radial_displacement: (n_time, n_probes) radial displacement r at the probes [m].
+        probe_positions: x of the probes [m]; ``probe_gaps`` their radial gaps [m].
+        impacts: number of times a node entered contact with the borehole, counted between
+            successive output times (a contact shorter than one output step may be missed).
+        status: "success" or "failed"; ``message`` says where and why a failed run stopped.
+        stats: solver statistics (right-hand-side evaluations, accepted/rejected steps, wall time).
+    """
+
+    time: np.ndarray
+    observables: dict[str, np.ndarray]
+    radial_displacement: np.ndarray
+    probe_positions: np.ndarray
+    probe_gaps: np.ndarray
+    impacts: int
+    status: str
+    message: str
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.status == "success"
+
+
+class SimulationError(RuntimeError):
+    """A run that stopped early (divergence, step size collapse); ``.result`` keeps what was computed."""
+
+    def __init__(self, message: str, result: SimulationResult) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+def simulate_model(
+    model: ReducedOrderModel,
+    *,
+    t_end: float,
+    output_step: float,
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    method: str = "dopri5",
+    max_steps: int = 2_000_000,
+    min_step: float = 1e-12,
+    lateral_perturbation: float = 1e-4,
+    seed: int = 0,
+    progress: Callable[[float], None] | None = None,
+    raise_on_failure: bool = True,
+) -> SimulationResult:
+    """Integrate ``model`` from its initial state (:meth:`ReducedOrderModel.initial_state`) to ``t_end``
+    [s], storing observables every ``output_step`` [s]. A failed integration raises
+    :class:`SimulationError` (or, with ``raise_on_failure=False``, returns the partial result)."""
+    y0 = model.initial_state(lateral_perturbation, seed)
+    n_obs = len(OBSERVABLES)
+    previous = np.zeros(model.static.mesh.n_nodes, dtype=bool)
+    impacts = 0
+
+    def observe(t: float, y: np.ndarray) -> np.ndarray:
+        nonlocal previous, impacts
+        values = model.observe(t, y)
+        mask = model.contact_mask()
+        impacts += int(np.count_nonzero(mask & ~previous))
+        previous = mask
+        return values
+
+    start = _time.perf_counter()
+    failure = None
+    try:
+        solution = integrate(
+            model.rhs, (0.0, t_end), y0, output_step=output_step, tableau=method, rtol=rtol,
+            atol=atol, max_steps=max_steps, min_step=min_step, progress=progress, observe=observe,
+        )
+    except IntegrationError as error:
+        failure = error
+        solution = error.solution
+    wall = _time.perf_counter() - start
+    values = np.asarray(solution.y) if solution is not None and len(solution.t) else np.zeros(
+        (0, n_obs + len(model.probe_nodes)))
+    times = np.asarray(solution.t) if solution is not None else np.zeros(0)
+    stats = dict(solution.stats) if solution is not None else {}
+    stats["wall_time"] = wall
+    result = SimulationResult(
+        time=times,
+        observables={name: values[:, i] for i, name in enumerate(OBSERVABLES)},
+        radial_displacement=values[:, n_obs:],
+        probe_positions=model.probe_positions.copy(),
+        probe_gaps=model.gap[model.probe_nodes].copy(),
+        impacts=impacts,
+        status="failed" if failure else "success",
+        message=str(failure) if failure else "",
+        stats=stats,
+    )
+    if failure is not None and raise_on_failure:
+        raise SimulationError(f"simulation stopped early: {failure}", result)
+    return result

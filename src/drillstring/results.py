@@ -1,0 +1,86 @@
+"""Results as xarray Datasets: one name and one unit per quantity, NetCDF I/O.
+
+Variable names are the same across code, files and figures: ``rate_of_penetration`` [m/s],
+``bit_speed`` [rad/s], ``torque_on_bit`` [N·m], ``force_on_bit`` [N], ``bit_depth`` [m],
+``nodes_in_contact`` [-], ``radial_displacement`` [m] (dimension ``probe``, coordinate ``x`` [m]).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from drillstring import __version__
+from drillstring.dynamics.simulate import SimulationResult
+
+UNITS = {
+    "time": "s",
+    "rate_of_penetration": "m/s",
+    "bit_speed": "rad/s",
+    "torque_on_bit": "N m",
+    "force_on_bit": "N",
+    "bit_depth": "m",
+    "nodes_in_contact": "1",
+    "radial_displacement": "m",
+    "x": "m",
+    "weight_on_hook": "N",
+    "weight_on_bit": "N",
+}
+
+LONG_NAMES = {
+    "rate_of_penetration": "rate of penetration (bit axial velocity, down positive)",
+    "bit_speed": "bit rotation speed",
+    "torque_on_bit": "torque on bit (rock torque opposing the rotation)",
+    "force_on_bit": "force on bit (rock reaction, upward positive)",
+    "bit_depth": "bit advance from the static state",
+    "nodes_in_contact": "number of nodes touching the borehole",
+    "radial_displacement": "radial (lateral) displacement",
+    "weight_on_hook": "weight on hook",
+    "weight_on_bit": "static weight on bit",
+}
+
+
+def run_dataset(result: SimulationResult, *, case_toml: str = "", extra_attrs: dict | None = None
+                ) -> xr.Dataset:
+    """The observables of one run as a Dataset with units, the case and the solver statistics."""
+    data = {
+        name: ("time", values, {"units": UNITS[name], "long_name": LONG_NAMES[name]})
+        for name, values in result.observables.items()
+    }
+    data["radial_displacement"] = (
+        ("time", "probe"), result.radial_displacement,
+        {"units": "m", "long_name": LONG_NAMES["radial_displacement"]},
+    )
+    coords = {
+        "time": ("time", result.time, {"units": "s"}),
+        "x": ("probe", result.probe_positions, {"units": "m", "long_name": "probe position from the top"}),
+        "gap": ("probe", result.probe_gaps, {"units": "m", "long_name": "radial gap to the borehole"}),
+    }
+    attrs = {
+        "drillstring_version": __version__,
+        "case": case_toml,
+        "status": result.status,
+        "message": result.message,
+        "impacts": int(result.impacts),
+    }
+    attrs.update({f"solver_{k}": v for k, v in result.stats.items() if isinstance(v, (int, float, str))})
+    attrs.update(extra_attrs or {})
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def write_netcdf(dataset: xr.Dataset, path: str | Path) -> Path:
+    """Write ``dataset`` to NetCDF-4 (h5netcdf engine); returns the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    clean = dataset.copy()
+    clean.attrs = {k: (int(v) if isinstance(v, (bool, np.bool_)) else v) for k, v in dataset.attrs.items()}
+    clean.to_netcdf(path, engine="h5netcdf")
+    return path
+
+
+def read_netcdf(path: str | Path) -> xr.Dataset:
+    """Read a Dataset written by :func:`write_netcdf` (loaded into memory, file closed)."""
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        return ds.load()

@@ -1,0 +1,91 @@
+"""Reduced-order model: projection, energy conservation, steady drilling against closed forms."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from drillstring.dynamics.rom import case_reduced_model, reduced_model
+from drillstring.dynamics.runge_kutta import integrate
+from drillstring.dynamics.simulate import simulate_model
+from drillstring.fem.build import stabilizers
+from drillstring.forces.bit_rock import BitRockParameters, steady_state
+from drillstring.forces.contact import ContactParameters
+from drillstring.modal import build_linear_system
+from drillstring.fem.build import section_fluid_coefficients
+from drillstring.statics import case_static_state
+
+
+def test_projection_is_mass_normalised_and_diagonal(coarse_case):
+    rom = case_reduced_model(coarse_case, axial_modes=3, torsional_modes=3, lateral_modes=4)
+    phi = rom.basis
+    m = phi.T @ (rom.system.mass @ phi)
+    k = phi.T @ (rom.system.stiffness @ phi)
+    np.testing.assert_allclose(m, np.eye(rom.size), atol=1e-8)
+    np.testing.assert_allclose(k, np.diag(rom.omega2), atol=1e-6 * rom.omega2.max())
+    assert rom.family[0] == "rigid_axial" and rom.angular_frequencies[0] == 0.0
+    assert rom.size == 1 + 3 + 3 + 2 * 4
+    # Modal damping 2 ξ ω on elastic modes (the fluid adds to lateral ones only).
+    xi = coarse_case.damping.modal_damping_ratio
+    for i in range(1, 7):
+        assert rom.damping[i, i] == pytest.approx(2 * xi * rom.angular_frequencies[i], rel=1e-12)
+
+
+def conservative_model(case):
+    """Undamped, unforced ROM: no modal/fluid damping, no contact, no bit-rock force, no wob."""
+    static = dataclasses.replace(case_static_state(case), weight_on_bit=0.0)
+    fluid = section_fluid_coefficients(case.model_copy(update={"fluid": case.fluid.model_copy(
+        update={"coriolis": False, "viscous_damping": False})}), static.mesh)
+    system = build_linear_system(static.mesh, static, stabilizers(case), fluid)
+    return reduced_model(
+        static, system, axial_modes=3, torsional_modes=3, lateral_modes=4, modal_damping_ratio=0.0,
+        rigid_axial_damping=0.0, top_speed=1.0,
+        bit_rock=BitRockParameters(0.0, 1e40, 0.0, 0.0, 0.0, 2.0),
+        contact=ContactParameters(0.0, 0.0, 0.1, False), borehole_diameter=case.borehole.diameter,
+    )
+
+
+def test_energy_is_conserved_without_damping_and_forcing(coarse_case):
+    rom = conservative_model(coarse_case)
+    rng = np.random.default_rng(3)
+    y0 = rng.normal(size=2 * rom.size) * 1e-2
+    y0[0] = 0.0  # no rigid drift, so energies stay O(1)
+    lowest = np.min(rom.angular_frequencies[rom.angular_frequencies > 0])
+    t_end = 20 * 2 * np.pi / lowest * 0.05  # several periods of all but the slowest lateral modes
+    sol = integrate(rom.rhs, (0.0, t_end), y0, output_step=t_end / 50, rtol=1e-9, atol=1e-12,
+                    observe=lambda t, y: np.array([rom.energy(y)]))
+    energy = sol.y[:, 0]
+    drift = np.abs(energy / energy[0] - 1).max()
+    assert drift < 1e-6, drift
+
+
+@pytest.mark.parametrize(
+    "weight_on_bit, top_speed",
+    [(100e3, 100 * np.pi / 30), (80e3, 60 * np.pi / 30), (140e3, 140 * np.pi / 30)],
+)
+def test_steady_drilling_matches_closed_form_without_lateral_modes(coarse_case, weight_on_bit,
+                                                                    top_speed):
+    case = coarse_case.model_copy(update={
+        "operation": coarse_case.operation.model_copy(update={"top_speed": top_speed})})
+    rom = case_reduced_model(case, weight_on_bit=weight_on_bit, lateral_modes=0)
+    result = simulate_model(rom, t_end=20.0, output_step=0.01, lateral_perturbation=0.0)
+    late = result.time >= 15.0
+    rop, tob = steady_state(weight_on_bit, top_speed, rom.bit_rock)
+    assert result.observables["rate_of_penetration"][late].mean() == pytest.approx(rop, rel=0.01)
+    assert result.observables["torque_on_bit"][late].mean() == pytest.approx(tob, rel=0.01)
+    assert result.observables["bit_speed"][late].mean() == pytest.approx(top_speed, rel=0.01)
+    # Force balance of the rigid motion: the rock carries the weight-on-bit (minus c1 · ROP).
+    assert result.observables["force_on_bit"][late].mean() == pytest.approx(weight_on_bit, rel=1e-3)
+
+
+def test_initial_state_is_seeded_and_scaled(coarse_case):
+    rom = case_reduced_model(coarse_case, lateral_modes=5)
+    a = rom.initial_state(1e-4, seed=7)
+    b = rom.initial_state(1e-4, seed=7)
+    c = rom.initial_state(1e-4, seed=8)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+    n = rom.size
+    radius = np.hypot(rom.phi_v @ a[:n], rom.phi_w @ a[:n])
+    assert radius.max() == pytest.approx(1e-4, rel=1e-12)
+    assert np.all(a[n:] == 0) and np.all(a[:n][np.array(rom.family) != "lateral_y"][: 1 + 6 + 6] == 0)

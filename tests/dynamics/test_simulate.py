@@ -1,0 +1,66 @@
+"""One drilling run: tolerance and mode-count convergence, failure handling, impact counting."""
+
+import numpy as np
+import pytest
+
+from drillstring.dynamics.rom import case_reduced_model
+from drillstring.dynamics.simulate import SimulationError, simulate_model
+
+T_END = 6.0
+
+
+def run(case, rtol=1e-6, **modes):
+    rom = case_reduced_model(case, **modes)
+    return simulate_model(rom, t_end=T_END, output_step=0.01, rtol=rtol, atol=rtol * 1e-3,
+                          lateral_perturbation=case.initial.lateral_perturbation)
+
+
+def history_error(a, b, name):
+    x, y = a.observables[name], b.observables[name]
+    return np.sqrt(np.mean((x - y) ** 2)) / np.sqrt(np.mean(y**2))
+
+
+def test_results_converge_as_rtol_is_tightened(coarse_case):
+    ref = run(coarse_case, rtol=1e-9)
+    errors = {rtol: history_error(run(coarse_case, rtol=rtol), ref, "bit_speed")
+              for rtol in (1e-3, 1e-5, 1e-7)}
+    assert errors[1e-7] < errors[1e-5] < errors[1e-3]
+    assert errors[1e-7] < 1e-6
+
+
+def test_results_converge_as_axial_and_torsional_modes_grow(coarse_case):
+    ref = run(coarse_case, axial_modes=12, torsional_modes=12, lateral_modes=2)
+    err = [history_error(run(coarse_case, axial_modes=n, torsional_modes=n, lateral_modes=2), ref,
+                         "rate_of_penetration") for n in (1, 3, 6)]
+    assert err[2] < err[1] < err[0]
+    assert err[2] < 0.01
+
+
+def test_failure_keeps_computed_outputs_and_says_when(coarse_case):
+    case = coarse_case.model_copy(update={
+        "simulation": coarse_case.simulation.model_copy(update={"max_steps": 60})})
+    rom = case_reduced_model(case, lateral_modes=2)
+    with pytest.raises(SimulationError, match=r"t = [0-9.]+ s") as info:
+        simulate_model(rom, t_end=T_END, output_step=0.01, max_steps=60)
+    partial = info.value.result
+    assert partial.status == "failed"
+    assert 0 < len(partial.time) < T_END / 0.01
+    assert np.all(np.isfinite(partial.observables["rate_of_penetration"]))
+    returned = simulate_model(rom, t_end=T_END, output_step=0.01, max_steps=60,
+                              raise_on_failure=False)
+    assert returned.status == "failed" and "t =" in returned.message
+
+
+def test_impacts_are_counted_when_the_string_touches(coarse_case):
+    """A centred string never touches; one released beyond the wall is pushed back and rattles."""
+    case = coarse_case.model_copy(update={
+        "damping": coarse_case.damping.model_copy(update={"modal_damping_ratio": 0.01})})
+    rom = case_reduced_model(case, lateral_modes=6)
+    gap = rom.gap.min()
+    centred = simulate_model(rom, t_end=3.0, output_step=0.005, lateral_perturbation=0.0)
+    assert centred.impacts == 0 and centred.observables["nodes_in_contact"].max() == 0
+    released = simulate_model(rom, t_end=3.0, output_step=0.005, lateral_perturbation=2.0 * gap)
+    assert released.impacts > 0
+    assert released.observables["nodes_in_contact"].max() >= 1
+    # The wall pushes back: the probe never goes far past the wall (k_sh = 1e8 N/m).
+    assert released.radial_displacement.max() < 2.0 * gap
