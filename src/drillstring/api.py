@@ -73,3 +73,47 @@ def simulate(
             raise
         return dataset
     return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
+
+
+def study(
+    case: Case | str | Path = "reference",
+    *,
+    sigma: float | None = None,
+    dispersion: float | None = None,
+    samples: int = 50,
+    seed: int = 0,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    progress=None,
+) -> xr.Dataset:
+    """Monte Carlo study of a random weight-on-hook (SPEC §8); returns the statistics Dataset.
+
+    Exactly one of ``sigma`` [N] (standard deviation of the weight-on-hook) or ``dispersion``
+    (σ / mean) is given. Realizations stream to the Zarr store ``out`` (a temporary folder when None);
+    rerunning with the same ``out`` resumes. ``workers`` local processes (default: one per core), or a
+    Dask scheduler address in ``scheduler``. See :mod:`drillstring.stochastic.montecarlo`.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    import tempfile
+
+    from drillstring.stochastic.analysis import load_study, study_statistics
+    from drillstring.stochastic.montecarlo import StudySettings, nominal_weight_on_hook, run_study
+
+    case = as_case(case)
+    if (sigma is None) == (dispersion is None):
+        raise ValueError("give exactly one of sigma [N] or dispersion (sigma / mean weight_on_hook)")
+    if dispersion is not None:
+        if not dispersion > 0:
+            raise ValueError(f"dispersion = {dispersion!r}: must be > 0")
+        sigma = dispersion * nominal_weight_on_hook(case)
+    settings = StudySettings(
+        samples=samples, sigma=float(sigma), seed=seed,
+        t_end=case.simulation.t_end if t_end is None else t_end,
+        output_step=case.simulation.output_step if output_step is None else output_step,
+    )
+    store = Path(out) / "study.zarr" if out is not None else Path(tempfile.mkdtemp()) / "study.zarr"
+    run_study(case, settings, store, workers=workers, scheduler=scheduler, progress=progress)
+    return study_statistics(load_study(store))

@@ -1,0 +1,111 @@
+"""From a study's Zarr store to statistics and a JSON-ready summary (SPEC §8)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from drillstring.results import LONG_NAMES, UNITS
+from drillstring.stochastic.montecarlo import DONE, FAILED, STUDY_OBSERVABLES
+from drillstring.stochastic.statistics import (
+    dispersion_summary,
+    mean_square_convergence,
+    realization_statistics,
+)
+
+#: Default start of the steady regime for summaries [s] (the reference transient has decayed to a
+#: few percent of the bit-speed oscillation by then; see docs/verification.md).
+DEFAULT_TRANSIENT = 10.0
+
+
+def load_study(store_path: str | Path) -> xr.Dataset:
+    """The raw study: every realization (dimension ``realization``), its status and draw, the nominal
+    (deterministic, mean weight-on-hook) response, and the store's attributes."""
+    ds = xr.open_zarr(str(store_path), consolidated=False).load()
+    ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
+    ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
+    for name in STUDY_OBSERVABLES + ("radial_displacement",):
+        attrs = {"units": UNITS[name], "long_name": LONG_NAMES[name]}
+        ds[name].attrs.update(attrs)
+        ds[f"nominal_{name}"].attrs.update(attrs)
+    return ds
+
+
+def study_statistics(raw: xr.Dataset, level: float = 0.95) -> xr.Dataset:
+    """Pointwise statistics over the finished realizations (failed ones excluded), the mean-square
+    convergence ``conv(n_s)`` of each observable, and the nominal response.
+
+    Variables: ``<v>_mean``, ``<v>_std``, ``<v>_lower``, ``<v>_upper`` (the ``level`` quantile envelope),
+    ``<v>_dispersion`` (std/|mean|), ``<v>_nominal`` and ``<v>_convergence`` (dimension ``n_samples``),
+    for ``v`` in the study observables and ``radial_displacement`` (per probe).
+    """
+    ok = raw.status.values == DONE
+    names = list(STUDY_OBSERVABLES) + ["radial_displacement"]
+    done = raw[names].isel(realization=np.nonzero(ok)[0])
+    n_done = int(ok.sum())
+    if n_done < 2:
+        raise ValueError(f"only {n_done} finished realization(s): statistics need at least 2")
+    stats = realization_statistics(done, dim="realization", level=level)
+    time = raw.time.values
+    for name in names:
+        stats[f"{name}_nominal"] = raw[f"nominal_{name}"]
+        samples = done[name].transpose("realization", "time", ...).values
+        conv = mean_square_convergence(samples, time)
+        stats[f"{name}_convergence"] = xr.DataArray(
+            conv, dims="n_samples", coords={"n_samples": np.arange(1, n_done + 1)},
+            attrs={"units": f"({UNITS[name]})^2 s",
+                   "long_name": f"conv(n_s) = (1/n_s) sum_j int ||{name}_j||^2 dt"},
+        )
+    woh = raw.weight_on_hook.values[ok]
+    wob = raw.weight_on_bit.values[ok]
+    settings = dict(raw.attrs.get("settings", {}))
+    mean_woh = float(raw.attrs.get("weight_on_hook_mean", np.nan))
+    nominal_wob = float(raw.attrs.get("weight", np.nan)) - mean_woh
+    sigma = float(settings.get("sigma", np.nan))
+    stats.attrs.update({
+        "n_samples": n_done,
+        "n_failed": int((raw.status.values == FAILED).sum()),
+        "seed": int(settings.get("seed", -1)),
+        "sigma": sigma,
+        "weight_on_hook_mean": mean_woh,
+        "weight_on_bit_nominal": nominal_wob,
+        "weight_on_hook_dispersion": sigma / mean_woh,
+        "weight_on_bit_dispersion": sigma / nominal_wob,
+        "weight_on_hook_sample_mean": float(woh.mean()),
+        "weight_on_hook_sample_std": float(woh.std(ddof=1)),
+        "weight_on_bit_sample_std": float(wob.std(ddof=1)),
+        "case": raw.attrs.get("case", ""),
+    })
+    return stats
+
+
+def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> dict:
+    """Per observable: time-mean and maximum dispersion after ``t_transient`` [s] and their ratios to
+    the weight-on-hook and weight-on-bit dispersions; plus the study's size and input dispersions."""
+    inputs = {
+        "weight_on_hook": stats.attrs["weight_on_hook_dispersion"],
+        "weight_on_bit": stats.attrs["weight_on_bit_dispersion"],
+    }
+    per_variable = dispersion_summary(
+        stats, list(STUDY_OBSERVABLES), t_transient=t_transient, input_dispersion=inputs
+    )
+    convergence = {}
+    for name in STUDY_OBSERVABLES:
+        conv = stats[f"{name}_convergence"].values
+        half = len(conv) // 2
+        # Relative change of conv(n_s) over the second half of the realizations.
+        convergence[name] = float(abs(conv[-1] - conv[half]) / abs(conv[-1])) if half else None
+    return {
+        "n_samples": int(stats.attrs["n_samples"]),
+        "n_failed": int(stats.attrs["n_failed"]),
+        "seed": int(stats.attrs["seed"]),
+        "sigma": float(stats.attrs["sigma"]),
+        "weight_on_hook_mean": float(stats.attrs["weight_on_hook_mean"]),
+        "weight_on_hook_dispersion": inputs["weight_on_hook"],
+        "weight_on_bit_dispersion": inputs["weight_on_bit"],
+        "t_transient": float(t_transient),
+        "observables": per_variable,
+        "convergence_change_second_half": convergence,
+    }
