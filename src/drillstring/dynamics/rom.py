@@ -28,8 +28,8 @@ import numpy as np
 from numba import njit
 
 from drillstring.fem.assembly import THETA_X, U, V, W, dof
-from drillstring.forces.bit_rock import BitRockParameters, bit_rock_force_floored
-from drillstring.forces.contact import ContactParameters, contact_forces
+from drillstring.forces.bit_rock import BitRockParameters, bit_rock_force_floored, evaluate_bit_rock
+from drillstring.forces.contact import ContactParameters, contact_forces, evaluate_contact
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes
 from drillstring.statics import StaticState, case_static_state
 
@@ -47,8 +47,8 @@ OBSERVABLES = (
 @njit(cache=True)
 def _physical_state(y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin):
     """Lateral displacements/velocities and spin speed at every node from modal state ``y``."""
-    eta = y[:n]
-    eta_dot = y[n:]
+    eta = np.ascontiguousarray(y[:n])
+    eta_dot = np.ascontiguousarray(y[n:])
     v[:] = phi_v @ eta
     w[:] = phi_w @ eta
     v_dot[:] = phi_v @ eta_dot
@@ -61,26 +61,88 @@ def _physical_state(y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v
 
 @njit(cache=True)
 def _rhs_kernel(
-    y, out, omega2, damping, bit_u, bit_t, phi_v, phi_w, phi_tx, phi_vt, phi_wt, phi_txt,
-    gap, outer_diameter, top_speed, weight_on_bit, bit_args, contact_args, tangential,
-    v, w, v_dot, w_dot, spin, force_v, force_w, torque,
+    y, out, omega2, damping, blocks, bit_u, bit_t, phi_v, phi_w, phi_tx, gap, outer_diameter,
+    top_speed, weight_on_bit, bit_args, contact_args, tangential,
+    v, w, contact_nodes, c_v, c_w, c_vd, c_wd, c_spin, c_gap, c_od, c_fv, c_fw, c_tq,
 ):
+    """dy/dt of the ROM. Each physical quantity is read from its own mode family only
+    (``blocks`` = [axial start, end, torsional start, end, lateral y start, end, lateral z start,
+    end] column ranges; ``bit_u``, ``bit_t``, ``phi_v``, ``phi_w``, ``phi_tx`` hold only those
+    columns), and contact work is done only at the nodes that touch the borehole."""
     n = omega2.shape[0]
-    bit_velocity, bit_speed = _physical_state(
-        y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin
-    )
+    a0, a1, t0, t1, y0, y1, z0, z1 = blocks[0], blocks[1], blocks[2], blocks[3], blocks[4], blocks[5], blocks[6], blocks[7]
+    eta = y[:n]
+    eta_dot = y[n:]
+    acc = out[n:]
+    # linear part: -D η̇ - ω² η  (D: dense only where the fluid couples lateral modes)
+    for i in range(n):
+        out[i] = eta_dot[i]
+        acc[i] = -omega2[i] * eta[i]
+    for i in range(n):
+        total = 0.0
+        for j in range(n):
+            total += damping[i, j] * eta_dot[j]
+        acc[i] -= total
+    # bit-rock interaction at the bit node
+    bit_velocity = 0.0
+    for j in range(a0, a1):
+        bit_velocity += bit_u[j - a0] * eta_dot[j]
+    bit_speed = top_speed
+    for j in range(t0, t1):
+        bit_speed += bit_t[j - t0] * eta_dot[j]
     axial_force, bit_torque = bit_rock_force_floored(
         bit_velocity, bit_speed, bit_args[0], bit_args[1], bit_args[2], bit_args[3], bit_args[4],
         bit_args[5], bit_args[6],
     )
-    contact_forces(v, w, v_dot, w_dot, spin, gap, outer_diameter, contact_args[0], contact_args[1],
-                   contact_args[2], tangential, force_v, force_w, torque)
-    eta = y[:n]
-    eta_dot = y[n:]
-    generalized = phi_vt @ force_v + phi_wt @ force_w + phi_txt @ torque
-    generalized += bit_u * (axial_force + weight_on_bit) + bit_t * bit_torque
-    out[:n] = eta_dot
-    out[n:] = generalized - damping @ eta_dot - omega2 * eta
+    axial_force += weight_on_bit
+    for j in range(a0, a1):
+        acc[j] += bit_u[j - a0] * axial_force
+    for j in range(t0, t1):
+        acc[j] += bit_t[j - t0] * bit_torque
+    # shocks and rubbing: find the nodes outside the gap
+    n_nodes = v.shape[0]
+    if y1 > y0 or z1 > z0:
+        v[:] = phi_v @ eta[y0:y1] if y1 > y0 else np.zeros(n_nodes)
+        w[:] = phi_w @ eta[z0:z1] if z1 > z0 else np.zeros(n_nodes)
+    else:
+        return
+    n_c = 0
+    for i in range(n_nodes):
+        if v[i] * v[i] + w[i] * w[i] > gap[i] * gap[i]:
+            contact_nodes[n_c] = i
+            n_c += 1
+    if n_c == 0:
+        return
+    for c in range(n_c):
+        i = contact_nodes[c]
+        c_v[c] = v[i]
+        c_w[c] = w[i]
+        c_gap[c] = gap[i]
+        c_od[c] = outer_diameter[i]
+        spin = top_speed
+        for j in range(t0, t1):
+            spin += phi_tx[i, j - t0] * eta_dot[j]
+        c_spin[c] = spin
+        vd = 0.0
+        wd = 0.0
+        if tangential:
+            for j in range(y0, y1):
+                vd += phi_v[i, j - y0] * eta_dot[j]
+            for j in range(z0, z1):
+                wd += phi_w[i, j - z0] * eta_dot[j]
+        c_vd[c] = vd
+        c_wd[c] = wd
+    contact_forces(c_v[:n_c], c_w[:n_c], c_vd[:n_c], c_wd[:n_c], c_spin[:n_c], c_gap[:n_c],
+                   c_od[:n_c], contact_args[0], contact_args[1], contact_args[2], tangential,
+                   c_fv[:n_c], c_fw[:n_c], c_tq[:n_c])
+    for c in range(n_c):
+        i = contact_nodes[c]
+        for j in range(y0, y1):
+            acc[j] += phi_v[i, j - y0] * c_fv[c]
+        for j in range(z0, z1):
+            acc[j] += phi_w[i, j - z0] * c_fw[c]
+        for j in range(t0, t1):
+            acc[j] += phi_tx[i, j - t0] * c_tq[c]
 
 
 @njit(cache=True)
@@ -104,7 +166,7 @@ def _observe_kernel(
     out[1] = bit_speed
     out[2] = -bit_torque
     out[3] = -axial_force
-    out[4] = bit_u @ y[:n]
+    out[4] = bit_u @ np.ascontiguousarray(y[:n])
     out[5] = count
     for k in range(probe_nodes.shape[0]):
         j = probe_nodes[k]
@@ -157,13 +219,27 @@ class ReducedOrderModel:
         n_nodes = mesh.n_nodes
         self._buffers = tuple(np.zeros(n_nodes) for _ in range(8))
         self._in_contact = np.zeros(n_nodes, dtype=np.bool_)
+        labels = np.array(self.family)
+        blocks = []
+        for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
+            columns = np.nonzero(np.isin(labels, names))[0]
+            start = int(columns[0]) if len(columns) else 0
+            end = int(columns[-1]) + 1 if len(columns) else 0
+            if len(columns) and not np.array_equal(columns, np.arange(start, end)):
+                raise ValueError("mode families must be contiguous in the basis")
+            blocks += [start, end]
+        self.blocks = np.array(blocks, dtype=np.int64)
+        a0, a1, t0, t1, y0, y1, z0, z1 = blocks
+        contact_work = tuple(np.zeros(n_nodes) for _ in range(10))
         self._rhs_args = (
-            self.omega2, np.ascontiguousarray(self.damping), self.bit_u, self.bit_t, self.phi_v,
-            self.phi_w, self.phi_tx, np.ascontiguousarray(self.phi_v.T),
-            np.ascontiguousarray(self.phi_w.T), np.ascontiguousarray(self.phi_tx.T),
+            self.omega2, np.ascontiguousarray(self.damping), self.blocks,
+            np.ascontiguousarray(self.bit_u[a0:a1]), np.ascontiguousarray(self.bit_t[t0:t1]),
+            np.ascontiguousarray(self.phi_v[:, y0:y1]), np.ascontiguousarray(self.phi_w[:, z0:z1]),
+            np.ascontiguousarray(self.phi_tx[:, t0:t1]),
             np.ascontiguousarray(self.gap), np.ascontiguousarray(self.outer_diameter),
             float(self.top_speed), float(self.weight_on_bit), self.bit_args, self.contact_args,
-            bool(c.tangential_friction), *self._buffers,
+            bool(c.tangential_friction), np.zeros(n_nodes), np.zeros(n_nodes),
+            np.zeros(n_nodes, dtype=np.int64), *contact_work,
         )
 
     @property
@@ -180,6 +256,22 @@ class ReducedOrderModel:
         out = np.empty_like(y)
         _rhs_kernel(y, out, *self._rhs_args)
         return out
+
+    def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The straightforward NumPy right-hand side (full basis, every node): the reference
+        implementation that the compiled :meth:`rhs` is tested against; same equations."""
+        n = self.size
+        eta, eta_dot = y[:n], y[n:]
+        bit_velocity = self.bit_u @ eta_dot
+        bit_speed = self.top_speed + self.bit_t @ eta_dot
+        axial_force, bit_torque = evaluate_bit_rock(bit_velocity, bit_speed, self.bit_rock)
+        force_v, force_w, torque, _ = evaluate_contact(
+            self.phi_v @ eta, self.phi_w @ eta, self.phi_v @ eta_dot, self.phi_w @ eta_dot,
+            self.top_speed + self.phi_tx @ eta_dot, self.gap, self.outer_diameter, self.contact,
+        )
+        generalized = (self.phi_v.T @ force_v + self.phi_w.T @ force_w + self.phi_tx.T @ torque
+                       + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque)
+        return np.concatenate([eta_dot, generalized - self.damping @ eta_dot - self.omega2 * eta])
 
     def observe(self, t: float, y: np.ndarray) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement at each probe [m]."""

@@ -64,11 +64,24 @@ def simulate_model(
     seed: int = 0,
     progress: Callable[[float], None] | None = None,
     raise_on_failure: bool = True,
+    engine: str = "compiled",
 ) -> SimulationResult:
     """Integrate ``model`` from its initial state (:meth:`ReducedOrderModel.initial_state`) to ``t_end``
     [s], storing observables every ``output_step`` [s]. A failed integration raises
-    :class:`SimulationError` (or, with ``raise_on_failure=False``, returns the partial result)."""
+    :class:`SimulationError` (or, with ``raise_on_failure=False``, returns the partial result).
+
+    ``engine``: "compiled" (default; :mod:`drillstring.dynamics.compiled`, the whole step loop in
+    Numba) or "reference" (the generic :func:`~drillstring.dynamics.runge_kutta.integrate` calling
+    the NumPy right-hand side :meth:`ReducedOrderModel.rhs_reference`). Both use the same method,
+    controller and dense output; tests check they agree within the integration tolerance.
+    """
+    if engine not in ("compiled", "reference"):
+        raise ValueError(f"engine = {engine!r}: must be 'compiled' or 'reference'")
     y0 = model.initial_state(lateral_perturbation, seed)
+    if engine == "compiled":
+        return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
+                                  atol=atol, method=method, max_steps=max_steps, min_step=min_step,
+                                  progress=progress, raise_on_failure=raise_on_failure)
     n_obs = len(OBSERVABLES)
     previous = np.zeros(model.static.mesh.n_nodes, dtype=bool)
     impacts = 0
@@ -85,7 +98,7 @@ def simulate_model(
     failure = None
     try:
         solution = integrate(
-            model.rhs, (0.0, t_end), y0, output_step=output_step, tableau=method, rtol=rtol,
+            model.rhs_reference, (0.0, t_end), y0, output_step=output_step, tableau=method, rtol=rtol,
             atol=atol, max_steps=max_steps, min_step=min_step, progress=progress, observe=observe,
         )
     except IntegrationError as error:
@@ -110,4 +123,42 @@ def simulate_model(
     )
     if failure is not None and raise_on_failure:
         raise SimulationError(f"simulation stopped early: {failure}", result)
+    return result
+
+
+def output_grid(t_end: float, output_step: float) -> np.ndarray:
+    """Output times k·Δt up to t_end, t_end included (the reference integrator's grid)."""
+    n = int(np.floor(t_end / output_step + 1e-9))
+    grid = np.arange(n + 1) * output_step
+    if t_end - grid[-1] > 1e-9 * output_step:
+        grid = np.append(grid, t_end)
+    grid[-1] = min(grid[-1], t_end)
+    return grid
+
+
+def _simulate_compiled(model, y0, *, t_end, output_step, rtol, atol, method, max_steps, min_step,
+                       progress, raise_on_failure) -> SimulationResult:
+    from drillstring.dynamics.compiled import integrate_compiled
+
+    grid = output_grid(t_end, output_step)
+    start = _time.perf_counter()
+    values, stats, message = integrate_compiled(
+        model, y0, grid, tableau=method, rtol=rtol, atol=atol, min_step=min_step,
+        max_steps=max_steps, progress=progress,
+    )
+    stats["wall_time"] = _time.perf_counter() - start
+    n_obs = len(OBSERVABLES)
+    result = SimulationResult(
+        time=grid[: len(values)],
+        observables={name: values[:, i] for i, name in enumerate(OBSERVABLES)},
+        radial_displacement=values[:, n_obs:],
+        probe_positions=model.probe_positions.copy(),
+        probe_gaps=model.gap[model.probe_nodes].copy(),
+        impacts=int(stats.pop("impacts")),
+        status=stats["status"],
+        message=message,
+        stats=stats,
+    )
+    if message and raise_on_failure:
+        raise SimulationError(f"simulation stopped early: {message}", result)
     return result

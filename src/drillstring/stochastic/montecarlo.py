@@ -32,7 +32,12 @@ import zarr
 from drillstring import __version__
 from drillstring.case import Case
 from drillstring.dynamics.rom import case_reduced_model
-from drillstring.dynamics.simulate import SimulationError, SimulationResult, simulate_model
+from drillstring.dynamics.simulate import (
+    SimulationError,
+    SimulationResult,
+    output_grid,
+    simulate_model,
+)
 from drillstring.stochastic.maxent import realization_generator, weight_on_hook_law
 
 #: Observables kept for every realization (each (realization, time)); plus radial_displacement.
@@ -74,12 +79,7 @@ class StudySettings:
     @property
     def time(self) -> np.ndarray:
         """The common output grid [s] (the integrator's grid: k·Δt, t_end included)."""
-        n = int(math.floor(self.t_end / self.output_step + 1e-9))
-        grid = np.arange(n + 1) * self.output_step
-        if self.t_end - grid[-1] > 1e-9 * self.output_step:
-            grid = np.append(grid, self.t_end)
-        grid[-1] = min(grid[-1], self.t_end)
-        return grid
+        return output_grid(self.t_end, self.output_step)
 
 
 @dataclass

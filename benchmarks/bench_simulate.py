@@ -1,0 +1,85 @@
+"""Benchmark: one reference drilling run (case 2) on one core, against SciPy's solve_ivp(RK45).
+
+Both integrate the same reduced-order model (same right-hand side, same rtol/atol, same output grid)
+in the same process, so the ratio is meaningful on a noisy machine. Run:
+
+    .venv/bin/python benchmarks/bench_simulate.py [--repeat 3] [--case reference]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy.integrate import solve_ivp  # noqa: E402
+
+from drillstring.case import load_case  # noqa: E402
+from drillstring.dynamics.rom import case_reduced_model  # noqa: E402
+from drillstring.dynamics.simulate import simulate_model  # noqa: E402
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--case", default="reference")
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
+    case = load_case(args.case)
+    s = case.simulation
+    t0 = time.perf_counter()
+    model = case_reduced_model(case)
+    build = time.perf_counter() - t0
+    y0 = model.initial_state(case.initial.lateral_perturbation, case.initial.seed)
+    model.rhs(0.0, y0)  # compile / load the kernels outside the timings
+    kwargs = dict(t_end=s.t_end, output_step=s.output_step, rtol=s.rtol, atol=s.atol,
+                  lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed)
+
+    timings: dict[str, list[float]] = {k: [] for k in ("compiled", "reference", "ivp_numpy", "ivp_compiled")}
+    for _ in range(args.repeat):
+        start = time.perf_counter()
+        result = simulate_model(model, engine="compiled", **kwargs)
+        timings["compiled"].append(time.perf_counter() - start)
+        start = time.perf_counter()
+        reference = simulate_model(model, engine="reference", **kwargs)
+        timings["reference"].append(time.perf_counter() - start)
+        grid = result.time
+        start = time.perf_counter()
+        baseline = solve_ivp(model.rhs_reference, (0.0, s.t_end), y0, method="RK45", t_eval=grid,
+                             rtol=s.rtol, atol=s.atol)
+        timings["ivp_numpy"].append(time.perf_counter() - start)
+        start = time.perf_counter()
+        compiled_rhs = solve_ivp(model.rhs, (0.0, s.t_end), y0, method="RK45", t_eval=grid,
+                                 rtol=s.rtol, atol=s.atol)
+        timings["ivp_compiled"].append(time.perf_counter() - start)
+    best = {k: min(v) for k, v in timings.items()}
+    rop = result.observables["rate_of_penetration"]
+    ref_rop = np.array([model.observe(t, y)[0] for t, y in zip(baseline.t, baseline.y.T)])
+    agreement = np.max(np.abs(rop - ref_rop)) / np.max(np.abs(ref_rop))
+    print(f"case {args.case}: {model.static.mesh.n_elements} elements, {model.size} modal coordinates,"
+          f" t_end = {s.t_end} s, rtol = {s.rtol}, atol = {s.atol}, one core, best of {args.repeat}")
+    print(f"model build (mesh, statics, modes, projection): {build:.3f} s")
+    print(f"fast path (compiled DOPRI5 + compiled RHS):   {best['compiled']:.3f} s;"
+          f" RHS evaluations {result.stats['n_rhs']}, accepted {result.stats['n_accepted']},"
+          f" rejected {result.stats['n_rejected']}")
+    print(f"reference path (Python DOPRI5 + NumPy RHS):   {best['reference']:.3f} s;"
+          f" RHS evaluations {reference.stats['n_rhs']}")
+    print(f"baseline solve_ivp RK45 + NumPy RHS:           {best['ivp_numpy']:.3f} s;"
+          f" RHS evaluations {baseline.nfev}")
+    print(f"solve_ivp RK45 + our compiled RHS:             {best['ivp_compiled']:.3f} s;"
+          f" RHS evaluations {compiled_rhs.nfev}")
+    print(f"speed-up of the fast path: {best['ivp_numpy'] / best['compiled']:.1f}x vs the baseline,"
+          f" {best['ivp_compiled'] / best['compiled']:.1f}x vs solve_ivp with the compiled RHS,"
+          f" {best['reference'] / best['compiled']:.1f}x vs the reference path")
+    print(f"max ROP difference fast path vs baseline: {agreement:.2e} (relative)")
+    print(f"one full reference run incl. model build: {build + best['compiled']:.3f} s (goal <= 5 s)")
+
+
+if __name__ == "__main__":
+    main()
