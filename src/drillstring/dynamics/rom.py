@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from drillstring.fem.assembly import THETA_X, U, V, W, dof
+from drillstring.fem.assembly import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
 from drillstring.forces.bit_rock import BitRockParameters, bit_rock_force_floored, evaluate_bit_rock
 from drillstring.forces.contact import ContactParameters, contact_forces, evaluate_contact
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes
@@ -287,17 +287,34 @@ class ReducedOrderModel:
         return self._in_contact.copy()
 
     def initial_state(self, lateral_perturbation: float, seed: int) -> np.ndarray:
-        """Static state, the whole string spinning at Ω, zero axial speed (η = η̇ = 0), plus a seeded
-        lateral perturbation: a random combination of the lateral modes (standard-normal modal
-        amplitudes from ``numpy.random.default_rng(seed)``) scaled so the largest radial displacement
-        along the string equals ``lateral_perturbation`` [m]."""
+        """Initial state (SPEC §7): the static state, the whole string spinning at Ω, zero axial
+        speed (η̇ = 0), plus a seeded lateral perturbation defined physically, independent of the
+        basis: ``v0(x) = Σ_k a_k sin(kπx/L)/k²``, ``w0`` likewise with ``b_k``, k = 1…10,
+        ``a_k, b_k`` standard normal from ``numpy.random.default_rng(seed)``, scaled so that the largest
+        radial displacement along the string is ``lateral_perturbation`` [m]; it is projected on the
+        lateral modes (mass-orthogonal projection ``η0 = Φᵀ(M + M_f) q0``), so it converges to the
+        physical shape as lateral modes are added."""
         y0 = np.zeros(2 * self.size)
         lateral = np.array([f.startswith("lateral") for f in self.family])
-        if lateral_perturbation > 0 and lateral.any():
-            rng = np.random.default_rng(seed)
-            amplitudes = np.where(lateral, rng.standard_normal(self.size), 0.0)
-            radius = np.hypot(self.phi_v @ amplitudes, self.phi_w @ amplitudes)
-            y0[: self.size] = amplitudes * (lateral_perturbation / radius.max())
+        if not (lateral_perturbation > 0 and lateral.any()):
+            return y0
+        mesh = self.static.mesh
+        x = mesh.nodes / mesh.length
+        k = np.arange(1, 11)
+        rng = np.random.default_rng(seed)
+        a, b = rng.standard_normal(10), rng.standard_normal(10)
+        shapes = np.sin(np.pi * np.outer(x, k)) / k**2
+        slopes = np.pi / mesh.length * np.cos(np.pi * np.outer(x, k)) / k
+        v0, w0 = shapes @ a, shapes @ b
+        scale = lateral_perturbation / np.hypot(v0, w0).max()
+        nodes = np.arange(mesh.n_nodes)
+        q0 = np.zeros(mesh.n_dofs)
+        q0[dof(nodes, V)] = scale * v0
+        q0[dof(nodes, W)] = scale * w0
+        q0[dof(nodes, THETA_Z)] = scale * (slopes @ a)  # θz = ∂v/∂x
+        q0[dof(nodes, THETA_Y)] = -scale * (slopes @ b)  # θy = −∂w/∂x
+        eta0 = self.basis.T @ (self.system.mass @ q0)
+        y0[: self.size] = np.where(lateral, eta0, 0.0)
         return y0
 
     def energy(self, y: np.ndarray) -> float:
