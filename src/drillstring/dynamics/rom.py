@@ -30,6 +30,14 @@ from numba import njit
 from drillstring.fem.assembly import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
 from drillstring.forces.bit_rock import BitRockParameters, bit_rock_force_floored, evaluate_bit_rock
 from drillstring.forces.contact import ContactParameters, contact_forces, evaluate_contact
+from drillstring.forces.nonlinear import (
+    NonlinearElements,
+    _kinetic_forces_kernel,
+    _strain_energy_forces_kernel,
+    contract_mass_tensor,
+    modal_mass_tensor,
+    nonlinear_elements,
+)
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes
 from drillstring.statics import StaticState, case_static_state
 
@@ -146,6 +154,34 @@ def _rhs_kernel(
 
 
 @njit(cache=True)
+def _rhs_full_kernel(y, out, case2_args, basis, basis_t, theta_x_dofs, top_speed, inv_length, xi,
+                     weights, slope, rotation, axial_stiffness, polar_inertia, tensor, active, q, qd,
+                     f_se, f_vel, coupling, mass):
+    """Case 1: the case-2 right-hand side plus the strain- and kinetic-energy forces f_se and f_ke
+    (:mod:`drillstring.forces.nonlinear`), evaluated on the physical state ``q̄ = Φη``,
+    ``q̇ = Φη̇ + Ω`` (θx DOFs), projected on the basis. ``f_ke = f_vel − M_nl(q) q̈``: the
+    configuration-dependent mass correction is moved to the left-hand side and
+    ``(I + Φᵀ M_nl(Φη) Φ) η̈ = …`` is solved at every evaluation (exact, no lagged accelerations)."""
+    _rhs_kernel(y, out, *case2_args)
+    n = basis.shape[1]
+    eta = np.ascontiguousarray(y[:n])
+    eta_dot = np.ascontiguousarray(y[n:])
+    q[:] = basis @ eta
+    qd[:] = basis @ eta_dot
+    for i in range(theta_x_dofs.shape[0]):
+        qd[theta_x_dofs[i]] += top_speed
+    _strain_energy_forces_kernel(q, inv_length, weights, slope, axial_stiffness, f_se)
+    _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, f_vel, coupling)
+    for i in range(f_se.shape[0]):
+        f_se[i] += f_vel[i]
+    acc = out[n:] + basis_t @ f_se
+    contract_mass_tensor(tensor, active, eta, mass)
+    for i in range(n):
+        mass[i, i] += 1.0
+    out[n:] = np.linalg.solve(mass, acc)
+
+
+@njit(cache=True)
 def _observe_kernel(
     y, out, omega2, bit_u, bit_t, phi_v, phi_w, phi_tx, gap, top_speed, bit_args, probe_nodes,
     v, w, v_dot, w_dot, spin, in_contact,
@@ -199,6 +235,7 @@ class ReducedOrderModel:
     gap: np.ndarray
     outer_diameter: np.ndarray
     probe_positions: np.ndarray
+    nonlinear: str = "bit_and_contact"
     _work: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
@@ -241,6 +278,28 @@ class ReducedOrderModel:
             bool(c.tangential_friction), np.zeros(n_nodes), np.zeros(n_nodes),
             np.zeros(n_nodes, dtype=np.int64), *contact_work,
         )
+        self.kernel = _rhs_kernel
+        self.kernel_args = self._rhs_args
+        if self.nonlinear == "full":
+            self._setup_full()
+        elif self.nonlinear != "bit_and_contact":
+            raise ValueError(f"nonlinear = {self.nonlinear!r}: must be 'bit_and_contact' or 'full'")
+
+    def _setup_full(self) -> None:
+        mesh = self.static.mesh
+        self.elements: NonlinearElements = nonlinear_elements(mesh)
+        basis = np.ascontiguousarray(self.basis)
+        active, tensor = modal_mass_tensor(self.elements, basis, tol=1e-14)
+        e = self.elements
+        n_dofs, n = basis.shape
+        self.kernel = _rhs_full_kernel
+        self.kernel_args = (
+            self._rhs_args, basis, np.ascontiguousarray(basis.T),
+            dof(np.arange(mesh.n_nodes), THETA_X).astype(np.int64), float(self.top_speed),
+            e.inv_length, e.xi, e.weights, e.slope, e.rotation, e.axial_stiffness, e.polar_inertia,
+            tensor, active, np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs),
+            np.zeros((e.n_elements, 2, 4)), np.zeros((n, n)),
+        )
 
     @property
     def size(self) -> int:
@@ -254,7 +313,7 @@ class ReducedOrderModel:
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt for y = [η, η̇] (t enters only through the imposed top rotation, which drops out)."""
         out = np.empty_like(y)
-        _rhs_kernel(y, out, *self._rhs_args)
+        self.kernel(y, out, *self.kernel_args)
         return out
 
     def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:
@@ -271,7 +330,18 @@ class ReducedOrderModel:
         )
         generalized = (self.phi_v.T @ force_v + self.phi_w.T @ force_w + self.phi_tx.T @ torque
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque)
-        return np.concatenate([eta_dot, generalized - self.damping @ eta_dot - self.omega2 * eta])
+        acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
+        if self.nonlinear == "full":
+            q = self.basis @ eta
+            qd = self.basis @ eta_dot
+            qd[dof(np.arange(self.static.mesh.n_nodes), THETA_X)] += self.top_speed
+            f_se = self.elements.strain_energy_forces(q, np.zeros_like(q))
+            f_vel = np.zeros_like(q)
+            self.elements.kinetic_forces(q, qd, f_vel)
+            mass_nl = self.elements.mass_correction_matrix(q)
+            mass = np.eye(self.size) + self.basis.T @ (mass_nl @ self.basis)
+            acceleration = np.linalg.solve(mass, acceleration + self.basis.T @ (f_se + f_vel))
+        return np.concatenate([eta_dot, acceleration])
 
     def observe(self, t: float, y: np.ndarray) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement at each probe [m]."""
@@ -337,6 +407,7 @@ def reduced_model(
     contact: ContactParameters,
     borehole_diameter: float,
     probe_positions=(),
+    nonlinear: str = "bit_and_contact",
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one).
 
@@ -366,6 +437,7 @@ def reduced_model(
         weight_on_bit=static.weight_on_bit, bit_rock=bit_rock, contact=contact,
         gap=(borehole_diameter - outer) / 2.0, outer_diameter=outer,
         probe_positions=np.asarray(probe_positions, dtype=float),
+        nonlinear=nonlinear,
     )
 
 
@@ -377,8 +449,10 @@ def case_reduced_model(
     torsional_modes: int | None = None,
     lateral_modes: int | None = None,
     static: StaticState | None = None,
+    nonlinear: str | None = None,
 ) -> ReducedOrderModel:
-    """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values."""
+    """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
+    (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
     r = case.reduced_model
@@ -398,4 +472,5 @@ def case_reduced_model(
                                   c.tangential_friction),
         borehole_diameter=case.borehole.diameter,
         probe_positions=case.mesh.probes,
+        nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,
     )
