@@ -559,8 +559,8 @@ class Mesh(_Base):
 class ReducedModel(_Base):
     """Number of normal modes kept per family (lateral: per plane)."""
 
-    axial_modes: int = Field(6, ge=0)
-    torsional_modes: int = Field(6, ge=1)
+    axial_modes: int = Field(10, ge=0)
+    torsional_modes: int = Field(10, ge=1)
     lateral_modes: int = Field(20, ge=0)
 
 
