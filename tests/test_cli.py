@@ -178,3 +178,166 @@ def test_missing_file_and_unknown_name(tmp_path):
     result = _invoke("modes", "no_such_case")
     assert result.exit_code == 2
     assert "reference" in result.stderr  # lists the built-in cases
+
+
+# ---------------------------------------------------------------------------------------- simulate, study
+
+
+@pytest.fixture(scope="module")
+def coarse_case(tmp_path_factory):
+    """The reference case on a 40 m mesh: a 1 s run takes a fraction of a second."""
+    from drillstring.case import load_case
+
+    case = load_case("reference")
+    case = case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 40.0})})
+    path = tmp_path_factory.mktemp("cases") / "coarse.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    return path
+
+
+def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
+    from drillstring.results import read_netcdf
+
+    nc, png = tmp_path / "run.nc", tmp_path / "run.png"
+    data = _json("simulate", str(coarse_case), "--t-end", "1", "--out", str(nc), "--plot", str(png), "--json")
+    for key in ("mean_rate_of_penetration", "bit_speed_min", "bit_speed_max", "stick_slip",
+                "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
+                "wall_time", "netcdf", "figure"):
+        assert key in data, key
+    assert data["netcdf"] == str(nc) and data["figure"] == str(png)
+    assert png.read_bytes().startswith(b"\x89PNG")
+    ds = read_netcdf(nc)
+    assert float(ds.time[-1]) == pytest.approx(1.0)
+    assert ds.attrs["status"] == "success"
+    top = 100.0 * 2.0 * 3.141592653589793 / 60.0
+    assert 1e-4 < data["mean_rate_of_penetration"] < 1e-2  # m/s: 0.36 to 36 m/h
+    assert 0.0 < data["bit_speed_min"] <= data["bit_speed_max"] < 2.0 * top  # rad/s
+    assert data["stick_slip"] is False
+    assert data["stick_slip"] == (data["bit_speed_min"] < 0.1 * top)
+    assert len(data["max_radial_displacement"]) == len(data["gap"]) == 1
+    assert 0.0 <= data["max_radial_displacement"][0] < data["gap"][0] == pytest.approx(0.0357)
+    assert data["impacts"] >= 0 and data["n_rejected"] >= 0
+    assert data["n_rhs"] >= data["n_accepted"] > 0
+    assert data["wall_time"] > 0.0
+
+
+def test_simulate_table_has_units(coarse_case, tmp_path):
+    result = _invoke("simulate", str(coarse_case), "--t-end", "0.5", "--out", str(tmp_path / "a.nc"),
+                     "--plot", str(tmp_path / "a.png"))
+    assert result.exit_code == 0, result.output
+    for text in ("rate of penetration", "m/h", "rpm", "stick-slip", "mm", "impacts", "steps accepted",
+                 str(tmp_path / "a.nc")):
+        assert text in result.stdout, text
+
+
+def test_simulate_failure_keeps_the_partial_run(coarse_case, tmp_path):
+    from drillstring.case import load_case
+    from drillstring.results import read_netcdf
+
+    case = load_case(coarse_case)
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"max_steps": 50})})
+    path = tmp_path / "few_steps.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    nc = tmp_path / "partial.nc"
+    result = _invoke("simulate", str(path), "--t-end", "1", "--out", str(nc), "--plot", str(tmp_path / "p.png"))
+    assert result.exit_code == 1, result.output
+    assert "stopped" in result.stderr and "t = " in result.stderr  # when it stopped
+    assert "Traceback" not in result.output
+    ds = read_netcdf(nc)
+    assert ds.attrs["status"] == "failed"
+    assert 0 < float(ds.time[-1]) < 1.0
+
+
+def test_simulate_bad_t_end(coarse_case):
+    result = _invoke("simulate", str(coarse_case), "--t-end", "-1")
+    assert result.exit_code == 2
+    assert "--t-end" in result.stderr
+
+
+def _study(case_path, out, *extra):
+    return _invoke("study", str(case_path), "--samples", "3", "--t-end", "1", "--workers", "1",
+                   "--out", str(out), *extra)
+
+
+def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
+    out = tmp_path / "study"
+    result = _study(coarse_case, out, "--json")
+    assert result.exit_code == 0, result.output
+    first = json.loads(result.stdout)
+    saved = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert saved == first
+    for name in ("study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png",
+                 "envelopes.png", "dispersion.png"):
+        assert (out / name).exists(), name
+    assert first["n_samples"] == 3 and first["n_failed"] == 0 and first["failures"] == {}
+    assert first["seed"] == 0 and first["sigma"] == 5000.0  # the defaults
+    assert first["workers"] == 1 and first["wall_time"] > 0.0
+    assert first["t_transient"] == pytest.approx(0.5)  # min(10 s, t_end / 2)
+    assert set(first["observables"]) == {"rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"}
+    for entry in first["observables"].values():
+        assert 0.0 < entry["dispersion_time_mean"] <= entry["dispersion_max"] < 1.0
+        assert set(entry["ratio_time_mean"]) == {"weight_on_hook", "weight_on_bit"}
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert "data:image/png;base64," in html and "http" not in html
+
+    again = _study(coarse_case, out, "--json")
+    assert again.exit_code == 0, again.output
+    second = json.loads(again.stdout)
+    assert second["observables"] == first["observables"]
+    assert second["n_samples"] == 3
+    assert second["wall_time"] < first["wall_time"]  # nothing left to run
+    assert "resumed" in again.stderr
+
+    table = _study(coarse_case, out)
+    assert table.exit_code == 0, table.output
+    for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}"):
+        assert text in table.stdout, text
+
+
+def test_study_refuses_other_settings_on_the_same_store(coarse_case, tmp_path):
+    out = tmp_path / "study"
+    assert _study(coarse_case, out).exit_code == 0
+    result = _study(coarse_case, out, "--sigma", "3000")
+    assert result.exit_code == 2
+    assert "different study" in result.stderr and "--out" in result.stderr
+    assert "Traceback" not in result.output
+
+
+def test_study_dispersion_sets_sigma(coarse_case, tmp_path):
+    from drillstring.case import load_case
+    from drillstring.stochastic.montecarlo import nominal_weight_on_hook
+
+    result = _study(coarse_case, tmp_path / "d", "--dispersion", "0.01", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["sigma"] == pytest.approx(0.01 * nominal_weight_on_hook(load_case(coarse_case)))
+    assert data["weight_on_hook_dispersion"] == pytest.approx(0.01)
+
+
+def test_study_sigma_and_dispersion_together_refused(coarse_case, tmp_path):
+    result = _study(coarse_case, tmp_path / "x", "--sigma", "1000", "--dispersion", "0.01")
+    assert result.exit_code == 2
+    assert "--sigma" in result.stderr and "--dispersion" in result.stderr
+    assert not (tmp_path / "x" / "study.zarr").exists()
+
+
+@pytest.mark.parametrize("args", [("--sigma", "-5"), ("--dispersion", "0"), ("--transient", "5")])
+def test_study_bad_values_refused(coarse_case, tmp_path, args):
+    result = _study(coarse_case, tmp_path / "bad", *args)
+    assert result.exit_code == 2, result.output
+    assert "error:" in result.stderr
+
+
+def test_study_interrupted_exit_130(coarse_case, tmp_path, monkeypatch):
+    from drillstring.stochastic import montecarlo
+
+    def interrupted(*args, **kwargs):
+        raise montecarlo.StudyInterrupted(
+            "study interrupted after 1 of 3 realizations; they are saved in x; run the same command again "
+            "to resume")
+
+    monkeypatch.setattr(montecarlo, "run_study", interrupted)
+    result = _study(coarse_case, tmp_path / "i")
+    assert result.exit_code == 130
+    assert "resume" in result.stderr
+    assert "Traceback" not in result.output

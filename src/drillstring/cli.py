@@ -8,6 +8,10 @@ Commands
     The lowest natural frequencies of the axial, torsional and lateral mode families.
 ``drillstring cases``
     The built-in cases.
+``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
+    One drilling run: NetCDF of the observables, a four-panel figure and a summary table.
+``drillstring study [CASE] [--sigma N | --dispersion D] [--samples N] [--seed S] [--out DIR] ...``
+    Monte Carlo study of a random weight-on-hook: Zarr store (resumable), statistics, figures, report.
 
 ``CASE`` is a built-in case name (default ``reference``) or the path to a TOML case file.
 
@@ -17,17 +21,30 @@ Conventions for every command (follow them when adding one)
 - Physics stays out of this module: a command calls the package API and only formats the result.
 - ``--json`` prints ``json.dumps(payload, indent=2)`` of SI values, and nothing else, on stdout.
 - Human-readable output (rich tables) converts units here, at the edge: kN, m, Hz, ...
+- Progress bars and notes go to stderr, so that stdout holds only the table or the JSON.
+- Exit codes: 0 success, 1 a run that failed, 2 invalid input, 130 interrupted (Ctrl-C).
+- Heavy modules (simulation, Monte Carlo, Matplotlib) are imported inside the commands that need them.
 """
 
 from __future__ import annotations
 
 import json
+import math
+from pathlib import Path
 from typing import Annotated, Any, NoReturn
 
 import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 from rich.table import Table
 
 from drillstring import __version__
@@ -37,8 +54,17 @@ from drillstring.statics import case_static_state
 
 #: Exit code for an invalid case or bad input data (same as Click's usage errors).
 EXIT_INVALID_INPUT = 2
+#: Exit code for a run that failed (a simulation that stopped early, a study without statistics).
+EXIT_RUN_FAILED = 1
+#: Exit code after Ctrl-C (128 + SIGINT, the shell convention).
+EXIT_INTERRUPTED = 130
 
 _KN = 1e3  # N per kN
+_RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
+_MM = 1e3  # mm per m
+_M_PER_H = 3600.0  # (m/h) per (m/s)
+#: A run sticks when its bit speed after the transient falls below this fraction of the top speed.
+STICK_FRACTION = 0.1
 
 app = typer.Typer(
     name="drillstring",
@@ -86,6 +112,18 @@ def _print_json(payload: Any) -> None:
 def _console() -> Console:
     # Created per call so that the current sys.stdout is used (tests capture it).
     return Console(highlight=False)
+
+
+def _err_console() -> Console:
+    """Progress bars and notes: stderr, so that stdout keeps only the table or the JSON."""
+    return Console(stderr=True, highlight=False)
+
+
+def _default_transient(t_end: float) -> float:
+    """Start of the steady regime used by the summaries [s]: 10 s, or half the run when shorter."""
+    from drillstring.stochastic.analysis import DEFAULT_TRANSIENT
+
+    return min(DEFAULT_TRANSIENT, 0.5 * t_end)
 
 
 def _version(value: bool) -> None:
@@ -239,6 +277,368 @@ def modes(
         "Prestress (geometric stiffness) and drilling fluid included.",
     ):
         console.print(note)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring simulate
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
+    """Summary numbers of one run (SI): steady-regime ROP and bit speed (t >= ``t_transient``), stick-slip,
+    maximum radial displacement and gap per probe, impacts and solver statistics."""
+    t = np.asarray(ds["time"].values, dtype=float)
+    steady = t >= t_transient
+    if not steady.any():  # a run that stopped before the end of the transient: use what there is
+        steady = np.ones_like(t, dtype=bool)
+    rop = np.asarray(ds["rate_of_penetration"].values, dtype=float)[steady]
+    speed = np.asarray(ds["bit_speed"].values, dtype=float)[steady]
+    top = float(ds.attrs.get("top_speed", np.nan))
+    radial = np.asarray(ds["radial_displacement"].values, dtype=float)
+    x = np.atleast_1d(np.asarray(ds["x"].values, dtype=float))
+    gap = np.atleast_1d(np.asarray(ds["gap"].values, dtype=float))
+
+    def number(values: np.ndarray, reduce) -> float | None:
+        finite = values[np.isfinite(values)]
+        return float(reduce(finite)) if finite.size else None
+
+    speed_min = number(speed, np.min)
+    radial_max = [number(radial[:, j], np.max) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+    return {
+        "mean_rate_of_penetration": number(rop, np.mean),
+        "bit_speed_min": speed_min,
+        "bit_speed_max": number(speed, np.max),
+        "stick_slip": None if speed_min is None else bool(speed_min < STICK_FRACTION * top),
+        "max_radial_displacement": radial_max,
+        "gap": [float(g) for g in gap],
+        "probe_x": [float(v) for v in x],
+        "impacts": int(ds.attrs.get("impacts", 0)),
+        "n_rhs": int(ds.attrs.get("solver_n_rhs", 0)),
+        "n_accepted": int(ds.attrs.get("solver_n_accepted", 0)),
+        "n_rejected": int(ds.attrs.get("solver_n_rejected", 0)),
+        "wall_time": float(ds.attrs.get("solver_wall_time", np.nan)),
+        "t_transient": float(t_transient),
+        "t_end": float(t[-1]) if t.size else 0.0,
+        "top_speed": top,
+        "status": str(ds.attrs.get("status", "")),
+    }
+
+
+def _fmt(value: float | None, spec: str, scale: float = 1.0) -> str:
+    return "–" if value is None else format(value * scale, spec)
+
+
+def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
+    t_tr = numbers["t_transient"]
+    table = Table(
+        title=escape(f"Simulation: case {name!r}, t = 0 to {numbers['t_end']:g} s"), title_justify="left"
+    )
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    table.add_row(escape(f"mean rate of penetration (t ≥ {t_tr:g} s)"),
+                  _fmt(numbers["mean_rate_of_penetration"], ",.3f", _M_PER_H), "m/h")
+    table.add_row(escape(f"bit speed min / max (t ≥ {t_tr:g} s)"),
+                  f"{_fmt(numbers['bit_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['bit_speed_max'], ',.2f', _RPM)}",
+                  "rpm")
+    stick = numbers["stick_slip"]
+    table.add_row(
+        escape(f"stick-slip (bit below {STICK_FRACTION:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
+        "–" if stick is None else ("yes" if stick else "no"), "",
+    )
+    for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
+        table.add_row(escape(f"max radial displacement at x = {x:g} m / gap"),
+                      f"{_fmt(r, ',.3f', _MM)} / {gap * _MM:,.1f}", "mm")
+    table.add_row("impacts on the borehole", f"{numbers['impacts']:,}", "")
+    table.add_row("right-hand-side evaluations", f"{numbers['n_rhs']:,}", "")
+    table.add_row("steps accepted / rejected", f"{numbers['n_accepted']:,} / {numbers['n_rejected']:,}", "")
+    table.add_row("solver wall time", f"{numbers['wall_time']:,.2f}", "s")
+    return table
+
+
+@app.command()
+def simulate(
+    case: CaseArg = "reference",
+    t_end: Annotated[
+        float | None, typer.Option("--t-end", help="Simulated time [s] (default: the case's simulation.t_end).")
+    ] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="NetCDF file of the observables.")] = Path(
+        "simulation.nc"
+    ),
+    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the four-panel figure.")] = Path(
+        "simulation.png"
+    ),
+    as_json: JsonOpt = False,
+) -> None:
+    """One drilling run: ROP, bit speed, torque- and force-on-bit, radial displacements, in time.
+
+    Writes the observables to NetCDF and a four-panel figure, then prints a summary. After the transient
+    (t >= min(10 s, t_end/2)), stick-slip means that the bit speed falls below 10 % of the top speed. A run
+    that stops early still writes what it computed, reports where it stopped and exits with code 1.
+    """
+    the_case = _load(case)
+    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
+    if not (math.isfinite(t_final) and t_final > 0):
+        _fail(f"--t-end = {t_final!r} s: must be > 0")
+    if the_case.simulation.output_step > t_final:
+        _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
+              f"({the_case.simulation.output_step:g} s)")
+
+    from drillstring import api
+    from drillstring.dynamics.simulate import SimulationError
+    from drillstring.plots import plot_run
+    from drillstring.results import write_netcdf
+
+    failure: SimulationError | None = None
+    columns = (TextColumn("simulating"), BarColumn(), TextColumn("{task.completed:.2f} / {task.total:g} s"),
+               TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn())
+    try:
+        with Progress(*columns, console=_err_console()) as bar:
+            task = bar.add_task("simulating", total=t_final)
+            try:
+                ds = api.simulate(the_case, t_end=t_final,
+                                  progress=lambda t: bar.update(task, completed=min(float(t), t_final)))
+            except SimulationError as error:
+                failure = error
+                ds = error.dataset
+    except KeyboardInterrupt:
+        _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
+
+    netcdf = write_netcdf(ds, out)
+    figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+    numbers = _run_numbers(ds, _default_transient(t_final))
+    numbers["netcdf"] = str(netcdf)
+    numbers["figure"] = None if figure is None else str(figure)
+    if failure is not None:
+        numbers["message"] = str(failure)
+    if as_json:
+        _print_json(numbers)
+    else:
+        console = _console()
+        console.print(_simulation_table(the_case.name, numbers))
+        written = f"NetCDF: {netcdf}" + ("" if figure is None else f", figure: {figure}")
+        console.print(escape(written), soft_wrap=True)
+    if failure is not None:
+        _fail(f"{failure} (the partial run is in {netcdf})", EXIT_RUN_FAILED)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring study
+# ---------------------------------------------------------------------------------------------------------
+
+#: σ_WOH [N] of a study given neither --sigma nor --dispersion (the reference study's largest).
+DEFAULT_SIGMA = 5000.0
+
+
+class _StudyProgress:
+    """``progress(done, failed, total)`` for :func:`run_study`: a rich bar (stderr) of realizations,
+    failures and time left. The bar starts at the first call, so that a resumed study's estimate counts
+    only the realizations run now, and a study refused before it starts prints no empty bar."""
+
+    _COLUMNS = (TextColumn("realizations"), BarColumn(), MofNCompleteColumn(),
+                TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
+                TimeRemainingColumn())
+
+    def __init__(self, console: Console) -> None:
+        self.console = console
+        self.bar: Progress | None = None
+        self.task = None
+        self.already = 0
+
+    def __call__(self, done: int, failed: int, total: int) -> None:
+        if self.bar is None:
+            self.already = done + failed
+            self.bar = Progress(*self._COLUMNS, console=self.console)
+            self.bar.start()
+            self.task = self.bar.add_task("realizations", total=total, completed=done + failed, failed=failed)
+        else:
+            self.bar.update(self.task, completed=done + failed, failed=failed)
+
+    def stop(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+def _study_table(summary: dict[str, Any]) -> Table:
+    title = (f"Dispersion after the transient (t ≥ {summary['t_transient']:g} s): "
+             f"δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
+             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
+    table = Table(title=escape(title), title_justify="left")
+    table.add_column("observable")
+    for header in ("mean δ [%]", "max δ [%]", "mean/δ_WOH", "mean/δ_WOB"):
+        table.add_column(escape(header), justify="right")
+    for name, entry in summary["observables"].items():
+        ratio = entry.get("ratio_time_mean", {})
+        table.add_row(
+            escape(name.replace("_", " ")),
+            _fmt(entry.get("dispersion_time_mean"), ".3g", 100.0),
+            _fmt(entry.get("dispersion_max"), ".3g", 100.0),
+            _fmt(ratio.get("weight_on_hook"), ".3g"),
+            _fmt(ratio.get("weight_on_bit"), ".3g"),
+        )
+    return table
+
+
+@app.command()
+def study(
+    case: CaseArg = "reference",
+    sigma: Annotated[
+        float | None,
+        typer.Option("--sigma", help="Standard deviation of the weight-on-hook [N] (default 5000 N)."),
+    ] = None,
+    dispersion: Annotated[
+        float | None,
+        typer.Option("--dispersion", help="Dispersion σ/mean of the weight-on-hook, instead of --sigma."),
+    ] = None,
+    samples: Annotated[int, typer.Option("--samples", "-n", min=1, help="Number of realizations n_s.")] = 50,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Root seed of the random draws.")] = 0,
+    out: Annotated[
+        Path,
+        typer.Option("--out", "-o", help="Output folder (study.zarr, summary.json, statistics.nc, figures, "
+                                         "report.html); rerunning with the same folder resumes."),
+    ] = Path("study"),
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", "-j", min=1,
+                     help="Local worker processes (default: one per core); 1 runs in this process."),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option("--scheduler", help="Dask scheduler address (tcp://host:8786) instead of local processes."),
+    ] = None,
+    t_end: Annotated[
+        float | None,
+        typer.Option("--t-end", help="Simulated time per realization [s] (default: the case's t_end)."),
+    ] = None,
+    transient: Annotated[
+        float | None,
+        typer.Option("--transient", help="Start of the steady regime for the summaries [s] "
+                                         "(default: min(10 s, t_end/2))."),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Monte Carlo study of a random weight-on-hook (Normal law, Maximum Entropy).
+
+    Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
+    writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
+    dispersion.png, and the self-contained report OUT/report.html.
+    """
+    the_case = _load(case)
+    if sigma is not None and dispersion is not None:
+        _fail("give --sigma or --dispersion, not both")
+    if workers is not None and scheduler:
+        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+
+    from drillstring.plots import plot_study
+    from drillstring.report import write_report
+    from drillstring.results import write_netcdf
+    from drillstring.stochastic import montecarlo
+    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+
+    if dispersion is not None:
+        if not (math.isfinite(dispersion) and dispersion > 0):
+            _fail(f"--dispersion = {dispersion!r}: must be > 0")
+        sigma_value = dispersion * montecarlo.nominal_weight_on_hook(the_case)
+    else:
+        sigma_value = DEFAULT_SIGMA if sigma is None else float(sigma)
+    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
+    try:
+        settings = montecarlo.StudySettings(samples=samples, sigma=sigma_value, seed=seed, t_end=t_final,
+                                            output_step=the_case.simulation.output_step)
+    except ValueError as error:
+        _fail(str(error))
+    t_transient = _default_transient(t_final) if transient is None else float(transient)
+    if not (math.isfinite(t_transient) and 0 <= t_transient <= t_final):
+        _fail(f"--transient = {t_transient!r} s: must be in [0, t_end = {t_final:g} s]")
+
+    out.mkdir(parents=True, exist_ok=True)
+    store_path = out / "study.zarr"
+    err = _err_console()
+    tracker = _StudyProgress(err)
+    try:
+        try:
+            run = montecarlo.run_study(the_case, settings, store_path, workers=workers, scheduler=scheduler,
+                                       progress=tracker)
+        finally:
+            tracker.stop()
+    except montecarlo.StudyInterrupted as error:
+        _fail(str(error), EXIT_INTERRUPTED)
+    except KeyboardInterrupt:
+        _fail(f"interrupted; finished realizations are saved in {store_path}; run the same command again "
+              "to resume", EXIT_INTERRUPTED)
+    except ValueError as error:  # a store holding another study, or settings refused
+        _fail(str(error))
+    if tracker.already:
+        err.print(escape(f"resumed: {tracker.already} of {samples} realizations were already in {store_path}"))
+
+    raw = load_study(store_path)
+    failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
+    try:
+        stats = study_statistics(raw)
+    except ValueError as error:
+        listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
+        _fail(f"{error} ({len(failures)} failure(s){': ' + listing if listing else ''})", EXIT_RUN_FAILED)
+    summary = study_summary(stats, t_transient=t_transient)
+    realization_time = float(np.nansum(raw["wall_time"].values)) if "wall_time" in raw else float("nan")
+
+    paths = {
+        "store": out / "study.zarr",
+        "summary": out / "summary.json",
+        "statistics": out / "statistics.nc",
+        "report": out / "report.html",
+    }
+    write_netcdf(stats, paths["statistics"])
+    figures = plot_study(stats, out, t_transient)
+    payload = dict(summary)
+    payload.update({
+        "case": the_case.name,
+        "samples": samples,
+        "failures": failures,
+        "wall_time": run.wall_time,
+        "realization_wall_time_total": realization_time,
+        "workers": run.workers,
+        "files": {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}},
+    })
+    paths["summary"].write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
+    captions = {
+        "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean weight-on-hook)",
+        "dispersion": f"Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
+        "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
+    }
+    write_report(
+        paths["report"],
+        title=f"Monte Carlo study: case '{the_case.name}', random weight-on-hook",
+        case_toml=the_case.to_toml(),
+        summary=summary,
+        figures={captions[k]: figures[k] for k in ("envelopes", "dispersion", "convergence")},
+        run_info={
+            "realizations requested": samples,
+            "failures": failures,
+            "wall time of this run [s]": round(run.wall_time, 2),
+            "total time of the realizations [s]": round(realization_time, 2),
+            "workers": run.workers,
+            "simulated time per realization [s]": t_final,
+            "output step [s]": settings.output_step,
+            "store": str(paths["store"]),
+        },
+    )
+
+    if as_json:
+        _print_json(payload)
+        return
+    console = _console()
+    n_failed = summary["n_failed"]
+    console.print(escape(
+        f"Monte Carlo study: case {the_case.name!r}, n_s = {summary['n_samples']} finished"
+        f" ({n_failed} failed), seed {seed}, σ_WOH = {summary['sigma'] / _KN:g} kN,"
+        f" wall time {run.wall_time:,.1f} s ({run.workers} worker{'s' if run.workers != 1 else ''})"
+    ), soft_wrap=True)
+    console.print(_study_table(summary))
+    if failures:
+        console.print(escape(f"{len(failures)} failure(s), causes in {paths['summary']}"), soft_wrap=True)
+    console.print(escape(f"Store (rerun to resume): {paths['store']}"), soft_wrap=True)
+    console.print(escape(f"Summary: {paths['summary']}, statistics: {paths['statistics']}"), soft_wrap=True)
+    console.print(escape(f"Figures and report: {paths['report']}"), soft_wrap=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,262 @@
+"""Matplotlib figures of one run and of a Monte Carlo study (no physics here).
+
+Every function takes the Datasets produced by the package (SI units) and converts to engineering units
+only for the axes: ROP in m/h, bit speed in rpm, torque in kN·m, force in kN, displacements in mm.
+
+Figures are drawn on :class:`matplotlib.figure.Figure` objects rendered by the Agg canvas, without
+``pyplot``: nothing here changes the global Matplotlib backend or leaves figures open, so the functions
+are safe in scripts, notebooks, worker processes and tests.
+
+* :func:`plot_run` — one simulation: ROP, bit speed, radial displacement at a probe, torque-on-bit.
+* :func:`plot_convergence` — mean-square convergence ``conv(n_s)`` of each observable.
+* :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB.
+* :func:`plot_dispersion` — dispersion [%] of the same observables vs time, transient shaded.
+* :func:`plot_study` — the three study figures in one folder.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+__all__ = [
+    "DISPLAY_UNITS",
+    "plot_run",
+    "plot_convergence",
+    "plot_envelopes",
+    "plot_dispersion",
+    "plot_study",
+]
+
+_RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
+
+#: name -> (factor from SI, unit label, short title) for the axes.
+DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
+    "rate_of_penetration": (3600.0, "m/h", "rate of penetration"),
+    "bit_speed": (_RPM, "rpm", "bit speed"),
+    "torque_on_bit": (1e-3, "kN·m", "torque-on-bit"),
+    "force_on_bit": (1e-3, "kN", "force-on-bit"),
+    "radial_displacement": (1e3, "mm", "radial displacement"),
+}
+
+#: The four observables of the study figures, in panel order.
+STUDY_PANELS = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+
+_DPI = 120
+_MEAN_COLOR = "C0"
+_NOMINAL_COLOR = "C3"
+_ENVELOPE_COLOR = "C0"
+
+
+def _figure(rows: int, cols: int, size: tuple[float, float], sharex: bool = False
+            ) -> tuple[Figure, np.ndarray]:
+    fig = Figure(figsize=size, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = np.asarray(fig.subplots(rows, cols, squeeze=False, sharex=sharex)).ravel()
+    return fig, axes
+
+
+def _save(fig: Figure, path: str | Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=_DPI, format="png")
+    return path
+
+
+def _label(name: str) -> str:
+    _, unit, title = DISPLAY_UNITS[name]
+    return f"{title} [{unit}]"
+
+
+def _scaled(values, name: str) -> np.ndarray:
+    return np.asarray(values, dtype=float) * DISPLAY_UNITS[name][0]
+
+
+def _probe_index(x: np.ndarray, probe_x: float) -> int:
+    if x.size == 0:
+        raise ValueError("the dataset has no probe")
+    return int(np.argmin(np.abs(x - probe_x)))
+
+
+def _probe_positions(ds: xr.Dataset) -> np.ndarray:
+    if "x" in ds.coords or "x" in ds:
+        return np.atleast_1d(np.asarray(ds["x"].values, dtype=float))
+    n = ds.sizes.get("probe", 0)
+    return np.full(n, np.nan)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# One run
+# ---------------------------------------------------------------------------------------------------------
+
+
+def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
+    """Four panels of one simulation (like the reference study's figure) written to the PNG ``path``.
+
+    ROP [m/h], bit speed [rpm] with the top speed (``ds.attrs["top_speed"]`` [rad/s]) dashed, radial
+    displacement [mm] at the probe nearest ``probe_x`` [m] with its gap (coordinate ``gap``) dashed, and
+    torque-on-bit [kN·m], all vs time [s]. A failed (partial) run is plotted as far as it went, with its
+    status in the title.
+    """
+    t = np.asarray(ds["time"].values, dtype=float)
+    fig, axes = _figure(2, 2, (11.0, 7.0))
+    ax_rop, ax_speed, ax_radial, ax_tob = axes
+
+    ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration"), lw=0.9)
+    ax_rop.set_ylabel(_label("rate_of_penetration"))
+
+    ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed"), lw=0.9, label="bit")
+    top = ds.attrs.get("top_speed")
+    if top is not None:
+        ax_speed.axhline(float(top) * _RPM, color="k", ls="--", lw=0.9, label="top (imposed)")
+    ax_speed.set_ylabel(_label("bit_speed"))
+    ax_speed.legend(loc="best", fontsize="small")
+
+    x = _probe_positions(ds)
+    if "radial_displacement" in ds and x.size:
+        i = _probe_index(x, probe_x)
+        r = ds["radial_displacement"].isel(probe=i).values
+        r_mm = _scaled(r, "radial_displacement")
+        ax_radial.plot(t, r_mm, lw=0.9, label="r")
+        if np.isfinite(r_mm).any():
+            # The gap line can dwarf a small orbit: say how large it is.
+            ax_radial.text(0.02, 0.95, f"max r = {np.nanmax(r_mm):.3g} mm", transform=ax_radial.transAxes,
+                           va="top", fontsize="small")
+        if "gap" in ds.coords or "gap" in ds:
+            gap = float(np.atleast_1d(ds["gap"].values)[i])
+            ax_radial.axhline(gap * 1e3, color="k", ls="--", lw=0.9, label="gap")
+        ax_radial.set_title(f"probe at x = {x[i]:.0f} m", fontsize="medium")
+        ax_radial.legend(loc="best", fontsize="small")
+    else:
+        ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
+    ax_radial.set_ylabel(_label("radial_displacement"))
+
+    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), lw=0.9)
+    ax_tob.set_ylabel(_label("torque_on_bit"))
+
+    for ax in axes:
+        ax.set_xlabel("time [s]")
+        ax.grid(True, alpha=0.3)
+    title = "Drilling run"
+    name = _case_name(ds.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    if ds.attrs.get("status", "success") != "success":
+        title += f" ({ds.attrs.get('status')}, stopped at t = {t[-1]:.3g} s)" if t.size else " (failed)"
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+def _case_name(case_toml: str) -> str:
+    """The ``name = "..."`` of a case's TOML text ('' when absent)."""
+    for line in str(case_toml).splitlines():
+        stripped = line.strip()
+        if stripped.startswith("name") and "=" in stripped:
+            key, value = stripped.split("=", 1)
+            if key.strip() == "name":
+                return value.strip().strip('"').strip("'")
+        if stripped.startswith("["):
+            break
+    return ""
+
+
+# ---------------------------------------------------------------------------------------------------------
+# A study
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _study_title(stats: xr.Dataset, what: str) -> str:
+    parts = [what]
+    n = stats.attrs.get("n_samples")
+    if n is not None:
+        parts.append(f"n_s = {int(n)}")
+    sigma = stats.attrs.get("sigma")
+    if sigma is not None and np.isfinite(float(sigma)):
+        parts.append(f"σ_WOH = {float(sigma) / 1e3:g} kN")
+    return ", ".join(parts)
+
+
+def plot_convergence(stats: xr.Dataset, path: str | Path) -> Path:
+    """``conv(n_s)`` of each observable (``<v>_convergence``), divided by its last value so that all
+    observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices."""
+    fig, (ax,) = _figure(1, 1, (8.0, 4.8))
+    names = [str(v)[: -len("_convergence")] for v in stats.data_vars if str(v).endswith("_convergence")]
+    if not names:
+        raise ValueError("stats has no <observable>_convergence variable")
+    for name in names:
+        conv = stats[f"{name}_convergence"]
+        n = np.asarray(conv["n_samples"].values if "n_samples" in conv.coords else np.arange(1, conv.size + 1))
+        values = np.asarray(conv.values, dtype=float)
+        last = values[-1] if values.size else np.nan
+        normalised = values / last if np.isfinite(last) and last != 0 else values
+        title = DISPLAY_UNITS[name][2] if name in DISPLAY_UNITS else name
+        ax.plot(n, normalised, marker="." if n.size <= 60 else None, lw=1.1, label=title)
+    ax.axhline(1.0, color="k", lw=0.7, ls=":")
+    ax.set_xlabel("number of realizations $n_s$")
+    ax.set_ylabel("conv($n_s$) / conv($n_s^{max}$)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
+    fig.suptitle(_study_title(stats, "Mean-square convergence"))
+    return _save(fig, path)
+
+
+def plot_envelopes(stats: xr.Dataset, path: str | Path) -> Path:
+    """Four panels (ROP, bit speed, TOB, FOB): the envelope between ``<v>_lower`` and ``<v>_upper`` (the
+    95 % quantile envelope), the mean and the nominal (deterministic, mean weight-on-hook) response."""
+    t = np.asarray(stats["time"].values, dtype=float)
+    level = float(stats.attrs.get("level", 0.95))
+    fig, axes = _figure(2, 2, (11.0, 7.0))
+    for ax, name in zip(axes, STUDY_PANELS):
+        lower = _scaled(stats[f"{name}_lower"].values, name)
+        upper = _scaled(stats[f"{name}_upper"].values, name)
+        ax.fill_between(t, lower, upper, color=_ENVELOPE_COLOR, alpha=0.3, lw=0,
+                        label=f"{level:.0%} envelope")
+        ax.plot(t, _scaled(stats[f"{name}_mean"].values, name), color=_MEAN_COLOR, lw=1.0, label="mean")
+        if f"{name}_nominal" in stats:
+            ax.plot(t, _scaled(stats[f"{name}_nominal"].values, name), color=_NOMINAL_COLOR, lw=0.9,
+                    ls="--", label="nominal")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel(_label(name))
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc="best", fontsize="small")
+    fig.suptitle(_study_title(stats, "Envelopes of the response"))
+    return _save(fig, path)
+
+
+def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float) -> Path:
+    """Dispersion ``std/|mean|`` [%] vs time of ROP, bit speed, TOB and FOB (one panel each, shared time
+    axis), the transient ``t < t_transient`` [s] shaded."""
+    t = np.asarray(stats["time"].values, dtype=float)
+    fig, axes = _figure(len(STUDY_PANELS), 1, (9.0, 8.5), sharex=True)
+    for ax, name in zip(axes, STUDY_PANELS):
+        ax.plot(t, 100.0 * np.asarray(stats[f"{name}_dispersion"].values, dtype=float), lw=0.9)
+        if t.size:
+            ax.axvspan(t[0], min(float(t_transient), t[-1]), color="0.85", lw=0,
+                       label=f"transient (t < {t_transient:g} s)")
+        ax.set_ylabel(f"{DISPLAY_UNITS[name][2]}\ndispersion [%]")
+        ax.grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    axes[0].legend(loc="upper right", fontsize="small")
+    title = _study_title(stats, "Dispersion of the response")
+    inputs = [(key, stats.attrs.get(f"{key}_dispersion")) for key in ("weight_on_hook", "weight_on_bit")]
+    extra = ", ".join(f"δ_{'WOH' if k == 'weight_on_hook' else 'WOB'} = {100 * float(v):.3g} %"
+                      for k, v in inputs if v is not None)
+    fig.suptitle(f"{title}\n{extra}" if extra else title)
+    return _save(fig, path)
+
+
+def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float) -> dict[str, Path]:
+    """The three study figures in ``out_dir``: ``convergence.png``, ``envelopes.png``, ``dispersion.png``
+    (returned by those names without the extension)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return {
+        "convergence": plot_convergence(stats, out / "convergence.png"),
+        "envelopes": plot_envelopes(stats, out / "envelopes.png"),
+        "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient),
+    }

@@ -1,0 +1,311 @@
+"""A self-contained HTML report of a Monte Carlo study (no physics here).
+
+:func:`write_report` writes one HTML file with everything inline: CSS in a ``<style>`` element, figures as
+base64 PNG ``data:`` URIs, no script and no external resource, so the page can be mailed or archived
+alone. Every piece of text that comes from outside (case TOML, names, messages) is escaped.
+
+The page holds the case (key numbers and the full TOML in a collapsible block), the study's size and
+input dispersions, a dispersion table per observable (time-mean and maximum dispersion after the
+transient in %, and their ratios to the weight-on-hook and weight-on-bit dispersions), the run
+information (failures, wall time, ...) and the figures.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import math
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from drillstring import __version__
+
+__all__ = ["write_report"]
+
+_RPM = 60.0 / (2.0 * math.pi)
+
+#: Display names of the study observables, in table order.
+OBSERVABLE_NAMES = {
+    "rate_of_penetration": "rate of penetration",
+    "bit_speed": "bit speed",
+    "torque_on_bit": "torque-on-bit",
+    "force_on_bit": "force-on-bit",
+    "radial_displacement": "radial displacement",
+}
+
+_CSS = """
+body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, Helvetica, Arial, sans-serif;
+       margin: 2em auto; max-width: 72em; padding: 0 1.5em; color: #222; line-height: 1.45; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; }
+h2 { font-size: 1.25em; margin-top: 1.8em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; }
+p.meta { color: #666; margin-top: 0; }
+table { border-collapse: collapse; margin: 0.6em 0; }
+th, td { border: 1px solid #ccc; padding: 0.25em 0.7em; }
+th { background: #f2f2f2; text-align: left; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+table.kv th { font-weight: normal; background: #f7f7f7; }
+details { margin: 0.6em 0; }
+summary { cursor: pointer; color: #1f4e99; }
+pre { background: #f7f7f7; border: 1px solid #ddd; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+figure { margin: 1.2em 0; }
+figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
+figcaption { color: #555; font-size: 0.9em; }
+ul.failures { font-size: 0.9em; }
+"""
+
+
+def _esc(value: Any) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _num(value: Any, digits: int = 4) -> str:
+    """A number for a table cell ('–' when missing or not finite)."""
+    if value is None:
+        return "–"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return f"{value:,}"
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return _esc(value)
+    if not math.isfinite(v):
+        return "–"
+    return f"{v:.{digits}g}"
+
+
+def _percent(value: Any) -> str:
+    if value is None:
+        return "–"
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return "–"
+    return f"{100.0 * v:.3g}" if math.isfinite(v) else "–"
+
+
+def _kv_table(rows: list[tuple[str, str]]) -> str:
+    """Two-column table; labels are escaped here, values must already be HTML."""
+    body = "".join(f"<tr><th>{_esc(k)}</th><td>{v}</td></tr>" for k, v in rows)
+    return f'<table class="kv">{body}</table>'
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Sections
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _case_rows(case_toml: str) -> list[tuple[str, str]]:
+    """Key numbers of a case from its TOML (SI numbers, as written by ``Case.to_toml``), in display units.
+    Missing or unparsable entries are left out: the full TOML is shown anyway."""
+    try:
+        data = tomllib.loads(case_toml)
+    except (tomllib.TOMLDecodeError, TypeError):
+        return []
+    rows: list[tuple[str, str]] = []
+
+    def add(label: str, value: Any, unit: str = "", digits: int = 4) -> None:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            rows.append((label, f"{_num(value, digits)} {_esc(unit)}".strip()))
+        elif value not in (None, ""):
+            rows.append((label, _esc(value)))
+
+    add("name", data.get("name"))
+    add("description", data.get("description"))
+    sections = data.get("sections") or []
+    if sections:
+        length = sum(float(s.get("length", 0.0)) for s in sections if isinstance(s, dict))
+        add("string length", length, "m", 6)
+        for s in sections:
+            if not isinstance(s, dict):
+                continue
+            parts = []
+            if "length" in s:
+                parts.append(f"{_num(s['length'], 6)} m")
+            if "outer_diameter" in s and "inner_diameter" in s:
+                parts.append(f"OD/ID {_num(1e3 * float(s['outer_diameter']))}/"
+                             f"{_num(1e3 * float(s['inner_diameter']))} mm")
+            rows.append((f"section: {s.get('name', '?')}", ", ".join(parts)))
+    borehole = data.get("borehole") or {}
+    if "diameter" in borehole:
+        add("borehole diameter", 1e3 * float(borehole["diameter"]), "mm")
+    for i, stab in enumerate(data.get("stabilizers") or []):
+        if isinstance(stab, dict) and "position" in stab:
+            stiffness = stab.get("stiffness")
+            text = f"x = {_num(stab['position'], 6)} m"
+            if stiffness is not None:
+                text += f", {_num(float(stiffness) / 1e6)} MN/m"
+            rows.append((f"stabilizer {i + 1}", _esc(text)))
+    operation = data.get("operation") or {}
+    if "top_speed" in operation:
+        add("top speed", float(operation["top_speed"]) * _RPM, "rpm")
+    if "weight_on_bit" in operation:
+        add("weight-on-bit (static)", float(operation["weight_on_bit"]) / 1e3, "kN")
+    fluid = data.get("fluid") or {}
+    if "density" in fluid:
+        add("mud density", fluid["density"], "kg/m³")
+    damping = data.get("damping") or {}
+    if "modal_damping_ratio" in damping:
+        add("modal damping ratio ξ", damping["modal_damping_ratio"])
+    model = data.get("model") or {}
+    add("nonlinear forces", model.get("nonlinear"))
+    mesh = data.get("mesh") or {}
+    if "max_element_length" in mesh:
+        add("max element length", mesh["max_element_length"], "m")
+    reduced = data.get("reduced_model") or {}
+    if reduced:
+        rows.append(("modes (axial + rigid, torsional, lateral per plane)",
+                     _esc(", ".join(str(reduced.get(k, "?"))
+                                    for k in ("axial_modes", "torsional_modes", "lateral_modes")))))
+    simulation = data.get("simulation") or {}
+    if "rtol" in simulation:
+        add("integrator tolerances (rtol, atol)", f"{simulation['rtol']:g}, {simulation.get('atol', '?')}")
+    return rows
+
+
+def _case_section(case_toml: str) -> str:
+    rows = _case_rows(case_toml)
+    table = _kv_table(rows) if rows else "<p>(no key numbers could be read from the case)</p>"
+    return (
+        "<h2>Case</h2>"
+        f"{table}"
+        "<details><summary>Full case file (TOML, SI units)</summary>"
+        f"<pre>{_esc(case_toml)}</pre></details>"
+    )
+
+
+def _study_section(summary: Mapping[str, Any]) -> str:
+    rows: list[tuple[str, str]] = []
+    if "n_samples" in summary:
+        rows.append(("realizations used (n_s)", _num(summary["n_samples"])))
+    if "n_failed" in summary:
+        rows.append(("failed realizations", _num(summary["n_failed"])))
+    if "seed" in summary:
+        rows.append(("seed", _num(summary["seed"])))
+    if "sigma" in summary:
+        rows.append(("σ of the weight-on-hook", f"{_num(float(summary['sigma']) / 1e3)} kN"))
+    if "weight_on_hook_mean" in summary:
+        rows.append(("mean weight-on-hook", f"{_num(float(summary['weight_on_hook_mean']) / 1e3, 6)} kN"))
+    if "weight_on_hook_dispersion" in summary:
+        rows.append(("weight-on-hook dispersion δ_WOH", f"{_percent(summary['weight_on_hook_dispersion'])} %"))
+    if "weight_on_bit_dispersion" in summary:
+        rows.append(("weight-on-bit dispersion δ_WOB", f"{_percent(summary['weight_on_bit_dispersion'])} %"))
+    if "t_transient" in summary:
+        rows.append(("summaries over", f"t ≥ {_num(summary['t_transient'])} s"))
+    return "<h2>Study</h2>" + (_kv_table(rows) if rows else "")
+
+
+def _dispersion_table(summary: Mapping[str, Any]) -> str:
+    observables = summary.get("observables") or {}
+    if not observables:
+        return ""
+    conv = summary.get("convergence_change_second_half") or {}
+    head = (
+        "<tr><th>observable</th><th>time-mean δ [%]</th><th>max δ [%]</th><th>time of max [s]</th>"
+        "<th>mean δ / δ_WOH</th><th>mean δ / δ_WOB</th><th>max δ / δ_WOH</th><th>max δ / δ_WOB</th>"
+        "<th>conv(n_s) change, 2nd half [%]</th></tr>"
+    )
+    body = []
+    for name, entry in observables.items():
+        entry = entry or {}
+        rt = entry.get("ratio_time_mean") or {}
+        rm = entry.get("ratio_max") or {}
+        cells = [
+            _percent(entry.get("dispersion_time_mean")),
+            _percent(entry.get("dispersion_max")),
+            _num(entry.get("time_of_max")),
+            _num(rt.get("weight_on_hook"), 3),
+            _num(rt.get("weight_on_bit"), 3),
+            _num(rm.get("weight_on_hook"), 3),
+            _num(rm.get("weight_on_bit"), 3),
+            _percent(conv.get(name)),
+        ]
+        label = OBSERVABLE_NAMES.get(str(name), str(name))
+        body.append(f"<tr><td>{_esc(label)}</td>" + "".join(f'<td class="num">{c}</td>' for c in cells)
+                    + "</tr>")
+    return (
+        "<h2>Dispersion of the response</h2>"
+        "<p>Dispersion δ = std / |mean| over the realizations, summarised over time after the transient; "
+        "ratios above 1 mean that the input uncertainty is amplified.</p>"
+        f"<table>{head}{''.join(body)}</table>"
+    )
+
+
+def _value_html(value: Any) -> str:
+    if isinstance(value, Mapping):
+        if not value:
+            return "none"
+        items = "".join(f"<li><b>{_esc(k)}</b>: {_esc(v)}</li>" for k, v in value.items())
+        return f'<details><summary>{len(value)}</summary><ul class="failures">{items}</ul></details>'
+    if isinstance(value, (list, tuple)):
+        return _esc(", ".join(str(v) for v in value))
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return _num(value, 6)
+    return _esc(value)
+
+
+def _run_section(run_info: Mapping[str, Any]) -> str:
+    if not run_info:
+        return ""
+    rows = [(str(k), _value_html(v)) for k, v in run_info.items()]
+    return "<h2>Run</h2>" + _kv_table(rows)
+
+
+def _figure_html(name: str, path: str | Path) -> str:
+    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+    label = _esc(name)
+    return (f'<figure><img src="data:image/png;base64,{data}" alt="{label}">'
+            f"<figcaption>{label}</figcaption></figure>")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The page
+# ---------------------------------------------------------------------------------------------------------
+
+
+def write_report(
+    path: str | Path,
+    *,
+    title: str,
+    case_toml: str,
+    summary: Mapping[str, Any],
+    figures: Mapping[str, str | Path],
+    run_info: Mapping[str, Any],
+) -> Path:
+    """Write the study report as one self-contained HTML page at ``path``; returns the path.
+
+    Args:
+        title: page title.
+        case_toml: the case's TOML text (e.g. the statistics' ``attrs["case"]``).
+        summary: :func:`drillstring.stochastic.analysis.study_summary` (SI; dispersions as fractions,
+            shown in %).
+        figures: caption -> PNG file, embedded in this order as base64 ``data:`` URIs.
+        run_info: label -> value rows of the "Run" table (e.g. wall time, workers, failures); a mapping
+            value (such as the failures ``{realization: message}``) is shown as a collapsible list.
+    """
+    path = Path(path)
+    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{_esc(title)}</title>",
+        f"<style>{_CSS}</style></head><body>",
+        f"<h1>{_esc(title)}</h1>",
+        f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
+        _case_section(case_toml),
+        _study_section(summary),
+        _dispersion_table(summary),
+        _run_section(run_info),
+    ]
+    if figures:
+        parts.append("<h2>Figures</h2>")
+        parts.extend(_figure_html(name, fig) for name, fig in figures.items())
+    parts.append("</body></html>")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,119 @@
+"""Figures: every plotting function writes a non-empty PNG from small synthetic Datasets (no simulation)."""
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from drillstring import plots
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+TOP_SPEED = 100.0 * 2.0 * math.pi / 60.0  # rad/s
+
+
+def _assert_png(path):
+    assert path.exists()
+    data = path.read_bytes()
+    assert data.startswith(PNG_SIGNATURE)
+    assert len(data) > 5_000  # axes, curves and labels, not an empty canvas
+
+
+@pytest.fixture
+def run_dataset():
+    """One run in the layout of drillstring.results.run_dataset, two probes."""
+    t = np.linspace(0.0, 5.0, 101)
+    radial = np.stack([1e-3 * np.abs(np.sin(t)), 2e-3 * np.abs(np.cos(t))], axis=1)
+    return xr.Dataset(
+        {
+            "rate_of_penetration": ("time", 3.5e-3 * (1 - np.exp(-t))),
+            "bit_speed": ("time", TOP_SPEED * (1 + 0.3 * np.exp(-t) * np.sin(3 * t))),
+            "torque_on_bit": ("time", 4.5e3 * (1 - 0.5 * np.exp(-t))),
+            "force_on_bit": ("time", 1e5 * np.ones_like(t)),
+            "radial_displacement": (("time", "probe"), radial),
+        },
+        coords={"time": t, "x": ("probe", [1500.0, 1560.0]), "gap": ("probe", [0.0357, 0.0357])},
+        attrs={"top_speed": TOP_SPEED, "status": "success", "case": 'name = "synthetic"\n'},
+    )
+
+
+@pytest.fixture
+def stats_dataset():
+    """Study statistics in the layout of drillstring.stochastic.analysis.study_statistics."""
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 4.0, 81)
+    scales = {"rate_of_penetration": 3.5e-3, "bit_speed": TOP_SPEED, "torque_on_bit": 4.5e3,
+              "force_on_bit": 1e5}
+    data = {}
+    n_s = 8
+    for name, scale in scales.items():
+        samples = scale * (1 + 0.05 * rng.standard_normal((n_s, 1))) * (1 + 0.1 * np.sin(t))
+        mean = samples.mean(axis=0)
+        std = samples.std(axis=0, ddof=1)
+        data[f"{name}_mean"] = ("time", mean)
+        data[f"{name}_std"] = ("time", std)
+        data[f"{name}_lower"] = ("time", np.quantile(samples, 0.025, axis=0))
+        data[f"{name}_upper"] = ("time", np.quantile(samples, 0.975, axis=0))
+        data[f"{name}_dispersion"] = ("time", std / np.abs(mean))
+        data[f"{name}_nominal"] = ("time", scale * (1 + 0.1 * np.sin(t)))
+        energy = np.trapezoid(samples**2, t, axis=1)
+        data[f"{name}_convergence"] = ("n_samples", np.cumsum(energy) / np.arange(1, n_s + 1))
+    return xr.Dataset(
+        data,
+        coords={"time": t, "n_samples": np.arange(1, n_s + 1)},
+        attrs={"n_samples": n_s, "sigma": 5000.0, "level": 0.95, "weight_on_hook_dispersion": 0.0047,
+               "weight_on_bit_dispersion": 0.05},
+    )
+
+
+def test_plot_run_writes_png(run_dataset, tmp_path):
+    path = plots.plot_run(run_dataset, tmp_path / "sub" / "run.png", probe_x=1560.0)
+    assert path == tmp_path / "sub" / "run.png"
+    _assert_png(path)
+
+
+def test_plot_run_partial_failed_run(run_dataset, tmp_path):
+    partial = run_dataset.isel(time=slice(0, 10)).assign_attrs(status="failed")
+    _assert_png(plots.plot_run(partial, tmp_path / "partial.png"))
+
+
+def test_plot_run_differs_with_the_probe(run_dataset, tmp_path):
+    near_first = plots.plot_run(run_dataset, tmp_path / "a.png", probe_x=1490.0).read_bytes()
+    near_second = plots.plot_run(run_dataset, tmp_path / "b.png", probe_x=1570.0).read_bytes()
+    assert near_first != near_second
+
+
+def test_plot_convergence_writes_png(stats_dataset, tmp_path):
+    _assert_png(plots.plot_convergence(stats_dataset, tmp_path / "convergence.png"))
+
+
+def test_plot_convergence_needs_convergence_variables(stats_dataset, tmp_path):
+    bare = stats_dataset.drop_vars([f"{v}_convergence" for v in OBSERVABLES])
+    with pytest.raises(ValueError, match="convergence"):
+        plots.plot_convergence(bare, tmp_path / "none.png")
+
+
+def test_plot_envelopes_writes_png(stats_dataset, tmp_path):
+    _assert_png(plots.plot_envelopes(stats_dataset, tmp_path / "envelopes.png"))
+
+
+def test_plot_dispersion_writes_png(stats_dataset, tmp_path):
+    _assert_png(plots.plot_dispersion(stats_dataset, tmp_path / "dispersion.png", t_transient=1.0))
+
+
+def test_plot_study_writes_the_three_figures(stats_dataset, tmp_path):
+    figures = plots.plot_study(stats_dataset, tmp_path / "out", t_transient=1.0)
+    assert set(figures) == {"convergence", "envelopes", "dispersion"}
+    for name, path in figures.items():
+        assert path == tmp_path / "out" / f"{name}.png"
+        _assert_png(path)
+
+
+def test_no_global_pyplot_state(stats_dataset, tmp_path):
+    """Figures are drawn without pyplot: nothing stays open in a notebook or a worker."""
+    import matplotlib.pyplot as plt
+
+    before = plt.get_fignums()
+    plots.plot_study(stats_dataset, tmp_path, t_transient=1.0)
+    assert plt.get_fignums() == before

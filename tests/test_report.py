@@ -1,0 +1,119 @@
+"""HTML report: self-contained (inline CSS, base64 figures, no external resource), escaped, with the table."""
+
+import base64
+import re
+
+import pytest
+
+from drillstring.case import load_case
+from drillstring.report import write_report
+
+# A 1x1 PNG.
+PNG = base64.b64decode(
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="
+)
+
+
+def _entry(mean, maximum, d_woh=0.0047, d_wob=0.05):
+    return {
+        "dispersion_time_mean": mean,
+        "dispersion_max": maximum,
+        "time_of_max": 12.5,
+        "ratio_time_mean": {"weight_on_hook": mean / d_woh, "weight_on_bit": mean / d_wob},
+        "ratio_max": {"weight_on_hook": maximum / d_woh, "weight_on_bit": maximum / d_wob},
+    }
+
+
+@pytest.fixture
+def summary():
+    return {
+        "n_samples": 47,
+        "n_failed": 3,
+        "seed": 11,
+        "sigma": 5000.0,
+        "weight_on_hook_mean": 1.0634e6,
+        "weight_on_hook_dispersion": 0.0047,
+        "weight_on_bit_dispersion": 0.05,
+        "t_transient": 10.0,
+        "observables": {
+            "rate_of_penetration": _entry(0.0692, 0.0713),
+            "bit_speed": _entry(0.00209, 0.00848),
+            "torque_on_bit": _entry(0.0469, 0.0506),
+            "force_on_bit": _entry(0.0448, 0.0451),
+        },
+        "convergence_change_second_half": {"rate_of_penetration": 0.023},
+    }
+
+
+@pytest.fixture
+def report(tmp_path, summary):
+    figures = {}
+    for name in ("envelopes", "dispersion"):
+        path = tmp_path / f"{name}.png"
+        path.write_bytes(PNG)
+        figures[f"{name} <figure>"] = path
+    path = write_report(
+        tmp_path / "out" / "report.html",
+        title="Study <of> 'reference' & co",
+        case_toml=load_case("reference").to_toml(),
+        summary=summary,
+        figures=figures,
+        run_info={"wall time [s]": 123.4, "workers": 2,
+                  "failures": {"4": "SimulationError: step size <collapsed> at t = 3 s"}},
+    )
+    return path, path.read_text(encoding="utf-8")
+
+
+def test_report_written(report, tmp_path):
+    path, text = report
+    assert path == tmp_path / "out" / "report.html"
+    assert text.startswith("<!DOCTYPE html>")
+    assert text.rstrip().endswith("</html>")
+
+
+def test_report_has_the_table_values(report):
+    _, text = report
+    for value in ("6.92", "7.13", "0.209", "0.848", "4.69", "5.06", "4.48", "4.51",  # dispersions [%]
+                  "14.7", "1.38",  # ROP time-mean ratios to δ_WOH and δ_WOB
+                  "0.47", "5",  # input dispersions [%]
+                  "47", "11", "123.4"):  # n_s, seed, wall time
+        assert value in text, value
+    for label in ("rate of penetration", "bit speed", "torque-on-bit", "force-on-bit", "seed"):
+        assert label in text, label
+
+
+def test_report_has_the_case(report):
+    _, text = report
+    assert "<details>" in text and "[bit_rock]" in text  # full TOML, collapsible
+    assert "100 rpm" in text and "100 kN" in text and "1600 m" in text  # key numbers, display units
+
+
+def test_report_embeds_figures(report):
+    _, text = report
+    assert text.count('src="data:image/png;base64,') == 2
+    assert base64.b64encode(PNG).decode() in text
+
+
+def test_report_is_self_contained(report):
+    _, text = report
+    assert "http" not in text  # no link, script, stylesheet or font from elsewhere
+    assert "<script" not in text
+    assert not re.search(r'<link\b', text)
+    assert not re.search(r'src="(?!data:)', text)
+    assert "<style>" in text
+
+
+def test_report_escapes_text(report):
+    _, text = report
+    assert "Study &lt;of&gt; &#x27;reference&#x27; &amp; co" in text
+    assert "<of>" not in text
+    assert "step size &lt;collapsed&gt;" in text
+    assert "envelopes &lt;figure&gt;" in text
+
+
+def test_report_tolerates_missing_pieces(tmp_path):
+    path = write_report(tmp_path / "r.html", title="t", case_toml="not = [valid toml", summary={},
+                        figures={}, run_info={})
+    text = path.read_text(encoding="utf-8")
+    assert "not = [valid toml" in text
+    assert "http" not in text
