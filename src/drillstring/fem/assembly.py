@@ -38,17 +38,15 @@ def element_dofs(element: int) -> np.ndarray:
 
 def assemble_matrix(n_dofs: int, element_matrices: Iterable[np.ndarray]) -> sp.csr_matrix:
     """Sum 12×12 element matrices (element e on nodes e, e+1) into a sparse n_dofs × n_dofs matrix."""
-    rows, cols, values = [], [], []
-    for e, ke in enumerate(element_matrices):
-        d = element_dofs(e)
-        rows.append(np.repeat(d, 12))
-        cols.append(np.tile(d, 12))
-        values.append(np.asarray(ke).ravel())
-    if not values:
+    blocks = [np.asarray(ke) for ke in element_matrices]
+    if not blocks:
         return sp.csr_matrix((n_dofs, n_dofs))
-    return sp.coo_matrix(
-        (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))), shape=(n_dofs, n_dofs)
-    ).tocsr()
+    values = np.stack(blocks)  # (n_el, 12, 12)
+    dofs = DOFS_PER_NODE * np.arange(len(blocks))[:, None] + np.arange(12)  # (n_el, 12)
+    rows = np.broadcast_to(dofs[:, :, None], values.shape)
+    cols = np.broadcast_to(dofs[:, None, :], values.shape)
+    return sp.coo_matrix((values.ravel(), (rows.ravel(), cols.ravel())),
+                         shape=(n_dofs, n_dofs)).tocsr()
 
 
 def assemble_vector(n_dofs: int, element_vectors: Iterable[np.ndarray]) -> np.ndarray:

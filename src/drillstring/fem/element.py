@@ -120,6 +120,23 @@ def planar_shapes(length: float, phi: float, n_gauss: int = N_GAUSS) -> PlanarSh
     return PlanarShapes(xi, w * L, displacement, slope, rotation, curvature)
 
 
+def _frozen(function):
+    """Cache a pure matrix function of hashable arguments (sections are frozen dataclasses); the
+    cached arrays are made read-only so no caller can alter them."""
+
+    @lru_cache(maxsize=4096)
+    def cached(*args):
+        result = function(*args)
+        for array in result if isinstance(result, tuple) else (result,):
+            array.setflags(write=False)
+        return result
+
+    cached.__doc__ = function.__doc__
+    cached.__name__ = function.__name__
+    cached.__wrapped__ = function
+    return cached
+
+
 def _integrate(weights: np.ndarray, left: np.ndarray, right: np.ndarray, density=1.0) -> np.ndarray:
     """∫ density(x) leftᵀ right dx by quadrature; ``density`` scalar or one value per Gauss point."""
     return np.einsum("g,gi,gj->ij", weights * np.broadcast_to(density, weights.shape), left, right)
@@ -128,6 +145,7 @@ def _integrate(weights: np.ndarray, left: np.ndarray, right: np.ndarray, density
 # --- planar (one bending plane) matrices -------------------------------------------------------------
 
 
+@_frozen
 def bending_stiffness(section: BeamSection, length: float) -> np.ndarray:
     """Planar Timoshenko stiffness ∫ EI ψ'ᵀψ' + k_s G A (v' − ψ)ᵀ(v' − ψ) dx, 4×4 [N/m, N, N·m]."""
     s = planar_shapes(length, shear_parameter(section, length))
@@ -137,6 +155,7 @@ def bending_stiffness(section: BeamSection, length: float) -> np.ndarray:
     )
 
 
+@_frozen
 def bending_mass(section: BeamSection, length: float) -> np.ndarray:
     """Planar consistent mass ∫ ρA N_vᵀN_v + ρI N_ψᵀN_ψ dx, 4×4 (translational + rotary inertia)."""
     s = planar_shapes(length, shear_parameter(section, length))
@@ -152,11 +171,19 @@ def bending_geometric_stiffness(
     """Planar geometric stiffness ∫ N(x) N_v'ᵀ N_v' dx (SPEC §3), 4×4.
 
     ``N(x)`` [N], tension positive, varies linearly from ``axial_force_start`` (upper node) to
-    ``axial_force_end`` (lower node), as it does under gravity.
+    ``axial_force_end`` (lower node), as it does under gravity. Being linear in N, it is
+    ``N_start G_start + N_end G_end`` with the cached unit matrices of :func:`_unit_geometric`.
     """
+    g_start, g_end = _unit_geometric(section, length)
+    return axial_force_start * g_start + axial_force_end * g_end
+
+
+@_frozen
+def _unit_geometric(section: BeamSection, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """(∫(1 − ξ) N_v'ᵀN_v' dx, ∫ξ N_v'ᵀN_v' dx): geometric stiffness of unit end forces."""
     s = planar_shapes(length, shear_parameter(section, length))
-    force = axial_force_start + (axial_force_end - axial_force_start) * s.xi
-    return _integrate(s.weights, s.slope, s.slope, force)
+    return (_integrate(s.weights, s.slope, s.slope, 1.0 - s.xi),
+            _integrate(s.weights, s.slope, s.slope, s.xi))
 
 
 # --- axial and torsion ------------------------------------------------------------------------------
@@ -168,11 +195,13 @@ def _linear_pair(stiffness_coefficient: float, inertia_per_length: float, length
     return k, m
 
 
+@_frozen
 def axial_matrices(section: BeamSection, length: float) -> tuple[np.ndarray, np.ndarray]:
     """Linear bar element: (EA/L [[1,−1],[−1,1]], ρAL/6 [[2,1],[1,2]])."""
     return _linear_pair(section.axial_stiffness, section.mass_per_length, length)
 
 
+@_frozen
 def torsion_matrices(section: BeamSection, length: float) -> tuple[np.ndarray, np.ndarray]:
     """Linear shaft element: (G I_p/L [[1,−1],[−1,1]], ρ I_p L/6 [[2,1],[1,2]])."""
     return _linear_pair(
@@ -192,6 +221,7 @@ def place_planar(planar: np.ndarray, out: np.ndarray | None = None) -> np.ndarra
     return out
 
 
+@_frozen
 def element_stiffness(section: BeamSection, length: float) -> np.ndarray:
     """Elastic stiffness [K_e], 12×12, symmetric positive semi-definite (6 rigid-body modes)."""
     k = place_planar(bending_stiffness(section, length))
@@ -200,6 +230,7 @@ def element_stiffness(section: BeamSection, length: float) -> np.ndarray:
     return k
 
 
+@_frozen
 def element_mass(section: BeamSection, length: float) -> np.ndarray:
     """Consistent mass [M_e], 12×12: translational, rotary (ρI) and polar (ρI_p) inertia."""
     m = place_planar(bending_mass(section, length))

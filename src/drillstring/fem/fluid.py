@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drillstring.fem.element import _integrate, planar_shapes, shear_parameter
+from drillstring.fem.element import _frozen, _integrate, planar_shapes, shear_parameter
 from drillstring.fem.sections import BeamSection
 
 
@@ -97,6 +97,7 @@ def fluid_coefficients(
     )
 
 
+@_frozen
 def fluid_planar_matrices(
     section: BeamSection, length: float, coefficients: FluidCoefficients
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
