@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
-from drillstring.dynamics.rom import _observe_kernel
+from drillstring.dynamics.rom import _observe_kernel, rhs_dispatch
 from drillstring.dynamics.runge_kutta import TABLEAUS, ButcherTableau, StepSizeController
 
 SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE = 0, 1, 2, 3
@@ -43,7 +43,8 @@ def _observe(t, y, out, row, obs_args, previous):
 @njit(cache=True)
 def _run_chunk(state, y, f, k, k_old, y_old, grid, t_stop, t_end, a, b, e, c, dense, fsal,
                q_order, rtol, atol, safety, min_factor, max_factor, beta1, beta2, max_step,
-               min_step, max_steps, stretch, rhs_kernel, rhs_args, obs_args, out, previous, y_tmp):
+               min_step, max_steps, stretch, full, case2_args, full_args, obs_args, out, previous,
+               y_tmp):
     """Advance until the output grid is filled up to ``t_stop`` (or t_end). Returns a status code."""
     n = y.shape[0]
     s = c.shape[0]
@@ -74,7 +75,7 @@ def _run_chunk(state, y, f, k, k_old, y_old, grid, t_stop, t_end, a, b, e, c, de
                 for m in range(i):
                     acc += a[i, m] * k[m, j]
                 y_tmp[j] = y[j] + h * acc
-            rhs_kernel(y_tmp, k[i], *rhs_args)
+            rhs_dispatch(y_tmp, k[i], full, case2_args, full_args)
             for j in range(n):
                 if not math.isfinite(k[i, j]):
                     finite = False
@@ -139,7 +140,7 @@ def _run_chunk(state, y, f, k, k_old, y_old, grid, t_stop, t_end, a, b, e, c, de
             for j in range(n):
                 f[j] = k[s - 1, j]
         else:
-            rhs_kernel(y, f, *rhs_args)
+            rhs_dispatch(y, f, full, case2_args, full_args)
             state[N_RHS] += 1
         t_new = t_end if last else t + h
         state[T] = t_new
@@ -225,7 +226,7 @@ def integrate_compiled(
             np.ascontiguousarray(tab.dense), bool(tab.fsal), float(tab.controller_order),
             float(rtol), float(atol), ctrl.safety, ctrl.min_factor, ctrl.max_factor, ctrl.beta1,
             ctrl.beta2, float(max_step), float(min_step), float(max_steps), 0.01,
-            model.kernel, model.kernel_args, obs_args, out, previous, y_tmp,
+            model.full, model._rhs_args, model.full_args, obs_args, out, previous, y_tmp,
         )
         if progress is not None:
             progress(float(state[T]))

@@ -52,18 +52,48 @@ OBSERVABLES = (
 )
 
 
+#: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
+#: is still detected. Deterministic for a given build: same results for any worker count.
+VECTOR_MATH = {"reassoc", "contract"}
+
+
+@njit(cache=True, fastmath=VECTOR_MATH)
+def _matvec(matrix, vector, offset, out):
+    """out = matrix @ vector[offset:offset + matrix.shape[1]] with compiled loops (no BLAS, so no
+    thread oversubscription when several worker processes run)."""
+    for i in range(matrix.shape[0]):
+        total = 0.0
+        for j in range(matrix.shape[1]):
+            total += matrix[i, j] * vector[offset + j]
+        out[i] = total
+
+
+@njit(cache=True)
+def _columns_matvec(matrix_t, vector, offset, out, sign):
+    """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
+    column, so the inner loop is contiguous and vectorises without reassociating sums."""
+    for j in range(matrix_t.shape[0]):
+        x = sign * vector[offset + j]
+        if x != 0.0:
+            for i in range(matrix_t.shape[1]):
+                out[i] += matrix_t[j, i] * x
+
+
 @njit(cache=True)
 def _physical_state(y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin):
     """Lateral displacements/velocities and spin speed at every node from modal state ``y``."""
-    eta = np.ascontiguousarray(y[:n])
-    eta_dot = np.ascontiguousarray(y[n:])
-    v[:] = phi_v @ eta
-    w[:] = phi_w @ eta
-    v_dot[:] = phi_v @ eta_dot
-    w_dot[:] = phi_w @ eta_dot
-    spin[:] = top_speed + phi_tx @ eta_dot
-    bit_velocity = bit_u @ eta_dot
-    bit_speed = top_speed + bit_t @ eta_dot
+    _matvec(phi_v, y, 0, v)
+    _matvec(phi_w, y, 0, w)
+    _matvec(phi_v, y, n, v_dot)
+    _matvec(phi_w, y, n, w_dot)
+    _matvec(phi_tx, y, n, spin)
+    for i in range(spin.shape[0]):
+        spin[i] += top_speed
+    bit_velocity = 0.0
+    bit_speed = top_speed
+    for j in range(n):
+        bit_velocity += bit_u[j] * y[n + j]
+        bit_speed += bit_t[j] * y[n + j]
     return bit_velocity, bit_speed
 
 
@@ -76,7 +106,8 @@ def _rhs_kernel(
     """dy/dt of the ROM. Each physical quantity is read from its own mode family only
     (``blocks`` = [axial start, end, torsional start, end, lateral y start, end, lateral z start,
     end] column ranges; ``bit_u``, ``bit_t``, ``phi_v``, ``phi_w``, ``phi_tx`` hold only those
-    columns), and contact work is done only at the nodes that touch the borehole."""
+    columns, the last three and ``damping`` stored transposed so products run column by column),
+    and contact work is done only at the nodes that touch the borehole."""
     n = omega2.shape[0]
     a0, a1, t0, t1, y0, y1, z0, z1 = blocks[0], blocks[1], blocks[2], blocks[3], blocks[4], blocks[5], blocks[6], blocks[7]
     eta = y[:n]
@@ -86,11 +117,7 @@ def _rhs_kernel(
     for i in range(n):
         out[i] = eta_dot[i]
         acc[i] = -omega2[i] * eta[i]
-    for i in range(n):
-        total = 0.0
-        for j in range(n):
-            total += damping[i, j] * eta_dot[j]
-        acc[i] -= total
+    _columns_matvec(damping, eta_dot, 0, acc, -1.0)  # ``damping`` holds Dᵀ
     # bit-rock interaction at the bit node
     bit_velocity = 0.0
     for j in range(a0, a1):
@@ -109,11 +136,12 @@ def _rhs_kernel(
         acc[j] += bit_t[j - t0] * bit_torque
     # shocks and rubbing: find the nodes outside the gap
     n_nodes = v.shape[0]
-    if y1 > y0 or z1 > z0:
-        v[:] = phi_v @ eta[y0:y1] if y1 > y0 else np.zeros(n_nodes)
-        w[:] = phi_w @ eta[z0:z1] if z1 > z0 else np.zeros(n_nodes)
-    else:
+    if y1 == y0 and z1 == z0:
         return
+    v[:] = 0.0
+    w[:] = 0.0
+    _columns_matvec(phi_v, eta, y0, v, 1.0)  # phi_v, phi_w, phi_tx are stored transposed
+    _columns_matvec(phi_w, eta, z0, w, 1.0)
     n_c = 0
     for i in range(n_nodes):
         if v[i] * v[i] + w[i] * w[i] > gap[i] * gap[i]:
@@ -129,15 +157,15 @@ def _rhs_kernel(
         c_od[c] = outer_diameter[i]
         spin = top_speed
         for j in range(t0, t1):
-            spin += phi_tx[i, j - t0] * eta_dot[j]
+            spin += phi_tx[j - t0, i] * eta_dot[j]
         c_spin[c] = spin
         vd = 0.0
         wd = 0.0
         if tangential:
             for j in range(y0, y1):
-                vd += phi_v[i, j - y0] * eta_dot[j]
+                vd += phi_v[j - y0, i] * eta_dot[j]
             for j in range(z0, z1):
-                wd += phi_w[i, j - z0] * eta_dot[j]
+                wd += phi_w[j - z0, i] * eta_dot[j]
         c_vd[c] = vd
         c_wd[c] = wd
     contact_forces(c_v[:n_c], c_w[:n_c], c_vd[:n_c], c_wd[:n_c], c_spin[:n_c], c_gap[:n_c],
@@ -146,11 +174,11 @@ def _rhs_kernel(
     for c in range(n_c):
         i = contact_nodes[c]
         for j in range(y0, y1):
-            acc[j] += phi_v[i, j - y0] * c_fv[c]
+            acc[j] += phi_v[j - y0, i] * c_fv[c]
         for j in range(z0, z1):
-            acc[j] += phi_w[i, j - z0] * c_fw[c]
+            acc[j] += phi_w[j - z0, i] * c_fw[c]
         for j in range(t0, t1):
-            acc[j] += phi_tx[i, j - t0] * c_tq[c]
+            acc[j] += phi_tx[j - t0, i] * c_tq[c]
 
 
 @njit(cache=True)
@@ -164,21 +192,43 @@ def _rhs_full_kernel(y, out, case2_args, basis, basis_t, theta_x_dofs, top_speed
     ``(I + Φᵀ M_nl(Φη) Φ) η̈ = …`` is solved at every evaluation (exact, no lagged accelerations)."""
     _rhs_kernel(y, out, *case2_args)
     n = basis.shape[1]
-    eta = np.ascontiguousarray(y[:n])
-    eta_dot = np.ascontiguousarray(y[n:])
-    q[:] = basis @ eta
-    qd[:] = basis @ eta_dot
+    eta = y[:n]
+    q[:] = 0.0
+    qd[:] = 0.0
+    _columns_matvec(basis_t, y, 0, q, 1.0)
+    _columns_matvec(basis_t, y, n, qd, 1.0)
     for i in range(theta_x_dofs.shape[0]):
         qd[theta_x_dofs[i]] += top_speed
     _strain_energy_forces_kernel(q, inv_length, weights, slope, axial_stiffness, f_se)
     _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, f_vel, coupling)
     for i in range(f_se.shape[0]):
         f_se[i] += f_vel[i]
-    acc = out[n:] + basis_t @ f_se
+    acc = np.empty(n)
+    _matvec(basis_t, f_se, 0, acc)
+    for i in range(n):
+        acc[i] += out[n + i]
     contract_mass_tensor(tensor, active, eta, mass)
     for i in range(n):
         mass[i, i] += 1.0
     out[n:] = np.linalg.solve(mass, acc)
+
+
+@njit(cache=True)
+def rhs_dispatch(y, out, full, case2_args, full_args):
+    """The ROM right-hand side: case 2 (``full`` False) or case 1. Both argument tuples always have
+    the same types (case 2 carries empty placeholders for the case-1 data), so the compiled
+    integrator has one cacheable specialisation."""
+    if full:
+        _rhs_full_kernel(y, out, case2_args, *full_args)
+    else:
+        _rhs_kernel(y, out, *case2_args)
+
+
+def _placeholder_full_args():
+    """Empty case-1 arguments with the exact types of real ones (see :func:`rhs_dispatch`)."""
+    f2, f3, i1 = np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0, dtype=np.int64)
+    f1 = np.zeros(0)
+    return (f2, f2, i1, 0.0, f1, f1, f2, f3, f3, f1, f1, f3, i1, f1, f1, f1, f1, f3, f2)
 
 
 @njit(cache=True)
@@ -202,7 +252,10 @@ def _observe_kernel(
     out[1] = bit_speed
     out[2] = -bit_torque
     out[3] = -axial_force
-    out[4] = bit_u @ np.ascontiguousarray(y[:n])
+    depth = 0.0
+    for j in range(n):
+        depth += bit_u[j] * y[j]
+    out[4] = depth
     out[5] = count
     for k in range(probe_nodes.shape[0]):
         j = probe_nodes[k]
@@ -269,17 +322,17 @@ class ReducedOrderModel:
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
         contact_work = tuple(np.zeros(n_nodes) for _ in range(10))
         self._rhs_args = (
-            self.omega2, np.ascontiguousarray(self.damping), self.blocks,
+            self.omega2, np.ascontiguousarray(self.damping.T), self.blocks,
             np.ascontiguousarray(self.bit_u[a0:a1]), np.ascontiguousarray(self.bit_t[t0:t1]),
-            np.ascontiguousarray(self.phi_v[:, y0:y1]), np.ascontiguousarray(self.phi_w[:, z0:z1]),
-            np.ascontiguousarray(self.phi_tx[:, t0:t1]),
+            np.ascontiguousarray(self.phi_v[:, y0:y1].T), np.ascontiguousarray(self.phi_w[:, z0:z1].T),
+            np.ascontiguousarray(self.phi_tx[:, t0:t1].T),
             np.ascontiguousarray(self.gap), np.ascontiguousarray(self.outer_diameter),
             float(self.top_speed), float(self.weight_on_bit), self.bit_args, self.contact_args,
             bool(c.tangential_friction), np.zeros(n_nodes), np.zeros(n_nodes),
             np.zeros(n_nodes, dtype=np.int64), *contact_work,
         )
-        self.kernel = _rhs_kernel
-        self.kernel_args = self._rhs_args
+        self.full = False
+        self.full_args = _placeholder_full_args()
         if self.nonlinear == "full":
             self._setup_full()
         elif self.nonlinear != "bit_and_contact":
@@ -292,12 +345,15 @@ class ReducedOrderModel:
         active, tensor = modal_mass_tensor(self.elements, basis, tol=1e-14)
         e = self.elements
         n_dofs, n = basis.shape
-        self.kernel = _rhs_full_kernel
-        self.kernel_args = (
-            self._rhs_args, basis, np.ascontiguousarray(basis.T),
+        self.full = True
+        c = np.ascontiguousarray
+        self.full_args = (
+            basis, c(basis.T),
             dof(np.arange(mesh.n_nodes), THETA_X).astype(np.int64), float(self.top_speed),
-            e.inv_length, e.xi, e.weights, e.slope, e.rotation, e.axial_stiffness, e.polar_inertia,
-            tensor, active, np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs),
+            c(e.inv_length, dtype=float), c(e.xi, dtype=float), c(e.weights, dtype=float),
+            c(e.slope, dtype=float), c(e.rotation, dtype=float), c(e.axial_stiffness, dtype=float),
+            c(e.polar_inertia, dtype=float), c(tensor, dtype=float), c(active, dtype=np.int64),
+            np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs),
             np.zeros((e.n_elements, 2, 4)), np.zeros((n, n)),
         )
 
@@ -313,7 +369,7 @@ class ReducedOrderModel:
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt for y = [η, η̇] (t enters only through the imposed top rotation, which drops out)."""
         out = np.empty_like(y)
-        self.kernel(y, out, *self.kernel_args)
+        rhs_dispatch(y, out, self.full, self._rhs_args, self.full_args)
         return out
 
     def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:

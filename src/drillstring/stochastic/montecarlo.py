@@ -335,11 +335,48 @@ def run_study(
     return StudyRun(store, done, failed, time.perf_counter() - start, used)
 
 
+#: Thread counts for worker processes: one process per core, each single-threaded, so linear
+#: algebra libraries do not oversubscribe the cores.
+WORKER_ENVIRONMENT = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+                      "NUMBA_NUM_THREADS": "1"}
+
+
+def _worker_start(parent_pid: int) -> None:
+    """Worker initializer: exit as soon as the study's process is gone (killed, not just
+    interrupted), instead of computing realizations nobody will record."""
+    import os
+    import threading
+
+    def watch() -> None:
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent_pid:
+                os._exit(0)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
 def _run_processes(case, settings, indices: Iterable[int], workers: int, record) -> None:
+    import os
+
     context = multiprocessing.get_context("spawn")
     remaining = list(indices)
+    saved = {k: os.environ.get(k) for k in WORKER_ENVIRONMENT}
+    os.environ.update(WORKER_ENVIRONMENT)  # inherited by the spawned workers only at start-up
+    try:
+        _process_loop(context, case, settings, remaining, workers, record, os.getpid())
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def _process_loop(context, case, settings, remaining, workers, record, parent_pid) -> None:
     while remaining:
-        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context)
+        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                                      initializer=_worker_start, initargs=(parent_pid,))
         try:
             futures = {pool.submit(run_realization, case, settings, i): i for i in remaining}
             for future in cf.as_completed(futures):
