@@ -341,3 +341,58 @@ def test_study_interrupted_exit_130(coarse_case, tmp_path, monkeypatch):
     assert result.exit_code == 130
     assert "resume" in result.stderr
     assert "Traceback" not in result.output
+
+
+# ------------------------------------------------------------------------------------------------ compare
+
+
+@pytest.fixture(scope="module")
+def coarse_modes_case(tmp_path_factory):
+    """The reference case on a 40 m mesh with 3 axial, 3 torsional and 4 lateral modes."""
+    from drillstring.case import load_case
+
+    case = load_case("reference")
+    case = case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 40.0}),
+        "reduced_model": case.reduced_model.model_copy(
+            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 4}),
+    })
+    path = tmp_path_factory.mktemp("cases") / "coarse_modes.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    return path
+
+
+def test_compare_json_and_figure(coarse_modes_case, tmp_path):
+    png = tmp_path / "cmp.png"
+    data = _json("compare", str(coarse_modes_case), "--t-end", "1", "--plot", str(png), "--json")
+    assert data["figure"] == str(png)
+    assert png.read_bytes().startswith(b"\x89PNG")
+    assert data["t_end"] == pytest.approx(1.0) and data["t_transient"] == pytest.approx(0.5)
+    assert set(data["observables"]) == {"rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit",
+                                        "radial_displacement_0"}
+    for entry in data["observables"].values():
+        for key in ("max_abs_difference", "rms_relative_difference", "mean_difference",
+                    "mean_relative_difference"):
+            assert entry[key] is not None and entry[key] == entry[key], key  # finite, not null
+    assert data["observables"]["rate_of_penetration"]["rms_relative_difference"] < 1e-6
+    assert data["wall_time"]["full"] > 0 and data["wall_time"]["bit_and_contact"] > 0
+    assert data["wall_time"]["ratio"] > 0
+
+
+def test_compare_table_and_failure(coarse_modes_case, tmp_path):
+    from drillstring.case import load_case
+
+    result = _invoke("compare", str(coarse_modes_case), "--t-end", "0.5", "--plot", str(tmp_path / "c.png"))
+    assert result.exit_code == 0, result.output
+    for text in ("ROP [m/h]", "bit speed [rpm]", "kN·m", "r at x = 1560 m [mm]", "case 1 (full)",
+                 "ratio case 1 / case 2", str(tmp_path / "c.png")):
+        assert text in result.stdout, text
+
+    case = load_case(coarse_modes_case)
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"max_steps": 30})})
+    path = tmp_path / "few_steps.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    result = _invoke("compare", str(path), "--t-end", "1", "--plot", str(tmp_path / "f.png"))
+    assert result.exit_code == 1, result.output
+    assert "case 1 (full) failed" in result.stderr
+    assert "Traceback" not in result.output

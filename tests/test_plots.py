@@ -117,3 +117,16 @@ def test_no_global_pyplot_state(stats_dataset, tmp_path):
     before = plt.get_fignums()
     plots.plot_study(stats_dataset, tmp_path, t_transient=1.0)
     assert plt.get_fignums() == before
+
+
+def test_plot_compare_writes_png(run_dataset, tmp_path):
+    reduced = run_dataset.copy(deep=True)
+    reduced["bit_speed"] = reduced["bit_speed"] * 1.01
+    path = plots.plot_compare(run_dataset, reduced, tmp_path / "sub" / "compare.png", probe_x=1560.0)
+    assert path == tmp_path / "sub" / "compare.png"
+    _assert_png(path)
+    # a partial (failed) run and a dataset without probes still plot
+    partial = reduced.isel(time=slice(0, 10)).assign_attrs(status="failed")
+    bare = run_dataset.drop_vars(["radial_displacement", "x", "gap"])
+    _assert_png(plots.plot_compare(bare, partial.drop_vars(["radial_displacement", "x", "gap"]),
+                                   tmp_path / "partial.png"))

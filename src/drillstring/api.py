@@ -117,3 +117,131 @@ def study(
     store = Path(out) / "study.zarr" if out is not None else Path(tempfile.mkdtemp()) / "study.zarr"
     run_study(case, settings, store, workers=workers, scheduler=scheduler, progress=progress)
     return study_statistics(load_study(store))
+
+
+import math  # noqa: E402  (used by the comparison helpers below)
+
+#: The two nonlinear models compared by :func:`compare`, in the order returned: case 1, case 2.
+COMPARED_MODELS = ("full", "bit_and_contact")
+#: Scalar observables compared by :func:`compare` (the radial displacement is added per probe).
+COMPARED_OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+
+
+def _ratio(numerator: float, denominator: float) -> float | None:
+    """``numerator / denominator`` as a JSON-ready float, None when undefined (0/0, x/0, NaN)."""
+    if not (math.isfinite(numerator) and math.isfinite(denominator)) or denominator == 0.0:
+        return None
+    return float(numerator / denominator)
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def _difference_numbers(full, reduced, steady) -> dict[str, float | None]:
+    """Differences of one observable, case 1 (``full``) minus case 2 (``reduced``), SI units: the largest
+    absolute difference over time, the RMS difference relative to the RMS of case 2, and the difference of
+    the means over the ``steady`` samples (t after the transient), absolute and relative to case 2's."""
+    import numpy as np
+
+    full = np.asarray(full, dtype=float)
+    reduced = np.asarray(reduced, dtype=float)
+    delta = full - reduced
+    mean_full = float(np.mean(full[steady]))
+    mean_reduced = float(np.mean(reduced[steady]))
+    return {
+        "max_abs_difference": _finite_or_none(float(np.max(np.abs(delta)))),
+        "rms_relative_difference": _ratio(float(np.sqrt(np.mean(delta**2))),
+                                          float(np.sqrt(np.mean(reduced**2)))),
+        "mean_full": _finite_or_none(mean_full),
+        "mean_bit_and_contact": _finite_or_none(mean_reduced),
+        "mean_difference": _finite_or_none(mean_full - mean_reduced),
+        "mean_relative_difference": _ratio(mean_full - mean_reduced, abs(mean_reduced)),
+    }
+
+
+def compare(
+    case: Case | str | Path = "reference",
+    *,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    progress: Callable[[str, float], None] | None = None,
+) -> tuple[xr.Dataset, xr.Dataset, dict]:
+    """Run ``case`` with the full nonlinear model (case 1: kinetic- and strain-energy forces added) and with
+    the bit–rock and contact forces only (case 2), everything else equal (SPEC §6), and compare them.
+
+    Returns ``(full, bit_and_contact, differences)``: the two run Datasets and a JSON-ready dict (SI
+    units) with, under ``observables``, for the rate of penetration, bit speed, torque- and force-on-bit
+    and the radial displacement at each probe (``radial_displacement_<j>``, with its ``probe_x``):
+    ``max_abs_difference`` over time, ``rms_relative_difference`` (RMS of the difference / RMS of case 2),
+    the means after the transient (t >= min(10 s, t_end/2)) of each case, their ``mean_difference`` and
+    ``mean_relative_difference`` (relative to |mean of case 2|; None when that mean is 0). Differences are
+    case 1 minus case 2. ``wall_time`` holds the wall time [s] of each ``simulate`` call (model build and
+    integration, measured around the call), ``ratio`` = full / bit_and_contact; ``solver_wall_time`` and
+    ``n_rhs`` the integrator's own numbers. ``progress(model, t)`` is called with the model name
+    ("full" or "bit_and_contact") and the simulated time [s]. A run that stops early raises
+    :class:`SimulationError` (``.dataset`` the partial run, ``.nonlinear`` which model failed).
+    """
+    import time
+
+    import numpy as np
+
+    from drillstring.stochastic.analysis import DEFAULT_TRANSIENT
+
+    case = as_case(case)
+    runs: dict[str, xr.Dataset] = {}
+    wall: dict[str, float] = {}
+    for nonlinear in COMPARED_MODELS:
+        variant = case.model_copy(update={"model": case.model.model_copy(update={"nonlinear": nonlinear})})
+        report = None if progress is None else (lambda t, _m=nonlinear: progress(_m, t))
+        start = time.perf_counter()
+        try:
+            runs[nonlinear] = simulate(variant, t_end=t_end, output_step=output_step, progress=report)
+        except SimulationError as error:
+            error.nonlinear = nonlinear
+            raise
+        wall[nonlinear] = time.perf_counter() - start
+    full, reduced = runs["full"], runs["bit_and_contact"]
+
+    t = np.asarray(full["time"].values, dtype=float)
+    t_reduced = np.asarray(reduced["time"].values, dtype=float)
+
+    def on_grid(values) -> np.ndarray:
+        values = np.asarray(values, dtype=float)
+        if t_reduced.shape == t.shape and np.allclose(t_reduced, t, rtol=0.0, atol=1e-12):
+            return values
+        return np.interp(t, t_reduced, values)
+
+    t_final = float(t[-1])
+    t_transient = min(DEFAULT_TRANSIENT, 0.5 * t_final)
+    steady = t >= t_transient - 1e-9 * max(1.0, t_final)
+    if not steady.any():
+        steady = np.ones_like(t, dtype=bool)
+
+    observables: dict[str, dict] = {}
+    for name in COMPARED_OBSERVABLES:
+        observables[name] = _difference_numbers(full[name].values, on_grid(reduced[name].values), steady)
+    x = np.atleast_1d(np.asarray(full["x"].values, dtype=float))
+    radial_full = np.asarray(full["radial_displacement"].values, dtype=float)
+    radial_reduced = np.asarray(reduced["radial_displacement"].values, dtype=float)
+    for j, position in enumerate(x):
+        entry = {"probe_x": float(position)}
+        entry.update(_difference_numbers(radial_full[:, j], on_grid(radial_reduced[:, j]), steady))
+        observables[f"radial_displacement_{j}"] = entry
+
+    def pair(key: str, cast=float) -> dict:
+        return {m: cast(runs[m].attrs.get(key, float("nan"))) for m in COMPARED_MODELS}
+
+    differences = {
+        "case": case.name,
+        "t_end": t_final,
+        "t_transient": float(t_transient),
+        "difference": "case 1 (full) minus case 2 (bit_and_contact)",
+        "observables": observables,
+        "wall_time": {**{m: float(wall[m]) for m in COMPARED_MODELS},
+                      "ratio": _ratio(wall["full"], wall["bit_and_contact"])},
+        "solver_wall_time": pair("solver_wall_time"),
+        "n_rhs": pair("solver_n_rhs", int),
+        "impacts": pair("impacts", int),
+    }
+    return full, reduced, differences

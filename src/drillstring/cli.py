@@ -12,6 +12,8 @@ Commands
     One drilling run: NetCDF of the observables, a four-panel figure and a summary table.
 ``drillstring study [CASE] [--sigma N | --dispersion D] [--samples N] [--seed S] [--out DIR] ...``
     Monte Carlo study of a random weight-on-hook: Zarr store (resumable), statistics, figures, report.
+``drillstring compare [CASE] [--t-end S] [--plot FILE.png] [--json]``
+    Case 1 (full nonlinear model) against case 2 (bit–rock + contact): differences, wall times, figure.
 
 ``CASE`` is a built-in case name (default ``reference``) or the path to a TOML case file.
 
@@ -420,6 +422,124 @@ def simulate(
         console.print(escape(written), soft_wrap=True)
     if failure is not None:
         _fail(f"{failure} (the partial run is in {netcdf})", EXIT_RUN_FAILED)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring compare
+# ---------------------------------------------------------------------------------------------------------
+
+#: Display of each compared observable: (short label, factor from SI, unit).
+_COMPARE_ROWS = {
+    "rate_of_penetration": ("ROP", _M_PER_H, "m/h"),
+    "bit_speed": ("bit speed", _RPM, "rpm"),
+    "torque_on_bit": ("torque-on-bit", 1.0 / _KN, "kN·m"),
+    "force_on_bit": ("force-on-bit", 1.0 / _KN, "kN"),
+    "radial_displacement": ("r", _MM, "mm"),
+}
+_COMPARE_LABELS = {"full": "case 1 (full)", "bit_and_contact": "case 2 (bit–rock + contact)"}
+
+
+def _compare_table(name: str, differences: dict[str, Any]) -> Table:
+    table = Table(
+        title=escape(f"Case 1 (full) vs case 2 (bit–rock + contact): case {name!r}, "
+                     f"t = 0 to {differences['t_end']:g} s"),
+        title_justify="left",
+        caption=escape(f"Δ = case 1 − case 2; RMS and means relative to case 2; means over "
+                       f"t ≥ {differences['t_transient']:g} s."),
+        caption_justify="left",
+    )
+    table.add_column("observable")
+    for header in ("max |Δ|", "RMS Δ / RMS", "Δ mean", "Δ mean / mean"):
+        table.add_column(escape(header), justify="right")
+    for key, entry in differences["observables"].items():
+        base = "radial_displacement" if key.startswith("radial_displacement") else key
+        label, scale, unit = _COMPARE_ROWS[base]
+        if "probe_x" in entry:
+            label += f" at x = {entry['probe_x']:g} m"
+        table.add_row(
+            escape(f"{label} [{unit}]"),
+            _fmt(entry["max_abs_difference"], ".3g", scale),
+            _fmt(entry["rms_relative_difference"], ".3g"),
+            _fmt(entry["mean_difference"], ".3g", scale),
+            _fmt(entry["mean_relative_difference"], ".3g"),
+        )
+    return table
+
+
+def _compare_times(differences: dict[str, Any]) -> Table:
+    table = Table(title="Wall time of each run (model build and integration)", title_justify="left")
+    table.add_column("run")
+    table.add_column(escape("wall time [s]"), justify="right")
+    table.add_column(escape("solver [s]"), justify="right")
+    table.add_column("right-hand sides", justify="right")
+    for model, label in _COMPARE_LABELS.items():
+        table.add_row(escape(label), f"{differences['wall_time'][model]:,.2f}",
+                      f"{differences['solver_wall_time'][model]:,.2f}", f"{differences['n_rhs'][model]:,}")
+    table.add_row("ratio case 1 / case 2", _fmt(differences["wall_time"]["ratio"], ".3g"), "", "")
+    return table
+
+
+@app.command()
+def compare(
+    case: CaseArg = "reference",
+    t_end: Annotated[
+        float | None, typer.Option("--t-end", help="Simulated time [s] (default: the case's simulation.t_end).")
+    ] = None,
+    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the overlaid four-panel figure.")] = Path(
+        "compare.png"
+    ),
+    as_json: JsonOpt = False,
+) -> None:
+    """Case 1 (full nonlinear model) against case 2 (bit–rock and contact forces only) on the same case.
+
+    Runs both, writes a four-panel figure with both overlaid (case 1 solid, case 2 dashed) and prints, per
+    observable, the largest difference, the RMS difference relative to case 2, and the difference of the
+    means after the transient (t >= min(10 s, t_end/2)), then the wall time of each run and their ratio.
+    A run that stops early ends the command with exit code 1.
+    """
+    the_case = _load(case)
+    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
+    if not (math.isfinite(t_final) and t_final > 0):
+        _fail(f"--t-end = {t_final!r} s: must be > 0")
+    if the_case.simulation.output_step > t_final:
+        _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
+              f"({the_case.simulation.output_step:g} s)")
+
+    from drillstring import api
+    from drillstring.dynamics.simulate import SimulationError
+    from drillstring.plots import plot_compare
+
+    columns = (TextColumn("{task.description}"), BarColumn(),
+               TextColumn("{task.completed:.2f} / {task.total:g} s"), TimeElapsedColumn(), TextColumn("left"),
+               TimeRemainingColumn())
+    try:
+        with Progress(*columns, console=_err_console()) as bar:
+            # Case 2's clock starts when its run does (after case 1's), so its time left is its own.
+            tasks = {model: bar.add_task(escape(label), total=t_final, start=False)
+                     for model, label in _COMPARE_LABELS.items()}
+            started: set[str] = set()
+
+            def progress(model: str, t: float) -> None:
+                if model not in started:
+                    started.add(model)
+                    bar.start_task(tasks[model])
+                bar.update(tasks[model], completed=min(float(t), t_final))
+
+            full, reduced, differences = api.compare(the_case, t_end=t_final, progress=progress)
+    except SimulationError as error:
+        which = _COMPARE_LABELS.get(getattr(error, "nonlinear", ""), "a run")
+        _fail(f"{which} failed: {error}", EXIT_RUN_FAILED)
+    except KeyboardInterrupt:
+        _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
+
+    figure = plot_compare(full, reduced, plot)  # the probe nearest x = 1560 m
+    if as_json:
+        _print_json({**differences, "figure": str(figure)})
+        return
+    console = _console()
+    console.print(_compare_table(the_case.name, differences))
+    console.print(_compare_times(differences))
+    console.print(escape(f"Figure: {figure}"), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------

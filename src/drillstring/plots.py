@@ -8,6 +8,7 @@ Figures are drawn on :class:`matplotlib.figure.Figure` objects rendered by the A
 are safe in scripts, notebooks, worker processes and tests.
 
 * :func:`plot_run` — one simulation: ROP, bit speed, radial displacement at a probe, torque-on-bit.
+* :func:`plot_compare` — the same four panels for case 1 (full) and case 2 (bit–rock + contact) overlaid.
 * :func:`plot_convergence` — mean-square convergence ``conv(n_s)`` of each observable.
 * :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB.
 * :func:`plot_dispersion` — dispersion [%] of the same observables vs time, transient shaded.
@@ -27,6 +28,7 @@ from matplotlib.figure import Figure
 __all__ = [
     "DISPLAY_UNITS",
     "plot_run",
+    "plot_compare",
     "plot_convergence",
     "plot_envelopes",
     "plot_dispersion",
@@ -148,6 +150,76 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
         title += f": case '{name}'"
     if ds.attrs.get("status", "success") != "success":
         title += f" ({ds.attrs.get('status')}, stopped at t = {t[-1]:.3g} s)" if t.size else " (failed)"
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+#: Line styles and legend labels of :func:`plot_compare`: case 1 solid, case 2 dashed.
+_COMPARE_STYLES = (
+    ("case 1 (full)", {"color": "C0", "ls": "-", "lw": 1.1}),
+    ("case 2 (bit–rock + contact)", {"color": "C1", "ls": "--", "lw": 1.1}),
+)
+
+
+def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
+    """Case 1 (``full``: kinetic- and strain-energy forces included, solid) and case 2 (``reduced``: bit–rock
+    and contact forces only, dashed) of the same case overlaid, in the four panels of :func:`plot_run`:
+    ROP [m/h], bit speed [rpm] with the top speed, radial displacement [mm] at the probe nearest
+    ``probe_x`` [m] with its gap, torque-on-bit [kN·m], vs time [s]. Written to the PNG ``path``."""
+    fig, axes = _figure(2, 2, (11.0, 7.0))
+    ax_rop, ax_speed, ax_radial, ax_tob = axes
+    runs = ((full, *_COMPARE_STYLES[0]), (reduced, *_COMPARE_STYLES[1]))
+
+    radial_max: list[str] = []
+    probe_title = None
+    gap = None
+    for ds, label, style in runs:
+        t = np.asarray(ds["time"].values, dtype=float)
+        ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration"), label=label, **style)
+        ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed"), label=label, **style)
+        ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), label=label, **style)
+        x = _probe_positions(ds)
+        if "radial_displacement" in ds and x.size:
+            i = _probe_index(x, probe_x)
+            r_mm = _scaled(ds["radial_displacement"].isel(probe=i).values, "radial_displacement")
+            ax_radial.plot(t, r_mm, label=label, **style)
+            if np.isfinite(r_mm).any():
+                radial_max.append(f"{label.split(' (')[0]}: max r = {np.nanmax(r_mm):.3g} mm")
+            probe_title = f"probe at x = {x[i]:.0f} m"
+            if gap is None and ("gap" in ds.coords or "gap" in ds):
+                gap = float(np.atleast_1d(ds["gap"].values)[i])
+
+    top = full.attrs.get("top_speed", reduced.attrs.get("top_speed"))
+    if top is not None:
+        ax_speed.axhline(float(top) * _RPM, color="k", ls=":", lw=0.9, label="top (imposed)")
+    if probe_title is None:
+        ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
+    else:
+        if gap is not None:
+            ax_radial.axhline(gap * 1e3, color="k", ls=":", lw=0.9, label="gap")
+        if radial_max:
+            # The gap line can dwarf a small orbit: say how large it is.
+            ax_radial.text(0.02, 0.95, "\n".join(radial_max), transform=ax_radial.transAxes, va="top",
+                           fontsize="small")
+        ax_radial.set_title(probe_title, fontsize="medium")
+
+    for ax, name in ((ax_rop, "rate_of_penetration"), (ax_speed, "bit_speed"),
+                     (ax_radial, "radial_displacement"), (ax_tob, "torque_on_bit")):
+        ax.set_ylabel(_label(name))
+        ax.set_xlabel("time [s]")
+        ax.grid(True, alpha=0.3)
+    ax_rop.legend(loc="best", fontsize="small")
+    ax_speed.legend(loc="best", fontsize="small")
+    if probe_title is not None:
+        ax_radial.legend(loc="center right", fontsize="small")
+
+    title = "Case 1 (full) vs case 2 (bit–rock + contact)"
+    name = _case_name(full.attrs.get("case", "")) or _case_name(reduced.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    failed = [label.split(" (")[0] for ds, label, _ in runs if ds.attrs.get("status", "success") != "success"]
+    if failed:
+        title += f" ({' and '.join(failed)} failed)"
     fig.suptitle(title)
     return _save(fig, path)
 
