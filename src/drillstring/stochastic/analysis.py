@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from drillstring.results import LONG_NAMES, UNITS
+from drillstring.quantities import LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import DONE, FAILED, STUDY_OBSERVABLES
 from drillstring.stochastic.statistics import (
     dispersion_summary,

@@ -1,0 +1,28 @@
+"""One name, one unit and one description per output quantity, shared by every layer (results,
+statistics, figures, reports). Units are SI; conversions for display happen in plots and tables."""
+
+UNITS = {
+    "time": "s",
+    "rate_of_penetration": "m/s",
+    "bit_speed": "rad/s",
+    "torque_on_bit": "N m",
+    "force_on_bit": "N",
+    "bit_depth": "m",
+    "nodes_in_contact": "1",
+    "radial_displacement": "m",
+    "x": "m",
+    "weight_on_hook": "N",
+    "weight_on_bit": "N",
+}
+
+LONG_NAMES = {
+    "rate_of_penetration": "rate of penetration (bit axial velocity, down positive)",
+    "bit_speed": "bit rotation speed",
+    "torque_on_bit": "torque on bit (rock torque opposing the rotation)",
+    "force_on_bit": "force on bit (rock reaction, upward positive)",
+    "bit_depth": "bit advance from the static state",
+    "nodes_in_contact": "number of nodes touching the borehole",
+    "radial_displacement": "radial (lateral) displacement",
+    "weight_on_hook": "weight on hook",
+    "weight_on_bit": "static weight on bit",
+}
