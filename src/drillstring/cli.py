@@ -149,6 +149,11 @@ def main(
 # ---------------------------------------------------------------------------------------------------------
 
 
+TEndOption = Annotated[
+    float | None, typer.Option("--t-end", help="Simulated time [s] (default: the case's simulation.t_end).")
+]
+
+
 @app.command()
 def cases() -> None:
     """List the built-in cases."""
@@ -361,9 +366,7 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
 @app.command()
 def simulate(
     case: CaseArg = "reference",
-    t_end: Annotated[
-        float | None, typer.Option("--t-end", help="Simulated time [s] (default: the case's simulation.t_end).")
-    ] = None,
+    t_end: TEndOption = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="NetCDF file of the observables.")] = Path(
         "simulation.nc"
     ),
@@ -482,9 +485,7 @@ def _compare_times(differences: dict[str, Any]) -> Table:
 @app.command()
 def compare(
     case: CaseArg = "reference",
-    t_end: Annotated[
-        float | None, typer.Option("--t-end", help="Simulated time [s] (default: the case's simulation.t_end).")
-    ] = None,
+    t_end: TEndOption = None,
     plot: Annotated[Path, typer.Option("--plot", help="PNG file of the overlaid four-panel figure.")] = Path(
         "compare.png"
     ),

@@ -13,7 +13,7 @@ axial translation, frequency 0.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
@@ -146,7 +146,6 @@ class Modes:
     torsional: ModeFamily
     lateral_y: ModeFamily
     lateral_z: ModeFamily
-    extra: dict = field(default_factory=dict)
 
     @property
     def lateral(self) -> ModeFamily:

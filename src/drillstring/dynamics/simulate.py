@@ -110,6 +110,14 @@ def simulate_model(
     times = np.asarray(solution.t) if solution is not None else np.zeros(0)
     stats = dict(solution.stats) if solution is not None else {}
     stats["wall_time"] = wall
+    return _result(model, times, values, impacts, str(failure) if failure else "", stats,
+                   raise_on_failure)
+
+
+def _result(model, times, values, impacts, message, stats, raise_on_failure) -> SimulationResult:
+    """Split the observed rows into a :class:`SimulationResult`; raise if the run failed."""
+    n_obs = len(OBSERVABLES)
+    stats["status"] = "failed" if message else "success"
     result = SimulationResult(
         time=times,
         observables={name: values[:, i] for i, name in enumerate(OBSERVABLES)},
@@ -117,12 +125,12 @@ def simulate_model(
         probe_positions=model.probe_positions.copy(),
         probe_gaps=model.gap[model.probe_nodes].copy(),
         impacts=impacts,
-        status="failed" if failure else "success",
-        message=str(failure) if failure else "",
+        status=stats["status"],
+        message=message,
         stats=stats,
     )
-    if failure is not None and raise_on_failure:
-        raise SimulationError(f"simulation stopped early: {failure}", result)
+    if message and raise_on_failure:
+        raise SimulationError(f"simulation stopped early: {message}", result)
     return result
 
 
@@ -147,18 +155,5 @@ def _simulate_compiled(model, y0, *, t_end, output_step, rtol, atol, method, max
         max_steps=max_steps, progress=progress,
     )
     stats["wall_time"] = _time.perf_counter() - start
-    n_obs = len(OBSERVABLES)
-    result = SimulationResult(
-        time=grid[: len(values)],
-        observables={name: values[:, i] for i, name in enumerate(OBSERVABLES)},
-        radial_displacement=values[:, n_obs:],
-        probe_positions=model.probe_positions.copy(),
-        probe_gaps=model.gap[model.probe_nodes].copy(),
-        impacts=int(stats.pop("impacts")),
-        status=stats["status"],
-        message=message,
-        stats=stats,
-    )
-    if message and raise_on_failure:
-        raise SimulationError(f"simulation stopped early: {message}", result)
-    return result
+    impacts = int(stats.pop("impacts"))
+    return _result(model, grid[: len(values)], values, impacts, message, stats, raise_on_failure)

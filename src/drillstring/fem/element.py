@@ -221,22 +221,24 @@ def place_planar(planar: np.ndarray, out: np.ndarray | None = None) -> np.ndarra
     return out
 
 
+def _element_matrix(planar: np.ndarray, section: BeamSection, length: float, kind: int):
+    """Both bending planes plus the axial and torsion pairs (``kind`` 0: stiffness, 1: mass)."""
+    matrix = place_planar(planar)
+    matrix[np.ix_(AXIAL_DOFS, AXIAL_DOFS)] += axial_matrices(section, length)[kind]
+    matrix[np.ix_(TORSION_DOFS, TORSION_DOFS)] += torsion_matrices(section, length)[kind]
+    return matrix
+
+
 @_frozen
 def element_stiffness(section: BeamSection, length: float) -> np.ndarray:
     """Elastic stiffness [K_e], 12×12, symmetric positive semi-definite (6 rigid-body modes)."""
-    k = place_planar(bending_stiffness(section, length))
-    k[np.ix_(AXIAL_DOFS, AXIAL_DOFS)] += axial_matrices(section, length)[0]
-    k[np.ix_(TORSION_DOFS, TORSION_DOFS)] += torsion_matrices(section, length)[0]
-    return k
+    return _element_matrix(bending_stiffness(section, length), section, length, 0)
 
 
 @_frozen
 def element_mass(section: BeamSection, length: float) -> np.ndarray:
     """Consistent mass [M_e], 12×12: translational, rotary (ρI) and polar (ρI_p) inertia."""
-    m = place_planar(bending_mass(section, length))
-    m[np.ix_(AXIAL_DOFS, AXIAL_DOFS)] += axial_matrices(section, length)[1]
-    m[np.ix_(TORSION_DOFS, TORSION_DOFS)] += torsion_matrices(section, length)[1]
-    return m
+    return _element_matrix(bending_mass(section, length), section, length, 1)
 
 
 def element_geometric_stiffness(
