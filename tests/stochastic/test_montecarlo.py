@@ -171,3 +171,24 @@ def test_dask_cluster_gives_the_same_result(small_case, tmp_path):
                               scheduler=cluster.scheduler_address)
     assert remote.completed == local.completed
     assert_same(arrays(tmp_path / "local.zarr"), arrays(tmp_path / "dask.zarr"))
+
+
+def die_on_index_2(case, settings, index):
+    """A realization task whose worker process dies on realization 2 (as on a crash or OOM kill)."""
+    if index == 2:
+        os._exit(1)
+    return mc.run_realization(case, settings, index)
+
+
+def test_realization_that_kills_its_worker_is_recorded_not_retried_forever(small_case, tmp_path):
+    store = mc.StudyStore(tmp_path / "crash.zarr", small_case, SETTINGS)
+    mc._run_processes(small_case, SETTINGS, list(range(SETTINGS.samples)), 2, store.write,
+                      task=die_on_index_2)
+    status = store.status()
+    assert status[2] == mc.FAILED and "worker process died" in store.failures()["2"]
+    assert np.all(status[[0, 1, 3, 4]] == mc.DONE)
+    # The others are exactly what an undisturbed run computes.
+    mc.run_study(small_case, SETTINGS, tmp_path / "ref.zarr", workers=1)
+    a, b = arrays(tmp_path / "crash.zarr"), arrays(tmp_path / "ref.zarr")
+    for name in ("rate_of_penetration", "bit_speed"):
+        np.testing.assert_array_equal(a[name][[0, 1, 3, 4]], b[name][[0, 1, 3, 4]])

@@ -356,7 +356,8 @@ def _worker_start(parent_pid: int) -> None:
     threading.Thread(target=watch, daemon=True).start()
 
 
-def _run_processes(case, settings, indices: Iterable[int], workers: int, record) -> None:
+def _run_processes(case, settings, indices: Iterable[int], workers: int, record,
+                   task: Callable = run_realization) -> None:
     import os
 
     context = multiprocessing.get_context("spawn")
@@ -364,7 +365,7 @@ def _run_processes(case, settings, indices: Iterable[int], workers: int, record)
     saved = {k: os.environ.get(k) for k in WORKER_ENVIRONMENT}
     os.environ.update(WORKER_ENVIRONMENT)  # inherited by the spawned workers only at start-up
     try:
-        _process_loop(context, case, settings, remaining, workers, record, os.getpid())
+        _process_loop(context, case, settings, remaining, workers, record, os.getpid(), task)
     finally:
         for key, value in saved.items():
             if value is None:
@@ -373,18 +374,31 @@ def _run_processes(case, settings, indices: Iterable[int], workers: int, record)
                 os.environ[key] = value
 
 
-def _process_loop(context, case, settings, remaining, workers, record, parent_pid) -> None:
+def _process_loop(context, case, settings, remaining, workers, record, parent_pid, task) -> None:
+    """Run ``remaining`` on a process pool. If a worker dies (killed, out of memory, crash), the pool
+    is restarted for the rest; if it dies again before any realization finished, the remaining
+    realizations run one per single-worker pool, so a realization that kills its worker is recorded
+    as failed with that cause instead of being retried forever."""
+    isolate = False
     while remaining:
-        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context,
+        before = len(remaining)
+        batch = remaining[:1] if isolate else list(remaining)
+        pool = cf.ProcessPoolExecutor(max_workers=1 if isolate else workers, mp_context=context,
                                       initializer=_worker_start, initargs=(parent_pid,))
         try:
-            futures = {pool.submit(run_realization, case, settings, i): i for i in remaining}
+            futures = {pool.submit(task, case, settings, i): i for i in batch}
             for future in cf.as_completed(futures):
                 record(future.result())
                 remaining.remove(futures[future])
         except cf.process.BrokenProcessPool:
-            # A worker died (killed, out of memory): restart the pool and go on with the rest.
-            continue
+            if isolate:
+                index = batch[0]
+                record(RealizationOutcome(
+                    index, draw_weight_on_hook(case, settings, index), math.nan, FAILED,
+                    "worker process died (killed or crashed) while computing this realization"))
+                remaining.remove(index)
+            elif len(remaining) == before:
+                isolate = True
         finally:
             pool.shutdown(wait=False, cancel_futures=True)
 
