@@ -208,10 +208,7 @@ def integrate_compiled(
     out = np.full((len(grid), len(model.observable_names) + len(model.probe_nodes)), np.nan)
     previous = np.zeros(model.static.mesh.n_nodes, dtype=np.bool_)
     k, k_old, y_old, y_tmp = np.zeros((s, n)), np.zeros((s, n)), np.zeros(n), np.zeros(n)
-    b = model._buffers
-    obs_args = (model.omega2, model.bit_u, model.bit_t, model.phi_v, model.phi_w, model.phi_tx,
-                model.gap, float(model.top_speed), model.bit_args, model.probe_nodes,
-                b[0], b[1], b[2], b[3], b[4], model._in_contact)
+    obs_args = model.observe_args
     e = np.ascontiguousarray(tab.b - tab.b_hat)
     start = _time.perf_counter()
     status = SUCCESS

@@ -22,7 +22,7 @@ projected. The right-hand side is a Numba-compiled kernel over preallocated arra
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -289,7 +289,6 @@ class ReducedOrderModel:
     outer_diameter: np.ndarray
     probe_positions: np.ndarray
     nonlinear: str = "bit_and_contact"
-    _work: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         mesh = self.static.mesh
@@ -307,8 +306,14 @@ class ReducedOrderModel:
         self.contact_args = np.array([c.shock_stiffness, c.friction_coefficient,
                                       c.speed_regularization])
         n_nodes = mesh.n_nodes
-        self._buffers = tuple(np.zeros(n_nodes) for _ in range(8))
         self._in_contact = np.zeros(n_nodes, dtype=np.bool_)
+        # Arguments of the observation kernel after (y, out), shared by observe() and the
+        # compiled integrator; the last one is the contact mask it fills.
+        self.observe_args = (
+            self.omega2, self.bit_u, self.bit_t, self.phi_v, self.phi_w, self.phi_tx, self.gap,
+            float(self.top_speed), self.bit_args, self.probe_nodes,
+            *(np.zeros(n_nodes) for _ in range(5)), self._in_contact,
+        )
         labels = np.array(self.family)
         blocks = []
         for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
@@ -402,10 +407,7 @@ class ReducedOrderModel:
     def observe(self, t: float, y: np.ndarray) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement at each probe [m]."""
         out = np.empty(len(OBSERVABLES) + len(self.probe_nodes))
-        b = self._buffers
-        _observe_kernel(y, out, self.omega2, self.bit_u, self.bit_t, self.phi_v, self.phi_w,
-                        self.phi_tx, self.gap, float(self.top_speed), self.bit_args,
-                        self.probe_nodes, b[0], b[1], b[2], b[3], b[4], self._in_contact)
+        _observe_kernel(y, out, *self.observe_args)
         return out
 
     def contact_mask(self) -> np.ndarray:
