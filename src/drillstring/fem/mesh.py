@@ -13,6 +13,7 @@ from typing import Sequence
 
 import numpy as np
 
+from drillstring.fem.dofs import DOFS_PER_NODE
 from drillstring.fem.sections import BeamSection
 
 #: Two positions closer than this [m] are the same node.
@@ -43,7 +44,7 @@ class Mesh:
 
     @property
     def n_dofs(self) -> int:
-        return 6 * len(self.nodes)
+        return DOFS_PER_NODE * len(self.nodes)
 
     @property
     def length(self) -> float:
