@@ -5,11 +5,17 @@ import dataclasses
 import numpy as np
 import pytest
 
-from drillstring.dynamics.rom import case_reduced_model, reduced_model
+from drillstring.dynamics.rom import (
+    OBSERVABLE_COLUMN,
+    OBSERVABLES,
+    PROBE_COLUMN,
+    case_reduced_model,
+    reduced_model,
+)
 from drillstring.dynamics.runge_kutta import integrate
 from drillstring.dynamics.simulate import simulate_model
 from drillstring.fem.build import stabilizers
-from drillstring.forces.bit_rock import BitRockParameters, steady_state
+from drillstring.forces.bit_rock import BitRockParameters, evaluate_bit_rock, steady_state
 from drillstring.forces.contact import ContactParameters
 from drillstring.modal import build_linear_system
 from drillstring.fem.build import section_fluid_coefficients
@@ -94,3 +100,53 @@ def test_initial_state_is_seeded_physical_and_converges_with_modes(coarse_case):
         eta = m.initial_state(1e-4, seed=7)[: m.size]
         errors.append(abs(np.hypot(m.phi_v @ eta, m.phi_w @ eta).max() - 1e-4))
     assert errors[2] < errors[1] < errors[0] and errors[2] < 2e-6
+
+
+def test_observables_are_written_by_name(coarse_case):
+    """Each observable sits in the column its name gives (OBSERVABLE_COLUMN, derived from OBSERVABLES)
+    and equals its definition, computed here independently from the full mode shapes."""
+    rom = case_reduced_model(coarse_case, lateral_modes=5)
+    assert sorted(OBSERVABLE_COLUMN.values()) == list(range(len(OBSERVABLES)))
+    assert [OBSERVABLE_COLUMN[name] for name in OBSERVABLES] == list(range(len(OBSERVABLES)))
+    n = rom.size
+    y = np.random.default_rng(2).normal(size=2 * n) * 30.0  # several nodes touch the wall
+    out = rom.observe(0.0, y)
+    eta, eta_dot = y[:n], y[n:]
+    rop = rom.bit_u @ eta_dot
+    speed = rom.top_speed + rom.bit_t @ eta_dot
+    axial_force, torque = evaluate_bit_rock(rop, speed, rom.bit_rock)
+    radius = np.hypot(rom.phi_v @ eta, rom.phi_w @ eta)
+    expected = {
+        "rate_of_penetration": rop,
+        "bit_speed": speed,
+        "torque_on_bit": -torque,
+        "force_on_bit": -axial_force,
+        "bit_depth": rom.bit_u @ eta,
+        "nodes_in_contact": np.count_nonzero(radius > rom.gap),
+    }
+    assert expected["nodes_in_contact"] >= 2
+    for name, value in expected.items():
+        assert out[OBSERVABLE_COLUMN[name]] == pytest.approx(value, rel=1e-10, abs=1e-14), name
+    np.testing.assert_allclose(out[PROBE_COLUMN:], radius[rom.probe_nodes], rtol=1e-10)
+    np.testing.assert_array_equal(rom.contact_mask(), radius > rom.gap)
+
+
+def test_generalized_force_is_added_to_the_modal_acceleration(coarse_case):
+    base = case_reduced_model(coarse_case, lateral_modes=4)
+    np.testing.assert_array_equal(base.generalized_force, np.zeros(base.size))  # default: none
+    rng = np.random.default_rng(5)
+    force = rng.normal(size=base.size)
+    forced = dataclasses.replace(base, generalized_force=force)
+    n = base.size
+    for scale in (1e-6, 30.0):  # without and with contact
+        y = rng.normal(size=2 * n) * scale
+        difference = forced.rhs(0.0, y) - base.rhs(0.0, y)
+        np.testing.assert_allclose(difference[:n], 0.0, atol=0)
+        np.testing.assert_allclose(difference[n:], force, rtol=1e-9, atol=1e-9 * np.abs(force).max())
+        reference = forced.rhs_reference(0.0, y)
+        np.testing.assert_allclose(forced.rhs(0.0, y), reference, rtol=1e-10,
+                                   atol=1e-10 * np.abs(reference).max())
+    with pytest.raises(ValueError, match="generalized_force"):
+        dataclasses.replace(base, generalized_force=np.ones(n + 1))
+    with pytest.raises(ValueError, match="generalized_force"):
+        dataclasses.replace(base, generalized_force=np.full(n, np.nan))
