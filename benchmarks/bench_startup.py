@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -38,15 +39,22 @@ ROOT = Path(__file__).resolve().parents[1]
 CLI = "import sys; from drillstring.cli import app; sys.argv[0] = 'drillstring'; app()"
 
 
-def _run(src: Path, args: list[str], cache: Path, cwd: Path) -> tuple[float, subprocess.CompletedProcess]:
-    env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(cache), PYTHONDONTWRITEBYTECODE="")
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _run(src: Path, args: list[str], cache: Path, cwd: Path) -> tuple[float, float, subprocess.CompletedProcess]:
+    """Run ``drillstring ARGS`` with the package from ``src``; returns (wall [s], CPU [s], process)."""
+    env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(cache))
+    cpu = _children_cpu()
     start = time.perf_counter()
     done = subprocess.run([sys.executable, "-c", CLI, *args], env=env, cwd=cwd, capture_output=True,
                           text=True)
     wall = time.perf_counter() - start
     if done.returncode != 0:
         raise RuntimeError(f"drillstring {' '.join(args)} failed ({done.returncode}):\n{done.stderr}")
-    return wall, done
+    return wall, _children_cpu() - cpu, done
 
 
 def _import_time(src: Path, cache: Path) -> float:
@@ -62,24 +70,30 @@ def measure(src: Path, repeat: int) -> dict[str, float | str]:
         work = Path(tmp)
         cache = work / "numba-cache"
         out = ["--out", str(work / "run.nc"), "--plot", str(work / "run.png")]
-        cold, done = _run(src, ["simulate", "reference", "--t-end", "1", *out], cache, work)
+        cold, cold_cpu, done = _run(src, ["simulate", "reference", "--t-end", "1", *out], cache, work)
         message = next((line.strip() for line in done.stderr.splitlines() if "compil" in line.lower()), "")
-        warm, solver, modes, imports = [], [], [], []
+        warm, warm_cpu, solver, modes, modes_cpu, imports = [], [], [], [], [], []
         for _ in range(repeat):
-            wall, done = _run(src, ["simulate", "reference", "--json", *out], cache, work)
+            wall, cpu, done = _run(src, ["simulate", "reference", "--json", *out], cache, work)
             warm.append(wall)
+            warm_cpu.append(cpu)
             solver.append(float(json.loads(done.stdout)["wall_time"]))
-            modes.append(_run(src, ["modes", "reference"], cache, work)[0])
+            wall, cpu, _ = _run(src, ["modes", "reference"], cache, work)
+            modes.append(wall)
+            modes_cpu.append(cpu)
             imports.append(_import_time(src, cache))
-    overhead = [w - s for w, s in zip(warm, solver)]
+    median = statistics.median
     return {
         "cold simulate --t-end 1 [s]": cold,
+        "  CPU [s]": cold_cpu,
         "compilation message": message or "(none)",
-        "warm simulate reference [s]": statistics.median(warm),
-        "  of which solver [s]": statistics.median(solver),
-        "  beyond the solver [s]": statistics.median(overhead),
-        "warm modes reference [s]": statistics.median(modes),
-        "import drillstring.cli [s]": statistics.median(imports),
+        "warm simulate reference [s]": median(warm),
+        "  of which solver [s]": median(solver),
+        "  beyond the solver [s]": median(w - s for w, s in zip(warm, solver)),
+        "  CPU beyond the solver [s]": median(c - s for c, s in zip(warm_cpu, solver)),
+        "warm modes reference [s]": median(modes),
+        "  CPU [s] ": median(modes_cpu),
+        "import drillstring.cli [s]": median(imports),
     }
 
 
@@ -105,7 +119,8 @@ def main() -> None:
     goals = {"cold simulate --t-end 1 [s]": "<= 15", "  beyond the solver [s]": "<= 2",
              "warm modes reference [s]": "<= 1.5"}
     print(f"drillstring start-up, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}, "
-          f"median of {args.repeat} warm runs")
+          f"median of {args.repeat} warm runs (CPU: user + system time of the process, less sensitive "
+          f"to other load than wall time)")
     names = list(next(iter(columns.values())))
     width = max(len(n) for n in names)
     print(f"{'':<{width}}  " + "  ".join(f"{c:>16}" for c in columns) + "  goal")
@@ -113,8 +128,10 @@ def main() -> None:
         cells = []
         for figures in columns.values():
             value = figures[name]
-            cells.append(f"{value:>16.2f}" if isinstance(value, float) else f"{value[:40]:>16}")
+            cells.append(f"{value:>16.2f}" if isinstance(value, float) else f"{value[:16]:>16}")
         print(f"{name:<{width}}  " + "  ".join(cells) + f"  {goals.get(name, '')}")
+    for label, figures in columns.items():
+        print(f"compilation message ({label}): {figures['compilation message']}")
 
 
 if __name__ == "__main__":

@@ -396,3 +396,34 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
     assert result.exit_code == 1, result.output
     assert "case 1 (full) failed" in result.stderr
     assert "Traceback" not in result.output
+
+
+#: Modules that only the simulating commands need.
+_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr")
+
+
+@pytest.mark.parametrize("argv, unwanted", [
+    ([], _HEAVY + ("scipy",)),  # importing the command line itself
+    (["cases"], _HEAVY + ("scipy",)),
+    (["static", "reference", "--json"], _HEAVY),
+    (["modes", "reference", "--count", "2", "--json"], _HEAVY),
+])
+def test_light_commands_import_only_what_they_need(argv, unwanted):
+    """Start-up cost: a command loads only the modules it uses (a fresh interpreter each)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom drillstring.cli import app\nsys.argv = ['drillstring', *sys.argv[1:]]\n"
+            "if len(sys.argv) > 1:\n    try:\n        app()\n    except SystemExit as e:\n"
+            "        assert not e.code, e.code\n"
+            f"print([m for m in {unwanted!r} if m in sys.modules], file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "[]"
+
+
+def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
+    numbers = _json("simulate", "reference", "--t-end", "0.5", "--json", "--out", str(tmp_path / "r.nc"),
+                    "--plot", str(tmp_path / "r.png"))
+    assert numbers["wall_time"] > 0 and numbers["compile_time"] >= 0
+    assert isinstance(numbers["compiled"], bool)

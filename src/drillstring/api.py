@@ -186,7 +186,7 @@ def compare(
 
     import numpy as np
 
-    from drillstring.stochastic.analysis import DEFAULT_TRANSIENT
+    from drillstring.quantities import default_transient
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}
@@ -213,7 +213,7 @@ def compare(
         return np.interp(t, t_reduced, values)
 
     t_final = float(t[-1])
-    t_transient = min(DEFAULT_TRANSIENT, 0.5 * t_final)
+    t_transient = default_transient(t_final)
     steady = t >= t_transient - 1e-9 * max(1.0, t_final)
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)

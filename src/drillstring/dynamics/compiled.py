@@ -295,6 +295,31 @@ def _prepare(dispatcher, *args) -> None:
     dispatcher.compile(tuple(typeof(a) for a in args))
 
 
+def _compile_kernels(model, work: Workspace, settings: StepperSettings) -> tuple[float, bool]:
+    """Compile (or load from the cache) every kernel the integration of ``model`` calls. Returns the
+    time it took [s] and whether anything was compiled; the first compilation is announced."""
+    start = _time.perf_counter()
+    monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
+    with event.install_listener("numba:compile", monitor):
+        _prepare(_run_chunk, work, 0.0, settings, model.rhs_data, model.case2_data, model.observe_data)
+        _prepare(_observe, work, 0, work.y, model.case2_data, model.observe_data)
+        model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
+    return _time.perf_counter() - start, monitor.compiled
+
+
+def prepare_kernels(model, tableau: ButcherTableau | str = "dopri5") -> tuple[float, bool]:
+    """Compile, or load from Numba's cache, the kernels that integrating ``model`` (a
+    :class:`~drillstring.dynamics.rom.ReducedOrderModel`) with ``tableau`` needs, without integrating.
+    Kernels depend on the types of the model's data only (case 1 or case 2), not on its sizes, so one
+    call prepares every realization of a study. Returns ``(seconds, compiled)``."""
+    tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
+    n = 2 * model.size
+    settings = StepperSettings.create(tab, StepSizeController(), n, min_step=1e-12, max_steps=1)
+    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), PROBE_COLUMN + len(model.probe_nodes),
+                              model.static.mesh.n_nodes)
+    return _compile_kernels(model, work, settings)
+
+
 def integrate_compiled(
     model,
     y0: np.ndarray,
@@ -324,18 +349,11 @@ def integrate_compiled(
     work = Workspace.allocate(y0, tab.n_stages, grid, PROBE_COLUMN + len(model.probe_nodes),
                               model.static.mesh.n_nodes)
     grid = work.grid
-    t_end = float(grid[-1])
     rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
-
-    prepare_start = _time.perf_counter()
-    monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
-    with event.install_listener("numba:compile", monitor):
-        _prepare(_run_chunk, work, t_end, settings, rhs_data, case2, observe_data)
-        _prepare(_observe, work, 0, work.y, case2, observe_data)
-        work.f[:] = model.rhs(0.0, work.y)
-    compile_time = _time.perf_counter() - prepare_start
+    compile_time, compiled = _compile_kernels(model, work, settings)
 
     start = _time.perf_counter()
+    work.f[:] = model.rhs(0.0, work.y)
     h0 = ctrl.initial_step(model.rhs, 0.0, work.y, work.f, tab.controller_order)
     state = work.state
     state[H] = h0
@@ -362,7 +380,7 @@ def integrate_compiled(
         "n_steps": int(state[N_ACCEPTED] + state[N_REJECTED]),
         "wall_time": _time.perf_counter() - start,
         "compile_time": compile_time,
-        "compiled": monitor.compiled,
+        "compiled": compiled,
         "impacts": int(state[IMPACTS]),
     }
     message = ""

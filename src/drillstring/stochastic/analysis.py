@@ -7,18 +7,13 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from drillstring.quantities import LONG_NAMES, UNITS
+from drillstring.quantities import DEFAULT_TRANSIENT, LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import DONE, FAILED, STUDY_OBSERVABLES
 from drillstring.stochastic.statistics import (
     dispersion_summary,
     mean_square_convergence,
     realization_statistics,
 )
-
-#: Default start of the steady regime for summaries [s] (the reference transient has decayed to a
-#: few percent of the bit-speed oscillation by then; see docs/verification.md).
-DEFAULT_TRANSIENT = 10.0
-
 
 def load_study(store_path: str | Path) -> xr.Dataset:
     """The raw study: every realization (dimension ``realization``), its status and draw, the nominal

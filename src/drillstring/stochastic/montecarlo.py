@@ -316,6 +316,8 @@ def run_study(
 
     if progress:
         progress(done, failed, total)
+    if indices and not scheduler:
+        _compile_kernels(case)
     try:
         if scheduler:
             _run_dask(case, settings, indices, scheduler, record)
@@ -333,6 +335,14 @@ def run_study(
             f"{store.path}; run the same command again to resume"
         ) from error
     return StudyRun(store, done, failed, time.perf_counter() - start, used)
+
+
+def _compile_kernels(case: Case) -> None:
+    """Compile the simulation kernels once, here (announced on stderr the first time), so that local
+    worker processes only load them from Numba's cache and no realization's time includes compiling."""
+    from drillstring.dynamics.compiled import prepare_kernels
+
+    prepare_kernels(case_reduced_model(case), case.simulation.method)
 
 
 #: Thread counts for worker processes: one process per core, each single-threaded, so linear
