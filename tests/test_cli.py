@@ -154,6 +154,36 @@ def test_invalid_case_file_exit_code_2(tmp_path):
         assert result.exception is None or isinstance(result.exception, SystemExit)
 
 
+@pytest.mark.parametrize("old, new, field", [
+    ("lateral_modes = 20", "lateral_modes = 100000", "reduced_model.lateral_modes = 100000"),
+    ('max_element_length = "10 m"', 'max_element_length = "1 mm"', "mesh.max_element_length = 0.001"),
+    ('max_element_length = "10 m"', 'max_element_length = "2 km"', "mesh.max_element_length = 2000.0"),
+])
+def test_cases_that_cannot_be_meshed_or_reduced_exit_2_naming_the_field(tmp_path, old, new, field):
+    text = _reference_toml()
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    for command in ("static", "modes", "simulate"):
+        result = _invoke(command, str(path), "--json")
+        assert result.exit_code == 2, result.output
+        assert field in result.stderr
+        assert "Traceback" not in result.output
+        assert result.exception is None or isinstance(result.exception, SystemExit)
+
+
+def test_gravity_off_runs_with_a_pushing_hook(tmp_path):
+    text = _reference_toml()
+    path = tmp_path / "weightless.toml"
+    path.write_text(text.replace("\ngravity = true", "\ngravity = false"), encoding="utf-8")
+    static = _json("static", str(path), "--json")
+    assert static["weight"] == 0.0 and static["weight_on_hook"] == pytest.approx(-REFERENCE_WOB)
+    assert all(n == pytest.approx(-REFERENCE_WOB) for _, n in static["axial_force"])  # compressed
+    run = _json("simulate", str(path), "--t-end", "0.2", "--json", "--out", str(tmp_path / "w.nc"),
+                "--plot", str(tmp_path / "w.png"))
+    assert run["status"] == "success" and run["mean_rate_of_penetration"] > 0
+
+
 @pytest.mark.parametrize(
     "content, expected",
     [
