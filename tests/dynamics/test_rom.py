@@ -77,9 +77,10 @@ def test_steady_drilling_matches_closed_form_without_lateral_modes(coarse_case, 
     result = simulate_model(rom, t_end=20.0, output_step=0.01, lateral_perturbation=0.0)
     late = result.time >= 15.0
     rop, tob = steady_state(weight_on_bit, top_speed, rom.bit_rock)
-    assert result.observables["rate_of_penetration"][late].mean() == pytest.approx(rop, rel=0.01)
-    assert result.observables["torque_on_bit"][late].mean() == pytest.approx(tob, rel=0.01)
-    assert result.observables["bit_speed"][late].mean() == pytest.approx(top_speed, rel=0.01)
+    # what is left of the decaying transient after 15 s is below 1e-3 of each (observed: <= 9.5e-4)
+    assert result.observables["rate_of_penetration"][late].mean() == pytest.approx(rop, rel=2e-3)
+    assert result.observables["torque_on_bit"][late].mean() == pytest.approx(tob, rel=2e-3)
+    assert result.observables["bit_speed"][late].mean() == pytest.approx(top_speed, rel=2e-3)
     # Force balance of the rigid motion: the rock carries the weight-on-bit (minus c1 · ROP).
     assert result.observables["force_on_bit"][late].mean() == pytest.approx(weight_on_bit, rel=1e-3)
 
