@@ -13,3 +13,34 @@ def drill_pipe():
 @pytest.fixture
 def drill_collar():
     return hollow_circle(0.2286, 0.0762, 210e9, 7850.0, 0.29, 6.0 / 7.0)
+
+
+def _can_create_in(folder) -> bool:
+    import os
+
+    probe = os.path.join(folder, ".drillstring-fixture-probe")
+    try:
+        with open(probe, "w"):
+            pass
+    except OSError:
+        return False
+    os.unlink(probe)
+    return True
+
+
+@pytest.fixture
+def unwritable_folder(tmp_path):
+    """A folder in which nothing can be created: a read-only temporary folder, or, for the superuser
+    (whom permissions do not stop), /sys where the kernel refuses new files."""
+    from pathlib import Path
+
+    folder = tmp_path / "read-only"
+    folder.mkdir()
+    folder.chmod(0o500)
+    if not _can_create_in(folder):
+        yield folder
+    elif Path("/sys").is_dir() and not _can_create_in("/sys"):
+        yield Path("/sys")
+    else:
+        pytest.skip("no unwritable folder on this machine")
+    folder.chmod(0o700)
