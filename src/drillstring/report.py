@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from drillstring import __version__
+from drillstring.files import write_text_atomic
 
 __all__ = ["write_report"]
 
@@ -306,6 +307,4 @@ def write_report(
         parts.append("<h2>Figures</h2>")
         parts.extend(_figure_html(name, fig) for name, fig in figures.items())
     parts.append("</body></html>")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
-    return path
+    return write_text_atomic(path, "\n".join(parts) + "\n")
