@@ -8,7 +8,13 @@ import numpy as np
 import xarray as xr
 
 from drillstring.quantities import LONG_NAMES, UNITS
-from drillstring.stochastic.montecarlo import DONE, FAILED, STUDY_OBSERVABLES
+from drillstring.stochastic.montecarlo import (
+    DONE,
+    FAILED,
+    STUDY_OBSERVABLES,
+    open_study_group,
+)
+from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.statistics import (
     dispersion_summary,
     mean_square_convergence,
@@ -20,10 +26,23 @@ from drillstring.stochastic.statistics import (
 DEFAULT_TRANSIENT = 10.0
 
 
+def default_transient(t_end: float) -> float:
+    """Start of the steady regime used by the summaries [s]: :data:`DEFAULT_TRANSIENT`, or half the
+    run when that is shorter."""
+    return min(DEFAULT_TRANSIENT, 0.5 * t_end)
+
+
 def load_study(store_path: str | Path) -> xr.Dataset:
     """The raw study: every realization (dimension ``realization``), its status and draw, the nominal
-    (deterministic, mean weight-on-hook) response, and the store's attributes."""
-    ds = xr.open_zarr(str(store_path), consolidated=False).load()
+    (deterministic, mean weight-on-hook) response, and the store's attributes.
+
+    Refused while another process runs a study on the store (:class:`~drillstring.stochastic.
+    locks.StudyLocked`: statistics are never computed from a store being written), and for a
+    folder that is not a complete study store (:class:`~drillstring.stochastic.montecarlo.
+    StudyStoreError`)."""
+    with StudyLock(store_path, shared=True):
+        open_study_group(store_path, mode="r")
+        ds = xr.open_zarr(str(store_path), consolidated=False).load()
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in STUDY_OBSERVABLES + ("radial_displacement",):
