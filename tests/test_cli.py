@@ -3,6 +3,7 @@
 import json
 from importlib import resources
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -285,12 +286,17 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     second = json.loads(again.stdout)
     assert second["observables"] == first["observables"]
     assert second["n_samples"] == 3
-    assert second["wall_time"] < first["wall_time"]  # nothing left to run
+    # Nothing left to run: the study's computation time is kept, the rerun is reported apart.
+    assert second["wall_time"] == first["wall_time"] and second["workers"] == first["workers"]
+    assert first["realizations_this_run"] == 3 and second["realizations_this_run"] == 0
+    assert len(second["sessions"]) == 1 and second["sessions"][0]["realizations"] == 3
+    assert second["wall_time_this_run"] < first["wall_time"]
     assert "resumed" in again.stderr
 
     table = _study(coarse_case, out)
     assert table.exit_code == 0, table.output
-    for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}"):
+    for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}",
+                 f"wall time {first['wall_time']:,.1f} s", "this run only recomputed the statistics"):
         assert text in table.stdout, text
 
 
@@ -341,6 +347,202 @@ def test_study_interrupted_exit_130(coarse_case, tmp_path, monkeypatch):
     assert result.exit_code == 130
     assert "resume" in result.stderr
     assert "Traceback" not in result.output
+
+
+def _one_line_error(result, *expected):
+    """Refused as bad input: exit code 2, one line on stderr naming the problem, no traceback."""
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    for text in expected:
+        assert text in lines[0], (text, lines[0])
+    assert "Traceback" not in result.output
+
+
+@pytest.fixture
+def nothing_runs(monkeypatch):
+    """Any simulation or study started by a command fails the test: refusals must come first."""
+    from drillstring import api
+    from drillstring.stochastic import montecarlo
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("computation started before the input was checked")
+
+    for module, name in ((api, "simulate"), (api, "compare"), (montecarlo, "run_study"),
+                         (montecarlo, "run_realization")):
+        monkeypatch.setattr(module, name, forbidden)
+
+
+@pytest.mark.parametrize("args, expected", [
+    (("--samples", "1"), ["samples = 1: must be an integer >= 2"]),
+    (("--sigma", "1e6"), ["sigma = 1e+06 N:", "probability", "at most 32.36 kN"]),
+    (("--sigma", "nan"), ["sigma = nan N: must be a finite number > 0"]),
+    (("--sigma", "-1"), ["sigma = -1.0 N: must be a finite number > 0"]),
+    (("--dispersion", "inf"), ["dispersion = inf: must be a finite number > 0"]),
+    (("--dispersion", "0.5"), ["sigma = 531716 N", "probability"]),
+    (("--t-end", "inf"), ["t_end = inf s: must be a finite number > 0"]),
+    (("--t-end", "-2"), ["t_end = -2.0 s"]),
+    (("--seed", "-1"), ["seed = -1: must be an integer >= 0"]),
+    (("--transient", "nan"), ["transient = nan s"]),
+])
+def test_study_impossible_settings_refused_before_running(coarse_case, tmp_path, nothing_runs, args, expected):
+    out = tmp_path / "bad"
+    _one_line_error(_study(coarse_case, out, *args), *expected)
+    assert not out.exists()  # nothing created
+
+
+def test_study_workers_zero_refused(coarse_case, tmp_path, nothing_runs):
+    result = _invoke("study", str(coarse_case), "--workers", "0", "--out", str(tmp_path / "w"))
+    _one_line_error(result, "workers = 0: must be an integer >= 1")
+
+
+def test_study_output_folder_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    _one_line_error(_study(coarse_case, a_file), f"--out = {a_file}: is a file, not a folder")
+    _one_line_error(_study(coarse_case, a_file / "sub"), f"{a_file} is a file, not a folder")
+    _one_line_error(_study(coarse_case, unwritable_folder / "study"), f"cannot write in {unwritable_folder}")
+
+
+def test_study_store_that_is_not_a_study_refused(coarse_case, tmp_path):
+    import zarr
+
+    out = tmp_path / "study"
+    assert _study(coarse_case, out).exit_code == 0
+    del zarr.open_group(str(out / "study.zarr"), mode="a")["status"]
+    _one_line_error(_study(coarse_case, out), "study.zarr is not a complete drillstring study store",
+                    "missing array(s): status")
+
+
+def test_study_stale_lock_is_taken_over_with_a_note(coarse_case, tmp_path):
+    import socket
+
+    out = tmp_path / "study"
+    out.mkdir()
+    # The record of a study killed with -9 (nobody holds the lock any more).
+    (out / "study.zarr.lock").write_text(json.dumps({"pid": 4_000_000, "host": socket.gethostname(),
+                                                     "started": "2026-01-01T00:00:00+00:00"}))
+    result = _study(coarse_case, out)
+    assert result.exit_code == 0, result.output
+    assert "note: took over a stale lock (pid 4000000 on host" in result.stderr
+    assert not (out / "study.zarr.lock").exists()
+
+
+def test_study_calls_the_api_with_its_defaults(coarse_case, tmp_path, monkeypatch):
+    """The command line parses and formats; defaults and checks are the API's (one definition)."""
+    from drillstring import api
+
+    seen = {}
+
+    def record(case, **kwargs):
+        seen.update(kwargs)
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(api, "monte_carlo_study", record)
+    result = _invoke("study", str(coarse_case), "--out", str(tmp_path / "s"))
+    _one_line_error(result, "stop here")
+    assert seen["sigma"] is None and seen["dispersion"] is None and seen["transient"] is None
+    assert seen["t_end"] is None and seen["workers"] is None and seen["scheduler"] is None
+    from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
+    import inspect
+
+    defaults = inspect.signature(api.study).parameters
+    assert seen["samples"] == DEFAULT_SAMPLES == defaults["samples"].default
+    assert seen["seed"] == DEFAULT_SEED == defaults["seed"].default
+
+
+def test_study_scheduler_refused_port(coarse_case, tmp_path, nothing_runs):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    result = _invoke("study", str(coarse_case), "--scheduler", f"tcp://127.0.0.1:{port}", "--out",
+                     str(tmp_path / "s"))
+    _one_line_error(result, f"scheduler = 'tcp://127.0.0.1:{port}': connection refused")
+    assert not (tmp_path / "s").exists()
+
+
+def _drillstring(*args, timeout=180):
+    """The installed command in its own process (what a user runs), with a guard against hangs."""
+    import subprocess
+    import sys
+
+    command = [sys.executable, "-c", "from drillstring.cli import app; app()", *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout,
+                          env={**__import__("os").environ, "COLUMNS": "120"})
+
+
+def test_study_scheduler_that_is_no_dask_server_fails_fast(coarse_case, tmp_path):
+    """A TCP server that accepts and never answers (the reported 300 s+ hang): refused by the real
+    command with one line after the 5 s greeting timeout (the subprocess timeout guards the hang)."""
+    import socket
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    try:
+        result = _drillstring("study", str(coarse_case), "--scheduler",
+                              f"tcp://127.0.0.1:{server.getsockname()[1]}", "--out", str(tmp_path / "s"),
+                              timeout=60)
+    finally:
+        server.close()
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "sent no Dask greeting within 5 s (not a Dask scheduler)" in lines[0]
+
+
+def test_two_studies_on_one_folder(coarse_case, tmp_path):
+    """Two real processes on one --out: the second is refused at once while the first runs, naming it;
+    the first finishes normally with sound statistics."""
+    import subprocess
+    import sys
+    import time
+
+    from drillstring.results import read_netcdf
+
+    out = tmp_path / "study"
+    args = ["study", str(coarse_case), "--samples", "6", "--t-end", "1", "--workers", "1", "--out", str(out),
+            "--json"]
+    first = subprocess.Popen([sys.executable, "-c", "from drillstring.cli import app; app()", *args],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lock = out / "study.zarr.lock"
+    deadline = time.time() + 120
+    while time.time() < deadline and first.poll() is None and not (lock.exists() and lock.read_text().strip()):
+        time.sleep(0.05)
+    second = _drillstring(*args[:-1], timeout=120)
+    stdout, stderr = first.communicate(timeout=300)
+    assert first.returncode == 0, stderr
+    assert second.returncode == 2, second.stderr
+    lines = second.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"is in use by pid {first.pid} on host" in lines[0]
+    assert "wait for that study to finish or use another --out folder" in lines[0]
+    summary = json.loads(stdout)
+    assert summary["n_samples"] == 6 and summary["n_failed"] == 0
+    stats = read_netcdf(out / "statistics.nc")
+    steady = stats.time.values >= 0.5
+    for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
+        mean, nominal = stats[f"{name}_mean"].values[steady], stats[f"{name}_nominal"].values[steady]
+        assert np.all(np.abs(nominal) > 0), name  # the reported failure: all-zero statistics
+        np.testing.assert_allclose(mean, nominal, rtol=0.2, err_msg=name)  # around the nominal run
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        ["study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png", "envelopes.png",
+         "dispersion.png"])  # no lock, no temporary file left
+
+
+def test_simulate_output_paths_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
+    ok_nc, ok_png = str(tmp_path / "a.nc"), str(tmp_path / "a.png")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", str(tmp_path), "--plot", ok_png),
+                    f"--out = {tmp_path}: is a folder; give a file name")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", str(unwritable_folder / "x.nc"),
+                            "--plot", ok_png), f"--out = {unwritable_folder / 'x.nc'}: cannot write in")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", ok_nc, "--plot",
+                            str(unwritable_folder / "x.png")), f"--plot = {unwritable_folder / 'x.png'}: cannot write in")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", ok_nc, "--plot", ok_nc),
+                    "--out and --plot are the same file")
+    _one_line_error(_invoke("compare", str(coarse_case), "--plot", str(unwritable_folder / "c.png")),
+                    f"--plot = {unwritable_folder / 'c.png'}: cannot write in")
+    _one_line_error(_invoke("compare", str(coarse_case), "--plot", str(tmp_path)), "is a folder")
 
 
 # ------------------------------------------------------------------------------------------------ compare

@@ -53,6 +53,7 @@ from drillstring import __version__
 from drillstring.case import Case, CaseError, builtin_cases, load_case
 from drillstring.modal import case_linear_system, compute_modes
 from drillstring.statics import case_static_state
+from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_SIGMA
 
 #: Exit code for an invalid case or bad input data (same as Click's usage errors).
 EXIT_INVALID_INPUT = 2
@@ -122,10 +123,20 @@ def _err_console() -> Console:
 
 
 def _default_transient(t_end: float) -> float:
-    """Start of the steady regime used by the summaries [s]: 10 s, or half the run when shorter."""
-    from drillstring.stochastic.analysis import DEFAULT_TRANSIENT
+    """Start of the steady regime used by the summaries [s] (:func:`~drillstring.stochastic.analysis.
+    default_transient`)."""
+    from drillstring.stochastic.analysis import default_transient
 
-    return min(DEFAULT_TRANSIENT, 0.5 * t_end)
+    return default_transient(t_end)
+
+
+def _check_output(option: str, path: Path, *, folder: bool = False) -> None:
+    """End the command (exit code 2) before any computation when ``path`` cannot be written."""
+    from drillstring.files import output_file_problem, output_folder_problem
+
+    problem = output_folder_problem(path) if folder else output_file_problem(path)
+    if problem:
+        _fail(f"{option} = {path}: {problem}")
 
 
 def _version(value: bool) -> None:
@@ -388,6 +399,10 @@ def simulate(
     if the_case.simulation.output_step > t_final:
         _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
               f"({the_case.simulation.output_step:g} s)")
+    _check_output("--out", out)
+    _check_output("--plot", plot)
+    if Path(out).resolve() == Path(plot).resolve():
+        _fail(f"--out and --plot are the same file ({out}): give two file names")
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
@@ -505,6 +520,7 @@ def compare(
     if the_case.simulation.output_step > t_final:
         _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
               f"({the_case.simulation.output_step:g} s)")
+    _check_output("--plot", plot)
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
@@ -547,14 +563,10 @@ def compare(
 # drillstring study
 # ---------------------------------------------------------------------------------------------------------
 
-#: σ_WOH [N] of a study given neither --sigma nor --dispersion (the reference study's largest).
-DEFAULT_SIGMA = 5000.0
-
-
 class _StudyProgress:
     """``progress(done, failed, total)`` for :func:`run_study`: a rich bar (stderr) of realizations,
-    failures and time left. The bar starts at the first call, so that a resumed study's estimate counts
-    only the realizations run now, and a study refused before it starts prints no empty bar."""
+    failures and time left. The bar starts at the first call, so that a study refused before it starts
+    prints no empty bar."""
 
     _COLUMNS = (TextColumn("realizations"), BarColumn(), MofNCompleteColumn(),
                 TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
@@ -564,11 +576,9 @@ class _StudyProgress:
         self.console = console
         self.bar: Progress | None = None
         self.task = None
-        self.already = 0
 
     def __call__(self, done: int, failed: int, total: int) -> None:
         if self.bar is None:
-            self.already = done + failed
             self.bar = Progress(*self._COLUMNS, console=self.console)
             self.bar.start()
             self.task = self.bar.add_task("realizations", total=total, completed=done + failed, failed=failed)
@@ -605,22 +615,24 @@ def study(
     case: CaseArg = "reference",
     sigma: Annotated[
         float | None,
-        typer.Option("--sigma", help="Standard deviation of the weight-on-hook [N] (default 5000 N)."),
+        typer.Option("--sigma", help=f"Standard deviation of the weight-on-hook [N] (default {DEFAULT_SIGMA:g} N)."),
     ] = None,
     dispersion: Annotated[
         float | None,
         typer.Option("--dispersion", help="Dispersion σ/mean of the weight-on-hook, instead of --sigma."),
     ] = None,
-    samples: Annotated[int, typer.Option("--samples", "-n", min=1, help="Number of realizations n_s.")] = 50,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Root seed of the random draws.")] = 0,
+    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of realizations n_s (>= 2).")
+                       ] = DEFAULT_SAMPLES,
+    seed: Annotated[int, typer.Option("--seed", help="Root seed of the random draws (>= 0).")] = DEFAULT_SEED,
     out: Annotated[
         Path,
         typer.Option("--out", "-o", help="Output folder (study.zarr, summary.json, statistics.nc, figures, "
-                                         "report.html); rerunning with the same folder resumes."),
+                                         "report.html); rerunning with the same folder resumes. Locked "
+                                         "while a study runs on it."),
     ] = Path("study"),
     workers: Annotated[
         int | None,
-        typer.Option("--workers", "-j", min=1,
+        typer.Option("--workers", "-j",
                      help="Local worker processes (default: one per core); 1 runs in this process."),
     ] = None,
     scheduler: Annotated[
@@ -642,124 +654,93 @@ def study(
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
     writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
-    dispersion.png, and the self-contained report OUT/report.html.
+    dispersion.png, and the self-contained report OUT/report.html. Settings, the output folder and the
+    scheduler are checked before anything runs; a second study on the same OUT is refused while one runs.
     """
     the_case = _load(case)
     if sigma is not None and dispersion is not None:
         _fail("give --sigma or --dispersion, not both")
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+    _check_output("--out", out, folder=True)
 
-    from drillstring.plots import plot_study
-    from drillstring.report import write_report
-    from drillstring.results import write_netcdf
-    from drillstring.stochastic import montecarlo
-    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+    from drillstring.stochastic.locks import StudyLock, StudyLocked
 
-    if dispersion is not None:
-        if not (math.isfinite(dispersion) and dispersion > 0):
-            _fail(f"--dispersion = {dispersion!r}: must be > 0")
-        sigma_value = dispersion * montecarlo.nominal_weight_on_hook(the_case)
-    else:
-        sigma_value = DEFAULT_SIGMA if sigma is None else float(sigma)
-    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
-    try:
-        settings = montecarlo.StudySettings(samples=samples, sigma=sigma_value, seed=seed, t_end=t_final,
-                                            output_step=the_case.simulation.output_step)
-    except ValueError as error:
-        _fail(str(error))
-    t_transient = _default_transient(t_final) if transient is None else float(transient)
-    if not (math.isfinite(t_transient) and 0 <= t_transient <= t_final):
-        _fail(f"--transient = {t_transient!r} s: must be in [0, t_end = {t_final:g} s]")
-
-    out.mkdir(parents=True, exist_ok=True)
-    store_path = out / "study.zarr"
     err = _err_console()
+
+    def note(text: str) -> None:
+        err.print(escape(f"note: {text}"), soft_wrap=True)
+
+    created = not out.exists()
+    lock = StudyLock(out / "study.zarr")
+    try:  # taken before loading the engine: a second study on this folder is refused at once
+        lock.__enter__()
+    except StudyLocked as error:
+        _fail(str(error))
+    if lock.note:
+        note(lock.note)
+    try:
+        outcome = _run_study(the_case, out, err, note, sigma=sigma, dispersion=dispersion,
+                             samples=samples, seed=seed, workers=workers, scheduler=scheduler, t_end=t_end,
+                             transient=transient)
+    finally:
+        lock.__exit__(None, None, None)
+        if created and out.is_dir() and not any(out.iterdir()):  # refused before anything was written
+            out.rmdir()
+    if outcome.already:
+        err.print(escape(f"resumed: {outcome.already} of {samples} realizations were already in "
+                         f"{out / 'study.zarr'}"), soft_wrap=True)
+
+    payload = outcome.summary
+    if as_json:
+        _print_json(payload)
+        return
+    _print_study(the_case.name, payload, outcome.files)
+
+
+def _run_study(the_case: Case, out: Path, err: Console, note, **settings):
+    """:func:`drillstring.api.monte_carlo_study` with a progress bar; its errors end the command."""
+    from drillstring import api
+    from drillstring.files import LockedError
+    from drillstring.stochastic import montecarlo
+
     tracker = _StudyProgress(err)
     try:
         try:
-            run = montecarlo.run_study(the_case, settings, store_path, workers=workers, scheduler=scheduler,
-                                       progress=tracker)
+            return api.monte_carlo_study(the_case, out=out, progress=tracker, note=note, **settings)
         finally:
             tracker.stop()
     except montecarlo.StudyInterrupted as error:
         _fail(str(error), EXIT_INTERRUPTED)
     except KeyboardInterrupt:
-        _fail(f"interrupted; finished realizations are saved in {store_path}; run the same command again "
-              "to resume", EXIT_INTERRUPTED)
-    except ValueError as error:  # a store holding another study, or settings refused
+        _fail(f"interrupted; finished realizations are saved in {out / 'study.zarr'}; run the same command "
+              "again to resume", EXIT_INTERRUPTED)
+    except (montecarlo.StudyWorkersLost, api.StudyFailed) as error:
+        _fail(str(error), EXIT_RUN_FAILED)
+    except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
         _fail(str(error))
-    if tracker.already:
-        err.print(escape(f"resumed: {tracker.already} of {samples} realizations were already in {store_path}"))
 
-    raw = load_study(store_path)
-    failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
-    try:
-        stats = study_statistics(raw)
-    except ValueError as error:
-        listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
-        _fail(f"{error} ({len(failures)} failure(s){': ' + listing if listing else ''})", EXIT_RUN_FAILED)
-    summary = study_summary(stats, t_transient=t_transient)
-    realization_time = float(np.nansum(raw["wall_time"].values)) if "wall_time" in raw else float("nan")
 
-    paths = {
-        "store": out / "study.zarr",
-        "summary": out / "summary.json",
-        "statistics": out / "statistics.nc",
-        "report": out / "report.html",
-    }
-    write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, out, t_transient)
-    payload = dict(summary)
-    payload.update({
-        "case": the_case.name,
-        "samples": samples,
-        "failures": failures,
-        "wall_time": run.wall_time,
-        "realization_wall_time_total": realization_time,
-        "workers": run.workers,
-        "files": {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}},
-    })
-    paths["summary"].write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
-    captions = {
-        "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean weight-on-hook)",
-        "dispersion": f"Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
-        "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
-    }
-    write_report(
-        paths["report"],
-        title=f"Monte Carlo study: case '{the_case.name}', random weight-on-hook",
-        case_toml=the_case.to_toml(),
-        summary=summary,
-        figures={captions[k]: figures[k] for k in ("envelopes", "dispersion", "convergence")},
-        run_info={
-            "realizations requested": samples,
-            "failures": failures,
-            "wall time of this run [s]": round(run.wall_time, 2),
-            "total time of the realizations [s]": round(realization_time, 2),
-            "workers": run.workers,
-            "simulated time per realization [s]": t_final,
-            "output step [s]": settings.output_step,
-            "store": str(paths["store"]),
-        },
-    )
-
-    if as_json:
-        _print_json(payload)
-        return
+def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> None:
     console = _console()
-    n_failed = summary["n_failed"]
+    used = payload["workers"]
+    timing = f"wall time {payload['wall_time']:,.1f} s ({used} worker{'s' if used != 1 else ''})"
+    if payload["realizations_this_run"] == 0:
+        timing += f"; this run only recomputed the statistics ({payload['wall_time_this_run']:,.2f} s)"
+    elif len(payload["sessions"]) > 1:
+        timing += f" over {len(payload['sessions'])} runs"
     console.print(escape(
-        f"Monte Carlo study: case {the_case.name!r}, n_s = {summary['n_samples']} finished"
-        f" ({n_failed} failed), seed {seed}, σ_WOH = {summary['sigma'] / _KN:g} kN,"
-        f" wall time {run.wall_time:,.1f} s ({run.workers} worker{'s' if run.workers != 1 else ''})"
+        f"Monte Carlo study: case {name!r}, n_s = {payload['n_samples']} finished"
+        f" ({payload['n_failed']} failed), seed {payload['seed']}, σ_WOH = {payload['sigma'] / _KN:g} kN, "
+        f"{timing}"
     ), soft_wrap=True)
-    console.print(_study_table(summary))
-    if failures:
-        console.print(escape(f"{len(failures)} failure(s), causes in {paths['summary']}"), soft_wrap=True)
-    console.print(escape(f"Store (rerun to resume): {paths['store']}"), soft_wrap=True)
-    console.print(escape(f"Summary: {paths['summary']}, statistics: {paths['statistics']}"), soft_wrap=True)
-    console.print(escape(f"Figures and report: {paths['report']}"), soft_wrap=True)
+    console.print(_study_table(payload))
+    if payload["failures"]:
+        console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),
+                      soft_wrap=True)
+    console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+    console.print(escape(f"Summary: {files['summary']}, statistics: {files['statistics']}"), soft_wrap=True)
+    console.print(escape(f"Figures and report: {files['report']}"), soft_wrap=True)
 
 
 if __name__ == "__main__":  # pragma: no cover
