@@ -724,7 +724,8 @@ def _run_study(the_case: Case, out: Path, err: Console, note, **settings):
 def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> None:
     console = _console()
     used = payload["workers"]
-    timing = f"wall time {payload['wall_time']:,.1f} s ({used} worker{'s' if used != 1 else ''})"
+    where = f"Dask cluster at {used}" if isinstance(used, str) else f"{used} worker{'s' if used != 1 else ''}"
+    timing = f"wall time {payload['wall_time']:,.1f} s ({where})"
     if payload["realizations_this_run"] == 0:
         timing += f"; this run only recomputed the statistics ({payload['wall_time_this_run']:,.2f} s)"
     elif len(payload["sessions"]) > 1:

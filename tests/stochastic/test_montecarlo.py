@@ -303,6 +303,9 @@ def test_dask_cluster_gives_the_same_result_and_stops_resumably_without_workers(
         whole = mc.run_study(small_case, SETTINGS, tmp_path / "dask.zarr",
                              scheduler=cluster.scheduler_address)
         assert whole.completed == local.completed and whole.workers == cluster.scheduler_address
+        worker = next(iter(cluster.scheduler_info["workers"]))
+        with pytest.raises(mc.SchedulerUnreachable, match="that is a Dask Worker, not a scheduler"):
+            mc.connect_scheduler(worker)
 
         def workers_leave(done, failed, total):
             if done == 2 and cluster.workers:

@@ -461,9 +461,10 @@ ProgressCallback = Callable[[int, int, int], None]  # (done, failed, total)
 
 #: Seconds a Dask study waits with no worker in the cluster before stopping (resumably).
 DASK_WORKER_TIMEOUT = 30.0
-#: Seconds allowed to each step of reaching a Dask scheduler (TCP connection, its greeting, the
-#: client's registration): at most three steps, so an address that is no scheduler fails in ≤ 15 s.
-SCHEDULER_TIMEOUT = 5.0
+#: Seconds allowed to each step of reaching a Dask scheduler (TCP connection, the server's greeting,
+#: its identity, the client's registration): an address that is no scheduler fails at one of the first
+#: three, so within 12 s.
+SCHEDULER_TIMEOUT = 4.0
 
 
 def _local_workers(workers: int | None) -> int:
@@ -755,11 +756,40 @@ def _probe_tcp_scheduler(address: str, host: str, port: int, timeout: float) -> 
         raise refuse(not_dask)
 
 
+def _server_type(address: str, timeout: float) -> str:
+    """The type of the Dask server at ``address`` ("Scheduler", "Worker", "Nanny", ...) from its
+    ``identity``, within ``timeout`` seconds (in a thread of its own, so that it also works where an
+    event loop is already running, as in a notebook)."""
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    from distributed.core import rpc
+
+    async def identity() -> dict:
+        async with rpc(address, timeout=timeout) as server:
+            return await asyncio.wait_for(server.identity(), timeout)
+
+    def ask() -> str:
+        try:
+            info = asyncio.run(asyncio.wait_for(identity(), timeout))
+        except (TimeoutError, asyncio.TimeoutError):
+            raise SchedulerUnreachable(f"scheduler = {address!r}: no answer to a Dask request within "
+                                       f"{timeout:g} s") from None
+        except Exception as error:
+            message = str(error).splitlines()[0] if str(error) else type(error).__name__
+            raise SchedulerUnreachable(f"scheduler = {address!r}: cannot connect ({message})") from None
+        return str(info.get("type", "server of unknown type")) if isinstance(info, dict) else "server"
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        return pool.submit(ask).result()
+
+
 def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT):
     """A :class:`distributed.Client` connected to the scheduler at ``address``, or
     :class:`SchedulerUnreachable` (one line) within about ``3 × timeout`` seconds: a TCP address is
     first probed by hand (:func:`_probe_tcp_scheduler`), since the client waits forever for the
-    greeting of a server that is not a Dask scheduler."""
+    greeting of a server that is not a Dask server; then the server must say it is a scheduler (not a
+    worker or nanny)."""
     from distributed import Client
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
@@ -775,6 +805,10 @@ def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT):
                                    f"({error})") from None
     if scheme == "tcp":
         _probe_tcp_scheduler(address, host, int(port), timeout)
+    kind = _server_type(address.strip(), timeout)
+    if kind != "Scheduler":
+        raise SchedulerUnreachable(f"scheduler = {address!r}: that is a Dask {kind}, not a scheduler "
+                                   "(give the scheduler's address, e.g. tcp://host:8786)")
     try:
         return Client(address.strip(), timeout=timeout, set_as_default=False)
     except Exception as error:  # one line, whatever went wrong on the way
