@@ -75,6 +75,21 @@ def simulate(
     return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
 
 
+def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
+    """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
+    about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
+
+    Returns a :class:`~drillstring.dynamics.stability.StabilityResult`: ``.stable``, ``.steady_state``
+    (``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit`` [N·m], ``force_on_bit``
+    [N]), ``.modes`` sorted by frequency (``family``, ``frequency`` [Hz], ``damping_ratio``,
+    ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
+    overrides the case's.
+    """
+    from drillstring.dynamics.stability import case_stability
+
+    return case_stability(as_case(case), weight_on_bit=weight_on_bit)
+
+
 def study(
     case: Case | str | Path = "reference",
     *,
@@ -186,7 +201,7 @@ def compare(
 
     import numpy as np
 
-    from drillstring.stochastic.analysis import DEFAULT_TRANSIENT
+    from drillstring.dynamics.indicators import transient_end
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}
@@ -213,7 +228,7 @@ def compare(
         return np.interp(t, t_reduced, values)
 
     t_final = float(t[-1])
-    t_transient = min(DEFAULT_TRANSIENT, 0.5 * t_final)
+    t_transient = transient_end(t_final)
     steady = t >= t_transient - 1e-9 * max(1.0, t_final)
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)

@@ -580,7 +580,7 @@ class ReducedModel(_Base):
 class Simulation(_Base):
     """Time integration (adaptive explicit Runge-Kutta)."""
 
-    t_end: Time = Field(20.0, gt=0, description="end time [s]")
+    t_end: Time = Field(30.0, gt=0, description="end time [s]")
     output_step: Time = Field(0.01, gt=0, description="output sampling step [s]; <= t_end")
     rtol: Dimensionless = Field(1e-6, gt=0, lt=1)
     atol: Dimensionless = Field(1e-9, gt=0)

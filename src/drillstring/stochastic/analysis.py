@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from drillstring.dynamics.indicators import DEFAULT_TRANSIENT
 from drillstring.quantities import LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import DONE, FAILED, STUDY_OBSERVABLES
 from drillstring.stochastic.statistics import (
@@ -15,9 +16,6 @@ from drillstring.stochastic.statistics import (
     realization_statistics,
 )
 
-#: Default start of the steady regime for summaries [s] (the reference transient has decayed to a
-#: few percent of the bit-speed oscillation by then; see docs/verification.md).
-DEFAULT_TRANSIENT = 10.0
 
 
 def load_study(store_path: str | Path) -> xr.Dataset:
