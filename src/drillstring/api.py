@@ -102,6 +102,7 @@ def study(
     scheduler: str | None = None,
     t_end: float | None = None,
     output_step: float | None = None,
+    transient: float | None = None,
     progress=None,
 ) -> xr.Dataset:
     """Monte Carlo study of a random weight-on-hook (SPEC §8); returns the statistics Dataset.
@@ -109,7 +110,9 @@ def study(
     Exactly one of ``sigma`` [N] (standard deviation of the weight-on-hook) or ``dispersion``
     (σ / mean) is given. Realizations stream to the Zarr store ``out`` (a temporary folder when None);
     rerunning with the same ``out`` resumes. ``workers`` local processes (default: one per core), or a
-    Dask scheduler address in ``scheduler``. See :mod:`drillstring.stochastic.montecarlo`.
+    Dask scheduler address in ``scheduler``. ``transient`` [s]: start of the steady window for the
+    per-realization vibration indicators (default ``min(10 s, t_end/2)``). See
+    :mod:`drillstring.stochastic.montecarlo`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     import tempfile
@@ -131,7 +134,7 @@ def study(
     )
     store = Path(out) / "study.zarr" if out is not None else Path(tempfile.mkdtemp()) / "study.zarr"
     run_study(case, settings, store, workers=workers, scheduler=scheduler, progress=progress)
-    return study_statistics(load_study(store))
+    return study_statistics(load_study(store), t_transient=transient)
 
 
 import math  # noqa: E402  (used by the comparison helpers below)

@@ -644,23 +644,40 @@ class _StudyProgress:
 
 
 def _study_table(summary: dict[str, Any]) -> Table:
-    title = (f"Dispersion after the transient (t ≥ {summary['t_transient']:g} s): "
-             f"δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
-             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
+    """Dispersions per observable over the steady window and over the whole record, in %."""
+    title = (f"Dispersion: δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
+             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %; steady window t ≥ "
+             f"{summary['t_transient']:g} s, whole record from the first time the mean leaves 0")
     table = Table(title=escape(title), title_justify="left")
     table.add_column("observable")
-    for header in ("mean δ [%]", "max δ [%]", "mean/δ_WOH", "mean/δ_WOB"):
+    for header in ("steady: mean δ [%]", "max δ [%]", "mean/δ_WOH",
+                   "whole: mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH"):
         table.add_column(escape(header), justify="right")
     for name, entry in summary["observables"].items():
-        ratio = entry.get("ratio_time_mean", {})
+        whole = entry.get("whole_record", {})
         table.add_row(
             escape(name.replace("_", " ")),
             _fmt(entry.get("dispersion_time_mean"), ".3g", 100.0),
             _fmt(entry.get("dispersion_max"), ".3g", 100.0),
-            _fmt(ratio.get("weight_on_hook"), ".3g"),
-            _fmt(ratio.get("weight_on_bit"), ".3g"),
+            _fmt(entry.get("ratio_time_mean", {}).get("weight_on_hook"), ".3g"),
+            _fmt(whole.get("dispersion_time_mean"), ".3g", 100.0),
+            _fmt(whole.get("dispersion_max"), ".3g", 100.0),
+            _fmt(whole.get("time_of_max"), ".2f"),
+            _fmt(whole.get("ratio_time_mean", {}).get("weight_on_hook"), ".3g"),
         )
     return table
+
+
+def _indicator_line(summary: dict[str, Any]) -> str | None:
+    """One line on the realizations' vibration: bit-speed oscillation and stick-slip."""
+    indicators = summary.get("indicators") or {}
+    oscillation = indicators.get("bit_speed_oscillation")
+    if not oscillation:
+        return None
+    return (f"Bit-speed oscillation (max − min)/2Ω after {indicators['t_transient']:g} s: mean "
+            f"{oscillation['mean']:.3f}, range {oscillation['min']:.3f} – {oscillation['max']:.3f}; "
+            f"stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
+            f"{indicators['stick_slip_realizations']} of {summary['n_samples']} realizations")
 
 
 @app.command()
@@ -758,7 +775,7 @@ def study(
     raw = load_study(store_path)
     failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
     try:
-        stats = study_statistics(raw)
+        stats = study_statistics(raw, t_transient=t_transient)
     except ValueError as error:
         listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
         _fail(f"{error} ({len(failures)} failure(s){': ' + listing if listing else ''})", EXIT_RUN_FAILED)
@@ -818,6 +835,9 @@ def study(
         f" wall time {run.wall_time:,.1f} s ({run.workers} worker{'s' if run.workers != 1 else ''})"
     ), soft_wrap=True)
     console.print(_study_table(summary))
+    line = _indicator_line(summary)
+    if line:
+        console.print(escape(line), soft_wrap=True)
     if failures:
         console.print(escape(f"{len(failures)} failure(s), causes in {paths['summary']}"), soft_wrap=True)
     console.print(escape(f"Store (rerun to resume): {paths['store']}"), soft_wrap=True)
