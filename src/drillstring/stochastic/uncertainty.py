@@ -135,7 +135,9 @@ LAWS: dict[str, _Form] = {
     "gamma": _Form(
         ("mean", "std"), frozenset({"mean", "std", "log_mean"}), False, "gamma mean=5.7e-8 std=0.6e-8"
     ),
-    "maxent": _Form((), frozenset({"min", "max", "mean", "std", "log_mean"}), False, "maxent min=1.2 max=1.8 mean=1.4 m/s"),
+    "maxent": _Form(
+        (), frozenset({"min", "max", "mean", "std", "log_mean"}), False, "maxent min=1.2 max=1.8 mean=1.4 m/s"
+    ),
 }
 _KEY_ORDER = ("min", "max", "mean", "std", "log_mean")
 _NUMBER = re.compile(r"^[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity)$", re.IGNORECASE)
@@ -268,7 +270,8 @@ def _assign(law: str, args: list[tuple[str | None, float]]) -> dict[str, float]:
         if key is None:
             continue
         if key not in form.keys:
-            raise ValueError(f"{law} has no key {key!r}; its keys: {', '.join(k for k in _KEY_ORDER if k in form.keys)}")
+            allowed = ", ".join(k for k in _KEY_ORDER if k in form.keys)
+            raise ValueError(f"{law} has no key {key!r}; its keys: {allowed}")
         if key in values:
             raise ValueError(f"{key} is given twice")
         values[key] = v
@@ -281,7 +284,9 @@ def _information(law: str, v: dict[str, float]) -> tuple[tuple[float, float], tu
     def need(*keys: str) -> None:
         missing = [k for k in keys if k not in v]
         if missing:
-            raise ValueError(f"{law} needs {' and '.join(keys)} (missing {', '.join(missing)}), e.g. {LAWS[law].example!r}")
+            raise ValueError(
+                f"{law} needs {' and '.join(keys)} (missing {', '.join(missing)}), e.g. {LAWS[law].example!r}"
+            )
 
     for key, x in v.items():
         if key in ("min", "max"):
@@ -315,7 +320,9 @@ def _information(law: str, v: dict[str, float]) -> tuple[tuple[float, float], tu
     if law == "gamma":
         need("mean")
         if ("std" in v) == ("log_mean" in v):
-            raise ValueError("gamma needs mean and exactly one of std and log_mean, e.g. 'gamma mean=5.7e-8 std=0.6e-8'")
+            raise ValueError(
+                "gamma needs mean and exactly one of std and log_mean, e.g. 'gamma mean=5.7e-8 std=0.6e-8'"
+            )
         m = v["mean"]
         if not m > 0.0:
             raise ValueError(f"mean = {_fmt(m)} must be > 0 for a gamma law (support (0, inf))")
@@ -464,7 +471,8 @@ class Uncertainty:
             key = name.strip() if isinstance(name, str) else name
             if key not in index:
                 raise ParameterError(
-                    f"correlation.parameters: {name!r} is not a declared uncertain parameter; declared: {', '.join(self.paths)}"
+                    f"correlation.parameters: {name!r} is not a declared uncertain parameter; "
+                    f"declared: {', '.join(self.paths)}"
                 )
             resolved.append(key)
         if len(set(resolved)) != len(resolved):
@@ -484,13 +492,16 @@ class Uncertainty:
             raise ParameterError(f"correlation.matrix = {matrix!r} must be a square table of numbers") from None
         n = len(resolved)
         if r.shape != (n, n):
-            raise ParameterError(f"correlation.matrix has shape {r.shape}; it must be {n} x {n} (one row per parameter)")
+            raise ParameterError(
+                f"correlation.matrix has shape {r.shape}; it must be {n} x {n} (one row per parameter)"
+            )
         if not np.all(np.isfinite(r)):
             raise ParameterError("correlation.matrix must hold finite numbers")
         if not np.allclose(r, r.T, rtol=0.0, atol=1e-12):
             i, j = np.unravel_index(np.argmax(np.abs(r - r.T)), r.shape)
             raise ParameterError(
-                f"correlation.matrix[{i}][{j}] = {r[i, j]:g} differs from [{j}][{i}] = {r[j, i]:g}: it must be symmetric"
+                f"correlation.matrix[{i}][{j}] = {r[i, j]:g} differs from [{j}][{i}] = {r[j, i]:g}: "
+                "it must be symmetric"
             )
         if not np.allclose(np.diag(r), 1.0, rtol=0.0, atol=1e-12):
             i = int(np.argmax(np.abs(np.diag(r) - 1.0)))
