@@ -24,7 +24,7 @@ Errors
 Every problem raises :class:`ParameterError` (a ``ValueError``) whose message is one line naming the path,
 the value and what is allowed, e.g.
 
-    operation.top_speed = '-5 rpm' (= -0.523599 SI): must be > 0
+    operation.top_speed = '-5 rpm' (= -0.523598775598 SI): must be > 0
     unknown case parameter 'operation.top_sped': operation has no field 'top_sped'; numeric fields
     there: top_speed, weight_on_bit
     fluid.coriolis is not a numeric parameter (a true/false switch)
