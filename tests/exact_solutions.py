@@ -143,3 +143,24 @@ def heavy_column_critical_load(
         if np.sign(values[i]) != np.sign(values[i + 1]):
             return brentq(end_minor, grid[i], grid[i + 1], xtol=1e-10 * search_max, rtol=1e-12)
     raise ValueError("no critical load below search_max")
+
+
+def free_free_damping_on_first_fixed_free_mode(
+    damping_ratio: float, rigid_coefficient: float, rigid_inertia: float, wave_speed: float,
+    length: float, terms: int = 200_000,
+) -> float:
+    """ψ₁ᵀ C ψ₁ / (2 ω₁) for a uniform rod (or bar) of length L whose damping matrix is built on its
+    free–free modes, C = M Φ diag(c_k) Φᵀ M (c_0 = c/J on the rigid mode, c_k = 2ξω_k), and ψ₁ the
+    first mode of the same rod with the top (x = 0) held and the bottom free.
+
+    Mass-normalised shapes (mass per length μ, J = μL): φ_0 = 1/√J, φ_k = √(2/J) cos(kπx/L),
+    ω_k = kπc/L; ψ₁ = √(2/J) sin(πx/2L), ω₁ = πc/(2L). The projections a_k = ∫ μ ψ₁ φ_k dx are
+    a_0 = 2√2/π and a_k = −1/(π (k² − ¼)) (Σ a_k² = 1), so
+
+        ψ₁ᵀ C ψ₁ / (2ω₁) = (c/J) a_0² / (2ω₁) + ξ Σ_{k≥1} (ω_k/ω₁) a_k²,   ω_k/ω₁ = 2k.
+    """
+    k = np.arange(1, terms + 1, dtype=float)
+    a = -1.0 / (math.pi * (k**2 - 0.25))
+    omega_1 = math.pi * wave_speed / (2.0 * length)
+    rigid = (rigid_coefficient / rigid_inertia) * (8.0 / math.pi**2) / (2.0 * omega_1)
+    return rigid + damping_ratio * float(np.sum(2.0 * k * a**2))

@@ -212,7 +212,7 @@ def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
     nc, png = tmp_path / "run.nc", tmp_path / "run.png"
     data = _json("simulate", str(coarse_case), "--t-end", "1", "--out", str(nc), "--plot", str(png), "--json")
     for key in ("mean_rate_of_penetration", "bit_speed_min", "bit_speed_max", "stick_slip",
-                "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
+                "stick_time_fraction", "bit_speed_oscillation", "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
                 "wall_time", "netcdf", "figure"):
         assert key in data, key
     assert data["netcdf"] == str(nc) and data["figure"] == str(png)
@@ -223,8 +223,10 @@ def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
     top = 100.0 * 2.0 * 3.141592653589793 / 60.0
     assert 1e-4 < data["mean_rate_of_penetration"] < 1e-2  # m/s: 0.36 to 36 m/h
     assert 0.0 < data["bit_speed_min"] <= data["bit_speed_max"] < 2.0 * top  # rad/s
-    assert data["stick_slip"] is False
+    assert data["stick_slip"] is False and data["stick_time_fraction"] == 0.0
     assert data["stick_slip"] == (data["bit_speed_min"] < 0.1 * top)
+    oscillation = (data["bit_speed_max"] - data["bit_speed_min"]) / (2 * top)
+    assert data["bit_speed_oscillation"] == pytest.approx(oscillation, rel=1e-12)
     assert len(data["max_radial_displacement"]) == len(data["gap"]) == 1
     assert 0.0 <= data["max_radial_displacement"][0] < data["gap"][0] == pytest.approx(0.0357)
     assert data["impacts"] >= 0 and data["n_rejected"] >= 0
@@ -236,7 +238,8 @@ def test_simulate_table_has_units(coarse_case, tmp_path):
     result = _invoke("simulate", str(coarse_case), "--t-end", "0.5", "--out", str(tmp_path / "a.nc"),
                      "--plot", str(tmp_path / "a.png"))
     assert result.exit_code == 0, result.output
-    for text in ("rate of penetration", "m/h", "rpm", "stick-slip", "mm", "impacts", "steps accepted",
+    for text in ("rate of penetration", "m/h", "rpm", "bit speed oscillation", "stick time fraction", "mm",
+                 "impacts", "steps accepted",
                  str(tmp_path / "a.nc")):
         assert text in result.stdout, text
 
@@ -407,3 +410,30 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
     assert result.exit_code == 1, result.output
     assert "case 1 (full) failed" in result.stderr
     assert "Traceback" not in result.output
+
+
+def test_stability_json_and_table(coarse_case):
+    data = _json("stability", str(coarse_case), "--json")
+    assert set(data) == {"stable", "steady_state", "modes"}
+    assert data["stable"] is False  # free–free damping: the first torsional mode grows
+    steady = data["steady_state"]
+    assert steady["bit_speed"] == pytest.approx(100 * 3.141592653589793 / 30)
+    assert 3e-3 < steady["rate_of_penetration"] < 4e-3 and steady["force_on_bit"] == pytest.approx(1e5, rel=1e-6)
+    leading = max(data["modes"], key=lambda m: m["growth_rate"])
+    assert leading["family"] == "torsional" and leading["growth_rate"] > 0
+    result = _invoke("stability", str(coarse_case))
+    assert result.exit_code == 0, result.output
+    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
+        assert text in result.stdout, text
+
+
+def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
+    from drillstring.case import load_case
+
+    case = load_case(coarse_case)
+    case = case.model_copy(update={"bit_rock": case.bit_rock.model_copy(update={"a1": 0.02})})
+    path = tmp_path / "no_drilling.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    result = _invoke("stability", str(path))
+    assert result.exit_code == 2
+    assert "rate_of_penetration" in result.stderr and "Traceback" not in result.output

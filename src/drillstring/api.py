@@ -75,6 +75,21 @@ def simulate(
     return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
 
 
+def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
+    """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
+    about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
+
+    Returns a :class:`~drillstring.dynamics.stability.StabilityResult`: ``.stable``, ``.steady_state``
+    (``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit`` [N·m], ``force_on_bit``
+    [N]), ``.modes`` sorted by frequency (``family``, ``frequency`` [Hz], ``damping_ratio``,
+    ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
+    overrides the case's.
+    """
+    from drillstring.dynamics.stability import case_stability
+
+    return case_stability(as_case(case), weight_on_bit=weight_on_bit)
+
+
 def study(
     case: Case | str | Path = "reference",
     *,
@@ -87,6 +102,7 @@ def study(
     scheduler: str | None = None,
     t_end: float | None = None,
     output_step: float | None = None,
+    transient: float | None = None,
     progress=None,
 ) -> xr.Dataset:
     """Monte Carlo study of a random weight-on-hook (SPEC §8); returns the statistics Dataset.
@@ -94,7 +110,9 @@ def study(
     Exactly one of ``sigma`` [N] (standard deviation of the weight-on-hook) or ``dispersion``
     (σ / mean) is given. Realizations stream to the Zarr store ``out`` (a temporary folder when None);
     rerunning with the same ``out`` resumes. ``workers`` local processes (default: one per core), or a
-    Dask scheduler address in ``scheduler``. See :mod:`drillstring.stochastic.montecarlo`.
+    Dask scheduler address in ``scheduler``. ``transient`` [s]: start of the steady window for the
+    per-realization vibration indicators (default ``min(10 s, t_end/2)``). See
+    :mod:`drillstring.stochastic.montecarlo`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     import tempfile
@@ -116,7 +134,7 @@ def study(
     )
     store = Path(out) / "study.zarr" if out is not None else Path(tempfile.mkdtemp()) / "study.zarr"
     run_study(case, settings, store, workers=workers, scheduler=scheduler, progress=progress)
-    return study_statistics(load_study(store))
+    return study_statistics(load_study(store), t_transient=transient)
 
 
 import math  # noqa: E402  (used by the comparison helpers below)
@@ -186,7 +204,7 @@ def compare(
 
     import numpy as np
 
-    from drillstring.stochastic.analysis import DEFAULT_TRANSIENT
+    from drillstring.dynamics.indicators import transient_end
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}
@@ -213,7 +231,7 @@ def compare(
         return np.interp(t, t_reduced, values)
 
     t_final = float(t[-1])
-    t_transient = min(DEFAULT_TRANSIENT, 0.5 * t_final)
+    t_transient = transient_end(t_final)
     steady = t >= t_transient - 1e-9 * max(1.0, t_final)
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)

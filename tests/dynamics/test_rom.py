@@ -25,10 +25,13 @@ def test_projection_is_mass_normalised_and_diagonal(coarse_case):
     np.testing.assert_allclose(k, np.diag(rom.omega2), atol=1e-6 * rom.omega2.max())
     assert rom.family[0] == "rigid_axial" and rom.angular_frequencies[0] == 0.0
     assert rom.size == 1 + 3 + 3 + 2 * 4
-    # Modal damping 2 ξ ω on elastic modes (the fluid adds to lateral ones only).
+    # Modal damping 2 ξ ω on the elastic axial modes (their basis is free–free, the damping's own;
+    # the fluid adds to lateral ones only); the top-held torsional modes get less (tests/test_damping.py).
     xi = coarse_case.damping.modal_damping_ratio
-    for i in range(1, 7):
-        assert rom.damping[i, i] == pytest.approx(2 * xi * rom.angular_frequencies[i], rel=1e-12)
+    for i in range(1, 4):
+        assert rom.damping[i, i] == pytest.approx(2 * xi * rom.angular_frequencies[i], rel=1e-9)
+    for i in range(4, 7):
+        assert 0 < rom.damping[i, i] < 2 * xi * rom.angular_frequencies[i]
 
 
 def conservative_model(case):
@@ -65,8 +68,13 @@ def test_energy_is_conserved_without_damping_and_forcing(coarse_case):
 )
 def test_steady_drilling_matches_closed_form_without_lateral_modes(coarse_case, weight_on_bit,
                                                                     top_speed):
+    """From rest, the integrated response settles on the closed-form steady state where steady drilling
+    is stable: with damping on the constrained modes (with the default free–free damping steady
+    drilling is unstable on this string; tests/dynamics/test_stability.py checks the steady state and
+    its growth rate there)."""
     case = coarse_case.model_copy(update={
-        "operation": coarse_case.operation.model_copy(update={"top_speed": top_speed})})
+        "operation": coarse_case.operation.model_copy(update={"top_speed": top_speed}),
+        "damping": coarse_case.damping.model_copy(update={"basis": "constrained"})})
     rom = case_reduced_model(case, weight_on_bit=weight_on_bit, lateral_modes=0)
     result = simulate_model(rom, t_end=20.0, output_step=0.01, lateral_perturbation=0.0)
     late = result.time >= 15.0
