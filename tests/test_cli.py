@@ -50,7 +50,10 @@ def heavier_bit_case(tmp_path):
 
 def test_static_json_reference():
     data = _json("static", "reference", "--json")
-    assert set(data) == {"weight", "weight_on_hook", "weight_on_bit", "neutral_point_height", "axial_force"}
+    assert set(data) == {"weight", "weight_on_hook", "weight_on_bit", "neutral_point_height",
+                         "critical_weight_on_bit", "axial_force"}
+    # Issue 10 measured ≈ 114 kN; tests/test_buckling.py checks it against a shooting solution.
+    assert data["critical_weight_on_bit"] == pytest.approx(114.13e3, rel=1e-4)
     assert data["weight"] == pytest.approx(REFERENCE_WEIGHT, rel=1e-4)
     assert data["weight_on_hook"] == pytest.approx(REFERENCE_WOH, rel=1e-4)
     assert data["weight_on_bit"] == pytest.approx(REFERENCE_WOB)
@@ -73,7 +76,8 @@ def test_static_human_readable_has_units_and_summary():
     result = _invoke("static", "reference")
     assert result.exit_code == 0, result.output
     out = result.stdout
-    for text in ("kN", "[m]", "[kN]", "weight-on-hook", "1,063.43", "neutral point", "top", "bit", "stabilizer"):
+    for text in ("kN", "[m]", "[kN]", "weight-on-hook", "1,063.43", "neutral point", "top", "bit", "stabilizer",
+                 "critical weight-on-bit", "114.13", "margin 14.13 kN"):
         assert text in out, text
     assert "drill pipe / drill collar" in out
     assert len(out.splitlines()) < 40  # a summary, not the full profile
@@ -87,6 +91,10 @@ def test_static_user_case_file(heavier_bit_case):
     assert data["weight_on_hook"] == pytest.approx(reference["weight_on_hook"] - 50e3, rel=1e-9)
     assert data["axial_force"][-1][1] == pytest.approx(-150e3, rel=1e-9)
     assert data["neutral_point_height"] > reference["neutral_point_height"]
+    # The margin depends on the case, not on its weight-on-bit; 150 kN is beyond it.
+    assert data["critical_weight_on_bit"] == pytest.approx(reference["critical_weight_on_bit"], rel=1e-9)
+    result = _invoke("static", str(heavier_bit_case))
+    assert result.exit_code == 0 and "BUCKLED" in result.stdout
 
 
 # -------------------------------------------------------------------------------------------------- modes
@@ -112,7 +120,8 @@ def test_modes_default_count_is_ten():
 def test_modes_human_readable_has_units():
     result = _invoke("modes", "reference", "-n", "3")
     assert result.exit_code == 0, result.output
-    for text in ("axial [Hz]", "torsional [Hz]", "lateral [Hz]", "1.2006", "0.2313", "rigid"):
+    for text in ("axial [Hz]", "torsional [Hz]", "lateral [Hz]", "1.2006", "0.2313", "rigid",
+                 "Lateral buckling at weight-on-bit 114.13 kN"):
         assert text in result.stdout, text
 
 
@@ -121,8 +130,10 @@ def test_modes_user_case_file(heavier_bit_case):
     data = _json("modes", str(heavier_bit_case), "--json", "--count", "3")
     # Mass and axial stiffness do not depend on the weight-on-bit.
     assert data["axial"] == pytest.approx(reference["axial"], rel=1e-9, abs=1e-12)
-    # More compression lowers the lateral frequencies (geometric stiffness).
-    assert data["lateral"][0] < reference["lateral"][0]
+    # More compression lowers the lateral frequencies (geometric stiffness); 150 kN buckles the
+    # string: its lowest lateral mode is unstable, reported as a negative frequency.
+    assert data["lateral"][0] < 0.0 < reference["lateral"][0]
+    assert "BUCKLED" in _invoke("modes", str(heavier_bit_case), "-n", "3").stdout
 
 
 def test_modes_count_zero_is_refused():

@@ -3,7 +3,8 @@
 Commands
 --------
 ``drillstring static [CASE] [--json]``
-    The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, axial force.
+    The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force.
 ``drillstring modes [CASE] [--count N] [--json]``
     The lowest natural frequencies of the axial, torsional and lateral mode families.
 ``drillstring cases``
@@ -50,6 +51,7 @@ from rich.progress import (
 from rich.table import Table
 
 from drillstring import __version__
+from drillstring.buckling import BucklingMargin, buckling_margin, case_buckling_margin
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO
 from drillstring.case import Case, CaseError, builtin_cases, load_case
 from drillstring.modal import case_linear_system, compute_modes
@@ -198,9 +200,11 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 
 @app.command()
 def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
-    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, axial force."""
+    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force."""
     the_case = _load(case)
     state = case_static_state(the_case)
+    margin = case_buckling_margin(the_case, state)
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -210,6 +214,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
                 "weight_on_hook": float(state.weight_on_hook),
                 "weight_on_bit": float(state.weight_on_bit),
                 "neutral_point_height": float(state.neutral_point_height),
+                "critical_weight_on_bit": margin.critical_weight_on_bit,
                 "axial_force": [[float(xi), float(ni)] for xi, ni in zip(x, n)],
             }
         )
@@ -224,8 +229,11 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
     summary.add_row("weight-on-hook", f"{state.weight_on_hook / _KN:,.2f}", "kN")
     summary.add_row("weight-on-bit", f"{state.weight_on_bit / _KN:,.2f}", "kN")
     summary.add_row("neutral point above the bit", f"{state.neutral_point_height:,.2f}", "m")
+    summary.add_row("critical weight-on-bit (lateral buckling)",
+                    f"{margin.critical_weight_on_bit / _KN:,.2f}", "kN")
     summary.add_row("string length", f"{state.mesh.length:,.1f}", "m")
     console.print(summary)
+    console.print(escape(_buckling_note(margin)), soft_wrap=True)
 
     forces = Table(title="Axial force N (tension > 0)", title_justify="left")
     forces.add_column("where")
@@ -239,6 +247,16 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
         forces.add_row(escape(label), f"{position:,.1f}", f"{height:,.1f}", f"{value / _KN:,.2f}")
     console.print(forces)
     console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"), soft_wrap=True)
+
+
+def _buckling_note(margin: BucklingMargin) -> str:
+    """One line: the lateral buckling margin of the case at its weight-on-bit."""
+    critical, wob = margin.critical_weight_on_bit / _KN, margin.weight_on_bit / _KN
+    if margin.buckled:
+        return (f"BUCKLED: weight-on-bit {wob:,.2f} kN exceeds the critical {critical:,.2f} kN; the straight "
+                "string is statically unstable (lowest lateral mode has ω² < 0).")
+    return (f"Lateral buckling at weight-on-bit {critical:,.2f} kN: margin {critical - wob:,.2f} kN "
+            f"({critical / wob:.2f} × the case's {wob:,.2f} kN).")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -257,7 +275,8 @@ def modes(
     """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
     the_case = _load(case)
     state = case_static_state(the_case)
-    found = compute_modes(case_linear_system(the_case, state), axial=count, torsional=count, lateral=count)
+    system = case_linear_system(the_case, state)
+    found = compute_modes(system, axial=count, torsional=count, lateral=count)
     families = {
         "axial": [float(f) for f in found.axial.frequencies],
         "torsional": [float(f) for f in found.torsional.frequencies],
@@ -280,9 +299,11 @@ def modes(
     for note in (
         "axial: both ends free; mode 1 is the rigid translation (0 Hz).",
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
-        "Prestress (geometric stiffness) and drilling fluid included.",
+        "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
+        "mode, -sqrt(|ω²|)/2π.",
+        _buckling_note(buckling_margin(system)),
     ):
-        console.print(note)
+        console.print(escape(note), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------

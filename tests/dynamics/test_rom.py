@@ -102,3 +102,19 @@ def test_initial_state_is_seeded_physical_and_converges_with_modes(coarse_case):
         eta = m.initial_state(1e-4, seed=7)[: m.size]
         errors.append(abs(np.hypot(m.phi_v @ eta, m.phi_w @ eta).max() - 1e-4))
     assert errors[2] < errors[1] < errors[0] and errors[2] < 2e-6
+
+
+def test_reduced_model_pushes_a_buckled_string_away_from_the_centre(reference_case):
+    """The reduced model keeps the signed ω² of a buckled string: a small displacement along the
+    unstable lateral mode (η̇ = 0, inside the gap) gets the outward acceleration −ω₁² η > 0."""
+    from drillstring.modal import family_modes
+
+    model = case_reduced_model(reference_case, weight_on_bit=130e3, axial_modes=2,
+                               torsional_modes=2, lateral_modes=3)
+    first = model.family.index("lateral_y")
+    omega2 = family_modes(model.system, "lateral_y", 1).eigenvalues[0]
+    assert omega2 < 0
+    y = np.zeros(2 * model.size)
+    y[first] = 1e-5
+    acceleration = model.rhs(0.0, y)[model.size + first]
+    assert acceleration == pytest.approx(-omega2 * 1e-5, rel=1e-9)
