@@ -667,25 +667,28 @@ class _StudyProgress:
 def _study_table(summary: dict[str, Any]) -> Table:
     """Dispersions per observable over the steady window and over the whole record, in %."""
     title = (f"Dispersion: δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
-             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %; steady window t ≥ "
-             f"{summary['t_transient']:g} s, whole record from the first time the mean leaves 0")
-    table = Table(title=escape(title), title_justify="left")
+             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
+    table = Table(title=escape(title), title_justify="left",
+                  caption="whole record: from the first time the mean response leaves 0", caption_justify="left")
     table.add_column("observable")
-    for header in ("steady: mean δ [%]", "max δ [%]", "mean/δ_WOH",
-                   "whole: mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH"):
+    table.add_column("window")
+    for header in ("mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH", "mean/δ_WOB"):
         table.add_column(escape(header), justify="right")
     for name, entry in summary["observables"].items():
-        whole = entry.get("whole_record", {})
-        table.add_row(
-            escape(name.replace("_", " ")),
-            _fmt(entry.get("dispersion_time_mean"), ".3g", 100.0),
-            _fmt(entry.get("dispersion_max"), ".3g", 100.0),
-            _fmt(entry.get("ratio_time_mean", {}).get("weight_on_hook"), ".3g"),
-            _fmt(whole.get("dispersion_time_mean"), ".3g", 100.0),
-            _fmt(whole.get("dispersion_max"), ".3g", 100.0),
-            _fmt(whole.get("time_of_max"), ".2f"),
-            _fmt(whole.get("ratio_time_mean", {}).get("weight_on_hook"), ".3g"),
-        )
+        whole = entry.get("whole_record")
+        windows = [(escape(name.replace("_", " ")), f"t ≥ {summary['t_transient']:g} s", entry)]
+        if whole:
+            windows.append(("", f"whole, t ≥ {whole['t_start']:g} s", whole))
+        for label, window, values in windows:
+            ratio = values.get("ratio_time_mean", {})
+            table.add_row(
+                label, escape(window),
+                _fmt(values.get("dispersion_time_mean"), ".3g", 100.0),
+                _fmt(values.get("dispersion_max"), ".3g", 100.0),
+                _fmt(values.get("time_of_max"), ".2f"),
+                _fmt(ratio.get("weight_on_hook"), ".3g"),
+                _fmt(ratio.get("weight_on_bit"), ".3g"),
+            )
     return table
 
 
