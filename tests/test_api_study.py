@@ -9,7 +9,7 @@ from drillstring import api
 from drillstring.case import load_case
 from drillstring.results import read_netcdf
 from drillstring.stochastic import DEFAULT_SIGMA
-from drillstring.stochastic.analysis import default_transient
+from drillstring.dynamics.indicators import transient_end
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +26,7 @@ def test_study_files_defaults_and_rerun(small_case, tmp_path):
     out = tmp_path / "s"
     first = api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out)
     summary = first.summary
-    assert summary["sigma"] == DEFAULT_SIGMA and summary["t_transient"] == default_transient(0.6) == 0.3
+    assert summary["sigma"] == DEFAULT_SIGMA and summary["t_transient"] == transient_end(0.6) == 0.3
     assert first.already == 0 and summary["realizations_this_run"] == 3
     assert json.loads((out / "summary.json").read_text()) == summary
     assert set(first.files) == {"store", "summary", "statistics", "report", "envelopes", "dispersion",

@@ -51,7 +51,10 @@ def heavier_bit_case(tmp_path):
 
 def test_static_json_reference():
     data = _json("static", "reference", "--json")
-    assert set(data) == {"weight", "weight_on_hook", "weight_on_bit", "neutral_point_height", "axial_force"}
+    assert set(data) == {"weight", "weight_on_hook", "weight_on_bit", "neutral_point_height",
+                         "critical_weight_on_bit", "axial_force"}
+    # Issue 10 measured ≈ 114 kN; tests/test_buckling.py checks it against a shooting solution.
+    assert data["critical_weight_on_bit"] == pytest.approx(114.13e3, rel=1e-4)
     assert data["weight"] == pytest.approx(REFERENCE_WEIGHT, rel=1e-4)
     assert data["weight_on_hook"] == pytest.approx(REFERENCE_WOH, rel=1e-4)
     assert data["weight_on_bit"] == pytest.approx(REFERENCE_WOB)
@@ -74,7 +77,8 @@ def test_static_human_readable_has_units_and_summary():
     result = _invoke("static", "reference")
     assert result.exit_code == 0, result.output
     out = result.stdout
-    for text in ("kN", "[m]", "[kN]", "weight-on-hook", "1,063.43", "neutral point", "top", "bit", "stabilizer"):
+    for text in ("kN", "[m]", "[kN]", "weight-on-hook", "1,063.43", "neutral point", "top", "bit", "stabilizer",
+                 "critical weight-on-bit", "114.13", "margin 14.13 kN"):
         assert text in out, text
     assert "drill pipe / drill collar" in out
     assert len(out.splitlines()) < 40  # a summary, not the full profile
@@ -88,6 +92,10 @@ def test_static_user_case_file(heavier_bit_case):
     assert data["weight_on_hook"] == pytest.approx(reference["weight_on_hook"] - 50e3, rel=1e-9)
     assert data["axial_force"][-1][1] == pytest.approx(-150e3, rel=1e-9)
     assert data["neutral_point_height"] > reference["neutral_point_height"]
+    # The margin depends on the case, not on its weight-on-bit; 150 kN is beyond it.
+    assert data["critical_weight_on_bit"] == pytest.approx(reference["critical_weight_on_bit"], rel=1e-9)
+    result = _invoke("static", str(heavier_bit_case))
+    assert result.exit_code == 0 and "BUCKLED" in result.stdout
 
 
 # -------------------------------------------------------------------------------------------------- modes
@@ -113,7 +121,8 @@ def test_modes_default_count_is_ten():
 def test_modes_human_readable_has_units():
     result = _invoke("modes", "reference", "-n", "3")
     assert result.exit_code == 0, result.output
-    for text in ("axial [Hz]", "torsional [Hz]", "lateral [Hz]", "1.2006", "0.2313", "rigid"):
+    for text in ("axial [Hz]", "torsional [Hz]", "lateral [Hz]", "1.2006", "0.2313", "rigid",
+                 "Lateral buckling at weight-on-bit 114.13 kN"):
         assert text in result.stdout, text
 
 
@@ -122,8 +131,10 @@ def test_modes_user_case_file(heavier_bit_case):
     data = _json("modes", str(heavier_bit_case), "--json", "--count", "3")
     # Mass and axial stiffness do not depend on the weight-on-bit.
     assert data["axial"] == pytest.approx(reference["axial"], rel=1e-9, abs=1e-12)
-    # More compression lowers the lateral frequencies (geometric stiffness).
-    assert data["lateral"][0] < reference["lateral"][0]
+    # More compression lowers the lateral frequencies (geometric stiffness); 150 kN buckles the
+    # string: its lowest lateral mode is unstable, reported as a negative frequency.
+    assert data["lateral"][0] < 0.0 < reference["lateral"][0]
+    assert "BUCKLED" in _invoke("modes", str(heavier_bit_case), "-n", "3").stdout
 
 
 def test_modes_count_zero_is_refused():
@@ -202,7 +213,7 @@ def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
     nc, png = tmp_path / "run.nc", tmp_path / "run.png"
     data = _json("simulate", str(coarse_case), "--t-end", "1", "--out", str(nc), "--plot", str(png), "--json")
     for key in ("mean_rate_of_penetration", "bit_speed_min", "bit_speed_max", "stick_slip",
-                "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
+                "stick_time_fraction", "bit_speed_oscillation", "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
                 "wall_time", "netcdf", "figure"):
         assert key in data, key
     assert data["netcdf"] == str(nc) and data["figure"] == str(png)
@@ -213,8 +224,10 @@ def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
     top = 100.0 * 2.0 * 3.141592653589793 / 60.0
     assert 1e-4 < data["mean_rate_of_penetration"] < 1e-2  # m/s: 0.36 to 36 m/h
     assert 0.0 < data["bit_speed_min"] <= data["bit_speed_max"] < 2.0 * top  # rad/s
-    assert data["stick_slip"] is False
+    assert data["stick_slip"] is False and data["stick_time_fraction"] == 0.0
     assert data["stick_slip"] == (data["bit_speed_min"] < 0.1 * top)
+    oscillation = (data["bit_speed_max"] - data["bit_speed_min"]) / (2 * top)
+    assert data["bit_speed_oscillation"] == pytest.approx(oscillation, rel=1e-12)
     assert len(data["max_radial_displacement"]) == len(data["gap"]) == 1
     assert 0.0 <= data["max_radial_displacement"][0] < data["gap"][0] == pytest.approx(0.0357)
     assert data["impacts"] >= 0 and data["n_rejected"] >= 0
@@ -226,7 +239,8 @@ def test_simulate_table_has_units(coarse_case, tmp_path):
     result = _invoke("simulate", str(coarse_case), "--t-end", "0.5", "--out", str(tmp_path / "a.nc"),
                      "--plot", str(tmp_path / "a.png"))
     assert result.exit_code == 0, result.output
-    for text in ("rate of penetration", "m/h", "rpm", "stick-slip", "mm", "impacts", "steps accepted",
+    for text in ("rate of penetration", "m/h", "rpm", "bit speed oscillation", "stick time fraction", "mm",
+                 "impacts", "steps accepted",
                  str(tmp_path / "a.nc")):
         assert text in result.stdout, text
 
@@ -598,3 +612,30 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
     assert result.exit_code == 1, result.output
     assert "case 1 (full) failed" in result.stderr
     assert "Traceback" not in result.output
+
+
+def test_stability_json_and_table(coarse_case):
+    data = _json("stability", str(coarse_case), "--json")
+    assert set(data) == {"stable", "steady_state", "modes"}
+    assert data["stable"] is False  # free–free damping: the first torsional mode grows
+    steady = data["steady_state"]
+    assert steady["bit_speed"] == pytest.approx(100 * 3.141592653589793 / 30)
+    assert 3e-3 < steady["rate_of_penetration"] < 4e-3 and steady["force_on_bit"] == pytest.approx(1e5, rel=1e-6)
+    leading = max(data["modes"], key=lambda m: m["growth_rate"])
+    assert leading["family"] == "torsional" and leading["growth_rate"] > 0
+    result = _invoke("stability", str(coarse_case))
+    assert result.exit_code == 0, result.output
+    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
+        assert text in result.stdout, text
+
+
+def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
+    from drillstring.case import load_case
+
+    case = load_case(coarse_case)
+    case = case.model_copy(update={"bit_rock": case.bit_rock.model_copy(update={"a1": 0.02})})
+    path = tmp_path / "no_drilling.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    result = _invoke("stability", str(path))
+    assert result.exit_code == 2
+    assert "rate_of_penetration" in result.stderr and "Traceback" not in result.output

@@ -118,8 +118,8 @@ _STUDY_CAPTIONS = {
 
 def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_step, transient):
     """The validated settings and transient of a study (ValueError naming the field otherwise)."""
+    from drillstring.dynamics.indicators import transient_end
     from drillstring.stochastic import DEFAULT_SIGMA
-    from drillstring.stochastic.analysis import default_transient
     from drillstring.stochastic.montecarlo import StudySettings, check_study, nominal_weight_on_hook
 
     if sigma is not None and dispersion is not None:
@@ -137,7 +137,7 @@ def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_
     )
     check_study(case, settings)
     if transient is None:
-        transient = default_transient(settings.t_end)
+        transient = transient_end(settings.t_end)
     elif not (isinstance(transient, (int, float)) and math.isfinite(transient)
               and 0 <= transient <= settings.t_end):
         raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {settings.t_end:g} s]")
@@ -218,7 +218,7 @@ def monte_carlo_study(
             raw = load_study(store)
             failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
             try:
-                stats = study_statistics(raw)
+                stats = study_statistics(raw, t_transient=t_transient)
             except ValueError as error:
                 listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
                 raise StudyFailed(f"{error} ({len(failures)} failure(s)"
@@ -243,7 +243,7 @@ def monte_carlo_study(
             })
             files: dict[str, Path] = {}
             if out is not None:
-                files = _write_study_files(case, settings, stats, payload, folder, t_transient)
+                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient)
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
@@ -251,8 +251,9 @@ def monte_carlo_study(
                         guard.note or run.note)
 
 
-def _write_study_files(case, settings, stats, payload, folder: Path, t_transient) -> dict[str, Path]:
-    """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html."""
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:
+    """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
+    statistics' ``summary`` and the run information from ``payload``)."""
     import json
 
     from drillstring.files import write_text_atomic
@@ -285,14 +286,27 @@ def _write_study_files(case, settings, stats, payload, folder: Path, t_transient
         paths["report"],
         title=f"Monte Carlo study: case '{case.name}', random weight-on-hook",
         case_toml=case.to_toml(),
-        summary={k: payload[k] for k in (
-            "n_samples", "n_failed", "seed", "sigma", "weight_on_hook_mean", "weight_on_hook_dispersion",
-            "weight_on_bit_dispersion", "t_transient", "observables", "convergence_change_second_half")},
+        summary=summary,
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
                  for k in ("envelopes", "dispersion", "convergence")},
         run_info=run_info,
     )
     return {**paths, **figures}
+
+
+def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
+    """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
+    about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
+
+    Returns a :class:`~drillstring.dynamics.stability.StabilityResult`: ``.stable``, ``.steady_state``
+    (``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit`` [N·m], ``force_on_bit``
+    [N]), ``.modes`` sorted by frequency (``family``, ``frequency`` [Hz], ``damping_ratio``,
+    ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
+    overrides the case's.
+    """
+    from drillstring.dynamics.stability import case_stability
+
+    return case_stability(as_case(case), weight_on_bit=weight_on_bit)
 
 
 def study(
@@ -315,6 +329,8 @@ def study(
     The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): at most one
     of ``sigma`` [N] or ``dispersion`` (σ / mean; default σ = 5000 N); realizations stream to the Zarr
     store ``out``/study.zarr (a temporary folder when None), rerunning with the same ``out`` resumes.
+    ``transient`` [s]: start of the steady window for the summaries and the per-realization vibration
+    indicators (default ``min(10 s, t_end/2)``).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     return monte_carlo_study(
@@ -384,7 +400,7 @@ def compare(
     """
     import time
 
-    from drillstring.stochastic.analysis import default_transient
+    from drillstring.dynamics.indicators import transient_end
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}
@@ -411,7 +427,7 @@ def compare(
         return np.interp(t, t_reduced, values)
 
     t_final = float(t[-1])
-    t_transient = default_transient(t_final)
+    t_transient = transient_end(t_final)
     steady = t >= t_transient - 1e-9 * max(1.0, t_final)
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)

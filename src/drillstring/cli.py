@@ -3,7 +3,8 @@
 Commands
 --------
 ``drillstring static [CASE] [--json]``
-    The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, axial force.
+    The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force.
 ``drillstring modes [CASE] [--count N] [--json]``
     The lowest natural frequencies of the axial, torsional and lateral mode families.
 ``drillstring cases``
@@ -50,6 +51,8 @@ from rich.progress import (
 from rich.table import Table
 
 from drillstring import __version__
+from drillstring.buckling import BucklingMargin, buckling_margin, case_buckling_margin
+from drillstring.dynamics.indicators import STICK_SPEED_RATIO
 from drillstring.case import Case, CaseError, builtin_cases, load_case
 from drillstring.modal import case_linear_system, compute_modes
 from drillstring.statics import case_static_state
@@ -66,8 +69,6 @@ _KN = 1e3  # N per kN
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
 _MM = 1e3  # mm per m
 _M_PER_H = 3600.0  # (m/h) per (m/s)
-#: A run sticks when its bit speed after the transient falls below this fraction of the top speed.
-STICK_FRACTION = 0.1
 
 app = typer.Typer(
     name="drillstring",
@@ -123,11 +124,10 @@ def _err_console() -> Console:
 
 
 def _default_transient(t_end: float) -> float:
-    """Start of the steady regime used by the summaries [s] (:func:`~drillstring.stochastic.analysis.
-    default_transient`)."""
-    from drillstring.stochastic.analysis import default_transient
+    """Start of the steady regime used by the summaries [s]: 10 s, or half the run when shorter."""
+    from drillstring.dynamics.indicators import transient_end
 
-    return default_transient(t_end)
+    return transient_end(t_end)
 
 
 def _check_output(option: str, path: Path, *, folder: bool = False) -> None:
@@ -210,9 +210,11 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 
 @app.command()
 def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
-    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, axial force."""
+    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force."""
     the_case = _load(case)
     state = case_static_state(the_case)
+    margin = case_buckling_margin(the_case, state)
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -222,6 +224,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
                 "weight_on_hook": float(state.weight_on_hook),
                 "weight_on_bit": float(state.weight_on_bit),
                 "neutral_point_height": float(state.neutral_point_height),
+                "critical_weight_on_bit": margin.critical_weight_on_bit,
                 "axial_force": [[float(xi), float(ni)] for xi, ni in zip(x, n)],
             }
         )
@@ -236,8 +239,11 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
     summary.add_row("weight-on-hook", f"{state.weight_on_hook / _KN:,.2f}", "kN")
     summary.add_row("weight-on-bit", f"{state.weight_on_bit / _KN:,.2f}", "kN")
     summary.add_row("neutral point above the bit", f"{state.neutral_point_height:,.2f}", "m")
+    summary.add_row("critical weight-on-bit (lateral buckling)",
+                    f"{margin.critical_weight_on_bit / _KN:,.2f}", "kN")
     summary.add_row("string length", f"{state.mesh.length:,.1f}", "m")
     console.print(summary)
+    console.print(escape(_buckling_note(margin)), soft_wrap=True)
 
     forces = Table(title="Axial force N (tension > 0)", title_justify="left")
     forces.add_column("where")
@@ -251,6 +257,16 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
         forces.add_row(escape(label), f"{position:,.1f}", f"{height:,.1f}", f"{value / _KN:,.2f}")
     console.print(forces)
     console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"), soft_wrap=True)
+
+
+def _buckling_note(margin: BucklingMargin) -> str:
+    """One line: the lateral buckling margin of the case at its weight-on-bit."""
+    critical, wob = margin.critical_weight_on_bit / _KN, margin.weight_on_bit / _KN
+    if margin.buckled:
+        return (f"BUCKLED: weight-on-bit {wob:,.2f} kN exceeds the critical {critical:,.2f} kN; the straight "
+                "string is statically unstable (lowest lateral mode has ω² < 0).")
+    return (f"Lateral buckling at weight-on-bit {critical:,.2f} kN: margin {critical - wob:,.2f} kN "
+            f"({critical / wob:.2f} × the case's {wob:,.2f} kN).")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -269,7 +285,8 @@ def modes(
     """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
     the_case = _load(case)
     state = case_static_state(the_case)
-    found = compute_modes(case_linear_system(the_case, state), axial=count, torsional=count, lateral=count)
+    system = case_linear_system(the_case, state)
+    found = compute_modes(system, axial=count, torsional=count, lateral=count)
     families = {
         "axial": [float(f) for f in found.axial.frequencies],
         "torsional": [float(f) for f in found.torsional.frequencies],
@@ -292,9 +309,77 @@ def modes(
     for note in (
         "axial: both ends free; mode 1 is the rigid translation (0 Hz).",
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
-        "Prestress (geometric stiffness) and drilling fluid included.",
+        "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
+        "mode, -sqrt(|ω²|)/2π.",
+        _buckling_note(buckling_margin(system)),
     ):
-        console.print(note)
+        console.print(escape(note), soft_wrap=True)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring stability
+# ---------------------------------------------------------------------------------------------------------
+
+#: Lateral modes listed in the stability table (all of them in --json).
+_STABILITY_LATERAL_ROWS = 4
+
+
+@app.command()
+def stability(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
+    """Steady drilling (closed form) and its linear stability: eigenvalues of the reduced model
+    linearised about it, bit–rock law included.
+
+    A mode with a positive growth rate grows from any small perturbation of steady drilling: the string
+    then settles into a self-excited vibration (the torsional one, through the bit–rock law).
+    """
+    the_case = _load(case)
+    from drillstring import api
+
+    try:
+        result = api.stability(the_case)
+    except ValueError as error:  # no steady drilling (the law gives no penetration)
+        _fail(str(error))
+    payload = result.to_dict()
+    if as_json:
+        _print_json(payload)
+        return
+    steady = payload["steady_state"]
+    console = _console()
+    table = Table(title=escape(f"Steady drilling: case {the_case.name!r}"), title_justify="left")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    table.add_row("rate of penetration", f"{steady['rate_of_penetration'] * _M_PER_H:,.3f}", "m/h")
+    table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
+    table.add_row("torque on bit", f"{steady['torque_on_bit'] / _KN:,.3f}", "kN·m")
+    table.add_row("force on bit", f"{steady['force_on_bit'] / _KN:,.3f}", "kN")
+    console.print(table)
+    modes_table = Table(title="Eigenvalues of the linearised model (sorted by frequency)", title_justify="left")
+    for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):
+        modes_table.add_column(column, justify="left" if column in ("family", "note") else "right")
+    lateral_shown = 0
+    hidden = 0
+    for mode in result.modes:
+        if mode.family == "lateral":
+            if lateral_shown >= _STABILITY_LATERAL_ROWS and mode.growth_rate < 0:
+                hidden += 1
+                continue
+            lateral_shown += 1
+        modes_table.add_row(mode.family, f"{mode.frequency:.4f}", f"{100 * mode.damping_ratio:.2f}",
+                            f"{mode.growth_rate:.4g}", "UNSTABLE" if mode.growth_rate > 0 else "")
+    console.print(modes_table)
+    if hidden:
+        console.print(escape(f"+ {hidden} more (stable) lateral modes: drillstring stability {case} --json"),
+                      soft_wrap=True)
+    leading = result.leading
+    if result.stable:
+        console.print(escape(f"Steady drilling is stable: slowest decay {leading.growth_rate:.4g} 1/s "
+                             f"({leading.family}, {leading.frequency:.4f} Hz)."), soft_wrap=True)
+    else:
+        console.print(escape(
+            f"Steady drilling is UNSTABLE: the {leading.family} mode at {leading.frequency:.4f} Hz grows at "
+            f"{leading.growth_rate:.4g} 1/s (e-folding time {1 / leading.growth_rate:.3g} s); the string "
+            f"settles into a self-excited vibration."), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -303,30 +388,26 @@ def modes(
 
 
 def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
-    """Summary numbers of one run (SI): steady-regime ROP and bit speed (t >= ``t_transient``), stick-slip,
-    maximum radial displacement and gap per probe, impacts and solver statistics."""
+    """Summary numbers of one run (SI): the drilling indicators after the transient
+    (:func:`~drillstring.dynamics.indicators.drilling_indicators`), maximum radial displacement and gap
+    per probe, impacts and solver statistics."""
+    from drillstring.dynamics.indicators import drilling_indicators
+
     t = np.asarray(ds["time"].values, dtype=float)
-    steady = t >= t_transient
-    if not steady.any():  # a run that stopped before the end of the transient: use what there is
-        steady = np.ones_like(t, dtype=bool)
-    rop = np.asarray(ds["rate_of_penetration"].values, dtype=float)[steady]
-    speed = np.asarray(ds["bit_speed"].values, dtype=float)[steady]
     top = float(ds.attrs.get("top_speed", np.nan))
     radial = np.asarray(ds["radial_displacement"].values, dtype=float)
     x = np.atleast_1d(np.asarray(ds["x"].values, dtype=float))
     gap = np.atleast_1d(np.asarray(ds["gap"].values, dtype=float))
 
-    def number(values: np.ndarray, reduce) -> float | None:
+    def largest(values: np.ndarray) -> float | None:
         finite = values[np.isfinite(values)]
-        return float(reduce(finite)) if finite.size else None
+        return float(finite.max()) if finite.size else None
 
-    speed_min = number(speed, np.min)
-    radial_max = [number(radial[:, j], np.max) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+    radial_max = [largest(radial[:, j]) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+    indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
+                                     t_transient)
     return {
-        "mean_rate_of_penetration": number(rop, np.mean),
-        "bit_speed_min": speed_min,
-        "bit_speed_max": number(speed, np.max),
-        "stick_slip": None if speed_min is None else bool(speed_min < STICK_FRACTION * top),
+        **indicators,
         "max_radial_displacement": radial_max,
         "gap": [float(g) for g in gap],
         "probe_x": [float(v) for v in x],
@@ -359,10 +440,11 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
     table.add_row(escape(f"bit speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['bit_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['bit_speed_max'], ',.2f', _RPM)}",
                   "rpm")
-    stick = numbers["stick_slip"]
+    table.add_row(escape(f"bit speed oscillation (max − min) / 2Ω (t ≥ {t_tr:g} s)"),
+                  _fmt(numbers["bit_speed_oscillation"], ".3f"), "")
     table.add_row(
-        escape(f"stick-slip (bit below {STICK_FRACTION:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
-        "–" if stick is None else ("yes" if stick else "no"), "",
+        escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
+        _fmt(numbers["stick_time_fraction"], ".1%"), "",
     )
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
         table.add_row(escape(f"max radial displacement at x = {x:g} m / gap"),
@@ -389,7 +471,8 @@ def simulate(
     """One drilling run: ROP, bit speed, torque- and force-on-bit, radial displacements, in time.
 
     Writes the observables to NetCDF and a four-panel figure, then prints a summary. After the transient
-    (t >= min(10 s, t_end/2)), stick-slip means that the bit speed falls below 10 % of the top speed. A run
+    (t >= min(10 s, t_end/2)): the bit-speed oscillation (max − min)/(2 × top speed) and the fraction of the time
+    the bit turns slower than 10 % of the top speed (stick). A run
     that stops early still writes what it computed, reports where it stopped and exits with code 1.
     """
     the_case = _load(case)
@@ -591,23 +674,43 @@ class _StudyProgress:
 
 
 def _study_table(summary: dict[str, Any]) -> Table:
-    title = (f"Dispersion after the transient (t ≥ {summary['t_transient']:g} s): "
-             f"δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
+    """Dispersions per observable over the steady window and over the whole record, in %."""
+    title = (f"Dispersion: δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
              f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
-    table = Table(title=escape(title), title_justify="left")
+    table = Table(title=escape(title), title_justify="left",
+                  caption="whole record: from the first time the mean response leaves 0", caption_justify="left")
     table.add_column("observable")
-    for header in ("mean δ [%]", "max δ [%]", "mean/δ_WOH", "mean/δ_WOB"):
+    table.add_column("window")
+    for header in ("mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH", "mean/δ_WOB"):
         table.add_column(escape(header), justify="right")
     for name, entry in summary["observables"].items():
-        ratio = entry.get("ratio_time_mean", {})
-        table.add_row(
-            escape(name.replace("_", " ")),
-            _fmt(entry.get("dispersion_time_mean"), ".3g", 100.0),
-            _fmt(entry.get("dispersion_max"), ".3g", 100.0),
-            _fmt(ratio.get("weight_on_hook"), ".3g"),
-            _fmt(ratio.get("weight_on_bit"), ".3g"),
-        )
+        whole = entry.get("whole_record")
+        windows = [(escape(name.replace("_", " ")), f"t ≥ {summary['t_transient']:g} s", entry)]
+        if whole:
+            windows.append(("", f"whole, t ≥ {whole['t_start']:g} s", whole))
+        for label, window, values in windows:
+            ratio = values.get("ratio_time_mean", {})
+            table.add_row(
+                label, escape(window),
+                _fmt(values.get("dispersion_time_mean"), ".3g", 100.0),
+                _fmt(values.get("dispersion_max"), ".3g", 100.0),
+                _fmt(values.get("time_of_max"), ".2f"),
+                _fmt(ratio.get("weight_on_hook"), ".3g"),
+                _fmt(ratio.get("weight_on_bit"), ".3g"),
+            )
     return table
+
+
+def _indicator_line(summary: dict[str, Any]) -> str | None:
+    """One line on the realizations' vibration: bit-speed oscillation and stick-slip."""
+    indicators = summary.get("indicators") or {}
+    oscillation = indicators.get("bit_speed_oscillation")
+    if not oscillation:
+        return None
+    return (f"Bit-speed oscillation (max − min)/2Ω after {indicators['t_transient']:g} s: mean "
+            f"{oscillation['mean']:.3f}, range {oscillation['min']:.3f} – {oscillation['max']:.3f}; "
+            f"stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
+            f"{indicators['stick_slip_realizations']} of {summary['n_samples']} realizations")
 
 
 @app.command()
@@ -736,6 +839,9 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
         f"{timing}"
     ), soft_wrap=True)
     console.print(_study_table(payload))
+    line = _indicator_line(payload)
+    if line:
+        console.print(escape(line), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),
                       soft_wrap=True)

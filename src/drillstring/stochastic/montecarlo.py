@@ -78,7 +78,7 @@ class StudySettings:
     samples: int
     sigma: float
     seed: int = 0
-    t_end: float = 20.0
+    t_end: float = 30.0
     output_step: float = 0.01
 
     def __post_init__(self) -> None:
