@@ -465,6 +465,31 @@ def test_study_calls_the_api_with_its_defaults(coarse_case, tmp_path, monkeypatc
     assert seen["seed"] == DEFAULT_SEED == defaults["seed"].default
 
 
+@pytest.mark.parametrize("error, code", [
+    ("workers_lost", 1), ("failed", 1), ("locked", 2),
+])
+def test_study_run_errors_are_one_line(coarse_case, tmp_path, monkeypatch, error, code):
+    """Errors of a study that started (workers gone, too few realizations) exit 1; a lock taken by
+    another study between the command's check and the engine's exits 2; one line each."""
+    from drillstring import api
+    from drillstring.stochastic import montecarlo
+
+    raised = {"workers_lost": montecarlo.StudyWorkersLost("the Dask cluster at tcp://x:1 has had no worker "
+                                                          "for 30 s; the finished realizations are saved"),
+              "failed": api.StudyFailed("only 1 finished realization(s): statistics need at least 2"),
+              "locked": montecarlo.StudyLocked("study store s is in use by pid 1 on host h")}[error]
+
+    def fail(*args, **kwargs):
+        raise raised
+
+    monkeypatch.setattr(api, "monte_carlo_study", fail)
+    result = _study(coarse_case, tmp_path / "s")
+    assert result.exit_code == code, result.output
+    lines = result.stderr.strip().splitlines()
+    assert lines == [f"error: {raised}"]
+    assert "Traceback" not in result.output
+
+
 def test_study_scheduler_refused_port(coarse_case, tmp_path, nothing_runs):
     import socket
 

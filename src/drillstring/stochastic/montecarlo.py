@@ -477,7 +477,7 @@ def run_study(
     store_path: str | Path,
     *,
     workers: int | None = None,
-    scheduler: str | None = None,
+    scheduler=None,
     progress: ProgressCallback | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float = DASK_WORKER_TIMEOUT,
@@ -485,7 +485,7 @@ def run_study(
     """Run (or resume) every pending realization of a study into its Zarr store.
 
     Before anything is created: the settings are checked against the case (:func:`check_study`), a
-    scheduler is reached (:class:`SchedulerUnreachable` within about 15 s), and the store is locked
+    scheduler is reached (:class:`SchedulerUnreachable` within about 12 s), and the store is locked
     (:class:`StudyLocked` if another study runs on it).
 
     Args:
