@@ -1,7 +1,8 @@
-"""Shared fixtures: small sections and meshes that build in milliseconds."""
+"""Shared fixtures: small sections and meshes that build in milliseconds, and the reference case."""
 
 import pytest
 
+from drillstring.case import load_case
 from drillstring.fem.sections import hollow_circle
 
 
@@ -13,3 +14,46 @@ def drill_pipe():
 @pytest.fixture
 def drill_collar():
     return hollow_circle(0.2286, 0.0762, 210e9, 7850.0, 0.29, 6.0 / 7.0)
+
+
+@pytest.fixture(scope="session")
+def reference_case():
+    return load_case("reference")
+
+
+@pytest.fixture(scope="session")
+def coarse_case(reference_case):
+    """The reference string on a 40 m mesh: builds and runs several times faster."""
+    mesh = reference_case.mesh.model_copy(update={"max_element_length": 40.0})
+    return reference_case.model_copy(update={"mesh": mesh})
+
+
+def _can_create_in(folder) -> bool:
+    import os
+
+    probe = os.path.join(folder, ".drillstring-fixture-probe")
+    try:
+        with open(probe, "w"):
+            pass
+    except OSError:
+        return False
+    os.unlink(probe)
+    return True
+
+
+@pytest.fixture
+def unwritable_folder(tmp_path):
+    """A folder in which nothing can be created: a read-only temporary folder, or, for the superuser
+    (whom permissions do not stop), /sys where the kernel refuses new files."""
+    from pathlib import Path
+
+    folder = tmp_path / "read-only"
+    folder.mkdir()
+    folder.chmod(0o500)
+    if not _can_create_in(folder):
+        yield folder
+    elif Path("/sys").is_dir() and not _can_create_in("/sys"):
+        yield Path("/sys")
+    else:
+        pytest.skip("no unwritable folder on this machine")
+    folder.chmod(0o700)

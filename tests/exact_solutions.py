@@ -76,3 +76,91 @@ def engesser_buckling_load(length: float, ei: float, kga: float) -> float:
     P = P_E / (1 + P_E / k_sGA), P_E = π² EI / L²."""
     p_euler = math.pi**2 * ei / length**2
     return p_euler / (1.0 + p_euler / kga)
+
+
+def heavy_column_critical_load(
+    segments: list[tuple[float, float, float, float]],
+    springs: tuple[tuple[float, float], ...] = (),
+    search_max: float = 1e7,
+    n_grid: int = 60,
+) -> float:
+    """Smallest bit load W [N] that buckles a heavy pinned–pinned column hanging from its top.
+
+    Euler–Bernoulli column, x down from the top (pinned: w = 0, M = 0) to the bit (pinned); the
+    segments, top first, are ``(length [m], EI [N·m²], weight per length q [N/m], extra compression
+    p [N])`` and the axial force is ``N(x) = ∫ₓᴸ q dx − W − p(x)`` (tension positive). ``springs``
+    are ``(x [m], k [N/m])`` lateral point springs. Equilibrium of the bent column:
+
+        (EI w'')'' − (N w')' + Σ k w δ(x − x_s) = 0,
+
+    written for the state z = (w, θ = w', M = EI w'', Q = M' − N θ), continuous at section changes:
+    z' = (θ, M/EI, Q + N θ, 0), and Q jumps by −k w at a spring.
+
+    The two solutions that satisfy the top conditions span a plane in z-space; it is carried down
+    by the compound-matrix method (Ng & Reid): the antisymmetric Φ = z₁z₂ᵀ − z₂z₁ᵀ obeys
+    Φ' = AΦ + ΦAᵀ and is renormalised continuously, so exponential growth in the tension zone does
+    not make the two solutions collinear (plain shooting fails beyond ~10 (EI/q)^{1/3}). A bit
+    state with w = M = 0 exists when the minor Φ[w, M](L) vanishes; its sign changes are found on a
+    grid of W and refined with brentq. Independent of the package (SciPy ODE solver only).
+    """
+    from scipy.integrate import solve_ivp
+
+    lengths = [s[0] for s in segments]
+    total_weight = sum(s[0] * s[2] for s in segments)
+    bounds = np.concatenate([[0.0], np.cumsum(lengths)])
+
+    def end_minor(load: float) -> float:
+        phi = np.zeros((4, 4))
+        phi[1, 3], phi[3, 1] = 1.0, -1.0  # free at the top: θ and Q
+        below = total_weight  # ∫ₓᴸ q dx at the segment top
+        for (length, ei, q, p), x0 in zip(segments, bounds[:-1]):
+            x1 = x0 + length
+            cuts = sorted({x0, x1, *[x for x, _ in springs if x0 < x < x1 + 1e-9]})
+            for a, b in zip(cuts[:-1], cuts[1:]):
+                def rhs(x, y, a=a, ei=ei, q=q, p=p, top=below):
+                    n = top - q * (x - x0) - load - p
+                    mat = np.zeros((4, 4))
+                    mat[0, 1], mat[1, 2], mat[2, 1], mat[2, 3] = 1.0, 1.0 / ei, n, 1.0
+                    f = y.reshape(4, 4)
+                    d = mat @ f + f @ mat.T
+                    d -= np.sum(f * d) / np.sum(f * f) * f  # stay on the unit sphere
+                    return d.ravel()
+
+                sol = solve_ivp(rhs, (a, b), phi.ravel(), method="DOP853", rtol=1e-9, atol=1e-12)
+                phi = sol.y[:, -1].reshape(4, 4)
+                for x, k in springs:
+                    if abs(x - b) < 1e-9 and b < bounds[-1]:
+                        jump = np.eye(4)
+                        jump[3, 0] = -k
+                        phi = jump @ phi @ jump.T
+                phi /= np.linalg.norm(phi)
+            below -= q * length
+        return phi[0, 2]
+
+    grid = np.linspace(0.0, search_max, n_grid)
+    values = [end_minor(w) for w in grid]
+    for i in range(n_grid - 1):
+        if np.sign(values[i]) != np.sign(values[i + 1]):
+            return brentq(end_minor, grid[i], grid[i + 1], xtol=1e-10 * search_max, rtol=1e-12)
+    raise ValueError("no critical load below search_max")
+
+
+def free_free_damping_on_first_fixed_free_mode(
+    damping_ratio: float, rigid_coefficient: float, rigid_inertia: float, wave_speed: float,
+    length: float, terms: int = 200_000,
+) -> float:
+    """ψ₁ᵀ C ψ₁ / (2 ω₁) for a uniform rod (or bar) of length L whose damping matrix is built on its
+    free–free modes, C = M Φ diag(c_k) Φᵀ M (c_0 = c/J on the rigid mode, c_k = 2ξω_k), and ψ₁ the
+    first mode of the same rod with the top (x = 0) held and the bottom free.
+
+    Mass-normalised shapes (mass per length μ, J = μL): φ_0 = 1/√J, φ_k = √(2/J) cos(kπx/L),
+    ω_k = kπc/L; ψ₁ = √(2/J) sin(πx/2L), ω₁ = πc/(2L). The projections a_k = ∫ μ ψ₁ φ_k dx are
+    a_0 = 2√2/π and a_k = −1/(π (k² − ¼)) (Σ a_k² = 1), so
+
+        ψ₁ᵀ C ψ₁ / (2ω₁) = (c/J) a_0² / (2ω₁) + ξ Σ_{k≥1} (ω_k/ω₁) a_k²,   ω_k/ω₁ = 2k.
+    """
+    k = np.arange(1, terms + 1, dtype=float)
+    a = -1.0 / (math.pi * (k**2 - 0.25))
+    omega_1 = math.pi * wave_speed / (2.0 * length)
+    rigid = (rigid_coefficient / rigid_inertia) * (8.0 / math.pi**2) / (2.0 * omega_1)
+    return rigid + damping_ratio * float(np.sum(2.0 * k * a**2))

@@ -284,8 +284,8 @@ def test_refuses_lateral_perturbation_not_less_than_gap(data):
 
 
 def test_refuses_output_step_longer_than_run(data):
-    data["simulation"]["output_step"] = 30
-    assert_problem(refused(data), "simulation.output_step", "30.0", "t_end")
+    data["simulation"]["output_step"] = 40
+    assert_problem(refused(data), "simulation.output_step", "40.0", "t_end")
 
 
 def test_refuses_unknown_top_level_key(data):

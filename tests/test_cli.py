@@ -3,6 +3,7 @@
 import json
 from importlib import resources
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -50,7 +51,10 @@ def heavier_bit_case(tmp_path):
 
 def test_static_json_reference():
     data = _json("static", "reference", "--json")
-    assert set(data) == {"weight", "weight_on_hook", "weight_on_bit", "neutral_point_height", "axial_force"}
+    assert set(data) == {"weight", "weight_on_hook", "weight_on_bit", "neutral_point_height",
+                         "critical_weight_on_bit", "axial_force"}
+    # Issue 10 measured ≈ 114 kN; tests/test_buckling.py checks it against a shooting solution.
+    assert data["critical_weight_on_bit"] == pytest.approx(114.13e3, rel=1e-4)
     assert data["weight"] == pytest.approx(REFERENCE_WEIGHT, rel=1e-4)
     assert data["weight_on_hook"] == pytest.approx(REFERENCE_WOH, rel=1e-4)
     assert data["weight_on_bit"] == pytest.approx(REFERENCE_WOB)
@@ -73,7 +77,8 @@ def test_static_human_readable_has_units_and_summary():
     result = _invoke("static", "reference")
     assert result.exit_code == 0, result.output
     out = result.stdout
-    for text in ("kN", "[m]", "[kN]", "weight-on-hook", "1,063.43", "neutral point", "top", "bit", "stabilizer"):
+    for text in ("kN", "[m]", "[kN]", "weight-on-hook", "1,063.43", "neutral point", "top", "bit", "stabilizer",
+                 "critical weight-on-bit", "114.13", "margin 14.13 kN"):
         assert text in out, text
     assert "drill pipe / drill collar" in out
     assert len(out.splitlines()) < 40  # a summary, not the full profile
@@ -87,6 +92,10 @@ def test_static_user_case_file(heavier_bit_case):
     assert data["weight_on_hook"] == pytest.approx(reference["weight_on_hook"] - 50e3, rel=1e-9)
     assert data["axial_force"][-1][1] == pytest.approx(-150e3, rel=1e-9)
     assert data["neutral_point_height"] > reference["neutral_point_height"]
+    # The margin depends on the case, not on its weight-on-bit; 150 kN is beyond it.
+    assert data["critical_weight_on_bit"] == pytest.approx(reference["critical_weight_on_bit"], rel=1e-9)
+    result = _invoke("static", str(heavier_bit_case))
+    assert result.exit_code == 0 and "BUCKLED" in result.stdout
 
 
 # -------------------------------------------------------------------------------------------------- modes
@@ -112,7 +121,8 @@ def test_modes_default_count_is_ten():
 def test_modes_human_readable_has_units():
     result = _invoke("modes", "reference", "-n", "3")
     assert result.exit_code == 0, result.output
-    for text in ("axial [Hz]", "torsional [Hz]", "lateral [Hz]", "1.2006", "0.2313", "rigid"):
+    for text in ("axial [Hz]", "torsional [Hz]", "lateral [Hz]", "1.2006", "0.2313", "rigid",
+                 "Lateral buckling at weight-on-bit 114.13 kN"):
         assert text in result.stdout, text
 
 
@@ -121,8 +131,10 @@ def test_modes_user_case_file(heavier_bit_case):
     data = _json("modes", str(heavier_bit_case), "--json", "--count", "3")
     # Mass and axial stiffness do not depend on the weight-on-bit.
     assert data["axial"] == pytest.approx(reference["axial"], rel=1e-9, abs=1e-12)
-    # More compression lowers the lateral frequencies (geometric stiffness).
-    assert data["lateral"][0] < reference["lateral"][0]
+    # More compression lowers the lateral frequencies (geometric stiffness); 150 kN buckles the
+    # string: its lowest lateral mode is unstable, reported as a negative frequency.
+    assert data["lateral"][0] < 0.0 < reference["lateral"][0]
+    assert "BUCKLED" in _invoke("modes", str(heavier_bit_case), "-n", "3").stdout
 
 
 def test_modes_count_zero_is_refused():
@@ -231,7 +243,7 @@ def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
     nc, png = tmp_path / "run.nc", tmp_path / "run.png"
     data = _json("simulate", str(coarse_case), "--t-end", "1", "--out", str(nc), "--plot", str(png), "--json")
     for key in ("mean_rate_of_penetration", "bit_speed_min", "bit_speed_max", "stick_slip",
-                "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
+                "stick_time_fraction", "bit_speed_oscillation", "max_radial_displacement", "gap", "impacts", "n_rhs", "n_accepted", "n_rejected",
                 "wall_time", "netcdf", "figure"):
         assert key in data, key
     assert data["netcdf"] == str(nc) and data["figure"] == str(png)
@@ -242,8 +254,10 @@ def test_simulate_json_writes_netcdf_and_figure(coarse_case, tmp_path):
     top = 100.0 * 2.0 * 3.141592653589793 / 60.0
     assert 1e-4 < data["mean_rate_of_penetration"] < 1e-2  # m/s: 0.36 to 36 m/h
     assert 0.0 < data["bit_speed_min"] <= data["bit_speed_max"] < 2.0 * top  # rad/s
-    assert data["stick_slip"] is False
+    assert data["stick_slip"] is False and data["stick_time_fraction"] == 0.0
     assert data["stick_slip"] == (data["bit_speed_min"] < 0.1 * top)
+    oscillation = (data["bit_speed_max"] - data["bit_speed_min"]) / (2 * top)
+    assert data["bit_speed_oscillation"] == pytest.approx(oscillation, rel=1e-12)
     assert len(data["max_radial_displacement"]) == len(data["gap"]) == 1
     assert 0.0 <= data["max_radial_displacement"][0] < data["gap"][0] == pytest.approx(0.0357)
     assert data["impacts"] >= 0 and data["n_rejected"] >= 0
@@ -255,7 +269,8 @@ def test_simulate_table_has_units(coarse_case, tmp_path):
     result = _invoke("simulate", str(coarse_case), "--t-end", "0.5", "--out", str(tmp_path / "a.nc"),
                      "--plot", str(tmp_path / "a.png"))
     assert result.exit_code == 0, result.output
-    for text in ("rate of penetration", "m/h", "rpm", "stick-slip", "mm", "impacts", "steps accepted",
+    for text in ("rate of penetration", "m/h", "rpm", "bit speed oscillation", "stick time fraction", "mm",
+                 "impacts", "steps accepted",
                  str(tmp_path / "a.nc")):
         assert text in result.stdout, text
 
@@ -315,12 +330,17 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     second = json.loads(again.stdout)
     assert second["observables"] == first["observables"]
     assert second["n_samples"] == 3
-    assert second["wall_time"] < first["wall_time"]  # nothing left to run
+    # Nothing left to run: the study's computation time is kept, the rerun is reported apart.
+    assert second["wall_time"] == first["wall_time"] and second["workers"] == first["workers"]
+    assert first["realizations_this_run"] == 3 and second["realizations_this_run"] == 0
+    assert len(second["sessions"]) == 1 and second["sessions"][0]["realizations"] == 3
+    assert second["wall_time_this_run"] < first["wall_time"]
     assert "resumed" in again.stderr
 
     table = _study(coarse_case, out)
     assert table.exit_code == 0, table.output
-    for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}"):
+    for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}",
+                 f"wall time {first['wall_time']:,.1f} s", "this run only recomputed the statistics"):
         assert text in table.stdout, text
 
 
@@ -371,6 +391,227 @@ def test_study_interrupted_exit_130(coarse_case, tmp_path, monkeypatch):
     assert result.exit_code == 130
     assert "resume" in result.stderr
     assert "Traceback" not in result.output
+
+
+def _one_line_error(result, *expected):
+    """Refused as bad input: exit code 2, one line on stderr naming the problem, no traceback."""
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    for text in expected:
+        assert text in lines[0], (text, lines[0])
+    assert "Traceback" not in result.output
+
+
+@pytest.fixture
+def nothing_runs(monkeypatch):
+    """Any simulation or study started by a command fails the test: refusals must come first."""
+    from drillstring import api
+    from drillstring.stochastic import montecarlo
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("computation started before the input was checked")
+
+    for module, name in ((api, "simulate"), (api, "compare"), (montecarlo, "run_study"),
+                         (montecarlo, "run_realization")):
+        monkeypatch.setattr(module, name, forbidden)
+
+
+@pytest.mark.parametrize("args, expected", [
+    (("--samples", "1"), ["samples = 1: must be an integer >= 2"]),
+    (("--sigma", "1e6"), ["sigma = 1e+06 N:", "probability", "at most 32.36 kN"]),
+    (("--sigma", "nan"), ["sigma = nan N: must be a finite number > 0"]),
+    (("--sigma", "-1"), ["sigma = -1.0 N: must be a finite number > 0"]),
+    (("--dispersion", "inf"), ["dispersion = inf: must be a finite number > 0"]),
+    (("--dispersion", "0.5"), ["sigma = 531716 N", "probability"]),
+    (("--t-end", "inf"), ["t_end = inf s: must be a finite number > 0"]),
+    (("--t-end", "-2"), ["t_end = -2.0 s"]),
+    (("--seed", "-1"), ["seed = -1: must be an integer >= 0"]),
+    (("--transient", "nan"), ["transient = nan s"]),
+])
+def test_study_impossible_settings_refused_before_running(coarse_case, tmp_path, nothing_runs, args, expected):
+    out = tmp_path / "bad"
+    _one_line_error(_study(coarse_case, out, *args), *expected)
+    assert not out.exists()  # nothing created
+
+
+def test_study_workers_zero_refused(coarse_case, tmp_path, nothing_runs):
+    result = _invoke("study", str(coarse_case), "--workers", "0", "--out", str(tmp_path / "w"))
+    _one_line_error(result, "workers = 0: must be an integer >= 1")
+
+
+def test_study_output_folder_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    _one_line_error(_study(coarse_case, a_file), f"--out = {a_file}: is a file, not a folder")
+    _one_line_error(_study(coarse_case, a_file / "sub"), f"{a_file} is a file, not a folder")
+    _one_line_error(_study(coarse_case, unwritable_folder / "study"), f"cannot write in {unwritable_folder}")
+
+
+def test_study_store_that_is_not_a_study_refused(coarse_case, tmp_path):
+    import zarr
+
+    out = tmp_path / "study"
+    assert _study(coarse_case, out).exit_code == 0
+    del zarr.open_group(str(out / "study.zarr"), mode="a")["status"]
+    _one_line_error(_study(coarse_case, out), "study.zarr is not a complete drillstring study store",
+                    "missing array(s): status")
+
+
+def test_study_stale_lock_is_taken_over_with_a_note(coarse_case, tmp_path):
+    import socket
+
+    out = tmp_path / "study"
+    out.mkdir()
+    # The record of a study killed with -9 (nobody holds the lock any more).
+    (out / "study.zarr.lock").write_text(json.dumps({"pid": 4_000_000, "host": socket.gethostname(),
+                                                     "started": "2026-01-01T00:00:00+00:00"}))
+    result = _study(coarse_case, out)
+    assert result.exit_code == 0, result.output
+    assert "note: took over a stale lock (pid 4000000 on host" in result.stderr
+    assert not (out / "study.zarr.lock").exists()
+
+
+def test_study_calls_the_api_with_its_defaults(coarse_case, tmp_path, monkeypatch):
+    """The command line parses and formats; defaults and checks are the API's (one definition)."""
+    from drillstring import api
+
+    seen = {}
+
+    def record(case, **kwargs):
+        seen.update(kwargs)
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(api, "monte_carlo_study", record)
+    result = _invoke("study", str(coarse_case), "--out", str(tmp_path / "s"))
+    _one_line_error(result, "stop here")
+    assert seen["sigma"] is None and seen["dispersion"] is None and seen["transient"] is None
+    assert seen["t_end"] is None and seen["workers"] is None and seen["scheduler"] is None
+    from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
+    import inspect
+
+    defaults = inspect.signature(api.study).parameters
+    assert seen["samples"] == DEFAULT_SAMPLES == defaults["samples"].default
+    assert seen["seed"] == DEFAULT_SEED == defaults["seed"].default
+
+
+@pytest.mark.parametrize("error, code", [
+    ("workers_lost", 1), ("failed", 1), ("locked", 2),
+])
+def test_study_run_errors_are_one_line(coarse_case, tmp_path, monkeypatch, error, code):
+    """Errors of a study that started (workers gone, too few realizations) exit 1; a lock taken by
+    another study between the command's check and the engine's exits 2; one line each."""
+    from drillstring import api
+    from drillstring.stochastic import montecarlo
+
+    raised = {"workers_lost": montecarlo.StudyWorkersLost("the Dask cluster at tcp://x:1 has had no worker "
+                                                          "for 30 s; the finished realizations are saved"),
+              "failed": api.StudyFailed("only 1 finished realization(s): statistics need at least 2"),
+              "locked": montecarlo.StudyLocked("study store s is in use by pid 1 on host h")}[error]
+
+    def fail(*args, **kwargs):
+        raise raised
+
+    monkeypatch.setattr(api, "monte_carlo_study", fail)
+    result = _study(coarse_case, tmp_path / "s")
+    assert result.exit_code == code, result.output
+    lines = result.stderr.strip().splitlines()
+    assert lines == [f"error: {raised}"]
+    assert "Traceback" not in result.output
+
+
+def test_study_scheduler_refused_port(coarse_case, tmp_path, nothing_runs):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    result = _invoke("study", str(coarse_case), "--scheduler", f"tcp://127.0.0.1:{port}", "--out",
+                     str(tmp_path / "s"))
+    _one_line_error(result, f"scheduler = 'tcp://127.0.0.1:{port}': connection refused")
+    assert not (tmp_path / "s").exists()
+
+
+def _drillstring(*args, timeout=180):
+    """The installed command in its own process (what a user runs), with a guard against hangs."""
+    import subprocess
+    import sys
+
+    command = [sys.executable, "-c", "from drillstring.cli import app; app()", *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout,
+                          env={**__import__("os").environ, "COLUMNS": "120"})
+
+
+def test_study_scheduler_that_is_no_dask_server_fails_fast(coarse_case, tmp_path):
+    """A TCP server that accepts and never answers (the reported 300 s+ hang): refused by the real
+    command with one line after the greeting timeout (the subprocess timeout guards the hang)."""
+    import socket
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    try:
+        result = _drillstring("study", str(coarse_case), "--scheduler",
+                              f"tcp://127.0.0.1:{server.getsockname()[1]}", "--out", str(tmp_path / "s"),
+                              timeout=60)
+    finally:
+        server.close()
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "sent no Dask greeting within 4 s (not a Dask scheduler)" in lines[0]
+
+
+def test_two_studies_on_one_folder(coarse_case, tmp_path):
+    """Two real processes on one --out: the second is refused at once while the first runs, naming it;
+    the first finishes normally with sound statistics."""
+    import subprocess
+    import sys
+    import time
+
+    from drillstring.results import read_netcdf
+
+    out = tmp_path / "study"
+    args = ["study", str(coarse_case), "--samples", "6", "--t-end", "1", "--workers", "1", "--out", str(out),
+            "--json"]
+    first = subprocess.Popen([sys.executable, "-c", "from drillstring.cli import app; app()", *args],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lock = out / "study.zarr.lock"
+    deadline = time.time() + 120
+    while time.time() < deadline and first.poll() is None and not (lock.exists() and lock.read_text().strip()):
+        time.sleep(0.05)
+    second = _drillstring(*args[:-1], timeout=120)
+    stdout, stderr = first.communicate(timeout=300)
+    assert first.returncode == 0, stderr
+    assert second.returncode == 2, second.stderr
+    lines = second.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"is in use by pid {first.pid} on host" in lines[0]
+    assert "wait for that study to finish or use another --out folder" in lines[0]
+    summary = json.loads(stdout)
+    assert summary["n_samples"] == 6 and summary["n_failed"] == 0
+    stats = read_netcdf(out / "statistics.nc")
+    steady = stats.time.values >= 0.5
+    for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
+        mean, nominal = stats[f"{name}_mean"].values[steady], stats[f"{name}_nominal"].values[steady]
+        assert np.all(np.abs(nominal) > 0), name  # the reported failure: all-zero statistics
+        np.testing.assert_allclose(mean, nominal, rtol=0.2, err_msg=name)  # around the nominal run
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        ["study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png", "envelopes.png",
+         "dispersion.png"])  # no lock, no temporary file left
+
+
+def test_simulate_output_paths_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
+    ok_nc, ok_png = str(tmp_path / "a.nc"), str(tmp_path / "a.png")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", str(tmp_path), "--plot", ok_png),
+                    f"--out = {tmp_path}: is a folder; give a file name")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", str(unwritable_folder / "x.nc"),
+                            "--plot", ok_png), f"--out = {unwritable_folder / 'x.nc'}: cannot write in")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", ok_nc, "--plot",
+                            str(unwritable_folder / "x.png")), f"--plot = {unwritable_folder / 'x.png'}: cannot write in")
+    _one_line_error(_invoke("simulate", str(coarse_case), "--out", ok_nc, "--plot", ok_nc),
+                    "--out and --plot are the same file")
+    _one_line_error(_invoke("compare", str(coarse_case), "--plot", str(unwritable_folder / "c.png")),
+                    f"--plot = {unwritable_folder / 'c.png'}: cannot write in")
+    _one_line_error(_invoke("compare", str(coarse_case), "--plot", str(tmp_path)), "is a folder")
 
 
 # ------------------------------------------------------------------------------------------------ compare
@@ -457,3 +698,30 @@ def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
                     "--plot", str(tmp_path / "r.png"))
     assert numbers["wall_time"] > 0 and numbers["compile_time"] >= 0
     assert isinstance(numbers["compiled"], bool)
+
+
+def test_stability_json_and_table(coarse_case):
+    data = _json("stability", str(coarse_case), "--json")
+    assert set(data) == {"stable", "steady_state", "modes"}
+    assert data["stable"] is False  # free–free damping: the first torsional mode grows
+    steady = data["steady_state"]
+    assert steady["bit_speed"] == pytest.approx(100 * 3.141592653589793 / 30)
+    assert 3e-3 < steady["rate_of_penetration"] < 4e-3 and steady["force_on_bit"] == pytest.approx(1e5, rel=1e-6)
+    leading = max(data["modes"], key=lambda m: m["growth_rate"])
+    assert leading["family"] == "torsional" and leading["growth_rate"] > 0
+    result = _invoke("stability", str(coarse_case))
+    assert result.exit_code == 0, result.output
+    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
+        assert text in result.stdout, text
+
+
+def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
+    from drillstring.case import load_case
+
+    case = load_case(coarse_case)
+    case = case.model_copy(update={"bit_rock": case.bit_rock.model_copy(update={"a1": 0.02})})
+    path = tmp_path / "no_drilling.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    result = _invoke("stability", str(path))
+    assert result.exit_code == 2
+    assert "rate_of_penetration" in result.stderr and "Traceback" not in result.output

@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 README = Path(__file__).resolve().parents[1] / "README.md"
 
 
@@ -35,8 +37,9 @@ def test_python_examples_run_nothing_on_import():
                 _is_main_guard(node), ast.unparse(node)
 
 
-def test_first_example_prints_what_the_readme_shows(tmp_path):
-    (offset, code), = _blocks("python")[:1]
+@pytest.mark.parametrize("index", [0, 1])  # the quick ones: statics and modes, buckling margin
+def test_example_prints_what_the_readme_shows(tmp_path, index):
+    offset, code = _blocks("python")[index]
     shown = next(text for start, text in _blocks("text") if start > offset)
     script = tmp_path / "example.py"
     script.write_text(code, encoding="utf-8")

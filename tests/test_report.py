@@ -76,11 +76,13 @@ def _key_values(text: str) -> dict[str, str]:
     return dict(re.findall(r"<tr><th>([^<]*)</th><td>(.*?)</td></tr>", text))
 
 
-def _observable_rows(text: str) -> dict[str, list[str]]:
-    """The dispersion table: observable -> its numeric cells, in column order."""
+def _observable_rows(text: str) -> dict[str, dict[str, str]]:
+    """The dispersion table: observable -> {column header: cell}, exactly."""
+    table = text[text.index("<th>observable</th>"):]
+    headers = re.findall(r"<th>([^<]*)</th>", table[: table.index("</tr>")])[1:]
     rows = {}
     for label, cells in re.findall(r"<tr><td>([^<]*)</td>((?:<td class=\"num\">[^<]*</td>)+)</tr>", text):
-        rows[label] = re.findall(r'<td class="num">([^<]*)</td>', cells)
+        rows[label] = dict(zip(headers, re.findall(r'<td class="num">([^<]*)</td>', cells), strict=True))
     return rows
 
 
@@ -100,12 +102,14 @@ def test_report_has_the_table_values(report):
     assert kv["workers"] == "2"
     rows = _observable_rows(text)
     assert list(rows) == ["rate of penetration", "bit speed", "torque-on-bit", "force-on-bit"]
-    # time-mean δ [%], max δ [%], time of max [s], mean δ / δ_WOH, mean δ / δ_WOB, ...
-    assert rows["rate of penetration"][:5] == ["6.92", "7.13", "12.5", "14.7", "1.38"]
-    assert rows["bit speed"][:2] == ["0.209", "0.848"]
-    assert rows["torque-on-bit"][:2] == ["4.69", "5.06"]
-    assert rows["force-on-bit"][:2] == ["4.48", "4.51"]
-    assert rows["rate of penetration"][-1] == "2.3"  # conv(n_s) change over the 2nd half [%]
+    rop = rows["rate of penetration"]
+    assert rop["time-mean δ [%]"] == "6.92" and rop["max δ [%]"] == "7.13"
+    assert rop["time of max [s]"] == "12.5"
+    assert rop["mean δ / δ_WOH"] == "14.7" and rop["mean δ / δ_WOB"] == "1.38"
+    assert rop["conv(n_s) change, 2nd half [%]"] == "2.3"
+    for label, mean, maximum in (("bit speed", "0.209", "0.848"), ("torque-on-bit", "4.69", "5.06"),
+                                 ("force-on-bit", "4.48", "4.51")):
+        assert (rows[label]["time-mean δ [%]"], rows[label]["max δ [%]"]) == (mean, maximum), label
 
 
 def test_report_has_the_case(report):

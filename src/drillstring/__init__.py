@@ -5,7 +5,8 @@ case -> fem (sections, elements, mesh, assembly) -> statics -> modal -> forces -
 dynamics (reduced model, Runge-Kutta) -> stochastic (MaxEnt, Monte Carlo, statistics) ->
 results, plots, report, cli.
 
-The notebook API: :func:`load_case`, :func:`simulate` (and :func:`study` for Monte Carlo studies).
+The notebook API: :func:`load_case`, :func:`simulate`, :func:`stability` (steady drilling and its linear
+stability) and :func:`study` for Monte Carlo studies.
 """
 
 __version__ = "0.1.0"
@@ -20,6 +21,10 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring.api import simulate
 
         return simulate
+    if name == "stability":
+        from drillstring.api import stability
+
+        return stability
     if name == "study":
         from drillstring.api import study
 

@@ -1,4 +1,6 @@
-"""The Python API for notebooks: load a case, run one drilling simulation.
+"""The Python API for notebooks: load a case, run one drilling simulation, a Monte Carlo study, a
+comparison of the two nonlinear models. The command line calls these functions (one set of defaults,
+one set of checks) and only parses and formats.
 
 >>> import drillstring
 >>> ds = drillstring.simulate("reference", t_end=5.0)        # doctest: +SKIP
@@ -7,15 +9,19 @@
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import xarray as xr
 
 from drillstring.case import Case, load_case
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.results import run_dataset
+from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
 
 
 def as_case(case: Case | str | Path) -> Case:
@@ -75,51 +81,263 @@ def simulate(
     return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
 
 
+class StudyFailed(RuntimeError):
+    """A study that ran but cannot give statistics (fewer than 2 realizations finished); the message
+    lists the first failures, the store keeps everything."""
+
+
+@dataclass
+class StudyOutcome:
+    """What :func:`monte_carlo_study` did.
+
+    Attributes:
+        statistics: the statistics Dataset (as returned by :func:`study`).
+        summary: the JSON-ready summary (SI), as written to ``summary.json``: dispersions after the
+            transient, the failures and their causes, ``wall_time`` (the computation time of the study,
+            summed over the runs that computed realizations; a rerun of a finished study keeps it),
+            ``wall_time_this_run``, ``workers``, ``sessions`` and ``files``.
+        files: name -> path of each file written (empty when ``out`` is None).
+        already: realizations that were in the store before this run (a resumed or finished study).
+        note: a note for the user (a stale lock taken over), or None.
+    """
+
+    statistics: xr.Dataset
+    summary: dict
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+
+#: Captions of the study figures in the report, by figure name.
+_STUDY_CAPTIONS = {
+    "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean weight-on-hook)",
+    "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
+    "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
+}
+
+
+def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_step, transient):
+    """The validated settings and transient of a study (ValueError naming the field otherwise)."""
+    from drillstring.dynamics.indicators import transient_end
+    from drillstring.stochastic import DEFAULT_SIGMA
+    from drillstring.stochastic.montecarlo import StudySettings, check_study, nominal_weight_on_hook
+
+    if sigma is not None and dispersion is not None:
+        raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
+    if dispersion is not None:
+        if not (isinstance(dispersion, (int, float)) and math.isfinite(dispersion) and dispersion > 0):
+            raise ValueError(f"dispersion = {dispersion!r}: must be a finite number > 0")
+        sigma = dispersion * nominal_weight_on_hook(case)
+    elif sigma is None:
+        sigma = DEFAULT_SIGMA
+    settings = StudySettings(
+        samples=samples, sigma=sigma if not isinstance(sigma, int) else float(sigma), seed=seed,
+        t_end=case.simulation.t_end if t_end is None else t_end,
+        output_step=case.simulation.output_step if output_step is None else output_step,
+    )
+    check_study(case, settings)
+    if transient is None:
+        transient = transient_end(settings.t_end)
+    elif not (isinstance(transient, (int, float)) and math.isfinite(transient)
+              and 0 <= transient <= settings.t_end):
+        raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {settings.t_end:g} s]")
+    return settings, float(transient)
+
+
+def monte_carlo_study(
+    case: Case | str | Path = "reference",
+    *,
+    sigma: float | None = None,
+    dispersion: float | None = None,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = DEFAULT_SEED,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+) -> StudyOutcome:
+    """Monte Carlo study of a random weight-on-hook (SPEC §8), with its files.
+
+    The weight-on-hook follows the Normal law (Maximum Entropy, known mean and variance) of standard
+    deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of them; default
+    :data:`~drillstring.stochastic.DEFAULT_SIGMA`). ``samples`` realizations (>= 2) of ``t_end`` [s]
+    run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
+    (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
+    ``min(10 s, t_end/2)``). ``progress(done, failed, total)`` follows the realizations; ``note(text)``
+    receives notes (a stale lock taken over).
+
+    Everything is checked before anything runs: the settings (ValueError naming the field; a sigma
+    that would put a weight-on-bit outside (0, string weight) with probability above 1e-3 included),
+    ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.montecarlo.
+    SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
+    StudyLocked` while another study runs there; held until every file is written).
+
+    In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
+    realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
+    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png`` and
+    ``report.html``. Fewer than 2 finished realizations raise :class:`StudyFailed`.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    import tempfile
+
+    from drillstring.files import output_folder_problem
+    from drillstring.stochastic.locks import StudyLock
+    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+    from drillstring.stochastic.montecarlo import (
+        DASK_WORKER_TIMEOUT,
+        check_workers,
+        computation_time,
+        connect_scheduler,
+        notify,
+        run_study,
+    )
+
+    case = as_case(case)
+    settings, t_transient = _study_settings(case, sigma, dispersion, samples, seed, t_end, output_step,
+                                            transient)
+    if out is not None:
+        problem = output_folder_problem(out)
+        if problem:
+            raise ValueError(f"out = {str(out)!r}: {problem}")
+    check_workers(workers, scheduler)
+    folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="drillstring-study-"))
+    store = folder / "study.zarr"
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store) as guard:
+            if guard.note:
+                notify(note, guard.note)
+            run = run_study(case, settings, store, workers=workers, scheduler=client, progress=progress,
+                            note=note, worker_timeout=(DASK_WORKER_TIMEOUT if worker_timeout is None
+                                                       else worker_timeout))
+            raw = load_study(store)
+            failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
+            try:
+                stats = study_statistics(raw, t_transient=t_transient)
+            except ValueError as error:
+                listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
+                raise StudyFailed(f"{error} ({len(failures)} failure(s)"
+                                  f"{': ' + listing if listing else ''})") from None
+            summary = study_summary(stats, t_transient=t_transient)
+            sessions = run.store.sessions()
+            wall_time, used = computation_time(sessions)
+            if not sessions:  # a store written before sessions were recorded
+                wall_time, used = run.wall_time, run.workers
+            realization_time = float(np.nansum(raw["wall_time"].values))
+            payload = dict(summary)
+            payload.update({
+                "case": case.name,
+                "samples": settings.samples,
+                "failures": failures,
+                "wall_time": wall_time,
+                "wall_time_this_run": run.wall_time,
+                "realizations_this_run": run.computed,
+                "realization_wall_time_total": realization_time,
+                "workers": used if isinstance(used, (int, str)) else str(used),
+                "sessions": sessions,
+            })
+            files: dict[str, Path] = {}
+            if out is not None:
+                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient)
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+    return StudyOutcome(stats, payload, files, run.completed + run.failed - run.computed,
+                        guard.note or run.note)
+
+
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:
+    """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
+    statistics' ``summary`` and the run information from ``payload``)."""
+    import json
+
+    from drillstring.files import write_text_atomic
+    from drillstring.plots import plot_study
+    from drillstring.report import write_report
+    from drillstring.results import write_netcdf
+
+    paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
+             "statistics": folder / "statistics.nc", "report": folder / "report.html"}
+    write_netcdf(stats, paths["statistics"])
+    figures = plot_study(stats, folder, t_transient)
+    payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
+    write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
+    run_info = {
+        "realizations requested": settings.samples,
+        "failures": payload["failures"],
+        "computation wall time [s]": round(payload["wall_time"], 2),
+        "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
+        "workers": payload["workers"],
+    }
+    if payload["realizations_this_run"] == 0 or len(payload["sessions"]) > 1:
+        run_info["wall time of this run [s]"] = round(payload["wall_time_this_run"], 2)
+        run_info["runs that computed realizations"] = len(payload["sessions"])
+    run_info.update({
+        "simulated time per realization [s]": settings.t_end,
+        "output step [s]": settings.output_step,
+        "store": str(paths["store"]),
+    })
+    write_report(
+        paths["report"],
+        title=f"Monte Carlo study: case '{case.name}', random weight-on-hook",
+        case_toml=case.to_toml(),
+        summary=summary,
+        figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
+                 for k in ("envelopes", "dispersion", "convergence")},
+        run_info=run_info,
+    )
+    return {**paths, **figures}
+
+
+def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
+    """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
+    about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
+
+    Returns a :class:`~drillstring.dynamics.stability.StabilityResult`: ``.stable``, ``.steady_state``
+    (``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit`` [N·m], ``force_on_bit``
+    [N]), ``.modes`` sorted by frequency (``family``, ``frequency`` [Hz], ``damping_ratio``,
+    ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
+    overrides the case's.
+    """
+    from drillstring.dynamics.stability import case_stability
+
+    return case_stability(as_case(case), weight_on_bit=weight_on_bit)
+
+
 def study(
     case: Case | str | Path = "reference",
     *,
     sigma: float | None = None,
     dispersion: float | None = None,
-    samples: int = 50,
-    seed: int = 0,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
     workers: int | None = None,
-    scheduler: str | None = None,
+    scheduler=None,
     t_end: float | None = None,
     output_step: float | None = None,
-    progress=None,
+    transient: float | None = None,
+    progress: Callable[[int, int, int], None] | None = None,
 ) -> xr.Dataset:
     """Monte Carlo study of a random weight-on-hook (SPEC §8); returns the statistics Dataset.
 
-    Exactly one of ``sigma`` [N] (standard deviation of the weight-on-hook) or ``dispersion``
-    (σ / mean) is given. Realizations stream to the Zarr store ``out`` (a temporary folder when None);
-    rerunning with the same ``out`` resumes. ``workers`` local processes (default: one per core), or a
-    Dask scheduler address in ``scheduler``. See :mod:`drillstring.stochastic.montecarlo`.
+    The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): at most one
+    of ``sigma`` [N] or ``dispersion`` (σ / mean; default σ = 5000 N); realizations stream to the Zarr
+    store ``out``/study.zarr (a temporary folder when None), rerunning with the same ``out`` resumes.
+    ``transient`` [s]: start of the steady window for the summaries and the per-realization vibration
+    indicators (default ``min(10 s, t_end/2)``).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
-    import tempfile
+    return monte_carlo_study(
+        case, sigma=sigma, dispersion=dispersion, samples=samples, seed=seed, out=out, workers=workers,
+        scheduler=scheduler, t_end=t_end, output_step=output_step, transient=transient, progress=progress,
+    ).statistics
 
-    from drillstring.stochastic.analysis import load_study, study_statistics
-    from drillstring.stochastic.montecarlo import StudySettings, nominal_weight_on_hook, run_study
-
-    case = as_case(case)
-    if (sigma is None) == (dispersion is None):
-        raise ValueError("give exactly one of sigma [N] or dispersion (sigma / mean weight_on_hook)")
-    if dispersion is not None:
-        if not dispersion > 0:
-            raise ValueError(f"dispersion = {dispersion!r}: must be > 0")
-        sigma = dispersion * nominal_weight_on_hook(case)
-    settings = StudySettings(
-        samples=samples, sigma=float(sigma), seed=seed,
-        t_end=case.simulation.t_end if t_end is None else t_end,
-        output_step=case.simulation.output_step if output_step is None else output_step,
-    )
-    store = Path(out) / "study.zarr" if out is not None else Path(tempfile.mkdtemp()) / "study.zarr"
-    run_study(case, settings, store, workers=workers, scheduler=scheduler, progress=progress)
-    return study_statistics(load_study(store))
-
-
-import math  # noqa: E402  (used by the comparison helpers below)
 
 #: The two nonlinear models compared by :func:`compare`, in the order returned: case 1, case 2.
 COMPARED_MODELS = ("full", "bit_and_contact")
@@ -142,8 +360,6 @@ def _difference_numbers(full, reduced, steady) -> dict[str, float | None]:
     """Differences of one observable, case 1 (``full``) minus case 2 (``reduced``), SI units: the largest
     absolute difference over time, the RMS difference relative to the RMS of case 2, and the difference of
     the means over the ``steady`` samples (t after the transient), absolute and relative to case 2's."""
-    import numpy as np
-
     full = np.asarray(full, dtype=float)
     reduced = np.asarray(reduced, dtype=float)
     delta = full - reduced
@@ -184,9 +400,7 @@ def compare(
     """
     import time
 
-    import numpy as np
-
-    from drillstring.quantities import default_transient
+    from drillstring.dynamics.indicators import transient_end
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}
@@ -213,7 +427,7 @@ def compare(
         return np.interp(t, t_reduced, values)
 
     t_final = float(t[-1])
-    t_transient = default_transient(t_final)
+    t_transient = transient_end(t_final)
     steady = t >= t_transient - 1e-9 * max(1.0, t_final)
     if not steady.any():
         steady = np.ones_like(t, dtype=bool)

@@ -518,6 +518,10 @@ class BitRock(_Base):
     a4: ForceAngle = Field(9.537e6, ge=0, description="a4 [N*rad]")
     a5: Torque = Field(1.475e3, ge=0, description="a5 [N*m]")
     regularization: AngularSpeed = Field(2.0, gt=0, description="e in Z = w / sqrt(w^2 + e^2) [rad/s]")
+    stick_stiffening_limit: Dimensionless = Field(
+        100.0, gt=1, description="largest ratio of the axial resistance 1/(a2 Z^2) to its value at the top speed;"
+        " 1/Z^2 is frozen below the bit speed where it is reached (integrable stick) [-]"
+    )
 
 
 class Contact(_Base):
@@ -541,11 +545,20 @@ class Operation(_Base):
 
 
 class Damping(_Base):
-    """Structural damping: modal ratio on elastic modes, viscous coefficients on the rigid-body motions."""
+    """Structural damping: modal ratio on elastic modes, viscous coefficients on the rigid-body motions.
+
+    ``basis = "free_free"``: xi, c1 and c2 are defined on the modes of the unconstrained string (axial and
+    torsional families; the rigid modes get c1 and c2), then projected on the reduced basis;
+    ``"constrained"``: xi on every mode of the reduced basis (torsional modes top-held), c2 unused.
+    See :mod:`drillstring.damping`.
+    """
 
     modal_damping_ratio: Dimensionless = Field(0.3, ge=0, lt=1, description="xi [-]")
     rigid_axial: AxialDamping = Field(0.05, ge=0, description="c1, rigid axial motion [N*s/m]")
     rigid_rotation: RotationalDamping = Field(0.05, ge=0, description="c2, rigid rotation [N*m*s/rad]")
+    basis: Literal["free_free", "constrained"] = Field(
+        "free_free", description="modes on which xi, c1, c2 are defined"
+    )
 
 
 class Environment(_Base):
@@ -578,7 +591,7 @@ class ReducedModel(_Base):
 class Simulation(_Base):
     """Time integration (adaptive explicit Runge-Kutta)."""
 
-    t_end: Time = Field(20.0, gt=0, description="end time [s]")
+    t_end: Time = Field(30.0, gt=0, description="end time [s]")
     output_step: Time = Field(0.01, gt=0, description="output sampling step [s]; <= t_end")
     rtol: Dimensionless = Field(1e-6, gt=0, lt=1)
     atol: Dimensionless = Field(1e-9, gt=0)

@@ -3,7 +3,8 @@
 Commands
 --------
 ``drillstring static [CASE] [--json]``
-    The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, axial force.
+    The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force.
 ``drillstring modes [CASE] [--count N] [--json]``
     The lowest natural frequencies of the axial, torsional and lateral mode families.
 ``drillstring cases``
@@ -42,7 +43,7 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import json  # noqa: E402
 import math  # noqa: E402
 from pathlib import Path  # noqa: E402
-from typing import Annotated, Any, NoReturn  # noqa: E402
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn  # noqa: E402
 
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
@@ -60,6 +61,11 @@ from rich.table import Table  # noqa: E402
 
 from drillstring import __version__  # noqa: E402
 from drillstring.case import Case, CaseError, builtin_cases, load_case  # noqa: E402
+from drillstring.dynamics.indicators import STICK_SPEED_RATIO  # noqa: E402
+from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_SIGMA  # noqa: E402
+
+if TYPE_CHECKING:
+    from drillstring.buckling import BucklingMargin
 
 #: Exit code for an invalid case or bad input data (same as Click's usage errors).
 EXIT_INVALID_INPUT = 2
@@ -72,8 +78,6 @@ _KN = 1e3  # N per kN
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
 _MM = 1e3  # mm per m
 _M_PER_H = 3600.0  # (m/h) per (m/s)
-#: A run sticks when its bit speed after the transient falls below this fraction of the top speed.
-STICK_FRACTION = 0.1
 
 app = typer.Typer(
     name="drillstring",
@@ -130,9 +134,18 @@ def _err_console() -> Console:
 
 def _default_transient(t_end: float) -> float:
     """Start of the steady regime used by the summaries [s]: 10 s, or half the run when shorter."""
-    from drillstring.quantities import default_transient
+    from drillstring.dynamics.indicators import transient_end
 
-    return default_transient(t_end)
+    return transient_end(t_end)
+
+
+def _check_output(option: str, path: Path, *, folder: bool = False) -> None:
+    """End the command (exit code 2) before any computation when ``path`` cannot be written."""
+    from drillstring.files import output_file_problem, output_folder_problem
+
+    problem = output_folder_problem(path) if folder else output_file_problem(path)
+    if problem:
+        _fail(f"{option} = {path}: {problem}")
 
 
 def _version(value: bool) -> None:
@@ -206,11 +219,14 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 
 @app.command()
 def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
-    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, axial force."""
+    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force."""
+    from drillstring.buckling import case_buckling_margin
     from drillstring.statics import case_static_state
 
     the_case = _load(case)
     state = case_static_state(the_case)
+    margin = case_buckling_margin(the_case, state)
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -220,6 +236,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
                 "weight_on_hook": float(state.weight_on_hook),
                 "weight_on_bit": float(state.weight_on_bit),
                 "neutral_point_height": float(state.neutral_point_height),
+                "critical_weight_on_bit": margin.critical_weight_on_bit,
                 "axial_force": [[float(xi), float(ni)] for xi, ni in zip(x, n)],
             }
         )
@@ -234,8 +251,11 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
     summary.add_row("weight-on-hook", f"{state.weight_on_hook / _KN:,.2f}", "kN")
     summary.add_row("weight-on-bit", f"{state.weight_on_bit / _KN:,.2f}", "kN")
     summary.add_row("neutral point above the bit", f"{state.neutral_point_height:,.2f}", "m")
+    summary.add_row("critical weight-on-bit (lateral buckling)",
+                    f"{margin.critical_weight_on_bit / _KN:,.2f}", "kN")
     summary.add_row("string length", f"{state.mesh.length:,.1f}", "m")
     console.print(summary)
+    console.print(escape(_buckling_note(margin)), soft_wrap=True)
 
     forces = Table(title="Axial force N (tension > 0)", title_justify="left")
     forces.add_column("where")
@@ -249,6 +269,16 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
         forces.add_row(escape(label), f"{position:,.1f}", f"{height:,.1f}", f"{value / _KN:,.2f}")
     console.print(forces)
     console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"), soft_wrap=True)
+
+
+def _buckling_note(margin: BucklingMargin) -> str:
+    """One line: the lateral buckling margin of the case at its weight-on-bit."""
+    critical, wob = margin.critical_weight_on_bit / _KN, margin.weight_on_bit / _KN
+    if margin.buckled:
+        return (f"BUCKLED: weight-on-bit {wob:,.2f} kN exceeds the critical {critical:,.2f} kN; the straight "
+                "string is statically unstable (lowest lateral mode has ω² < 0).")
+    return (f"Lateral buckling at weight-on-bit {critical:,.2f} kN: margin {critical - wob:,.2f} kN "
+            f"({critical / wob:.2f} × the case's {wob:,.2f} kN).")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -265,12 +295,14 @@ def modes(
     as_json: JsonOpt = False,
 ) -> None:
     """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
+    from drillstring.buckling import buckling_margin
     from drillstring.modal import case_linear_system, compute_modes
     from drillstring.statics import case_static_state
 
     the_case = _load(case)
     state = case_static_state(the_case)
-    found = compute_modes(case_linear_system(the_case, state), axial=count, torsional=count, lateral=count)
+    system = case_linear_system(the_case, state)
+    found = compute_modes(system, axial=count, torsional=count, lateral=count)
     families = {
         "axial": [float(f) for f in found.axial.frequencies],
         "torsional": [float(f) for f in found.torsional.frequencies],
@@ -293,9 +325,77 @@ def modes(
     for note in (
         "axial: both ends free; mode 1 is the rigid translation (0 Hz).",
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
-        "Prestress (geometric stiffness) and drilling fluid included.",
+        "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
+        "mode, -sqrt(|ω²|)/2π.",
+        _buckling_note(buckling_margin(system)),
     ):
-        console.print(note)
+        console.print(escape(note), soft_wrap=True)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring stability
+# ---------------------------------------------------------------------------------------------------------
+
+#: Lateral modes listed in the stability table (all of them in --json).
+_STABILITY_LATERAL_ROWS = 4
+
+
+@app.command()
+def stability(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
+    """Steady drilling (closed form) and its linear stability: eigenvalues of the reduced model
+    linearised about it, bit–rock law included.
+
+    A mode with a positive growth rate grows from any small perturbation of steady drilling: the string
+    then settles into a self-excited vibration (the torsional one, through the bit–rock law).
+    """
+    the_case = _load(case)
+    from drillstring import api
+
+    try:
+        result = api.stability(the_case)
+    except ValueError as error:  # no steady drilling (the law gives no penetration)
+        _fail(str(error))
+    payload = result.to_dict()
+    if as_json:
+        _print_json(payload)
+        return
+    steady = payload["steady_state"]
+    console = _console()
+    table = Table(title=escape(f"Steady drilling: case {the_case.name!r}"), title_justify="left")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    table.add_row("rate of penetration", f"{steady['rate_of_penetration'] * _M_PER_H:,.3f}", "m/h")
+    table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
+    table.add_row("torque on bit", f"{steady['torque_on_bit'] / _KN:,.3f}", "kN·m")
+    table.add_row("force on bit", f"{steady['force_on_bit'] / _KN:,.3f}", "kN")
+    console.print(table)
+    modes_table = Table(title="Eigenvalues of the linearised model (sorted by frequency)", title_justify="left")
+    for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):
+        modes_table.add_column(column, justify="left" if column in ("family", "note") else "right")
+    lateral_shown = 0
+    hidden = 0
+    for mode in result.modes:
+        if mode.family == "lateral":
+            if lateral_shown >= _STABILITY_LATERAL_ROWS and mode.growth_rate < 0:
+                hidden += 1
+                continue
+            lateral_shown += 1
+        modes_table.add_row(mode.family, f"{mode.frequency:.4f}", f"{100 * mode.damping_ratio:.2f}",
+                            f"{mode.growth_rate:.4g}", "UNSTABLE" if mode.growth_rate > 0 else "")
+    console.print(modes_table)
+    if hidden:
+        console.print(escape(f"+ {hidden} more (stable) lateral modes: drillstring stability {case} --json"),
+                      soft_wrap=True)
+    leading = result.leading
+    if result.stable:
+        console.print(escape(f"Steady drilling is stable: slowest decay {leading.growth_rate:.4g} 1/s "
+                             f"({leading.family}, {leading.frequency:.4f} Hz)."), soft_wrap=True)
+    else:
+        console.print(escape(
+            f"Steady drilling is UNSTABLE: the {leading.family} mode at {leading.frequency:.4f} Hz grows at "
+            f"{leading.growth_rate:.4g} 1/s (e-folding time {1 / leading.growth_rate:.3g} s); the string "
+            f"settles into a self-excited vibration."), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -304,30 +404,26 @@ def modes(
 
 
 def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
-    """Summary numbers of one run (SI): steady-regime ROP and bit speed (t >= ``t_transient``), stick-slip,
-    maximum radial displacement and gap per probe, impacts and solver statistics."""
+    """Summary numbers of one run (SI): the drilling indicators after the transient
+    (:func:`~drillstring.dynamics.indicators.drilling_indicators`), maximum radial displacement and gap
+    per probe, impacts and solver statistics."""
+    from drillstring.dynamics.indicators import drilling_indicators
+
     t = np.asarray(ds["time"].values, dtype=float)
-    steady = t >= t_transient
-    if not steady.any():  # a run that stopped before the end of the transient: use what there is
-        steady = np.ones_like(t, dtype=bool)
-    rop = np.asarray(ds["rate_of_penetration"].values, dtype=float)[steady]
-    speed = np.asarray(ds["bit_speed"].values, dtype=float)[steady]
     top = float(ds.attrs.get("top_speed", np.nan))
     radial = np.asarray(ds["radial_displacement"].values, dtype=float)
     x = np.atleast_1d(np.asarray(ds["x"].values, dtype=float))
     gap = np.atleast_1d(np.asarray(ds["gap"].values, dtype=float))
 
-    def number(values: np.ndarray, reduce) -> float | None:
+    def largest(values: np.ndarray) -> float | None:
         finite = values[np.isfinite(values)]
-        return float(reduce(finite)) if finite.size else None
+        return float(finite.max()) if finite.size else None
 
-    speed_min = number(speed, np.min)
-    radial_max = [number(radial[:, j], np.max) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+    radial_max = [largest(radial[:, j]) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+    indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
+                                     t_transient)
     return {
-        "mean_rate_of_penetration": number(rop, np.mean),
-        "bit_speed_min": speed_min,
-        "bit_speed_max": number(speed, np.max),
-        "stick_slip": None if speed_min is None else bool(speed_min < STICK_FRACTION * top),
+        **indicators,
         "max_radial_displacement": radial_max,
         "gap": [float(g) for g in gap],
         "probe_x": [float(v) for v in x],
@@ -362,10 +458,11 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
     table.add_row(escape(f"bit speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['bit_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['bit_speed_max'], ',.2f', _RPM)}",
                   "rpm")
-    stick = numbers["stick_slip"]
+    table.add_row(escape(f"bit speed oscillation (max − min) / 2Ω (t ≥ {t_tr:g} s)"),
+                  _fmt(numbers["bit_speed_oscillation"], ".3f"), "")
     table.add_row(
-        escape(f"stick-slip (bit below {STICK_FRACTION:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
-        "–" if stick is None else ("yes" if stick else "no"), "",
+        escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
+        _fmt(numbers["stick_time_fraction"], ".1%"), "",
     )
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
         table.add_row(escape(f"max radial displacement at x = {x:g} m / gap"),
@@ -394,7 +491,8 @@ def simulate(
     """One drilling run: ROP, bit speed, torque- and force-on-bit, radial displacements, in time.
 
     Writes the observables to NetCDF and a four-panel figure, then prints a summary. After the transient
-    (t >= min(10 s, t_end/2)), stick-slip means that the bit speed falls below 10 % of the top speed. A run
+    (t >= min(10 s, t_end/2)): the bit-speed oscillation (max − min)/(2 × top speed) and the fraction of the time
+    the bit turns slower than 10 % of the top speed (stick). A run
     that stops early still writes what it computed, reports where it stopped and exits with code 1.
     """
     the_case = _load(case)
@@ -404,6 +502,10 @@ def simulate(
     if the_case.simulation.output_step > t_final:
         _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
               f"({the_case.simulation.output_step:g} s)")
+    _check_output("--out", out)
+    _check_output("--plot", plot)
+    if Path(out).resolve() == Path(plot).resolve():
+        _fail(f"--out and --plot are the same file ({out}): give two file names")
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
@@ -521,6 +623,7 @@ def compare(
     if the_case.simulation.output_step > t_final:
         _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
               f"({the_case.simulation.output_step:g} s)")
+    _check_output("--plot", plot)
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
@@ -563,14 +666,10 @@ def compare(
 # drillstring study
 # ---------------------------------------------------------------------------------------------------------
 
-#: σ_WOH [N] of a study given neither --sigma nor --dispersion (the reference study's largest).
-DEFAULT_SIGMA = 5000.0
-
-
 class _StudyProgress:
     """``progress(done, failed, total)`` for :func:`run_study`: a rich bar (stderr) of realizations,
-    failures and time left. The bar starts at the first call, so that a resumed study's estimate counts
-    only the realizations run now, and a study refused before it starts prints no empty bar."""
+    failures and time left. The bar starts at the first call, so that a study refused before it starts
+    prints no empty bar."""
 
     _COLUMNS = (TextColumn("realizations"), BarColumn(), MofNCompleteColumn(),
                 TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
@@ -580,11 +679,9 @@ class _StudyProgress:
         self.console = console
         self.bar: Progress | None = None
         self.task = None
-        self.already = 0
 
     def __call__(self, done: int, failed: int, total: int) -> None:
         if self.bar is None:
-            self.already = done + failed
             self.bar = Progress(*self._COLUMNS, console=self.console)
             self.bar.start()
             self.task = self.bar.add_task("realizations", total=total, completed=done + failed, failed=failed)
@@ -597,23 +694,43 @@ class _StudyProgress:
 
 
 def _study_table(summary: dict[str, Any]) -> Table:
-    title = (f"Dispersion after the transient (t ≥ {summary['t_transient']:g} s): "
-             f"δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
+    """Dispersions per observable over the steady window and over the whole record, in %."""
+    title = (f"Dispersion: δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
              f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
-    table = Table(title=escape(title), title_justify="left")
+    table = Table(title=escape(title), title_justify="left",
+                  caption="whole record: from the first time the mean response leaves 0", caption_justify="left")
     table.add_column("observable")
-    for header in ("mean δ [%]", "max δ [%]", "mean/δ_WOH", "mean/δ_WOB"):
+    table.add_column("window")
+    for header in ("mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH", "mean/δ_WOB"):
         table.add_column(escape(header), justify="right")
     for name, entry in summary["observables"].items():
-        ratio = entry.get("ratio_time_mean", {})
-        table.add_row(
-            escape(name.replace("_", " ")),
-            _fmt(entry.get("dispersion_time_mean"), ".3g", 100.0),
-            _fmt(entry.get("dispersion_max"), ".3g", 100.0),
-            _fmt(ratio.get("weight_on_hook"), ".3g"),
-            _fmt(ratio.get("weight_on_bit"), ".3g"),
-        )
+        whole = entry.get("whole_record")
+        windows = [(escape(name.replace("_", " ")), f"t ≥ {summary['t_transient']:g} s", entry)]
+        if whole:
+            windows.append(("", f"whole, t ≥ {whole['t_start']:g} s", whole))
+        for label, window, values in windows:
+            ratio = values.get("ratio_time_mean", {})
+            table.add_row(
+                label, escape(window),
+                _fmt(values.get("dispersion_time_mean"), ".3g", 100.0),
+                _fmt(values.get("dispersion_max"), ".3g", 100.0),
+                _fmt(values.get("time_of_max"), ".2f"),
+                _fmt(ratio.get("weight_on_hook"), ".3g"),
+                _fmt(ratio.get("weight_on_bit"), ".3g"),
+            )
     return table
+
+
+def _indicator_line(summary: dict[str, Any]) -> str | None:
+    """One line on the realizations' vibration: bit-speed oscillation and stick-slip."""
+    indicators = summary.get("indicators") or {}
+    oscillation = indicators.get("bit_speed_oscillation")
+    if not oscillation:
+        return None
+    return (f"Bit-speed oscillation (max − min)/2Ω after {indicators['t_transient']:g} s: mean "
+            f"{oscillation['mean']:.3f}, range {oscillation['min']:.3f} – {oscillation['max']:.3f}; "
+            f"stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
+            f"{indicators['stick_slip_realizations']} of {summary['n_samples']} realizations")
 
 
 @app.command()
@@ -621,22 +738,24 @@ def study(
     case: CaseArg = "reference",
     sigma: Annotated[
         float | None,
-        typer.Option("--sigma", help="Standard deviation of the weight-on-hook [N] (default 5000 N)."),
+        typer.Option("--sigma", help=f"Standard deviation of the weight-on-hook [N] (default {DEFAULT_SIGMA:g} N)."),
     ] = None,
     dispersion: Annotated[
         float | None,
         typer.Option("--dispersion", help="Dispersion σ/mean of the weight-on-hook, instead of --sigma."),
     ] = None,
-    samples: Annotated[int, typer.Option("--samples", "-n", min=1, help="Number of realizations n_s.")] = 50,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Root seed of the random draws.")] = 0,
+    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of realizations n_s (>= 2).")
+                       ] = DEFAULT_SAMPLES,
+    seed: Annotated[int, typer.Option("--seed", help="Root seed of the random draws (>= 0).")] = DEFAULT_SEED,
     out: Annotated[
         Path,
         typer.Option("--out", "-o", help="Output folder (study.zarr, summary.json, statistics.nc, figures, "
-                                         "report.html); rerunning with the same folder resumes."),
+                                         "report.html); rerunning with the same folder resumes. Locked "
+                                         "while a study runs on it."),
     ] = Path("study"),
     workers: Annotated[
         int | None,
-        typer.Option("--workers", "-j", min=1,
+        typer.Option("--workers", "-j",
                      help="Local worker processes (default: one per core); 1 runs in this process."),
     ] = None,
     scheduler: Annotated[
@@ -658,124 +777,97 @@ def study(
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
     writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
-    dispersion.png, and the self-contained report OUT/report.html.
+    dispersion.png, and the self-contained report OUT/report.html. Settings, the output folder and the
+    scheduler are checked before anything runs; a second study on the same OUT is refused while one runs.
     """
     the_case = _load(case)
     if sigma is not None and dispersion is not None:
         _fail("give --sigma or --dispersion, not both")
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+    _check_output("--out", out, folder=True)
 
-    from drillstring.plots import plot_study
-    from drillstring.report import write_report
-    from drillstring.results import write_netcdf
-    from drillstring.stochastic import montecarlo
-    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+    from drillstring.stochastic.locks import StudyLock, StudyLocked
 
-    if dispersion is not None:
-        if not (math.isfinite(dispersion) and dispersion > 0):
-            _fail(f"--dispersion = {dispersion!r}: must be > 0")
-        sigma_value = dispersion * montecarlo.nominal_weight_on_hook(the_case)
-    else:
-        sigma_value = DEFAULT_SIGMA if sigma is None else float(sigma)
-    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
-    try:
-        settings = montecarlo.StudySettings(samples=samples, sigma=sigma_value, seed=seed, t_end=t_final,
-                                            output_step=the_case.simulation.output_step)
-    except ValueError as error:
-        _fail(str(error))
-    t_transient = _default_transient(t_final) if transient is None else float(transient)
-    if not (math.isfinite(t_transient) and 0 <= t_transient <= t_final):
-        _fail(f"--transient = {t_transient!r} s: must be in [0, t_end = {t_final:g} s]")
-
-    out.mkdir(parents=True, exist_ok=True)
-    store_path = out / "study.zarr"
     err = _err_console()
+
+    def note(text: str) -> None:
+        err.print(escape(f"note: {text}"), soft_wrap=True)
+
+    created = not out.exists()
+    lock = StudyLock(out / "study.zarr")
+    try:  # taken before loading the engine: a second study on this folder is refused at once
+        lock.__enter__()
+    except StudyLocked as error:
+        _fail(str(error))
+    if lock.note:
+        note(lock.note)
+    try:
+        outcome = _run_study(the_case, out, err, note, sigma=sigma, dispersion=dispersion,
+                             samples=samples, seed=seed, workers=workers, scheduler=scheduler, t_end=t_end,
+                             transient=transient)
+    finally:
+        lock.__exit__(None, None, None)
+        if created and out.is_dir() and not any(out.iterdir()):  # refused before anything was written
+            out.rmdir()
+    if outcome.already:
+        err.print(escape(f"resumed: {outcome.already} of {samples} realizations were already in "
+                         f"{out / 'study.zarr'}"), soft_wrap=True)
+
+    payload = outcome.summary
+    if as_json:
+        _print_json(payload)
+        return
+    _print_study(the_case.name, payload, outcome.files)
+
+
+def _run_study(the_case: Case, out: Path, err: Console, note, **settings):
+    """:func:`drillstring.api.monte_carlo_study` with a progress bar; its errors end the command."""
+    from drillstring import api
+    from drillstring.files import LockedError
+    from drillstring.stochastic import montecarlo
+
     tracker = _StudyProgress(err)
     try:
         try:
-            run = montecarlo.run_study(the_case, settings, store_path, workers=workers, scheduler=scheduler,
-                                       progress=tracker)
+            return api.monte_carlo_study(the_case, out=out, progress=tracker, note=note, **settings)
         finally:
             tracker.stop()
     except montecarlo.StudyInterrupted as error:
         _fail(str(error), EXIT_INTERRUPTED)
     except KeyboardInterrupt:
-        _fail(f"interrupted; finished realizations are saved in {store_path}; run the same command again "
-              "to resume", EXIT_INTERRUPTED)
-    except ValueError as error:  # a store holding another study, or settings refused
+        _fail(f"interrupted; finished realizations are saved in {out / 'study.zarr'}; run the same command "
+              "again to resume", EXIT_INTERRUPTED)
+    except (montecarlo.StudyWorkersLost, api.StudyFailed) as error:
+        _fail(str(error), EXIT_RUN_FAILED)
+    except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
         _fail(str(error))
-    if tracker.already:
-        err.print(escape(f"resumed: {tracker.already} of {samples} realizations were already in {store_path}"))
 
-    raw = load_study(store_path)
-    failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
-    try:
-        stats = study_statistics(raw)
-    except ValueError as error:
-        listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
-        _fail(f"{error} ({len(failures)} failure(s){': ' + listing if listing else ''})", EXIT_RUN_FAILED)
-    summary = study_summary(stats, t_transient=t_transient)
-    realization_time = float(np.nansum(raw["wall_time"].values)) if "wall_time" in raw else float("nan")
 
-    paths = {
-        "store": out / "study.zarr",
-        "summary": out / "summary.json",
-        "statistics": out / "statistics.nc",
-        "report": out / "report.html",
-    }
-    write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, out, t_transient)
-    payload = dict(summary)
-    payload.update({
-        "case": the_case.name,
-        "samples": samples,
-        "failures": failures,
-        "wall_time": run.wall_time,
-        "realization_wall_time_total": realization_time,
-        "workers": run.workers,
-        "files": {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}},
-    })
-    paths["summary"].write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
-    captions = {
-        "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean weight-on-hook)",
-        "dispersion": f"Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
-        "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
-    }
-    write_report(
-        paths["report"],
-        title=f"Monte Carlo study: case '{the_case.name}', random weight-on-hook",
-        case_toml=the_case.to_toml(),
-        summary=summary,
-        figures={captions[k]: figures[k] for k in ("envelopes", "dispersion", "convergence")},
-        run_info={
-            "realizations requested": samples,
-            "failures": failures,
-            "wall time of this run [s]": round(run.wall_time, 2),
-            "total time of the realizations [s]": round(realization_time, 2),
-            "workers": run.workers,
-            "simulated time per realization [s]": t_final,
-            "output step [s]": settings.output_step,
-            "store": str(paths["store"]),
-        },
-    )
-
-    if as_json:
-        _print_json(payload)
-        return
+def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> None:
     console = _console()
-    n_failed = summary["n_failed"]
+    used = payload["workers"]
+    where = f"Dask cluster at {used}" if isinstance(used, str) else f"{used} worker{'s' if used != 1 else ''}"
+    timing = f"wall time {payload['wall_time']:,.1f} s ({where})"
+    if payload["realizations_this_run"] == 0:
+        timing += f"; this run only recomputed the statistics ({payload['wall_time_this_run']:,.2f} s)"
+    elif len(payload["sessions"]) > 1:
+        timing += f" over {len(payload['sessions'])} runs"
     console.print(escape(
-        f"Monte Carlo study: case {the_case.name!r}, n_s = {summary['n_samples']} finished"
-        f" ({n_failed} failed), seed {seed}, σ_WOH = {summary['sigma'] / _KN:g} kN,"
-        f" wall time {run.wall_time:,.1f} s ({run.workers} worker{'s' if run.workers != 1 else ''})"
+        f"Monte Carlo study: case {name!r}, n_s = {payload['n_samples']} finished"
+        f" ({payload['n_failed']} failed), seed {payload['seed']}, σ_WOH = {payload['sigma'] / _KN:g} kN, "
+        f"{timing}"
     ), soft_wrap=True)
-    console.print(_study_table(summary))
-    if failures:
-        console.print(escape(f"{len(failures)} failure(s), causes in {paths['summary']}"), soft_wrap=True)
-    console.print(escape(f"Store (rerun to resume): {paths['store']}"), soft_wrap=True)
-    console.print(escape(f"Summary: {paths['summary']}, statistics: {paths['statistics']}"), soft_wrap=True)
-    console.print(escape(f"Figures and report: {paths['report']}"), soft_wrap=True)
+    console.print(_study_table(payload))
+    line = _indicator_line(payload)
+    if line:
+        console.print(escape(line), soft_wrap=True)
+    if payload["failures"]:
+        console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),
+                      soft_wrap=True)
+    console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+    console.print(escape(f"Summary: {files['summary']}, statistics: {files['statistics']}"), soft_wrap=True)
+    console.print(escape(f"Figures and report: {files['report']}"), soft_wrap=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

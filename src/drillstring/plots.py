@@ -25,6 +25,8 @@ import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from drillstring.files import atomic_output
+
 __all__ = [
     "DISPLAY_UNITS",
     "plot_run",
@@ -71,9 +73,10 @@ def _figure(rows: int, cols: int, size: tuple[float, float], sharex: bool = Fals
 
 
 def _save(fig: Figure, path: str | Path) -> Path:
+    """Write ``fig`` as PNG, atomically (a reader never sees a partial file)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=_DPI, format="png")
+    with atomic_output(path) as temporary:
+        fig.savefig(temporary, dpi=_DPI, format="png")
     return path
 
 

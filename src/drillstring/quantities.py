@@ -26,13 +26,3 @@ LONG_NAMES = {
     "weight_on_hook": "weight on hook",
     "weight_on_bit": "static weight on bit",
 }
-
-#: Default start of the steady regime for summaries [s] (the reference transient has decayed to a
-#: few percent of the bit-speed oscillation by then; see docs/verification.md).
-DEFAULT_TRANSIENT = 10.0
-
-
-def default_transient(t_end: float) -> float:
-    """Start of the steady regime used by the summaries of a run of ``t_end`` [s]: 10 s, or half the
-    run when shorter."""
-    return min(DEFAULT_TRANSIENT, 0.5 * t_end)

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from drillstring import __version__
+from drillstring.files import write_text_atomic
 
 __all__ = ["write_report"]
 
@@ -199,22 +200,15 @@ def _study_section(summary: Mapping[str, Any]) -> str:
     return "<h2>Study</h2>" + (_kv_table(rows) if rows else "")
 
 
-def _dispersion_table(summary: Mapping[str, Any]) -> str:
-    observables = summary.get("observables") or {}
-    if not observables:
-        return ""
-    conv = summary.get("convergence_change_second_half") or {}
-    head = (
-        "<tr><th>observable</th><th>time-mean δ [%]</th><th>max δ [%]</th><th>time of max [s]</th>"
-        "<th>mean δ / δ_WOH</th><th>mean δ / δ_WOB</th><th>max δ / δ_WOH</th><th>max δ / δ_WOB</th>"
-        "<th>conv(n_s) change, 2nd half [%]</th></tr>"
-    )
+def _dispersion_rows(observables: Mapping[str, Any], window: str | None, conv: Mapping[str, Any]) -> str:
+    """Table rows of one summary window (``window`` None: the steady window, else the entry's key)."""
     body = []
     for name, entry in observables.items():
-        entry = entry or {}
+        entry = (entry or {}) if window is None else ((entry or {}).get(window) or {})
         rt = entry.get("ratio_time_mean") or {}
         rm = entry.get("ratio_max") or {}
         cells = [
+            _num(entry.get("t_start")),
             _percent(entry.get("dispersion_time_mean")),
             _percent(entry.get("dispersion_max")),
             _num(entry.get("time_of_max")),
@@ -222,17 +216,56 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
             _num(rt.get("weight_on_bit"), 3),
             _num(rm.get("weight_on_hook"), 3),
             _num(rm.get("weight_on_bit"), 3),
-            _percent(conv.get(name)),
         ]
+        if window is None:
+            cells.append(_percent(conv.get(name)))
         label = OBSERVABLE_NAMES.get(str(name), str(name))
         body.append(f"<tr><td>{_esc(label)}</td>" + "".join(f'<td class="num">{c}</td>' for c in cells)
                     + "</tr>")
+    return "".join(body)
+
+
+def _dispersion_table(summary: Mapping[str, Any]) -> str:
+    observables = summary.get("observables") or {}
+    if not observables:
+        return ""
+    conv = summary.get("convergence_change_second_half") or {}
+    columns = ("<th>observable</th><th>from t [s]</th><th>time-mean δ [%]</th><th>max δ [%]</th>"
+               "<th>time of max [s]</th><th>mean δ / δ_WOH</th><th>mean δ / δ_WOB</th><th>max δ / δ_WOH</th>"
+               "<th>max δ / δ_WOB</th>")
+    steady = (f"<h3>Steady window (t ≥ {_num(summary.get('t_transient'))} s)</h3>"
+              f"<table><tr>{columns}<th>conv(n_s) change, 2nd half [%]</th></tr>"
+              f"{_dispersion_rows(observables, None, conv)}</table>")
+    whole = ""
+    if any("whole_record" in (entry or {}) for entry in observables.values()):
+        whole = ("<h3>Whole record</h3><p>From the first output time at which the mean response is away "
+                 "from 0 (at least 10 % of its steady-window average): ROP starts at 0 in every "
+                 "realization, so δ is undefined at t = 0.</p>"
+                 f"<table><tr>{columns}</tr>{_dispersion_rows(observables, 'whole_record', conv)}</table>")
     return (
         "<h2>Dispersion of the response</h2>"
-        "<p>Dispersion δ = std / |mean| over the realizations, summarised over time after the transient; "
-        "ratios above 1 mean that the input uncertainty is amplified.</p>"
-        f"<table>{head}{''.join(body)}</table>"
+        "<p>Dispersion δ = std / |mean| over the realizations at each time, summarised over time (mean and "
+        "maximum); ratios above 1 mean that the input uncertainty is amplified.</p>"
+        + steady + whole + _indicators_html(summary)
     )
+
+
+def _indicators_html(summary: Mapping[str, Any]) -> str:
+    indicators = summary.get("indicators") or {}
+    rows = []
+    labels = {"bit_speed_oscillation": "bit-speed oscillation (max − min)/2Ω",
+              "stick_time_fraction": "stick time fraction (bit below 10 % of the top speed)"}
+    for key, label in labels.items():
+        entry = indicators.get(key)
+        if entry:
+            rows.append((label, f"mean {_num(entry['mean'], 3)}, std {_num(entry['std'], 3)}, "
+                                f"range {_num(entry['min'], 3)} – {_num(entry['max'], 3)}"))
+    if "stick_slip_realizations" in indicators:
+        rows.append(("realizations in stick-slip", _num(indicators["stick_slip_realizations"])))
+    if not rows:
+        return ""
+    return (f"<h3>Vibration of the realizations (after t = {_num(indicators.get('t_transient'))} s)</h3>"
+            + _kv_table(rows))
 
 
 def _value_html(value: Any) -> str:
@@ -306,6 +339,4 @@ def write_report(
         parts.append("<h2>Figures</h2>")
         parts.extend(_figure_html(name, fig) for name, fig in figures.items())
     parts.append("</body></html>")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
-    return path
+    return write_text_atomic(path, "\n".join(parts) + "\n")

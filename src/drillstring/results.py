@@ -14,6 +14,7 @@ import xarray as xr
 
 from drillstring import __version__
 from drillstring.dynamics.simulate import SimulationResult
+from drillstring.files import atomic_output
 from drillstring.quantities import LONG_NAMES, UNITS
 
 def run_dataset(result: SimulationResult, *, case_toml: str = "", extra_attrs: dict | None = None
@@ -45,12 +46,13 @@ def run_dataset(result: SimulationResult, *, case_toml: str = "", extra_attrs: d
 
 
 def write_netcdf(dataset: xr.Dataset, path: str | Path) -> Path:
-    """Write ``dataset`` to NetCDF-4 (h5netcdf engine); returns the path."""
+    """Write ``dataset`` to NetCDF-4 (h5netcdf engine), atomically (a complete file or the previous
+    one, never a partial file); returns the path."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     clean = dataset.copy()
     clean.attrs = {k: (int(v) if isinstance(v, (bool, np.bool_)) else v) for k, v in dataset.attrs.items()}
-    clean.to_netcdf(path, engine="h5netcdf")
+    with atomic_output(path) as temporary:
+        clean.to_netcdf(temporary, engine="h5netcdf")
     return path
 
 

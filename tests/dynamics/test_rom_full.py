@@ -65,7 +65,7 @@ def test_generalized_force_goes_through_the_nonlinear_mass(short_case):
     rom = case_reduced_model(short_case, axial_modes=3, torsional_modes=3, lateral_modes=5,
                              nonlinear="full")
     force = np.random.default_rng(8).normal(size=rom.size)
-    forced = dataclasses.replace(rom, generalized_force=force)
+    forced = dataclasses.replace(rom, generalized_force=rom.generalized_force + force)
     y = large_state(rom, np.random.default_rng(9))
     at_rest_shape = y.copy()
     at_rest_shape[: rom.size] = 0.0

@@ -64,3 +64,33 @@ def test_impacts_are_counted_when_the_string_touches(coarse_case):
     assert released.observables["nodes_in_contact"].max() >= 1
     # The wall pushes back: the probe never goes far past the wall (k_sh = 1e8 N/m).
     assert released.radial_displacement.max() < 2.0 * gap
+
+
+def sticking_case(case, stiffening_limit):
+    """The coarse reference string with a sharper bit–rock law (e = 0.5 rad/s) at 140 kN: the bit sticks."""
+    return case.model_copy(update={
+        "reduced_model": case.reduced_model.model_copy(update={"lateral_modes": 0}),
+        "bit_rock": case.bit_rock.model_copy(update={"regularization": 0.5,
+                                                     "stick_stiffening_limit": stiffening_limit}),
+        "operation": case.operation.model_copy(update={"weight_on_bit": 140e3}),
+    })
+
+
+def test_stick_slip_integrates_and_converges_with_the_stiffening_limit(coarse_case):
+    """With the default limit a sticking run integrates (without it the step size collapses within
+    1 s); its indicators change by < 1e-3 when the limit is raised 30-fold."""
+    from drillstring.dynamics.indicators import drilling_indicators
+
+    results = {}
+    for limit in (100.0, 3000.0):
+        model = case_reduced_model(sticking_case(coarse_case, limit))
+        run = simulate_model(model, t_end=20.0, output_step=0.01, lateral_perturbation=0.0)
+        results[limit] = drilling_indicators(run.time, run.observables["rate_of_penetration"],
+                                             run.observables["bit_speed"], model.top_speed, 10.0)
+    default, tight = results[100.0], results[3000.0]
+    assert default["bit_speed_min"] < 0.01 * coarse_case.operation.top_speed  # it sticks
+    assert default["stick_time_fraction"] > 0.2 and default["stick_slip"]
+    assert default["bit_speed_oscillation"] > 1.0
+    for key in ("mean_rate_of_penetration", "bit_speed_oscillation"):
+        assert default[key] == pytest.approx(tight[key], rel=1e-3)
+    assert default["stick_time_fraction"] == pytest.approx(tight["stick_time_fraction"], abs=2e-3)

@@ -145,3 +145,47 @@ def test_gravity_load_sums_to_weight():
     f = el.element_gravity_load(43.8, 10.0, 9.81)
     assert f.sum() == pytest.approx(43.8 * 10.0 * 9.81)
     assert f[0] == f[6]
+
+
+# --- gyroscopic matrix ----------------------------------------------------------------------------------
+
+
+def _rigid_rotation_rates(length, about):
+    """Element velocities of a rigid rotation at unit rate about y or z through the first node."""
+    qd = np.zeros(12)
+    for node, x in ((0, 0.0), (1, length)):
+        if about == "z":  # θz = ∂v/∂x: v̇ = x, θ̇z = 1
+            qd[6 * node + 1], qd[6 * node + 5] = x, 1.0
+        else:  # θy = −∂w/∂x: ẇ = −x, θ̇y = 1
+            qd[6 * node + 2], qd[6 * node + 4] = -x, 1.0
+    return qd
+
+
+def test_gyroscopic_matrix_is_skew_and_couples_only_the_bending_planes(drill_collar, length):
+    g = el.element_gyroscopic(drill_collar, length)
+    np.testing.assert_array_equal(g, -g.T)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        qd = rng.normal(size=12)
+        assert abs(qd @ g @ qd) < 1e-14 * np.abs(g).max()  # gyroscopic forces do no work
+    nonzero = np.zeros((12, 12), dtype=bool)
+    nonzero[np.ix_(el.BENDING_Y_DOFS, el.BENDING_Z_DOFS)] = True
+    nonzero[np.ix_(el.BENDING_Z_DOFS, el.BENDING_Y_DOFS)] = True
+    assert np.all(g[~nonzero] == 0.0) and np.abs(g[nonzero]).max() > 0
+    # a rigid lateral translation (v̇, ẇ uniform, no rotation rate) excites no gyroscopic force
+    translation = np.zeros(12)
+    translation[[1, 7]], translation[[2, 8]] = 0.3, -0.7
+    np.testing.assert_allclose(g @ translation, 0.0, atol=1e-15 * np.abs(g).max())
+
+
+def test_gyroscopic_moment_is_the_rate_of_spin_angular_momentum(drill_collar, length):
+    """Tilting a spinning element rigidly about y at rate α̇ turns its spin angular momentum
+    H = ρI_p L Ω n, n = (1, θz, −θy), so dH/dt = −ρI_p L Ω α̇ ẑ: the moment resultant about z of
+    Ω G q̇ (its virtual power on a unit rigid rotation about z) must equal it, and symmetrically
+    +ρI_p L Ω β̇ ŷ for a tilt about z. Also: the spin axis follows a torque (precession)."""
+    g = el.element_gyroscopic(drill_collar, length)
+    rho_ip_l = drill_collar.density * drill_collar.polar_moment * length
+    about_y, about_z = _rigid_rotation_rates(length, "y"), _rigid_rotation_rates(length, "z")
+    assert about_z @ g @ about_y == pytest.approx(-rho_ip_l, rel=1e-12)
+    assert about_y @ g @ about_z == pytest.approx(rho_ip_l, rel=1e-12)
+    np.testing.assert_allclose(g @ about_y @ about_y, 0.0, atol=1e-15 * rho_ip_l)

@@ -171,3 +171,25 @@ def test_vectorised_wrapper_matches_kernel():
     assert tb[2] == bit_rock_force(1e-3, 10.0, *ARGS)[1]
     fs, ts = evaluate_bit_rock(1e-3, 10.0, P)
     assert fs.shape == () and float(fs) == bit_rock_force(1e-3, 10.0, *ARGS)[0]
+
+
+def test_stick_floor_from_stiffening_limit():
+    """Below θ̇_floor the axial resistance −∂f/∂u̇ = (1/Z²)/a2 stays at K times its value at Ω."""
+    from drillstring.forces.bit_rock import stick_speed_floor_ratio
+
+    omega, limit = 10.0, 100.0
+    ratio = stick_speed_floor_ratio(P.e, omega, limit)
+    params = BitRockParameters(P.a1, P.a2, P.a3, P.a4, P.a5, P.e, ratio)
+
+    def resistance(w):
+        f1, _ = evaluate_bit_rock(1e-3, w, params)
+        f0, _ = evaluate_bit_rock(0.0, w, params)
+        return -(float(f1) - float(f0)) / 1e-3
+
+    at_top = resistance(omega)
+    assert at_top == pytest.approx((1 + (P.e / omega) ** 2) / P.a2, rel=1e-9)
+    for w in (0.0, 1e-9, 0.5 * params.stick_speed_floor):
+        assert resistance(w) == pytest.approx(limit * at_top, rel=1e-9)
+    assert resistance(2 * params.stick_speed_floor) < limit * at_top
+    with pytest.raises(ValueError, match="must be > 1"):
+        stick_speed_floor_ratio(P.e, omega, 1.0)

@@ -200,3 +200,194 @@ def test_parameter_validation_and_wrapper_checks():
         evaluate_contact([0.0], [0.0], 0.0, 0.0, 0.0, -0.01, D_O, P)
     with pytest.raises(ValueError):
         evaluate_contact(np.zeros((2, 2)), 0.0, 0.0, 0.0, 0.0, GAP, D_O, P)
+
+
+# --- distributed wall stiffness: contact stations by nodal quadrature (issue 10) -------------------------
+
+from scipy.integrate import quad  # noqa: E402
+from scipy.optimize import brentq  # noqa: E402
+
+from drillstring.forces.contact import (  # noqa: E402
+    contact_stations, distributed_contact_forces, mesh_contact_stations,
+)
+
+K_PER_LENGTH = 1e8  # N/m per m of string (the reference value, read as distributed)
+D_PIPE, D_COLLAR, D_HOLE = 0.127, 0.2286, 0.3
+
+
+def two_section_nodes(h_pipe, h_collar, l_pipe=100.0, l_collar=60.0):
+    """Nodes of a pipe-over-collar string (exact node at the change) and each element's diameter."""
+    pipe = np.linspace(0.0, l_pipe, max(1, math.ceil(l_pipe / h_pipe)) + 1)
+    collar = np.linspace(l_pipe, l_pipe + l_collar, max(1, math.ceil(l_collar / h_collar)) + 1)[1:]
+    nodes = np.concatenate([pipe, collar])
+    diameter = np.where(0.5 * (nodes[:-1] + nodes[1:]) < l_pipe, D_PIPE, D_COLLAR)
+    return nodes, diameter
+
+
+def station_forces(stations, v_nodes, w_nodes, spin=10.0, params=P):
+    n = len(stations)
+    v, w = stations.gather(v_nodes), stations.gather(w_nodes)
+    return evaluate_contact(v, w, np.zeros(n), np.zeros(n), np.full(n, spin), stations.gap,
+                            stations.outer_diameter, params, stiffness=stations.stiffness(K_PER_LENGTH))
+
+
+def test_stations_split_tributary_lengths_at_section_changes():
+    nodes, diameter = two_section_nodes(7.0, 3.0)
+    st = contact_stations(nodes, diameter, D_HOLE)
+    assert st.length.sum() == pytest.approx(160.0, rel=1e-14)
+    change = int(np.argmin(np.abs(nodes - 100.0)))
+    at_change = st.node == change
+    assert at_change.sum() == 2  # one station per section
+    np.testing.assert_allclose(sorted(st.length[at_change]), sorted([1.5, (nodes[change] - nodes[change - 1]) / 2]))
+    np.testing.assert_allclose(sorted(st.gap[at_change]), sorted(radial_gap(D_HOLE, [D_PIPE, D_COLLAR])))
+    assert np.all(np.diff(st.node) >= 0) and st.node[0] == 0 and st.node[-1] == len(nodes) - 1
+    assert st.length[0] == pytest.approx((nodes[1] - nodes[0]) / 2)  # the end nodes get half an element
+    np.testing.assert_allclose(st.stiffness(K_PER_LENGTH), K_PER_LENGTH * st.length)
+    # Per-node sums of station values.
+    np.testing.assert_allclose(st.scatter(st.length, len(nodes)).sum(), 160.0)
+    with pytest.raises(ValueError, match="stiffness_per_length"):
+        st.stiffness(-1.0)
+    with pytest.raises(ValueError):
+        contact_stations(nodes, diameter[:-1], D_HOLE)
+
+
+@pytest.mark.parametrize("h", [(20.0, 20.0), (10.0, 7.0), (3.3, 1.1), (1.0, 0.25)])
+def test_uniform_penetration_gives_the_same_total_force_on_any_mesh(h):
+    """The whole string offset so that only the collar (smaller gap) penetrates by δ: total force
+    k' δ L_collar, torque μ k' δ L_collar D/2, whatever the mesh (nodal quadrature is exact); the
+    per-node law instead scales with the number of collar nodes."""
+    nodes, diameter = two_section_nodes(*h)
+    st = contact_stations(nodes, diameter, D_HOLE)
+    delta = 2e-3
+    r = float(radial_gap(D_HOLE, D_COLLAR)) + delta
+    angle = 0.7
+    v, w = np.full(len(nodes), r * math.cos(angle)), np.full(len(nodes), r * math.sin(angle))
+    fv, fw, tq, touching = station_forces(st, v, w)
+    expected = K_PER_LENGTH * delta * 60.0
+    assert math.hypot(fv.sum(), fw.sum()) == pytest.approx(expected, rel=1e-12)
+    assert -tq.sum() == pytest.approx(MU * expected * D_COLLAR / 2 * 10.0 / math.hypot(10.0, EPS), rel=1e-12)
+    assert touching == np.sum(st.gap < r)
+    per_node = evaluate_contact(v, w, 0.0, 0.0, 10.0, radial_gap(D_HOLE, np.append(diameter, D_COLLAR)),
+                                np.append(diameter, D_COLLAR), ContactParameters(K_PER_LENGTH, MU, EPS))
+    assert math.hypot(per_node[0].sum(), per_node[1].sum()) == pytest.approx(
+        K_PER_LENGTH * delta * np.sum(nodes > 100.0 - 1e-9), rel=1e-12)
+
+
+def _bow(x, length=160.0):
+    """An asymmetric bow [m] that touches the collar wall over part of its length."""
+    return 0.05 * np.sin(np.pi * x / length) * (0.6 + 0.8 * x / length)
+
+
+def _exact_resultants(gap_pipe, gap_collar, length=160.0, l_pipe=100.0):
+    """∫ k'(r − g)₊ dx and ∫ x k'(r − g)₊ dx by adaptive quadrature between the contact edges."""
+    force = moment = 0.0
+    for a, b, g in ((0.0, l_pipe, gap_pipe), (l_pipe, length, gap_collar)):
+        xs = np.linspace(a, b, 2001)
+        d = _bow(xs) - g
+        edges = [a] + [brentq(lambda x: _bow(x) - g, xs[i], xs[i + 1], xtol=1e-13)
+                       for i in np.nonzero(np.sign(d[:-1]) != np.sign(d[1:]))[0]] + [b]
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            if _bow(0.5 * (lo + hi)) > g:
+                force += quad(lambda x: K_PER_LENGTH * (_bow(x) - g), lo, hi, epsabs=0, epsrel=1e-13)[0]
+                moment += quad(lambda x: K_PER_LENGTH * x * (_bow(x) - g), lo, hi, epsabs=0,
+                               epsrel=1e-13)[0]
+    return force, moment
+
+
+def test_force_resultant_and_moment_converge_with_the_mesh():
+    """A bow penetrating the collar wall over part of its length (one contact edge inside an element,
+    wherever the mesh puts it): the resultant and its moment about the top converge at second order
+    to the exact integrals. Trapezoidal rule on each element: the smooth part errs by at most
+    h² ℓ_c max|F''|/12 and the element holding the contact edge (F has a kink there) by at most
+    h² |F'(edge)|/8, F = k'(r − g) or k' x (r − g); the bound is checked on 25 meshes."""
+    g_pipe, g_collar = float(radial_gap(D_HOLE, D_PIPE)), float(radial_gap(D_HOLE, D_COLLAR))
+    exact_force, exact_moment = _exact_resultants(g_pipe, g_collar)
+    assert exact_force > 0
+    x = np.linspace(100.0, 160.0, 60001)
+    inside = _bow(x) > g_collar
+    contact_length = x[inside][-1] - 100.0
+    bounds = []
+    for weight, exact in ((np.ones_like(x), exact_force), (x, exact_moment)):
+        f = K_PER_LENGTH * weight * (_bow(x) - g_collar)
+        d1, d2 = np.gradient(f, x), np.gradient(np.gradient(f, x), x)
+        bounds.append((contact_length * np.abs(d2[inside]).max() / 12 + np.abs(d1[inside]).max() / 8)
+                      / exact)
+    worst = 0.0
+    for h in np.geomspace(0.1, 8.0, 25):
+        nodes, diameter = two_section_nodes(h, h)
+        h_collar = nodes[-1] - nodes[-2]
+        st = contact_stations(nodes, diameter, D_HOLE)
+        fv, fw, _, _ = station_forces(st, _bow(nodes), np.zeros(len(nodes)))
+        errors = (abs(-fv.sum() / exact_force - 1), abs(-(fv * nodes[st.node]).sum() / exact_moment - 1))
+        for error, bound in zip(errors, bounds):
+            assert error <= bound * h_collar**2
+            worst = max(worst, error / (bound * h_collar**2))
+        if h <= 0.11:
+            assert max(errors) < 1e-5
+    assert worst > 0.05  # the bound is not loose by orders of magnitude
+
+
+def test_distributed_kernel_equals_per_node_kernel_for_equal_stiffnesses():
+    rng = np.random.default_rng(4)
+    n = 40
+    gap = np.full(n, GAP)
+    dia = np.full(n, D_O)
+    r = gap * rng.uniform(0.5, 1.5, n)
+    ang = rng.uniform(0, 2 * np.pi, n)
+    v, w = r * np.cos(ang), r * np.sin(ang)
+    vd, wd, spin = rng.normal(size=n), rng.normal(size=n), rng.normal(10.0, 3.0, n)
+    a = [np.empty(n) for _ in range(3)]
+    b = [np.empty(n) for _ in range(3)]
+    na = contact_forces(v, w, vd, wd, spin, gap, dia, K_SH, MU, EPS, True, *a)
+    nb = distributed_contact_forces(v, w, vd, wd, spin, gap, dia, np.full(n, K_SH), MU, EPS, True, *b)
+    assert na == nb == np.sum(r > gap)
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+    # And a varying stiffness scales each station's force and torque.
+    k = rng.uniform(1e6, 1e9, n)
+    distributed_contact_forces(v, w, vd, wd, spin, gap, dia, k, MU, EPS, True, *b)
+    np.testing.assert_allclose(b[0], a[0] * k / K_SH, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(b[2], a[2] * k / K_SH, rtol=1e-12, atol=0)
+
+
+def test_station_forces_derive_from_the_potential():
+    """F = −∇ Σ ½ k_i (r_i − g_i)₊² with k_i = k' ℓ_i (finite differences, μ = 0)."""
+    nodes, diameter = two_section_nodes(10.0, 5.0)
+    st = contact_stations(nodes, diameter, D_HOLE)
+    k = st.stiffness(K_PER_LENGTH)
+    params = ContactParameters(K_SH, 0.0, EPS)
+    rng = np.random.default_rng(5)
+    v = _bow(nodes) + rng.normal(0, 1e-3, len(nodes))
+    w = rng.normal(0, 2e-2, len(nodes))
+
+    def energy(vn, wn):
+        r = np.hypot(st.gather(vn), st.gather(wn))
+        return 0.5 * np.sum(k * np.maximum(r - st.gap, 0.0) ** 2)
+
+    fv, fw, _, _ = station_forces(st, v, w, params=params)
+    nodal_v, nodal_w = st.scatter(fv, len(nodes)), st.scatter(fw, len(nodes))
+    step = 1e-7
+    for i in np.nonzero(np.abs(nodal_v) > 0)[0][:5]:
+        e = np.zeros(len(nodes))
+        e[i] = step
+        dv = (energy(v + e, w) - energy(v - e, w)) / (2 * step)
+        dw = (energy(v, w + e) - energy(v, w - e)) / (2 * step)
+        assert nodal_v[i] == pytest.approx(-dv, rel=1e-5)
+        assert nodal_w[i] == pytest.approx(-dw, rel=1e-5, abs=1e-6 * abs(nodal_v[i]))
+
+
+def test_mesh_stations_of_the_reference_case(reference_mesh):
+    st = mesh_contact_stations(reference_mesh, 0.3)
+    assert st.length.sum() == pytest.approx(1600.0)
+    assert len(st) == reference_mesh.n_nodes + 1  # the drill pipe / drill collar node has two
+    k = st.stiffness(1e8)
+    assert k.max() == pytest.approx(1e9) and k[0] == pytest.approx(5e8)  # 10 m elements
+    with pytest.raises(ValueError, match="stiffness must be finite"):
+        evaluate_contact([0.0], [0.0], 0.0, 0.0, 0.0, GAP, D_O, P, stiffness=[-1.0])
+
+
+@pytest.fixture
+def reference_mesh(drill_pipe, drill_collar):
+    from drillstring.fem.mesh import build_mesh
+
+    return build_mesh([1400.0, 200.0], [drill_pipe, drill_collar], 10.0, [1560.0])

@@ -347,6 +347,26 @@ def test_gyroscopic_terms_do_no_work():
     assert qd @ f1 == pytest.approx(power, rel=1e-12)
 
 
+@pytest.mark.xfail(strict=True, reason="sign: T_nl = ∫ρI_p θ̇x θ̇z θy gives gyroscopic moments of the wrong "
+                   "sign for θy = −∂w/∂x; the spin about the tilted axis is θ̇x + θ̇y θz (or θ̇x − θ̇z θy), "
+                   "so case 1 stiffens backward instead of forward whirl (issue 10 report)")
+def test_linearised_kinetic_forces_are_the_gyroscopic_matrix():
+    """At θ̇x = Ω with small bending rates, f_vel is linear in q̇ and must be −Ω G q̇, G the element's
+    gyroscopic matrix (fem.element.element_gyroscopic, checked against the Campbell diagram of a
+    spinning shaft and the rate of the spin angular momentum)."""
+    from drillstring.fem.element import element_gyroscopic
+
+    rng = np.random.default_rng(31)
+    omega = 10.47
+    qd = np.zeros(12)
+    bending = np.r_[BENDING_Y_DOFS, BENDING_Z_DOFS]
+    qd[bending] = rng.normal(size=8) * 1e-3
+    qd[[3, 9]] = omega
+    f_vel, _ = element_kinetic_force(np.zeros(12), qd, SECTION, L)
+    expected = -omega * element_gyroscopic(SECTION, L) @ qd
+    np.testing.assert_allclose(f_vel[bending], expected[bending], rtol=1e-10, atol=1e-14)
+
+
 def test_kinetic_energy_conserved_for_free_element():
     """Lagrange's equations (M + M_nl(q)) q̈ = f_vel(q̇) conserve E = ½q̇ᵀMq̇ + T_nl (no stiffness)."""
     rng = np.random.default_rng(4)

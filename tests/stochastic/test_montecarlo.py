@@ -2,8 +2,10 @@
 
 import os
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -83,34 +85,49 @@ import sys
 from drillstring.case import case_from_dict
 import tomllib
 from drillstring.stochastic import montecarlo as mc
-case = case_from_dict(tomllib.loads(open(sys.argv[1]).read()))
-settings = mc.StudySettings(samples=40, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
-mc.run_study(case, settings, sys.argv[2], workers=1)
+if __name__ == "__main__":
+    case = case_from_dict(tomllib.loads(open(sys.argv[1]).read()))
+    settings = mc.StudySettings(samples=40, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
+    mc.run_study(case, settings, sys.argv[2], workers=2)
 """
 
 
+def _done_in(store) -> int:
+    try:
+        return int(np.sum(zarr.open_group(str(store), mode="r")["status"][:] == mc.DONE))
+    except Exception:  # not created yet
+        return 0
+
+
 def test_killed_process_resumes_to_the_same_result(small_case, tmp_path):
+    """kill -9 of a study running on 2 worker processes: the rerun takes over the stale lock (with a
+    note), its workers are gone, and it resumes to exactly the uninterrupted result."""
     settings = mc.StudySettings(samples=40, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
     case_file = tmp_path / "case.toml"
     case_file.write_text(small_case.to_toml())
+    script = tmp_path / "kill_me.py"  # a file, so that spawned workers can import the main module
+    script.write_text(KILL_SCRIPT)
     store = tmp_path / "killed.zarr"
-    proc = subprocess.Popen([sys.executable, "-c", KILL_SCRIPT, str(case_file), str(store)])
-    deadline = time.time() + 120
+    proc = subprocess.Popen([sys.executable, str(script), str(case_file), str(store)])
+    deadline = time.time() + 180
     done = 0
-    while time.time() < deadline and proc.poll() is None:
+    while time.time() < deadline and proc.poll() is None and done < 3:
         time.sleep(0.2)
-        try:
-            done = int(np.sum(zarr.open_group(str(store), mode="r")["status"][:] == mc.DONE))
-        except Exception:
-            continue
-        if done >= 3:
-            break
+        done = _done_in(store)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
     assert 3 <= done < 40, "the process should have been killed mid-study"
-    mc.run_study(small_case, settings, store, workers=1)
+    assert (tmp_path / "killed.zarr.lock").read_text().strip(), "the killed study left its lock record"
+    with pytest.warns(RuntimeWarning, match=f"stale lock .*pid {proc.pid}"):
+        resumed = mc.run_study(small_case, settings, store, workers=2)
+    assert resumed.completed == 40 and resumed.computed == 40 - _done_before(resumed)
+    assert not (tmp_path / "killed.zarr.lock").exists()  # released cleanly
     mc.run_study(small_case, settings, tmp_path / "full.zarr", workers=1)
     assert_same(arrays(store), arrays(tmp_path / "full.zarr"))
+
+
+def _done_before(run) -> int:
+    return run.completed + run.failed - run.computed
 
 
 def test_failed_realizations_are_recorded_and_excluded(small_case, tmp_path, monkeypatch):
@@ -136,13 +153,13 @@ def test_failed_realizations_are_recorded_and_excluded(small_case, tmp_path, mon
     expected = raw.rate_of_penetration.values[~above].mean(axis=0)
     np.testing.assert_allclose(stats.rate_of_penetration_mean.values, expected, rtol=1e-12)
 
-    # A huge sigma draws weights-on-hook above the string's weight: refused with the cause.
+    # A draw outside (0, string weight) cannot run: recorded as failed with the cause (a study with
+    # such a sigma is refused before running, see test_impossible_sigma_is_refused_before_running).
     wild = mc.StudySettings(samples=6, sigma=3e5, seed=1, t_end=0.2, output_step=0.05)
-    monkeypatch.setattr(mc, "simulate_model", real)
-    run = mc.run_study(small_case, wild, tmp_path / "wild.zarr", workers=1)
-    failures = load_study(tmp_path / "wild.zarr").attrs["failures"]
-    assert run.failed == len(failures) > 0
-    assert all("weight_on_bit" in m for m in failures.values())
+    draws = [mc.draw_weight_on_hook(small_case, wild, i) for i in range(6)]
+    impossible = next(i for i, woh in enumerate(draws) if not 0 < small_case.weight - woh < small_case.weight)
+    outcome = mc.run_realization(small_case, wild, impossible)
+    assert outcome.status == mc.FAILED and "weight_on_bit" in outcome.message
 
 
 def test_store_with_other_settings_is_refused(small_case, tmp_path):
@@ -153,45 +170,254 @@ def test_store_with_other_settings_is_refused(small_case, tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, field", [
-    (dict(samples=0, sigma=1.0), "samples"), (dict(samples=2, sigma=-1.0), "sigma"),
+    (dict(samples=0, sigma=1.0), "samples"), (dict(samples=1, sigma=1.0), "samples"),
+    (dict(samples=2.5, sigma=1.0), "samples"), (dict(samples=2, sigma=-1.0), "sigma"),
+    (dict(samples=2, sigma=float("nan")), "sigma"), (dict(samples=2, sigma=float("inf")), "sigma"),
     (dict(samples=2, sigma=1.0, seed=-3), "seed"), (dict(samples=2, sigma=1.0, t_end=0.0), "t_end"),
+    (dict(samples=2, sigma=1.0, t_end=float("inf")), "t_end"),
+    (dict(samples=2, sigma=1.0, t_end=1.0, output_step=float("nan")), "output_step"),
+    (dict(samples=2, sigma=1.0, t_end=1.0, output_step=-0.1), "output_step"),
 ])
 def test_bad_settings_are_refused(kwargs, field):
-    with pytest.raises(ValueError, match=field):
+    with pytest.raises(ValueError, match=f"^{field} = "):
         mc.StudySettings(**kwargs)
 
 
-def test_dask_cluster_gives_the_same_result(small_case, tmp_path):
+def test_out_of_range_probability_against_the_normal_law(small_case):
+    """P(wob outside (0, W)) = Φ(−wob/σ) + Φ(−(W − wob)/σ), checked against SciPy's Normal law and by
+    sampling; the largest accepted sigma puts it exactly at the threshold."""
+    from scipy.stats import norm
+
+    weight, wob = small_case.weight, small_case.operation.weight_on_bit
+    for sigma in (1e4, 3e4, 1e5, 1e6):
+        expected = norm.cdf(0.0, loc=wob, scale=sigma) + norm.sf(weight, loc=wob, scale=sigma)
+        assert mc.weight_on_bit_out_of_range_probability(small_case, sigma) == pytest.approx(expected, rel=1e-9)
+    drawn = small_case.weight - mc.nominal_weight_on_hook(small_case) - 1e5 * np.random.default_rng(0).standard_normal(200_000)
+    observed = np.mean((drawn <= 0) | (drawn >= weight))
+    assert observed == pytest.approx(mc.weight_on_bit_out_of_range_probability(small_case, 1e5), rel=0.02)
+    limit = mc.largest_accepted_sigma(small_case)
+    assert mc.weight_on_bit_out_of_range_probability(small_case, limit) == pytest.approx(
+        mc.OUT_OF_RANGE_PROBABILITY, rel=1e-6)
+    assert limit == pytest.approx(wob / norm.isf(mc.OUT_OF_RANGE_PROBABILITY), rel=1e-3)  # the W side is negligible
+
+
+def test_impossible_sigma_is_refused_before_running(small_case, tmp_path):
+    settings = mc.StudySettings(samples=10, sigma=1e6, seed=0, t_end=1.0, output_step=0.05)
+    with pytest.raises(ValueError, match=r"^sigma = 1e\+06 N: .* probability 0\.\d+, above 0\.001.* at most 32\.\d+ kN"):
+        mc.run_study(small_case, settings, tmp_path / "s.zarr", workers=1)
+    assert not (tmp_path / "s.zarr").exists()
+    accepted = mc.StudySettings(samples=2, sigma=0.99 * mc.largest_accepted_sigma(small_case), t_end=0.1,
+                                output_step=0.05)
+    mc.check_study(small_case, accepted)  # just below the threshold: accepted
+
+
+def test_a_finished_study_keeps_its_computation_time(small_case, tmp_path):
+    first = mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
+    again = mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
+    assert first.computed == SETTINGS.samples and again.computed == 0
+    sessions = again.store.sessions()
+    assert len(sessions) == 1 and sessions[0]["realizations"] == SETTINGS.samples
+    assert mc.computation_time(sessions) == (first.wall_time, 1)
+
+
+# --- store checks and locks ---------------------------------------------------------------------
+
+
+def test_a_folder_that_is_not_a_study_store_is_refused(small_case, tmp_path):
+    mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
+    group = zarr.open_group(str(tmp_path / "s.zarr"), mode="a")
+    del group["status"]
+    for attempt in (lambda: mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1),
+                    lambda: load_study(tmp_path / "s.zarr")):
+        with pytest.raises(mc.StudyStoreError, match=r"missing array\(s\): status\); delete it"):
+            attempt()
+    foreign = tmp_path / "foreign.zarr"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    with pytest.raises(mc.StudyStoreError, match="not a drillstring study store .no zarr.json"):
+        mc.run_study(small_case, SETTINGS, foreign, workers=1)
+    assert (foreign / "notes.txt").read_text() == "mine"  # left alone
+    other = tmp_path / "other.zarr"
+    zarr.open_group(str(other), mode="w").create_array("a", shape=(2,), dtype="f8")
+    with pytest.raises(mc.StudyStoreError, match="no fingerprint, settings, case attribute"):
+        load_study(other)
+    (other / "zarr.json").write_text("{not json")
+    with pytest.raises(mc.StudyStoreError, match="not a readable Zarr store"):
+        load_study(other)
+
+
+HOLD_SCRIPT = """
+import sys, time
+from drillstring.stochastic.locks import StudyLock
+with StudyLock(sys.argv[1]):
+    print("locked", flush=True)
+    time.sleep(120)
+"""
+
+
+def test_a_store_in_use_is_refused_for_writing_and_reading(small_case, tmp_path):
+    """Another process holds the study's lock: running or reading that store is refused at once,
+    naming the holder; once it is gone (kill -9), its stale lock is taken over with a note."""
+    store = tmp_path / "s.zarr"
+    mc.run_study(small_case, SETTINGS, store, workers=1)
+    holder = subprocess.Popen([sys.executable, "-c", HOLD_SCRIPT, str(store)], stdout=subprocess.PIPE,
+                              text=True)
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        with pytest.raises(mc.StudyLocked, match=f"in use by pid {holder.pid} on host .*another --out"):
+            mc.run_study(small_case, SETTINGS, store, workers=1)
+        with pytest.raises(mc.StudyLocked, match="no study is writing it"):
+            load_study(store)
+    finally:
+        holder.kill()
+        holder.wait()
+    notes = []
+    run = mc.run_study(small_case, SETTINGS, store, workers=1, note=notes.append)
+    assert run.completed == SETTINGS.samples and len(notes) == 1
+    assert f"stale lock (pid {holder.pid}" in notes[0] and run.note == notes[0]
+    assert load_study(store).sizes["realization"] == SETTINGS.samples
+
+
+def test_a_store_is_created_whole_or_not_at_all(small_case, tmp_path, monkeypatch):
+    """A creation that fails midway leaves no store (and no temporary folder) behind."""
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(mc.StudyStore, "_create", staticmethod(broken))
+    with pytest.raises(OSError, match="disk full"):
+        mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+# --- Dask ----------------------------------------------------------------------------------------
+
+
+def test_dask_cluster_gives_the_same_result_and_stops_resumably_without_workers(small_case, tmp_path):
+    """A real cluster (2 worker processes) computes exactly the local result. When every worker
+    leaves mid-study, the study says so and stops; with workers back, the rerun resumes."""
     from distributed import LocalCluster
 
     local = mc.run_study(small_case, SETTINGS, tmp_path / "local.zarr", workers=1)
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster:
-        remote = mc.run_study(small_case, SETTINGS, tmp_path / "dask.zarr",
-                              scheduler=cluster.scheduler_address)
-    assert remote.completed == local.completed
+        whole = mc.run_study(small_case, SETTINGS, tmp_path / "dask.zarr",
+                             scheduler=cluster.scheduler_address)
+        assert whole.completed == local.completed and whole.workers == cluster.scheduler_address
+        worker = next(iter(cluster.scheduler_info["workers"]))
+        with pytest.raises(mc.SchedulerUnreachable, match="that is a Dask Worker, not a scheduler"):
+            mc.connect_scheduler(worker)
+
+        def workers_leave(done, failed, total):
+            if done == 2 and cluster.workers:
+                cluster.scale(0)
+
+        with pytest.raises(mc.StudyWorkersLost, match="no worker for 2 s.*saved.*resume"):
+            mc.run_study(small_case, SETTINGS, tmp_path / "lost.zarr", scheduler=cluster.scheduler_address,
+                         progress=workers_leave, worker_timeout=2.0)
+        assert 2 <= _done_in(tmp_path / "lost.zarr") < SETTINGS.samples
+        cluster.scale(2)
+        cluster.wait_for_workers(2)
+        resumed = mc.run_study(small_case, SETTINGS, tmp_path / "lost.zarr",
+                               scheduler=cluster.scheduler_address)
+        assert resumed.completed == SETTINGS.samples and _done_before(resumed) >= 2
     assert_same(arrays(tmp_path / "local.zarr"), arrays(tmp_path / "dask.zarr"))
+    assert_same(arrays(tmp_path / "local.zarr"), arrays(tmp_path / "lost.zarr"))
+
+
+def _closed_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _tcp_server(greeting: bytes | None) -> socket.socket:
+    """A loopback TCP server that is not a Dask scheduler: it accepts connections and sends
+    ``greeting`` (or nothing) and then stays silent."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    kept = []
+
+    def serve():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            kept.append(conn)
+            if greeting:
+                conn.sendall(greeting)
+
+    threading.Thread(target=serve, daemon=True).start()
+    return server
+
+
+@pytest.mark.parametrize("kind, message", [
+    ("closed", "connection refused"),
+    ("silent", "the server there sent no Dask greeting within 1 s .not a Dask scheduler"),
+    ("ssh", "the server there does not speak the Dask protocol .not a Dask scheduler"),
+    ("http", "the server there does not speak the Dask protocol .not a Dask scheduler"),
+    ("malformed", "not an address like tcp://host:8786"),
+])
+def test_a_scheduler_address_that_is_no_scheduler_fails_fast(small_case, tmp_path, kind, message):
+    server = None
+    if kind == "closed":
+        address = f"tcp://127.0.0.1:{_closed_port()}"
+    elif kind == "malformed":
+        address = "tcp://127.0.0.1:notaport"
+    else:
+        greeting = {"silent": None, "ssh": b"SSH-2.0-OpenSSH_9.6\r\n",
+                    "http": b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n"}[kind]
+        server = _tcp_server(greeting)
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    try:
+        with pytest.raises(mc.SchedulerUnreachable, match=f"^scheduler = '{address}': {message}"):
+            mc.connect_scheduler(address, timeout=1.0)
+        with pytest.raises(mc.SchedulerUnreachable):  # nothing created
+            mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", scheduler=address)
+        assert not (tmp_path / "s.zarr").exists()
+    finally:
+        if server is not None:
+            server.close()
+
+
+# --- worker processes that die -----------------------------------------------------------------
 
 
 def die_on_index_2(case, settings, index):
-    """A realization task whose worker process dies on realization 2 (as on a crash or OOM kill)."""
+    """A realization task whose worker process dies on realization 2 (as on a crash or OOM kill); it
+    logs "index pid" first to the file named by $DRILLSTRING_TEST_LOG."""
+    with open(os.environ["DRILLSTRING_TEST_LOG"], "a") as log:
+        log.write(f"{index} {os.getpid()}\n")
     if index == 2:
         os._exit(1)
     return mc.run_realization(case, settings, index)
 
 
-def test_realization_that_kills_its_worker_is_recorded_not_retried_forever(small_case, tmp_path):
-    store = mc.StudyStore(tmp_path / "crash.zarr", small_case, SETTINGS)
-    mc._run_processes(small_case, SETTINGS, list(range(SETTINGS.samples)), 2, store.write,
+def test_realization_that_kills_its_worker_is_isolated_and_the_others_stay_parallel(
+        small_case, tmp_path, monkeypatch):
+    """Only the realizations running when the worker died are rerun alone (the culprit is recorded as
+    failed, the innocent one finishes); the others keep running on the 2-process pool: at most 3 pools'
+    worth of processes, not one fresh process per remaining realization."""
+    settings = mc.StudySettings(samples=10, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
+    log = tmp_path / "log.txt"
+    monkeypatch.setenv("DRILLSTRING_TEST_LOG", str(log))
+    store = mc.StudyStore(tmp_path / "crash.zarr", small_case, settings)
+    mc._run_processes(small_case, settings, list(range(settings.samples)), 2, store.write,
                       task=die_on_index_2)
     status = store.status()
     assert status[2] == mc.FAILED and "worker process died" in store.failures()["2"]
-    assert np.all(status[[0, 1, 3, 4]] == mc.DONE)
+    others = [i for i in range(settings.samples) if i != 2]
+    assert np.all(status[others] == mc.DONE)
+    started = [line.split() for line in log.read_text().splitlines()]  # (index, pid) per start
+    pids = {pid for _, pid in started}
+    assert len(pids) <= 3 * 2, f"{len(pids)} worker processes for {settings.samples} realizations"
+    assert [index for index, _ in started].count("2") == 2  # in the pool, then alone
     # The others are exactly what an undisturbed run computes.
-    mc.run_study(small_case, SETTINGS, tmp_path / "ref.zarr", workers=1)
+    mc.run_study(small_case, settings, tmp_path / "ref.zarr", workers=1)
     a, b = arrays(tmp_path / "crash.zarr"), arrays(tmp_path / "ref.zarr")
-    for name in ("rate_of_penetration", "bit_speed"):
-        np.testing.assert_array_equal(a[name][[0, 1, 3, 4]], b[name][[0, 1, 3, 4]])
+    for name in ("rate_of_penetration", "bit_speed", "weight_on_hook"):
+        np.testing.assert_array_equal(a[name][others], b[name][others])
 
 
 def test_drawn_weights_agree_with_the_statics_with_fluid_axial_loads(small_case):

@@ -339,3 +339,19 @@ def test_dispersion_summary_validation():
     )
     # ROP ∝ WOH⁸ here, so the dispersion is amplified about 8 times
     assert summary["rate_of_penetration"]["ratio_time_mean"]["weight_on_hook"] == pytest.approx(8.0, rel=0.15)
+
+
+def test_record_start_after_the_mean_leaves_zero():
+    from drillstring.stochastic.statistics import record_start
+
+    t = np.arange(0.0, 20.0, 0.01)
+    mean = np.minimum(t / 2.0, 1.0)  # ramps from 0 to 1 over 2 s, then steady
+    start = record_start(t, mean, 10.0)
+    assert start == pytest.approx(0.2)  # first time with |mean| >= 0.1 of its steady value
+    assert record_start(t, np.ones_like(t), 10.0) == 0.0  # never near 0: the record starts at t = 0
+    dipped = mean.copy()
+    dipped[(t > 5.0) & (t < 5.5)] = 0.0  # a late dip before the transient ends moves the start after it
+    assert record_start(t, dipped, 10.0) == pytest.approx(5.5)
+    mean_nan = mean.copy()
+    mean_nan[0] = np.nan
+    assert record_start(t, mean_nan, 10.0) == pytest.approx(0.2)

@@ -8,13 +8,13 @@ lateral modes in each plane. The reduced equations are
 
     η̈ + (D + Φᵀ C_f Φ) η̇ + diag(ω²) η = Φᵀ (f_NL(q, q̇) + wob e_bit,u) + g
 
-where ``g`` is a constant generalized force (:attr:`ReducedOrderModel.generalized_force`, zero by
-default), ``D`` is modal damping ``2 ξ ω_i`` on the elastic modes and ``c1 / m_string`` on the rigid axial
-mode, ``C_f`` the fluid (Coriolis + viscous) damping, and ``wob e_bit,u`` removes the static bit
-reaction that ``q_S`` already balances (the hook force stays equal to the static weight-on-hook,
-SPEC §7). The top rotation is imposed: ``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is
-``Ω + (Φ η̇)_θx``; the rigid rotation is prescribed, hence its damping coefficient ``c2`` does not
-enter the response (it only adds ``c2 Ω`` to the torque the rotary table supplies).
+where ``D`` is the structural damping and ``g`` the constant generalised force of the damping of the
+imposed top rotation (:mod:`drillstring.damping`: by default ξ, c1 and c2 defined on the free–free
+modes, giving a dense torsional block; or ``2 ξ ω_i`` on every basis mode;
+:attr:`ReducedOrderModel.generalized_force`, zero when not given), ``C_f`` the fluid (Coriolis + viscous)
+damping, and ``wob e_bit,u`` removes the static bit reaction that ``q_S`` already balances (the hook force
+stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed:
+``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
 the bit node and the borehole shocks and rubbing at every node, evaluated in physical DOFs and
@@ -33,8 +33,14 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
+from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
-from drillstring.forces.bit_rock import BitRockParameters, bit_rock_force_floored, evaluate_bit_rock
+from drillstring.forces.bit_rock import (
+    BitRockParameters,
+    bit_rock_force_floored,
+    evaluate_bit_rock,
+    stick_speed_floor_ratio,
+)
 from drillstring.forces.contact import ContactParameters, contact_forces, evaluate_contact
 from drillstring.forces.nonlinear import (
     NonlinearElements,
@@ -589,13 +595,18 @@ def reduced_model(
     bit_rock: BitRockParameters,
     contact: ContactParameters,
     borehole_diameter: float,
+    rigid_rotation_damping: float = 0.0,
+    damping_basis: str = "free_free",
     probe_positions=(),
     nonlinear: str = "bit_and_contact",
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one).
 
     Args:
-        rigid_axial_damping: c1 [N·s/m], viscous resistance to the rigid axial motion.
+        modal_damping_ratio: ξ [-]; rigid_axial_damping: c1 [N·s/m], viscous resistance to the
+            rigid axial motion; rigid_rotation_damping: c2 [N·m·s/rad], to the rigid rotation.
+        damping_basis: "free_free" (ξ, c1, c2 on the free–free modes) or "constrained" (ξ on every
+            basis mode); see :mod:`drillstring.damping`.
         top_speed: Ω [rad/s].
         borehole_diameter: D_ch [m].
     """
@@ -605,13 +616,13 @@ def reduced_model(
     omega = np.concatenate([f.angular_frequencies for f in families])
     family = ["rigid_axial"] + ["axial"] * axial_modes
     family += ["torsional"] * torsional_modes + ["lateral_y"] * lateral_modes + ["lateral_z"] * lateral_modes
-    damping = basis.T @ (system.fluid_damping @ basis)
-    elastic = np.arange(1, len(omega))
-    damping[elastic, elastic] += 2.0 * modal_damping_ratio * np.abs(omega[elastic])
+    structural = reduced_structural_damping(
+        system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
+        rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping, top_speed=top_speed,
+        definition=damping_basis,
+    )
+    damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
     mesh = static.mesh
-    string_mass = float(np.sum(system.structural_mass[dof(np.arange(mesh.n_nodes), U)]
-                               [:, dof(np.arange(mesh.n_nodes), U)]))
-    damping[0, 0] += rigid_axial_damping / string_mass
     node_sections = mesh.node_section()
     outer = np.array([mesh.sections[i].outer_diameter for i in node_sections])
     return ReducedOrderModel(
@@ -620,7 +631,7 @@ def reduced_model(
         weight_on_bit=static.weight_on_bit, bit_rock=bit_rock, contact=contact,
         gap=(borehole_diameter - outer) / 2.0, outer_diameter=outer,
         probe_positions=np.asarray(probe_positions, dtype=float),
-        nonlinear=nonlinear,
+        nonlinear=nonlinear, generalized_force=structural.generalized_force,
     )
 
 
@@ -649,8 +660,13 @@ def case_reduced_model(
         lateral_modes=r.lateral_modes if lateral_modes is None else lateral_modes,
         modal_damping_ratio=case.damping.modal_damping_ratio,
         rigid_axial_damping=case.damping.rigid_axial,
+        rigid_rotation_damping=case.damping.rigid_rotation,
+        damping_basis=case.damping.basis,
         top_speed=case.operation.top_speed,
-        bit_rock=BitRockParameters(b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization),
+        bit_rock=BitRockParameters(
+            b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
+            stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit),
+        ),
         contact=ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
                                   c.tangential_friction),
         borehole_diameter=case.borehole.diameter,

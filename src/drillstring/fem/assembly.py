@@ -26,6 +26,7 @@ from drillstring.fem.dofs import (  # noqa: F401  (re-exported: the numbering's 
 )
 from drillstring.fem.element import (
     element_geometric_stiffness,
+    element_gyroscopic,
     element_gravity_load,
     element_mass,
     element_stiffness,
@@ -79,6 +80,15 @@ def structural_matrices(mesh: Mesh) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     k = assemble_matrix(mesh.n_dofs, (element_stiffness(s, h) for s, h in pairs))
     m = assemble_matrix(mesh.n_dofs, (element_mass(s, h) for s, h in pairs))
     return k, m
+
+
+def gyroscopic_matrix(mesh: Mesh) -> sp.csr_matrix:
+    """Global gyroscopic matrix [G] per unit spin speed (skew-symmetric): a string spinning at Ω
+    [rad/s] has ``M q̈ + Ω G q̇ + K q = f`` (:func:`~drillstring.fem.element.element_gyroscopic`)."""
+    return assemble_matrix(
+        mesh.n_dofs,
+        (element_gyroscopic(s, h) for s, h in zip(mesh.element_sections(), mesh.element_lengths)),
+    )
 
 
 def geometric_stiffness(mesh: Mesh, nodal_axial_force: np.ndarray) -> sp.csr_matrix:

@@ -251,6 +251,41 @@ def element_geometric_stiffness(
     )
 
 
+@_frozen
+def polar_rotary_inertia(section: BeamSection, length: float) -> np.ndarray:
+    """Planar ``R = ρI_p ∫ N_ψᵀ N_ψ dx``, 4×4 [kg·m², kg·m, kg] (DOFs v1, ψ1, v2, ψ2)."""
+    s = planar_shapes(length, shear_parameter(section, length))
+    return section.density * section.polar_moment * _integrate(s.weights, s.rotation, s.rotation)
+
+
+@_frozen
+def element_gyroscopic(section: BeamSection, length: float) -> np.ndarray:
+    """Gyroscopic matrix [G_e], 12×12, skew-symmetric, per unit spin speed [kg·m²/rad]: a string
+    spinning at Ω [rad/s] about +x gets ``Ω G q̇`` on the left-hand side of its lateral equations
+    (``M q̈ + Ω G q̇ + K q = f``).
+
+    Derivation: a section tilted by the small bending rotations (θy, θz) has its axis along
+    ``n = (1, θz, −θy)``; its spin about that axis is ``θ̇x + θ̇y θz`` to second order (rotation
+    sequence θy then θz then θx; other sequences differ by ``d(θyθz)/dt``, which gives no force at
+    constant Ω). The kinetic energy ``½ ρI_p (Ω + θ̇y θz)²`` has the gyroscopic part
+    ``T_G = Ω ∫ ρI_p θ̇y θz dx``, and Lagrange's equations give the moments ``+ρI_p Ω θ̇z`` on θy and
+    ``−ρI_p Ω θ̇y`` on θz (the rate of change of the spin angular momentum ``ρI_p Ω n``). With
+    ``θz = N_ψ q_y``, ``θy = −N_ψ S q_z`` (module docstring) and ``R`` = :func:`polar_rotary_inertia`::
+
+        G[y, z] = R S,    G[z, y] = −S R = −G[y, z]ᵀ
+
+    (Nelson & McVaugh, J. Eng. Ind. 98 (1976) 593, eq. for the gyroscopic matrix, in this element's
+    interpolation and DOF signs). With Ω > 0 it raises forward whirl (orbit y → z, with the spin)
+    and lowers backward whirl.
+    """
+    r = polar_rotary_inertia(section, length)
+    rs = r * PLANE_Z_SIGNS  # R S
+    out = np.zeros((DOFS_PER_ELEMENT, DOFS_PER_ELEMENT))
+    out[np.ix_(BENDING_Y_DOFS, BENDING_Z_DOFS)] = rs
+    out[np.ix_(BENDING_Z_DOFS, BENDING_Y_DOFS)] = -rs.T
+    return out
+
+
 def element_gravity_load(mass_per_length: float, length: float, gravity: float) -> np.ndarray:
     """Consistent nodal loads of a uniform axial weight ρ_eff A g [N/m] along +x (down): ½ each node."""
     f = np.zeros(DOFS_PER_ELEMENT)

@@ -27,6 +27,39 @@ sliding velocity along the tangent is::
 tangential force opposes ``s``. Its sign is regularised on the velocity scale ``ε R`` [m/s], i.e.
 ``sgn_ε(s/R)`` with the same ``ε`` [rad/s] as the torque, so that ``ε`` keeps one unit.
 
+Distributed wall stiffness (mesh-objective contact)
+--------------------------------------------------
+A per-node ``k_sh`` makes the law depend on the mesh: a length ``ℓ`` of string pressed ``δ`` into the wall
+pushes back ``k_sh δ`` times the number of nodes on ``ℓ``. The wall is therefore modelled as a
+**distributed** stiffness ``k'_sh`` [N/m per m of string = N/m²]: the string section at ``x`` receives
+``f(x) = −k'_sh (r(x) − g(x))₊ n(x)`` per unit length [N/m]. Its work-consistent nodal forces
+``F_i = ∫ f N_i dx`` are integrated element by element with **nodal (trapezoidal, Lobatto) quadrature**:
+each element of length ``h_e`` gives each of its two nodes ``h_e/2 · f(x_node)``, evaluated with the
+element's own gap and diameter. The contact is thus carried by *stations* (:class:`ContactStations`), one
+per node and adjacent section: a node inside a section has one station of tributary length
+``(h_{e−1} + h_e)/2``; a node at a section change has two (``h/2`` with each section's gap), so the
+collar's smaller gap does not extend half an element into the drill pipe. Station ``i`` acts as a point
+spring ``k_i = k'_sh ℓ_i`` (:meth:`ContactStations.stiffness`) in :func:`distributed_contact_forces`.
+
+Why nodal quadrature (rather than the consistent integral or Gauss points):
+
+- it is exact for the total force of any penetration that is linear on each element (the trapezoidal
+  rule), in particular for a uniform penetration over any set of whole sections, on any mesh; for a
+  smooth penetration that starts and ends inside elements (a bow touching the wall) the force resultant
+  and its moment converge as ``O(h²)`` (kinks included: the integrand is continuous);
+- it samples the penetration where the DOFs are: no interpolation of the bending shape inside the kernel,
+  no forces on the rotation DOFs, the same per-station loop as the per-node law;
+- each station derives from its own convex potential ``½ k_i (r_i − g_i)₊²``, so the discrete contact is
+  conservative and purely repulsive; the consistent (``∫ N_vᵀ N_v``) integration of a penalty produces
+  adhesive nodal forces when an element penetrates at one end only, and Gauss points can miss a contact
+  that peaks at a node (a stabilizer-supported bow, the bit).
+
+Reading of the reference data: the reference study gives ``k_sh = 1e8 N/m`` for the shocks "per meter" of
+string. It is read as the distributed stiffness ``k'_sh = 1e8 N/m per m``: one metre of string pressed
+``δ`` into the wall pushes back ``1e8 δ`` N. On the default 10 m mesh an interior station then has
+``k_i = 1e9 N/m`` (5e8 N/m at the bit), ten times the old per-node value, which it equals on a 1 m mesh.
+Stabilizers stay point springs (:func:`drillstring.fem.assembly.stabilizer_stiffness`).
+
 Decision: as written in SPEC §6, the friction torque uses the sign of the spin ``θ̇x`` (not of ``s``), so with
 ``tangential=False`` the model is exactly the SPEC's; with ``tangential=True`` the lateral force is added
 and the torque is unchanged (the two differ only when the whirl velocity is comparable with the surface
@@ -43,9 +76,13 @@ from numba import njit
 
 __all__ = [
     "ContactParameters",
+    "ContactStations",
+    "contact_stations",
+    "mesh_contact_stations",
     "radial_gap",
     "regularized_sign",
     "contact_forces",
+    "distributed_contact_forces",
     "evaluate_contact",
 ]
 
@@ -57,7 +94,10 @@ class ContactParameters:
     Attributes
     ----------
     shock_stiffness : float
-        ``k_sh`` [N/m], penalty stiffness of the wall (reference 1e8 N/m).
+        ``k_sh`` [N/m], penalty stiffness of the wall at each node (reference 1e8 N/m), used as is by the
+        per-node law :func:`contact_forces`. The reference value is a stiffness per metre of string; the
+        mesh-objective law uses it as ``k'_sh`` [N/m per m] through :meth:`ContactStations.stiffness`
+        (module docstring).
     friction_coefficient : float
         ``μ_sh`` [-], string–borehole friction (reference 0.0005).
     speed_regularization : float
@@ -83,6 +123,83 @@ def radial_gap(borehole_diameter, outer_diameter):
     return 0.5 * (np.asarray(borehole_diameter, dtype=np.float64) - np.asarray(outer_diameter, dtype=np.float64))
 
 
+@dataclass(frozen=True)
+class ContactStations:
+    """Where the distributed wall stiffness acts: nodal quadrature of each element (module docstring).
+
+    Attributes (one entry per station, ordered by node):
+        node: index of the node the station sits on (int64); a node at a section change has two stations.
+        length: tributary length ℓ_i [m], half of each adjacent element of the station's section.
+        gap: radial clearance (D_ch − D_o)/2 of the station's section [m].
+        outer_diameter: D_o of the station's section [m].
+    """
+
+    node: np.ndarray
+    length: np.ndarray
+    gap: np.ndarray
+    outer_diameter: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.node)
+
+    def stiffness(self, stiffness_per_length: float) -> np.ndarray:
+        """Station stiffnesses ``k_i = k'_sh ℓ_i`` [N/m] of a wall stiffness ``k'_sh`` [N/m per m]."""
+        if not (math.isfinite(stiffness_per_length) and stiffness_per_length >= 0.0):
+            raise ValueError(
+                f"stiffness_per_length = {stiffness_per_length!r} N/m per m: must be finite and >= 0"
+            )
+        return stiffness_per_length * self.length
+
+    def gather(self, nodal: np.ndarray) -> np.ndarray:
+        """Values at the stations of a per-node array (the last axis indexes nodes)."""
+        return np.asarray(nodal)[..., self.node]
+
+    def scatter(self, values: np.ndarray, n_nodes: int) -> np.ndarray:
+        """Per-node sums of per-station values (forces or torques of the stations on each node)."""
+        return np.bincount(self.node, weights=np.asarray(values, dtype=float), minlength=n_nodes)
+
+
+def contact_stations(nodes, element_outer_diameter, borehole_diameter) -> ContactStations:
+    """Contact stations of a string by nodal quadrature of each element (module docstring).
+
+    Args:
+        nodes: node positions x [m], increasing.
+        element_outer_diameter: D_o of each element [m] (one fewer than the nodes).
+        borehole_diameter: D_ch [m], scalar or one per element.
+    """
+    x = np.asarray(nodes, dtype=np.float64)
+    d_o = np.asarray(element_outer_diameter, dtype=np.float64)
+    if x.ndim != 1 or len(x) < 2 or d_o.shape != (len(x) - 1,):
+        raise ValueError("need node positions (n >= 2) and one outer diameter per element (n − 1)")
+    h = np.diff(x)
+    if np.any(h <= 0.0):
+        raise ValueError("node positions must increase strictly")
+    gap = np.broadcast_to(radial_gap(borehole_diameter, d_o), d_o.shape)
+    if np.any(gap < 0.0):
+        raise ValueError("borehole diameter must be at least the outer diameter (gap >= 0)")
+    # each element gives h/2 to each of its nodes, with its own gap and diameter
+    element = np.arange(len(h))
+    node = np.concatenate([element, element + 1])
+    half = np.concatenate([h, h]) / 2.0
+    g = np.concatenate([gap, gap])
+    d = np.concatenate([d_o, d_o])
+    keys = np.stack([node, g, d], axis=1)
+    unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+    length = np.bincount(inverse.ravel(), weights=half)
+    return ContactStations(
+        node=unique[:, 0].astype(np.int64),
+        length=length,
+        gap=np.ascontiguousarray(unique[:, 1]),
+        outer_diameter=np.ascontiguousarray(unique[:, 2]),
+    )
+
+
+def mesh_contact_stations(mesh, borehole_diameter: float) -> ContactStations:
+    """:func:`contact_stations` of a :class:`~drillstring.fem.mesh.Mesh` in a borehole of diameter D_ch [m]."""
+    outer = np.array([mesh.sections[i].outer_diameter for i in mesh.element_section])
+    return contact_stations(mesh.nodes, outer, borehole_diameter)
+
+
 @njit(cache=True)
 def regularized_sign(s, eps):
     """``sgn_ε(s) = s / sqrt(s² + ε²)`` (odd, continuous, ``-> ±1`` for ``|s| >> ε``; 0 at ``s = 0``)."""
@@ -93,6 +210,30 @@ def regularized_sign(s, eps):
 
 
 @njit(cache=True)
+def _station_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, k, mu, eps, tangential):
+    """Contact force ``(f_v, f_w)`` [N] and torque [N·m] at one station of stiffness ``k`` [N/m], and
+    whether it touches: the law of the module docstring, shared by every kernel."""
+    r = math.hypot(v, w)
+    if not (r > gap and r > 0.0):
+        return 0.0, 0.0, 0.0, False
+    normal = k * (r - gap)
+    nv = v / r
+    nw = w / r
+    radius = 0.5 * outer_diameter
+    fv = -normal * nv
+    fw = -normal * nw
+    friction = mu * normal
+    torque = -friction * radius * regularized_sign(spin_speed, eps)
+    if tangential:
+        # slip = θ̇x R + (v ẇ − w v̇)/r ; tangent t = (−n_w, n_v); sign regularised on ε R [m/s]
+        slip = spin_speed * radius + nv * w_dot - nw * v_dot
+        ft = -friction * regularized_sign(slip, eps * radius)
+        fv += ft * (-nw)
+        fw += ft * nv
+    return fv, fw, torque, True
+
+
+@njit(cache=True)
 def contact_forces(
     v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, k_sh, mu, eps, tangential, force_v, force_w, torque
 ):
@@ -100,74 +241,72 @@ def contact_forces(
 
     Inputs (1-D float64 arrays, one entry per node): ``v``, ``w`` lateral displacements [m], ``v_dot``,
     ``w_dot`` lateral velocities [m/s], ``spin_speed`` θ̇x [rad/s], ``gap`` radial clearance
-    ``(D_ch − D_o)/2`` [m], ``outer_diameter`` D_o [m]. Scalars: ``k_sh`` [N/m], ``mu`` [-], ``eps``
+    ``(D_ch − D_o)/2`` [m], ``outer_diameter`` D_o [m]. Scalars: ``k_sh`` [N/m] (one stiffness for every
+    node: the mesh-dependent per-node law; see :func:`distributed_contact_forces`), ``mu`` [-], ``eps``
     [rad/s], ``tangential`` (bool). Outputs (overwritten, no allocation): ``force_v``, ``force_w`` [N]
     along y and z, ``torque`` [N·m] about +x. Model and slip-velocity derivation in the module docstring
     (SPEC §6).
     """
     n_contacts = 0
     for i in range(v.shape[0]):
-        vi = v[i]
-        wi = w[i]
-        r = math.hypot(vi, wi)
-        g = gap[i]
-        if r > g and r > 0.0:
-            n_contacts += 1
-            normal = k_sh * (r - g)
-            nv = vi / r
-            nw = wi / r
-            radius = 0.5 * outer_diameter[i]
-            fv = -normal * nv
-            fw = -normal * nw
-            friction = mu * normal
-            torque[i] = -friction * radius * regularized_sign(spin_speed[i], eps)
-            if tangential:
-                # slip = θ̇x R + (v ẇ − w v̇)/r ; tangent t = (−n_w, n_v); sign regularised on ε R [m/s]
-                slip = spin_speed[i] * radius + nv * w_dot[i] - nw * v_dot[i]
-                ft = -friction * regularized_sign(slip, eps * radius)
-                fv += ft * (-nw)
-                fw += ft * nv
-            force_v[i] = fv
-            force_w[i] = fw
-        else:
-            force_v[i] = 0.0
-            force_w[i] = 0.0
-            torque[i] = 0.0
+        fv, fw, tq, touching = _station_contact(v[i], w[i], v_dot[i], w_dot[i], spin_speed[i], gap[i],
+                                                outer_diameter[i], k_sh, mu, eps, tangential)
+        force_v[i] = fv
+        force_w[i] = fw
+        torque[i] = tq
+        n_contacts += touching
     return n_contacts
 
 
-def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params: ContactParameters):
-    """Contact forces for arrays of nodes: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``.
+@njit(cache=True)
+def distributed_contact_forces(
+    v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, stiffness, mu, eps, tangential, force_v, force_w,
+    torque,
+):
+    """:func:`contact_forces` with one stiffness per station: ``stiffness`` [N/m] (1-D float64), e.g.
+    :meth:`ContactStations.stiffness` of a distributed wall stiffness [N/m per m]. The other arrays hold
+    one entry per station (gather node values with ``ContactStations.node``); returns the number of
+    stations in contact."""
+    n_contacts = 0
+    for i in range(v.shape[0]):
+        fv, fw, tq, touching = _station_contact(v[i], w[i], v_dot[i], w_dot[i], spin_speed[i], gap[i],
+                                                outer_diameter[i], stiffness[i], mu, eps, tangential)
+        force_v[i] = fv
+        force_w[i] = fw
+        torque[i] = tq
+        n_contacts += touching
+    return n_contacts
+
+
+def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params: ContactParameters,
+                     stiffness=None):
+    """Contact forces for arrays of nodes or stations: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``.
 
     Array-likes are broadcast together to 1-D (``gap`` [m] and ``outer_diameter`` [m] may be scalars);
-    see :func:`contact_forces` for units and the model (SPEC §6).
+    see :func:`contact_forces` for units and the model (SPEC §6). Without ``stiffness`` every entry has
+    ``params.shock_stiffness`` [N/m] (per-node law); with ``stiffness`` [N/m] (one per entry, e.g.
+    :meth:`ContactStations.stiffness`) it replaces it (:func:`distributed_contact_forces`).
     """
-    arrays = np.broadcast_arrays(
-        *(np.atleast_1d(np.asarray(a, dtype=np.float64)) for a in (v, w, v_dot, w_dot, spin_speed, gap, outer_diameter))
-    )
+    inputs = [v, w, v_dot, w_dot, spin_speed, gap, outer_diameter]
+    if stiffness is not None:
+        inputs.append(stiffness)
+    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, dtype=np.float64)) for a in inputs))
     if arrays[0].ndim != 1:
         raise ValueError("evaluate_contact expects 1-D arrays (one entry per node)")
-    v_, w_, vd_, wd_, s_, g_, d_ = (np.ascontiguousarray(a) for a in arrays)
+    v_, w_, vd_, wd_, s_, g_, d_ = (np.ascontiguousarray(a) for a in arrays[:7])
     if np.any(g_ < 0.0):
         raise ValueError("gap must be >= 0 (the string is wider than the borehole)")
     n = v_.shape[0]
     force_v = np.zeros(n)
     force_w = np.zeros(n)
     torque = np.zeros(n)
-    n_contacts = contact_forces(
-        v_,
-        w_,
-        vd_,
-        wd_,
-        s_,
-        g_,
-        d_,
-        float(params.shock_stiffness),
-        float(params.friction_coefficient),
-        float(params.speed_regularization),
-        bool(params.tangential_friction),
-        force_v,
-        force_w,
-        torque,
-    )
+    common = (float(params.friction_coefficient), float(params.speed_regularization),
+              bool(params.tangential_friction), force_v, force_w, torque)
+    if stiffness is None:
+        n_contacts = contact_forces(v_, w_, vd_, wd_, s_, g_, d_, float(params.shock_stiffness), *common)
+    else:
+        k_ = np.ascontiguousarray(arrays[7])
+        if not np.all(np.isfinite(k_) & (k_ >= 0.0)):
+            raise ValueError("stiffness must be finite and >= 0 N/m at every station")
+        n_contacts = distributed_contact_forces(v_, w_, vd_, wd_, s_, g_, d_, k_, *common)
     return force_v, force_w, torque, int(n_contacts)

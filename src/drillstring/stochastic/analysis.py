@@ -2,23 +2,40 @@
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from drillstring.quantities import DEFAULT_TRANSIENT, LONG_NAMES, UNITS
-from drillstring.stochastic.montecarlo import DONE, FAILED, STUDY_OBSERVABLES
+from drillstring.dynamics.indicators import DEFAULT_TRANSIENT, drilling_indicators, transient_end
+from drillstring.quantities import LONG_NAMES, UNITS
+from drillstring.stochastic.montecarlo import (
+    DONE,
+    FAILED,
+    STUDY_OBSERVABLES,
+    open_study_group,
+)
+from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.statistics import (
     dispersion_summary,
     mean_square_convergence,
     realization_statistics,
+    record_start,
 )
+
 
 def load_study(store_path: str | Path) -> xr.Dataset:
     """The raw study: every realization (dimension ``realization``), its status and draw, the nominal
-    (deterministic, mean weight-on-hook) response, and the store's attributes."""
-    ds = xr.open_zarr(str(store_path), consolidated=False).load()
+    (deterministic, mean weight-on-hook) response, and the store's attributes.
+
+    Refused while another process runs a study on the store (:class:`~drillstring.stochastic.
+    locks.StudyLocked`: statistics are never computed from a store being written), and for a
+    folder that is not a complete study store (:class:`~drillstring.stochastic.montecarlo.
+    StudyStoreError`)."""
+    with StudyLock(store_path, shared=True):
+        open_study_group(store_path, mode="r")
+        ds = xr.open_zarr(str(store_path), consolidated=False).load()
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in STUDY_OBSERVABLES + ("radial_displacement",):
@@ -28,13 +45,19 @@ def load_study(store_path: str | Path) -> xr.Dataset:
     return ds
 
 
-def study_statistics(raw: xr.Dataset, level: float = 0.95) -> xr.Dataset:
+#: Vibration indicators recorded per realization (:mod:`drillstring.dynamics.indicators`).
+REALIZATION_INDICATORS = ("bit_speed_oscillation", "stick_time_fraction")
+
+
+def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | None = None) -> xr.Dataset:
     """Pointwise statistics over the finished realizations (failed ones excluded), the mean-square
     convergence ``conv(n_s)`` of each observable, and the nominal response.
 
     Variables: ``<v>_mean``, ``<v>_std``, ``<v>_lower``, ``<v>_upper`` (the ``level`` quantile envelope),
     ``<v>_dispersion`` (std/|mean|), ``<v>_nominal`` and ``<v>_convergence`` (dimension ``n_samples``),
-    for ``v`` in the study observables and ``radial_displacement`` (per probe).
+    for ``v`` in the study observables and ``radial_displacement`` (per probe); and, per finished
+    realization (dimension ``realization``), the vibration indicators ``bit_speed_oscillation`` and
+    ``stick_time_fraction`` after ``t_transient`` [s] (default ``min(10 s, t_end/2)``).
     """
     ok = raw.status.values == DONE
     names = list(STUDY_OBSERVABLES) + ["radial_displacement"]
@@ -52,6 +75,16 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95) -> xr.Dataset:
             conv, dims="n_samples", coords={"n_samples": np.arange(1, n_done + 1)},
             attrs={"units": f"({UNITS[name]})^2 s",
                    "long_name": f"conv(n_s) = (1/n_s) sum_j int ||{name}_j||^2 dt"},
+        )
+    t_transient = transient_end(float(time[-1])) if t_transient is None else float(t_transient)
+    top_speed = float(tomllib.loads(raw.attrs["case"])["operation"]["top_speed"])
+    rows = [drilling_indicators(time, done.rate_of_penetration.values[j], done.bit_speed.values[j], top_speed,
+                                t_transient) for j in range(n_done)]
+    for name in REALIZATION_INDICATORS:
+        stats[name] = xr.DataArray(
+            np.array([row[name] for row in rows], dtype=float), dims="realization",
+            coords={"realization": done.realization.values},
+            attrs={"units": "1", "long_name": f"{name.replace('_', ' ')} after t = {t_transient:g} s"},
         )
     woh = raw.weight_on_hook.values[ok]
     wob = raw.weight_on_bit.values[ok]
@@ -72,13 +105,18 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95) -> xr.Dataset:
         "weight_on_hook_sample_std": float(woh.std(ddof=1)),
         "weight_on_bit_sample_std": float(wob.std(ddof=1)),
         "case": raw.attrs.get("case", ""),
+        "t_transient": t_transient,
+        "top_speed": top_speed,
     })
     return stats
 
 
 def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> dict:
     """Per observable: time-mean and maximum dispersion after ``t_transient`` [s] and their ratios to
-    the weight-on-hook and weight-on-bit dispersions; plus the study's size and input dispersions."""
+    the weight-on-hook and weight-on-bit dispersions, and the same over the whole record
+    (``whole_record``: from :func:`~drillstring.stochastic.statistics.record_start`, the first time the
+    mean response is away from 0, as the reference study reports them); plus the study's size and
+    input dispersions."""
     inputs = {
         "weight_on_hook": stats.attrs["weight_on_hook_dispersion"],
         "weight_on_bit": stats.attrs["weight_on_bit_dispersion"],
@@ -86,12 +124,29 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> 
     per_variable = dispersion_summary(
         stats, list(STUDY_OBSERVABLES), t_transient=t_transient, input_dispersion=inputs
     )
+    time = stats.time.values
+    for name in STUDY_OBSERVABLES:
+        start = record_start(time, stats[f"{name}_mean"].values, t_transient)
+        whole = dispersion_summary(stats, [name], t_transient=start, input_dispersion=inputs)[name]
+        per_variable[name]["whole_record"] = {
+            key: whole[key] for key in ("dispersion_time_mean", "dispersion_max", "time_of_max", "t_start",
+                                        "ratio_time_mean", "ratio_max")
+        }
     convergence = {}
     for name in STUDY_OBSERVABLES:
         conv = stats[f"{name}_convergence"].values
         half = len(conv) // 2
         # Relative change of conv(n_s) over the second half of the realizations.
         convergence[name] = float(abs(conv[-1] - conv[half]) / abs(conv[-1])) if half else None
+    indicators = {}
+    for name in REALIZATION_INDICATORS:
+        if name in stats:
+            values = stats[name].values
+            indicators[name] = {"mean": float(values.mean()), "std": float(values.std(ddof=1)),
+                                "min": float(values.min()), "max": float(values.max())}
+    if "stick_time_fraction" in stats:
+        indicators["stick_slip_realizations"] = int((stats["stick_time_fraction"].values > 0).sum())
+        indicators["t_transient"] = float(stats.attrs.get("t_transient", t_transient))
     return {
         "n_samples": int(stats.attrs["n_samples"]),
         "n_failed": int(stats.attrs["n_failed"]),
@@ -103,4 +158,5 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> 
         "t_transient": float(t_transient),
         "observables": per_variable,
         "convergence_change_second_half": convergence,
+        "indicators": indicators,
     }

@@ -36,6 +36,7 @@ __all__ = [
     "dispersion",
     "realization_statistics",
     "dispersion_summary",
+    "record_start",
 ]
 
 #: Default quantile definition: NumPy's ``"linear"`` (Hyndman & Fan 1996, definition 7).
@@ -347,3 +348,24 @@ def dispersion_summary(
         }
         summary[str(v)] = entry
     return summary
+
+
+def record_start(time: np.ndarray, mean: np.ndarray, t_transient: float, fraction: float = 0.1) -> float:
+    """Start of the **whole record** of an observable for its dispersion summary [s].
+
+    A run starts from rest axially (ROP = 0 at t = 0 in every realization), so ``δ = std/|mean|`` is
+    undefined at first and meaningless while the mean is close to 0. The whole record starts at the
+    first output time after the last time before ``t_transient`` at which ``|mean(t)|`` is below
+    ``fraction`` (10 %) of its time average over ``t ≥ t_transient``; at the first output time when it
+    never is. ``time`` [s] and ``mean`` (the mean over realizations at each time) have one entry per
+    output time.
+    """
+    t = np.asarray(time, dtype=float)
+    m = np.abs(np.asarray(mean, dtype=float))
+    steady = t >= t_transient
+    reference = float(np.nanmean(m[steady])) if steady.any() else float(np.nanmean(m))
+    low = np.nonzero(((m < fraction * reference) | np.isnan(m)) & (t < t_transient))[0]
+    if low.size == 0:
+        return float(t[0])
+    first = int(low[-1]) + 1
+    return float(t[min(first, len(t) - 1)])

@@ -1,0 +1,220 @@
+"""Steady drilling and its linear stability (SPEC §6–§7).
+
+**Steady drilling** is the equilibrium of the reduced model in which the whole string turns at the top
+speed Ω and advances at a constant rate of penetration: the rigid axial coordinate moves at a constant
+speed, every other coordinate sits at a constant offset. With the bit–rock law (Tucker & Wang, SPEC §6)
+written as ``f(u̇, Ω) = f0 + f1 u̇`` (affine in the bit's axial speed at a fixed bit speed), the rigid axial
+equation ``b_r (f + wob) + g_r = D_rr η̇_r``, ``u̇ = b_r η̇_r`` gives, in closed form,
+
+    ROP = (b_r (f0 + wob) + g_r) / (D_rr / b_r − b_r f1)                                        (1)
+
+which is ``ROP = Z² (a2 wob − a1 + a3 √(Ω² + e²)) / (1 + a2 c1 Z²)`` for the reference model (``c1`` the
+rigid axial resistance; with ``c1 = 0`` it is SPEC §6's ``Z²(a2 wob − a1) + Z a3 Ω``). The bit speed is
+Ω, ``TOB = −t(ROP, Ω)``, ``FOB = −f(ROP, Ω)``, and the elastic offsets follow from ``ω_j² η_j`` = the
+constant generalised forces.
+
+**Linear stability.** About that state the reduced equations are linearised, the bit–rock law
+included::
+
+    δη̈ = −diag(ω²) δη − (D − J) δη̇,
+    J = b_u (f_u b_uᵀ + f_θ b_tᵀ) + b_t (t_u b_uᵀ + t_θ b_tᵀ)                                  (2)
+
+with ``b_u``, ``b_t`` the basis rows of the bit's axial and torsional DOFs and ``f_u = ∂f/∂u̇``,
+``f_θ = ∂f/∂θ̇``, ``t_u``, ``t_θ`` the partial derivatives of the law at ``(ROP, Ω)`` (closed forms in
+:func:`bit_rock_jacobian`). ``t_θ > 0`` is the velocity-weakening torque that acts as a negative
+damping on the torsional modes. The rigid axial position does not enter any equation (the depth drilled
+is indifferent) and is left out, so every eigenvalue is informative. Steady drilling is stable when
+every eigenvalue has a negative real part. Lateral modes are decoupled from the bit–rock law at the
+centred state; they enter with their own damping and stiffness (a negative ω², a buckled string, makes
+them unstable). The kinetic- and strain-energy forces of case 1 are at least quadratic in the lateral
+motion and are not linearised here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from drillstring.dynamics.rom import ReducedOrderModel
+from drillstring.forces.bit_rock import evaluate_bit_rock
+
+#: Families reported for the eigenvalues (lateral y and z together).
+STABILITY_FAMILIES = ("axial", "torsional", "lateral")
+
+
+@dataclass(frozen=True)
+class SteadyDrilling:
+    """Steady drilling (SI): ``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit``
+    [N·m], ``force_on_bit`` [N]; ``state`` is the reduced state ``[η, η̇]`` at t = 0 (rigid axial
+    coordinate 0)."""
+
+    rate_of_penetration: float
+    bit_speed: float
+    torque_on_bit: float
+    force_on_bit: float
+    state: np.ndarray
+
+    def to_dict(self) -> dict[str, float]:
+        return {"rate_of_penetration": self.rate_of_penetration, "bit_speed": self.bit_speed,
+                "torque_on_bit": self.torque_on_bit, "force_on_bit": self.force_on_bit}
+
+
+@dataclass(frozen=True)
+class ModeStability:
+    """One eigenvalue λ of the linearised model (one of each complex-conjugate pair).
+
+    ``frequency`` = |Im λ| / 2π [Hz], ``damping_ratio`` = −Re λ / |λ| [-], ``growth_rate`` = Re λ [1/s]
+    (> 0: the mode grows), ``family`` the family holding most of the mode's modal energy.
+    """
+
+    family: str
+    frequency: float
+    damping_ratio: float
+    growth_rate: float
+
+    @property
+    def eigenvalue(self) -> complex:
+        return complex(self.growth_rate, 2.0 * math.pi * self.frequency)
+
+
+@dataclass(frozen=True)
+class StabilityResult:
+    """Steady drilling and the eigenvalues of the reduced model linearised about it.
+
+    ``modes`` are sorted by frequency; ``stable`` is True when every growth rate is negative.
+    """
+
+    steady_state: SteadyDrilling
+    modes: list[ModeStability]
+
+    @property
+    def stable(self) -> bool:
+        return all(m.growth_rate < 0.0 for m in self.modes)
+
+    @property
+    def leading(self) -> ModeStability:
+        """The mode with the largest growth rate."""
+        return max(self.modes, key=lambda m: m.growth_rate)
+
+    def to_dict(self) -> dict:
+        """JSON-ready (SI): ``stable``, ``steady_state``, ``modes`` (list sorted by frequency)."""
+        return {"stable": self.stable, "steady_state": self.steady_state.to_dict(),
+                "modes": [asdict(m) for m in self.modes]}
+
+
+def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params) -> np.ndarray:
+    """``[[f_u, f_θ], [t_u, t_θ]]``: partial derivatives of the bit–rock force f [N] and torque t [N·m]
+    on the string (SPEC §6) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
+
+    With ``h = √(θ̇² + e²)``: ``f = −u̇ (1 + e²/θ̇²)/a2 + (a3 h − a1)/a2``, ``t = −a4 u̇ θ̇/h² − a5 θ̇/h``::
+
+        f_u = −(1 + e²/θ̇²)/a2,      f_θ = 2 e² u̇/(a2 θ̇³) + a3 θ̇/(a2 h),
+        t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
+
+    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term).
+    """
+    u, w = float(bit_axial_velocity), float(bit_speed)
+    a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
+    h2 = w * w + e * e
+    h = math.sqrt(h2)
+    floored = abs(w) < params.stick_speed_floor
+    speed = max(abs(w), params.stick_speed_floor)
+    f_u = -(1.0 + (e / speed) ** 2) / a2
+    f_theta = (0.0 if floored else 2.0 * e * e * u / (a2 * w**3)) + a3 * w / (a2 * h)
+    t_u = -a4 * w / h2
+    t_theta = -a4 * u * (e * e - w * w) / h2**2 - a5 * e * e / h**3
+    return np.array([[f_u, f_theta], [t_u, t_theta]])
+
+
+def _rigid_column(model: ReducedOrderModel) -> int:
+    columns = [i for i, f in enumerate(model.family) if f == "rigid_axial"]
+    if len(columns) != 1:
+        raise ValueError("the reduced model must hold exactly one rigid axial mode")
+    return columns[0]
+
+
+def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
+    """The steady drilling state of ``model``, eq. (1). Raises ValueError when the law gives no
+    penetration (ROP <= 0: the bit would lift off, the drilling regime does not exist)."""
+    r = _rigid_column(model)
+    b_r = model.bit_u[r]
+    omega = model.top_speed
+    f0, _ = evaluate_bit_rock(0.0, omega, model.bit_rock)
+    f1 = float(evaluate_bit_rock(1.0, omega, model.bit_rock)[0]) - float(f0)
+    d_rr = model.damping[r, r]
+    g = model.generalized_force
+    rop = (b_r * (float(f0) + model.weight_on_bit) + g[r]) / (d_rr / b_r - b_r * f1)
+    if not rop > 0.0:
+        raise ValueError(
+            f"no steady drilling at weight_on_bit = {model.weight_on_bit:.6g} N, top_speed = {omega:.6g} rad/s:"
+            f" the bit-rock law gives rate_of_penetration = {rop:.3g} m/s <= 0"
+        )
+    force, torque = (float(v) for v in evaluate_bit_rock(rop, omega, model.bit_rock))
+    n = model.size
+    velocity = np.zeros(n)
+    velocity[r] = rop / b_r
+    load = (model.bit_u * (force + model.weight_on_bit) + model.bit_t * torque + g
+            - model.damping @ velocity)
+    offsets = np.zeros(n)
+    elastic = model.omega2 != 0.0
+    offsets[elastic] = load[elastic] / model.omega2[elastic]
+    return SteadyDrilling(rate_of_penetration=float(rop), bit_speed=float(omega), torque_on_bit=-torque,
+                          force_on_bit=-force, state=np.concatenate([offsets, velocity]))
+
+
+def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
+    """State matrix ``A`` of eq. (2) for ``[δη, δη̇]`` (2n × 2n, rigid axial position included)."""
+    n = model.size
+    jac = bit_rock_jacobian(steady.rate_of_penetration, steady.bit_speed, model.bit_rock)
+    bu, bt = model.bit_u, model.bit_t
+    coupling = (np.outer(bu, jac[0, 0] * bu + jac[0, 1] * bt) + np.outer(bt, jac[1, 0] * bu + jac[1, 1] * bt))
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, n:] = np.eye(n)
+    a[n:, :n] = -np.diag(model.omega2)
+    a[n:, n:] = coupling - model.damping
+    return a
+
+
+def _family_of(model: ReducedOrderModel) -> np.ndarray:
+    return np.array(["lateral" if f.startswith("lateral") else ("axial" if f.endswith("axial") else f)
+                     for f in model.family])
+
+
+def stability(model: ReducedOrderModel) -> StabilityResult:
+    """Steady drilling of ``model`` and the eigenvalues of the model linearised about it."""
+    steady = steady_drilling(model)
+    n = model.size
+    a = linearized_matrix(model, steady)
+    keep = np.ones(2 * n, dtype=bool)
+    keep[_rigid_column(model)] = False  # the depth drilled: no equation depends on it
+    values, vectors = sla.eig(a[np.ix_(keep, keep)])
+    full = np.zeros((2 * n, len(values)), dtype=complex)
+    full[keep] = vectors
+    # modal energy of each coordinate: ½ (|δη̇|² + |ω²| |δη|²)
+    energy = np.abs(full[n:]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(full[:n]) ** 2
+    labels = _family_of(model)
+    modes = []
+    for k, lam in enumerate(values):
+        if lam.imag < 0.0:
+            continue
+        shares = [energy[labels == f, k].sum() for f in STABILITY_FAMILIES]
+        family = STABILITY_FAMILIES[int(np.argmax(shares))]
+        magnitude = abs(lam)
+        modes.append(ModeStability(
+            family=family, frequency=float(lam.imag / (2.0 * math.pi)),
+            damping_ratio=float(-lam.real / magnitude) if magnitude > 0 else 0.0,
+            growth_rate=float(lam.real),
+        ))
+    modes.sort(key=lambda m: (m.frequency, m.growth_rate))
+    return StabilityResult(steady, modes)
+
+
+def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResult:
+    """:func:`stability` of a :class:`~drillstring.case.Case`'s reduced model (``weight_on_bit`` [N]
+    overrides the case's)."""
+    from drillstring.dynamics.rom import case_reduced_model
+
+    return stability(case_reduced_model(case, weight_on_bit=weight_on_bit))

@@ -1,0 +1,42 @@
+"""The lock of a study store (light: the command line takes it before loading the study engine, so that
+a second study on the same folder is refused at once).
+
+A study running on ``<folder>/study.zarr`` holds ``<folder>/study.zarr.lock`` exclusively until its
+statistics, figures and report are written; reading a store for statistics takes it shared, so it is
+refused while a study writes the store (see :class:`drillstring.files.FileLock` for stale locks).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from drillstring.files import FileLock, LockedError
+
+
+class StudyLocked(LockedError):
+    """Another study runs on this store (or reads it); the message says who and what to do."""
+
+
+class StudyLock:
+    """Context manager holding the lock of the store at ``store_path`` (exclusive, or ``shared`` for
+    readers); a refusal raises :class:`StudyLocked` naming the store and the holder. ``note`` is set
+    when a stale lock (its holder died) was taken over. Re-entrant in one thread."""
+
+    def __init__(self, store_path: str | Path, *, shared: bool = False) -> None:
+        self.store_path = Path(store_path)
+        self.shared = shared
+        self.note: str | None = None
+        self._lock = FileLock(self.store_path.with_name(self.store_path.name + ".lock"), shared=shared,
+                              purpose="its finished realizations are kept")
+
+    def __enter__(self) -> "StudyLock":
+        try:
+            self.note = self._lock.acquire()
+        except LockedError as error:
+            what = ("statistics are computed from a store only when no study is writing it"
+                    if self.shared else "wait for that study to finish or use another --out folder")
+            raise StudyLocked(f"study store {self.store_path} is {error}; {what}") from None
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._lock.release()

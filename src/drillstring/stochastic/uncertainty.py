@@ -1,0 +1,683 @@
+"""Uncertain case parameters: laws built by the Maximum Entropy Principle from declared information.
+
+Any numeric case parameter (by its path, :mod:`drillstring.stochastic.parameters`, including the derived
+``weight_on_hook``) may be declared uncertain. What the user declares is *information* — a support, a mean,
+a standard deviation or a log-mean — and the law is the Maximum-Entropy density under that information
+(:func:`~drillstring.stochastic.maxent.maximum_entropy`; Jaynes 1957, Kapur 1989, Soize 2017 ch. 5). The law
+names below are shorthands for the classical information sets, whose MaxEnt laws are known in closed form;
+``maxent`` states the information directly and covers every other set through the numerical dual.
+
+Spec syntax
+-----------
+One string, usable as a case-file value and on the command line::
+
+    SPEC := LAW ARG* [UNIT]        ARG := NUMBER | KEY=NUMBER        KEY := min | max | mean | std | log_mean
+
+    "uniform 1.2 1.8 m/s"          "normal 100 5 rpm"              "exponential 2 mm"
+    "gamma mean=5.7e-8 std=0.6e-8" "gamma mean=5.7e-8 log_mean=-16.7"
+    "maxent min=1.2 max=1.8 mean=1.4 m/s"    "maxent min=1.2 max=1.8 mean=1.4 std=0.1 m/s"
+
+Positional numbers fill the law's keys in order (table below); ``key=value`` gives any allowed key. One unit,
+last, applies to every number (``min``, ``max``, ``mean``, ``std`` scale with it; ``log_mean = E{ln(X/unit)}``
+shifts by ``ln`` of the unit's SI factor). The unit must be of the parameter's dimension (the units of case
+files, :data:`drillstring.case.DIMENSIONS`); without a unit the numbers are SI. The same information may be
+given as a table, e.g. in TOML ``{law = "uniform", min = 1.2, max = 1.8, unit = "m/s"}``.
+
+=================  ===============  ==============================  ========================================
+law                positional       information (support; moments)  Maximum-Entropy law
+=================  ===============  ==============================  ========================================
+``uniform``        ``min max``      ``[min, max]``; none            uniform
+``normal``         ``mean std``     ``ℝ``; ``E{X}``, ``E{X²}``      normal ``N(mean, std²)``
+``exponential``    ``mean``         ``[min, ∞)`` (``min`` key,      exponential shifted to ``min``
+                                    default 0); ``E{X}``
+``gamma``          ``mean std``     ``(0, ∞)``; ``E{X}``,           gamma, shape ``k`` from
+                                    ``E{ln X}``                     ``ln k − ψ(k) = ln E{X} − E{ln X}``
+``maxent``         (keys only)      ``[min, max]`` (defaults        closed form when the set is one of the
+                                    ``−∞``, ``+∞``) and any of      above, else the numerical dual: bounded
+                                    ``mean``, ``std``, ``log_mean`` + mean -> truncated exponential; bounded
+                                                                    (or ``[0, ∞)``) + mean + std ->
+                                                                    truncated normal
+=================  ===============  ==============================  ========================================
+
+Which information gives the gamma law: on ``(0, ∞)`` the MaxEnt law under a mean and a *log-mean* is the
+gamma law. ``gamma mean=M std=S`` declares the same information with the log-mean chosen so that the law has
+standard deviation ``S``: ``E{ln X} = ψ(k) + ln θ`` with ``k = (M/S)²``, ``θ = S²/M`` — i.e. the gamma law of
+mean ``M`` and standard deviation ``S``. A mean and a standard deviation *alone* on ``(0, ∞)``
+(``maxent min=0 mean=M std=S``) give another law, the normal truncated to ``[0, ∞)`` (which exists only for
+``S < M``).
+
+A law must respect the parameter's range (:class:`~drillstring.stochastic.parameters.Bounds`): a law whose
+probability outside the range exceeds :data:`OUT_OF_RANGE_TOLERANCE` is refused (e.g. a normal top speed
+whose standard deviation is comparable with its mean); use a law on a bounded or positive support instead.
+Integer settings cannot carry a continuous law.
+
+Joint laws
+----------
+Parameters are independent unless a correlation matrix is declared for a subset of *normal* parameters:
+the MaxEnt density on ``ℝⁿ`` under a mean vector ``μ`` and a covariance matrix ``C`` is the multivariate
+normal ``N(μ, C)`` (Kapur 1989; Soize 2017 ch. 5), here with ``C = D R D``, ``D = diag(std)`` and ``R`` the
+declared correlation matrix (symmetric, unit diagonal, positive definite). Correlating laws other than the
+normal is refused: their MaxEnt joint law under a covariance is no longer of a known form, and a copula would
+not be a MaxEnt law. In a table::
+
+    [uncertainty.parameters]
+    "operation.top_speed" = "normal 100 5 rpm"
+    weight_on_hook = "normal 1063.4 5 kN"
+    [uncertainty.correlation]
+    parameters = ["operation.top_speed", "weight_on_hook"]
+    matrix = [[1.0, -0.3], [-0.3, 1.0]]
+
+Sampling
+--------
+All draws are the image of points of the unit hypercube ``(0, 1)^k`` (:meth:`Uncertainty.from_unit`):
+independent parameters by their inverse distribution functions ``x_j = F_j⁻¹(u_j)``; a correlated normal
+group by ``x = μ + D L Φ⁻¹(u)`` with ``L`` the Cholesky factor of ``R``. Monte Carlo realization ``i`` of a
+study seeded ``s`` takes ``u = rng.random(k)`` from its own stream
+:func:`~drillstring.stochastic.maxent.realization_generator` ``(s, i)`` (:meth:`Uncertainty.draw`), so a
+realization's values depend only on ``(s, i)`` and the declaration: not on workers, order or resumption.
+The Sobol' sampler (:mod:`drillstring.stochastic.sensitivity`) maps its Saltelli design through the same
+function. ``u`` is clipped to ``[2⁻⁵³, 1 − 2⁻⁵³]`` so that infinite ends are never returned.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import linalg, special, stats
+
+from drillstring.case import Case, Dimension, to_si
+from drillstring.stochastic.maxent import (
+    Constraint,
+    MaxEntDensity,
+    log_mean,
+    maximum_entropy,
+    mean,
+    realization_generator,
+    variance_constraints,
+)
+from drillstring.stochastic.parameters import CaseParameter, ParameterError, case_parameter, with_parameters
+
+__all__ = [
+    "LAWS",
+    "OUT_OF_RANGE_TOLERANCE",
+    "ParameterLaw",
+    "UncertainParameter",
+    "Uncertainty",
+    "parse_law",
+    "split_assignment",
+    "uncertainty",
+]
+
+#: Largest probability a law may put outside its parameter's range.
+OUT_OF_RANGE_TOLERANCE = 1e-6
+
+_U_MIN = 2.0**-53  # smallest / (1 − largest) point of the unit interval that is mapped
+
+
+@dataclass(frozen=True)
+class _Form:
+    positional: tuple[str, ...]
+    keys: frozenset[str]
+    canonical_positional: bool  # write the positional form in to_spec
+    example: str
+
+
+#: The laws of the spec syntax: positional keys, allowed keys (see the module docstring).
+LAWS: dict[str, _Form] = {
+    "uniform": _Form(("min", "max"), frozenset({"min", "max"}), True, "uniform 1.2 1.8 m/s"),
+    "normal": _Form(("mean", "std"), frozenset({"mean", "std"}), True, "normal 100 5 rpm"),
+    "exponential": _Form(("mean",), frozenset({"mean", "min"}), True, "exponential 2 mm"),
+    "gamma": _Form(
+        ("mean", "std"), frozenset({"mean", "std", "log_mean"}), False, "gamma mean=5.7e-8 std=0.6e-8"
+    ),
+    "maxent": _Form(
+        (), frozenset({"min", "max", "mean", "std", "log_mean"}), False, "maxent min=1.2 max=1.8 mean=1.4 m/s"
+    ),
+}
+_KEY_ORDER = ("min", "max", "mean", "std", "log_mean")
+_NUMBER = re.compile(r"^[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity)$", re.IGNORECASE)
+
+
+def _fmt(x: float) -> str:
+    text = repr(float(x))
+    return text[:-2] if text.endswith(".0") else text
+
+
+# ---------------------------------------------------------------------------------------------------------
+# One law
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ParameterLaw:
+    """A law as declared (in the declared unit) and the Maximum-Entropy density it defines (in SI).
+
+    Attributes
+    ----------
+    law:
+        ``"uniform"``, ``"normal"``, ``"exponential"``, ``"gamma"`` or ``"maxent"``.
+    declared:
+        The declared numbers ``(key, value)`` in the declared unit, in the order min, max, mean, std, log_mean.
+    unit:
+        The declared unit (``""``: SI).
+    support:
+        ``(a, b)`` in SI, ends possibly infinite.
+    constraints:
+        The moment constraints in SI (``mean``, ``second_moment``, ``log_mean``).
+    density:
+        The :class:`~drillstring.stochastic.maxent.MaxEntDensity` (SI); ``density.kind`` names the law found.
+    """
+
+    law: str
+    declared: tuple[tuple[str, float], ...]
+    unit: str
+    support: tuple[float, float] = field(compare=False)
+    constraints: tuple[Constraint, ...] = field(compare=False, repr=False)
+    density: MaxEntDensity = field(compare=False, repr=False)
+
+    @property
+    def value(self) -> dict[str, float]:
+        """The declared numbers by key (declared unit)."""
+        return dict(self.declared)
+
+    def to_spec(self) -> str:
+        """The canonical spec string; :func:`parse_law` reads it back to an equal law."""
+        form = LAWS[self.law]
+        values = self.value
+        words = [self.law]
+        if form.canonical_positional:
+            words += [_fmt(values[k]) for k in form.positional]
+            words += [f"{k}={_fmt(v)}" for k, v in self.declared if k not in form.positional]
+        else:
+            words += [f"{k}={_fmt(v)}" for k, v in self.declared]
+        if self.unit:
+            words.append(self.unit)
+        return " ".join(words)
+
+    def to_mapping(self) -> dict[str, Any]:
+        """The table form ``{"law": ..., key: value, ..., "unit": ...}`` (declared unit)."""
+        out: dict[str, Any] = {"law": self.law, **self.value}
+        if self.unit:
+            out["unit"] = self.unit
+        return out
+
+    def __str__(self) -> str:
+        return self.to_spec()
+
+
+def _tokens(spec: str) -> tuple[str, list[str]]:
+    text = re.sub(r"\s*=\s*", "=", spec.strip())
+    words = text.split()
+    if not words:
+        raise ValueError(f"empty law; write LAW NUMBERS [UNIT], e.g. {LAWS['uniform'].example!r}")
+    return words[0].lower(), words[1:]
+
+
+def _read_spec(spec: str) -> tuple[str, list[tuple[str | None, float]], str]:
+    """``(law, [(key or None for positional, number)], unit)`` from a spec string."""
+    law, words = _tokens(spec)
+    args: list[tuple[str | None, float]] = []
+    unit_words: list[str] = []
+    for word in words:
+        key, _, number = word.rpartition("=") if "=" in word else (None, "", word)
+        if _NUMBER.match(number) and not unit_words:
+            if key is not None and not key:
+                raise ValueError(f"'{word}' has no key before '='")
+            args.append((key, float(number)))
+        elif _NUMBER.match(number):
+            raise ValueError(f"'{word}' comes after the unit '{' '.join(unit_words)}': write the unit once, last")
+        elif key is not None:
+            raise ValueError(f"'{word}': the value of {key} must be a number (the unit goes once, at the end)")
+        else:
+            unit_words.append(word)
+    return law, args, " ".join(unit_words)
+
+
+def _read_mapping(spec: Mapping[str, Any]) -> tuple[str, list[tuple[str | None, float]], str]:
+    if "law" not in spec:
+        raise ValueError(f"a law table needs a 'law' key ({', '.join(LAWS)}), got keys {', '.join(spec) or 'none'}")
+    law = str(spec["law"]).lower()
+    unit = spec.get("unit", "")
+    if not isinstance(unit, str):
+        raise ValueError(f"unit = {unit!r} must be a string")
+    args: list[tuple[str | None, float]] = []
+    for key, value in spec.items():
+        if key in ("law", "unit"):
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{key} = {value!r} must be a number (the unit goes in the 'unit' key)")
+        args.append((str(key), float(value)))
+    return law, args, unit
+
+
+def _assign(law: str, args: list[tuple[str | None, float]]) -> dict[str, float]:
+    if law not in LAWS:
+        raise ValueError(f"unknown law {law!r}; laws: {', '.join(LAWS)}")
+    form = LAWS[law]
+    values: dict[str, float] = {}
+    positional = [v for k, v in args if k is None]
+    if len(positional) > len(form.positional):
+        expected = " ".join(form.positional) if form.positional else "no positional numbers (use key=value)"
+        raise ValueError(f"{law} takes {expected}, got {len(positional)} numbers")
+    for key, v in zip(form.positional, positional):
+        values[key] = v
+    for key, v in args:
+        if key is None:
+            continue
+        if key not in form.keys:
+            allowed = ", ".join(k for k in _KEY_ORDER if k in form.keys)
+            raise ValueError(f"{law} has no key {key!r}; its keys: {allowed}")
+        if key in values:
+            raise ValueError(f"{key} is given twice")
+        values[key] = v
+    return values
+
+
+def _information(law: str, v: dict[str, float]) -> tuple[tuple[float, float], tuple[Constraint, ...]]:
+    """Support and constraints (declared unit, log_mean still in it) of a law's declared numbers."""
+
+    def need(*keys: str) -> None:
+        missing = [k for k in keys if k not in v]
+        if missing:
+            raise ValueError(
+                f"{law} needs {' and '.join(keys)} (missing {', '.join(missing)}), e.g. {LAWS[law].example!r}"
+            )
+
+    for key, x in v.items():
+        if key in ("min", "max"):
+            if math.isnan(x):
+                raise ValueError(f"{key} = nan must be a number")
+        elif not math.isfinite(x):
+            raise ValueError(f"{key} = {x!r} must be finite")
+    if "std" in v and not v["std"] > 0.0:
+        raise ValueError(f"std = {_fmt(v['std'])} must be > 0")
+    lo, hi = v.get("min", -math.inf), v.get("max", math.inf)
+    if law == "exponential" and "min" not in v:
+        lo = 0.0
+    if not lo < hi:
+        raise ValueError(f"min = {_fmt(lo)} must be less than max = {_fmt(hi)}")
+    if "mean" in v and not lo < v["mean"] < hi and law not in ("normal", "gamma"):
+        raise ValueError(f"mean = {_fmt(v['mean'])} must lie strictly between min = {_fmt(lo)} and max = {_fmt(hi)}")
+    if law == "uniform":
+        need("min", "max")
+        if not (math.isfinite(v["min"]) and math.isfinite(v["max"])):
+            raise ValueError("uniform needs finite min and max")
+        return (v["min"], v["max"]), ()
+    if law == "normal":
+        need("mean", "std")
+        return (-math.inf, math.inf), variance_constraints(v["mean"], v["std"])
+    if law == "exponential":
+        need("mean")
+        lo = v.get("min", 0.0)
+        if not math.isfinite(lo):
+            raise ValueError(f"min = {lo!r} must be finite for an exponential law")
+        return (lo, math.inf), (mean(v["mean"]),)
+    if law == "gamma":
+        need("mean")
+        if ("std" in v) == ("log_mean" in v):
+            raise ValueError(
+                "gamma needs mean and exactly one of std and log_mean, e.g. 'gamma mean=5.7e-8 std=0.6e-8'"
+            )
+        m = v["mean"]
+        if not m > 0.0:
+            raise ValueError(f"mean = {_fmt(m)} must be > 0 for a gamma law (support (0, inf))")
+        if "std" in v:
+            k = (m / v["std"]) ** 2
+            lm = float(special.digamma(k)) + math.log(v["std"] ** 2 / m)
+        else:
+            lm = v["log_mean"]
+        return (0.0, math.inf), (mean(m), log_mean(lm))
+    # maxent: the information as declared
+    support = (v.get("min", -math.inf), v.get("max", math.inf))
+    constraints: list[Constraint] = []
+    if "std" in v:
+        need("mean")
+        constraints += variance_constraints(v["mean"], v["std"])
+    elif "mean" in v:
+        constraints.append(mean(v["mean"]))
+    if "log_mean" in v:
+        constraints.append(log_mean(v["log_mean"]))
+    return support, tuple(constraints)
+
+
+def _to_si_information(
+    support: tuple[float, float], constraints: tuple[Constraint, ...], unit: str, dimension: Dimension
+) -> tuple[tuple[float, float], tuple[Constraint, ...]]:
+    factor = to_si(f"1 {unit}", dimension) if unit else 1.0
+    if factor == 1.0:
+        return support, constraints
+    a, b = (x * factor for x in support)
+    out = []
+    for c in constraints:
+        if c.name == "mean":
+            out.append(Constraint(c.function, c.value * factor, c.name))
+        elif c.name == "second_moment":
+            out.append(Constraint(c.function, c.value * factor * factor, c.name))
+        elif c.name == "log_mean":
+            out.append(Constraint(c.function, c.value + math.log(factor), c.name))
+        else:  # pragma: no cover - only reserved constraints are built here
+            raise AssertionError(c.name)
+    return (a, b), tuple(out)
+
+
+def parse_law(spec: str | Mapping[str, Any], dimension: Dimension) -> ParameterLaw:
+    """Parse a law spec (string or table, see the module docstring) for a quantity of ``dimension``.
+
+    Raises ``ValueError`` with a one-line explanation (the problem and what is allowed). Use
+    :meth:`Uncertainty` / :func:`uncertainty` to bind a law to a case parameter with its range checked.
+    """
+    if isinstance(spec, str):
+        law, args, unit = _read_spec(spec)
+    elif isinstance(spec, Mapping):
+        law, args, unit = _read_mapping(spec)
+    else:
+        raise ValueError(f"a law must be a string such as {LAWS['uniform'].example!r} or a table, got {spec!r}")
+    values = _assign(law, args)
+    if unit:
+        to_si(f"1 {unit}", dimension)  # the unit's own error names the allowed units
+    support, constraints = _information(law, values)
+    support, constraints = _to_si_information(support, constraints, unit, dimension)
+    density = maximum_entropy(support, constraints)
+    declared = tuple((k, values[k]) for k in _KEY_ORDER if k in values)
+    return ParameterLaw(law, declared, unit, density.support, constraints, density)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Uncertain parameters of a case
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class UncertainParameter:
+    """A case parameter and its law."""
+
+    parameter: CaseParameter
+    law: ParameterLaw
+
+    @property
+    def path(self) -> str:
+        return self.parameter.path
+
+
+def _check_range(parameter: CaseParameter, law: ParameterLaw, spec_text: str) -> None:
+    bounds = parameter.bounds
+    density = law.density
+    below = float(density.cdf(bounds.lower)) if math.isfinite(bounds.lower) else 0.0
+    above = 1.0 - float(density.cdf(bounds.upper)) if math.isfinite(bounds.upper) else 0.0
+    outside = below + above
+    if outside > OUT_OF_RANGE_TOLERANCE:
+        unit = f" {parameter.unit}" if parameter.unit else ""
+        raise ParameterError(
+            f"{parameter.path} = {spec_text!r}: the law puts probability {outside:.3g} outside the allowed range "
+            f"({bounds.describe()}{unit}); allowed: at most {OUT_OF_RANGE_TOLERANCE:g}, e.g. a law whose support lies "
+            "inside the range (uniform, gamma, exponential, maxent min=... max=...)"
+        )
+
+
+def _bind(case: Case, path: str, spec: str | Mapping[str, Any]) -> UncertainParameter:
+    parameter = case_parameter(case, path)
+    text = spec if isinstance(spec, str) else repr(dict(spec)) if isinstance(spec, Mapping) else repr(spec)
+    if parameter.integer:
+        raise ParameterError(
+            f"{parameter.path} = {text!r}: an integer setting cannot carry a continuous law"
+        )
+    try:
+        law = parse_law(spec, parameter.dimension)
+    except ValueError as exc:
+        raise ParameterError(f"{parameter.path} = {text!r}: {exc}".replace("\n", " ")) from None
+    _check_range(parameter, law, text)
+    return UncertainParameter(parameter, law)
+
+
+class Uncertainty:
+    """The declared uncertain parameters of a case and their joint law (see the module docstring).
+
+    Build it with :func:`uncertainty` or :meth:`from_mapping`. ``parameters`` keeps the declaration order,
+    which is the column order of every value array ``(n, k)`` (SI units) and of the unit hypercube.
+    """
+
+    def __init__(
+        self,
+        parameters: Sequence[UncertainParameter],
+        correlated: Sequence[str] = (),
+        correlation: Any = None,
+    ) -> None:
+        self.parameters: tuple[UncertainParameter, ...] = tuple(parameters)
+        if not self.parameters:
+            raise ParameterError("no uncertain parameter declared")
+        paths = [p.path for p in self.parameters]
+        if len(set(paths)) != len(paths):
+            twice = sorted({p for p in paths if paths.count(p) > 1})
+            raise ParameterError(f"parameter {', '.join(twice)} is declared twice")
+        self.paths: tuple[str, ...] = tuple(paths)
+        self.correlated: tuple[str, ...] = tuple(correlated)
+        self.correlation: np.ndarray | None = None
+        self._group: np.ndarray = np.zeros(0, dtype=int)
+        self._cholesky: np.ndarray | None = None
+        if self.correlated or correlation is not None:
+            self._set_correlation(list(self.correlated), correlation)
+
+    # -- construction ------------------------------------------------------------------------------------
+
+    def _set_correlation(self, names: list[str], matrix: Any) -> None:
+        index = {p: j for j, p in enumerate(self.paths)}
+        resolved = []
+        for name in names:
+            key = name.strip() if isinstance(name, str) else name
+            if key not in index:
+                raise ParameterError(
+                    f"correlation.parameters: {name!r} is not a declared uncertain parameter; "
+                    f"declared: {', '.join(self.paths)}"
+                )
+            resolved.append(key)
+        if len(set(resolved)) != len(resolved):
+            raise ParameterError(f"correlation.parameters = {names!r}: a parameter is listed twice")
+        if len(resolved) < 2:
+            raise ParameterError(f"correlation.parameters = {names!r}: a correlation needs at least 2 parameters")
+        for name in resolved:
+            law = self.parameters[index[name]].law
+            if law.law != "normal":
+                raise ParameterError(
+                    f"correlation.parameters: {name} has law {law.to_spec()!r}; only normal parameters can be "
+                    "correlated (the MaxEnt law under a mean vector and a covariance is the multivariate normal)"
+                )
+        try:
+            r = np.array(matrix, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"correlation.matrix = {matrix!r} must be a square table of numbers") from None
+        n = len(resolved)
+        if r.shape != (n, n):
+            raise ParameterError(
+                f"correlation.matrix has shape {r.shape}; it must be {n} x {n} (one row per parameter)"
+            )
+        if not np.all(np.isfinite(r)):
+            raise ParameterError("correlation.matrix must hold finite numbers")
+        if not np.allclose(r, r.T, rtol=0.0, atol=1e-12):
+            i, j = np.unravel_index(np.argmax(np.abs(r - r.T)), r.shape)
+            raise ParameterError(
+                f"correlation.matrix[{i}][{j}] = {r[i, j]:g} differs from [{j}][{i}] = {r[j, i]:g}: "
+                "it must be symmetric"
+            )
+        if not np.allclose(np.diag(r), 1.0, rtol=0.0, atol=1e-12):
+            i = int(np.argmax(np.abs(np.diag(r) - 1.0)))
+            raise ParameterError(f"correlation.matrix[{i}][{i}] = {r[i, i]:g}: the diagonal must be 1")
+        if np.any(np.abs(r) > 1.0):
+            i, j = np.unravel_index(np.argmax(np.abs(r)), r.shape)
+            raise ParameterError(f"correlation.matrix[{i}][{j}] = {r[i, j]:g} must be in [-1, 1]")
+        r = 0.5 * (r + r.T)
+        smallest = float(np.linalg.eigvalsh(r)[0])
+        if not smallest > 1e-12:
+            raise ParameterError(
+                f"correlation.matrix must be positive definite (smallest eigenvalue {smallest:.3g}): a singular "
+                "correlation leaves no density, drop a parameter that is a combination of others"
+            )
+        self.correlated = tuple(resolved)
+        self.correlation = r
+        self._group = np.array([index[p] for p in resolved], dtype=int)
+        self._cholesky = linalg.cholesky(r, lower=True)
+
+    @classmethod
+    def from_mapping(cls, case: Case, mapping: Mapping[str, Any]) -> Uncertainty:
+        """From the table form ``{"parameters": {path: spec}, "correlation": {"parameters": [...],
+        "matrix": [[...]]}}`` (the ``[uncertainty]`` table of the module docstring)."""
+        if not isinstance(mapping, Mapping):
+            raise ParameterError(f"uncertainty must be a table, got {type(mapping).__name__}")
+        unknown = [k for k in mapping if k not in ("parameters", "correlation")]
+        if unknown:
+            raise ParameterError(f"uncertainty.{unknown[0]}: unknown key; allowed keys here: parameters, correlation")
+        parameters = mapping.get("parameters")
+        if not isinstance(parameters, Mapping) or not parameters:
+            raise ParameterError("uncertainty.parameters must be a non-empty table path = law")
+        correlation = mapping.get("correlation")
+        if correlation is None:
+            return uncertainty(case, parameters)
+        if not isinstance(correlation, Mapping) or set(correlation) != {"parameters", "matrix"}:
+            raise ParameterError("uncertainty.correlation must be a table with exactly the keys parameters and matrix")
+        return uncertainty(case, parameters, correlated=correlation["parameters"], correlation=correlation["matrix"])
+
+    def to_mapping(self) -> dict[str, Any]:
+        """The table form (declared units); :meth:`from_mapping` reads it back to an equal Uncertainty."""
+        out: dict[str, Any] = {"parameters": {p.path: p.law.to_spec() for p in self.parameters}}
+        if self.correlation is not None:
+            out["correlation"] = {"parameters": list(self.correlated), "matrix": self.correlation.tolist()}
+        return out
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Uncertainty):
+            return NotImplemented
+        same_corr = (self.correlation is None and other.correlation is None) or (
+            self.correlation is not None
+            and other.correlation is not None
+            and self.correlated == other.correlated
+            and np.array_equal(self.correlation, other.correlation)
+        )
+        return self.paths == other.paths and [p.law for p in self.parameters] == [
+            p.law for p in other.parameters
+        ] and same_corr
+
+    def __repr__(self) -> str:
+        laws = ", ".join(f"{p.path}={p.law.to_spec()!r}" for p in self.parameters)
+        corr = f", correlated={list(self.correlated)}" if self.correlation is not None else ""
+        return f"Uncertainty({laws}{corr})"
+
+    # -- properties --------------------------------------------------------------------------------------
+
+    @property
+    def size(self) -> int:
+        """Number of uncertain parameters ``k``."""
+        return len(self.parameters)
+
+    @property
+    def independent(self) -> bool:
+        """True when no correlation is declared."""
+        return self.correlation is None
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """SI unit of each parameter (``""``: dimensionless)."""
+        return tuple(p.parameter.unit for p in self.parameters)
+
+    def mean(self) -> np.ndarray:
+        """Mean of each parameter [SI], shape ``(k,)``."""
+        return np.array([p.law.density.mean() for p in self.parameters])
+
+    def std(self) -> np.ndarray:
+        """Standard deviation of each parameter [SI], shape ``(k,)``."""
+        return np.array([p.law.density.std() for p in self.parameters])
+
+    def covariance(self) -> np.ndarray:
+        """Covariance matrix of the parameters [SI products], shape ``(k, k)``."""
+        s = self.std()
+        c = np.diag(s * s)
+        if self.correlation is not None:
+            g = self._group
+            c[np.ix_(g, g)] = self.correlation * np.outer(s[g], s[g])
+        return c
+
+    # -- sampling ------------------------------------------------------------------------------------------
+
+    def from_unit(self, u: Any) -> np.ndarray:
+        """Map points ``u`` of the unit hypercube, shape ``(n, k)`` (or ``(k,)``), to parameter values [SI]
+        of the same shape (inverse distribution functions; the correlated group through ``μ + D L Φ⁻¹(u)``)."""
+        u = np.asarray(u, dtype=float)
+        single = u.ndim == 1
+        u2 = np.atleast_2d(u)
+        if u2.ndim != 2 or u2.shape[1] != self.size:
+            raise ValueError(f"unit-hypercube points must have shape (n, {self.size}), got {u.shape}")
+        if np.any(~np.isfinite(u2)) or np.any((u2 < 0.0) | (u2 > 1.0)):
+            raise ValueError("unit-hypercube points must lie in [0, 1]")
+        u2 = np.clip(u2, _U_MIN, 1.0 - _U_MIN)
+        x = np.empty_like(u2)
+        grouped = set(self._group.tolist())
+        for j, p in enumerate(self.parameters):
+            if j not in grouped:
+                x[:, j] = p.law.density.ppf(u2[:, j])
+        if self._cholesky is not None:
+            g = self._group
+            z = stats.norm.ppf(u2[:, g]) @ self._cholesky.T
+            means = np.array([self.parameters[j].law.density.mean() for j in g])
+            stds = np.array([self.parameters[j].law.density.std() for j in g])
+            x[:, g] = means + z * stds
+        return x[0] if single else x
+
+    def draw(self, seed: int, indices: Sequence[int] | np.ndarray) -> np.ndarray:
+        """The values [SI] of realizations ``indices`` of a study seeded ``seed``, shape ``(len(indices), k)``:
+        realization ``i`` maps ``realization_generator(seed, i).random(k)`` through :meth:`from_unit`."""
+        idx = list(indices)
+        u = np.empty((len(idx), self.size))
+        for n, i in enumerate(idx):
+            u[n] = realization_generator(seed, i).random(self.size)
+        return self.from_unit(u)
+
+    def values(self, row: Sequence[float]) -> dict[str, float]:
+        """``{path: value}`` of one row of values [SI]."""
+        row = np.asarray(row, dtype=float)
+        if row.shape != (self.size,):
+            raise ValueError(f"a row of values must have shape ({self.size},), got {row.shape}")
+        return {p: float(v) for p, v in zip(self.paths, row)}
+
+    def apply(self, case: Case, row: Sequence[float]) -> Case:
+        """``case`` with the parameters set to one row of values [SI] (a new validated Case; raises
+        :class:`~drillstring.stochastic.parameters.ParameterError` if a value breaks a case rule, e.g. a
+        drawn weight-on-hook above the weight)."""
+        return with_parameters(case, self.values(row))
+
+
+def uncertainty(
+    case: Case,
+    laws: Mapping[str, str | Mapping[str, Any]],
+    *,
+    correlated: Sequence[str] = (),
+    correlation: Any = None,
+) -> Uncertainty:
+    """Declare uncertain parameters of ``case``: ``laws`` maps parameter paths to law specs (strings or tables);
+    ``correlation`` is the correlation matrix of the normal parameters listed in ``correlated``.
+
+    Raises :class:`~drillstring.stochastic.parameters.ParameterError` (one line) for an unknown path, a bad
+    spec, a law outside the parameter's range or an invalid correlation.
+    """
+    if not isinstance(laws, Mapping):
+        raise ParameterError(f"laws must be a mapping path -> law, got {type(laws).__name__}")
+    if (correlation is None) != (not correlated):
+        raise ParameterError("give both the correlated parameters and their correlation matrix, or neither")
+    parameters = [_bind(case, path, spec) for path, spec in laws.items()]
+    return Uncertainty(parameters, correlated, correlation)
+
+
+def split_assignment(text: str) -> tuple[str, str]:
+    """``"fluid.inlet_velocity=uniform 1.2 1.8 m/s"`` -> ``("fluid.inlet_velocity", "uniform 1.2 1.8 m/s")``
+    (a command-line ``--param`` value; quotes around the law are removed)."""
+    path, sep, spec = text.partition("=")
+    path, spec = path.strip(), spec.strip()
+    if len(spec) >= 2 and spec[0] == spec[-1] and spec[0] in "'\"":
+        spec = spec[1:-1].strip()
+    if not sep or not path or not spec:
+        raise ParameterError(
+            f"{text!r} is not PATH=LAW, e.g. fluid.inlet_velocity=\"{LAWS['uniform'].example}\""
+        )
+    return path, spec

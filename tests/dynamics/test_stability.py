@@ -1,0 +1,139 @@
+"""Steady drilling and its linear stability: the closed-form steady state, the bit–rock Jacobian, the
+linearised state matrix against finite differences of the right-hand side, and the leading eigenvalue
+against the growth (or decay) of a small perturbation in the time domain."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.signal import find_peaks
+
+from drillstring.dynamics.rom import case_reduced_model
+from drillstring.dynamics.simulate import simulate_model
+from drillstring.dynamics.stability import (
+    bit_rock_jacobian,
+    linearized_matrix,
+    stability,
+    steady_drilling,
+)
+from drillstring.forces.bit_rock import BitRockParameters, evaluate_bit_rock
+
+
+def small_case(case, basis="free_free", lateral_modes=0, **operation):
+    return case.model_copy(update={
+        "reduced_model": case.reduced_model.model_copy(
+            update={"axial_modes": 4, "torsional_modes": 4, "lateral_modes": lateral_modes}),
+        "damping": case.damping.model_copy(update={"basis": basis}),
+        "operation": case.operation.model_copy(update=operation),
+    })
+
+
+@pytest.mark.parametrize("weight_on_bit, rpm", [(100e3, 100.0), (60e3, 50.0), (140e3, 160.0)])
+def test_steady_drilling_closed_form_and_equilibrium(coarse_case, weight_on_bit, rpm):
+    """ROP = Z²(a2 wob − a1 + a3 √(Ω² + e²)) / (1 + a2 c1 Z²) (SPEC §6 with the rigid axial friction c1),
+    TOB = a4 ROP Z²/Ω + a5 Z, FOB = wob − c1 ROP, bit speed Ω; and the reduced model's right-hand side
+    vanishes there (only the rigid axial coordinate moves)."""
+    omega = rpm * math.pi / 30
+    case = small_case(coarse_case, lateral_modes=3, weight_on_bit=weight_on_bit, top_speed=omega)
+    model = case_reduced_model(case)
+    steady = steady_drilling(model)
+    b = case.bit_rock
+    z2 = omega**2 / (omega**2 + b.regularization**2)
+    c1 = case.damping.rigid_axial
+    rop = z2 * (b.a2 * weight_on_bit - b.a1 + b.a3 * math.hypot(omega, b.regularization)) / (1 + b.a2 * c1 * z2)
+    assert steady.rate_of_penetration == pytest.approx(rop, rel=1e-10)
+    assert steady.torque_on_bit == pytest.approx(b.a4 * rop * z2 / omega + b.a5 * math.sqrt(z2), rel=1e-10)
+    assert steady.force_on_bit == pytest.approx(weight_on_bit - c1 * rop, rel=1e-10)
+    assert steady.bit_speed == omega
+    rhs = model.rhs(0.0, steady.state)
+    n = model.size
+    scale = np.abs(model.omega2 * steady.state[:n]).max()
+    assert np.abs(rhs[n:]).max() < 1e-10 * scale
+    np.testing.assert_allclose(rhs[:n], steady.state[n:], rtol=0, atol=0)
+    assert model.bit_u @ steady.state[n:] == pytest.approx(rop, rel=1e-12)
+
+
+def test_bit_rock_jacobian_against_finite_differences():
+    params = BitRockParameters.reference()
+    for u, w in [(3.6e-3, 10.47), (1e-3, 1.5), (5e-3, 30.0), (2e-3, -4.0)]:
+        jac = bit_rock_jacobian(u, w, params)
+        for j, (du, dw) in enumerate([(1e-9, 0.0), (0.0, 1e-6)]):
+            plus = np.array(evaluate_bit_rock(u + du, w + dw, params), dtype=float)
+            minus = np.array(evaluate_bit_rock(u - du, w - dw, params), dtype=float)
+            fd = (plus - minus) / (2 * (du + dw))
+            np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-9 * np.abs(jac).max())
+
+
+def test_linearized_matrix_against_finite_differences_of_the_rhs(coarse_case):
+    model = case_reduced_model(small_case(coarse_case, lateral_modes=3))
+    steady = steady_drilling(model)
+    a = linearized_matrix(model, steady)
+    y = steady.state
+    fd = np.zeros_like(a)
+    for k in range(len(y)):
+        step = 1e-7 * max(1.0, abs(y[k]))
+        d = np.zeros_like(y)
+        d[k] = step
+        fd[:, k] = (model.rhs(0.0, y + d) - model.rhs(0.0, y - d)) / (2 * step)
+    np.testing.assert_allclose(a, fd, atol=1e-8 * np.abs(a).max())
+
+
+def _peak_growth_rate(time, signal, t_from):
+    """Slope of log |peaks| of an oscillating signal after ``t_from`` (parabolic peak refinement)."""
+    dt = time[1] - time[0]
+    peaks, _ = find_peaks(np.abs(signal))
+    peaks = peaks[time[peaks] > t_from]
+    t_peak, log_amp = [], []
+    for p in peaks:
+        y1, y2, y3 = np.abs(signal[p - 1:p + 2])
+        d = 0.5 * (y1 - y3) / (y1 - 2 * y2 + y3)
+        t_peak.append(time[p] + d * dt)
+        log_amp.append(math.log(y2 - 0.25 * (y1 - y3) * d))
+    assert len(t_peak) >= 6
+    frequency = 1.0 / (2.0 * np.mean(np.diff(t_peak)))  # |x| peaks twice per period
+    return np.polyfit(t_peak, log_amp, 1)[0], frequency
+
+
+@pytest.mark.parametrize("basis, t_end, t_from", [("free_free", 120.0, 20.0), ("constrained", 20.0, 5.0)])
+def test_leading_eigenvalue_matches_simulated_growth_rate(coarse_case, basis, t_end, t_from):
+    """A small torsional kick on steady drilling grows (free–free damping: unstable) or decays
+    (constrained) at the leading eigenvalue's rate; the issue asks for 2 %, the agreement is < 1e-3."""
+    model = case_reduced_model(small_case(coarse_case, basis=basis))
+    result = stability(model)
+    leading = result.leading
+    assert leading.family == "torsional"
+    assert result.stable == (basis == "constrained")
+    assert (leading.growth_rate > 0) == (basis == "free_free")
+    y0 = result.steady_state.state.copy()
+    first_torsional = model.family.index("torsional")
+    y0[model.size + first_torsional] += 1e-3
+    run = simulate_model(model, t_end=t_end, output_step=0.01, initial_state=y0)
+    deviation = run.observables["bit_speed"] - model.top_speed
+    rate, frequency = _peak_growth_rate(run.time, deviation, t_from)
+    assert rate == pytest.approx(leading.growth_rate, rel=1e-3)
+    assert frequency == pytest.approx(leading.frequency, rel=1e-3)
+
+
+def test_reference_modes_and_json(reference_case):
+    """The reference case: steady drilling unstable on the first torsional mode (ratio ≈ −1 %), every
+    other mode damped; JSON keys as documented."""
+    result = stability(case_reduced_model(reference_case))
+    assert not result.stable
+    unstable = [m for m in result.modes if m.growth_rate > 0]
+    assert len(unstable) == 1 and unstable[0].family == "torsional"
+    assert -0.02 < unstable[0].damping_ratio < 0
+    payload = result.to_dict()
+    assert set(payload) == {"stable", "steady_state", "modes"}
+    assert set(payload["steady_state"]) == {"rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"}
+    frequencies = [m["frequency"] for m in payload["modes"]]
+    assert frequencies == sorted(frequencies)
+    assert {m["family"] for m in payload["modes"]} == {"axial", "torsional", "lateral"}
+    n_lateral = sum(m["family"] == "lateral" for m in payload["modes"])
+    assert n_lateral == 2 * reference_case.reduced_model.lateral_modes
+
+
+def test_no_steady_drilling_is_refused(coarse_case):
+    case = coarse_case.model_copy(update={"bit_rock": coarse_case.bit_rock.model_copy(update={"a1": 0.02})})
+    model = case_reduced_model(small_case(case))
+    with pytest.raises(ValueError, match="rate_of_penetration .* <= 0"):
+        steady_drilling(model)

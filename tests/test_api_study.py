@@ -1,0 +1,81 @@
+"""The study API: one set of defaults and checks, its files, the study's computation time kept."""
+
+import json
+
+import numpy as np
+import pytest
+
+from drillstring import api
+from drillstring.case import load_case
+from drillstring.results import read_netcdf
+from drillstring.stochastic import DEFAULT_SIGMA
+from drillstring.dynamics.indicators import transient_end
+
+
+@pytest.fixture(scope="module")
+def small_case():
+    case = load_case("reference")
+    return case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(
+            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3}),
+    })
+
+
+def test_study_files_defaults_and_rerun(small_case, tmp_path):
+    out = tmp_path / "s"
+    first = api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out)
+    summary = first.summary
+    assert summary["sigma"] == DEFAULT_SIGMA and summary["t_transient"] == transient_end(0.6) == 0.3
+    assert first.already == 0 and summary["realizations_this_run"] == 3
+    assert json.loads((out / "summary.json").read_text()) == summary
+    assert set(first.files) == {"store", "summary", "statistics", "report", "envelopes", "dispersion",
+                                "convergence"}
+    assert all(path.exists() for path in first.files.values())
+    stored = read_netcdf(out / "statistics.nc")
+    np.testing.assert_array_equal(stored.rate_of_penetration_mean.values,
+                                  first.statistics.rate_of_penetration_mean.values)
+    html = (out / "report.html").read_text()
+    assert f"{summary['wall_time']:.2f}".rstrip("0").rstrip(".") in html
+
+    again = api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out)
+    assert again.already == 3 and again.summary["realizations_this_run"] == 0
+    assert again.summary["wall_time"] == summary["wall_time"]  # the computation time, not the rerun's
+    assert again.summary["wall_time_this_run"] < summary["wall_time"]
+    assert "wall time of this run [s]" in (out / "report.html").read_text()
+    stats = api.study(small_case, samples=3, t_end=0.6, workers=1, out=out)
+    np.testing.assert_array_equal(stats.bit_speed_std.values, first.statistics.bit_speed_std.values)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(samples=1), "^samples = 1: must be an integer >= 2"),
+    (dict(sigma=1e6), r"^sigma = 1e\+06 N: .*probability"),
+    (dict(sigma=1.0, dispersion=0.01), "not both"),
+    (dict(dispersion=float("nan")), "^dispersion = nan: must be a finite number > 0"),
+    (dict(t_end=float("inf")), "^t_end = inf s"),
+    (dict(transient=2.0), r"^transient = 2.0 s: must be in \[0, t_end = 1 s\]"),
+    (dict(workers=0), "^workers = 0"),
+    (dict(workers=2, scheduler="tcp://127.0.0.1:1"), "not both"),
+])
+def test_impossible_settings_refused_before_anything(small_case, tmp_path, kwargs, message):
+    kwargs = {"samples": 2, "t_end": 1.0, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        api.monte_carlo_study(small_case, out=tmp_path / "s", **kwargs)
+    assert not (tmp_path / "s").exists()
+
+
+def test_output_folder_checked_first(small_case, tmp_path):
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(ValueError, match="^out = .*f': is a file, not a folder"):
+        api.study(small_case, samples=2, t_end=0.2, out=tmp_path / "f")
+
+
+def test_study_with_too_few_finished_realizations_fails_with_the_causes(small_case, tmp_path, monkeypatch):
+    from drillstring.stochastic import montecarlo
+
+    def fail(case, settings, index):
+        return montecarlo.RealizationOutcome(index, 1.0, 1.0, montecarlo.FAILED, f"made to fail {index}")
+
+    monkeypatch.setattr(montecarlo, "run_realization", fail)
+    with pytest.raises(api.StudyFailed, match=r"only 0 finished realization\(s\): statistics need at least 2 \(3 failure\(s\): nominal: made to fail -1; 0: made to fail 0"):
+        api.monte_carlo_study(small_case, samples=2, t_end=0.2, workers=1, out=tmp_path / "s")
