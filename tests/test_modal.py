@@ -204,16 +204,32 @@ def test_buckled_string_has_signed_negative_eigenvalues(wob, dense_limit, monkey
     assert np.sum(loads < wob) == np.sum(exact < 0) == {100e3: 0, 130e3: 1, 300e3: 2}[wob]
 
 
-@pytest.mark.xfail(strict=True, reason="modal._eigen's eigsh path (families > DENSE_LIMIT DOFs) shifts "
-                   "at σ = −1 rad²/s² and returns the eigenvalues nearest to it, so it misses modes with "
-                   "ω² far below −1 (strongly buckled strings); the dense path is right")
 def test_sparse_path_finds_strongly_unstable_modes(monkeypatch):
     from drillstring import modal
 
+    """At 600 kN the reference string has three modes with ω² from −4.8 to −1.6 rad²/s²: the sparse path
+    (shift-invert Lanczos) must shift below them all, not at −1 where it would return the three
+    eigenvalues nearest −1."""
     system = _reference_system(600e3)
-    dense = family_modes(system, "lateral_y", 3).eigenvalues
+    dense = family_modes(system, "lateral_y", 5).eigenvalues
+    assert np.sum(dense < -1.0) == 3
     monkeypatch.setattr(modal, "DENSE_LIMIT", 10)
-    np.testing.assert_allclose(family_modes(system, "lateral_y", 3).eigenvalues, dense, rtol=1e-8)
+    np.testing.assert_allclose(family_modes(system, "lateral_y", 5).eigenvalues, dense, rtol=1e-8)
+
+
+@pytest.mark.parametrize("wob", [100e3, 600e3])
+def test_count_below_is_the_number_of_eigenvalues_below_the_shift(wob):
+    """Sylvester's inertia of K − σM (used to place the sparse solver's shift) against dense eigenvalues."""
+    import scipy.linalg as sla
+
+    from drillstring.modal import count_below, family_dofs
+
+    system = _reference_system(wob)
+    dofs = family_dofs(system.mesh, "lateral_y")
+    k, m = system.stiffness[dofs][:, dofs], system.mass[dofs][:, dofs]
+    exact = sla.eigh(k.toarray(), m.toarray(), eigvals_only=True)
+    for sigma in (-10.0, -3.0, -1.0, -0.5, 0.0, 0.3, 5.0):
+        assert count_below(k, m, sigma) == np.sum(exact < sigma)
 
 
 def test_linear_modal_equations_grow_when_buckled():

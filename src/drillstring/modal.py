@@ -153,18 +153,56 @@ class Modes:
         return self.lateral_y
 
 
+def count_below(k: sp.spmatrix, m: sp.spmatrix, sigma: float) -> int | None:
+    """Number of eigenvalues of the pencil (K, M) below ``sigma`` (M positive definite), by Sylvester's law
+    of inertia: the number of negative pivots of the LDLᵀ factorisation of ``K − σM``. SuperLU in its
+    natural order with diagonal pivots (no row exchanges) is that factorisation for a symmetric matrix;
+    for the banded family matrices it fills only the band. ``None`` if SuperLU exchanged rows anyway
+    (a zero pivot) or ``σ`` is an eigenvalue."""
+    shifted = sp.csc_matrix(k - sigma * m)
+    try:
+        lu = spla.splu(shifted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+    except RuntimeError:  # exactly singular
+        return None
+    if not np.array_equal(lu.perm_r, np.arange(shifted.shape[0])):
+        return None
+    return int(np.count_nonzero(lu.U.diagonal() < 0.0))
+
+
+def _dense_eigen(k, m, count: int):
+    kd = k.toarray() if sp.issparse(k) else k
+    md = m.toarray() if sp.issparse(m) else m
+    return sla.eigh(kd, md, subset_by_index=[0, count - 1])
+
+
 def _eigen(k: np.ndarray | sp.spmatrix, m: np.ndarray | sp.spmatrix, count: int):
     n = k.shape[0]
     count = min(count, n)
     if n <= DENSE_LIMIT or count >= n - 1:
-        kd = k.toarray() if sp.issparse(k) else k
-        md = m.toarray() if sp.issparse(m) else m
-        return sla.eigh(kd, md, subset_by_index=[0, count - 1])
-    # Shift below zero so a rigid mode (singular K) does not break the factorisation.
-    values, vectors = spla.eigsh(sp.csc_matrix(k), k=count, M=sp.csc_matrix(m), sigma=-1.0,
-                                 which="LM")
+        return _dense_eigen(k, m, count)
+    # Shift-invert Lanczos returns the eigenvalues nearest the shift, so the shift must lie below the whole
+    # spectrum: start at −1 rad²/s² (below a rigid mode's 0, where K is singular) and move it down by
+    # decades while K − σM has negative pivots (eigenvalues below σ: a buckled string).
+    k, m = sp.csc_matrix(k), sp.csc_matrix(m)
+    sigma = -1.0
+    for _ in range(40):
+        below = count_below(k, m, sigma)
+        if below == 0:
+            break
+        sigma *= 10.0
+    else:
+        below = None
+    if below != 0:  # no inertia to go by: the dense solver is slower but always right
+        return _dense_eigen(k, m, count)
+    values, vectors = spla.eigsh(k, k=count, M=m, sigma=sigma, which="LM")
     order = np.argsort(values)
-    return values[order], vectors[:, order]
+    values, vectors = values[order], vectors[:, order]
+    # none skipped: exactly `count` eigenvalues lie below the largest one found (plus a rounding margin)
+    top = values[-1] + 1e-9 * max(1.0, float(np.abs(values).max()))
+    if count_below(k, m, top) != count:
+        return _dense_eigen(k, m, count)
+    return values, vectors
 
 
 def family_modes(system: LinearSystem, family: str, count: int) -> ModeFamily:

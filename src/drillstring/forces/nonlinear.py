@@ -40,11 +40,20 @@ translations give ``f_se = 0``; an infinitesimal rigid rotation (``v = αx``) gi
 Kinetic-energy forces ``f_ke`` — choice of ``T_nl``
 ---------------------------------------------------
 The small-angle kinetic energy of the section rotation is
-``T_rot = ½ ∫ [ρI_p (θ̇x + θ̇z θy)² + ρI (θ̇y² + θ̇z²)] dx``. Its quadratic part ``½ρI_p θ̇x² + ½ρI(θ̇y² + θ̇z²)``
-is in the consistent mass matrix. **Decision:** as in Ritto, Soize & Sampaio (2009) we keep only the cubic
-term and drop the quartic ``½ ρI_p θ̇z² θy²``::
+``T_rot = ½ ∫ [ρI_p (θ̇x − θ̇z θy)² + ρI (θ̇y² + θ̇z²)] dx``: with the section turned by θz about z, then θy
+about the new y axis, then θx about its own axis, the spin about the tilted axis is
+``ω_x'' = θ̇x − θ̇z sin θy`` (``ẑ·x̂'' = −sin θy``, ``ŷ'·x̂'' = 0``); here ``θy = −∂w/∂x`` and ``θz = ∂v/∂x``. (The
+other order of the two bending rotations gives ``θ̇x + θ̇y θz``; the two differ by ``d(θy θz)/dt``, so at a
+constant spin they give the same forces.) Its quadratic part ``½ρI_p θ̇x² + ½ρI(θ̇y² + θ̇z²)`` is in the
+consistent mass matrix. **Decision:** as in Ritto, Soize & Sampaio (2009) we keep only the cubic term and
+drop the quartic ``½ ρI_p θ̇z² θy²``::
 
-    T_nl(q, q̇) = ∫ ρI_p θ̇x θ̇z θy dx
+    T_nl(q, q̇) = −∫ ρI_p θ̇x θ̇z θy dx
+
+Linearised at the spin ``θ̇x = Ω`` its forces are ``−Ω G q̇``, ``G`` the gyroscopic matrix of
+:func:`drillstring.fem.element.element_gyroscopic` (checked against the exact Campbell diagram of a spinning
+shaft and the rate of spin angular momentum); the opposite sign would stiffen backward instead of forward
+whirl (tested).
 
 Reasons: (i) SPEC §6 calls ``f_ke`` *quadratic*; the quartic term would add cubic forces of the same order
 as the terms already discarded by the small-angle expansion itself (e.g. the ``O(θ²θ̇²)`` corrections of the
@@ -56,13 +65,13 @@ with the imposed top speed ``Ω`` added to every ``θ̇x`` DOF; ``θx`` itself n
 Lagrange's equations with ``T_nl = ½ q̇ᵀ M_nl(q) q̇`` give ``f_ke = −(d/dt ∂T_nl/∂q̇ − ∂T_nl/∂q)``::
 
     f_ke = f_vel(q̇) − M_nl(q) q̈
-    M_nl(q) = ∫ ρI_p θy (a bᵀ + b aᵀ) dx                   (symmetric; couples θx with the (v, θz) plane)
-    f_vel   = ∫ ρI_p [ θ̇x θ̇z c − θ̇y θ̇z a − θ̇y θ̇x b ] dx
+    M_nl(q) = −∫ ρI_p θy (a bᵀ + b aᵀ) dx                  (symmetric; couples θx with the (v, θz) plane)
+    f_vel   = ∫ ρI_p [ θ̇y θ̇z a + θ̇y θ̇x b − θ̇x θ̇z c ] dx
 
 with the shape vectors ``a = ∂θx/∂q``, ``b = ∂θz/∂q``, ``c = ∂θy/∂q`` at each point. The terms
-``ρI_p θ̇x θ̇z`` (on θy) and ``−ρI_p θ̇x θ̇y`` (on θz) are the gyroscopic moments (skew, no power); the others
+``−ρI_p θ̇x θ̇z`` (on θy) and ``ρI_p θ̇x θ̇y`` (on θz) are the gyroscopic moments (skew, no power); the others
 transfer energy between spin and whirl. ``M_nl`` couples the torsional acceleration with bending
-(``ρI_p θy θ̈z`` on θx, ``ρI_p θy θ̈x`` on θz).
+(``−ρI_p θy θ̈z`` on θx, ``−ρI_p θy θ̈x`` on θz).
 
 **Acceleration terms in the explicit scheme.** The reduced model moves ``M_nl`` to the left-hand side:
 with ``q̄ = Φη`` and ``Φᵀ(M + M_f)Φ = I``, at each right-hand-side evaluation it solves
@@ -75,7 +84,7 @@ Small-angle validity
 --------------------
 ``ε`` neglects ``½u'²`` and is accurate while slopes ``|v'|, |w'| ≪ 1``; with lateral displacements
 bounded by the radial gap (~0.04 m) the slopes stay ~1e-2 and the error of ``ε`` is ``O(v'⁴)``.
-``θ̇x + θ̇z θy`` is the spin rate to second order in the bending angles; at 0.1 rad the neglected terms are
+``θ̇x − θ̇z θy`` is the spin rate to second order in the bending angles; at 0.1 rad the neglected terms are
 ~0.5 %. Every force here is a polynomial of the DOFs, hence finite and smooth for any state; the total mass
 ``M + M_nl`` stays positive definite for ``|θy| < sqrt(I/I_p) = 1/√2`` rad (pointwise sufficient condition),
 far beyond the range where the model is meaningful.
@@ -250,7 +259,7 @@ def element_strain_energy_tangent(q_e, section: BeamSection, length: float) -> n
 
 
 def element_kinetic_energy_nl(q_e, qd_e, section: BeamSection, length: float) -> float:
-    """Nonlinear kinetic energy ``T_nl = ∫ ρI_p θ̇x θ̇z θy dx`` [J] of one element (Ritto et al. 2009).
+    """Nonlinear kinetic energy ``T_nl = −∫ ρI_p θ̇x θ̇z θy dx`` [J] of one element (module docstring).
 
     Args:
         q_e: (12,) element DOFs [m, rad] (only θy enters).
@@ -262,7 +271,7 @@ def element_kinetic_energy_nl(q_e, qd_e, section: BeamSection, length: float) ->
     qd = _as_element_vector(qd_e, "qd_e")
     op = _operators(section, float(length))
     k = section.density * section.polar_moment * op.weights
-    return float(k @ ((op.torsion @ qd) * (op.rotation_z @ qd) * (op.rotation_y @ q)))
+    return -float(k @ ((op.torsion @ qd) * (op.rotation_z @ qd) * (op.rotation_y @ q)))
 
 
 def element_kinetic_force(q_e, qd_e, section: BeamSection, length: float) -> tuple[np.ndarray, np.ndarray]:
@@ -270,8 +279,8 @@ def element_kinetic_force(q_e, qd_e, section: BeamSection, length: float) -> tup
 
     Returns:
         ``(f_vel, m_nl)``: ``f_vel`` (12,) [N, N·m], the velocity-dependent (quadratic) forces
-        ``∫ ρI_p [θ̇x θ̇z c − θ̇y θ̇z a − θ̇y θ̇x b] dx``; ``m_nl`` (12, 12) [kg, kg·m, kg·m²], the symmetric
-        configuration-dependent mass correction ``∫ ρI_p θy (a bᵀ + b aᵀ) dx`` (``T_nl = ½ q̇ᵀ m_nl q̇``).
+        ``∫ ρI_p [θ̇y θ̇z a + θ̇y θ̇x b − θ̇x θ̇z c] dx``; ``m_nl`` (12, 12) [kg, kg·m, kg·m²], the symmetric
+        configuration-dependent mass correction ``−∫ ρI_p θy (a bᵀ + b aᵀ) dx`` (``T_nl = ½ q̇ᵀ m_nl q̇``).
         Arguments as :func:`element_kinetic_energy_nl`.
     """
     q = _as_element_vector(q_e, "q_e")
@@ -282,8 +291,8 @@ def element_kinetic_force(q_e, qd_e, section: BeamSection, length: float) -> tup
     tzd = op.rotation_z @ qd
     tyd = op.rotation_y @ qd
     ty = op.rotation_y @ q
-    f_vel = (k * txd * tzd) @ op.rotation_y - (k * tyd * tzd) @ op.torsion - (k * tyd * txd) @ op.rotation_z
-    ab = np.einsum("g,gi,gj->ij", k * ty, op.torsion, op.rotation_z)
+    f_vel = (k * tyd * tzd) @ op.torsion + (k * tyd * txd) @ op.rotation_z - (k * txd * tzd) @ op.rotation_y
+    ab = np.einsum("g,gi,gj->ij", -k * ty, op.torsion, op.rotation_z)
     return f_vel, ab + ab.T
 
 
@@ -379,24 +388,24 @@ def _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, out, cou
             tzd = r0 * vd0 + r1 * vd1 + r2 * vd2 + r3 * vd3
             tyd = -(r0 * wd0 + r1 * wd1 + r2 * wd2 + r3 * wd3)
             ty = -(r0 * w0 + r1 * w1 + r2 * w2 + r3 * w3)
-            # θy-part: k θ̇x θ̇z c, c = −N_ψ S on the w plane
-            p = -k * txd * tzd
+            # θy-part: −k θ̇x θ̇z c, c = −N_ψ S on the w plane
+            p = k * txd * tzd
             fy0 += p * r0
             fy1 += p * r1
             fy2 += p * r2
             fy3 += p * r3
-            # θx-part: −k θ̇y θ̇z a
-            p = -k * tyd * tzd
+            # θx-part: k θ̇y θ̇z a
+            p = k * tyd * tzd
             fx0 += p * l0
             fx1 += p * l1
-            # θz-part: −k θ̇y θ̇x b
-            p = -k * tyd * txd
+            # θz-part: k θ̇y θ̇x b
+            p = k * tyd * txd
             fz0 += p * r0
             fz1 += p * r1
             fz2 += p * r2
             fz3 += p * r3
-            # mass coupling k θy a bᵀ
-            p = k * ty
+            # mass coupling −k θy a bᵀ
+            p = -k * ty
             c00 += p * l0 * r0
             c01 += p * l0 * r1
             c02 += p * l0 * r2
@@ -428,7 +437,7 @@ def _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, out, cou
 
 @njit(cache=True)
 def _mass_coupling_kernel(q, xi, weights, rotation, polar_inertia, coupling):
-    """coupling[e, i, j] = ∫ ρI_p θy a_i b_j (depends on the configuration only)."""
+    """coupling[e, i, j] = −∫ ρI_p θy a_i b_j (depends on the configuration only)."""
     n_el, n_g = weights.shape
     for e in range(n_el):
         b = DOFS_PER_NODE * e
@@ -439,7 +448,7 @@ def _mass_coupling_kernel(q, xi, weights, rotation, polar_inertia, coupling):
         for g in range(n_g):
             r0, r1, r2, r3 = rotation[e, g, 0], rotation[e, g, 1], rotation[e, g, 2], rotation[e, g, 3]
             ty = -(r0 * w0 + r1 * w1 + r2 * w2 + r3 * w3)
-            p = polar_inertia[e] * weights[e, g] * ty
+            p = -polar_inertia[e] * weights[e, g] * ty
             for i in range(2):
                 pl = p * (xi[g] if i == 1 else 1.0 - xi[g])
                 for j in range(4):
@@ -463,7 +472,7 @@ def _kinetic_energy_kernel(q, qd, xi, weights, rotation, polar_inertia):
             tzd = r0 * vd0 + r1 * vd1 + r2 * vd2 + r3 * vd3
             ty = -(r0 * w0 + r1 * w1 + r2 * w2 + r3 * w3)
             acc += weights[e, g] * txd * tzd * ty
-        total += polar_inertia[e] * acc
+        total -= polar_inertia[e] * acc
     return total
 
 
