@@ -54,6 +54,7 @@ __all__ = [
     "DIMENSIONS",
     "MAX_ELEMENTS",
     "Acceleration",
+    "Angle",
     "AngularSpeed",
     "AxialDamping",
     "ForceAngle",
@@ -63,6 +64,7 @@ __all__ = [
     "RotationalDamping",
     "BitRock",
     "Borehole",
+    "Bow",
     "Case",
     "CaseError",
     "Contact",
@@ -307,6 +309,7 @@ DENSITY = Dimension("density", {"kg/m3": 1.0, "kg/m^3": 1.0, "g/cm3": 1e3, "g/cm
 TIME = Dimension("time", {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
 TORQUE = Dimension("torque", {"N*m": 1.0, "N.m": 1.0, "kN*m": 1e3, "kN.m": 1e3})
 ACCELERATION = Dimension("acceleration", {"m/s2": 1.0, "m/s^2": 1.0})
+ANGLE = Dimension("angle", {"rad": 1.0, "deg": math.pi / 180.0})
 DIMENSIONLESS = Dimension("dimensionless number", {})
 # Coefficients that only ever appear in SI; the unit string is still accepted so a file can say what it means.
 AXIAL_DAMPING = Dimension("axial damping coefficient", {"N*s/m": 1.0, "N.s/m": 1.0})
@@ -318,7 +321,7 @@ FORCE_ANGLE = Dimension("force times angle", {"N*rad": 1.0, "N.rad": 1.0})
 
 #: Every dimension, for error messages naming the dimension a misplaced unit belongs to.
 DIMENSIONS: tuple[Dimension, ...] = (
-    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION,
+    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION, ANGLE,
     DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING, LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE,
     FORCE_ANGLE,
 )  # fmt: skip
@@ -390,6 +393,7 @@ Density = _quantity(DENSITY)  #: [kg/m^3]
 Time = _quantity(TIME)  #: [s]
 Torque = _quantity(TORQUE)  #: [N*m]
 Acceleration = _quantity(ACCELERATION)  #: [m/s^2]
+Angle = _quantity(ANGLE)  #: [rad]
 Dimensionless = _quantity(DIMENSIONLESS)  #: [-]
 AxialDamping = _quantity(AXIAL_DAMPING)  #: [N*s/m]
 RotationalDamping = _quantity(ROTATIONAL_DAMPING)  #: [N*m*s/rad]
@@ -451,6 +455,11 @@ class Section(_Base):
     inner_diameter: Length = Field(ge=0, description="inner (bore) diameter D_i [m]; 0 for a solid section")
     material: str = Field("steel", description="key into Case.materials")
     shear_factor: Dimensionless = Field(6.0 / 7.0, gt=0, le=1, description="Timoshenko shear factor k_s [-]")
+    eccentricity: Length = Field(
+        0.0, ge=0, description="mass imbalance: offset e of the section's mass centre from its axis [m]; the "
+        "centrifugal force rho A e (spin speed)^2 per metre turns with the string (0: none)")
+    eccentricity_angle: Angle = Field(
+        0.0, description="direction of the offset from y when the section's rotation is 0 [rad]")
 
     @model_validator(mode="after")
     def _inner_less_than_outer(self) -> Section:
@@ -480,6 +489,17 @@ class Section(_Base):
     def area(self) -> float:
         """Steel cross-section pi (D_o^2 - D_i^2) / 4 [m^2]."""
         return self.outer_area - self.inner_area
+
+
+class Bow(_Base):
+    """A stress-free bow of the string (a bent collar) turning with it: the unloaded shape is offset by
+    ``amplitude sin²(π (x − start)/(end − start))`` between ``start`` and ``end`` (0 elsewhere; no kink), in
+    the direction ``angle`` from y when the section's rotation is 0. ``amplitude = 0``: no bow."""
+
+    amplitude: Length = Field(0.0, ge=0, description="largest offset of the unloaded shape [m]; 0: no bow")
+    start: Length = Field(0.0, ge=0, description="upper end of the bow, from the top [m]")
+    end: Length = Field(0.0, ge=0, description="lower end of the bow, from the top [m]; > start")
+    angle: Angle = Field(0.0, description="direction of the bow from y at zero rotation [rad]")
 
 
 class Borehole(_Base):
@@ -642,6 +662,7 @@ class Case(_Base):
     reduced_model: ReducedModel = Field(default_factory=ReducedModel)
     simulation: Simulation = Field(default_factory=Simulation)
     initial: Initial = Field(default_factory=Initial)
+    bow: Bow = Field(default_factory=Bow)
 
     # -- derived quantities ------------------------------------------------------------------------------
 
@@ -735,6 +756,12 @@ class Case(_Base):
         for i, p in enumerate(self.mesh.probes):
             if not 0.0 <= p <= L:
                 problems.append((("mesh", "probes", i), p, f"must be within the string, 0 <= x <= {L:g} m"))
+        if self.bow.amplitude > 0.0:
+            if not self.bow.end <= L:
+                problems.append((("bow", "end"), self.bow.end, f"must be within the string, <= {L:g} m"))
+            if not self.bow.start < self.bow.end:
+                problems.append((("bow", "start"), self.bow.start,
+                                 f"must be less than bow.end ({self.bow.end:g} m)"))
         if problems:  # the rules below need valid materials and gaps
             raise _Problems(problems)
 

@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit, typeof
 from numba.core import event
 
-from drillstring.dynamics.rom import PROBE_COLUMN, _observe_kernel, evaluate_rhs
+from drillstring.dynamics.rom import PROBE_COLUMN, _observe_kernel, _track_impacts, evaluate_rhs
 from drillstring.dynamics.runge_kutta import (
     TABLEAUS,
     ButcherTableau,
@@ -88,8 +88,7 @@ class StepperSettings(NamedTuple):
 class Workspace(NamedTuple):
     """The integrator's state and buffers: ``state`` (scalars indexed by ``T``, ``H``, …), the current
     state ``y`` and its derivative ``f``, the stages ``k`` of the step being attempted and ``k_old`` of
-    the last accepted one (dense output), the output ``grid`` and the rows ``out`` it fills, and the
-    contact mask at the previous output (``previous``, for counting impacts)."""
+    the last accepted one (dense output), and the output ``grid`` and the rows ``out`` it fills."""
 
     state: np.ndarray  # (N_STATE,)
     y: np.ndarray  # (n,)
@@ -101,32 +100,22 @@ class Workspace(NamedTuple):
     error: np.ndarray  # (n,) scratch: local error estimate
     grid: np.ndarray  # (n_out,) output times [s]
     out: np.ndarray  # (n_out, n_columns) observations
-    previous: np.ndarray  # (n_nodes,) bool
 
     @classmethod
-    def allocate(cls, y0: np.ndarray, n_stages: int, grid: np.ndarray, n_columns: int,
-                 n_nodes: int) -> Workspace:
+    def allocate(cls, y0: np.ndarray, n_stages: int, grid: np.ndarray, n_columns: int) -> Workspace:
         n = y0.shape[0]
         return cls(
             state=np.zeros(N_STATE), y=np.array(y0, dtype=float), f=np.zeros(n),
             k=np.zeros((n_stages, n)), k_old=np.zeros((n_stages, n)), y_old=np.zeros(n),
             y_new=np.zeros(n), error=np.zeros(n), grid=np.ascontiguousarray(grid, dtype=float),
-            out=np.full((len(grid), n_columns), np.nan), previous=np.zeros(n_nodes, dtype=np.bool_),
+            out=np.full((len(grid), n_columns), np.nan),
         )
 
 
 @njit(cache=True)
 def _observe(work, row, y, case2, observe_data):
-    """Observe ``y`` into output row ``row``; returns the number of nodes that entered contact since
-    the previous output."""
+    """Observe ``y`` into output row ``row``."""
     _observe_kernel(case2, observe_data, y, work.out[row])
-    in_contact = observe_data.in_contact
-    new = 0
-    for i in range(in_contact.shape[0]):
-        if in_contact[i] and not work.previous[i]:
-            new += 1
-        work.previous[i] = in_contact[i]
-    return new
 
 
 @njit(cache=True)
@@ -167,7 +156,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
                 for m in range(i):
                     acc += st.a[i, m] * k[m, j]
                 y_new[j] = y[j] + h * acc
-            evaluate_rhs(rhs_data, y_new, k[i])
+            evaluate_rhs(rhs_data, t + st.c[i] * h, y_new, k[i])
             for j in range(n):
                 if not math.isfinite(k[i, j]):
                     finite = False
@@ -214,10 +203,11 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
         if st.fsal:
             for j in range(n):
                 f[j] = k[s - 1, j]
-        else:
-            evaluate_rhs(rhs_data, y, f)
-            state[N_RHS] += 1
         t_new = t_end if last else t + h
+        if not st.fsal:
+            evaluate_rhs(rhs_data, t_new, y, f)
+            state[N_RHS] += 1
+        state[IMPACTS] += _track_impacts(case2, observe_data, y)
         state[T] = t_new
         state[H] = min(h * factor, st.max_step)
         state[N_ACCEPTED] += 1
@@ -225,7 +215,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
         while row < n_grid and grid[row] <= t_new:
             tg = grid[row]
             if tg == t_new:
-                state[IMPACTS] += _observe(work, row, y, case2, observe_data)
+                _observe(work, row, y, case2, observe_data)
             else:
                 theta = (tg - t) / h
                 for j in range(n):
@@ -238,7 +228,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
                             power *= theta
                         acc += bm * k_old[m, j]
                     y_new[j] = y_old[j] + h * acc
-                state[IMPACTS] += _observe(work, row, y_new, case2, observe_data)
+                _observe(work, row, y_new, case2, observe_data)
             row += 1
             state[N_OUT] = row
         if last:
@@ -303,6 +293,7 @@ def _compile_kernels(model, work: Workspace, settings: StepperSettings) -> tuple
     with event.install_listener("numba:compile", monitor):
         _prepare(_run_chunk, work, 0.0, settings, model.rhs_data, model.case2_data, model.observe_data)
         _prepare(_observe, work, 0, work.y, model.case2_data, model.observe_data)
+        _prepare(_track_impacts, model.case2_data, model.observe_data, work.y)
         model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
     return _time.perf_counter() - start, monitor.compiled
 
@@ -315,8 +306,7 @@ def prepare_kernels(model, tableau: ButcherTableau | str = "dopri5") -> tuple[fl
     tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
     n = 2 * model.size
     settings = StepperSettings.create(tab, StepSizeController(), n, min_step=1e-12, max_steps=1)
-    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), PROBE_COLUMN + len(model.probe_nodes),
-                              model.static.mesh.n_nodes)
+    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), PROBE_COLUMN + len(model.probe_nodes))
     return _compile_kernels(model, work, settings)
 
 
@@ -346,8 +336,7 @@ def integrate_compiled(
     y0 = np.array(y0, dtype=float)
     ctrl = StepSizeController(rtol=rtol, atol=atol, max_step=max_step)
     settings = StepperSettings.create(tab, ctrl, y0.shape[0], min_step=min_step, max_steps=max_steps)
-    work = Workspace.allocate(y0, tab.n_stages, grid, PROBE_COLUMN + len(model.probe_nodes),
-                              model.static.mesh.n_nodes)
+    work = Workspace.allocate(y0, tab.n_stages, grid, PROBE_COLUMN + len(model.probe_nodes))
     grid = work.grid
     rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
     compile_time, compiled = _compile_kernels(model, work, settings)
@@ -360,8 +349,9 @@ def integrate_compiled(
     state[ERR_PREV] = 1.0
     state[N_RHS] = 2
     status = SUCCESS
+    state[IMPACTS] = model.start_impacts(work.y)
     if grid[0] == 0.0:
-        state[IMPACTS] += _observe(work, 0, work.y, case2, observe_data)
+        _observe(work, 0, work.y, case2, observe_data)
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
     for t_stop in stops:

@@ -17,15 +17,27 @@ stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed
 ``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
-the bit node and the borehole shocks and rubbing at every node, evaluated in physical DOFs and
-projected. The right-hand side is a Numba-compiled kernel over preallocated arrays; every compiled
-kernel takes one structured argument (:class:`RhsData`, :class:`FullModelData`, :class:`ObserveData`,
-named tuples built once by :class:`ReducedOrderModel`), and :func:`evaluate_rhs` picks the case-1 or
-case-2 kernel by the type of that argument when it is compiled.
+the bit node, the borehole shocks and rubbing at the contact stations
+(:class:`~drillstring.forces.contact.ContactStations`: the wall is a distributed stiffness ``k'_sh``
+[N/m per m of string], lumped by nodal quadrature, so the contact law does not change with the mesh)
+and the loads that turn with the string (mass imbalance, stress-free bow:
+:mod:`drillstring.forces.excitation`), evaluated in physical DOFs and projected. The turning loads
+follow the local rotation ``Ω t + (Φ η)_θx``, so the right-hand side depends on ``t``.
+
+The right-hand side is a Numba-compiled kernel over preallocated arrays; every compiled kernel takes
+one structured argument (:class:`RhsData`, :class:`FullModelData`, :class:`ObserveData`, named tuples
+built once by :class:`ReducedOrderModel`), and :func:`evaluate_rhs` picks the case-1 or case-2 kernel by
+the type of that argument when it is compiled.
+
+Impacts: a *contact zone* is a run of consecutive nodes in contact; an impact is a zone that appears
+with no node in contact within one node of it at the previous accepted step
+(:func:`new_contact_zones`). Counted zone by zone, not node by node, the number of impacts does not
+grow as the mesh is refined.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -41,7 +53,14 @@ from drillstring.forces.bit_rock import (
     evaluate_bit_rock,
     stick_speed_floor_ratio,
 )
-from drillstring.forces.contact import ContactParameters, contact_forces, evaluate_contact
+from drillstring.forces.contact import (
+    ContactParameters,
+    ContactStations,
+    distributed_contact_forces,
+    evaluate_contact,
+    mesh_contact_stations,
+)
+from drillstring.forces.excitation import TurningLoads, bow_loads, imbalance_loads
 from drillstring.forces.nonlinear import (
     NonlinearElements,
     _kinetic_forces_kernel,
@@ -61,6 +80,7 @@ OBSERVABLES = (
     "force_on_bit",  # N, axial force of the rock on the bit, upward positive (−f_xbit)
     "bit_depth",  # m, bit displacement from the static state (advance of the bit)
     "nodes_in_contact",  # number of nodes touching the borehole
+    "contact_force",  # N, total normal force of the wall on the string, Σ k_i (r_i − g_i)₊ over stations
 )
 #: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
 #: kernel writes by these names, so reordering the tuple reorders the output consistently).
@@ -71,6 +91,7 @@ _TOB = OBSERVABLE_COLUMN["torque_on_bit"]
 _FOB = OBSERVABLE_COLUMN["force_on_bit"]
 _DEPTH = OBSERVABLE_COLUMN["bit_depth"]
 _CONTACTS = OBSERVABLE_COLUMN["nodes_in_contact"]
+_CONTACT_FORCE = OBSERVABLE_COLUMN["contact_force"]
 #: First column of the probes' radial displacements.
 PROBE_COLUMN = len(OBSERVABLES)
 
@@ -86,26 +107,56 @@ VECTOR_MATH = {"reassoc", "contract"}
 
 
 class ContactWork(NamedTuple):
-    """Scratch arrays of the contact search, one entry per node (the first ``n_c`` used)."""
+    """Scratch arrays of the contact search: ``v``, ``w`` at every node, the rest one entry per contact
+    station (the first ``n_c``, the stations in contact, used)."""
 
     v: np.ndarray  # (n_nodes,) lateral displacement v [m]
     w: np.ndarray  # (n_nodes,) lateral displacement w [m]
-    nodes: np.ndarray  # (n_nodes,) int64, indices of the nodes in contact
-    v_c: np.ndarray  # the same quantities at the nodes in contact ...
+    stations: np.ndarray  # (n_stations,) int64, indices of the stations in contact
+    v_c: np.ndarray  # the same quantities at the stations in contact ...
     w_c: np.ndarray
     v_dot: np.ndarray
     w_dot: np.ndarray
     spin: np.ndarray
     gap: np.ndarray
     outer_diameter: np.ndarray
+    stiffness: np.ndarray
     force_v: np.ndarray  # ... and the contact forces [N] and torque [N·m] there
     force_w: np.ndarray
     torque: np.ndarray
 
     @classmethod
-    def allocate(cls, n_nodes: int) -> ContactWork:
-        return cls(*(np.zeros(n_nodes, dtype=np.int64 if name == "nodes" else np.float64)
+    def allocate(cls, n_nodes: int, n_stations: int) -> ContactWork:
+        sizes = {"v": n_nodes, "w": n_nodes}
+        return cls(*(np.zeros(sizes.get(name, n_stations), dtype=np.int64 if name == "stations" else np.float64)
                      for name in cls._fields))
+
+
+class ContactData(NamedTuple):
+    """The wall as the kernels read it: one entry per contact station
+    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node."""
+
+    node: np.ndarray  # (n_stations,) int64
+    gap: np.ndarray  # (n_stations,) radial clearance [m]
+    outer_diameter: np.ndarray  # (n_stations,) [m]
+    stiffness: np.ndarray  # (n_stations,) k_i = k'_sh ℓ_i [N/m]
+    friction: float  # μ_sh [-]
+    regularization: float  # ε [rad/s]
+    tangential: bool  # tangential friction force on the lateral DOFs
+    work: ContactWork
+
+
+class TurningLoadData(NamedTuple):
+    """Loads turning with the string (:class:`~drillstring.forces.excitation.TurningLoads`) projected on
+    the lateral modes: entry ``k`` adds ``s_k cos α_k load_y[k]`` to the y family and ``s_k sin α_k
+    load_z[k]`` to the z family, ``α_k = Ω t + (Φ η)_θx(node_k) + phase_k``, ``s_k`` the local spin
+    speed squared (imbalance) or 1 (bow)."""
+
+    node: np.ndarray  # (m,) int64
+    phase: np.ndarray  # (m,) [rad]
+    speed_squared: np.ndarray  # (m,) bool
+    load_y: np.ndarray  # (m, n_y) generalized forces on the lateral-y modes
+    load_z: np.ndarray  # (m, n_z)
 
 
 class RhsData(NamedTuple):
@@ -124,14 +175,11 @@ class RhsData(NamedTuple):
     phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
     phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
     phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
-    gap: np.ndarray  # (n_nodes,) radial gap [m]
-    outer_diameter: np.ndarray  # (n_nodes,) [m]
     top_speed: float  # Ω [rad/s]
     weight_on_bit: float  # static bit reaction [N]
     bit_rock: np.ndarray  # (7,) arguments of bit_rock_force_floored after the speeds
-    contact: np.ndarray  # (3,) k_sh [N/m], μ [-], speed regularization [rad/s]
-    tangential: bool  # tangential friction of the contact
-    work: ContactWork
+    contact: ContactData
+    turning: TurningLoadData
 
 
 class FullModelData(NamedTuple):
@@ -168,6 +216,8 @@ class ObserveData(NamedTuple):
     v: np.ndarray  # (n_nodes,) scratch
     w: np.ndarray  # (n_nodes,) scratch
     in_contact: np.ndarray  # (n_nodes,) bool: which nodes touch the borehole (filled)
+    current: np.ndarray  # (n_nodes,) bool: nodes in contact at the accepted step being counted (impacts)
+    previous: np.ndarray  # (n_nodes,) bool: nodes in contact at the previous accepted step (impacts)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -227,9 +277,31 @@ def _lateral_displacements(d, y, v, w):
 
 
 @njit(cache=True)
-def _rhs_kernel(d, y, out):
-    """dy/dt of the case-2 ROM (module docstring) from :class:`RhsData` ``d``; contact work is done only
-    at the nodes that touch the borehole."""
+def _turning_loads(d, t, y, acc):
+    """Add the projected loads that turn with the string (:class:`TurningLoadData`) to ``acc``."""
+    r = d.turning
+    n = d.omega2.shape[0]
+    t0, t1, y0, y1, z0, z1 = d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], d.blocks[7]
+    for k in range(r.node.shape[0]):
+        i = r.node[k]
+        angle = d.top_speed * t + r.phase[k]
+        speed = d.top_speed
+        for j in range(t0, t1):
+            angle += d.phi_tx_t[j - t0, i] * y[j]
+            speed += d.phi_tx_t[j - t0, i] * y[n + j]
+        scale = speed * speed if r.speed_squared[k] else 1.0
+        cy = scale * math.cos(angle)
+        cz = scale * math.sin(angle)
+        for j in range(y0, y1):
+            acc[j] += cy * r.load_y[k, j - y0]
+        for j in range(z0, z1):
+            acc[j] += cz * r.load_z[k, j - z0]
+
+
+@njit(cache=True)
+def _rhs_kernel(d, t, y, out):
+    """dy/dt of the case-2 ROM (module docstring) at time ``t`` [s] from :class:`RhsData` ``d``; contact
+    work is done only at the stations that touch the borehole."""
     n = d.omega2.shape[0]
     a0, a1, t0, t1, y0, y1, z0, z1 = (d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3], d.blocks[4],
                                       d.blocks[5], d.blocks[6], d.blocks[7])
@@ -249,58 +321,67 @@ def _rhs_kernel(d, y, out):
         acc[j] += d.bit_u[j - a0] * axial_force
     for j in range(t0, t1):
         acc[j] += d.bit_t[j - t0] * bit_torque
-    # shocks and rubbing: find the nodes outside the gap
     if y1 == y0 and z1 == z0:
         return
-    c = d.work
-    _lateral_displacements(d, eta, c.v, c.w)
+    _turning_loads(d, t, y, acc)
+    # shocks and rubbing: find the stations outside the gap
+    c = d.contact
+    cw = c.work
+    _lateral_displacements(d, eta, cw.v, cw.w)
     n_c = 0
-    for i in range(c.v.shape[0]):
-        if c.v[i] * c.v[i] + c.w[i] * c.w[i] > d.gap[i] * d.gap[i]:
-            c.nodes[n_c] = i
+    for k in range(c.node.shape[0]):
+        i = c.node[k]
+        if cw.v[i] * cw.v[i] + cw.w[i] * cw.w[i] > c.gap[k] * c.gap[k]:
+            cw.stations[n_c] = k
             n_c += 1
     if n_c == 0:
         return
-    for k in range(n_c):
-        i = c.nodes[k]
-        c.v_c[k] = c.v[i]
-        c.w_c[k] = c.w[i]
-        c.gap[k] = d.gap[i]
-        c.outer_diameter[k] = d.outer_diameter[i]
+    for m in range(n_c):
+        k = cw.stations[m]
+        i = c.node[k]
+        cw.v_c[m] = cw.v[i]
+        cw.w_c[m] = cw.w[i]
+        cw.gap[m] = c.gap[k]
+        cw.outer_diameter[m] = c.outer_diameter[k]
+        cw.stiffness[m] = c.stiffness[k]
         spin = d.top_speed
         for j in range(t0, t1):
             spin += d.phi_tx_t[j - t0, i] * eta_dot[j]
-        c.spin[k] = spin
+        cw.spin[m] = spin
         vd = 0.0
         wd = 0.0
-        if d.tangential:
+        if c.tangential:
             for j in range(y0, y1):
                 vd += d.phi_v_t[j - y0, i] * eta_dot[j]
             for j in range(z0, z1):
                 wd += d.phi_w_t[j - z0, i] * eta_dot[j]
-        c.v_dot[k] = vd
-        c.w_dot[k] = wd
-    contact_forces(c.v_c[:n_c], c.w_c[:n_c], c.v_dot[:n_c], c.w_dot[:n_c], c.spin[:n_c], c.gap[:n_c],
-                   c.outer_diameter[:n_c], d.contact[0], d.contact[1], d.contact[2], d.tangential,
-                   c.force_v[:n_c], c.force_w[:n_c], c.torque[:n_c])
-    for k in range(n_c):
-        i = c.nodes[k]
+        cw.v_dot[m] = vd
+        cw.w_dot[m] = wd
+    distributed_contact_forces(cw.v_c[:n_c], cw.w_c[:n_c], cw.v_dot[:n_c], cw.w_dot[:n_c], cw.spin[:n_c],
+                               cw.gap[:n_c], cw.outer_diameter[:n_c], cw.stiffness[:n_c], c.friction,
+                               c.regularization, c.tangential, cw.force_v[:n_c], cw.force_w[:n_c],
+                               cw.torque[:n_c])
+    for m in range(n_c):
+        i = c.node[cw.stations[m]]
+        fv = cw.force_v[m]
+        fw = cw.force_w[m]
+        tq = cw.torque[m]
         for j in range(y0, y1):
-            acc[j] += d.phi_v_t[j - y0, i] * c.force_v[k]
+            acc[j] += d.phi_v_t[j - y0, i] * fv
         for j in range(z0, z1):
-            acc[j] += d.phi_w_t[j - z0, i] * c.force_w[k]
+            acc[j] += d.phi_w_t[j - z0, i] * fw
         for j in range(t0, t1):
-            acc[j] += d.phi_tx_t[j - t0, i] * c.torque[k]
+            acc[j] += d.phi_tx_t[j - t0, i] * tq
 
 
 @njit(cache=True)
-def _rhs_full_kernel(f, y, out):
+def _rhs_full_kernel(f, t, y, out):
     """Case 1 from :class:`FullModelData` ``f``: the case-2 right-hand side plus the strain- and
     kinetic-energy forces f_se and f_ke (:mod:`drillstring.forces.nonlinear`), evaluated on the physical
     state ``q̄ = Φη``, ``q̇ = Φη̇ + Ω`` (θx DOFs), projected on the basis. ``f_ke = f_vel − M_nl(q) q̈``:
     the configuration-dependent mass correction is moved to the left-hand side and
     ``(I + Φᵀ M_nl(Φη) Φ) η̈ = …`` is solved at every evaluation (exact, no lagged accelerations)."""
-    _rhs_kernel(f.rhs, y, out)
+    _rhs_kernel(f.rhs, t, y, out)
     n = f.basis.shape[1]
     eta = y[:n]
     f.q[:] = 0.0
@@ -323,14 +404,15 @@ def _rhs_full_kernel(f, y, out):
     out[n:] = np.linalg.solve(f.mass, acc)
 
 
-def evaluate_rhs(data, y, out):
-    """dy/dt of the ROM for the state ``y`` written into ``out``: case 2 for :class:`RhsData`, case 1 for
-    :class:`FullModelData`. Callable from Python and from compiled code, where it is resolved by the type
-    of ``data`` at compile time, so a case-2 run never compiles the case-1 kernel."""
+def evaluate_rhs(data, t, y, out):
+    """dy/dt of the ROM at time ``t`` [s] for the state ``y`` written into ``out``: case 2 for
+    :class:`RhsData`, case 1 for :class:`FullModelData`. Callable from Python and from compiled code,
+    where it is resolved by the type of ``data`` at compile time, so a case-2 run never compiles the
+    case-1 kernel."""
     if isinstance(data, FullModelData):
-        _rhs_full_kernel(data, y, out)
+        _rhs_full_kernel(data, t, y, out)
     else:
-        _rhs_kernel(data, y, out)
+        _rhs_kernel(data, t, y, out)
 
 
 def _is(numba_type, cls) -> bool:
@@ -338,12 +420,66 @@ def _is(numba_type, cls) -> bool:
 
 
 @overload(evaluate_rhs)
-def _evaluate_rhs_compiled(data, y, out):
+def _evaluate_rhs_compiled(data, t, y, out):
     if _is(data, FullModelData):
-        return lambda data, y, out: _rhs_full_kernel(data, y, out)
+        return lambda data, t, y, out: _rhs_full_kernel(data, t, y, out)
     if _is(data, RhsData):
-        return lambda data, y, out: _rhs_kernel(data, y, out)
+        return lambda data, t, y, out: _rhs_kernel(data, t, y, out)
     return None
+
+
+@njit(cache=True)
+def _contact_state(d, y, v, w, in_contact):
+    """Fill ``v``, ``w`` (every node) and ``in_contact`` (nodes with a station outside its gap) for the
+    state ``y``; returns the total normal force of the wall Σ k_i (r_i − g_i)₊ [N]."""
+    _lateral_displacements(d, y, v, w)
+    in_contact[:] = False
+    c = d.contact
+    total = 0.0
+    for k in range(c.node.shape[0]):
+        i = c.node[k]
+        r = math.sqrt(v[i] * v[i] + w[i] * w[i])
+        if r > c.gap[k]:
+            in_contact[i] = True
+            total += c.stiffness[k] * (r - c.gap[k])
+    return total
+
+
+@njit(cache=True)
+def new_contact_zones(in_contact, previous):
+    """Number of contact zones (runs of consecutive nodes in contact) in ``in_contact`` with no node of
+    ``previous`` in contact within one node of the zone: the impacts since ``previous``."""
+    n = in_contact.shape[0]
+    count = 0
+    i = 0
+    while i < n:
+        if not in_contact[i]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < n and in_contact[j + 1]:
+            j += 1
+        seen = False
+        for k in range(max(i - 1, 0), min(j + 2, n)):
+            if previous[k]:
+                seen = True
+                break
+        if not seen:
+            count += 1
+        i = j + 1
+    return count
+
+
+@njit(cache=True)
+def _track_impacts(d, o, y):
+    """Impacts at the accepted state ``y`` since the previous call (:func:`new_contact_zones`); keeps
+    the nodes in contact in ``o.previous`` for the next call."""
+    if d.blocks[5] == d.blocks[4] and d.blocks[7] == d.blocks[6]:
+        return 0
+    _contact_state(d, y, o.v, o.w, o.current)
+    new = new_contact_zones(o.current, o.previous)
+    o.previous[:] = o.current
+    return new
 
 
 @njit(cache=True)
@@ -353,12 +489,10 @@ def _observe_kernel(d, o, y, out):
     contact mask it fills). Returns the number of nodes in contact."""
     bit_velocity, bit_speed = _bit_motion(d, y)
     axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
-    _lateral_displacements(d, y, o.v, o.w)
+    force = _contact_state(d, y, o.v, o.w, o.in_contact)
     count = 0
-    for i in range(o.v.shape[0]):
-        touching = o.v[i] * o.v[i] + o.w[i] * o.w[i] > d.gap[i] * d.gap[i]
-        o.in_contact[i] = touching
-        count += touching
+    for i in range(o.in_contact.shape[0]):
+        count += o.in_contact[i]
     depth = 0.0
     a0, a1 = d.blocks[0], d.blocks[1]
     for j in range(a0, a1):
@@ -369,6 +503,7 @@ def _observe_kernel(d, o, y, out):
     out[_FOB] = -axial_force
     out[_DEPTH] = depth
     out[_CONTACTS] = count
+    out[_CONTACT_FORCE] = force
     for k in range(o.probe_nodes.shape[0]):
         j = o.probe_nodes[k]
         out[PROBE_COLUMN + k] = np.sqrt(o.v[j] * o.v[j] + o.w[j] * o.w[j])
@@ -385,8 +520,13 @@ class ReducedOrderModel:
         basis: Φ, (n_dofs, n) global mode shapes.
         family: family label of each basis vector.
         probe_positions: x of the radial-displacement probes [m].
+        contact: the contact law; its ``shock_stiffness`` is read as the wall's distributed stiffness
+            k'_sh [N/m per m of string], acting on ``stations`` with ``k_i = k'_sh ℓ_i``.
+        stations: where the wall acts (:class:`~drillstring.forces.contact.ContactStations`).
         generalized_force: (n,) constant generalized force added to the modal acceleration
             [N/√kg per unit modal mass, i.e. the right-hand side of η̈ = …]; ``None`` means zeros.
+        turning_loads: loads turning with the string (:class:`~drillstring.forces.excitation.TurningLoads`:
+            mass imbalance, stress-free bow), or ``None``.
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
     and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
@@ -404,11 +544,11 @@ class ReducedOrderModel:
     weight_on_bit: float
     bit_rock: BitRockParameters
     contact: ContactParameters
-    gap: np.ndarray
-    outer_diameter: np.ndarray
+    stations: ContactStations
     probe_positions: np.ndarray
     nonlinear: str = "bit_and_contact"
     generalized_force: np.ndarray | None = None
+    turning_loads: TurningLoads | None = None
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -424,6 +564,8 @@ class ReducedOrderModel:
             raise ValueError(f"generalized_force: must be {n} finite numbers (one per mode), got shape "
                              f"{force.shape}")
         self.generalized_force = force
+        if self.turning_loads is None:
+            self.turning_loads = TurningLoads.empty(mesh.n_dofs)
         self.omega2 = np.ascontiguousarray(np.sign(self.angular_frequencies) * self.angular_frequencies**2)
         self.bit_u = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, U)])
         self.bit_t = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, THETA_X)])
@@ -431,6 +573,10 @@ class ReducedOrderModel:
         self.phi_w = np.ascontiguousarray(phi[dof(nodes, W)])
         self.phi_tx = np.ascontiguousarray(phi[dof(nodes, THETA_X)])
         self.probe_nodes = np.array([mesh.node_index(x) for x in self.probe_positions], dtype=np.int64)
+        if len(self.stations) and (self.stations.node.min() < 0 or self.stations.node.max() >= mesh.n_nodes):
+            raise ValueError("contact stations must sit on the mesh's nodes")
+        #: k_i = k'_sh ℓ_i [N/m] of each contact station
+        self.station_stiffness = self.stations.stiffness(self.contact.shock_stiffness)
         labels = np.array(self.family)
         blocks = []
         for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
@@ -443,7 +589,11 @@ class ReducedOrderModel:
         self.blocks = np.array(blocks, dtype=np.int64)
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
         c = self.contact
+        st = self.stations
         transposed = np.ascontiguousarray
+        turning = self.turning_loads
+        turning_y = transposed((turning.force_y.T @ phi[:, y0:y1]), dtype=float)
+        turning_z = transposed((turning.force_z.T @ phi[:, z0:z1]), dtype=float)
         self.case2_data = RhsData(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -454,19 +604,26 @@ class ReducedOrderModel:
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
-            gap=np.ascontiguousarray(self.gap, dtype=float),
-            outer_diameter=np.ascontiguousarray(self.outer_diameter, dtype=float),
             top_speed=float(self.top_speed),
             weight_on_bit=float(self.weight_on_bit),
             bit_rock=np.array(self.bit_rock.kernel_args(), dtype=float),
-            contact=np.array([c.shock_stiffness, c.friction_coefficient, c.speed_regularization],
-                             dtype=float),
-            tangential=bool(c.tangential_friction),
-            work=ContactWork.allocate(mesh.n_nodes),
+            contact=ContactData(
+                node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
+                outer_diameter=transposed(st.outer_diameter, dtype=float),
+                stiffness=transposed(self.station_stiffness, dtype=float),
+                friction=float(c.friction_coefficient), regularization=float(c.speed_regularization),
+                tangential=bool(c.tangential_friction), work=ContactWork.allocate(mesh.n_nodes, len(st)),
+            ),
+            turning=TurningLoadData(
+                node=transposed(turning.node, dtype=np.int64), phase=transposed(turning.phase, dtype=float),
+                speed_squared=transposed(turning.speed_squared, dtype=np.bool_),
+                load_y=turning_y.reshape(len(turning), y1 - y0), load_z=turning_z.reshape(len(turning), z1 - z0),
+            ),
         )
         self.observe_data = ObserveData(
             probe_nodes=self.probe_nodes, v=np.zeros(mesh.n_nodes), w=np.zeros(mesh.n_nodes),
             in_contact=np.zeros(mesh.n_nodes, dtype=np.bool_),
+            current=np.zeros(mesh.n_nodes, dtype=np.bool_), previous=np.zeros(mesh.n_nodes, dtype=np.bool_),
         )
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | FullModelData = (
@@ -501,10 +658,19 @@ class ReducedOrderModel:
     def observable_names(self) -> tuple[str, ...]:
         return OBSERVABLES
 
+    @property
+    def gap(self) -> np.ndarray:
+        """Radial clearance at each node [m]: the smallest of its stations' (at a section change, the
+        wider section's), so a node touches the wall exactly when ``r > gap``."""
+        gap = np.full(self.static.mesh.n_nodes, np.inf)
+        np.minimum.at(gap, self.stations.node, self.stations.gap)
+        return gap
+
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        """dy/dt for y = [η, η̇] (t enters only through the imposed top rotation, which drops out)."""
+        """dy/dt for y = [η, η̇] at time ``t`` [s] (t enters through the rotation Ω t that turns the
+        turning loads)."""
         out = np.empty_like(y)
-        evaluate_rhs(self.rhs_data, y, out)
+        evaluate_rhs(self.rhs_data, float(t), np.ascontiguousarray(y, dtype=float), out)
         return out
 
     def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:
@@ -515,13 +681,20 @@ class ReducedOrderModel:
         bit_velocity = self.bit_u @ eta_dot
         bit_speed = self.top_speed + self.bit_t @ eta_dot
         axial_force, bit_torque = evaluate_bit_rock(bit_velocity, bit_speed, self.bit_rock)
+        st = self.stations
+        spin = self.top_speed + self.phi_tx @ eta_dot
         force_v, force_w, torque, _ = evaluate_contact(
-            self.phi_v @ eta, self.phi_w @ eta, self.phi_v @ eta_dot, self.phi_w @ eta_dot,
-            self.top_speed + self.phi_tx @ eta_dot, self.gap, self.outer_diameter, self.contact,
+            st.gather(self.phi_v @ eta), st.gather(self.phi_w @ eta), st.gather(self.phi_v @ eta_dot),
+            st.gather(self.phi_w @ eta_dot), st.gather(spin), st.gap, st.outer_diameter, self.contact,
+            stiffness=self.station_stiffness,
         )
-        generalized = (self.phi_v.T @ force_v + self.phi_w.T @ force_w + self.phi_tx.T @ torque
+        n_nodes = self.static.mesh.n_nodes
+        turning = self.basis.T @ self.turning_loads.forces(self.top_speed * t + self.phi_tx @ eta, spin)
+        lateral = np.array([f.startswith("lateral") for f in self.family])
+        generalized = (self.phi_v.T @ st.scatter(force_v, n_nodes) + self.phi_w.T @ st.scatter(force_w, n_nodes)
+                       + self.phi_tx.T @ st.scatter(torque, n_nodes)
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
-                       + self.generalized_force)
+                       + self.generalized_force + np.where(lateral, turning, 0.0))
         acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
         if self.nonlinear == "full":
             q = self.basis @ eta
@@ -544,6 +717,18 @@ class ReducedOrderModel:
     def contact_mask(self) -> np.ndarray:
         """Nodes in contact at the last :meth:`observe` call (a copy)."""
         return self.observe_data.in_contact.copy()
+
+    def start_impacts(self, y: np.ndarray) -> int:
+        """Start counting impacts from the state ``y`` (the start of a run): returns its contact zones,
+        each an impact (:func:`new_contact_zones`)."""
+        self.observe_data.previous[:] = False
+        return self.track_impacts(y)
+
+    def track_impacts(self, y: np.ndarray) -> int:
+        """Impacts at the accepted state ``y`` since the previous call (or :meth:`start_impacts`): the
+        contact zones that appeared (:func:`new_contact_zones`). Both integrators call it after every
+        accepted step."""
+        return int(_track_impacts(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
 
     def initial_state(self, lateral_perturbation: float, seed: int) -> np.ndarray:
         """Initial state (SPEC §7): the static state, the whole string spinning at Ω, zero axial
@@ -599,6 +784,7 @@ def reduced_model(
     damping_basis: str = "free_free",
     probe_positions=(),
     nonlinear: str = "bit_and_contact",
+    turning_loads: TurningLoads | None = None,
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one).
 
@@ -608,7 +794,10 @@ def reduced_model(
         damping_basis: "free_free" (ξ, c1, c2 on the free–free modes) or "constrained" (ξ on every
             basis mode); see :mod:`drillstring.damping`.
         top_speed: Ω [rad/s].
-        borehole_diameter: D_ch [m].
+        contact: the contact law, ``shock_stiffness`` read as k'_sh [N/m per m of string].
+        borehole_diameter: D_ch [m]; the contact stations follow from it and the mesh
+            (:func:`~drillstring.forces.contact.mesh_contact_stations`).
+        turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
     """
     modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes)
     families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
@@ -622,17 +811,29 @@ def reduced_model(
         definition=damping_basis,
     )
     damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
-    mesh = static.mesh
-    node_sections = mesh.node_section()
-    outer = np.array([mesh.sections[i].outer_diameter for i in node_sections])
     return ReducedOrderModel(
         static=static, system=system, modes=modes, basis=basis, family=tuple(family),
         angular_frequencies=omega, damping=damping, top_speed=top_speed,
         weight_on_bit=static.weight_on_bit, bit_rock=bit_rock, contact=contact,
-        gap=(borehole_diameter - outer) / 2.0, outer_diameter=outer,
+        stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
-        nonlinear=nonlinear, generalized_force=structural.generalized_force,
+        nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
     )
+
+
+def case_turning_loads(case, mesh) -> TurningLoads:
+    """The mass imbalance of the case's sections (``sections[i].eccentricity``, ``eccentricity_angle``)
+    and its stress-free bow (``[bow]``) as :class:`~drillstring.forces.excitation.TurningLoads` on
+    ``mesh``; empty when the case has neither."""
+    from drillstring.fem.assembly import structural_matrices
+
+    loads = imbalance_loads(mesh, [s.eccentricity for s in case.sections],
+                            [s.eccentricity_angle for s in case.sections])
+    bow = case.bow
+    if bow.amplitude > 0.0:
+        stiffness, _ = structural_matrices(mesh)
+        loads = loads + bow_loads(mesh, stiffness, bow.amplitude, bow.start, bow.end, bow.angle)
+    return loads
 
 
 def case_reduced_model(
@@ -672,4 +873,5 @@ def case_reduced_model(
         borehole_diameter=case.borehole.diameter,
         probe_positions=case.mesh.probes,
         nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,
+        turning_loads=case_turning_loads(case, static.mesh),
     )

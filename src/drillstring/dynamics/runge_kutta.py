@@ -788,6 +788,7 @@ def integrate(
     observe: Callable[[float, np.ndarray], np.ndarray] | None = None,
     raise_on_failure: bool = True,
     controller: StepSizeController | None = None,
+    on_step: Callable[[float, np.ndarray], None] | None = None,
 ) -> Solution:
     """Integrate ``y' = rhs(t, y)`` over ``t_span = (t0, t_end)`` (``t_end < t0`` integrates backwards).
 
@@ -795,6 +796,7 @@ def integrate(
     ``t_end`` itself always included exactly (appended when the span is not a multiple of the step); with
     neither, every accepted step is output. Values between steps come from the stepper's dense output.
     ``observe(t, y)`` maps the state to what is stored (1-D; a scalar is stored as one column).
+    ``on_step(t, y)`` is called after every accepted step with its end time and state.
 
     Step control: ``rtol``, ``atol`` (scalar or per-component), ``max_step``, ``first_step``; a fully
     configured ``controller`` overrides those four. ``fixed_step`` switches control off (every step of
@@ -882,6 +884,8 @@ def integrate(
             if not stepper.step():
                 continue
             t_new = stepper.t
+            if on_step is not None:
+                on_step(t_new, stepper.y)
             if grid is None:
                 rows.add(np.array([t_new]), obs(t_new, stepper.y)[None, :])
             else:

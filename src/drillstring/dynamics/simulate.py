@@ -21,8 +21,10 @@ class SimulationResult:
         observables: name -> values on ``time`` (names in :data:`~drillstring.dynamics.rom.OBSERVABLES`).
         radial_displacement: (n_time, n_probes) radial displacement r at the probes [m].
         probe_positions: x of the probes [m]; ``probe_gaps`` their radial gaps [m].
-        impacts: number of times a node entered contact with the borehole, counted between
-            successive output times (a contact shorter than one output step may be missed).
+        impacts: number of times the string hit the borehole wall: contact zones (runs of consecutive
+            nodes in contact) that appeared, checked after every accepted integration step
+            (:func:`~drillstring.dynamics.rom.new_contact_zones`; a zone that moves along the string or
+            grows is the same contact, not a new impact).
         status: "success" or "failed"; ``message`` says where and why a failed run stopped.
         stats: solver statistics (right-hand-side evaluations, accepted/rejected steps, the solver's
             wall time ``wall_time`` [s]; with the compiled engine also ``compile_time`` [s], the time
@@ -93,23 +95,19 @@ def simulate_model(
         return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
                                   atol=atol, method=method, max_steps=max_steps, min_step=min_step,
                                   progress=progress, raise_on_failure=raise_on_failure)
-    previous = np.zeros(model.static.mesh.n_nodes, dtype=bool)
-    impacts = 0
+    impacts = model.start_impacts(y0)
 
-    def observe(t: float, y: np.ndarray) -> np.ndarray:
-        nonlocal previous, impacts
-        values = model.observe(t, y)
-        mask = model.contact_mask()
-        impacts += int(np.count_nonzero(mask & ~previous))
-        previous = mask
-        return values
+    def count_impacts(t: float, y: np.ndarray) -> None:
+        nonlocal impacts
+        impacts += model.track_impacts(y)
 
     start = _time.perf_counter()
     failure = None
     try:
         solution = integrate(
             model.rhs_reference, (0.0, t_end), y0, output_step=output_step, tableau=method, rtol=rtol,
-            atol=atol, max_steps=max_steps, min_step=min_step, progress=progress, observe=observe,
+            atol=atol, max_steps=max_steps, min_step=min_step, progress=progress, observe=model.observe,
+            on_step=count_impacts,
         )
     except IntegrationError as error:
         failure = error
