@@ -2,7 +2,9 @@
 
 Variable names are the same across code, files and figures: ``rate_of_penetration`` [m/s],
 ``bit_speed`` [rad/s], ``torque_on_bit`` [N·m], ``force_on_bit`` [N], ``bit_depth`` [m],
-``nodes_in_contact`` [-], ``radial_displacement`` [m] (dimension ``probe``, coordinate ``x`` [m]).
+``nodes_in_contact`` [-], ``contact_force`` [N], ``radial_displacement`` [m] (dimension ``probe``,
+coordinate ``x`` [m]) and ``lateral_displacement`` [m] (dimensions ``probe`` and ``direction`` = y, z: the
+whirl orbit).
 """
 
 from __future__ import annotations
@@ -28,8 +30,13 @@ def run_dataset(result: SimulationResult, *, case_toml: str = "", extra_attrs: d
         ("time", "probe"), result.radial_displacement,
         {"units": "m", "long_name": LONG_NAMES["radial_displacement"]},
     )
+    data["lateral_displacement"] = (
+        ("time", "probe", "direction"), result.lateral_displacement,
+        {"units": "m", "long_name": LONG_NAMES["lateral_displacement"]},
+    )
     coords = {
         "time": ("time", result.time, {"units": "s"}),
+        "direction": ("direction", np.array(["y", "z"])),
         "x": ("probe", result.probe_positions, {"units": "m", "long_name": "probe position from the top"}),
         "gap": ("probe", result.probe_gaps, {"units": "m", "long_name": "radial gap to the borehole"}),
     }

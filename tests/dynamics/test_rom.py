@@ -125,6 +125,7 @@ def test_observables_are_written_by_name(coarse_case):
     speed = rom.top_speed + rom.bit_t @ eta_dot
     axial_force, torque = evaluate_bit_rock(rop, speed, rom.bit_rock)
     radius = np.hypot(rom.phi_v @ eta, rom.phi_w @ eta)
+    st = rom.stations
     expected = {
         "rate_of_penetration": rop,
         "bit_speed": speed,
@@ -132,11 +133,18 @@ def test_observables_are_written_by_name(coarse_case):
         "force_on_bit": -axial_force,
         "bit_depth": rom.bit_u @ eta,
         "nodes_in_contact": np.count_nonzero(radius > rom.gap),
+        "contact_force": np.sum(rom.station_stiffness
+                                * np.clip(np.hypot(st.gather(rom.phi_v @ eta), st.gather(rom.phi_w @ eta))
+                                          - st.gap, 0.0, None)),
     }
     assert expected["nodes_in_contact"] >= 2
     for name, value in expected.items():
         assert out[OBSERVABLE_COLUMN[name]] == pytest.approx(value, rel=1e-10, abs=1e-14), name
-    np.testing.assert_allclose(out[PROBE_COLUMN:], radius[rom.probe_nodes], rtol=1e-10)
+    n_p = len(rom.probe_nodes)
+    np.testing.assert_allclose(out[PROBE_COLUMN:PROBE_COLUMN + n_p], radius[rom.probe_nodes], rtol=1e-10)
+    np.testing.assert_allclose(out[PROBE_COLUMN + n_p:PROBE_COLUMN + 2 * n_p], (rom.phi_v @ eta)[rom.probe_nodes],
+                               rtol=1e-10)
+    np.testing.assert_allclose(out[PROBE_COLUMN + 2 * n_p:], (rom.phi_w @ eta)[rom.probe_nodes], rtol=1e-10)
     np.testing.assert_array_equal(rom.contact_mask(), radius > rom.gap)
 
 

@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit, typeof
 from numba.core import event
 
-from drillstring.dynamics.rom import PROBE_COLUMN, _observe_kernel, _track_impacts, evaluate_rhs
+from drillstring.dynamics.rom import _observe_kernel, _track_impacts, evaluate_rhs, observation_width
 from drillstring.dynamics.runge_kutta import (
     TABLEAUS,
     ButcherTableau,
@@ -306,7 +306,7 @@ def prepare_kernels(model, tableau: ButcherTableau | str = "dopri5") -> tuple[fl
     tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
     n = 2 * model.size
     settings = StepperSettings.create(tab, StepSizeController(), n, min_step=1e-12, max_steps=1)
-    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), PROBE_COLUMN + len(model.probe_nodes))
+    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), observation_width(len(model.probe_nodes)))
     return _compile_kernels(model, work, settings)
 
 
@@ -336,7 +336,7 @@ def integrate_compiled(
     y0 = np.array(y0, dtype=float)
     ctrl = StepSizeController(rtol=rtol, atol=atol, max_step=max_step)
     settings = StepperSettings.create(tab, ctrl, y0.shape[0], min_step=min_step, max_steps=max_steps)
-    work = Workspace.allocate(y0, tab.n_stages, grid, PROBE_COLUMN + len(model.probe_nodes))
+    work = Workspace.allocate(y0, tab.n_stages, grid, observation_width(len(model.probe_nodes)))
     grid = work.grid
     rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
     compile_time, compiled = _compile_kernels(model, work, settings)

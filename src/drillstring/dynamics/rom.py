@@ -92,8 +92,15 @@ _FOB = OBSERVABLE_COLUMN["force_on_bit"]
 _DEPTH = OBSERVABLE_COLUMN["bit_depth"]
 _CONTACTS = OBSERVABLE_COLUMN["nodes_in_contact"]
 _CONTACT_FORCE = OBSERVABLE_COLUMN["contact_force"]
-#: First column of the probes' radial displacements.
+#: First column of the probes' displacements: after the observables, for ``n_p`` probes, ``n_p`` columns of
+#: radial displacement r, then ``n_p`` of v (along y), then ``n_p`` of w (along z) [m]
+#: (:func:`observation_width`).
 PROBE_COLUMN = len(OBSERVABLES)
+
+
+def observation_width(n_probes: int) -> int:
+    """Columns of one observation row: the observables, then r, v and w at each probe."""
+    return PROBE_COLUMN + 3 * n_probes
 
 
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
@@ -504,9 +511,12 @@ def _observe_kernel(d, o, y, out):
     out[_DEPTH] = depth
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
-    for k in range(o.probe_nodes.shape[0]):
+    n_p = o.probe_nodes.shape[0]
+    for k in range(n_p):
         j = o.probe_nodes[k]
         out[PROBE_COLUMN + k] = np.sqrt(o.v[j] * o.v[j] + o.w[j] * o.w[j])
+        out[PROBE_COLUMN + n_p + k] = o.v[j]
+        out[PROBE_COLUMN + 2 * n_p + k] = o.w[j]
     return count
 
 
@@ -709,8 +719,9 @@ class ReducedOrderModel:
         return np.concatenate([eta_dot, acceleration])
 
     def observe(self, t: float, y: np.ndarray) -> np.ndarray:
-        """Observables (:data:`OBSERVABLES`) followed by the radial displacement at each probe [m]."""
-        out = np.empty(PROBE_COLUMN + len(self.probe_nodes))
+        """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
+        its v and w [m] (:func:`observation_width` columns)."""
+        out = np.empty(observation_width(len(self.probe_nodes)))
         _observe_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float), out)
         return out
 
@@ -730,15 +741,42 @@ class ReducedOrderModel:
         accepted step."""
         return int(_track_impacts(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
 
+    def turning_whirl(self) -> np.ndarray:
+        """The steady lateral whirl [η, η̇] at t = 0 of the linear model spinning at Ω under the turning
+        loads alone (mass imbalance, bow): with ``η_f(t) = Re(A_f e^{iΩt})`` in each lateral family,
+        ``(diag(ω²) − Ω² I + iΩ D_ff) A_f = G_f``, ``G_y = Σ_k s_k e^{iφ_k} load_y[k]``,
+        ``G_z = −i Σ_k s_k e^{iφ_k} load_z[k]`` (``s_k = Ω²`` for an imbalance, 1 for a bow). Zero
+        without turning loads."""
+        n = self.size
+        y = np.zeros(2 * n)
+        turning = self.case2_data.turning
+        if not len(turning.node):
+            return y
+        omega = self.top_speed
+        weight = np.exp(1j * turning.phase) * np.where(turning.speed_squared, omega**2, 1.0)
+        _, _, _, _, y0, y1, z0, z1 = self.blocks
+        for (start, end), load, factor in (((y0, y1), turning.load_y, 1.0), ((z0, z1), turning.load_z, -1j)):
+            if end == start:
+                continue
+            rhs = factor * (weight @ load)
+            block = np.diag(self.omega2[start:end]) - omega**2 * np.eye(end - start) \
+                + 1j * omega * self.damping[start:end, start:end]
+            amplitude = np.linalg.solve(block, rhs)
+            y[start:end] = amplitude.real
+            y[n + start:n + end] = (1j * omega * amplitude).real
+        return y
+
     def initial_state(self, lateral_perturbation: float, seed: int) -> np.ndarray:
         """Initial state (SPEC §7): the static state, the whole string spinning at Ω, zero axial
-        speed (η̇ = 0), plus a seeded lateral perturbation defined physically, independent of the
-        basis: ``v0(x) = Σ_k a_k sin(kπx/L)/k²``, ``w0`` likewise with ``b_k``, k = 1…10,
-        ``a_k, b_k`` standard normal from ``numpy.random.default_rng(seed)``, scaled so that the largest
-        radial displacement along the string is ``lateral_perturbation`` [m]; it is projected on the
-        lateral modes (mass-orthogonal projection ``η0 = Φᵀ(M + M_f) q0``), so it converges to the
-        physical shape as lateral modes are added."""
-        y0 = np.zeros(2 * self.size)
+        speed (η̇ = 0), in the steady whirl of its turning loads (:meth:`turning_whirl`; none without
+        imbalance or bow: a string that has been spinning at Ω whirls so, and starting it straight would
+        give it the impulse of a load switched on at t = 0), plus a seeded lateral perturbation defined
+        physically, independent of the basis: ``v0(x) = Σ_k a_k sin(kπx/L)/k²``, ``w0`` likewise with
+        ``b_k``, k = 1…10, ``a_k, b_k`` standard normal from ``numpy.random.default_rng(seed)``, scaled so
+        that the largest radial displacement along the string is ``lateral_perturbation`` [m]; it is
+        projected on the lateral modes (mass-orthogonal projection ``η0 = Φᵀ(M + M_f) q0``), so it
+        converges to the physical shape as lateral modes are added."""
+        y0 = self.turning_whirl()
         lateral = np.array([f.startswith("lateral") for f in self.family])
         if not (lateral_perturbation > 0 and lateral.any()):
             return y0
@@ -758,7 +796,7 @@ class ReducedOrderModel:
         q0[dof(nodes, THETA_Z)] = scale * (slopes @ a)  # θz = ∂v/∂x
         q0[dof(nodes, THETA_Y)] = -scale * (slopes @ b)  # θy = −∂w/∂x
         eta0 = self.basis.T @ (self.system.mass @ q0)
-        y0[: self.size] = np.where(lateral, eta0, 0.0)
+        y0[: self.size] += np.where(lateral, eta0, 0.0)
         return y0
 
     def energy(self, y: np.ndarray) -> float:

@@ -8,7 +8,13 @@ from typing import Callable
 
 import numpy as np
 
-from drillstring.dynamics.rom import OBSERVABLE_COLUMN, OBSERVABLES, PROBE_COLUMN, ReducedOrderModel
+from drillstring.dynamics.rom import (
+    OBSERVABLE_COLUMN,
+    OBSERVABLES,
+    PROBE_COLUMN,
+    ReducedOrderModel,
+    observation_width,
+)
 from drillstring.dynamics.runge_kutta import IntegrationError, integrate
 
 
@@ -20,6 +26,8 @@ class SimulationResult:
         time: output times [s].
         observables: name -> values on ``time`` (names in :data:`~drillstring.dynamics.rom.OBSERVABLES`).
         radial_displacement: (n_time, n_probes) radial displacement r at the probes [m].
+        lateral_displacement: (n_time, n_probes, 2) lateral displacements (v, w) at the probes [m], along
+            y and z (the whirl orbit).
         probe_positions: x of the probes [m]; ``probe_gaps`` their radial gaps [m].
         impacts: number of times the string hit the borehole wall: contact zones (runs of consecutive
             nodes in contact) that appeared, checked after every accepted integration step
@@ -35,6 +43,7 @@ class SimulationResult:
     time: np.ndarray
     observables: dict[str, np.ndarray]
     radial_displacement: np.ndarray
+    lateral_displacement: np.ndarray
     probe_positions: np.ndarray
     probe_gaps: np.ndarray
     impacts: int
@@ -114,7 +123,7 @@ def simulate_model(
         solution = error.solution
     wall = _time.perf_counter() - start
     values = np.asarray(solution.y) if solution is not None and len(solution.t) else np.zeros(
-        (0, PROBE_COLUMN + len(model.probe_nodes)))
+        (0, observation_width(len(model.probe_nodes))))
     times = np.asarray(solution.t) if solution is not None else np.zeros(0)
     stats = dict(solution.stats) if solution is not None else {}
     stats["wall_time"] = wall
@@ -125,10 +134,13 @@ def simulate_model(
 def _result(model, times, values, impacts, message, stats, raise_on_failure) -> SimulationResult:
     """Split the observed rows into a :class:`SimulationResult`; raise if the run failed."""
     stats["status"] = "failed" if message else "success"
+    n_p = len(model.probe_nodes)
     result = SimulationResult(
         time=times,
         observables={name: values[:, OBSERVABLE_COLUMN[name]] for name in OBSERVABLES},
-        radial_displacement=values[:, PROBE_COLUMN:],
+        radial_displacement=values[:, PROBE_COLUMN:PROBE_COLUMN + n_p],
+        lateral_displacement=np.stack([values[:, PROBE_COLUMN + n_p:PROBE_COLUMN + 2 * n_p],
+                                       values[:, PROBE_COLUMN + 2 * n_p:PROBE_COLUMN + 3 * n_p]], axis=-1),
         probe_positions=model.probe_positions.copy(),
         probe_gaps=model.gap[model.probe_nodes].copy(),
         impacts=impacts,
