@@ -55,7 +55,7 @@ def simulate(
         "weight_on_bit": model.static.weight_on_bit,
         "top_speed": case.operation.top_speed,
         "modes": f"{case.reduced_model.axial_modes} axial + rigid, {case.reduced_model.torsional_modes} "
-                 f"torsional, {case.reduced_model.lateral_modes} lateral per plane",
+                 f"torsional, {model.family.count('lateral_y')} lateral per plane",
         "elements": model.static.mesh.n_elements,
     }
     kwargs = dict(

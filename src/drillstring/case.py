@@ -87,6 +87,7 @@ __all__ = [
     "Simulation",
     "Stabilizer",
     "Stiffness",
+    "StiffnessPerLength",
     "Time",
     "Torque",
     "Velocity",
@@ -304,6 +305,10 @@ VELOCITY = Dimension(
     "velocity", {"m/s": 1.0, "m/min": 1.0 / 60.0, "m/h": 1.0 / 3600.0, "ft/s": 0.3048, "ft/h": 0.3048 / 3600.0}
 )
 STIFFNESS = Dimension("stiffness", {"N/m": 1.0, "kN/m": 1e3, "MN/m": 1e6})
+# A stiffness per metre of string [N/m per m = N/m²]. "N/m" is accepted too, read per metre, because the
+# reference data write the shock stiffness so ("1e8 N/m" for the shocks, per meter of string).
+STIFFNESS_PER_LENGTH = Dimension("stiffness per length",
+                                 {"N/m2": 1.0, "N/m^2": 1.0, "N/m/m": 1.0, "kN/m2": 1e3, "MN/m2": 1e6, "N/m": 1.0})
 PRESSURE = Dimension("pressure", {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9})
 DENSITY = Dimension("density", {"kg/m3": 1.0, "kg/m^3": 1.0, "g/cm3": 1e3, "g/cm^3": 1e3})
 TIME = Dimension("time", {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
@@ -321,7 +326,7 @@ FORCE_ANGLE = Dimension("force times angle", {"N*rad": 1.0, "N.rad": 1.0})
 
 #: Every dimension, for error messages naming the dimension a misplaced unit belongs to.
 DIMENSIONS: tuple[Dimension, ...] = (
-    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION, ANGLE,
+    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, STIFFNESS_PER_LENGTH, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION, ANGLE,
     DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING, LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE,
     FORCE_ANGLE,
 )  # fmt: skip
@@ -388,6 +393,7 @@ Force = _quantity(FORCE)  #: [N]
 AngularSpeed = _quantity(ANGULAR_SPEED)  #: [rad/s]
 Velocity = _quantity(VELOCITY)  #: [m/s]
 Stiffness = _quantity(STIFFNESS)  #: [N/m]
+StiffnessPerLength = _quantity(STIFFNESS_PER_LENGTH)  #: [N/m per m of string]
 Pressure = _quantity(PRESSURE)  #: [Pa]
 Density = _quantity(DENSITY)  #: [kg/m^3]
 Time = _quantity(TIME)  #: [s]
@@ -545,9 +551,11 @@ class BitRock(_Base):
 
 
 class Contact(_Base):
-    """String-borehole shocks and rubbing."""
+    """String-borehole shocks and rubbing. The wall is a distributed stiffness: a length ℓ of string pressed
+    δ into it is pushed back by ``shock_stiffness`` ℓ δ, whatever the mesh."""
 
-    shock_stiffness: Stiffness = Field(1e8, ge=0, description="k_sh [N/m]")
+    shock_stiffness: StiffnessPerLength = Field(
+        1e8, ge=0, description="k_sh, per metre of string [N/m per m]")
     friction_coefficient: Dimensionless = Field(0.0005, ge=0, description="mu_sh [-]")
     tangential_friction: bool = False
     speed_regularization: AngularSpeed = Field(
@@ -601,11 +609,14 @@ class Mesh(_Base):
 
 
 class ReducedModel(_Base):
-    """Number of normal modes kept per family (lateral: per plane)."""
+    """Normal modes kept per family (lateral: per plane): ``lateral_modes`` at least, and every lateral mode
+    whose frequency is below ``lateral_cutoff`` times the rotation frequency (all the family's modes at most)."""
 
     axial_modes: int = Field(10, ge=0)
     torsional_modes: int = Field(10, ge=1)
     lateral_modes: int = Field(20, ge=0)
+    lateral_cutoff: Dimensionless = Field(
+        0.0, ge=0, description="keep every lateral mode below this multiple of the rotation frequency [-]")
 
 
 class Simulation(_Base):

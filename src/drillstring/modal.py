@@ -233,13 +233,32 @@ def family_modes(system: LinearSystem, family: str, count: int) -> ModeFamily:
     return ModeFamily(family, omega, shapes)
 
 
-def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int) -> Modes:
-    """Modes of every family: ``axial`` counts the rigid mode; ``lateral`` is per plane."""
+def family_modes_below(system: LinearSystem, family: str, count: int, cutoff: float) -> ModeFamily:
+    """The lowest modes of one family: at least ``count``, and every mode with ``ω < cutoff`` [rad/s]
+    (all modes with ``ω² < cutoff²``, unstable ones included), as many as the family has at most."""
+    size = len(family_dofs(system.mesh, family))
+    found = family_modes(system, family, count)
+    if not cutoff > 0.0:
+        return found
+    wanted = max(count, 1)
+    while wanted < size and (len(found.eigenvalues) < wanted or found.eigenvalues[-1] < cutoff**2):
+        wanted = min(size, 2 * wanted)
+        found = family_modes(system, family, wanted)
+    keep = max(count, int(np.count_nonzero(found.eigenvalues < cutoff**2)))
+    return ModeFamily(family, found.angular_frequencies[:keep], found.shapes[:, :keep])
+
+
+def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int,
+                  lateral_cutoff: float = 0.0) -> Modes:
+    """Modes of every family: ``axial`` counts the rigid mode; ``lateral`` is per plane, at least, with every
+    lateral mode below ``lateral_cutoff`` [rad/s] (:func:`family_modes_below`; the z plane takes as many
+    modes as the y plane)."""
+    lateral_y = family_modes_below(system, "lateral_y", lateral, lateral_cutoff)
     return Modes(
         axial=family_modes(system, "axial", axial),
         torsional=family_modes(system, "torsional", torsional),
-        lateral_y=family_modes(system, "lateral_y", lateral),
-        lateral_z=family_modes(system, "lateral_z", lateral),
+        lateral_y=lateral_y,
+        lateral_z=family_modes(system, "lateral_z", len(lateral_y.angular_frequencies)),
     )
 
 

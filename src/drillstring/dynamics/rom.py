@@ -823,8 +823,10 @@ def reduced_model(
     probe_positions=(),
     nonlinear: str = "bit_and_contact",
     turning_loads: TurningLoads | None = None,
+    lateral_cutoff: float = 0.0,
 ) -> ReducedOrderModel:
-    """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one).
+    """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
+    ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s]).
 
     Args:
         modal_damping_ratio: ξ [-]; rigid_axial_damping: c1 [N·s/m], viscous resistance to the
@@ -837,7 +839,8 @@ def reduced_model(
             (:func:`~drillstring.forces.contact.mesh_contact_stations`).
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
     """
-    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes)
+    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff)
+    lateral_modes = len(modes.lateral_y.angular_frequencies)
     families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
     basis = np.hstack([f.shapes for f in families])
     omega = np.concatenate([f.angular_frequencies for f in families])
@@ -883,9 +886,11 @@ def case_reduced_model(
     lateral_modes: int | None = None,
     static: StaticState | None = None,
     nonlinear: str | None = None,
+    lateral_cutoff: float | None = None,
 ) -> ReducedOrderModel:
     """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
-    (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``)."""
+    (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
+    ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
     r = case.reduced_model
@@ -912,4 +917,5 @@ def case_reduced_model(
         probe_positions=case.mesh.probes,
         nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,
         turning_loads=case_turning_loads(case, static.mesh),
+        lateral_cutoff=(r.lateral_cutoff if lateral_cutoff is None else lateral_cutoff) * case.operation.top_speed,
     )
