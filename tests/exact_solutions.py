@@ -164,3 +164,31 @@ def free_free_damping_on_first_fixed_free_mode(
     omega_1 = math.pi * wave_speed / (2.0 * length)
     rigid = (rigid_coefficient / rigid_inertia) * (8.0 / math.pi**2) / (2.0 * omega_1)
     return rigid + damping_ratio * float(np.sum(2.0 * k * a**2))
+
+
+def beam_resting_on_a_wall(stiffness, rows, station_stiffness, gaps, initial):
+    """Static equilibrium of a (possibly buckled) beam in one bending plane pushed against a wall on one
+    side: ``K v + Σ_i k_i (v[rows_i] − g_i)₊ e_i = 0`` with the wall at ``v = g_i`` for station ``i`` acting
+    on the DOF ``rows_i`` (penalty springs of stiffness ``k_i`` [N/m]). Piecewise linear: solved by an
+    active-set iteration (solve with the springs of the stations beyond their gap, update, repeat until
+    the set stops changing), started from ``initial``.
+
+    Returns ``(v, forces)``: the DOF vector and the wall force on each station [N] (>= 0, pushing back).
+    """
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    v = np.asarray(initial, dtype=float)
+    rows = np.asarray(rows)
+    active = v[rows] > gaps
+    for _ in range(200):
+        diagonal = np.zeros(len(v))
+        rhs = np.zeros(len(v))
+        np.add.at(diagonal, rows[active], station_stiffness[active])
+        np.add.at(rhs, rows[active], station_stiffness[active] * gaps[active])
+        v = spla.spsolve((stiffness + sp.diags(diagonal)).tocsc(), rhs)
+        now = v[rows] > gaps
+        if np.array_equal(now, active):
+            return v, station_stiffness * np.clip(v[rows] - gaps, 0.0, None)
+        active = now
+    raise RuntimeError("the active set did not settle")

@@ -3,21 +3,35 @@
 import numpy as np
 import pytest
 
-from drillstring.dynamics.rom import case_reduced_model
+from drillstring.dynamics.rom import OBSERVABLE_COLUMN, case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 
 NAMES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit", "bit_depth",
          "nodes_in_contact", "contact_force")
 
 
-def test_compiled_rhs_equals_reference_rhs_with_and_without_contact(coarse_case):
-    rom = case_reduced_model(coarse_case, lateral_modes=5)
+@pytest.mark.parametrize("turning", [False, True])
+def test_compiled_rhs_equals_reference_rhs_with_and_without_contact(coarse_case, turning):
+    """With and without contact, and with loads turning with the string (an eccentric collar and a
+    bowed pipe), at times where the turning loads point anywhere."""
+    case = coarse_case
+    if turning:
+        sections = [s.model_copy(update={"eccentricity": e, "eccentricity_angle": a})
+                    for s, e, a in zip(case.sections, (0.001, 0.005), (0.4, -2.0))]
+        case = case.model_copy(update={"sections": sections, "bow": case.bow.model_copy(
+            update={"amplitude": 0.003, "start": 300.0, "end": 900.0, "angle": 1.0})})
+    rom = case_reduced_model(case, lateral_modes=5)
+    assert len(rom.turning_loads) > 0 if turning else len(rom.turning_loads) == 0
     rng = np.random.default_rng(0)
-    for scale in (1e-6, 30.0):  # centred, and far enough out that many nodes touch the wall
-        y = rng.normal(size=2 * rom.size) * scale
-        fast, slow = rom.rhs(0.0, y), rom.rhs_reference(0.0, y)
-        np.testing.assert_allclose(fast, slow, rtol=1e-10, atol=1e-10 * np.abs(slow).max())
-    assert rom.observe(0.0, y)[5] > 0  # the second state really is in contact
+    for t in (0.0, 0.37, 11.9):
+        for scale in (1e-6, 30.0):  # centred, and far enough out that many nodes touch the wall
+            y = rng.normal(size=2 * rom.size) * scale
+            fast, slow = rom.rhs(t, y), rom.rhs_reference(t, y)
+            np.testing.assert_allclose(fast, slow, rtol=1e-10, atol=1e-10 * np.abs(slow).max())
+    assert rom.observe(0.0, y)[OBSERVABLE_COLUMN["nodes_in_contact"]] > 0  # the state really is in contact
+    if turning:  # the turning loads move with t: the string at rest in the centre is pushed differently
+        at_rest = np.zeros(2 * rom.size)
+        assert np.abs(rom.rhs(0.0, at_rest) - rom.rhs(0.37, at_rest)).max() > 0.1 * np.abs(rom.rhs(0.0, at_rest)).max()
 
 
 @pytest.mark.parametrize("method", ["dopri5", "bs32"])

@@ -184,3 +184,88 @@ def test_reduced_model_pushes_a_buckled_string_away_from_the_centre(reference_ca
     y[first] = 1e-5
     acceleration = model.rhs(0.0, y)[model.size + first]
     assert acceleration == pytest.approx(-omega2 * 1e-5, rel=1e-9)
+
+
+def whirling_model(case, lateral_modes):
+    """Undamped lateral ROM (no modal, Coriolis or viscous damping; no axial or torsional modes) of the
+    coarse reference string spinning at 100 rpm with an eccentric collar (5 mm, φ = 0) and a bow of the
+    collar (2 mm, φ = 1 rad)."""
+    from drillstring.fem.assembly import structural_matrices
+    from drillstring.forces.excitation import bow_loads, imbalance_loads
+
+    static = case_static_state(case)
+    fluid = section_fluid_coefficients(case.model_copy(update={"fluid": case.fluid.model_copy(
+        update={"coriolis": False, "viscous_damping": False})}), static.mesh)
+    system = build_linear_system(static.mesh, static, stabilizers(case), fluid)
+    mesh = static.mesh
+    loads = (imbalance_loads(mesh, [0.0, 0.005], [0.0, 0.0])
+             + bow_loads(mesh, structural_matrices(mesh)[0], 0.002, 1420.0, 1580.0, 1.0))
+    return reduced_model(
+        static, system, axial_modes=0, torsional_modes=0, lateral_modes=lateral_modes,
+        modal_damping_ratio=0.0, rigid_axial_damping=0.0, top_speed=100 * np.pi / 30,
+        bit_rock=BitRockParameters(0.0, 1e40, 0.0, 0.0, 0.0, 2.0),
+        contact=ContactParameters(1e8, 0.0, 0.1, False), borehole_diameter=case.borehole.diameter,
+        probe_positions=[1560.0], turning_loads=loads,
+    )
+
+
+def test_imbalance_and_bow_whirl_at_the_harmonic_response_of_the_finite_element_model(coarse_case):
+    """At a constant spin Ω the turning loads make the string whirl on a circle: the simulated radius at
+    the probe stays at the ROM's harmonic amplitude (the time-dependent kernel agrees with the frequency
+    domain), and that amplitude converges with the lateral modes to the direct harmonic solution of the
+    finite-element model, (K − Ω² M) X = Σ_k s_k e^{iφ_k} F_k, on every lateral DOF."""
+    import scipy.sparse.linalg as spla
+
+    from drillstring.fem.dofs import V, dof
+    from drillstring.modal import family_dofs
+
+    errors = []
+    for count in (10, 20, 40):
+        rom = whirling_model(coarse_case, count)
+        omega = rom.top_speed
+        turning = rom.turning_loads
+        weights = np.exp(1j * turning.phase) * np.where(turning.speed_squared, omega**2, 1.0)
+        dofs = family_dofs(rom.static.mesh, "lateral_y")
+        stiffness = rom.system.stiffness[dofs][:, dofs] - omega**2 * rom.system.mass[dofs][:, dofs]
+        exact = np.zeros(rom.static.mesh.n_dofs, dtype=complex)
+        exact[dofs] = spla.spsolve(stiffness.tocsc().astype(complex), (turning.force_y @ weights)[dofs])
+        probe = rom.probe_nodes[0]
+        radius = abs(exact[dof(probe, V)])
+        run = simulate_model(rom, t_end=2.0, output_step=0.01, rtol=1e-9, atol=1e-12, lateral_perturbation=0.0)
+        r = run.radial_displacement[:, 0]
+        assert np.ptp(r) < 1e-5 * r.mean()  # a circle: the steady whirl the run started on
+        orbit = run.lateral_displacement[:, 0, :]
+        assert np.allclose(np.hypot(orbit[:, 0], orbit[:, 1]), r, rtol=1e-12)
+        angle = np.unwrap(np.arctan2(orbit[:, 1], orbit[:, 0]))
+        assert angle[-1] - angle[0] == pytest.approx(omega * 2.0, rel=1e-6)  # forward, at Ω
+        errors.append(abs(r.mean() - radius) / radius)
+    assert errors[2] < errors[1] < errors[0] and errors[2] < 1e-2, errors
+
+
+def test_energy_is_conserved_through_impacts_without_damping_and_friction(coarse_case):
+    """Undamped, unforced, frictionless: the string thrown at the wall bounces off it several times, and
+    its energy ½η̇ᵀη̇ + ½Σω²η² + Σ_i ½ k_i (r_i − g_i)₊² (the wall's penalty potential, computed here from
+    the stations) is the same before, during and after the impacts, up to the integration tolerance."""
+    rom = dataclasses.replace(conservative_model(coarse_case),
+                              contact=ContactParameters(1e8, 0.0, 0.1, False))
+    st = rom.stations
+    n = rom.size
+
+    def energy(y):
+        eta = y[:n]
+        r = np.hypot(st.gather(rom.phi_v @ eta), st.gather(rom.phi_w @ eta))
+        return rom.energy(y) + 0.5 * np.sum(rom.station_stiffness * np.clip(r - st.gap, 0.0, None) ** 2)
+
+    y0 = np.zeros(2 * n)
+    lateral = np.array([f.startswith("lateral") for f in rom.family])
+    y0[n:][lateral] = np.random.default_rng(1).normal(size=lateral.sum()) * 10.0
+    drifts = {}
+    for rtol in (1e-6, 1e-9):
+        impacts = [rom.start_impacts(y0)]
+        run = integrate(rom.rhs, (0.0, 10.0), y0, output_step=0.01, rtol=rtol, atol=rtol * 1e-3,
+                        observe=lambda t, y: np.array([energy(y), rom.observe(t, y)[OBSERVABLE_COLUMN["contact_force"]]]),
+                        on_step=lambda t, y: impacts.append(rom.track_impacts(y)))
+        e, force = run.y[:, 0], run.y[:, 1]
+        assert sum(impacts) >= 2 and force.max() > 0
+        drifts[rtol] = np.abs(e / e[0] - 1).max()
+    assert drifts[1e-9] < 1e-6 and drifts[1e-9] < 0.01 * drifts[1e-6], drifts

@@ -94,3 +94,43 @@ def test_stick_slip_integrates_and_converges_with_the_stiffening_limit(coarse_ca
     for key in ("mean_rate_of_penetration", "bit_speed_oscillation"):
         assert default[key] == pytest.approx(tight[key], rel=1e-3)
     assert default["stick_time_fraction"] == pytest.approx(tight["stick_time_fraction"], abs=2e-3)
+
+
+def test_a_buckled_string_comes_to_rest_on_the_wall_with_the_static_lateral_load(reference_case):
+    """At 170 kN (critical 114 kN) the straight string is unstable: released along its unstable mode at
+    90 % of the collar's gap, it hits the wall, bounces and settles on it. At rest the wall's force on the
+    string equals the static lateral load of the finite-element model pushed against the wall (all
+    lateral DOFs, the same wall stations, solved statically: tests/exact_solutions.py), within the
+    lateral basis' truncation (40 modes per plane: measured 0.01 %)."""
+    from drillstring.fem.dofs import V, dof
+    from drillstring.modal import family_dofs
+
+    from exact_solutions import beam_resting_on_a_wall
+
+    model = case_reduced_model(reference_case, weight_on_bit=170e3, lateral_modes=40)
+    n = model.size
+    first = model.family.index("lateral_y")
+    assert model.omega2[first] < 0  # buckled
+    shape = model.phi_v[:, first]
+    peak = int(np.argmax(np.abs(shape)))
+    y0 = np.zeros(2 * n)
+    y0[first] = 0.9 * model.gap[peak] / shape[peak]  # towards +y
+    run = simulate_model(model, t_end=60.0, output_step=0.01, initial_state=y0)
+    force = run.observables["contact_force"]
+    last = force[run.time >= 55.0]
+    assert run.impacts >= 1 and last.min() > 0.0
+    assert np.ptp(last) < 1e-3 * last.mean()  # at rest
+
+    system, stations = model.system, model.stations
+    dofs = family_dofs(system.mesh, "lateral_y")
+    position = {int(d): i for i, d in enumerate(dofs)}
+    inner = np.array([dof(node, V) in position for node in stations.node])  # not the pinned ends
+    rows = np.array([position[dof(node, V)] for node in stations.node[inner]])
+    stiffness = system.stiffness[dofs][:, dofs]
+    start = np.zeros(len(dofs))
+    start[rows] = 1.5 * stations.gap[inner] * model.phi_v[stations.node[inner], first] / shape[peak]
+    _, wall = beam_resting_on_a_wall(stiffness, rows, model.station_stiffness[inner], stations.gap[inner], start)
+    assert wall.sum() == pytest.approx(last.mean(), rel=2e-3)
+    assert 50.0 < wall.sum() < 200.0  # ~92 N: near-critical strings lean on the wall lightly
+    # at the same place: the nodes touching at the end of the run (last observation) and in the static solve
+    assert set(stations.node[inner][wall > 0]) == set(np.nonzero(model.contact_mask())[0])
