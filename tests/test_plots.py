@@ -32,9 +32,13 @@ def run_dataset():
             "torque_on_bit": ("time", 4.5e3 * (1 - 0.5 * np.exp(-t))),
             "force_on_bit": ("time", 1e5 * np.ones_like(t)),
             "radial_displacement": (("time", "probe"), radial),
+            "lateral_displacement": (("time", "probe", "direction"),
+                                     np.stack([radial * np.cos(TOP_SPEED * t)[:, None],
+                                               radial * np.sin(TOP_SPEED * t)[:, None]], axis=-1)),
+            "contact_force": ("time", 1e4 * np.clip(np.sin(7 * t), 0, None)),
         },
         coords={"time": t, "x": ("probe", [1500.0, 1560.0]), "gap": ("probe", [0.0357, 0.0357])},
-        attrs={"top_speed": TOP_SPEED, "status": "success", "case": 'name = "synthetic"\n'},
+        attrs={"top_speed": TOP_SPEED, "status": "success", "case": 'name = "synthetic"\n', "impacts": 5},
     )
 
 

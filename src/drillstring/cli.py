@@ -420,6 +420,8 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
         return float(finite.max()) if finite.size else None
 
     radial_max = [largest(radial[:, j]) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+    contact = np.asarray(ds["contact_force"].values, dtype=float) if "contact_force" in ds else np.zeros(0)
+    steady = t >= t_transient - 1e-9 * max(1.0, t_transient)
     indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
                                      t_transient)
     return {
@@ -428,6 +430,9 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
         "gap": [float(g) for g in gap],
         "probe_x": [float(v) for v in x],
         "impacts": int(ds.attrs.get("impacts", 0)),
+        "max_contact_force": largest(contact),
+        "mean_contact_force": (float(np.nanmean(contact[steady])) if contact.size and steady.any() else None),
+        "contact_time_fraction": (float(np.mean(contact[steady] > 0)) if contact.size and steady.any() else None),
         "n_rhs": int(ds.attrs.get("solver_n_rhs", 0)),
         "n_accepted": int(ds.attrs.get("solver_n_accepted", 0)),
         "n_rejected": int(ds.attrs.get("solver_n_rejected", 0)),
@@ -468,6 +473,10 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
         table.add_row(escape(f"max radial displacement at x = {x:g} m / gap"),
                       f"{_fmt(r, ',.3f', _MM)} / {gap * _MM:,.1f}", "mm")
     table.add_row("impacts on the borehole", f"{numbers['impacts']:,}", "")
+    table.add_row("largest contact force", _fmt(numbers["max_contact_force"], ",.1f", 1.0 / _KN), "kN")
+    table.add_row(escape(f"mean contact force / time in contact (t ≥ {t_tr:g} s)"),
+                  f"{_fmt(numbers['mean_contact_force'], ',.3f', 1.0 / _KN)} kN / "
+                  f"{_fmt(numbers['contact_time_fraction'], '.1%')}", "")
     table.add_row("right-hand-side evaluations", f"{numbers['n_rhs']:,}", "")
     table.add_row("steps accepted / rejected", f"{numbers['n_accepted']:,} / {numbers['n_rejected']:,}", "")
     table.add_row("solver wall time", f"{numbers['wall_time']:,.2f}", "s")
@@ -488,9 +497,10 @@ def simulate(
     ),
     as_json: JsonOpt = False,
 ) -> None:
-    """One drilling run: ROP, bit speed, torque- and force-on-bit, radial displacements, in time.
+    """One drilling run: ROP, bit speed, torque- and force-on-bit, radial displacements, whirl, contact.
 
-    Writes the observables to NetCDF and a four-panel figure, then prints a summary. After the transient
+    Writes the observables to NetCDF and a six-panel figure (with the whirl orbit at the probe and the
+    contact force), then prints a summary: impacts on the borehole and contact forces too. After the transient
     (t >= min(10 s, t_end/2)): the bit-speed oscillation (max − min)/(2 × top speed) and the fraction of the time
     the bit turns slower than 10 % of the top speed (stick). A run
     that stops early still writes what it computed, reports where it stopped and exits with code 1.

@@ -7,8 +7,9 @@ Figures are drawn on :class:`matplotlib.figure.Figure` objects rendered by the A
 ``pyplot``: nothing here changes the global Matplotlib backend or leaves figures open, so the functions
 are safe in scripts, notebooks, worker processes and tests.
 
-* :func:`plot_run` — one simulation: ROP, bit speed, radial displacement at a probe, torque-on-bit.
-* :func:`plot_compare` — the same four panels for case 1 (full) and case 2 (bit–rock + contact) overlaid.
+* :func:`plot_run` — one simulation: ROP, bit speed, radial displacement at a probe, torque-on-bit, the
+  whirl orbit at the probe with the borehole wall, the contact force.
+* :func:`plot_compare` — the same six panels for case 1 (full) and case 2 (bit–rock + contact) overlaid.
 * :func:`plot_convergence` — mean-square convergence ``conv(n_s)`` of each observable.
 * :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB.
 * :func:`plot_dispersion` — dispersion [%] of the same observables vs time, transient shaded.
@@ -46,6 +47,7 @@ DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
     "torque_on_bit": (1e-3, "kN·m", "torque-on-bit"),
     "force_on_bit": (1e-3, "kN", "force-on-bit"),
     "radial_displacement": (1e3, "mm", "radial displacement"),
+    "contact_force": (1e-3, "kN", "contact force"),
 }
 
 #: The four observables of the study figures, in panel order.
@@ -57,9 +59,10 @@ _NOMINAL_COLOR = "C3"
 _ENVELOPE_COLOR = "C0"
 
 
-#: Fixed margins of the 2 × 2 run figures (11 × 7 in): laid out once by hand instead of by Matplotlib's
+#: Fixed margins of the 3 × 2 run figures (11 × 10 in): laid out once by hand instead of by Matplotlib's
 #: constrained layout, which measured every text twice and took half the drawing time.
-_PANEL_MARGINS = {"left": 0.065, "right": 0.985, "bottom": 0.08, "top": 0.925, "wspace": 0.2, "hspace": 0.32}
+_PANEL_MARGINS = {"left": 0.065, "right": 0.985, "bottom": 0.055, "top": 0.945, "wspace": 0.2, "hspace": 0.34}
+_RUN_FIGURE = (11.0, 10.0)
 
 
 def _figure(rows: int, cols: int, size: tuple[float, float], sharex: bool = False, *,
@@ -108,16 +111,16 @@ def _probe_positions(ds: xr.Dataset) -> np.ndarray:
 
 
 def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
-    """Four panels of one simulation (like the reference study's figure) written to the PNG ``path``.
-
+    """Six panels of one simulation written to the PNG ``path``: the four of the reference study's figure —
     ROP [m/h], bit speed [rpm] with the top speed (``ds.attrs["top_speed"]`` [rad/s]) dashed, radial
     displacement [mm] at the probe nearest ``probe_x`` [m] with its gap (coordinate ``gap``) dashed, and
-    torque-on-bit [kN·m], all vs time [s]. A failed (partial) run is plotted as far as it went, with its
-    status in the title.
+    torque-on-bit [kN·m], vs time [s] — and the lateral motion: the whirl orbit at that probe (w against v
+    [mm], with the borehole wall as a circle of radius the gap) and the contact force of the wall on the
+    string [kN] vs time. A failed (partial) run is plotted as far as it went, with its status in the title.
     """
     t = np.asarray(ds["time"].values, dtype=float)
-    fig, axes = _figure(2, 2, (11.0, 7.0), margins=_PANEL_MARGINS)
-    ax_rop, ax_speed, ax_radial, ax_tob = axes
+    fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
+    ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
 
     ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration"), lw=0.9)
     ax_rop.set_ylabel(_label("rate_of_penetration"))
@@ -151,8 +154,11 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
     ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), lw=0.9)
     ax_tob.set_ylabel(_label("torque_on_bit"))
 
+    _orbit_panel(ax_orbit, ((ds, "orbit", {"lw": 0.6}),), probe_x)
+    _contact_panel(ax_contact, ((ds, None, {"lw": 0.8}),))
     for ax in axes:
-        ax.set_xlabel("time [s]")
+        if ax is not ax_orbit:
+            ax.set_xlabel("time [s]")
         ax.grid(True, alpha=0.3)
     title = "Drilling run"
     name = _case_name(ds.attrs.get("case", ""))
@@ -173,11 +179,12 @@ _COMPARE_STYLES = (
 
 def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
     """Case 1 (``full``: kinetic- and strain-energy forces included, solid) and case 2 (``reduced``: bit–rock
-    and contact forces only, dashed) of the same case overlaid, in the four panels of :func:`plot_run`:
+    and contact forces only, dashed) of the same case overlaid, in the six panels of :func:`plot_run`:
     ROP [m/h], bit speed [rpm] with the top speed, radial displacement [mm] at the probe nearest
-    ``probe_x`` [m] with its gap, torque-on-bit [kN·m], vs time [s]. Written to the PNG ``path``."""
-    fig, axes = _figure(2, 2, (11.0, 7.0), margins=_PANEL_MARGINS)
-    ax_rop, ax_speed, ax_radial, ax_tob = axes
+    ``probe_x`` [m] with its gap, torque-on-bit [kN·m] vs time [s], the whirl orbits at that probe and the
+    contact forces [kN] vs time. Written to the PNG ``path``."""
+    fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
+    ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
     runs = ((full, *_COMPARE_STYLES[0]), (reduced, *_COMPARE_STYLES[1]))
 
     radial_max: list[str] = []
@@ -218,6 +225,12 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
         ax.set_ylabel(_label(name))
         ax.set_xlabel("time [s]")
         ax.grid(True, alpha=0.3)
+    thin = [(ds, label, {**style, "lw": 0.6}) for ds, label, style in runs]
+    _orbit_panel(ax_orbit, thin, probe_x)
+    _contact_panel(ax_contact, thin)
+    ax_contact.set_xlabel("time [s]")
+    for ax in (ax_orbit, ax_contact):
+        ax.grid(True, alpha=0.3)
     ax_rop.legend(loc="best", fontsize="small")
     ax_speed.legend(loc="best", fontsize="small")
     if probe_title is not None:
@@ -232,6 +245,53 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
         title += f" ({' and '.join(failed)} failed)"
     fig.suptitle(title)
     return _save(fig, path)
+
+
+def _orbit_panel(ax, runs, probe_x: float) -> None:
+    """The whirl orbit (w against v [mm]) at the probe nearest ``probe_x`` [m] of each ``(ds, label, style)``,
+    with the borehole wall (a circle of radius the probe's gap) and equal axes."""
+    gap = None
+    drawn = False
+    for ds, label, style in runs:
+        x = _probe_positions(ds)
+        if "lateral_displacement" not in ds or not x.size:
+            continue
+        i = _probe_index(x, probe_x)
+        orbit = np.asarray(ds["lateral_displacement"].isel(probe=i).values, dtype=float) * 1e3
+        ax.plot(orbit[:, 0], orbit[:, 1], label=label, **style)
+        drawn = True
+        if gap is None and ("gap" in ds.coords or "gap" in ds):
+            gap = float(np.atleast_1d(ds["gap"].values)[i])
+        ax.set_title(f"whirl orbit at x = {x[i]:.0f} m", fontsize="medium")
+    if not drawn:
+        ax.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax.transAxes)
+        return
+    if gap is not None:
+        angle = np.linspace(0.0, 2.0 * np.pi, 361)
+        ax.plot(gap * 1e3 * np.cos(angle), gap * 1e3 * np.sin(angle), color="k", lw=1.0, label="borehole wall")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("v, along y [mm]")
+    ax.set_ylabel("w, along z [mm]")
+    ax.legend(loc="upper right", fontsize="small")
+
+
+def _contact_panel(ax, runs) -> None:
+    """The total contact force of the wall on the string [kN] vs time of each ``(ds, label, style)``, with
+    the run's number of impacts."""
+    notes = []
+    for ds, label, style in runs:
+        if "contact_force" not in ds:
+            continue
+        t = np.asarray(ds["time"].values, dtype=float)
+        ax.plot(t, _scaled(ds["contact_force"].values, "contact_force"), label=label, **style)
+        impacts = ds.attrs.get("impacts")
+        if impacts is not None:
+            notes.append(f"{label.split(' (')[0] + ': ' if label else ''}{int(impacts)} impacts")
+    if notes:
+        ax.text(0.02, 0.95, "\n".join(notes), transform=ax.transAxes, va="top", fontsize="small")
+    ax.set_ylabel(_label("contact_force"))
+    if any(label for _, label, _ in runs):
+        ax.legend(loc="upper right", fontsize="small")
 
 
 def _case_name(case_toml: str) -> str:

@@ -27,7 +27,6 @@ from drillstring.forces.nonlinear import (  # noqa: I001
     _project_coupling_kernel,
     _strain_energy_forces_kernel,
     _strain_energy_kernel,
-    contract_mass_tensor,
     element_kinetic_energy_nl,
     element_kinetic_force,
     element_rows,
@@ -35,7 +34,7 @@ from drillstring.forces.nonlinear import (  # noqa: I001
     element_strain_energy_force,
     element_strain_energy_tangent,
     expand_mass_coupling,
-    modal_mass_tensor,
+    modal_mass_coupling,
     nonlinear_elements,
     project_mass_correction,
 )
@@ -457,18 +456,22 @@ def test_projection_of_mass_correction(mesh, nl):
     generic = project_mass_correction(expand_mass_coupling(coupling), phi_e)
     assert rel_err(compact, reference) < 1e-12
     assert rel_err(generic, reference) < 1e-12
-    # modal tensor: Φᵀ M_nl(Φη) Φ = Σ η_k A_k
-    active, tensor = modal_mass_tensor(nl, phi)
-    eta = rng.standard_normal(n)
-    out = np.empty((n, n))
-    contract_mass_tensor(tensor, active, eta, out)
-    assert rel_err(out, phi.T @ (nl.mass_correction_matrix(phi @ eta) @ phi)) < 1e-12
-    # modes without θy field are dropped
-    phi2 = phi.copy()
-    phi2[:, 0] = 0.0
-    phi2[0::6, 0] = 1.0  # axial translation
-    active2, _ = modal_mass_tensor(nl, phi2)
-    assert 0 not in active2 and len(active2) == n - 1
+    # family modes (each on its own DOFs): Φᵀ M_nl(Φη) Φ is zero but for the torsion × lateral-y block
+    # Σ_k η_z,k T_k and its transpose
+    families = {kind: np.zeros((mesh.n_dofs, 3)) for kind in ("u", "tx", "y", "z")}
+    for kind, offsets in (("u", [0]), ("tx", [3]), ("y", [1, 5]), ("z", [2, 4])):
+        for offset in offsets:
+            families[kind][offset::6] = rng.standard_normal((mesh.n_nodes, 3))
+    basis = np.hstack([families[k] for k in ("u", "tx", "y", "z")])
+    tensor = modal_mass_coupling(nl, families["tx"], families["y"], families["z"])
+    assert tensor.shape == (3, 3, 3)
+    eta = rng.standard_normal(12)
+    full = basis.T @ (nl.mass_correction_matrix(basis @ eta) @ basis)
+    block = np.einsum("k,kij->ij", eta[9:], tensor)
+    expected = np.zeros((12, 12))
+    expected[3:6, 6:9] = block
+    expected[6:9, 3:6] = block.T
+    assert rel_err(full, expected) < 1e-12 and np.abs(block).max() > 0
 
 
 @njit

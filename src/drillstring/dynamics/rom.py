@@ -65,11 +65,10 @@ from drillstring.forces.nonlinear import (
     NonlinearElements,
     _kinetic_forces_kernel,
     _strain_energy_forces_kernel,
-    contract_mass_tensor,
-    modal_mass_tensor,
+    modal_mass_coupling,
     nonlinear_elements,
 )
-from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes
+from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs
 from drillstring.statics import StaticState, case_static_state
 
 #: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
@@ -190,13 +189,26 @@ class RhsData(NamedTuple):
 
 
 class FullModelData(NamedTuple):
-    """What the case-1 right-hand side reads in addition to the case-2 data (``rhs``): the basis, the
-    element data of :class:`~drillstring.forces.nonlinear.NonlinearElements`, the modal mass tensor,
-    and scratch arrays."""
+    """What the case-1 right-hand side reads in addition to the case-2 data (``rhs``): the basis by family
+    (each family's modes live on its own DOFs only: ``*_dofs`` the global DOFs of the family,
+    ``*_shapes_t`` its mode shapes there, transposed), the element data of
+    :class:`~drillstring.forces.nonlinear.NonlinearElements`, the modal coupling tensor of the mass
+    correction, and scratch arrays.
+
+    The projected mass correction ``Φᵀ M_nl(Φη) Φ`` has only a torsion × lateral-y block
+    ``B(η) = Σ_k η_z,k T_k`` (and its transpose): ``M_nl`` couples θx with the (v, θz) plane with a
+    coefficient linear in θy, which only the lateral-z modes carry
+    (:func:`~drillstring.forces.nonlinear.modal_mass_coupling`)."""
 
     rhs: RhsData
-    basis: np.ndarray  # (n_dofs, n) Φ
-    basis_t: np.ndarray  # (n, n_dofs) Φᵀ
+    axial_dofs: np.ndarray  # int64
+    axial_shapes_t: np.ndarray  # (n_a, len(axial_dofs))
+    torsion_dofs: np.ndarray
+    torsion_shapes_t: np.ndarray
+    bending_y_dofs: np.ndarray
+    bending_y_shapes_t: np.ndarray
+    bending_z_dofs: np.ndarray
+    bending_z_shapes_t: np.ndarray
     theta_x_dofs: np.ndarray  # int64, the θx DOF of every node
     inv_length: np.ndarray
     xi: np.ndarray
@@ -205,14 +217,15 @@ class FullModelData(NamedTuple):
     rotation: np.ndarray
     axial_stiffness: np.ndarray
     polar_inertia: np.ndarray
-    mass_tensor: np.ndarray  # (k, n, n), see modal_mass_tensor
-    active: np.ndarray  # (k,) int64
+    coupling_tensor: np.ndarray  # (n_z, n_t, n_y) T_k
     q: np.ndarray  # (n_dofs,) scratch: q̄ = Φη
     qd: np.ndarray  # (n_dofs,) scratch: q̇
     f_se: np.ndarray  # (n_dofs,) scratch
     f_vel: np.ndarray  # (n_dofs,) scratch
     coupling: np.ndarray  # (n_el, 2, 4) scratch
-    mass: np.ndarray  # (n, n) scratch: I + Φᵀ M_nl Φ
+    block: np.ndarray  # (n_t, n_y) scratch: B(η)
+    schur: np.ndarray  # (n_t, n_t) scratch: I − B Bᵀ
+    torsion_rhs: np.ndarray  # (n_t,) scratch
     acceleration: np.ndarray  # (n,) scratch
 
 
@@ -382,33 +395,121 @@ def _rhs_kernel(d, t, y, out):
 
 
 @njit(cache=True)
+def _expand(shapes_t, dofs, y, offset, out):
+    """out[dofs] += shapesᵀ-columns · y[offset:offset + n_f] (one family's part of Φη)."""
+    for j in range(shapes_t.shape[0]):
+        x = y[offset + j]
+        if x != 0.0:
+            for i in range(dofs.shape[0]):
+                out[dofs[i]] += shapes_t[j, i] * x
+
+
+@njit(cache=True)
+def _project(shapes_t, dofs, force, offset, out):
+    """out[offset + j] = Σ_i shapes_t[j, i] force[dofs[i]] (one family's part of Φᵀ f)."""
+    for j in range(shapes_t.shape[0]):
+        total = 0.0
+        for i in range(dofs.shape[0]):
+            total += shapes_t[j, i] * force[dofs[i]]
+        out[offset + j] = total
+
+
+@njit(cache=True)
+def _solve_spd(a, b):
+    """Solve a x = b in place (x in b) for a small symmetric positive definite ``a`` (Cholesky, ``a``
+    overwritten by its factor)."""
+    n = a.shape[0]
+    for j in range(n):
+        d = a[j, j]
+        for k in range(j):
+            d -= a[j, k] * a[j, k]
+        d = math.sqrt(d)
+        a[j, j] = d
+        for i in range(j + 1, n):
+            v = a[i, j]
+            for k in range(j):
+                v -= a[i, k] * a[j, k]
+            a[i, j] = v / d
+    for i in range(n):
+        v = b[i]
+        for k in range(i):
+            v -= a[i, k] * b[k]
+        b[i] = v / a[i, i]
+    for i in range(n - 1, -1, -1):
+        v = b[i]
+        for k in range(i + 1, n):
+            v -= a[k, i] * b[k]
+        b[i] = v / a[i, i]
+
+
+@njit(cache=True)
 def _rhs_full_kernel(f, t, y, out):
     """Case 1 from :class:`FullModelData` ``f``: the case-2 right-hand side plus the strain- and
     kinetic-energy forces f_se and f_ke (:mod:`drillstring.forces.nonlinear`), evaluated on the physical
     state ``q̄ = Φη``, ``q̇ = Φη̇ + Ω`` (θx DOFs), projected on the basis. ``f_ke = f_vel − M_nl(q) q̈``:
     the configuration-dependent mass correction is moved to the left-hand side and
-    ``(I + Φᵀ M_nl(Φη) Φ) η̈ = …`` is solved at every evaluation (exact, no lagged accelerations)."""
+    ``(I + Φᵀ M_nl(Φη) Φ) η̈ = r`` is solved at every evaluation (exact, no lagged accelerations). Its only
+    off-diagonal blocks are ``B`` (torsion × lateral y) and ``Bᵀ``: ``(I − B Bᵀ) a_t = r_t − B r_y``,
+    ``a_y = r_y − Bᵀ a_t``, the other accelerations are ``r``."""
     _rhs_kernel(f.rhs, t, y, out)
-    n = f.basis.shape[1]
-    eta = y[:n]
+    d = f.rhs
+    n = d.omega2.shape[0]
+    a0, t0, t1, y0, y1, z0, z1 = d.blocks[0], d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], \
+        d.blocks[7]
     f.q[:] = 0.0
     f.qd[:] = 0.0
-    _columns_matvec(f.basis_t, y, 0, f.q, 1.0)
-    _columns_matvec(f.basis_t, y, n, f.qd, 1.0)
+    for shapes_t, dofs, offset in ((f.axial_shapes_t, f.axial_dofs, a0), (f.torsion_shapes_t, f.torsion_dofs, t0),
+                                   (f.bending_y_shapes_t, f.bending_y_dofs, y0),
+                                   (f.bending_z_shapes_t, f.bending_z_dofs, z0)):
+        _expand(shapes_t, dofs, y, offset, f.q)
+        _expand(shapes_t, dofs, y, n + offset, f.qd)
     for i in range(f.theta_x_dofs.shape[0]):
-        f.qd[f.theta_x_dofs[i]] += f.rhs.top_speed
+        f.qd[f.theta_x_dofs[i]] += d.top_speed
     _strain_energy_forces_kernel(f.q, f.inv_length, f.weights, f.slope, f.axial_stiffness, f.f_se)
     _kinetic_forces_kernel(f.q, f.qd, f.xi, f.weights, f.rotation, f.polar_inertia, f.f_vel, f.coupling)
     for i in range(f.f_se.shape[0]):
         f.f_se[i] += f.f_vel[i]
     acc = f.acceleration
-    _matvec(f.basis_t, f.f_se, 0, acc)
+    acc[:] = 0.0
+    for shapes_t, dofs, offset in ((f.axial_shapes_t, f.axial_dofs, a0), (f.torsion_shapes_t, f.torsion_dofs, t0),
+                                   (f.bending_y_shapes_t, f.bending_y_dofs, y0),
+                                   (f.bending_z_shapes_t, f.bending_z_dofs, z0)):
+        _project(shapes_t, dofs, f.f_se, offset, acc)
     for i in range(n):
-        acc[i] += out[n + i]
-    contract_mass_tensor(f.mass_tensor, f.active, eta, f.mass)
-    for i in range(n):
-        f.mass[i, i] += 1.0
-    out[n:] = np.linalg.solve(f.mass, acc)
+        out[n + i] += acc[i]
+    n_t = t1 - t0
+    n_y = y1 - y0
+    if n_t == 0 or n_y == 0 or z1 == z0:
+        return
+    # B(η) = Σ_k η_z,k T_k
+    b = f.block
+    b[:, :] = 0.0
+    for k in range(z1 - z0):
+        eta = y[z0 + k]
+        if eta != 0.0:
+            for i in range(n_t):
+                for j in range(n_y):
+                    b[i, j] += eta * f.coupling_tensor[k, i, j]
+    r = out[n:]
+    rt = f.torsion_rhs
+    for i in range(n_t):
+        v = r[t0 + i]
+        for j in range(n_y):
+            v -= b[i, j] * r[y0 + j]
+        rt[i] = v
+        for k in range(n_t):
+            total = 0.0
+            for j in range(n_y):
+                total += b[i, j] * b[k, j]
+            f.schur[i, k] = (1.0 if i == k else 0.0) - total
+    _solve_spd(f.schur, rt)
+    for j in range(n_y):
+        v = r[y0 + j]
+        for i in range(n_t):
+            v -= b[i, j] * rt[i]
+        r[y0 + j] = v
+    for i in range(n_t):
+        r[t0 + i] = rt[i]
 
 
 def evaluate_rhs(data, t, y, out):
@@ -642,21 +743,31 @@ class ReducedOrderModel:
     def _full_model_data(self, case2: RhsData) -> FullModelData:
         mesh = self.static.mesh
         self.elements: NonlinearElements = nonlinear_elements(mesh)
-        basis = np.ascontiguousarray(self.basis)
-        active, tensor = modal_mass_tensor(self.elements, basis, tol=1e-14)
         e = self.elements
-        n_dofs, n = basis.shape
+        a0, a1, t0, t1, y0, y1, z0, z1 = (int(b) for b in self.blocks)
         c = np.ascontiguousarray
+        rows = {}
+        for name, (start, end) in {"axial": (a0, a1), "torsional": (t0, t1), "lateral_y": (y0, y1),
+                                   "lateral_z": (z0, z1)}.items():
+            dofs = family_dofs(mesh, name).astype(np.int64)
+            rows[name] = (c(dofs), c(self.basis[dofs, start:end].T, dtype=float))
+        tensor = modal_mass_coupling(e, self.basis[:, t0:t1], self.basis[:, y0:y1], self.basis[:, z0:z1])
+        n_dofs = mesh.n_dofs
+        n_t, n_y = t1 - t0, y1 - y0
         return FullModelData(
-            rhs=case2, basis=basis, basis_t=c(basis.T),
+            rhs=case2,
+            axial_dofs=rows["axial"][0], axial_shapes_t=rows["axial"][1],
+            torsion_dofs=rows["torsional"][0], torsion_shapes_t=rows["torsional"][1],
+            bending_y_dofs=rows["lateral_y"][0], bending_y_shapes_t=rows["lateral_y"][1],
+            bending_z_dofs=rows["lateral_z"][0], bending_z_shapes_t=rows["lateral_z"][1],
             theta_x_dofs=dof(np.arange(mesh.n_nodes), THETA_X).astype(np.int64),
             inv_length=c(e.inv_length, dtype=float), xi=c(e.xi, dtype=float),
             weights=c(e.weights, dtype=float), slope=c(e.slope, dtype=float),
             rotation=c(e.rotation, dtype=float), axial_stiffness=c(e.axial_stiffness, dtype=float),
-            polar_inertia=c(e.polar_inertia, dtype=float), mass_tensor=c(tensor, dtype=float),
-            active=c(active, dtype=np.int64), q=np.zeros(n_dofs), qd=np.zeros(n_dofs),
-            f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs), coupling=np.zeros((e.n_elements, 2, 4)),
-            mass=np.zeros((n, n)), acceleration=np.zeros(n),
+            polar_inertia=c(e.polar_inertia, dtype=float), coupling_tensor=c(tensor, dtype=float),
+            q=np.zeros(n_dofs), qd=np.zeros(n_dofs), f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs),
+            coupling=np.zeros((e.n_elements, 2, 4)), block=np.zeros((n_t, n_y)), schur=np.zeros((n_t, n_t)),
+            torsion_rhs=np.zeros(n_t), acceleration=np.zeros(len(self.angular_frequencies)),
         )
 
     @property

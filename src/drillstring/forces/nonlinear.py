@@ -59,7 +59,7 @@ Reasons: (i) SPEC §6 calls ``f_ke`` *quadratic*; the quartic term would add cub
 as the terms already discarded by the small-angle expansion itself (e.g. the ``O(θ²θ̇²)`` corrections of the
 bending rotary inertia), so keeping it would not improve consistency; (ii) it keeps ``T_nl`` linear in
 ``q``, so ``f_vel`` depends on ``q̇`` only and the projected mass correction is linear in the modal
-coordinates (see :func:`modal_mass_tensor`). Here ``θ̇x`` is the **total** spin speed: callers pass ``q̇``
+coordinates (see :func:`modal_mass_coupling`). Here ``θ̇x`` is the **total** spin speed: callers pass ``q̇``
 with the imposed top speed ``Ω`` added to every ``θ̇x`` DOF; ``θx`` itself never appears undifferentiated.
 
 Lagrange's equations with ``T_nl = ½ q̇ᵀ M_nl(q) q̇`` give ``f_ke = −(d/dt ∂T_nl/∂q̇ − ∂T_nl/∂q)``::
@@ -77,8 +77,8 @@ transfer energy between spin and whirl. ``M_nl`` couples the torsional accelerat
 with ``q̄ = Φη`` and ``Φᵀ(M + M_f)Φ = I``, at each right-hand-side evaluation it solves
 ``(I + Φᵀ M_nl(q) Φ) η̈ = Φᵀ(f_vel + f_se + …) − D η̇ − Ω² η``, which is exact (no lag, no iteration) because
 ``M_nl`` depends on the configuration only. :func:`project_mass_correction` forms ``Φᵀ M_nl Φ`` from the
-per-element couplings, or :func:`modal_mass_tensor` / :func:`contract_mass_tensor` form it from ``η``
-directly (it is linear in ``η``).
+per-element couplings, or :func:`modal_mass_coupling` forms it from ``η`` directly (it is linear in ``η``,
+and for a basis of family modes only its torsion × lateral-y block is not zero).
 
 Small-angle validity
 --------------------
@@ -143,8 +143,7 @@ __all__ = [
     "expand_mass_coupling",
     "element_rows",
     "project_mass_correction",
-    "modal_mass_tensor",
-    "contract_mass_tensor",
+    "modal_mass_coupling",
 ]
 
 #: Gauss points per element for the nonlinear forces (≥ 5 needed for the quartic strain energy).
@@ -528,20 +527,6 @@ def _project_blocks_kernel(blocks, phi_elements, out, work):
     return out
 
 
-@njit(cache=True)
-def contract_mass_tensor(tensor, active, eta, out):
-    """out = Σ_k η[active[k]] tensor[k] = Φᵀ M_nl(Φη) Φ (n, n), written in place; see :func:`modal_mass_tensor`."""
-    out[:, :] = 0.0
-    n = out.shape[0]
-    for k in range(active.shape[0]):
-        a = eta[active[k]]
-        if a != 0.0:
-            for i in range(n):
-                for j in range(n):
-                    out[i, j] += a * tensor[k, i, j]
-    return out
-
-
 @dataclass(eq=False)
 class NonlinearElements:
     """Per-element, per-Gauss-point data for the global ``f_se`` and ``f_ke`` kernels (module docstring).
@@ -697,23 +682,27 @@ def project_mass_correction(
     raise ValueError(f"blocks must have shape (n_el, 2, 4) or (n_el, 12, 12), got {blocks.shape}")
 
 
-def modal_mass_tensor(elements: NonlinearElements, phi: np.ndarray, tol: float = 0.0):
-    """Precompute ``Φᵀ M_nl(Φη) Φ = Σ_k η[active[k]] tensor[k]`` (``M_nl`` is linear in ``q``).
+def modal_mass_coupling(elements: NonlinearElements, torsional: np.ndarray, bending_y: np.ndarray,
+                        bending_z: np.ndarray) -> np.ndarray:
+    """The projected mass correction of a basis whose modes each live on one family, as a tensor.
 
-    ``phi`` (n_dofs, n) is the reduced basis of ``q̄ = Φη``. Only modes that carry a θy field (whose slice
-    of the tensor is not zero, max-abs above ``tol`` times the largest) are kept. Returns
-    ``(active (k,) int64, tensor (k, n, n))``; evaluate with :func:`contract_mass_tensor` (``k n²`` flops,
-    no allocation with a preallocated output).
+    ``M_nl(q)`` couples the torsion ``θx`` with the (v, θz) bending plane, with a coefficient linear in ``θy``
+    (module docstring). For a basis of torsional modes ``Ψ`` (n_dofs, n_t), lateral-y modes ``Φ_y`` (on v, θz)
+    and lateral-z modes ``Φ_z`` (on w, θy) — axial modes take no part —, ``Φᵀ M_nl(Φη) Φ`` is therefore zero but
+    for the torsion × lateral-y block ``B(η) = Σ_k η_z,k T_k`` and its transpose, with
+    ``T_k = Ψᵀ M_nl(φ_z,k) Φ_y``. Returns ``T`` (n_z, n_t, n_y).
     """
-    phi = np.asarray(phi, dtype=np.float64)
-    rows = element_rows(phi, elements.n_elements)
-    n = phi.shape[1]
-    slices = np.empty((n, n, n))
+    torsional = np.asarray(torsional, dtype=np.float64)
+    bending_y = np.asarray(bending_y, dtype=np.float64)
+    bending_z = np.asarray(bending_z, dtype=np.float64)
+    n_t, n_y, n_z = torsional.shape[1], bending_y.shape[1], bending_z.shape[1]
+    rows = element_rows(np.hstack([torsional, bending_y]), elements.n_elements)
+    tensor = np.empty((n_z, n_t, n_y))
     coupling = np.empty((elements.n_elements, 2, 4))
-    work = np.empty((2, n))
-    for j in range(n):
-        elements.mass_coupling(np.ascontiguousarray(phi[:, j]), coupling)
-        _project_coupling_kernel(coupling, rows, slices[j], work)
-    size = np.abs(slices).reshape(n, -1).max(axis=1)
-    active = np.flatnonzero(size > tol * size.max(initial=0.0))
-    return active.astype(np.int64), np.ascontiguousarray(slices[active])
+    block = np.empty((n_t + n_y, n_t + n_y))
+    work = np.empty((2, n_t + n_y))
+    for k in range(n_z):
+        elements.mass_coupling(np.ascontiguousarray(bending_z[:, k]), coupling)
+        _project_coupling_kernel(coupling, rows, block, work)
+        tensor[k] = block[:n_t, n_t:]
+    return tensor
