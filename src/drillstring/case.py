@@ -616,7 +616,7 @@ class ReducedModel(_Base):
     torsional_modes: int = Field(10, ge=1)
     lateral_modes: int = Field(20, ge=0)
     lateral_cutoff: Dimensionless = Field(
-        0.0, ge=0, description="keep every lateral mode below this multiple of the rotation frequency [-]")
+        1.5, ge=0, description="keep every lateral mode below this multiple of the rotation frequency [-]")
 
 
 class Simulation(_Base):

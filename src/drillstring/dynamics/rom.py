@@ -973,6 +973,12 @@ def reduced_model(
     )
 
 
+def _lateral_cutoff(case_value: float, lateral_modes: int | None, lateral_cutoff: float | None) -> float:
+    if lateral_cutoff is not None:
+        return lateral_cutoff
+    return 0.0 if lateral_modes is not None else case_value
+
+
 def case_turning_loads(case, mesh) -> TurningLoads:
     """The mass imbalance of the case's sections (``sections[i].eccentricity``, ``eccentricity_angle``)
     and its stress-free bow (``[bow]``) as :class:`~drillstring.forces.excitation.TurningLoads` on
@@ -1001,7 +1007,9 @@ def case_reduced_model(
 ) -> ReducedOrderModel:
     """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
     (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
-    ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``)."""
+    ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``). A
+    ``lateral_modes`` given without ``lateral_cutoff`` asks for exactly that many lateral modes (no
+    cut-off)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
     r = case.reduced_model
@@ -1028,5 +1036,5 @@ def case_reduced_model(
         probe_positions=case.mesh.probes,
         nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,
         turning_loads=case_turning_loads(case, static.mesh),
-        lateral_cutoff=(r.lateral_cutoff if lateral_cutoff is None else lateral_cutoff) * case.operation.top_speed,
+        lateral_cutoff=_lateral_cutoff(r.lateral_cutoff, lateral_modes, lateral_cutoff) * case.operation.top_speed,
     )
