@@ -86,7 +86,7 @@ def main() -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
     case = load_case("contact")
     case_reduced_model(case)  # compile the kernels outside the timings
-    header = ("| impacts | RMS r at 1560 m [mm] | mean contact force [N] | peak contact force [kN] | "
+    header = ("impacts | RMS r at 1560 m [mm] | mean contact force [N] | peak contact force [kN] | "
               "CPU per 30 s [s] |")
     print(f"contact case, {args.seeds} realizations of {args.t_end:g} s each, statistics over "
           f"t >= {transient_end(args.t_end):g} s (mean ± std over the realizations)\n")

@@ -58,7 +58,9 @@ Reading of the reference data: the reference study gives ``k_sh = 1e8 N/m`` for 
 string. It is read as the distributed stiffness ``k'_sh = 1e8 N/m per m``: one metre of string pressed
 ``δ`` into the wall pushes back ``1e8 δ`` N. On the default 10 m mesh an interior station then has
 ``k_i = 1e9 N/m`` (5e8 N/m at the bit), ten times the old per-node value, which it equals on a 1 m mesh.
-Stabilizers stay point springs (:func:`drillstring.fem.assembly.stabilizer_stiffness`).
+Stabilizers stay point springs (:func:`drillstring.fem.assembly.stabilizer_stiffness`). The reduced model
+uses this law (:mod:`drillstring.dynamics.rom`); the per-node :func:`contact_forces` remains for
+comparison (the convergence benchmark shows its mesh dependence).
 
 Decision: as written in SPEC §6, the friction torque uses the sign of the spin ``θ̇x`` (not of ``s``), so with
 ``tangential=False`` the model is exactly the SPEC's; with ``tangential=True`` the lateral force is added
@@ -94,10 +96,10 @@ class ContactParameters:
     Attributes
     ----------
     shock_stiffness : float
-        ``k_sh`` [N/m], penalty stiffness of the wall at each node (reference 1e8 N/m), used as is by the
-        per-node law :func:`contact_forces`. The reference value is a stiffness per metre of string; the
-        mesh-objective law uses it as ``k'_sh`` [N/m per m] through :meth:`ContactStations.stiffness`
-        (module docstring).
+        ``k'_sh`` [N/m per m of string], the wall's distributed penalty stiffness (reference 1e8): the
+        reduced model (:mod:`drillstring.dynamics.rom`) gives each contact station ``k'_sh ℓ_i``
+        (:meth:`ContactStations.stiffness`; module docstring). The per-node law :func:`contact_forces`
+        (kept for comparison) would use the same number as a stiffness [N/m] at every node.
     friction_coefficient : float
         ``μ_sh`` [-], string–borehole friction (reference 0.0005).
     speed_regularization : float
