@@ -294,6 +294,40 @@ def _rhs_kernel(d, y, out):
 
 
 @njit(cache=True)
+def _cholesky_solve(a, b, x):
+    """x = a⁻¹ b for a symmetric positive definite ``a`` (n, n), by Cholesky ``a = L Lᵀ`` computed in the
+    lower triangle of ``a`` (overwritten). The case-1 mass ``I + Φᵀ M_nl Φ`` is positive definite wherever
+    the model holds (:mod:`drillstring.forces.nonlinear`); elsewhere (a non-positive pivot) ``x`` is NaN,
+    which the integrator treats as a rejected step. Compiled loops instead of ``np.linalg.solve``: no
+    allocation per call, and a fraction of the latter's compile time."""
+    n = a.shape[0]
+    for j in range(n):
+        d = a[j, j]
+        for k in range(j):
+            d -= a[j, k] * a[j, k]
+        if not d > 0.0:
+            x[:] = np.nan
+            return
+        d = np.sqrt(d)
+        a[j, j] = d
+        for i in range(j + 1, n):
+            s = a[i, j]
+            for k in range(j):
+                s -= a[i, k] * a[j, k]
+            a[i, j] = s / d
+    for i in range(n):  # L z = b
+        s = b[i]
+        for k in range(i):
+            s -= a[i, k] * x[k]
+        x[i] = s / a[i, i]
+    for i in range(n - 1, -1, -1):  # Lᵀ x = z
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= a[k, i] * x[k]
+        x[i] = s / a[i, i]
+
+
+@njit(cache=True)
 def _rhs_full_kernel(f, y, out):
     """Case 1 from :class:`FullModelData` ``f``: the case-2 right-hand side plus the strain- and
     kinetic-energy forces f_se and f_ke (:mod:`drillstring.forces.nonlinear`), evaluated on the physical
@@ -320,7 +354,7 @@ def _rhs_full_kernel(f, y, out):
     contract_mass_tensor(f.mass_tensor, f.active, eta, f.mass)
     for i in range(n):
         f.mass[i, i] += 1.0
-    out[n:] = np.linalg.solve(f.mass, acc)
+    _cholesky_solve(f.mass, acc, out[n:])
 
 
 def evaluate_rhs(data, y, out):
