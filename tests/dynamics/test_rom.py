@@ -176,3 +176,46 @@ def test_reduced_model_pushes_a_buckled_string_away_from_the_centre(reference_ca
     y[first] = 1e-5
     acceleration = model.rhs(0.0, y)[model.size + first]
     assert acceleration == pytest.approx(-omega2 * 1e-5, rel=1e-9)
+
+
+def test_diagonal_blocks_of_the_damping():
+    from drillstring.dynamics.rom import diagonal_blocks
+
+    a = np.zeros((7, 7))
+    a[0, 0] = 1.0
+    a[1, 3] = 2.0  # couples 1..3
+    a[5, 6] = a[6, 5] = 1.0
+    np.testing.assert_array_equal(diagonal_blocks(a), [[0, 1], [1, 4], [5, 7]])  # row 4 all zero: left out
+    assert diagonal_blocks(np.zeros((3, 3))).shape == (0, 2)
+
+
+def test_reference_damping_is_block_diagonal_by_family(coarse_case):
+    rom = case_reduced_model(coarse_case, axial_modes=3, torsional_modes=3, lateral_modes=4)
+    blocks = rom.case2_data.damping_blocks
+    np.testing.assert_array_equal(blocks, rom.blocks.reshape(4, 2))  # axial, torsional, lateral y, z
+    mask = np.zeros_like(rom.damping, dtype=bool)
+    for start, end in blocks:
+        mask[start:end, start:end] = True
+    assert not rom.damping[~mask].any()
+
+
+def test_contact_bound_never_skips_a_touching_node(coarse_case):
+    """The cheap bound that skips the contact search is rigorous: whenever it says "clear", no node is
+    outside its gap; and near the wall it lets the search run."""
+    from drillstring.dynamics.rom import _surely_clear
+
+    rom = case_reduced_model(coarse_case, axial_modes=2, torsional_modes=2, lateral_modes=6)
+    d = rom.case2_data
+    rng = np.random.default_rng(0)
+    lateral = np.char.startswith(np.array(rom.family), "lateral")
+    cleared = searched = 0
+    for scale in np.geomspace(1e-3, 10.0, 40):
+        eta = np.zeros(rom.size)
+        eta[lateral] = rng.normal(size=lateral.sum()) * scale
+        radius = np.hypot(rom.phi_v @ eta, rom.phi_w @ eta)
+        if _surely_clear(d, eta):
+            cleared += 1
+            assert np.all(radius <= rom.gap)
+        else:
+            searched += 1
+    assert cleared and searched

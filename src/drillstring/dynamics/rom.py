@@ -117,6 +117,7 @@ class RhsData(NamedTuple):
 
     omega2: np.ndarray  # (n,) signed ω² [1/s²]
     damping_t: np.ndarray  # (n, n) Dᵀ [1/s]
+    damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
     generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
     blocks: np.ndarray  # (8,) int64
     bit_u: np.ndarray  # axial mode shapes at the bit's u
@@ -125,6 +126,8 @@ class RhsData(NamedTuple):
     phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
     phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
     gap: np.ndarray  # (n_nodes,) radial gap [m]
+    smallest_gap: float  # min(gap) [m]
+    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
     outer_diameter: np.ndarray  # (n_nodes,) [m]
     top_speed: float  # Ω [rad/s]
     weight_on_bit: float  # static bit reaction [N]
@@ -186,6 +189,39 @@ def _matvec(matrix, vector, offset, out):
         out[i] = total
 
 
+def diagonal_blocks(matrix: np.ndarray) -> np.ndarray:
+    """The finest contiguous diagonal blocks ``[start, end)`` of a square matrix outside which every
+    entry is exactly 0, as a (k, 2) int64 array (all-zero blocks left out). The ROM's damping is block
+    diagonal by mode family (the families are uncoupled in the linear model)."""
+    nonzero = matrix != 0.0
+    n = matrix.shape[0]
+    reach = np.arange(n)
+    for i in range(n):
+        linked = np.nonzero(nonzero[i] | nonzero[:, i])[0]
+        if linked.size:
+            reach[i] = max(i, int(linked.max()))
+    blocks, start, end = [], 0, 0
+    for i in range(n):
+        end = max(end, reach[i] + 1)
+        if i + 1 == end:
+            if nonzero[start:end, start:end].any():
+                blocks.append((start, end))
+            start = end
+    return np.array(blocks, dtype=np.int64).reshape(-1, 2)
+
+
+@njit(cache=True)
+def _block_damping(damping_t, blocks, velocity, out):
+    """out −= D velocity, D block diagonal (``blocks`` from :func:`diagonal_blocks`, ``damping_t`` = Dᵀ)."""
+    for b in range(blocks.shape[0]):
+        start, end = blocks[b, 0], blocks[b, 1]
+        for j in range(start, end):
+            x = velocity[j]
+            if x != 0.0:
+                for i in range(start, end):
+                    out[i] -= damping_t[j, i] * x
+
+
 @njit(cache=True)
 def _columns_matvec(matrix_t, vector, offset, out, sign):
     """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
@@ -227,6 +263,20 @@ def _lateral_displacements(d, y, v, w):
 
 
 @njit(cache=True)
+def _surely_clear(d, eta):
+    """True when no node can touch the borehole: r_i ≤ |v_i| + |w_i| ≤ Σ_j (max_i |φ_ij|) |η_j| over
+    both lateral families (triangle inequality) is below the smallest gap. Costs one pass over the
+    lateral coordinates instead of the mode shapes at every node."""
+    bound = 0.0
+    for j in range(d.blocks[4], d.blocks[5]):
+        bound += d.lateral_shape_max[j - d.blocks[4]] * abs(eta[j])
+    offset = d.blocks[5] - d.blocks[4]
+    for j in range(d.blocks[6], d.blocks[7]):
+        bound += d.lateral_shape_max[offset + j - d.blocks[6]] * abs(eta[j])
+    return bound < d.smallest_gap
+
+
+@njit(cache=True)
 def _rhs_kernel(d, y, out):
     """dy/dt of the case-2 ROM (module docstring) from :class:`RhsData` ``d``; contact work is done only
     at the nodes that touch the borehole."""
@@ -240,7 +290,7 @@ def _rhs_kernel(d, y, out):
     for i in range(n):
         out[i] = eta_dot[i]
         acc[i] = d.generalized_force[i] - d.omega2[i] * eta[i]
-    _columns_matvec(d.damping_t, eta_dot, 0, acc, -1.0)
+    _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
     # bit-rock interaction at the bit node
     bit_velocity, bit_speed = _bit_motion(d, y)
     axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
@@ -251,6 +301,8 @@ def _rhs_kernel(d, y, out):
         acc[j] += d.bit_t[j - t0] * bit_torque
     # shocks and rubbing: find the nodes outside the gap
     if y1 == y0 and z1 == z0:
+        return
+    if _surely_clear(d, eta):
         return
     c = d.work
     _lateral_displacements(d, eta, c.v, c.w)
@@ -481,6 +533,7 @@ class ReducedOrderModel:
         self.case2_data = RhsData(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
+            damping_blocks=diagonal_blocks(self.damping),
             generalized_force=self.generalized_force,
             blocks=self.blocks,
             bit_u=transposed(self.bit_u[a0:a1]),
@@ -489,6 +542,9 @@ class ReducedOrderModel:
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
             gap=np.ascontiguousarray(self.gap, dtype=float),
+            smallest_gap=float(np.min(self.gap)),
+            lateral_shape_max=np.concatenate([np.abs(self.phi_v[:, y0:y1]).max(axis=0, initial=0.0),
+                                              np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
             outer_diameter=np.ascontiguousarray(self.outer_diameter, dtype=float),
             top_speed=float(self.top_speed),
             weight_on_bit=float(self.weight_on_bit),
