@@ -693,6 +693,28 @@ def test_light_commands_import_only_what_they_need(argv, unwanted):
     assert done.stderr.strip().splitlines()[-1] == "[]"
 
 
+def test_console_script_hides_dask_from_single_run_commands(tmp_path):
+    """The console script's simulate runs without importing Dask (xarray would otherwise import
+    dask.array and dask.distributed), and writes its NetCDF and figure; a study keeps Dask."""
+    import subprocess
+    import sys
+
+    from drillstring.cli import NO_DASK_COMMANDS
+
+    assert "simulate" in NO_DASK_COMMANDS and "study" not in NO_DASK_COMMANDS
+    nc, png = tmp_path / "r.nc", tmp_path / "r.png"
+    code = ("import sys\nfrom drillstring.cli import main\nsys.argv = ['drillstring', *sys.argv[1:]]\n"
+            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print([m for m in ('dask.array', 'dask.base', 'distributed') if m in sys.modules], file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", code, "simulate", "reference", "--t-end", "0.2", "--json",
+                           "--out", str(nc), "--plot", str(png)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "[]"
+    from drillstring.results import read_netcdf
+
+    assert float(read_netcdf(nc).time[-1]) == pytest.approx(0.2) and png.stat().st_size > 0
+
+
 def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
     numbers = _json("simulate", "reference", "--t-end", "0.5", "--json", "--out", str(tmp_path / "r.nc"),
                     "--plot", str(tmp_path / "r.png"))

@@ -130,3 +130,22 @@ def test_case_switch_comes_from_the_case(coarse_case):
     assert case_reduced_model(coarse_case, lateral_modes=2).nonlinear == "bit_and_contact"
     with pytest.raises(ValueError, match="nonlinear"):
         case_reduced_model(coarse_case, lateral_modes=2, nonlinear="everything")
+
+
+def test_cholesky_solve_of_the_nonlinear_mass():
+    """The compiled solve of (I + Φᵀ M_nl Φ) η̈ = …: equal to LAPACK's on a positive definite matrix; NaN
+    (a rejected step for the integrator) when the matrix is not positive definite."""
+    from drillstring.dynamics.rom import _cholesky_solve
+
+    rng = np.random.default_rng(1)
+    n = 30
+    m = rng.normal(size=(n, n)) * 0.3
+    a = np.eye(n) + m @ m.T
+    b = rng.normal(size=n)
+    x = np.zeros(n)
+    _cholesky_solve(a.copy(), b, x)
+    np.testing.assert_allclose(x, np.linalg.solve(a, b), rtol=1e-12, atol=1e-12)
+    indefinite = np.eye(n)
+    indefinite[3, 3] = -1.0
+    _cholesky_solve(indefinite, b, x)
+    assert np.all(np.isnan(x))
