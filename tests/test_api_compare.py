@@ -19,7 +19,7 @@ def _coarse_reference():
     return case.model_copy(update={
         "mesh": case.mesh.model_copy(update={"max_element_length": 40.0}),
         "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 4}),
+            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 4, "lateral_cutoff": 0.0}),
     })
 
 

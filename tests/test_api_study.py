@@ -18,7 +18,7 @@ def small_case():
     return case.model_copy(update={
         "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
         "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3}),
+            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3, "lateral_cutoff": 0.0}),
     })
 
 
@@ -79,3 +79,37 @@ def test_study_with_too_few_finished_realizations_fails_with_the_causes(small_ca
     monkeypatch.setattr(montecarlo, "run_realization", fail)
     with pytest.raises(api.StudyFailed, match=r"only 0 finished realization\(s\): statistics need at least 2 \(3 failure\(s\): nominal: made to fail -1; 0: made to fail 0"):
         api.monte_carlo_study(small_case, samples=2, t_end=0.2, workers=1, out=tmp_path / "s")
+
+
+def test_study_counts_buckled_realizations_and_warns_before_running(small_case, tmp_path):
+    """2 kN below its critical load with σ = 5 kN, a third of the draws buckle the string (P = Φ(−0.4)):
+    the study notes it before running (probability from the weight-on-hook law and the critical
+    weight-on-bit), records each realization's lowest lateral eigenvalue, negative exactly for the draws
+    beyond the critical weight-on-bit, and counts them in the summary."""
+    from scipy.stats import norm
+
+    from drillstring.buckling import case_buckling_margin
+
+    critical = case_buckling_margin(small_case).critical_weight_on_bit  # independent of the weight-on-bit
+    case = small_case.model_copy(update={"operation": small_case.operation.model_copy(
+        update={"weight_on_bit": critical - 2e3})})
+    notes = []
+    outcome = api.monte_carlo_study(case, sigma=5000.0, samples=8, t_end=0.4, workers=1, out=tmp_path / "b",
+                                    note=notes.append)
+    buckling = outcome.summary["buckling"]
+    assert buckling["critical_weight_on_bit"] == pytest.approx(critical, rel=1e-9)
+    assert buckling["probability"] == pytest.approx(norm.cdf(-0.4), rel=1e-6)
+    assert buckling["expected"] == pytest.approx(8 * buckling["probability"])
+    assert len(notes) == 1 and "buckled" in notes[0] and buckling["warning"] == notes[0]
+    stats = outcome.statistics
+    lowest = stats.lowest_lateral_eigenvalue.values
+    saved = json.loads((tmp_path / "b" / "summary.json").read_text())["buckling"]
+    from drillstring.stochastic.analysis import load_study
+
+    wob = load_study(tmp_path / "b" / "study.zarr").weight_on_bit.values
+    assert np.array_equal(lowest < 0, wob > critical)
+    assert buckling["buckled_realizations"] == int(np.sum(wob > critical)) == saved["buckled_realizations"] >= 1
+    assert "buckled realizations" in (tmp_path / "b" / "report.html").read_text()
+    quiet = []
+    api.monte_carlo_study(small_case, sigma=3000.0, samples=2, t_end=0.2, workers=1, note=quiet.append)
+    assert quiet == []  # P = Φ(−14.1/3) ≈ 1e-6: nothing to say

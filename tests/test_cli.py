@@ -231,7 +231,8 @@ def coarse_case(tmp_path_factory):
     from drillstring.case import load_case
 
     case = load_case("reference")
-    case = case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 40.0})})
+    case = case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 40.0}),
+                                   "reduced_model": case.reduced_model.model_copy(update={"lateral_cutoff": 0.0})})
     path = tmp_path_factory.mktemp("cases") / "coarse.toml"
     path.write_text(case.to_toml(), encoding="utf-8")
     return path
@@ -339,7 +340,9 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
 
     table = _study(coarse_case, out)
     assert table.exit_code == 0, table.output
+    assert first["buckling"]["buckled_realizations"] == 0 and first["buckling"]["warning"] is not None
     for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}",
+                 "Buckled strings (lowest lateral ω² < 0): 0 of 3 realizations",
                  f"wall time {first['wall_time']:,.1f} s", "this run only recomputed the statistics"):
         assert text in table.stdout, text
 
@@ -626,7 +629,7 @@ def coarse_modes_case(tmp_path_factory):
     case = case.model_copy(update={
         "mesh": case.mesh.model_copy(update={"max_element_length": 40.0}),
         "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 4}),
+            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 4, "lateral_cutoff": 0.0}),
     })
     path = tmp_path_factory.mktemp("cases") / "coarse_modes.toml"
     path.write_text(case.to_toml(), encoding="utf-8")

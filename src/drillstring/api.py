@@ -172,7 +172,8 @@ def monte_carlo_study(
     receives notes (a stale lock taken over).
 
     Everything is checked before anything runs: the settings (ValueError naming the field; a sigma
-    that would put a weight-on-bit outside (0, string weight) with probability above 1e-3 included),
+    that would put a weight-on-bit outside (0, string weight) with probability above 1e-3 included; a
+    sigma that buckles more than one draw in a thousand is only noted, through ``note``),
     ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.montecarlo.
     SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
     StudyLocked` while another study runs there; held until every file is written).
@@ -195,6 +196,7 @@ def monte_carlo_study(
         connect_scheduler,
         notify,
         run_study,
+        study_buckling_margin,
     )
 
     case = as_case(case)
@@ -205,6 +207,9 @@ def monte_carlo_study(
         if problem:
             raise ValueError(f"out = {str(out)!r}: {problem}")
     check_workers(workers, scheduler)
+    buckling = study_buckling_margin(case, settings)
+    if buckling["warning"]:
+        notify(note, buckling["warning"])
     folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="drillstring-study-"))
     store = folder / "study.zarr"
     client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
@@ -230,6 +235,7 @@ def monte_carlo_study(
                 wall_time, used = run.wall_time, run.workers
             realization_time = float(np.nansum(raw["wall_time"].values))
             payload = dict(summary)
+            payload["buckling"] = {**summary["buckling"], **buckling}
             payload.update({
                 "case": case.name,
                 "samples": settings.samples,
@@ -271,6 +277,10 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         "realizations requested": settings.samples,
         "failures": payload["failures"],
         "computation wall time [s]": round(payload["wall_time"], 2),
+        "buckled realizations (lowest lateral ω² < 0)": (
+            f"{payload['buckling']['buckled_realizations']} of {payload['n_samples']}; critical weight-on-bit "
+            f"{payload['buckling']['critical_weight_on_bit'] / 1e3:.5g} kN, probability of a buckled draw "
+            f"{payload['buckling']['probability']:.3g}"),
         "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
         "workers": payload["workers"],
     }

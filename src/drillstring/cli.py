@@ -731,6 +731,14 @@ def _study_table(summary: dict[str, Any]) -> Table:
     return table
 
 
+def _buckling_line(summary: dict[str, Any]) -> str:
+    """One line on the realizations' lateral buckling margin."""
+    b = summary["buckling"]
+    return (f"Buckled strings (lowest lateral ω² < 0): {b['buckled_realizations']} of {summary['n_samples']} "
+            f"realizations; critical weight-on-bit {b['critical_weight_on_bit'] / _KN:,.2f} kN, probability "
+            f"of a buckled draw {b['probability']:.3g}")
+
+
 def _indicator_line(summary: dict[str, Any]) -> str | None:
     """One line on the realizations' vibration: bit-speed oscillation and stick-slip."""
     indicators = summary.get("indicators") or {}
@@ -872,6 +880,7 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
     line = _indicator_line(payload)
     if line:
         console.print(escape(line), soft_wrap=True)
+    console.print(escape(_buckling_line(payload)), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),
                       soft_wrap=True)

@@ -69,7 +69,7 @@ def test_impacts_are_counted_when_the_string_touches(coarse_case):
 def sticking_case(case, stiffening_limit):
     """The coarse reference string with a sharper bit–rock law (e = 0.5 rad/s) at 140 kN: the bit sticks."""
     return case.model_copy(update={
-        "reduced_model": case.reduced_model.model_copy(update={"lateral_modes": 0}),
+        "reduced_model": case.reduced_model.model_copy(update={"lateral_modes": 0, "lateral_cutoff": 0.0}),
         "bit_rock": case.bit_rock.model_copy(update={"regularization": 0.5,
                                                      "stick_stiffening_limit": stiffening_limit}),
         "operation": case.operation.model_copy(update={"weight_on_bit": 140e3}),

@@ -28,7 +28,7 @@ def small_case():
     return case.model_copy(update={
         "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
         "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3}),
+            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3, "lateral_cutoff": 0.0}),
     })
 
 

@@ -834,6 +834,13 @@ class ReducedOrderModel:
         )
 
     @property
+    def lowest_lateral_eigenvalue(self) -> float:
+        """ω₁² [rad²/s²] of the lowest lateral mode of the basis (signed; negative: the straight string is
+        statically buckled, :mod:`drillstring.buckling`); NaN without lateral modes."""
+        y0, y1 = int(self.blocks[4]), int(self.blocks[5])
+        return float(self.omega2[y0]) if y1 > y0 else math.nan
+
+    @property
     def size(self) -> int:
         """Number of modal coordinates n (the state has 2n entries)."""
         return len(self.angular_frequencies)

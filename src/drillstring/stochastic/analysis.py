@@ -57,7 +57,9 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     ``<v>_dispersion`` (std/|mean|), ``<v>_nominal`` and ``<v>_convergence`` (dimension ``n_samples``),
     for ``v`` in the study observables and ``radial_displacement`` (per probe); and, per finished
     realization (dimension ``realization``), the vibration indicators ``bit_speed_oscillation`` and
-    ``stick_time_fraction`` after ``t_transient`` [s] (default ``min(10 s, t_end/2)``).
+    ``stick_time_fraction`` after ``t_transient`` [s] (default ``min(10 s, t_end/2)``) and the
+    ``lowest_lateral_eigenvalue`` ω₁² [rad²/s²] of its prestressed string (negative: statically buckled;
+    attribute ``buckled_realizations``).
     """
     ok = raw.status.values == DONE
     names = list(STUDY_OBSERVABLES) + ["radial_displacement"]
@@ -86,6 +88,11 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
             coords={"realization": done.realization.values},
             attrs={"units": "1", "long_name": f"{name.replace('_', ' ')} after t = {t_transient:g} s"},
         )
+    lowest = raw.lowest_lateral_eigenvalue.values[ok]
+    stats["lowest_lateral_eigenvalue"] = xr.DataArray(
+        lowest, dims="realization", coords={"realization": done.realization.values},
+        attrs={"units": "rad^2/s^2", "long_name": "lowest lateral eigenvalue omega_1^2 (< 0: buckled)"},
+    )
     woh = raw.weight_on_hook.values[ok]
     wob = raw.weight_on_bit.values[ok]
     settings = dict(raw.attrs.get("settings", {}))
@@ -107,6 +114,7 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
         "case": raw.attrs.get("case", ""),
         "t_transient": t_transient,
         "top_speed": top_speed,
+        "buckled_realizations": int(np.sum(lowest < 0.0)),
     })
     return stats
 
@@ -147,7 +155,13 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> 
     if "stick_time_fraction" in stats:
         indicators["stick_slip_realizations"] = int((stats["stick_time_fraction"].values > 0).sum())
         indicators["t_transient"] = float(stats.attrs.get("t_transient", t_transient))
+    lowest = stats["lowest_lateral_eigenvalue"].values if "lowest_lateral_eigenvalue" in stats else np.zeros(0)
     return {
+        "buckling": {
+            "buckled_realizations": int(stats.attrs.get("buckled_realizations", 0)),
+            "lowest_lateral_eigenvalue_min": float(lowest.min()) if lowest.size else None,
+            "lowest_lateral_eigenvalue_max": float(lowest.max()) if lowest.size else None,
+        },
         "n_samples": int(stats.attrs["n_samples"]),
         "n_failed": int(stats.attrs["n_failed"]),
         "seed": int(stats.attrs["seed"]),
