@@ -88,7 +88,8 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
             coords={"realization": done.realization.values},
             attrs={"units": "1", "long_name": f"{name.replace('_', ' ')} after t = {t_transient:g} s"},
         )
-    lowest = raw.lowest_lateral_eigenvalue.values[ok]
+    lowest = (raw.lowest_lateral_eigenvalue.values[ok] if "lowest_lateral_eigenvalue" in raw
+              else np.full(n_done, np.nan))
     stats["lowest_lateral_eigenvalue"] = xr.DataArray(
         lowest, dims="realization", coords={"realization": done.realization.values},
         attrs={"units": "rad^2/s^2", "long_name": "lowest lateral eigenvalue omega_1^2 (< 0: buckled)"},
