@@ -27,7 +27,9 @@ is indifferent) and is left out, so every eigenvalue is informative. Steady dril
 every eigenvalue has a negative real part. Lateral modes are decoupled from the bit–rock law at the
 centred state; they enter with their own damping and stiffness (a negative ω², a buckled string, makes
 them unstable). The kinetic- and strain-energy forces of case 1 are at least quadratic in the lateral
-motion and are not linearised here.
+motion and are not linearised here. Loads turning with the string (mass imbalance, bow:
+:mod:`drillstring.forces.excitation`) are left out too: they make the motion periodic, so there is no
+steady state to linearise about; the lateral modes' stability does not depend on them.
 """
 
 from __future__ import annotations
