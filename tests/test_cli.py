@@ -147,10 +147,26 @@ def test_modes_count_zero_is_refused():
 # ---------------------------------------------------------------------------------------------- cases, errors
 
 
-def test_cases_lists_reference():
+def test_cases_lists_reference_and_contact():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
-    assert "reference" in result.stdout.split()
+    names = [line.split()[0] for line in result.stdout.splitlines()]
+    assert names == ["contact", "reference"]
+    assert "hits the wall" in result.stdout
+
+
+def test_simulate_contact_hits_the_wall(tmp_path):
+    """The built-in contact case as the README runs it (first 10 s): impacts > 0 in --json, contact forces,
+    and the figure with the whirl orbit and the contact force."""
+    nc, png = tmp_path / "c.nc", tmp_path / "c.png"
+    data = _json("simulate", "contact", "--t-end", "10", "--out", str(nc), "--plot", str(png), "--json")
+    assert data["impacts"] > 0 and data["max_contact_force"] > 0 and data["contact_time_fraction"] > 0
+    assert data["max_radial_displacement"][0] > data["gap"][0]
+    from drillstring.results import read_netcdf
+
+    ds = read_netcdf(nc)
+    assert ds.contact_force.max() > 0 and ds.lateral_displacement.sizes["direction"] == 2
+    assert png.stat().st_size > 50_000
 
 
 def test_invalid_case_file_exit_code_2(tmp_path):
