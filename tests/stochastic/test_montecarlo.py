@@ -7,12 +7,14 @@ import subprocess
 import sys
 import threading
 import time
+from functools import partial
 
 import numpy as np
 import pytest
 import zarr
 
 from drillstring.case import load_case
+from drillstring.stochastic import execution
 from drillstring.stochastic import montecarlo as mc
 from drillstring.stochastic.analysis import load_study, study_statistics
 from drillstring.stochastic.maxent import realization_generator
@@ -403,8 +405,9 @@ def test_realization_that_kills_its_worker_is_isolated_and_the_others_stay_paral
     log = tmp_path / "log.txt"
     monkeypatch.setenv("DRILLSTRING_TEST_LOG", str(log))
     store = mc.StudyStore(tmp_path / "crash.zarr", small_case, settings)
-    mc._run_processes(small_case, settings, list(range(settings.samples)), 2, store.write,
-                      task=die_on_index_2)
+    execution._run_processes(partial(die_on_index_2, small_case, settings),
+                             [(i, i) for i in range(settings.samples)], 2, store.write,
+                             lost=partial(mc._worker_died, small_case, settings))
     status = store.status()
     assert status[2] == mc.FAILED and "worker process died" in store.failures()["2"]
     others = [i for i in range(settings.samples) if i != 2]
