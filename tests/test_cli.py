@@ -664,3 +664,39 @@ def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
     result = _invoke("stability", str(path))
     assert result.exit_code == 2
     assert "rate_of_penetration" in result.stderr and "Traceback" not in result.output
+
+
+def test_study_of_several_parameters_with_a_correlation(coarse_case, tmp_path):
+    result = _study(coarse_case, tmp_path / "p", "--param", "operation.top_speed=normal 100 5 rpm",
+                    "--param", 'fluid.inlet_velocity="uniform 1.2 1.8 m/s"', "--sigma", "4000",
+                    "--correlation", "operation.top_speed,weight_on_hook=0.5", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert list(data["inputs"]) == ["weight_on_hook", "operation.top_speed", "fluid.inlet_velocity"]
+    assert data["sigma"] == 4000.0 and data["inputs"]["weight_on_hook"]["std"] == 4000.0
+    assert set(data["input_dispersion"]) == {"weight_on_hook", "operation.top_speed", "fluid.inlet_velocity",
+                                            "weight_on_bit"}
+    table = _study(coarse_case, tmp_path / "p", "--param", "operation.top_speed=normal 100 5 rpm",
+                   "--param", 'fluid.inlet_velocity="uniform 1.2 1.8 m/s"', "--sigma", "4000",
+                   "--correlation", "operation.top_speed,weight_on_hook=0.5")
+    assert table.exit_code == 0, table.output
+    for text in ("operation.top_speed: normal 100 5 rpm", "δ(top_speed)", "δ(inlet_velocity)", "δ_WOB"):
+        assert text in table.stdout, text
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--param", "operation.top_speed"), ["is not PATH=LAW"]),
+    (("--param", "operation.top_speed=normal 100 rpm"), ["operation.top_speed", "normal"]),
+    (("--param", "fluid.coriolis=uniform 0 1"), ["fluid.coriolis is not a numeric parameter"]),
+    (("--param", "operation.top_speed=uniform 50 150 m/s"), ["operation.top_speed", "m/s"]),
+    (("--correlation", "a,b"), ["is not PATH1,PATH2=R"]),
+    (("--param", "operation.top_speed=uniform 50 150 rpm", "--correlation",
+      "operation.top_speed,weight_on_hook=0.2"), ["weight_on_hook", "not a declared uncertain parameter"]),
+])
+def test_study_bad_laws_exit_2_with_one_line(coarse_case, tmp_path, args, words):
+    result = _study(coarse_case, tmp_path / "bad", *args)
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output and len(result.stderr.strip().splitlines()) == 1, result.stderr
+    for word in words:
+        assert word in result.stderr, result.stderr
+    assert not (tmp_path / "bad").exists()

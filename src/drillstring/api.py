@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import xarray as xr
@@ -110,17 +110,27 @@ class StudyOutcome:
 
 #: Captions of the study figures in the report, by figure name.
 _STUDY_CAPTIONS = {
-    "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean weight-on-hook)",
+    "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean of every random "
+                 "parameter)",
     "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
     "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
 }
 
 
-def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_step, transient):
-    """The validated settings and transient of a study (ValueError naming the field otherwise)."""
-    from drillstring.dynamics.indicators import transient_end
+def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None,
+                   samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
+    """The validated settings of a Monte Carlo study of ``case`` (ValueError naming the field or the
+    parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
+
+    The random parameters: ``parameters`` (path -> law spec or table) with ``correlation`` (``{"parameters":
+    [...], "matrix": [[...]]}``) when given, else the case's ``[uncertainty]`` table; plus the weight-on-hook,
+    Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given. With none
+    of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    """
     from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.montecarlo import StudySettings, check_study, nominal_weight_on_hook
+    from drillstring.stochastic.parameters import WEIGHT_ON_HOOK
+    from drillstring.stochastic.uncertainty import declared_uncertainty
 
     if sigma is not None and dispersion is not None:
         raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
@@ -128,20 +138,38 @@ def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_
         if not (isinstance(dispersion, (int, float)) and math.isfinite(dispersion) and dispersion > 0):
             raise ValueError(f"dispersion = {dispersion!r}: must be a finite number > 0")
         sigma = dispersion * nominal_weight_on_hook(case)
-    elif sigma is None:
+    if sigma is not None and not (isinstance(sigma, (int, float)) and not isinstance(sigma, bool)):
+        raise ValueError(f"sigma = {sigma!r} N: must be a finite number > 0")
+    first = None
+    if sigma is not None and math.isfinite(sigma) and sigma > 0:
+        first = {WEIGHT_ON_HOOK: {"law": "normal", "mean": nominal_weight_on_hook(case), "std": float(sigma)}}
+    declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
+    laws, correlated, matrix = (), (), ()
+    if declared is not None:
+        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters if not (first and p.path in first))
+        if declared.correlation is not None:
+            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    if sigma is None and not laws:
         sigma = DEFAULT_SIGMA
+    bare = case.model_copy(update={"uncertainty": None})
     settings = StudySettings(
-        samples=samples, sigma=sigma if not isinstance(sigma, int) else float(sigma), seed=seed,
+        samples=samples, sigma=float(sigma) if sigma is not None else None, seed=seed,
         t_end=case.simulation.t_end if t_end is None else t_end,
         output_step=case.simulation.output_step if output_step is None else output_step,
+        laws=laws, correlated=correlated, correlation=matrix,
     )
-    check_study(case, settings)
+    check_study(bare, settings)
+    return settings, bare
+
+
+def _transient(transient, t_end: float) -> float:
+    from drillstring.dynamics.indicators import transient_end
+
     if transient is None:
-        transient = transient_end(settings.t_end)
-    elif not (isinstance(transient, (int, float)) and math.isfinite(transient)
-              and 0 <= transient <= settings.t_end):
-        raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {settings.t_end:g} s]")
-    return settings, float(transient)
+        return transient_end(t_end)
+    if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient <= t_end):
+        raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {t_end:g} s]")
+    return float(transient)
 
 
 def monte_carlo_study(
@@ -149,6 +177,8 @@ def monte_carlo_study(
     *,
     sigma: float | None = None,
     dispersion: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -161,18 +191,24 @@ def monte_carlo_study(
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
 ) -> StudyOutcome:
-    """Monte Carlo study of a random weight-on-hook (SPEC §8), with its files.
+    """Monte Carlo study of random case parameters (SPEC §8; by default a random weight-on-hook), with
+    its files.
 
-    The weight-on-hook follows the Normal law (Maximum Entropy, known mean and variance) of standard
-    deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of them; default
-    :data:`~drillstring.stochastic.DEFAULT_SIGMA`). ``samples`` realizations (>= 2) of ``t_end`` [s]
+    The random parameters (:func:`study_settings`): each of ``parameters`` (case-parameter path -> law
+    spec, e.g. ``{"fluid.inlet_velocity": "uniform 1.2 1.8 m/s"}``; laws by the Maximum Entropy Principle,
+    :mod:`drillstring.stochastic.uncertainty`), correlated normals by ``correlation`` (``{"parameters":
+    [...], "matrix": [[...]]}``), or the case's ``[uncertainty]`` table when ``parameters`` is None; and the
+    weight-on-hook, Normal of standard deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of
+    them). Nothing declared: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``samples`` realizations (>= 2) of ``t_end`` [s]
     run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
     (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
     ``min(10 s, t_end/2)``). ``progress(done, failed, total)`` follows the realizations; ``note(text)``
     receives notes (a stale lock taken over).
 
-    Everything is checked before anything runs: the settings (ValueError naming the field; a sigma
-    that would put a weight-on-bit outside (0, string weight) with probability above 1e-3 included),
+    Everything is checked before anything runs: the settings (ValueError naming the field or the
+    parameter; a law that puts a probability above 1e-3 outside its parameter's range, e.g. a sigma
+    that would put a weight-on-bit outside (0, string weight), included),
     ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.montecarlo.
     SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
     StudyLocked` while another study runs there; held until every file is written).
@@ -197,9 +233,10 @@ def monte_carlo_study(
         run_study,
     )
 
-    case = as_case(case)
-    settings, t_transient = _study_settings(case, sigma, dispersion, samples, seed, t_end, output_step,
-                                            transient)
+    settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
+                                    correlation=correlation, samples=samples, seed=seed, t_end=t_end,
+                                    output_step=output_step)
+    t_transient = _transient(transient, settings.t_end)
     if out is not None:
         problem = output_folder_problem(out)
         if problem:
@@ -284,7 +321,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     })
     write_report(
         paths["report"],
-        title=f"Monte Carlo study: case '{case.name}', random weight-on-hook",
+        title=f"Monte Carlo study: case '{case.name}', random {', '.join(stats.attrs['parameters'])}",
         case_toml=case.to_toml(),
         summary=summary,
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
@@ -314,6 +351,8 @@ def study(
     *,
     sigma: float | None = None,
     dispersion: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -324,18 +363,21 @@ def study(
     transient: float | None = None,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> xr.Dataset:
-    """Monte Carlo study of a random weight-on-hook (SPEC §8); returns the statistics Dataset.
+    """Monte Carlo study of random case parameters (SPEC §8); returns the statistics Dataset.
 
-    The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): at most one
-    of ``sigma`` [N] or ``dispersion`` (σ / mean; default σ = 5000 N); realizations stream to the Zarr
+    The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): laws of
+    ``parameters`` (or the case's ``[uncertainty]`` table), at most one of ``sigma`` [N] or
+    ``dispersion`` (σ / mean) for the weight-on-hook (default, nothing declared: σ = 5000 N); the
+    drawn values are in ``input_values``; realizations stream to the Zarr
     store ``out``/study.zarr (a temporary folder when None), rerunning with the same ``out`` resumes.
     ``transient`` [s]: start of the steady window for the summaries and the per-realization vibration
     indicators (default ``min(10 s, t_end/2)``).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     return monte_carlo_study(
-        case, sigma=sigma, dispersion=dispersion, samples=samples, seed=seed, out=out, workers=workers,
-        scheduler=scheduler, t_end=t_end, output_step=output_step, transient=transient, progress=progress,
+        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation,
+        samples=samples, seed=seed, out=out, workers=workers, scheduler=scheduler, t_end=t_end,
+        output_step=output_step, transient=transient, progress=progress,
     ).statistics
 
 

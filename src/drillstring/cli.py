@@ -646,6 +646,42 @@ def compare(
 # drillstring study
 # ---------------------------------------------------------------------------------------------------------
 
+ParamOption = Annotated[
+    list[str] | None,
+    typer.Option("--param", "-p", metavar="PATH=LAW",
+                 help='A random case parameter and its law, e.g. --param fluid.inlet_velocity="uniform 1.2 1.8 '
+                      'm/s" (laws: uniform, normal, exponential, gamma, maxent; see docs/uncertainty.md); '
+                      "repeat for several. Replaces the case file's [uncertainty] table."),
+]
+CorrelationOption = Annotated[
+    list[str] | None,
+    typer.Option("--correlation", metavar="PATH1,PATH2=R",
+                 help="Correlation coefficient of two normal parameters, e.g. "
+                      "operation.top_speed,weight_on_hook=-0.3; repeat for more pairs."),
+]
+
+
+def _declared_laws(param: list[str] | None, correlation: list[str] | None):
+    """The ``--param`` laws (None when none is given) and the ``--correlation`` table; a malformed value
+    ends the command (exit code 2)."""
+    from drillstring.stochastic.parameters import ParameterError
+    from drillstring.stochastic.uncertainty import correlation_table, split_assignment, split_correlation
+
+    try:
+        laws = None
+        if param:
+            laws = {}
+            for text in param:
+                path, spec = split_assignment(text)
+                if path in laws:
+                    raise ParameterError(f"--param {path} is given twice")
+                laws[path] = spec
+        table = correlation_table([split_correlation(t) for t in correlation]) if correlation else None
+    except ParameterError as error:
+        _fail(str(error))
+    return laws, table
+
+
 class _StudyProgress:
     """``progress(done, failed, total)`` for :func:`run_study`: a rich bar (stderr) of realizations,
     failures and time left. The bar starts at the first call, so that a study refused before it starts
@@ -673,15 +709,34 @@ class _StudyProgress:
             self.bar.stop()
 
 
+def _input_labels(names) -> dict[str, str]:
+    """Short table labels of the random inputs: δ_WOH, δ_WOB, or δ(last part of the path) when that is
+    unambiguous, else δ(path)."""
+    from drillstring.report import INPUT_LABELS
+
+    names = list(names)
+    short = {n: n.split(".")[-1] for n in names}
+    labels = {}
+    for n in names:
+        if n in INPUT_LABELS:
+            labels[n] = f"δ_{INPUT_LABELS[n]}"
+        else:
+            unique = sum(1 for m in names if short[m] == short[n]) == 1
+            labels[n] = f"δ({short[n] if unique else n})"
+    return labels
+
+
 def _study_table(summary: dict[str, Any]) -> Table:
-    """Dispersions per observable over the steady window and over the whole record, in %."""
-    title = (f"Dispersion: δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
-             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
+    """Dispersions per observable over the steady window and over the whole record, in %, and their
+    ratios to each input's dispersion."""
+    inputs = summary.get("input_dispersion") or {}
+    labels = _input_labels(inputs)
+    title = "Dispersion: " + ", ".join(f"{labels[k]} = {100 * v:.3g} %" for k, v in inputs.items())
     table = Table(title=escape(title), title_justify="left",
                   caption="whole record: from the first time the mean response leaves 0", caption_justify="left")
     table.add_column("observable")
     table.add_column("window")
-    for header in ("mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH", "mean/δ_WOB"):
+    for header in ("mean δ [%]", "max δ [%]", "at t [s]", *(f"mean/{labels[k]}" for k in inputs)):
         table.add_column(escape(header), justify="right")
     for name, entry in summary["observables"].items():
         whole = entry.get("whole_record")
@@ -695,8 +750,7 @@ def _study_table(summary: dict[str, Any]) -> Table:
                 _fmt(values.get("dispersion_time_mean"), ".3g", 100.0),
                 _fmt(values.get("dispersion_max"), ".3g", 100.0),
                 _fmt(values.get("time_of_max"), ".2f"),
-                _fmt(ratio.get("weight_on_hook"), ".3g"),
-                _fmt(ratio.get("weight_on_bit"), ".3g"),
+                *(_fmt(ratio.get(k), ".3g") for k in inputs),
             )
     return table
 
@@ -724,6 +778,8 @@ def study(
         float | None,
         typer.Option("--dispersion", help="Dispersion σ/mean of the weight-on-hook, instead of --sigma."),
     ] = None,
+    param: ParamOption = None,
+    correlation: CorrelationOption = None,
     samples: Annotated[int, typer.Option("--samples", "-n", help="Number of realizations n_s (>= 2).")
                        ] = DEFAULT_SAMPLES,
     seed: Annotated[int, typer.Option("--seed", help="Root seed of the random draws (>= 0).")] = DEFAULT_SEED,
@@ -753,7 +809,11 @@ def study(
     ] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Monte Carlo study of a random weight-on-hook (Normal law, Maximum Entropy).
+    """Monte Carlo study of random case parameters (laws by the Maximum Entropy Principle).
+
+    The random parameters: each --param PATH=LAW (else the case file's [uncertainty] table), correlated
+    normals by --correlation, and the weight-on-hook, Normal of standard deviation --sigma (or
+    --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN.
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
     writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
@@ -763,6 +823,7 @@ def study(
     the_case = _load(case)
     if sigma is not None and dispersion is not None:
         _fail("give --sigma or --dispersion, not both")
+    laws, correlated = _declared_laws(param, correlation)
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     _check_output("--out", out, folder=True)
@@ -783,8 +844,8 @@ def study(
     if lock.note:
         note(lock.note)
     try:
-        outcome = _run_study(the_case, out, err, note, sigma=sigma, dispersion=dispersion,
-                             samples=samples, seed=seed, workers=workers, scheduler=scheduler, t_end=t_end,
+        outcome = _run_study(the_case, out, err, note, sigma=sigma, dispersion=dispersion, parameters=laws,
+                             correlation=correlated, samples=samples, seed=seed, workers=workers, scheduler=scheduler, t_end=t_end,
                              transient=transient)
     finally:
         lock.__exit__(None, None, None)
@@ -835,9 +896,13 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
         timing += f" over {len(payload['sessions'])} runs"
     console.print(escape(
         f"Monte Carlo study: case {name!r}, n_s = {payload['n_samples']} finished"
-        f" ({payload['n_failed']} failed), seed {payload['seed']}, σ_WOH = {payload['sigma'] / _KN:g} kN, "
-        f"{timing}"
+        f" ({payload['n_failed']} failed), seed {payload['seed']}, {timing}"
     ), soft_wrap=True)
+    for path, entry in (payload.get("inputs") or {}).items():
+        unit = f" {entry['unit']}" if entry.get("unit") else ""
+        console.print(escape(f"  {path}: {entry['law']} (mean {entry['mean']:.6g}{unit}, std "
+                             f"{entry['std']:.4g}{unit}, dispersion {_fmt(entry['dispersion'], '.3g', 100.0)} %)"),
+                      soft_wrap=True)
     console.print(_study_table(payload))
     line = _indicator_line(payload)
     if line:

@@ -253,7 +253,26 @@ def _study_title(stats: xr.Dataset, what: str) -> str:
     sigma = stats.attrs.get("sigma")
     if sigma is not None and np.isfinite(float(sigma)):
         parts.append(f"σ_WOH = {float(sigma) / 1e3:g} kN")
+    others = [str(p) for p in stats.attrs.get("parameters", []) if str(p) != "weight_on_hook"]
+    if others:
+        parts.append("random " + ", ".join(others))
     return ", ".join(parts)
+
+
+def _input_dispersions(stats: xr.Dataset) -> list[tuple[str, float]]:
+    """(label, dispersion) of each random input from the statistics' attributes: std/|mean| of each
+    parameter's law, and δ_WOB when the weight-on-hook is random."""
+    attrs = stats.attrs
+    out = []
+    for path, mean, std in zip(attrs.get("parameters", []), attrs.get("parameter_mean", []),
+                               attrs.get("parameter_std", [])):
+        if float(mean) != 0.0:
+            label = "δ_WOH" if str(path) == "weight_on_hook" else f"δ({path})"
+            out.append((label, float(std) / abs(float(mean))))
+    dispersion = attrs.get("weight_on_bit_dispersion")
+    if dispersion is not None and np.isfinite(float(dispersion)):
+        out.append(("δ_WOB", float(dispersion)))
+    return out
 
 
 def plot_convergence(stats: xr.Dataset, path: str | Path) -> Path:
@@ -318,9 +337,7 @@ def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float) -> 
     axes[-1].set_xlabel("time [s]")
     axes[0].legend(loc="upper right", fontsize="small")
     title = _study_title(stats, "Dispersion of the response")
-    inputs = [(key, stats.attrs.get(f"{key}_dispersion")) for key in ("weight_on_hook", "weight_on_bit")]
-    extra = ", ".join(f"δ_{'WOH' if k == 'weight_on_hook' else 'WOB'} = {100 * float(v):.3g} %"
-                      for k, v in inputs if v is not None)
+    extra = ", ".join(f"{label} = {100 * value:.3g} %" for label, value in _input_dispersions(stats))
     fig.suptitle(f"{title}\n{extra}" if extra else title)
     return _save(fig, path)
 

@@ -5,8 +5,8 @@ base64 PNG ``data:`` URIs, no script and no external resource, so the page can b
 alone. Every piece of text that comes from outside (case TOML, names, messages) is escaped.
 
 The page holds the case (key numbers and the full TOML in a collapsible block), the study's size and
-input dispersions, a dispersion table per observable (time-mean and maximum dispersion after the
-transient in %, and their ratios to the weight-on-hook and weight-on-bit dispersions), the run
+the laws of its random inputs with their dispersions, a dispersion table per observable (time-mean and
+maximum dispersion after the transient in %, and their ratios to each input's dispersion), the run
 information (failures, wall time, ...) and the figures.
 """
 
@@ -187,22 +187,45 @@ def _study_section(summary: Mapping[str, Any]) -> str:
         rows.append(("failed realizations", _num(summary["n_failed"])))
     if "seed" in summary:
         rows.append(("seed", _num(summary["seed"])))
-    if "sigma" in summary:
+    for path, entry in (summary.get("inputs") or {}).items():
+        unit = f" {entry.get('unit')}" if entry.get("unit") else ""
+        rows.append((f"law of {path}", f"{_esc(entry.get('law'))} (SI: mean {_num(entry.get('mean'))}{_esc(unit)}, "
+                                        f"std {_num(entry.get('std'))}{_esc(unit)}, dispersion "
+                                        f"{_percent(entry.get('dispersion'))} %; sample: mean "
+                                        f"{_num(entry.get('sample_mean'))}, std {_num(entry.get('sample_std'))})"))
+    if summary.get("sigma") is not None:
         rows.append(("σ of the weight-on-hook", f"{_num(float(summary['sigma']) / 1e3)} kN"))
     if "weight_on_hook_mean" in summary:
         rows.append(("mean weight-on-hook", f"{_num(float(summary['weight_on_hook_mean']) / 1e3, 6)} kN"))
-    if "weight_on_hook_dispersion" in summary:
+    if summary.get("weight_on_hook_dispersion") is not None:
         rows.append(("weight-on-hook dispersion δ_WOH", f"{_percent(summary['weight_on_hook_dispersion'])} %"))
-    if "weight_on_bit_dispersion" in summary:
+    if summary.get("weight_on_bit_dispersion") is not None:
         rows.append(("weight-on-bit dispersion δ_WOB", f"{_percent(summary['weight_on_bit_dispersion'])} %"))
     if "t_transient" in summary:
         rows.append(("summaries over", f"t ≥ {_num(summary['t_transient'])} s"))
     return "<h2>Study</h2>" + (_kv_table(rows) if rows else "")
 
 
+#: Short labels of inputs in table headers (others: the parameter path).
+INPUT_LABELS = {"weight_on_hook": "WOH", "weight_on_bit": "WOB"}
+
+
+def input_label(name: str) -> str:
+    """``δ_WOH``, ``δ_WOB``, or ``δ(path)`` for another random parameter."""
+    return f"δ_{INPUT_LABELS[name]}" if name in INPUT_LABELS else f"δ({name})"
+
+
+def _input_names(observables: Mapping[str, Any]) -> list[str]:
+    """The inputs that the dispersion ratios refer to (those of the first observable)."""
+    for entry in observables.values():
+        return list((entry or {}).get("ratio_time_mean") or {})
+    return []
+
+
 def _dispersion_rows(observables: Mapping[str, Any], window: str | None, conv: Mapping[str, Any]) -> str:
     """Table rows of one summary window (``window`` None: the steady window, else the entry's key)."""
     body = []
+    inputs = _input_names(observables)
     for name, entry in observables.items():
         entry = (entry or {}) if window is None else ((entry or {}).get(window) or {})
         rt = entry.get("ratio_time_mean") or {}
@@ -212,10 +235,8 @@ def _dispersion_rows(observables: Mapping[str, Any], window: str | None, conv: M
             _percent(entry.get("dispersion_time_mean")),
             _percent(entry.get("dispersion_max")),
             _num(entry.get("time_of_max")),
-            _num(rt.get("weight_on_hook"), 3),
-            _num(rt.get("weight_on_bit"), 3),
-            _num(rm.get("weight_on_hook"), 3),
-            _num(rm.get("weight_on_bit"), 3),
+            *(_num(rt.get(key), 3) for key in inputs),
+            *(_num(rm.get(key), 3) for key in inputs),
         ]
         if window is None:
             cells.append(_percent(conv.get(name)))
@@ -230,9 +251,11 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
     if not observables:
         return ""
     conv = summary.get("convergence_change_second_half") or {}
+    inputs = _input_names(observables)
     columns = ("<th>observable</th><th>from t [s]</th><th>time-mean δ [%]</th><th>max δ [%]</th>"
-               "<th>time of max [s]</th><th>mean δ / δ_WOH</th><th>mean δ / δ_WOB</th><th>max δ / δ_WOH</th>"
-               "<th>max δ / δ_WOB</th>")
+               "<th>time of max [s]</th>"
+               + "".join(f"<th>mean δ / {_esc(input_label(k))}</th>" for k in inputs)
+               + "".join(f"<th>max δ / {_esc(input_label(k))}</th>" for k in inputs))
     steady = (f"<h3>Steady window (t ≥ {_num(summary.get('t_transient'))} s)</h3>"
               f"<table><tr>{columns}<th>conv(n_s) change, 2nd half [%]</th></tr>"
               f"{_dispersion_rows(observables, None, conv)}</table>")
@@ -245,7 +268,8 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
     return (
         "<h2>Dispersion of the response</h2>"
         "<p>Dispersion δ = std / |mean| over the realizations at each time, summarised over time (mean and "
-        "maximum); ratios above 1 mean that the input uncertainty is amplified.</p>"
+        "maximum), and its ratio to the dispersion of each random input; ratios above 1 mean that the input "
+        "uncertainty is amplified.</p>"
         + steady + whole + _indicators_html(summary)
     )
 

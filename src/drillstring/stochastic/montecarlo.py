@@ -28,7 +28,7 @@ import time
 from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 import zarr
@@ -59,18 +59,21 @@ from drillstring.stochastic.execution import (  # noqa: F401  (re-exported)
     run_tasks,
 )
 from drillstring.stochastic.locks import StudyLock, StudyLocked  # noqa: F401  (re-exported)
-from drillstring.stochastic.maxent import realization_generator, weight_on_hook_law
-from drillstring.stochastic.store import ArraySpec, TaskStore, fingerprint
+from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
+from drillstring.stochastic.runs import simulation_options
+from drillstring.stochastic.store import ArraySpec, TaskStore
 from drillstring.stochastic.store import StoreError as StudyStoreError
+from drillstring.stochastic.uncertainty import Uncertainty, uncertainty
 
 #: Observables kept for every realization (each (realization, time)); plus radial_displacement.
 STUDY_OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
-NOMINAL = -1  # index of the deterministic run at the mean weight-on-hook
+NOMINAL = -1  # index of the deterministic run at the mean of every uncertain parameter
 #: Fewest realizations of a study: the statistics (standard deviation, envelopes) need two.
 MIN_SAMPLES = 2
-#: Largest accepted probability that a drawn weight-on-bit falls outside (0, string weight), where the
-#: realization cannot run. The Normal law is unbounded; 1e-3 lets a 1000-realization study expect about
-#: one failed draw, and on the reference case (100 kN on the bit) accepts σ up to 32.4 kN.
+#: Largest accepted probability that a drawn value falls outside its parameter's allowed range (for the
+#: weight-on-hook: a weight-on-bit outside (0, string weight)), where the realization cannot run and is
+#: recorded as failed. The Normal law is unbounded; 1e-3 lets a 1000-realization study expect about one
+#: failed draw, and on the reference case (100 kN on the bit) accepts σ_WOH up to 32.4 kN.
 OUT_OF_RANGE_PROBABILITY = 1e-3
 
 
@@ -78,33 +81,51 @@ OUT_OF_RANGE_PROBABILITY = 1e-3
 class StudySettings:
     """What defines a study's realizations; a resumed study must have the same settings.
 
+    The random parameters are the weight-on-hook, Normal of standard deviation ``sigma`` around the case's
+    hook load (when ``sigma`` is given), and every ``(path, law)`` of ``laws`` (case-parameter paths and
+    law specs, :mod:`drillstring.stochastic.uncertainty`); at least one of them. ``correlated`` and
+    ``correlation`` declare a correlation matrix of some normal parameters (among them ``weight_on_hook``
+    when ``sigma`` is given).
+
     Attributes:
         samples: number of realizations n_s.
-        sigma: standard deviation of the weight-on-hook [N].
+        sigma: standard deviation of the weight-on-hook [N], or None.
         seed: root seed of the realizations' random streams.
         t_end: simulated time per realization [s].
         output_step: output step [s].
+        laws: ``((path, spec), ...)`` of the other random parameters (canonical specs).
+        correlated: paths of the correlated normal parameters.
+        correlation: their correlation matrix (rows of numbers).
     """
 
     samples: int
-    sigma: float
+    sigma: float | None = None
     seed: int = 0
     t_end: float = 30.0
     output_step: float = 0.01
+    laws: tuple[tuple[str, str], ...] = ()
+    correlated: tuple[str, ...] = ()
+    correlation: tuple[tuple[float, ...], ...] = ()
 
     def __post_init__(self) -> None:
         if not (isinstance(self.samples, int) and not isinstance(self.samples, bool)
                 and self.samples >= MIN_SAMPLES):
             raise ValueError(f"samples = {self.samples!r}: must be an integer >= {MIN_SAMPLES} (the "
                              "statistics need at least 2 realizations)")
-        if not (_is_real(self.sigma) and math.isfinite(self.sigma) and self.sigma > 0):
+        if self.sigma is not None and not (_is_real(self.sigma) and math.isfinite(self.sigma) and self.sigma > 0):
             raise ValueError(f"sigma = {self.sigma!r} N: must be a finite number > 0")
+        if self.sigma is None and not self.laws:
+            raise ValueError("no random parameter: give sigma (the weight-on-hook's standard deviation) or at "
+                             "least one parameter law")
         if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0):
             raise ValueError(f"seed = {self.seed!r}: must be an integer >= 0")
         if not (_is_real(self.t_end) and math.isfinite(self.t_end) and self.t_end > 0):
             raise ValueError(f"t_end = {self.t_end!r} s: must be a finite number > 0")
         if not (_is_real(self.output_step) and 0 < self.output_step <= self.t_end):
             raise ValueError(f"output_step = {self.output_step!r} s: must be in (0, t_end = {self.t_end:g} s]")
+        object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
+        object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
+        object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
 
     @property
     def time(self) -> np.ndarray:
@@ -118,7 +139,9 @@ def _is_real(value) -> bool:
 
 @dataclass
 class RealizationOutcome:
-    """What one realization returns to the driver (picklable)."""
+    """What one realization returns to the driver (picklable): the drawn values ``inputs`` [SI] in the
+    order of the study's parameters, the resulting weight-on-hook and weight-on-bit [N] (NaN where the
+    draw gave no valid case), the observables on the output grid."""
 
     index: int
     weight_on_hook: float
@@ -129,20 +152,76 @@ class RealizationOutcome:
     radial_displacement: np.ndarray | None = None
     wall_time: float = 0.0
     n_rhs: int = 0
+    inputs: np.ndarray | None = None
 
 
 def nominal_weight_on_hook(case: Case) -> float:
-    """Mean weight-on-hook [N]: the case's static hook load, weight − weight_on_bit."""
+    """Mean weight-on-hook [N] of the default law: the case's static hook load, weight − weight_on_bit."""
     return case.weight - case.operation.weight_on_bit
 
 
-def draw_weight_on_hook(case: Case, settings: StudySettings, index: int) -> float:
-    """The weight-on-hook [N] of realization ``index`` (the mean for :data:`NOMINAL`)."""
-    mean = nominal_weight_on_hook(case)
+#: Built uncertainties (their MaxEnt laws), by study, in this process.
+_UNCERTAINTIES: dict[tuple, Uncertainty] = {}
+
+
+def study_uncertainty(case: Case, settings: StudySettings, *, check: bool = False) -> Uncertainty:
+    """The study's random parameters and their joint law: ``weight_on_hook`` Normal(hook load, ``sigma``)
+    first when ``sigma`` is given, then ``settings.laws`` in order.
+
+    ``check=True`` refuses (:class:`~drillstring.stochastic.parameters.ParameterError`, one line) a law that
+    puts a probability above :data:`OUT_OF_RANGE_PROBABILITY` outside its parameter's range; otherwise any
+    law is accepted (draws outside the range fail their realization). Built once per process and study."""
+    key = (case.to_toml(), settings, check)
+    if key in _UNCERTAINTIES:
+        return _UNCERTAINTIES[key]
+    declared: dict[str, Any] = {}
+    if settings.sigma is not None:
+        declared[WEIGHT_ON_HOOK] = {"law": "normal", "mean": nominal_weight_on_hook(case), "std": settings.sigma}
+    for path, spec in settings.laws:
+        if path.strip() in declared:
+            raise ParameterError(f"{path} has a law and sigma (the weight-on-hook's standard deviation): give "
+                                 "one of them")
+        declared[path] = spec
+    correlation = [list(row) for row in settings.correlation] if settings.correlated else None
+    found = uncertainty(case, declared, correlated=settings.correlated, correlation=correlation,
+                        tolerance=OUT_OF_RANGE_PROBABILITY if check else 1.0)
+    if len(_UNCERTAINTIES) > 16:
+        _UNCERTAINTIES.clear()
+    _UNCERTAINTIES[key] = found
+    return found
+
+
+def input_attributes(law: Uncertainty) -> dict[str, Any]:
+    """The declared laws as plain attributes (lists, one entry per parameter, SI): ``parameters`` (paths),
+    ``laws`` (canonical specs), ``parameter_units``, ``parameter_mean``, ``parameter_std``, and
+    ``correlated`` / ``correlation`` (empty when independent)."""
+    return {
+        "parameters": list(law.paths),
+        "laws": [p.law.to_spec() for p in law.parameters],
+        "parameter_units": list(law.units),
+        "parameter_mean": [float(v) for v in law.mean()],
+        "parameter_std": [float(v) for v in law.std()],
+        "correlated": list(law.correlated) if law.correlation is not None else [],
+        "correlation": law.correlation.tolist() if law.correlation is not None else [],
+    }
+
+
+def draw_inputs(case: Case, settings: StudySettings, index: int) -> np.ndarray:
+    """The values [SI] of the random parameters of realization ``index`` (their means for
+    :data:`NOMINAL`): depend only on ``(seed, index)`` and the laws."""
+    law = study_uncertainty(case, settings)
     if index == NOMINAL:
-        return mean
-    law = weight_on_hook_law(mean, sigma=settings.sigma)
-    return float(law.sample(realization_generator(settings.seed, index)))
+        return law.mean()
+    return law.draw(settings.seed, [index])[0]
+
+
+def draw_weight_on_hook(case: Case, settings: StudySettings, index: int) -> float:
+    """The weight-on-hook [N] of realization ``index``: drawn when it is random (the mean for
+    :data:`NOMINAL`), else the case's."""
+    law = study_uncertainty(case, settings)
+    if WEIGHT_ON_HOOK not in law.paths:
+        return nominal_weight_on_hook(case)
+    return float(draw_inputs(case, settings, index)[law.paths.index(WEIGHT_ON_HOOK)])
 
 
 def _normal_tail(z: float) -> float:
@@ -177,48 +256,51 @@ def largest_accepted_sigma(case: Case, probability: float = OUT_OF_RANGE_PROBABI
 
 
 def check_study(case: Case, settings: StudySettings) -> None:
-    """Refuse (ValueError naming sigma) settings whose draws would often be impossible: a probability
-    above :data:`OUT_OF_RANGE_PROBABILITY` of a weight-on-bit outside (0, string weight)."""
-    p = weight_on_bit_out_of_range_probability(case, settings.sigma)
-    if p > OUT_OF_RANGE_PROBABILITY:
-        raise ValueError(
-            f"sigma = {settings.sigma:.6g} N: with the weight-on-hook Normal around "
-            f"{nominal_weight_on_hook(case) / 1e3:.6g} kN, the weight-on-bit falls outside (0, "
-            f"{case.weight / 1e3:.6g} kN) (the string's weight) with probability {p:.3g}, above "
-            f"{OUT_OF_RANGE_PROBABILITY:g}: such realizations cannot run; sigma must be at most "
-            f"{largest_accepted_sigma(case) / 1e3:.4g} kN for this case"
-        )
+    """Refuse (ValueError, one line) settings whose draws would often be impossible: a ``sigma`` with a
+    probability above :data:`OUT_OF_RANGE_PROBABILITY` of a weight-on-bit outside (0, string weight)
+    (the message names the largest accepted sigma), and any law that puts more than that probability
+    outside its parameter's range; also unknown paths, bad laws and correlations."""
+    if settings.sigma is not None:
+        p = weight_on_bit_out_of_range_probability(case, settings.sigma)
+        if p > OUT_OF_RANGE_PROBABILITY:
+            raise ValueError(
+                f"sigma = {settings.sigma:.6g} N: with the weight-on-hook Normal around "
+                f"{nominal_weight_on_hook(case) / 1e3:.6g} kN, the weight-on-bit falls outside (0, "
+                f"{case.weight / 1e3:.6g} kN) (the string's weight) with probability {p:.3g}, above "
+                f"{OUT_OF_RANGE_PROBABILITY:g}: such realizations cannot run; sigma must be at most "
+                f"{largest_accepted_sigma(case) / 1e3:.4g} kN for this case"
+            )
+    study_uncertainty(case, settings, check=True)
 
 
 def run_realization(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:
     """Draw, solve and simulate realization ``index``; never raises for a failed realization."""
     start = time.perf_counter()
-    woh = draw_weight_on_hook(case, settings, index)
-    wob = case.weight - woh
-    outcome = RealizationOutcome(index, woh, wob, FAILED, "")
+    outcome = RealizationOutcome(index, math.nan, math.nan, FAILED, "")
     n_t = len(settings.time)
     try:
-        if not 0.0 < wob < case.weight:
-            raise ValueError(
-                f"drawn weight_on_hook = {woh:.6g} N gives weight_on_bit = {wob:.6g} N, outside "
-                f"(0, {case.weight:.6g}) N"
-            )
-        model = case_reduced_model(case, weight_on_bit=wob)
-        s = case.simulation
-        kwargs = dict(t_end=settings.t_end, output_step=settings.output_step, rtol=s.rtol,
-                      atol=s.atol, method=s.method, max_steps=s.max_steps, min_step=s.min_step,
-                      lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed)
+        law = study_uncertainty(case, settings)
+        values = draw_inputs(case, settings, index)
+        outcome.inputs = values
+        if WEIGHT_ON_HOOK in law.paths:  # recorded even when the draw is impossible
+            outcome.weight_on_hook = float(values[law.paths.index(WEIGHT_ON_HOOK)])
+            outcome.weight_on_bit = case.weight - outcome.weight_on_hook
+        realized = law.apply(case, values)
+        outcome.weight_on_hook = realized.weight_on_hook
+        outcome.weight_on_bit = realized.operation.weight_on_bit
+        model = case_reduced_model(realized)
         try:
-            result: SimulationResult = simulate_model(model, **kwargs)
+            result: SimulationResult = simulate_model(
+                model, **simulation_options(realized, settings.t_end, settings.output_step))
             outcome.status = DONE
         except SimulationError as error:
             result = error.result
             outcome.message = str(error)
         k = len(result.time)
         for name in STUDY_OBSERVABLES:
-            values = np.full(n_t, np.nan)
-            values[:k] = result.observables[name]
-            outcome.observables[name] = values
+            series = np.full(n_t, np.nan)
+            series[:k] = result.observables[name]
+            outcome.observables[name] = series
         radial = np.full((n_t, result.radial_displacement.shape[1]), np.nan)
         radial[:k] = result.radial_displacement
         outcome.radial_displacement = radial
@@ -231,23 +313,6 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
 
 
 # --- the Zarr store ------------------------------------------------------------------------------
-
-
-def _fingerprint(case: Case, settings: StudySettings) -> str:
-    return fingerprint(case.to_toml(), asdict(settings))
-
-
-#: Arrays every study store holds: name -> dimension names (plus ``status`` and ``wall_time``).
-STORE_ARRAYS = {
-    "time": ("time",), "x": ("probe",),
-    "weight_on_hook": ("realization",), "weight_on_bit": ("realization",),
-    "wall_time": ("realization",), "status": ("realization",),
-    **{name: ("realization", "time") for name in STUDY_OBSERVABLES},
-    **{f"nominal_{name}": ("time",) for name in STUDY_OBSERVABLES},
-    "radial_displacement": ("realization", "time", "probe"),
-    "nominal_radial_displacement": ("time", "probe"),
-    "nominal_status": ("one",),
-}
 
 
 def open_study_group(path: str | Path, mode: str = "r") -> zarr.Group:
@@ -267,7 +332,7 @@ class StudyStore(TaskStore):
     kind = "study"
     row_dim = "realization"
     noun = "realizations"
-    differ = "case or settings differ: samples, sigma, seed, t_end, output_step"
+    differ = "case or settings differ: samples, sigma, laws, seed, t_end, output_step"
 
     def __init__(self, path: str | Path, case: Case, settings: StudySettings) -> None:
         self.case = case
@@ -285,8 +350,15 @@ class StudyStore(TaskStore):
             "nominal_radial_displacement": ArraySpec(("time", "probe")),
             "nominal_status": ArraySpec(("one",), "i1", PENDING),
         }
-        sizes = {"realization": settings.samples, "time": n_t, "probe": len(case.mesh.probes), "one": 1}
-        attrs = {"weight_on_hook_mean": nominal_weight_on_hook(case), "weight": case.weight}
+        law = study_uncertainty(case, settings)
+        layout["input_values"] = ArraySpec(("realization", "parameter"))
+        layout["nominal_input_values"] = ArraySpec(("parameter",))
+        sizes = {"realization": settings.samples, "time": n_t, "probe": len(case.mesh.probes), "one": 1,
+                 "parameter": law.size}
+        mean = law.mean()
+        woh_mean = (float(mean[law.paths.index(WEIGHT_ON_HOOK)]) if WEIGHT_ON_HOOK in law.paths
+                    else nominal_weight_on_hook(case))
+        attrs = {"weight_on_hook_mean": woh_mean, "weight": case.weight, **input_attributes(law)}
         super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
                          attrs=attrs)
 
@@ -300,7 +372,11 @@ class StudyStore(TaskStore):
                 for name in STUDY_OBSERVABLES:
                     yield f"nominal_{name}", Ellipsis, outcome.observables[name]
                 yield "nominal_radial_displacement", Ellipsis, outcome.radial_displacement
+            if outcome.inputs is not None:
+                yield "nominal_input_values", Ellipsis, outcome.inputs
             return
+        if outcome.inputs is not None:
+            yield "input_values", i, outcome.inputs
         if outcome.radial_displacement is not None:
             for name in STUDY_OBSERVABLES:
                 yield name, i, outcome.observables[name]
