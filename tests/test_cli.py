@@ -700,3 +700,73 @@ def test_study_bad_laws_exit_2_with_one_line(coarse_case, tmp_path, args, words)
     for word in words:
         assert word in result.stderr, result.stderr
     assert not (tmp_path / "bad").exists()
+
+
+@pytest.fixture(scope="module")
+def torsional_case_file(tmp_path_factory):
+    """A coarse reference string without lateral modes: a 2 s run takes a few hundredths of a second."""
+    from drillstring.case import load_case
+
+    case = load_case("reference")
+    case = case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(
+            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 0})})
+    path = tmp_path_factory.mktemp("cases") / "torsional.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    return path
+
+
+def test_map_command_writes_the_map_and_resumes(torsional_case_file, tmp_path):
+    import xarray as xr
+
+    out = tmp_path / "m"
+    args = ("map", str(torsional_case_file), "--top-speed", "80:160:2", "--weight-on-bit", "60 kN,90 kN",
+            "--t-end", "2", "--workers", "1", "--out", str(out))
+    result = _invoke(*args, "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["top_speed"] == pytest.approx([80 * np.pi / 30, 160 * np.pi / 30])  # bare numbers: rpm
+    assert summary["weight_on_bit"] == [6e4, 9e4] and summary["done"] == 4
+    for name in ("map.zarr", "map.nc", "map.json", "map.png", "report.html"):
+        assert (out / name).exists(), name
+    with xr.open_dataset(out / "map.nc", engine="h5netcdf") as ds:
+        assert ds.growth_rate.dims == ("top_speed", "weight_on_bit")
+    table = _invoke(*args)
+    assert table.exit_code == 0, table.output
+    assert "resumed: 4 of 4 grid points" in table.stderr
+    for text in ("Operating map", "largest mean ROP", "critical weight-on-bit", str(out / "report.html")):
+        assert text in table.stdout, text
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--top-speed", "40:200"), ["--top-speed = '40:200'", "A:B:N"]),
+    (("--weight-on-bit", "2e6"), ["--weight-on-bit = 2e+06 N", "string's weight"]),
+    (("--top-speed", "40 m:60 m:3"), ["--top-speed", "m"]),
+])
+def test_map_bad_grid_exits_2_with_one_line(torsional_case_file, tmp_path, args, words):
+    result = _invoke("map", str(torsional_case_file), "--t-end", "1", "--out", str(tmp_path / "m"), *args)
+    assert result.exit_code == 2, result.output
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.output
+    for word in words:
+        assert word in result.stderr, result.stderr
+    assert not (tmp_path / "m").exists()
+
+
+def test_sensitivity_command(torsional_case_file, tmp_path):
+    out = tmp_path / "s"
+    args = ("sensitivity", str(torsional_case_file), "--param", "operation.top_speed=uniform 120 180 rpm",
+            "--param", "operation.weight_on_bit=uniform 60 90 kN", "--samples", "8", "--t-end", "2",
+            "--workers", "1", "--out", str(out))
+    result = _invoke(*args, "--json")
+    assert result.exit_code == 0, result.output
+    payload = json.loads(result.stdout)
+    assert payload["runs"] == 32 and payload["base_samples"] == 8
+    assert json.loads((out / "sensitivity.json").read_text()) == payload
+    table = _invoke(*args)
+    assert table.exit_code == 0, table.output
+    for text in ("Sobol' indices", "mean ROP", "top_speed", "weight_on_bit", "S1", "ST"):
+        assert text in table.stdout, text
+    refused = _invoke("sensitivity", str(torsional_case_file), "--out", str(tmp_path / "none"))
+    assert refused.exit_code == 2 and "no uncertain parameter" in refused.stderr
+    assert not (tmp_path / "none").exists()

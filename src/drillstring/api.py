@@ -501,3 +501,276 @@ def compare(
         "impacts": pair("impacts", int),
     }
     return full, reduced, differences
+
+
+# --- operating maps and global sensitivity -------------------------------------------------------
+
+
+def _engine_folder(out, workers, scheduler, prefix: str) -> Path:
+    """The output folder (checked; a temporary one when ``out`` is None), after checking the workers."""
+    import tempfile
+
+    from drillstring.files import output_folder_problem
+    from drillstring.stochastic.execution import check_workers
+
+    if out is not None:
+        problem = output_folder_problem(out)
+        if problem:
+            raise ValueError(f"out = {str(out)!r}: {problem}")
+    check_workers(workers, scheduler)
+    return Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=prefix))
+
+
+def _run_record(store, run, noun: str) -> dict:
+    """Computation time and workers of a store's sessions, and this call's numbers (JSON-ready)."""
+    from drillstring.stochastic.execution import computation_time
+
+    sessions = store.sessions()
+    wall_time, used = computation_time(sessions)
+    return {
+        "failures": store.failures(),
+        "wall_time": wall_time,
+        "wall_time_this_run": run.wall_time,
+        f"{noun}_this_run": run.computed,
+        "workers": used if isinstance(used, (int, str)) or used is None else str(used),
+        "sessions": sessions,
+    }
+
+
+def _run_table(record: dict, noun: str) -> dict:
+    """Rows of a report's "Run" table."""
+    rows = {"failures": record["failures"], "computation wall time [s]": round(record["wall_time"], 2),
+            "workers": record["workers"]}
+    if record[f"{noun}_this_run"] == 0 or len(record["sessions"]) > 1:
+        rows["wall time of this run [s]"] = round(record["wall_time_this_run"], 2)
+        rows[f"runs that computed {noun}"] = len(record["sessions"])
+    return rows
+
+
+@dataclass
+class MapOutcome:
+    """What :func:`operating_map` did: the map Dataset, its JSON-ready summary (as in ``map.json``), the
+    files written (name -> path) and the points that were in the store before this call."""
+
+    dataset: xr.Dataset
+    summary: dict
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+
+#: Default grid of an operating map: top speed [rad/s] and weight-on-bit [N] axes (40–200 rpm × 40–160 kN).
+DEFAULT_MAP_GRID = ("40 rpm:200 rpm:17", "40 kN:160 kN:13")
+
+
+def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, output_step=None, transient=None,
+                 default_units: tuple[str, str] = ("", "")):
+    """The validated :class:`~drillstring.stochastic.operating_map.MapSettings` of a map of ``case``: axes
+    as sequences of SI numbers or grid strings (``"40 rpm:200 rpm:17"``, ``"100,120 kN"``; bare numbers in
+    ``default_units`` or SI), default :data:`DEFAULT_MAP_GRID`."""
+    from drillstring.case import DIMENSIONS
+    from drillstring.stochastic.operating_map import MapSettings, check_map, parse_axis
+
+    dimension = {d.name: d for d in DIMENSIONS}
+    speeds = parse_axis(DEFAULT_MAP_GRID[0] if top_speed is None else top_speed, dimension["angular speed"],
+                        name="top_speed", default_unit=default_units[0])
+    weights = parse_axis(DEFAULT_MAP_GRID[1] if weight_on_bit is None else weight_on_bit, dimension["force"],
+                         name="weight_on_bit", default_unit=default_units[1])
+    settings = MapSettings(tuple(speeds), tuple(weights),
+                           t_end=case.simulation.t_end if t_end is None else t_end,
+                           output_step=case.simulation.output_step if output_step is None else output_step,
+                           transient=transient)
+    check_map(case, settings)
+    return settings
+
+
+def operating_map(
+    case: Case | str | Path = "reference",
+    *,
+    top_speed=None,
+    weight_on_bit=None,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+) -> MapOutcome:
+    """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
+    one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
+    ``min(10 s, t_end/2)``) by mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical
+    specific energy, largest radial displacement and impacts, with the linear stability of steady drilling
+    (leading growth rate) and the buckling margin at each point.
+
+    ``top_speed`` [rad/s] and ``weight_on_bit`` [N]: sequences of values or grid strings (``"40 rpm:200
+    rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
+    run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
+    resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
+    ``map.json`` (the summary), ``map.png`` and ``report.html``. Checked before anything runs: the grid
+    (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    import json
+
+    from drillstring.files import write_text_atomic
+    from drillstring.plots import plot_map
+    from drillstring.report import write_map_report
+    from drillstring.results import write_netcdf
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
+    from drillstring.stochastic.locks import StudyLock
+    from drillstring.stochastic.operating_map import map_dataset, map_summary, run_map
+
+    case = as_case(case).model_copy(update={"uncertainty": None})
+    settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
+                            output_step=output_step, transient=transient)
+    folder = _engine_folder(out, workers, scheduler, "drillstring-map-")
+    store_path = folder / "map.zarr"
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what="map") as guard:
+            if guard.note:
+                notify(note, guard.note)
+            run = run_map(case, settings, store_path, workers=workers, scheduler=client, progress=progress,
+                          note=note, worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
+            ds = map_dataset(store_path)
+            summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
+            files: dict[str, Path] = {}
+            if out is not None:
+                files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
+                         "figure": folder / "map.png", "report": folder / "report.html"}
+                write_netcdf(ds, files["map"])
+                plot_map(ds, files["figure"])
+                summary["files"] = {k: str(v) for k, v in files.items()}
+                write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
+                write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
+                                 case_toml=case.to_toml(), summary=summary,
+                                 figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
+                                          "largest radial displacement over the map; black line: linear "
+                                          "stability boundary of steady drilling (hatched: unstable); red "
+                                          "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
+                                 run_info={**_run_table(summary, "points"), "store": str(store_path)})
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+    return MapOutcome(ds, summary, files, run.completed + run.failed - run.computed, guard.note or run.note)
+
+
+@dataclass
+class SensitivityOutcome:
+    """What :func:`sensitivity` did: the Sobol' indices (a :class:`~drillstring.stochastic.sensitivity.
+    SobolResult`), the JSON-ready payload (as in ``sensitivity.json``), the files written and the runs that
+    were in the store before this call."""
+
+    result: object
+    payload: dict
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+
+#: Default number of base samples N of a sensitivity analysis (N(k + 2) runs).
+DEFAULT_BASE_SAMPLES = 128
+
+
+def sensitivity(
+    case: Case | str | Path = "reference",
+    *,
+    parameters: Mapping[str, Any] | None = None,
+    samples: int = DEFAULT_BASE_SAMPLES,
+    seed: int = 0,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    confidence: float = 0.95,
+    resamples: int = 1000,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+) -> SensitivityOutcome:
+    """Global sensitivity of ``case``: first-order and total Sobol' indices, with bootstrap confidence
+    intervals (level ``confidence``) and a convergence check at N/4, N/2, N, of the time-mean ROP,
+    bit-speed oscillation, mean TOB and FOB and the standard deviations in time of ROP, TOB and FOB
+    (:mod:`drillstring.stochastic.sensitivity_study`).
+
+    The uncertain parameters: ``parameters`` (path -> law, independent), else the case's ``[uncertainty]``
+    table. ``samples`` is the number of base samples N (a power of 2): N(k + 2) runs of ``t_end`` [s]
+    on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/sensitivity.zarr is
+    resumable. In ``out``: ``sensitivity.json`` (per output: ``S1``, ``ST``, their intervals, per
+    parameter; the convergence; the run), ``sobol.png``, ``sobol_convergence.png`` and ``report.html``.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    import json
+
+    from drillstring.files import write_text_atomic
+    from drillstring.plots import plot_sobol, plot_sobol_convergence
+    from drillstring.report import write_sensitivity_report
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
+    from drillstring.stochastic.locks import StudyLock
+    from drillstring.stochastic.sensitivity_study import (
+        SENSITIVITY_OUTPUTS,
+        SensitivitySettings,
+        load_sensitivity,
+        run_sensitivity,
+    )
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    case = as_case(case)
+    declared = declared_uncertainty(case, parameters)
+    if declared is None:
+        raise ValueError("no uncertain parameter: give parameters (path -> law), e.g. --param "
+                         "operation.top_speed=\"uniform 60 140 rpm\", or an [uncertainty] table in the case")
+    case = case.model_copy(update={"uncertainty": None})
+    settings = SensitivitySettings(
+        base_samples=samples, laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters), seed=seed,
+        t_end=case.simulation.t_end if t_end is None else t_end,
+        output_step=case.simulation.output_step if output_step is None else output_step, transient=transient)
+    if declared.correlation is not None:
+        raise ValueError(f"Sobol' indices need independent parameters; {', '.join(declared.correlated)} are "
+                         "correlated (drop the correlation, or use a Monte Carlo study for the joint law)")
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence = {confidence!r}: must be in (0, 1), e.g. 0.95")
+    folder = _engine_folder(out, workers, scheduler, "drillstring-sensitivity-")
+    store_path = folder / "sensitivity.zarr"
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what="sensitivity") as guard:
+            if guard.note:
+                notify(note, guard.note)
+            run = run_sensitivity(case, settings, store_path, workers=workers, scheduler=client,
+                                  progress=progress, note=note,
+                                  worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
+            data = load_sensitivity(store_path)
+            result = data.indices(SENSITIVITY_OUTPUTS, confidence=confidence, resamples=resamples)
+            record = _run_record(run.store, run, "runs")
+            payload = {"case": case.name, **result.to_dict(), "t_end": settings.t_end,
+                       "t_transient": settings.transient, "failed_runs": run.failed,
+                       "run_wall_time_total": float(np.nansum(data.wall_time)), **record}
+            files: dict[str, Path] = {}
+            if out is not None:
+                files = {"store": store_path, "indices": folder / "sensitivity.json",
+                         "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
+                         "report": folder / "report.html"}
+                plot_sobol(payload, files["figure"])
+                plot_sobol_convergence(payload, files["convergence"])
+                payload["files"] = {k: str(v) for k, v in files.items()}
+                write_text_atomic(files["indices"], json.dumps(payload, indent=2, allow_nan=False) + "\n")
+                write_sensitivity_report(
+                    files["report"], title=f"Global sensitivity: case '{case.name}'", case_toml=case.to_toml(),
+                    indices=payload,
+                    figures={"First-order (S1) and total (ST) Sobol' indices with their confidence intervals":
+                             files["figure"],
+                             "The indices at N/4, N/2 and N base samples": files["convergence"]},
+                    run_info={**_run_table(record, "runs"), "runs": result.runs,
+                              "simulated time per run [s]": settings.t_end,
+                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)})
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+    return SensitivityOutcome(result, payload, files, run.completed + run.failed - run.computed,
+                              guard.note or run.note)

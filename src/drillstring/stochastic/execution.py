@@ -46,8 +46,9 @@ DASK_WORKER_TIMEOUT = 30.0
 #: its identity, the client's registration): an address that is no scheduler fails at one of the first
 #: three, so within 12 s.
 SCHEDULER_TIMEOUT = 4.0
-#: Largest delay [s] between an outcome's arrival and its write to the store (outcomes are written in
-#: batches: a kill loses at most this much work).
+#: Largest delay [s] between an outcome's arrival and its write to the store, unless the store sets its
+#: own ``flush_interval`` (outcomes are written in batches: a kill loses at most this much work; stores of
+#: many cheap scalar rows rewrite their small arrays once per batch instead of once per outcome).
 FLUSH_INTERVAL = 0.5
 
 #: Thread counts for worker processes: one process per core, each single-threaded, so linear
@@ -163,7 +164,8 @@ def run_tasks(
     outcome to ``store``; the caller holds the store's lock.
 
     ``store`` provides ``counts() -> (done, failed)``, ``total`` (items of the whole run),
-    ``write_many(outcomes)``, ``record_session(started, wall_time, count, workers)`` and ``path``.
+    ``write_many(outcomes)``, ``record_session(started, wall_time, count, workers)``, ``path`` and
+    optionally ``flush_interval`` [s] (default :data:`FLUSH_INTERVAL`; 0 writes each outcome at once).
     Items with an index outside ``[0, total)`` (a study's nominal run) are written but not counted.
     ``client`` (a ``distributed.Client``, ``address`` its scheduler) runs them on Dask, otherwise
     ``workers`` local processes (default one per core; 1 runs in this process).
@@ -177,6 +179,7 @@ def run_tasks(
     computed = 0
     buffer: list = []
     last_flush = time.monotonic()
+    interval = float(getattr(store, "flush_interval", FLUSH_INTERVAL))
 
     def flush() -> None:
         nonlocal last_flush
@@ -194,7 +197,7 @@ def run_tasks(
                 done += 1
             else:
                 failed += 1
-        if time.monotonic() - last_flush >= FLUSH_INTERVAL:
+        if time.monotonic() - last_flush >= interval:
             flush()
         if progress:
             progress(done, failed, total)

@@ -63,7 +63,7 @@ from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
 from drillstring.stochastic.runs import simulation_options
 from drillstring.stochastic.store import ArraySpec, TaskStore
 from drillstring.stochastic.store import StoreError as StudyStoreError
-from drillstring.stochastic.uncertainty import Uncertainty, uncertainty
+from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
 #: Observables kept for every realization (each (realization, time)); plus radial_displacement.
 STUDY_OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
@@ -189,21 +189,6 @@ def study_uncertainty(case: Case, settings: StudySettings, *, check: bool = Fals
         _UNCERTAINTIES.clear()
     _UNCERTAINTIES[key] = found
     return found
-
-
-def input_attributes(law: Uncertainty) -> dict[str, Any]:
-    """The declared laws as plain attributes (lists, one entry per parameter, SI): ``parameters`` (paths),
-    ``laws`` (canonical specs), ``parameter_units``, ``parameter_mean``, ``parameter_std``, and
-    ``correlated`` / ``correlation`` (empty when independent)."""
-    return {
-        "parameters": list(law.paths),
-        "laws": [p.law.to_spec() for p in law.parameters],
-        "parameter_units": list(law.units),
-        "parameter_mean": [float(v) for v in law.mean()],
-        "parameter_std": [float(v) for v in law.std()],
-        "correlated": list(law.correlated) if law.correlation is not None else [],
-        "correlation": law.correlation.tolist() if law.correlation is not None else [],
-    }
 
 
 def draw_inputs(case: Case, settings: StudySettings, index: int) -> np.ndarray:
@@ -332,6 +317,7 @@ class StudyStore(TaskStore):
     kind = "study"
     row_dim = "realization"
     noun = "realizations"
+    flush_interval = 0.0  # each realization written as it arrives: its time histories dominate the write
     differ = "case or settings differ: samples, sigma, laws, seed, t_end, output_step"
 
     def __init__(self, path: str | Path, case: Case, settings: StudySettings) -> None:

@@ -110,6 +110,7 @@ __all__ = [
     "Uncertainty",
     "correlation_table",
     "declared_uncertainty",
+    "input_attributes",
     "parse_law",
     "split_assignment",
     "split_correlation",
@@ -773,3 +774,18 @@ def declared_uncertainty(
                            correlation=correlation["matrix"], tolerance=tolerance)
     except ParameterError as error:
         raise ParameterError(f"{source}{error}") from None
+
+
+def input_attributes(law: Uncertainty) -> dict[str, Any]:
+    """The declared laws as plain attributes of a store or Dataset (lists, one entry per parameter, SI):
+    ``parameters`` (paths), ``laws`` (canonical specs), ``parameter_units``, ``parameter_mean``,
+    ``parameter_std``, and ``correlated`` / ``correlation`` (empty when independent)."""
+    return {
+        "parameters": list(law.paths),
+        "laws": [p.law.to_spec() for p in law.parameters],
+        "parameter_units": list(law.units),
+        "parameter_mean": [float(v) for v in law.mean()],
+        "parameter_std": [float(v) for v in law.std()],
+        "correlated": list(law.correlated) if law.correlation is not None else [],
+        "correlation": law.correlation.tolist() if law.correlation is not None else [],
+    }
