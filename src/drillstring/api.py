@@ -21,7 +21,7 @@ from drillstring.case import Case, load_case
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.results import run_dataset
-from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
+from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
 
 
 def as_case(case: Case | str | Path) -> Case:
@@ -559,22 +559,20 @@ class MapOutcome:
     note: str | None = None
 
 
-#: Default grid of an operating map: top speed [rad/s] and weight-on-bit [N] axes (40–200 rpm × 40–160 kN).
-DEFAULT_MAP_GRID = ("40 rpm:200 rpm:17", "40 kN:160 kN:13")
-
-
 def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, output_step=None, transient=None,
                  default_units: tuple[str, str] = ("", "")):
     """The validated :class:`~drillstring.stochastic.operating_map.MapSettings` of a map of ``case``: axes
     as sequences of SI numbers or grid strings (``"40 rpm:200 rpm:17"``, ``"100,120 kN"``; bare numbers in
-    ``default_units`` or SI), default :data:`DEFAULT_MAP_GRID`."""
+    ``default_units`` or SI), default :data:`~drillstring.stochastic.DEFAULT_MAP_TOP_SPEED` ×
+    :data:`~drillstring.stochastic.DEFAULT_MAP_WEIGHT_ON_BIT`."""
     from drillstring.case import DIMENSIONS
+    from drillstring.stochastic import DEFAULT_MAP_TOP_SPEED, DEFAULT_MAP_WEIGHT_ON_BIT
     from drillstring.stochastic.operating_map import MapSettings, check_map, parse_axis
 
     dimension = {d.name: d for d in DIMENSIONS}
-    speeds = parse_axis(DEFAULT_MAP_GRID[0] if top_speed is None else top_speed, dimension["angular speed"],
+    speeds = parse_axis(DEFAULT_MAP_TOP_SPEED if top_speed is None else top_speed, dimension["angular speed"],
                         name="top_speed", default_unit=default_units[0])
-    weights = parse_axis(DEFAULT_MAP_GRID[1] if weight_on_bit is None else weight_on_bit, dimension["force"],
+    weights = parse_axis(DEFAULT_MAP_WEIGHT_ON_BIT if weight_on_bit is None else weight_on_bit, dimension["force"],
                          name="weight_on_bit", default_unit=default_units[1])
     settings = MapSettings(tuple(speeds), tuple(weights),
                            t_end=case.simulation.t_end if t_end is None else t_end,
@@ -669,10 +667,6 @@ class SensitivityOutcome:
     files: dict[str, Path]
     already: int
     note: str | None = None
-
-
-#: Default number of base samples N of a sensitivity analysis (N(k + 2) runs).
-DEFAULT_BASE_SAMPLES = 128
 
 
 def sensitivity(

@@ -61,7 +61,14 @@ from drillstring.dynamics.indicators import STICK_SPEED_RATIO
 from drillstring.case import Case, CaseError, builtin_cases, load_case
 from drillstring.modal import case_linear_system, compute_modes
 from drillstring.statics import case_static_state
-from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_SIGMA
+from drillstring.stochastic import (
+    DEFAULT_BASE_SAMPLES,
+    DEFAULT_MAP_TOP_SPEED,
+    DEFAULT_MAP_WEIGHT_ON_BIT,
+    DEFAULT_SAMPLES,
+    DEFAULT_SEED,
+    DEFAULT_SIGMA,
+)
 
 #: Exit code for an invalid case or bad input data (same as Click's usage errors).
 EXIT_INVALID_INPUT = 2
@@ -656,7 +663,7 @@ ParamOption = Annotated[
     typer.Option("--param", "-p", metavar="PATH=LAW",
                  help='A random case parameter and its law, e.g. --param fluid.inlet_velocity="uniform 1.2 1.8 '
                       'm/s" (laws: uniform, normal, exponential, gamma, maxent; see docs/uncertainty.md); '
-                      "repeat for several. Replaces the case file's [uncertainty] table."),
+                      "repeat for several. Replaces the case file's uncertainty table."),
 ]
 CorrelationOption = Annotated[
     list[str] | None,
@@ -816,7 +823,7 @@ def study(
 ) -> None:
     """Monte Carlo study of random case parameters (laws by the Maximum Entropy Principle).
 
-    The random parameters: each --param PATH=LAW (else the case file's [uncertainty] table), correlated
+    The random parameters: each --param PATH=LAW (else the case file's uncertainty table), correlated
     normals by --correlation, and the weight-on-hook, Normal of standard deviation --sigma (or
     --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN.
 
@@ -943,11 +950,11 @@ SchedulerOption = Annotated[
     str | None, typer.Option("--scheduler", help="Dask scheduler address (tcp://host:8786) instead of local processes."),
 ]
 RunTEndOption = Annotated[
-    float | None, typer.Option("--t-end", help="Simulated time per run [s] (default: the case's t_end)."),
+    float | None, typer.Option("--t-end", help="Simulated time per run, in s (default: the case's t_end)."),
 ]
 TransientOption = Annotated[
     float | None,
-    typer.Option("--transient", help="Start of the window of the outputs [s] (default: min(10 s, t_end/2))."),
+    typer.Option("--transient", help="Start of the window of the outputs, in s (default: min(10 s, t_end/2))."),
 ]
 
 
@@ -955,14 +962,15 @@ TransientOption = Annotated[
 def map_command(
     case: CaseArg = "reference",
     top_speed: Annotated[
-        str, typer.Option("--top-speed", help="Top speeds: A:B:N (N values from A to B), a list a,b,c, or one "
-                                              "value; bare numbers in rpm, or with units: '40 rpm:200 rpm:17', "
-                                              "'4:21:17 rad/s'.")
-    ] = "40:200:17",
+        str | None, typer.Option("--top-speed", help="Top speeds: FROM:TO:N (N values from FROM to TO), a list "
+                                                     "a,b,c, or one value; bare numbers in rpm, or with units: "
+                                                     "'40 rpm:200 rpm:17', '4:21:17 rad/s' (default "
+                                                     f"{DEFAULT_MAP_TOP_SPEED}).")
+    ] = None,
     weight_on_bit: Annotated[
-        str, typer.Option("--weight-on-bit", help="Weights-on-bit, same forms; bare numbers in N, or with units: "
-                                                  "'40 kN:160 kN:13'.")
-    ] = "40e3:160e3:13",
+        str | None, typer.Option("--weight-on-bit", help="Weights-on-bit, same forms; bare numbers in N, or with "
+                                                         f"units: '60 kN,80 kN' (default {DEFAULT_MAP_WEIGHT_ON_BIT}).")
+    ] = None,
     t_end: RunTEndOption = None,
     transient: TransientOption = None,
     out: OutOption = Path("map"),
@@ -1044,7 +1052,7 @@ def sensitivity_command(
     samples: Annotated[
         int, typer.Option("--samples", "-n", help="Base samples N, a power of 2 (>= 8): N(k + 2) runs for k "
                                                    "parameters; indices also at N/4 and N/2 (convergence).")
-    ] = 128,
+    ] = DEFAULT_BASE_SAMPLES,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the Sobol' sequence and the bootstrap (>= 0).")] = 0,
     t_end: RunTEndOption = None,
     transient: TransientOption = None,
@@ -1057,7 +1065,7 @@ def sensitivity_command(
     bootstrap confidence intervals) of the time-mean ROP, bit-speed oscillation, mean TOB and FOB and the
     standard deviations in time of ROP, TOB and FOB.
 
-    The parameters: each --param PATH=LAW (independent laws), else the case file's [uncertainty] table.
+    The parameters: each --param PATH=LAW (independent laws), else the case file's uncertainty table.
     Writes OUT/sensitivity.zarr (resumable), OUT/sensitivity.json (per output: S1, ST, their intervals,
     per parameter; the convergence at N/4, N/2, N), OUT/sobol.png, OUT/sobol_convergence.png and
     OUT/report.html.

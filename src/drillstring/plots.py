@@ -365,28 +365,44 @@ def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float) -> di
 # An operating map
 # ---------------------------------------------------------------------------------------------------------
 
-#: Panels of :func:`plot_map`: variable, factor from SI, label, colour map.
+#: Panels of :func:`plot_map`: variable, factor from SI, label, colour map, logarithmic scale.
 MAP_PANELS = (
-    ("mean_rate_of_penetration", 3600.0, "mean rate of penetration [m/h]", "viridis"),
-    ("bit_speed_oscillation", 1.0, "bit-speed oscillation (max − min)/2Ω [-]", "magma_r"),
-    ("mechanical_specific_energy", 1e-6, "mechanical specific energy [MPa]", "cividis"),
-    ("max_radial_displacement", 1e3, "max radial displacement at the probes [mm]", "plasma"),
+    ("mean_rate_of_penetration", 3600.0, "mean rate of penetration [m/h]", "viridis", False),
+    ("bit_speed_oscillation", 1.0, "bit-speed oscillation (max − min)/2Ω [-]", "magma_r", False),
+    ("mechanical_specific_energy", 1e-6, "mechanical specific energy [MPa]", "cividis_r", True),
+    ("max_radial_displacement", 1e3, "max radial displacement at the probes [mm]", "plasma", False),
 )
 
 
-def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str, cmap: str) -> None:
-    """Filled contours of ``z`` (shape (len(x), len(y))) over x (abscissa) and y, or coloured markers when
-    an axis has a single value."""
+def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str, cmap: str,
+               log: bool = False) -> None:
+    """Filled contours of ``z`` (shape (len(x), len(y))) over x (abscissa) and y (on a logarithmic colour
+    scale when ``log`` and every value is positive), or coloured markers when an axis has a single value."""
+    from matplotlib import ticker
+    from matplotlib.colors import LogNorm
+
     finite = np.isfinite(z)
     if not finite.any():
         ax.text(0.5, 0.5, "no value", ha="center", va="center", transform=ax.transAxes)
         return
-    if x.size >= 2 and y.size >= 2 and np.unique(z[finite]).size > 1:
-        artist = ax.contourf(x, y, z.T, levels=12, cmap=cmap)
+    lo, hi = float(np.min(z[finite])), float(np.max(z[finite]))
+    scale = dict(norm=LogNorm(lo, hi)) if log and lo > 0 and hi > lo else {}
+    ticks = {}
+    levels = 12
+    if scale:  # ten levels per decade, ticks 1-2-5 labelled in plain numbers
+        def within(values):
+            return values[(values > lo) & (values < hi)]
+
+        marks = within(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)).tick_values(lo, hi))
+        ticks = dict(ticks=marks, format=ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        fine = within(ticker.LogLocator(base=10, subs=10 ** (np.arange(10) / 10)).tick_values(lo, hi))
+        levels = np.unique(np.concatenate([[lo], fine, [hi]]))
+    if x.size >= 2 and y.size >= 2 and hi > lo:
+        artist = ax.contourf(x, y, z.T, levels=levels, cmap=cmap, **scale)
     else:
         xx, yy = np.meshgrid(x, y, indexing="ij")
-        artist = ax.scatter(xx.ravel(), yy.ravel(), c=z.ravel(), cmap=cmap, s=80, zorder=2)
-    fig.colorbar(artist, ax=ax, label=label)
+        artist = ax.scatter(xx.ravel(), yy.ravel(), c=z.ravel(), cmap=cmap, s=80, zorder=2, **scale)
+    fig.colorbar(artist, ax=ax, label=label, **ticks)
 
 
 def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
@@ -406,10 +422,10 @@ def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
     fig, axes = _figure(2, 2, (12.0, 9.0))
     xx, yy = np.meshgrid(x, y, indexing="ij")
     contour_ok = x.size >= 2 and y.size >= 2 and np.isfinite(growth).sum() >= 4
-    for ax, (name, factor, label, cmap) in zip(axes, MAP_PANELS):
+    for ax, (name, factor, label, cmap, log) in zip(axes, MAP_PANELS):
         values = np.asarray(ds[name].values, dtype=float) * factor
         values = np.where(status == 1, values, np.nan)
-        _map_panel(ax, fig, x, y, values, label, cmap)
+        _map_panel(ax, fig, x, y, values, label, cmap, log)
         if contour_ok and np.nanmax(growth) > 0 > np.nanmin(growth):
             ax.contour(x, y, growth.T, levels=[0.0], colors="k", linewidths=1.6)
         if contour_ok and np.nanmax(growth) > 0:
@@ -417,9 +433,9 @@ def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
         if np.isfinite(critical) and y.min() <= critical <= y.max():
             ax.axhline(critical, color="C3", ls="--", lw=1.6)
         done = status == 1
-        ax.plot(xx[done], yy[done], ".", color="k", ms=3)
+        ax.plot(xx[done], yy[done], ".", color="k", ms=3, clip_on=False)
         if (~done).any():
-            ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6)
+            ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6, clip_on=False)
         ax.set_xlabel("top speed [rpm]")
         ax.set_ylabel("weight-on-bit [kN]")
         ax.set_title(label.split(" [")[0], fontsize="medium")

@@ -39,6 +39,7 @@ from drillstring.stochastic.execution import (
     DONE,
     FAILED,
     ProgressCallback,
+    TaskOutcome,
     check_workers,
     connect_scheduler,
     notify,
@@ -55,6 +56,7 @@ __all__ = [
     "MapSettings",
     "MapStore",
     "map_dataset",
+    "map_summary",
     "parse_axis",
     "run_map",
 ]
@@ -238,8 +240,6 @@ def _point_task(case: Case, settings: MapSettings, item: tuple[int, float, float
         point_case = with_parameters(case, {MAP_AXES["top_speed"]: top_speed,
                                             MAP_AXES["weight_on_bit"]: weight_on_bit})
     except ValueError as error:
-        from drillstring.stochastic.execution import TaskOutcome
-
         return TaskOutcome(index, FAILED, str(error))
     return run_outputs(point_case, index, t_end=settings.t_end, output_step=settings.output_step,
                        t_transient=settings.transient, with_stability=True)
