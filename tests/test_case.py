@@ -428,3 +428,94 @@ def test_load_case_accepts_path_objects(tmp_path, reference):
     path = Path(tmp_path) / "ref.toml"
     path.write_text(reference.to_toml(), encoding="utf-8")
     assert load_case(path).name == "reference"
+
+
+# ------------------------------------------------------------------------------- meshing and reduction
+
+
+def test_refuses_a_string_shorter_than_one_element(data):
+    """A 1 m string with the default 10 m elements: refused, naming the element length."""
+    data["sections"] = [dict(data["sections"][1], length="1 m")]
+    data["stabilizers"] = []
+    data["mesh"]["probes"] = ["0.5 m"]
+    data["operation"]["weight_on_bit"] = "1 kN"
+    assert_problem(refused(data), "mesh.max_element_length", "10.0", "string length (1 m)")
+    data["mesh"]["max_element_length"] = "0.1 m"
+    data["reduced_model"] = {"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 4}
+    assert case_from_dict(data).element_count == 10
+
+
+def test_refuses_an_element_longer_than_the_string(data):
+    data["mesh"]["max_element_length"] = "5 km"
+    assert_problem(refused(data), "mesh.max_element_length", "5000.0", "at most", "1600 m")
+
+
+def test_refuses_a_mesh_with_too_many_elements_at_once(data):
+    import time
+
+    from drillstring.case import MAX_ELEMENTS
+
+    data["mesh"]["max_element_length"] = "1 mm"
+    start = time.perf_counter()
+    err = refused(data)
+    assert time.perf_counter() - start < 5.0  # refused, not meshed (it used to take 45 s, then MemoryError)
+    assert_problem(err, "mesh.max_element_length", "0.001", "1,600,000 elements", f"{MAX_ELEMENTS:,}")
+    data["mesh"]["max_element_length"] = "1e-12 m"
+    assert_problem(refused(data), "mesh.max_element_length", "1e-12", "elements")
+
+
+@pytest.mark.parametrize(("key", "most"), [("axial_modes", 160), ("torsional_modes", 160),
+                                           ("lateral_modes", 320)])
+def test_refuses_more_modes_than_the_mesh_has(data, key, most):
+    """The reference mesh has 161 nodes: 161 axial DOFs (one of them the rigid mode), 160 torsional
+    (top held), 320 lateral per plane; one more mode than that is refused, naming the field."""
+    data["reduced_model"][key] = most + 1
+    assert_problem(refused(data), f"reduced_model.{key}", str(most + 1), f"at most {most}", "161 nodes")
+    data["reduced_model"][key] = 100000
+    assert_problem(refused(data), f"reduced_model.{key}", "100000", f"at most {most}")
+
+
+def test_as_many_modes_as_the_mesh_has_are_accepted_and_reduced(data):
+    """At the limit, the case is valid and the reduced model has exactly the modes asked for."""
+    from drillstring.dynamics.rom import case_reduced_model
+
+    data["sections"] = [dict(data["sections"][0], length="60 m"), dict(data["sections"][1], length="20 m")]
+    data["stabilizers"] = [{"position": "60 m", "stiffness": "17.5 MN/m"}]
+    data["mesh"] = {"max_element_length": "10 m", "probes": ["70 m"]}
+    data["operation"]["weight_on_bit"] = "20 kN"
+    data["reduced_model"] = {"axial_modes": 8, "torsional_modes": 8, "lateral_modes": 16}  # 9 nodes
+    case = case_from_dict(data)
+    assert case.element_count == 6 + 1 + 1  # breaks at 60 m (section, stabilizer) and 70 m (probe)
+    model = case_reduced_model(case)
+    assert model.size == 1 + 8 + 8 + 2 * 16
+    assert list(model.family).count("lateral_y") == 16
+
+
+def test_gravity_off_is_a_valid_case_with_a_pushing_hook(data):
+    data["model"]["gravity"] = False
+    case = case_from_dict(data)
+    assert case.weight == 0.0
+    assert case.weight_on_hook == -case.operation.weight_on_bit
+
+
+@pytest.mark.parametrize("axial_loads", [False, True])
+@pytest.mark.parametrize("buoyancy", [False, True])
+@pytest.mark.parametrize("gravity", [True, False])
+def test_weight_is_the_statics_weight(reference, axial_loads, buoyancy, gravity):
+    """One source of truth: Case.weight and weight_on_hook equal the finite-element statics' values for
+    every combination of the switches (fluid axial loads used to make them differ by 8.7 kN)."""
+    from drillstring.statics import case_static_state
+
+    case = reference.model_copy(update={
+        "fluid": reference.fluid.model_copy(update={"axial_loads": axial_loads}),
+        "model": reference.model.model_copy(update={"buoyancy": buoyancy, "gravity": gravity}),
+    })
+    static = case_static_state(case)
+    assert static.weight == pytest.approx(case.weight, rel=1e-13, abs=1e-9)
+    assert static.weight_on_hook == pytest.approx(case.weight_on_hook, rel=1e-10, abs=1e-6)
+    if axial_loads:  # the mud's skin friction is part of it: the annular flow drags the string up
+        plain = reference.model_copy(update={"model": case.model})
+        assert case.weight - plain.weight == pytest.approx(
+            sum(q * s.length for q, s in zip(case.axial_load_per_length, case.sections))
+            - sum(q * s.length for q, s in zip(plain.axial_load_per_length, plain.sections)), rel=1e-12)
+        assert abs(case.weight - plain.weight) > 1e3

@@ -166,6 +166,36 @@ def test_invalid_case_file_exit_code_2(tmp_path):
         assert result.exception is None or isinstance(result.exception, SystemExit)
 
 
+@pytest.mark.parametrize("old, new, field", [
+    ("lateral_modes = 20", "lateral_modes = 100000", "reduced_model.lateral_modes = 100000"),
+    ('max_element_length = "10 m"', 'max_element_length = "1 mm"', "mesh.max_element_length = 0.001"),
+    ('max_element_length = "10 m"', 'max_element_length = "2 km"', "mesh.max_element_length = 2000.0"),
+])
+def test_cases_that_cannot_be_meshed_or_reduced_exit_2_naming_the_field(tmp_path, old, new, field):
+    text = _reference_toml()
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    for command in ("static", "modes", "simulate"):
+        result = _invoke(command, str(path), "--json")
+        assert result.exit_code == 2, result.output
+        assert field in result.stderr
+        assert "Traceback" not in result.output
+        assert result.exception is None or isinstance(result.exception, SystemExit)
+
+
+def test_gravity_off_runs_with_a_pushing_hook(tmp_path):
+    text = _reference_toml()
+    path = tmp_path / "weightless.toml"
+    path.write_text(text.replace("\ngravity = true", "\ngravity = false"), encoding="utf-8")
+    static = _json("static", str(path), "--json")
+    assert static["weight"] == 0.0 and static["weight_on_hook"] == pytest.approx(-REFERENCE_WOB)
+    assert all(n == pytest.approx(-REFERENCE_WOB) for _, n in static["axial_force"])  # compressed
+    run = _json("simulate", str(path), "--t-end", "0.2", "--json", "--out", str(tmp_path / "w.nc"),
+                "--plot", str(tmp_path / "w.png"))
+    assert run["status"] == "success" and run["mean_rate_of_penetration"] > 0
+
+
 @pytest.mark.parametrize(
     "content, expected",
     [
@@ -637,6 +667,59 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
     assert result.exit_code == 1, result.output
     assert "case 1 (full) failed" in result.stderr
     assert "Traceback" not in result.output
+
+
+#: Modules that only the simulating commands need.
+_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr")
+
+
+@pytest.mark.parametrize("argv, unwanted", [
+    ([], _HEAVY + ("scipy",)),  # importing the command line itself
+    (["cases"], _HEAVY + ("scipy",)),
+    (["static", "reference", "--json"], _HEAVY),
+    (["modes", "reference", "--count", "2", "--json"], _HEAVY),
+])
+def test_light_commands_import_only_what_they_need(argv, unwanted):
+    """Start-up cost: a command loads only the modules it uses (a fresh interpreter each)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom drillstring.cli import app\nsys.argv = ['drillstring', *sys.argv[1:]]\n"
+            "if len(sys.argv) > 1:\n    try:\n        app()\n    except SystemExit as e:\n"
+            "        assert not e.code, e.code\n"
+            f"print([m for m in {unwanted!r} if m in sys.modules], file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "[]"
+
+
+def test_console_script_hides_dask_from_single_run_commands(tmp_path):
+    """The console script's simulate runs without importing Dask (xarray would otherwise import
+    dask.array and dask.distributed), and writes its NetCDF and figure; a study keeps Dask."""
+    import subprocess
+    import sys
+
+    from drillstring.cli import NO_DASK_COMMANDS
+
+    assert "simulate" in NO_DASK_COMMANDS and "study" not in NO_DASK_COMMANDS
+    nc, png = tmp_path / "r.nc", tmp_path / "r.png"
+    code = ("import sys\nfrom drillstring.cli import main\nsys.argv = ['drillstring', *sys.argv[1:]]\n"
+            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print([m for m in ('dask.array', 'dask.base', 'distributed') if m in sys.modules], file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", code, "simulate", "reference", "--t-end", "0.2", "--json",
+                           "--out", str(nc), "--plot", str(png)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "[]"
+    from drillstring.results import read_netcdf
+
+    assert float(read_netcdf(nc).time[-1]) == pytest.approx(0.2) and png.stat().st_size > 0
+
+
+def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
+    numbers = _json("simulate", "reference", "--t-end", "0.5", "--json", "--out", str(tmp_path / "r.nc"),
+                    "--plot", str(tmp_path / "r.png"))
+    assert numbers["wall_time"] > 0 and numbers["compile_time"] >= 0
+    assert isinstance(numbers["compiled"], bool)
 
 
 def test_stability_json_and_table(coarse_case):

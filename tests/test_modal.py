@@ -76,9 +76,10 @@ def test_torsion_top_fixed_against_two_section_bar(reference_bar, drill_pipe, dr
     np.testing.assert_allclose(fem, exact, rtol=TOL)
 
 
-@pytest.mark.parametrize("length", [2.0, 40.0])
-def test_uniform_timoshenko_pinned_pinned(drill_collar, length):
-    """Thick (L/D ≈ 9: shear and rotary inertia matter) and slender (L/D ≈ 175) pipes."""
+@pytest.mark.parametrize("length, shear_effect", [(2.0, (0.75, 0.85)), (40.0, (0.998, 1.0))])
+def test_uniform_timoshenko_pinned_pinned(drill_collar, length, shear_effect):
+    """Thick (L/D ≈ 9: shear and rotary inertia matter) and slender (L/D ≈ 175) pipes; ``shear_effect``
+    bounds the 4th frequency over its Euler–Bernoulli value (0.807 and 0.9993 exactly)."""
     s = drill_collar
     exact = timoshenko_pinned_frequencies(4, length, s.bending_stiffness, s.mass_per_length,
                                           s.density * s.second_moment, s.shear_stiffness)
@@ -92,10 +93,12 @@ def test_uniform_timoshenko_pinned_pinned(drill_collar, length):
     np.testing.assert_allclose(fem, exact, rtol=TOL)
     # At least second-order mesh convergence of the 4th mode (fourth order in the slender limit).
     assert errors[0][3] / errors[1][3] > 3.5
-    # Shear and rotary inertia lower the thick pipe's 4th frequency well below Euler–Bernoulli.
-    euler = (4 * math.pi / length) ** 2 * math.sqrt(s.bending_stiffness / s.mass_per_length)
-    if length == 8.0:
-        assert exact[3] < 0.9 * euler / (2 * math.pi)
+    # Shear and rotary inertia lower the thick pipe's 4th frequency well below Euler–Bernoulli (the
+    # elements capture it, not only the closed form); the slender pipe's stays within 0.2 % of it.
+    euler = (4 * math.pi / length) ** 2 * math.sqrt(s.bending_stiffness / s.mass_per_length) / (2 * math.pi)
+    low, high = shear_effect
+    assert low < exact[3] / euler < high
+    assert low < fem[3] / euler < high
 
 
 @pytest.mark.parametrize("length", [10.0, 60.0])
@@ -129,7 +132,7 @@ def test_tension_raises_and_compression_lowers_lateral_frequencies(drill_pipe):
         assert cmp(f, base)
         # Pinned string-beam: ω² = ω₀² (1 + N/P_E) for the first mode (EB limit, slender pipe).
         p_e = math.pi**2 * drill_pipe.bending_stiffness / 60.0**2
-        assert (f / base) ** 2 == pytest.approx(1 + n / p_e, rel=0.01)
+        assert (f / base) ** 2 == pytest.approx(1 + n / p_e, rel=3e-3)  # observed: 1e-5, 1.2e-3
 
 
 def test_added_mass_lowers_frequencies_by_mass_ratio(drill_pipe):

@@ -71,15 +71,45 @@ def test_report_written(report, tmp_path):
     assert text.rstrip().endswith("</html>")
 
 
+def _key_values(text: str) -> dict[str, str]:
+    """The two-column tables of the report: label -> value cell, exactly."""
+    return dict(re.findall(r"<tr><th>([^<]*)</th><td>(.*?)</td></tr>", text))
+
+
+def _observable_rows(text: str) -> dict[str, dict[str, str]]:
+    """The dispersion table: observable -> {column header: cell}, exactly."""
+    table = text[text.index("<th>observable</th>"):]
+    headers = re.findall(r"<th>([^<]*)</th>", table[: table.index("</tr>")])[1:]
+    rows = {}
+    for label, cells in re.findall(r"<tr><td>([^<]*)</td>((?:<td class=\"num\">[^<]*</td>)+)</tr>", text):
+        rows[label] = dict(zip(headers, re.findall(r'<td class="num">([^<]*)</td>', cells), strict=True))
+    return rows
+
+
 def test_report_has_the_table_values(report):
+    """Each number in the cell of its own row and column (not just somewhere in the page)."""
     _, text = report
-    for value in ("6.92", "7.13", "0.209", "0.848", "4.69", "5.06", "4.48", "4.51",  # dispersions [%]
-                  "14.7", "1.38",  # ROP time-mean ratios to δ_WOH and δ_WOB
-                  "0.47", "5",  # input dispersions [%]
-                  "47", "11", "123.4"):  # n_s, seed, wall time
-        assert value in text, value
-    for label in ("rate of penetration", "bit speed", "torque-on-bit", "force-on-bit", "seed"):
-        assert label in text, label
+    kv = _key_values(text)
+    assert kv["realizations used (n_s)"] == "47"
+    assert kv["failed realizations"] == "3"
+    assert kv["seed"] == "11"
+    assert kv["σ of the weight-on-hook"] == "5 kN"
+    assert kv["mean weight-on-hook"] == "1063.4 kN"
+    assert kv["weight-on-hook dispersion δ_WOH"] == "0.47 %"
+    assert kv["weight-on-bit dispersion δ_WOB"] == "5 %"
+    assert kv["summaries over"] == "t ≥ 10 s"
+    assert kv["wall time [s]"] == "123.4"
+    assert kv["workers"] == "2"
+    rows = _observable_rows(text)
+    assert list(rows) == ["rate of penetration", "bit speed", "torque-on-bit", "force-on-bit"]
+    rop = rows["rate of penetration"]
+    assert rop["time-mean δ [%]"] == "6.92" and rop["max δ [%]"] == "7.13"
+    assert rop["time of max [s]"] == "12.5"
+    assert rop["mean δ / δ_WOH"] == "14.7" and rop["mean δ / δ_WOB"] == "1.38"
+    assert rop["conv(n_s) change, 2nd half [%]"] == "2.3"
+    for label, mean, maximum in (("bit speed", "0.209", "0.848"), ("torque-on-bit", "4.69", "5.06"),
+                                 ("force-on-bit", "4.48", "4.51")):
+        assert (rows[label]["time-mean δ [%]"], rows[label]["max δ [%]"]) == (mean, maximum), label
 
 
 def test_report_has_the_case(report):

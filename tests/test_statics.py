@@ -50,9 +50,23 @@ def test_axial_force_and_displacement_are_exact_at_nodes(reference_statics):
     assert np.count_nonzero(q) == mesh.n_nodes
 
 
-def test_weight_on_bit_outside_range_is_refused(reference_statics):
+def test_negative_weight_on_bit_is_refused(reference_statics):
     mesh, loads, st = reference_statics
-    with pytest.raises(ValueError, match="weight_on_bit"):
-        solve_statics(mesh, loads, 2 * st.weight)
-    with pytest.raises(ValueError, match="weight_on_bit"):
-        solve_statics(mesh, loads, -1.0)
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="weight_on_bit"):
+            solve_statics(mesh, loads, bad)
+
+
+def test_the_hook_pushes_when_the_bit_carries_more_than_the_weight(reference_statics):
+    """wob > weight (always so with gravity off): the hook reaction is negative and the top is in
+    compression; N(x) = woh − ∫₀ˣ q dx still holds exactly."""
+    mesh, loads, st = reference_statics
+    heavy = solve_statics(mesh, loads, 2 * st.weight)
+    assert heavy.weight_on_hook == pytest.approx(-st.weight, rel=1e-10)
+    np.testing.assert_allclose(heavy.axial_force, st.axial_force - (2 * st.weight - 100e3),
+                               rtol=0, atol=1e-6 * st.weight)
+    weightless = solve_statics(mesh, [0.0, 0.0], 100e3)
+    assert weightless.weight == 0.0
+    assert weightless.weight_on_hook == pytest.approx(-100e3, rel=1e-12)
+    np.testing.assert_allclose(weightless.axial_force, -100e3, rtol=1e-12)
+    assert np.isnan(weightless.neutral_point)  # compression all along: no neutral point

@@ -23,7 +23,8 @@ Cross-field rules (which need the whole case) are checked only once every field 
 
 Entry points: :func:`load_case`, :func:`case_from_dict`, :func:`builtin_cases`, :meth:`Case.to_toml`.
 
-This module imports nothing from the rest of ``drillstring``.
+This module imports nothing from the rest of ``drillstring`` but :mod:`drillstring.derived` (pure functions
+of numbers shared with the finite-element model: mesh layout, mode-family sizes, axial loads).
 """
 
 from __future__ import annotations
@@ -40,8 +41,18 @@ from typing import Annotated, Any, Literal, Mapping
 import tomli_w
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
 
+from drillstring.derived import (
+    axial_load_per_length,
+    element_counts,
+    fluid_skin_friction,
+    mesh_breaks,
+    mode_family_sizes,
+    string_axial_load,
+)
+
 __all__ = [
     "DIMENSIONS",
+    "MAX_ELEMENTS",
     "Acceleration",
     "AngularSpeed",
     "AxialDamping",
@@ -619,6 +630,11 @@ class UncertaintyTable(_Base):
     correlation: CorrelationTable | None = None
 
 
+#: Most finite elements a case may have (a mesh finer than this is refused at validation: it would take
+#: minutes to build and gigabytes of memory; 10 000 elements is 0.16 m for the 1600 m reference string).
+MAX_ELEMENTS = 10_000
+
+
 def _default_materials() -> dict[str, Material]:
     return {"steel": Material(young_modulus=210e9, density=7850.0, poisson_ratio=0.29)}
 
@@ -669,26 +685,48 @@ class Case(_Base):
         return self.materials[section.material]
 
     @property
-    def weight(self) -> float:
-        """Weight of the string [N]: sum of rho_eff g A L over sections.
+    def flow_rate(self) -> float:
+        """Mud volume flow Q = U_i A_i of the top section [m^3/s] (U_i the inlet velocity)."""
+        return self.fluid.inlet_velocity * self.sections[0].inner_area
 
-        ``rho_eff = rho - rho_fluid`` when ``model.buoyancy`` is on, else ``rho``; 0 when ``model.gravity`` is off.
-        """
-        if not self.model.gravity:
-            return 0.0
-        g = self.environment.gravity
-        total = 0.0
+    @property
+    def axial_load_per_length(self) -> tuple[float, ...]:
+        """Distributed axial load q of each section [N/m], along +x (down): ``(rho - rho_b) A g``, with
+        ``rho_b`` the mud density when ``model.buoyancy`` is on (else 0) and ``g`` 0 when ``model.gravity``
+        is off, plus the mud's skin friction when ``fluid.axial_loads`` is on
+        (:func:`drillstring.derived.axial_load_per_length`; the statics uses the same values)."""
+        g = self.environment.gravity if self.model.gravity else 0.0
+        buoyancy = self.fluid.density if self.model.buoyancy else 0.0
+        loads = []
         for s in self.sections:
-            rho = self.material_of(s).density
-            if self.model.buoyancy:
-                rho -= self.fluid.density
-            total += rho * g * s.area * s.length
-        return total
+            friction = 0.0
+            if self.fluid.axial_loads:
+                friction = fluid_skin_friction(s.outer_diameter, s.inner_diameter, self.borehole.diameter,
+                                               self.fluid.density, self.flow_rate,
+                                               self.fluid.friction_coefficient)
+            loads.append(axial_load_per_length(steel_density=self.material_of(s).density, area=s.area,
+                                               gravity=g, buoyancy_density=buoyancy, skin_friction=friction))
+        return tuple(loads)
+
+    @property
+    def weight(self) -> float:
+        """Total distributed axial load on the string [N], ``sum q L`` over the sections
+        (:attr:`axial_load_per_length`): its weight (buoyed when ``model.buoyancy`` is on, 0 when
+        ``model.gravity`` is off) plus the mud's skin friction when ``fluid.axial_loads`` is on. The hook and
+        the bit carry it together; it equals the static state's ``weight``."""
+        return string_axial_load(self.axial_load_per_length, [s.length for s in self.sections])
 
     @property
     def weight_on_hook(self) -> float:
-        """Static hook load, weight - weight_on_bit [N]."""
+        """Static hook load, weight - weight_on_bit [N]; negative when the hook pushes (gravity off)."""
         return self.weight - self.operation.weight_on_bit
+
+    @property
+    def element_count(self) -> int:
+        """Number of finite elements of the case's mesh (:func:`drillstring.derived.element_counts`)."""
+        points = [st.position for st in self.stabilizers] + list(self.mesh.probes)
+        breaks = mesh_breaks([s.length for s in self.sections], points)
+        return sum(element_counts(breaks, self.mesh.max_element_length))
 
     # -- cross-field validation --------------------------------------------------------------------------
 
@@ -719,6 +757,8 @@ class Case(_Base):
         if problems:  # the rules below need valid materials and gaps
             raise _Problems(problems)
 
+        problems.extend(self._mesh_problems())
+
         # With gravity off the string weighs nothing and the hook pushes; the rule only applies with gravity.
         if self.model.gravity:
             w, wob = self.weight, self.operation.weight_on_bit
@@ -746,6 +786,33 @@ class Case(_Base):
         if problems:
             raise _Problems(problems)
         return self
+
+    def _mesh_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
+        """The case can be meshed (element length within the string, at most :data:`MAX_ELEMENTS`
+        elements) and reduced (no family asks for more modes than the mesh has DOFs)."""
+        length, h = self.length, self.mesh.max_element_length
+        where = ("mesh", "max_element_length")
+        if h > length:
+            return [(where, h, f"must be at most the string length ({length:g} m)")]
+        elements = self.element_count
+        if elements > MAX_ELEMENTS:
+            return [(where, h, f"gives {elements:,} elements, more than the {MAX_ELEMENTS:,} allowed "
+                               f"(about max_element_length >= {length / MAX_ELEMENTS:.3g} m for this "
+                               f"{length:g} m string)")]
+        nodes = elements + 1
+        sizes = mode_family_sizes(nodes)
+        problems = []
+        for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", 0),
+                                   ("lateral_modes", "lateral", 0)):
+            requested = getattr(self.reduced_model, key)
+            most = sizes[family] - rigid
+            if requested > most:
+                dofs = f"{sizes[family]} {family} DOFs" + (" per plane" if family == "lateral" else "")
+                rigid_note = ", one of them the rigid mode" if rigid else ""
+                problems.append((("reduced_model", key), requested,
+                                 f"must be at most {most}: the mesh has {nodes} nodes, {dofs}{rigid_note}; "
+                                 f"ask for fewer modes or lower mesh.max_element_length"))
+        return problems
 
     # -- serialisation -----------------------------------------------------------------------------------
 

@@ -64,11 +64,18 @@ _NOMINAL_COLOR = "C3"
 _ENVELOPE_COLOR = "C0"
 
 
-def _figure(rows: int, cols: int, size: tuple[float, float], sharex: bool = False
-            ) -> tuple[Figure, np.ndarray]:
-    fig = Figure(figsize=size, layout="constrained")
+#: Fixed margins of the 2 × 2 run figures (11 × 7 in): laid out once by hand instead of by Matplotlib's
+#: constrained layout, which measured every text twice and took half the drawing time.
+_PANEL_MARGINS = {"left": 0.065, "right": 0.985, "bottom": 0.08, "top": 0.925, "wspace": 0.2, "hspace": 0.32}
+
+
+def _figure(rows: int, cols: int, size: tuple[float, float], sharex: bool = False, *,
+            margins: dict[str, float] | None = None) -> tuple[Figure, np.ndarray]:
+    fig = Figure(figsize=size, layout=None if margins else "constrained")
     FigureCanvasAgg(fig)
     axes = np.asarray(fig.subplots(rows, cols, squeeze=False, sharex=sharex)).ravel()
+    if margins:
+        fig.subplots_adjust(**margins)
     return fig, axes
 
 
@@ -116,7 +123,7 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
     status in the title.
     """
     t = np.asarray(ds["time"].values, dtype=float)
-    fig, axes = _figure(2, 2, (11.0, 7.0))
+    fig, axes = _figure(2, 2, (11.0, 7.0), margins=_PANEL_MARGINS)
     ax_rop, ax_speed, ax_radial, ax_tob = axes
 
     ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration"), lw=0.9)
@@ -176,7 +183,7 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
     and contact forces only, dashed) of the same case overlaid, in the four panels of :func:`plot_run`:
     ROP [m/h], bit speed [rpm] with the top speed, radial displacement [mm] at the probe nearest
     ``probe_x`` [m] with its gap, torque-on-bit [kN·m], vs time [s]. Written to the PNG ``path``."""
-    fig, axes = _figure(2, 2, (11.0, 7.0))
+    fig, axes = _figure(2, 2, (11.0, 7.0), margins=_PANEL_MARGINS)
     ax_rop, ax_speed, ax_radial, ax_tob = axes
     runs = ((full, *_COMPARE_STYLES[0]), (reduced, *_COMPARE_STYLES[1]))
 

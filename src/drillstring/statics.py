@@ -4,7 +4,8 @@ The string hangs from the hook (top axial DOF held), carries its weight, and res
 weight-on-bit ``wob`` (a concentrated upward force at the bit). Solving ``[K] q_S = f_g + f_c`` gives the
 axial displacement, the axial force ``N(x)`` (tension positive: tension at the top, ``−wob`` at the bit),
 and the hook reaction, the weight-on-hook ``woh = ∫ q dx − wob`` (``q`` the axial load per length).
-Only axial DOFs are loaded in a vertical well, so only the axial sub-problem is solved.
+Only axial DOFs are loaded in a vertical well, so only the axial sub-problem is solved. A weight-on-bit
+above the string's weight (always so with gravity off) makes the hook push: ``woh < 0``.
 """
 
 from __future__ import annotations
@@ -12,10 +13,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
+import math
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from drillstring.derived import string_axial_load
 from drillstring.fem.assembly import U, dof, distributed_axial_load
 from drillstring.fem.element import axial_matrices
 from drillstring.fem.mesh import Mesh
@@ -29,8 +33,9 @@ class StaticState:
         mesh: the mesh.
         displacement: q_S, all 6 DOFs per node (only axial ones nonzero) [m].
         axial_force: N at each node [N], tension positive; linear inside each element.
-        weight: total axial load ∫ q dx [N] (the string's weight, buoyed if requested).
-        weight_on_hook: hook reaction [N].
+        weight: total axial load ∫ q dx [N] (the string's weight, buoyed if requested, plus the fluid's
+            skin friction if switched on; :func:`drillstring.derived.string_axial_load`, as ``Case.weight``).
+        weight_on_hook: hook reaction [N], weight − weight_on_bit; negative when the hook pushes.
         weight_on_bit: bit reaction [N].
     """
 
@@ -65,16 +70,15 @@ def solve_statics(
     Args:
         mesh: the mesh.
         load_per_length: distributed axial load q of each mesh section [N/m], along +x (down).
-        weight_on_bit: the bit's upward reaction [N], >= 0.
+        weight_on_bit: the bit's upward reaction [N], >= 0. It may exceed the string's weight: the hook
+            then pushes (negative weight-on-hook), as it must with gravity off.
     """
     load_per_length = np.asarray(load_per_length, dtype=float)
     lengths = mesh.element_lengths
     element_load = load_per_length[mesh.element_section] * lengths
-    weight = float(element_load.sum())
-    if not 0.0 <= weight_on_bit <= weight:
-        raise ValueError(
-            f"weight_on_bit = {weight_on_bit:.6g} N: must be in [0, weight = {weight:.6g} N]"
-        )
+    weight = string_axial_load(load_per_length[mesh.element_section], lengths)
+    if not (math.isfinite(weight_on_bit) and weight_on_bit >= 0.0):
+        raise ValueError(f"weight_on_bit = {weight_on_bit!r} N: must be a finite number >= 0")
     n = mesh.n_nodes
     # Axial sub-problem: tridiagonal stiffness on the nodal u; consistent loads; top node held.
     diag, off = np.zeros(n), np.zeros(n - 1)

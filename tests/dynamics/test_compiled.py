@@ -20,9 +20,13 @@ def test_compiled_rhs_equals_reference_rhs_with_and_without_contact(coarse_case)
     assert rom.observe(0.0, y)[5] > 0  # the second state really is in contact
 
 
-def test_fast_and_reference_paths_agree_without_contact(coarse_case):
+@pytest.mark.parametrize("method", ["dopri5", "bs32"])
+def test_fast_and_reference_paths_agree_without_contact(coarse_case, method):
+    """Same method, same controller functions, same dense output: the same steps and, but for
+    round-off, the same outputs."""
     rom = case_reduced_model(coarse_case, lateral_modes=6)
-    kwargs = dict(t_end=3.0, output_step=0.01, rtol=1e-7, atol=1e-10, lateral_perturbation=1e-4)
+    kwargs = dict(t_end=3.0 if method == "dopri5" else 1.0, output_step=0.01, rtol=1e-7, atol=1e-10,
+                  lateral_perturbation=1e-4, method=method)
     fast = simulate_model(rom, engine="compiled", **kwargs)
     slow = simulate_model(rom, engine="reference", **kwargs)
     np.testing.assert_array_equal(fast.time, slow.time)
@@ -30,6 +34,36 @@ def test_fast_and_reference_paths_agree_without_contact(coarse_case):
         a, b = fast.observables[name], slow.observables[name]
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b)), name
     assert fast.stats["n_accepted"] == slow.stats["n_accepted"]
+    assert fast.stats["n_rejected"] == slow.stats["n_rejected"]
+    assert fast.stats["n_rhs"] == slow.stats["n_rhs"]
+
+
+def test_first_compilation_is_announced_once_and_timed(monkeypatch):
+    """The compile monitor announces the first compilation of the process on one line and counts
+    the time spent compiling (a cache load fires no compile event)."""
+    from numba import njit
+    from numba.core import event
+
+    from drillstring.dynamics import compiled
+
+    messages = []
+    monkeypatch.setattr(compiled, "compile_notice", messages.append)
+    monkeypatch.setattr(compiled, "_announced", False)
+
+    def fresh(x):  # a new function each time: compiling it cannot hit any cache
+        return x + 1.0
+
+    for expected in (1, 1):
+        monitor = compiled._CompileMonitor(estimate=7)
+        with event.install_listener("numba:compile", monitor):
+            njit(cache=False)(fresh)(1.0)
+        assert monitor.compiled and monitor.seconds > 0
+        assert len(messages) == expected
+    assert messages == ["drillstring: compiling the simulation kernels (first run only, about 7 s)..."]
+    monitor = compiled._CompileMonitor(estimate=7)
+    with event.install_listener("numba:compile", monitor):
+        pass
+    assert not monitor.compiled and monitor.seconds == 0.0
 
 
 def test_fast_and_reference_paths_agree_within_integration_error_with_impacts(coarse_case):

@@ -226,10 +226,41 @@ def test_fixed_step_convergence_order(tab, name):
     assert abs(p - tab.order) < 0.2, (p, errs)
 
 
+def test_bs32_dense_output_is_the_cubic_hermite_interpolant_of_order_3():
+    """BS32's continuous extension: order conditions up to ρ(τ) = 3 for every θ (not 4), b(0) = 0,
+    b(1) = b, b'(0) = e_1, b'(1) = e_4 (C¹ through the FSAL stage), and it reproduces the cubic Hermite
+    interpolant of (y, f) at both ends of a step to round-off."""
+    tab = BOGACKI_SHAMPINE_32
+    d = tab.dense
+    assert d.shape == (4, 3)
+    for theta in np.linspace(0.0, 1.0, 11):
+        w = tab.dense_weights(theta)
+        for q in range(1, 4):
+            for t in trees(q):
+                assert abs(w @ stage_weights(tab.a, t) - theta**q / gamma(t)) < 1e-14, (theta, q)
+    w = tab.dense_weights(0.5)
+    assert max(abs(w @ stage_weights(tab.a, t) - 0.5**4 / gamma(t)) for t in trees(4)) > 1e-6
+    np.testing.assert_allclose(tab.dense_weights(1.0), tab.b, atol=1e-15)
+    deriv = lambda th: d @ (np.arange(1, 4) * th ** np.arange(0, 3))  # noqa: E731
+    np.testing.assert_allclose(deriv(0.0), np.eye(4)[0], atol=1e-15)
+    np.testing.assert_allclose(deriv(1.0), np.eye(4)[3], atol=1e-14)
+    hermite = ButcherTableau("bs32-hermite", tab.c, tab.a, tab.b, tab.b_hat, 3, 2, fsal=True, dense=None)
+    steppers = [RungeKuttaStepper(van_der_pol, 0.1, [2.0, -0.5], t, None, h0=0.3) for t in (tab, hermite)]
+    for st in steppers:
+        assert st.step()
+    times = 0.1 + 0.3 * np.linspace(0.0, 1.0, 7)
+    np.testing.assert_allclose(steppers[0].interpolate(times), steppers[1].interpolate(times),
+                               rtol=1e-14, atol=1e-14)
+
+
+#: Order p* of each method's continuous extension.
+DENSE_ORDER = {"dopri5": 4, "bs32": 3}
+
+
 @pytest.mark.parametrize("tab", [DORMAND_PRINCE_54, BOGACKI_SHAMPINE_32], ids=lambda t: t.name)
 def test_dense_output_local_order(tab):
     """One step of size h from (0.3, tan 0.3); interpolant error at θ = 1/2 is O(h^(p*+1)), p* = 4 for
-    the DOPRI5 continuous extension, 3 for the cubic Hermite used by BS32."""
+    the DOPRI5 continuous extension, 3 for the cubic Hermite one of BS32."""
     t0 = 0.3
     hs = np.array([0.2, 0.1, 0.05, 0.025])
     errs = []
@@ -241,8 +272,7 @@ def test_dense_output_local_order(tab):
         # the interpolant reproduces the step's end points
         np.testing.assert_allclose(st.interpolate(t0), [math.tan(t0)], rtol=0, atol=1e-15)
         np.testing.assert_allclose(st.interpolate(st.t), st.y, rtol=1e-14, atol=1e-15)
-    p_dense = 4 if tab.dense is not None else 3
-    assert _observed_order(hs, errs) > p_dense + 1 - 0.2, errs
+    assert _observed_order(hs, errs) > DENSE_ORDER[tab.name] + 1 - 0.2, errs
 
 
 def test_dense_output_global_accuracy_between_steps():

@@ -425,6 +425,24 @@ def test_realization_that_kills_its_worker_is_isolated_and_the_others_stay_paral
         np.testing.assert_array_equal(a[name][others], b[name][others])
 
 
+def test_drawn_weights_agree_with_the_statics_with_fluid_axial_loads(small_case):
+    """One source of truth for the string's weight: with the mud's axial loads on (8.7 kN on the
+    reference string), the mean weight-on-hook is the static hook load and each drawn weight-on-hook is
+    the hook load of the static state at the derived weight-on-bit."""
+    from drillstring.statics import case_static_state
+
+    case = small_case.model_copy(update={"fluid": small_case.fluid.model_copy(update={"axial_loads": True})})
+    assert abs(case.weight - small_case.weight) > 5e3
+    assert mc.nominal_weight_on_hook(case) == pytest.approx(case_static_state(case).weight_on_hook, rel=1e-10)
+    for index in (0, 3):
+        woh = mc.draw_weight_on_hook(case, SETTINGS, index)
+        outcome = mc.run_realization(case, mc.StudySettings(samples=5, sigma=5000.0, seed=11, t_end=0.1,
+                                                            output_step=0.05), index)
+        assert outcome.weight_on_hook == woh
+        static = case_static_state(case, weight_on_bit=outcome.weight_on_bit)
+        assert static.weight_on_hook == pytest.approx(woh, rel=1e-10)
+
+
 # --- random parameters other than the weight-on-hook --------------------------------------------
 
 LAWS = (("fluid.inlet_velocity", "uniform 1.2 1.8 m/s"), ("operation.top_speed", "normal 100 5 rpm"))

@@ -1,10 +1,19 @@
 """Fast path: the embedded Runge–Kutta loop for the reduced-order model, compiled with Numba.
 
-The same method data (:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`), the same PI
-step-size controller rules and error norm, and the same dense output as the reference integrator
-:func:`~drillstring.dynamics.runge_kutta.integrate`, with the ROM's right-hand side and observation
-kernels called directly from compiled code, so that no Python runs inside the step loop. Tests check
-that both paths agree to within the integration tolerance.
+The same method data (:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`), the same step-size
+controller — the compiled functions :func:`~drillstring.dynamics.runge_kutta.error_norm` and
+:func:`~drillstring.dynamics.runge_kutta.step_factor`, shared with the reference integrator
+:func:`~drillstring.dynamics.runge_kutta.integrate` — and the same dense output, with the ROM's
+right-hand side (:func:`~drillstring.dynamics.rom.evaluate_rhs`) and observation kernels called directly
+from compiled code, so that no Python runs inside the step loop. Tests check that both paths agree to
+within the integration tolerance.
+
+The compiled loop takes four structured arguments built in one place each: :class:`Workspace` (state
+and buffers, :meth:`Workspace.allocate`), :class:`StepperSettings` (method and controller,
+:meth:`StepperSettings.create`), and the model's ``rhs_data`` and ``observe_data``
+(:class:`~drillstring.dynamics.rom.ReducedOrderModel`). It is compiled once per type of ``rhs_data``
+(case 2 or case 1) and cached on disk; the first compilation in a fresh cache is announced on stderr
+and its duration is reported as ``compile_time``, apart from the solver's ``wall_time``.
 
 The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
 step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
@@ -13,57 +22,140 @@ step sequence does not depend on the chunking (steps never land on chunk boundar
 from __future__ import annotations
 
 import math
+import sys
 import time as _time
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof
+from numba.core import event
 
-from drillstring.dynamics.rom import _observe_kernel, rhs_dispatch
-from drillstring.dynamics.runge_kutta import TABLEAUS, ButcherTableau, StepSizeController
+from drillstring.dynamics.rom import PROBE_COLUMN, _observe_kernel, evaluate_rhs
+from drillstring.dynamics.runge_kutta import (
+    TABLEAUS,
+    ButcherTableau,
+    StepSizeController,
+    error_norm,
+    step_factor,
+)
 
 SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE = 0, 1, 2, 3
 # indices into the integrator's scalar state array
 T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE = range(10)
+N_STATE = 10
 CAUSES = {0: "", 1: "error estimate not met", 2: "non-finite values in the right-hand side"}
 
 
+class StepperSettings(NamedTuple):
+    """The method and the step-size controller, as the compiled loop reads them."""
+
+    a: np.ndarray  # (s, s) stage coefficients
+    b: np.ndarray  # (s,) weights of the propagated solution
+    error_weights: np.ndarray  # (s,) b − b_hat
+    c: np.ndarray  # (s,) nodes
+    dense: np.ndarray  # (s, p) continuous extension
+    fsal: bool
+    order: float  # q, order of the error estimate
+    rtol: float
+    atol: np.ndarray  # (n,) one absolute tolerance per state component
+    safety: float
+    min_factor: float
+    max_factor: float
+    beta1: float
+    beta2: float
+    max_step: float  # [s]
+    min_step: float  # [s]
+    max_steps: float  # step attempts, accepted + rejected
+    stretch: float  # a step within this fraction of t_end is stretched to land on it
+
+    @classmethod
+    def create(cls, tableau: ButcherTableau, controller: StepSizeController, n: int, *,
+               min_step: float, max_steps: int, stretch: float = 0.01) -> StepperSettings:
+        if tableau.dense is None:
+            raise ValueError(f"the compiled path needs a tableau with dense output; {tableau.name} has none")
+        c = np.ascontiguousarray
+        return cls(
+            a=c(tableau.a), b=c(tableau.b), error_weights=c(tableau.error_weights), c=c(tableau.c),
+            dense=c(tableau.dense), fsal=bool(tableau.fsal), order=float(tableau.controller_order),
+            rtol=float(controller.rtol), atol=controller.atol_vector(n), safety=float(controller.safety),
+            min_factor=float(controller.min_factor), max_factor=float(controller.max_factor),
+            beta1=float(controller.beta1), beta2=float(controller.beta2),
+            max_step=float(controller.max_step), min_step=float(min_step), max_steps=float(max_steps),
+            stretch=float(stretch),
+        )
+
+
+class Workspace(NamedTuple):
+    """The integrator's state and buffers: ``state`` (scalars indexed by ``T``, ``H``, …), the current
+    state ``y`` and its derivative ``f``, the stages ``k`` of the step being attempted and ``k_old`` of
+    the last accepted one (dense output), the output ``grid`` and the rows ``out`` it fills, and the
+    contact mask at the previous output (``previous``, for counting impacts)."""
+
+    state: np.ndarray  # (N_STATE,)
+    y: np.ndarray  # (n,)
+    f: np.ndarray  # (n,)
+    k: np.ndarray  # (s, n)
+    k_old: np.ndarray  # (s, n)
+    y_old: np.ndarray  # (n,)
+    y_new: np.ndarray  # (n,) scratch: stage arguments, then the candidate solution
+    error: np.ndarray  # (n,) scratch: local error estimate
+    grid: np.ndarray  # (n_out,) output times [s]
+    out: np.ndarray  # (n_out, n_columns) observations
+    previous: np.ndarray  # (n_nodes,) bool
+
+    @classmethod
+    def allocate(cls, y0: np.ndarray, n_stages: int, grid: np.ndarray, n_columns: int,
+                 n_nodes: int) -> Workspace:
+        n = y0.shape[0]
+        return cls(
+            state=np.zeros(N_STATE), y=np.array(y0, dtype=float), f=np.zeros(n),
+            k=np.zeros((n_stages, n)), k_old=np.zeros((n_stages, n)), y_old=np.zeros(n),
+            y_new=np.zeros(n), error=np.zeros(n), grid=np.ascontiguousarray(grid, dtype=float),
+            out=np.full((len(grid), n_columns), np.nan), previous=np.zeros(n_nodes, dtype=np.bool_),
+        )
+
+
 @njit(cache=True)
-def _observe(t, y, out, row, obs_args, previous):
-    _observe_kernel(y, out[row], *obs_args)
-    in_contact = obs_args[-1]
+def _observe(work, row, y, case2, observe_data):
+    """Observe ``y`` into output row ``row``; returns the number of nodes that entered contact since
+    the previous output."""
+    _observe_kernel(case2, observe_data, y, work.out[row])
+    in_contact = observe_data.in_contact
     new = 0
     for i in range(in_contact.shape[0]):
-        if in_contact[i] and not previous[i]:
+        if in_contact[i] and not work.previous[i]:
             new += 1
-        previous[i] = in_contact[i]
+        work.previous[i] = in_contact[i]
     return new
 
 
 @njit(cache=True)
-def _run_chunk(state, y, f, k, k_old, y_old, grid, t_stop, t_end, a, b, e, c, dense, fsal,
-               q_order, rtol, atol, safety, min_factor, max_factor, beta1, beta2, max_step,
-               min_step, max_steps, stretch, full, case2_args, full_args, obs_args, out, previous,
-               y_tmp):
-    """Advance until the output grid is filled up to ``t_stop`` (or t_end). Returns a status code."""
+def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
+    """Advance until the output grid is filled up to ``t_stop`` (or t_end). Returns a status code.
+    ``rhs_data`` is the model's right-hand-side data (case 2 or case 1), ``case2`` its case-2 part
+    (what the observation kernel reads)."""
+    st = settings
+    state, y, f, k, k_old, y_old, y_new, err = (work.state, work.y, work.f, work.k, work.k_old,
+                                                work.y_old, work.y_new, work.error)
+    grid = work.grid
     n = y.shape[0]
-    s = c.shape[0]
-    kk = q_order + 1.0
+    s = st.c.shape[0]
     n_grid = grid.shape[0]
+    t_end = grid[n_grid - 1]
     while True:
         t = state[T]
         row = int(state[N_OUT])
         if row >= n_grid or grid[row] > t_stop:
             return SUCCESS
-        if state[N_ACCEPTED] + state[N_REJECTED] >= max_steps:
+        if state[N_ACCEPTED] + state[N_REJECTED] >= st.max_steps:
             return MAX_STEPS
         h = state[H]
         remaining = t_end - t
         last = False
-        if h * (1.0 + stretch) >= remaining:
+        if h * (1.0 + st.stretch) >= remaining:
             h = remaining
             last = True
-        elif h < min_step:
+        elif h < st.min_step:
             return MIN_STEP
         # stages
         for j in range(n):
@@ -73,84 +165,67 @@ def _run_chunk(state, y, f, k, k_old, y_old, grid, t_stop, t_end, a, b, e, c, de
             for j in range(n):
                 acc = 0.0
                 for m in range(i):
-                    acc += a[i, m] * k[m, j]
-                y_tmp[j] = y[j] + h * acc
-            rhs_dispatch(y_tmp, k[i], full, case2_args, full_args)
+                    acc += st.a[i, m] * k[m, j]
+                y_new[j] = y[j] + h * acc
+            evaluate_rhs(rhs_data, y_new, k[i])
             for j in range(n):
                 if not math.isfinite(k[i, j]):
                     finite = False
             if not finite:
                 state[N_RHS] += i
                 break
+        norm = math.nan
         if finite:
             state[N_RHS] += s - 1
-            # y_new (FSAL: the last stage argument) and error norm
-            err2 = 0.0
+            # y_new (FSAL: the last stage argument) and the local error estimate
             for j in range(n):
-                if fsal:
-                    y_new_j = y_tmp[j]
-                else:
+                if not st.fsal:
                     acc = 0.0
                     for m in range(s):
-                        acc += b[m] * k[m, j]
-                    y_new_j = y[j] + h * acc
-                    y_tmp[j] = y_new_j
-                er = 0.0
+                        acc += st.b[m] * k[m, j]
+                    y_new[j] = y[j] + h * acc
+                e = 0.0
                 for m in range(s):
-                    er += e[m] * k[m, j]
-                er *= h
-                scale = atol + rtol * max(abs(y[j]), abs(y_new_j))
-                err2 += (er / scale) ** 2
-            error_norm = math.sqrt(err2 / n)
-            finite = math.isfinite(error_norm)
-        if not finite:
+                    e += st.error_weights[m] * k[m, j]
+                err[j] = h * e
+            norm = error_norm(y, y_new, err, st.rtol, st.atol)
+        accepted, factor, err_prev = step_factor(
+            norm, state[ERR_PREV], state[REJECTED_LAST] > 0.0, st.order, st.safety, st.min_factor,
+            st.max_factor, st.beta1, st.beta2)
+        state[ERR_PREV] = err_prev
+        if not accepted:
             state[N_REJECTED] += 1
             state[REJECTED_LAST] = 1.0
-            state[LAST_CAUSE] = 2.0
-            state[H] = min(h * min_factor, max_step)
+            state[LAST_CAUSE] = 1.0 if math.isfinite(norm) else 2.0
+            state[H] = min(h * factor, st.max_step)
             continue
-        if error_norm > 1.0:
-            factor = max(min_factor, safety * error_norm ** (-1.0 / kk))
-            state[N_REJECTED] += 1
-            state[REJECTED_LAST] = 1.0
-            state[LAST_CAUSE] = 1.0
-            state[H] = min(h * factor, max_step)
-            continue
-        if error_norm == 0.0:
-            factor = max_factor
-        else:
-            factor = safety * error_norm ** (-beta1 / kk) * state[ERR_PREV] ** (beta2 / kk)
-            factor = min(max_factor, max(min_factor, factor))
-        if state[REJECTED_LAST] > 0.0:
-            factor = min(1.0, factor)
-        state[ERR_PREV] = max(error_norm, 1e-4)
         state[REJECTED_LAST] = 0.0
         state[LAST_CAUSE] = 0.0
         for j in range(n):
-            if not math.isfinite(y_tmp[j]):
+            if not math.isfinite(y_new[j]):
                 return NON_FINITE
         # commit: keep the step's stages for dense output
         for j in range(n):
             y_old[j] = y[j]
-            y[j] = y_tmp[j]
+            y[j] = y_new[j]
         for m in range(s):
             for j in range(n):
                 k_old[m, j] = k[m, j]
-        if fsal:
+        if st.fsal:
             for j in range(n):
                 f[j] = k[s - 1, j]
         else:
-            rhs_dispatch(y, f, full, case2_args, full_args)
+            evaluate_rhs(rhs_data, y, f)
             state[N_RHS] += 1
         t_new = t_end if last else t + h
         state[T] = t_new
-        state[H] = min(h * factor, max_step)
+        state[H] = min(h * factor, st.max_step)
         state[N_ACCEPTED] += 1
         # outputs inside (t, t_new]
         while row < n_grid and grid[row] <= t_new:
             tg = grid[row]
             if tg == t_new:
-                state[IMPACTS] += _observe(tg, y, out, row, obs_args, previous)
+                state[IMPACTS] += _observe(work, row, y, case2, observe_data)
             else:
                 theta = (tg - t) / h
                 for j in range(n):
@@ -158,16 +233,91 @@ def _run_chunk(state, y, f, k, k_old, y_old, grid, t_stop, t_end, a, b, e, c, de
                     for m in range(s):
                         bm = 0.0
                         power = theta
-                        for p in range(dense.shape[1]):
-                            bm += dense[m, p] * power
+                        for p in range(st.dense.shape[1]):
+                            bm += st.dense[m, p] * power
                             power *= theta
                         acc += bm * k_old[m, j]
-                    y_tmp[j] = y_old[j] + h * acc
-                state[IMPACTS] += _observe(tg, y_tmp, out, row, obs_args, previous)
+                    y_new[j] = y_old[j] + h * acc
+                state[IMPACTS] += _observe(work, row, y_new, case2, observe_data)
             row += 1
             state[N_OUT] = row
         if last:
             return SUCCESS
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Compilation: once per process, visibly
+# ---------------------------------------------------------------------------------------------------------
+
+#: About how long the first compilation takes on a 2-core machine [s], per nonlinear model.
+COMPILE_ESTIMATE = {"bit_and_contact": 10, "full": 15}
+
+
+def _notify_stderr(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+#: Called with a one-line message when kernels start compiling (first run in a fresh cache only).
+compile_notice: Callable[[str], None] = _notify_stderr
+_announced = False
+
+
+class _CompileMonitor(event.Listener):
+    """Counts the time Numba spends compiling (cache misses only: loading a cached kernel fires no
+    compile event) and announces the first compilation of the process."""
+
+    def __init__(self, estimate: float) -> None:
+        self.estimate = estimate
+        self.depth = 0
+        self.started = 0.0
+        self.seconds = 0.0
+        self.compiled = False
+
+    def on_start(self, ev) -> None:
+        global _announced
+        if self.depth == 0:
+            self.started = _time.perf_counter()
+            if not _announced:
+                _announced = True
+                compile_notice(f"drillstring: compiling the simulation kernels (first run only, "
+                               f"about {self.estimate:g} s)...")
+        self.depth += 1
+        self.compiled = True
+
+    def on_end(self, ev) -> None:
+        self.depth -= 1
+        if self.depth == 0:
+            self.seconds += _time.perf_counter() - self.started
+
+
+def _prepare(dispatcher, *args) -> None:
+    """Compile ``dispatcher`` for the types of ``args``, or load it from the cache, without running it."""
+    dispatcher.compile(tuple(typeof(a) for a in args))
+
+
+def _compile_kernels(model, work: Workspace, settings: StepperSettings) -> tuple[float, bool]:
+    """Compile (or load from the cache) every kernel the integration of ``model`` calls. Returns the
+    time it took [s] and whether anything was compiled; the first compilation is announced."""
+    start = _time.perf_counter()
+    monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
+    with event.install_listener("numba:compile", monitor):
+        _prepare(_run_chunk, work, 0.0, settings, model.rhs_data, model.case2_data, model.observe_data)
+        _prepare(_observe, work, 0, work.y, model.case2_data, model.observe_data)
+        model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
+    return _time.perf_counter() - start, monitor.compiled
+
+
+def prepare_kernels(model, tableau: ButcherTableau | str = "dopri5") -> tuple[float, bool]:
+    """Compile, or load from Numba's cache, the kernels that integrating ``model`` (a
+    :class:`~drillstring.dynamics.rom.ReducedOrderModel`) with ``tableau`` needs, without integrating.
+    Kernels depend on the types of the model's data only (case 1 or case 2), not on its sizes, so one
+    call prepares every realization of a study. Returns ``(seconds, compiled)``."""
+    tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
+    n = 2 * model.size
+    settings = StepperSettings.create(tab, StepSizeController(), n, min_step=1e-12, max_steps=1)
+    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), PROBE_COLUMN + len(model.probe_nodes),
+                              model.static.mesh.n_nodes)
+    return _compile_kernels(model, work, settings)
 
 
 def integrate_compiled(
@@ -188,43 +338,34 @@ def integrate_compiled(
     over the output ``grid`` (starting at 0, ending at t_end) in compiled code.
 
     Returns ``(outputs, stats, message)``: outputs (n_written, n_observables) rows for the first
-    n_written grid times, a dict of solver statistics, and an empty message or the cause of failure.
+    n_written grid times, a dict of solver statistics — ``wall_time`` the solver's own time [s],
+    ``compile_time`` the time spent compiling or loading the kernels before it [s] (``compiled``: whether
+    anything had to be compiled) —, and an empty message or the cause of failure.
     """
     tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
-    if tab.dense is None:
-        raise ValueError(f"the compiled path needs a tableau with dense output; {tab.name} has none")
+    y0 = np.array(y0, dtype=float)
     ctrl = StepSizeController(rtol=rtol, atol=atol, max_step=max_step)
-    grid = np.ascontiguousarray(grid, dtype=float)
-    t_end = float(grid[-1])
-    y = np.array(y0, dtype=float)
-    n = y.size
-    s = tab.n_stages
-    f = model.rhs(0.0, y)
-    h0 = ctrl.initial_step(model.rhs, 0.0, y, f, tab.controller_order)
-    state = np.zeros(10)
+    settings = StepperSettings.create(tab, ctrl, y0.shape[0], min_step=min_step, max_steps=max_steps)
+    work = Workspace.allocate(y0, tab.n_stages, grid, PROBE_COLUMN + len(model.probe_nodes),
+                              model.static.mesh.n_nodes)
+    grid = work.grid
+    rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
+    compile_time, compiled = _compile_kernels(model, work, settings)
+
+    start = _time.perf_counter()
+    work.f[:] = model.rhs(0.0, work.y)
+    h0 = ctrl.initial_step(model.rhs, 0.0, work.y, work.f, tab.controller_order)
+    state = work.state
     state[H] = h0
     state[ERR_PREV] = 1.0
     state[N_RHS] = 2
-    out = np.full((len(grid), len(model.observable_names) + len(model.probe_nodes)), np.nan)
-    previous = np.zeros(model.static.mesh.n_nodes, dtype=np.bool_)
-    k, k_old, y_old, y_tmp = np.zeros((s, n)), np.zeros((s, n)), np.zeros(n), np.zeros(n)
-    obs_args = model.observe_args
-    e = np.ascontiguousarray(tab.b - tab.b_hat)
-    start = _time.perf_counter()
     status = SUCCESS
     if grid[0] == 0.0:
-        state[IMPACTS] += _observe(0.0, y, out, 0, obs_args, previous)
+        state[IMPACTS] += _observe(work, 0, work.y, case2, observe_data)
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
     for t_stop in stops:
-        status = _run_chunk(
-            state, y, f, k, k_old, y_old, grid, float(t_stop), t_end, np.ascontiguousarray(tab.a),
-            np.ascontiguousarray(tab.b), e, np.ascontiguousarray(tab.c),
-            np.ascontiguousarray(tab.dense), bool(tab.fsal), float(tab.controller_order),
-            float(rtol), float(atol), ctrl.safety, ctrl.min_factor, ctrl.max_factor, ctrl.beta1,
-            ctrl.beta2, float(max_step), float(min_step), float(max_steps), 0.01,
-            model.full, model._rhs_args, model.full_args, obs_args, out, previous, y_tmp,
-        )
+        status = _run_chunk(work, float(t_stop), settings, rhs_data, case2, observe_data)
         if progress is not None:
             progress(float(state[T]))
         if status != SUCCESS:
@@ -238,6 +379,8 @@ def integrate_compiled(
         "n_rejected": int(state[N_REJECTED]),
         "n_steps": int(state[N_ACCEPTED] + state[N_REJECTED]),
         "wall_time": _time.perf_counter() - start,
+        "compile_time": compile_time,
+        "compiled": compiled,
         "impacts": int(state[IMPACTS]),
     }
     message = ""
@@ -252,4 +395,4 @@ def integrate_compiled(
         if last and status != NON_FINITE:
             cause += f"; last rejection: {last}"
         message = f"integration failed at t = {t:.10g} s (h = {h:.3g} s): {cause}"
-    return out[:n_written], stats, message
+    return work.out[:n_written], stats, message

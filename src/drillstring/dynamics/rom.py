@@ -10,25 +10,31 @@ lateral modes in each plane. The reduced equations are
 
 where ``D`` is the structural damping and ``g`` the constant generalised force of the damping of the
 imposed top rotation (:mod:`drillstring.damping`: by default ξ, c1 and c2 defined on the free–free
-modes, giving a dense torsional block; or ``2 ξ ω_i`` on every basis mode), ``C_f`` the fluid
-(Coriolis + viscous) damping, and ``wob e_bit,u`` removes the static bit reaction that ``q_S``
-already balances (the hook force stays equal to the static weight-on-hook, SPEC §7). The top rotation
-is imposed: ``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``.
+modes, giving a dense torsional block; or ``2 ξ ω_i`` on every basis mode;
+:attr:`ReducedOrderModel.generalized_force`, zero when not given), ``C_f`` the fluid (Coriolis + viscous)
+damping, and ``wob e_bit,u`` removes the static bit reaction that ``q_S`` already balances (the hook force
+stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed:
+``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
 the bit node and the borehole shocks and rubbing at every node, evaluated in physical DOFs and
-projected. The right-hand side is a Numba-compiled kernel over preallocated arrays.
+projected. The right-hand side is a Numba-compiled kernel over preallocated arrays; every compiled
+kernel takes one structured argument (:class:`RhsData`, :class:`FullModelData`, :class:`ObserveData`,
+named tuples built once by :class:`ReducedOrderModel`), and :func:`evaluate_rhs` picks the case-1 or
+case-2 kernel by the type of that argument when it is compiled.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
-from drillstring.fem.assembly import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
+from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
 from drillstring.forces.bit_rock import (
     BitRockParameters,
     bit_rock_force_floored,
@@ -56,11 +62,120 @@ OBSERVABLES = (
     "bit_depth",  # m, bit displacement from the static state (advance of the bit)
     "nodes_in_contact",  # number of nodes touching the borehole
 )
+#: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
+#: kernel writes by these names, so reordering the tuple reorders the output consistently).
+OBSERVABLE_COLUMN = {name: column for column, name in enumerate(OBSERVABLES)}
+_ROP = OBSERVABLE_COLUMN["rate_of_penetration"]
+_BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
+_TOB = OBSERVABLE_COLUMN["torque_on_bit"]
+_FOB = OBSERVABLE_COLUMN["force_on_bit"]
+_DEPTH = OBSERVABLE_COLUMN["bit_depth"]
+_CONTACTS = OBSERVABLE_COLUMN["nodes_in_contact"]
+#: First column of the probes' radial displacements.
+PROBE_COLUMN = len(OBSERVABLES)
 
 
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
 VECTOR_MATH = {"reassoc", "contract"}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Kernel data: everything a compiled kernel reads, built once per model by ReducedOrderModel
+# ---------------------------------------------------------------------------------------------------------
+
+
+class ContactWork(NamedTuple):
+    """Scratch arrays of the contact search, one entry per node (the first ``n_c`` used)."""
+
+    v: np.ndarray  # (n_nodes,) lateral displacement v [m]
+    w: np.ndarray  # (n_nodes,) lateral displacement w [m]
+    nodes: np.ndarray  # (n_nodes,) int64, indices of the nodes in contact
+    v_c: np.ndarray  # the same quantities at the nodes in contact ...
+    w_c: np.ndarray
+    v_dot: np.ndarray
+    w_dot: np.ndarray
+    spin: np.ndarray
+    gap: np.ndarray
+    outer_diameter: np.ndarray
+    force_v: np.ndarray  # ... and the contact forces [N] and torque [N·m] there
+    force_w: np.ndarray
+    torque: np.ndarray
+
+    @classmethod
+    def allocate(cls, n_nodes: int) -> ContactWork:
+        return cls(*(np.zeros(n_nodes, dtype=np.int64 if name == "nodes" else np.float64)
+                     for name in cls._fields))
+
+
+class RhsData(NamedTuple):
+    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from its own
+    mode family only: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
+    lateral z start, end] column ranges; ``bit_u``, ``bit_t`` hold only their family's columns and
+    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (family columns × nodes) and ``damping_t`` are stored
+    transposed so that products run column by column."""
+
+    omega2: np.ndarray  # (n,) signed ω² [1/s²]
+    damping_t: np.ndarray  # (n, n) Dᵀ [1/s]
+    damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
+    generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
+    blocks: np.ndarray  # (8,) int64
+    bit_u: np.ndarray  # axial mode shapes at the bit's u
+    bit_t: np.ndarray  # torsional mode shapes at the bit's θx
+    phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
+    phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
+    phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
+    gap: np.ndarray  # (n_nodes,) radial gap [m]
+    smallest_gap: float  # min(gap) [m]
+    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
+    outer_diameter: np.ndarray  # (n_nodes,) [m]
+    top_speed: float  # Ω [rad/s]
+    weight_on_bit: float  # static bit reaction [N]
+    bit_rock: np.ndarray  # (7,) arguments of bit_rock_force_floored after the speeds
+    contact: np.ndarray  # (3,) k_sh [N/m], μ [-], speed regularization [rad/s]
+    tangential: bool  # tangential friction of the contact
+    work: ContactWork
+
+
+class FullModelData(NamedTuple):
+    """What the case-1 right-hand side reads in addition to the case-2 data (``rhs``): the basis, the
+    element data of :class:`~drillstring.forces.nonlinear.NonlinearElements`, the modal mass tensor,
+    and scratch arrays."""
+
+    rhs: RhsData
+    basis: np.ndarray  # (n_dofs, n) Φ
+    basis_t: np.ndarray  # (n, n_dofs) Φᵀ
+    theta_x_dofs: np.ndarray  # int64, the θx DOF of every node
+    inv_length: np.ndarray
+    xi: np.ndarray
+    weights: np.ndarray
+    slope: np.ndarray
+    rotation: np.ndarray
+    axial_stiffness: np.ndarray
+    polar_inertia: np.ndarray
+    mass_tensor: np.ndarray  # (k, n, n), see modal_mass_tensor
+    active: np.ndarray  # (k,) int64
+    q: np.ndarray  # (n_dofs,) scratch: q̄ = Φη
+    qd: np.ndarray  # (n_dofs,) scratch: q̇
+    f_se: np.ndarray  # (n_dofs,) scratch
+    f_vel: np.ndarray  # (n_dofs,) scratch
+    coupling: np.ndarray  # (n_el, 2, 4) scratch
+    mass: np.ndarray  # (n, n) scratch: I + Φᵀ M_nl Φ
+    acceleration: np.ndarray  # (n,) scratch
+
+
+class ObserveData(NamedTuple):
+    """What the observation kernel reads besides the right-hand-side data, and fills."""
+
+    probe_nodes: np.ndarray  # (n_probes,) int64
+    v: np.ndarray  # (n_nodes,) scratch
+    w: np.ndarray  # (n_nodes,) scratch
+    in_contact: np.ndarray  # (n_nodes,) bool: which nodes touch the borehole (filled)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Kernels
+# ---------------------------------------------------------------------------------------------------------
 
 
 @njit(cache=True, fastmath=VECTOR_MATH)
@@ -72,6 +187,39 @@ def _matvec(matrix, vector, offset, out):
         for j in range(matrix.shape[1]):
             total += matrix[i, j] * vector[offset + j]
         out[i] = total
+
+
+def diagonal_blocks(matrix: np.ndarray) -> np.ndarray:
+    """The finest contiguous diagonal blocks ``[start, end)`` of a square matrix outside which every
+    entry is exactly 0, as a (k, 2) int64 array (all-zero blocks left out). The ROM's damping is block
+    diagonal by mode family (the families are uncoupled in the linear model)."""
+    nonzero = matrix != 0.0
+    n = matrix.shape[0]
+    reach = np.arange(n)
+    for i in range(n):
+        linked = np.nonzero(nonzero[i] | nonzero[:, i])[0]
+        if linked.size:
+            reach[i] = max(i, int(linked.max()))
+    blocks, start, end = [], 0, 0
+    for i in range(n):
+        end = max(end, reach[i] + 1)
+        if i + 1 == end:
+            if nonzero[start:end, start:end].any():
+                blocks.append((start, end))
+            start = end
+    return np.array(blocks, dtype=np.int64).reshape(-1, 2)
+
+
+@njit(cache=True)
+def _block_damping(damping_t, blocks, velocity, out):
+    """out −= D velocity, D block diagonal (``blocks`` from :func:`diagonal_blocks`, ``damping_t`` = Dᵀ)."""
+    for b in range(blocks.shape[0]):
+        start, end = blocks[b, 0], blocks[b, 1]
+        for j in range(start, end):
+            x = velocity[j]
+            if x != 0.0:
+                for i in range(start, end):
+                    out[i] -= damping_t[j, i] * x
 
 
 @njit(cache=True)
@@ -86,186 +234,231 @@ def _columns_matvec(matrix_t, vector, offset, out, sign):
 
 
 @njit(cache=True)
-def _physical_state(y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin):
-    """Lateral displacements/velocities and spin speed at every node from modal state ``y``."""
-    _matvec(phi_v, y, 0, v)
-    _matvec(phi_w, y, 0, w)
-    _matvec(phi_v, y, n, v_dot)
-    _matvec(phi_w, y, n, w_dot)
-    _matvec(phi_tx, y, n, spin)
-    for i in range(spin.shape[0]):
-        spin[i] += top_speed
+def _bit_motion(d, y):
+    """Axial velocity [m/s] and spin speed [rad/s] of the bit for the state ``y`` = [η, η̇]."""
+    n = d.omega2.shape[0]
+    a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
     bit_velocity = 0.0
-    bit_speed = top_speed
-    for j in range(n):
-        bit_velocity += bit_u[j] * y[n + j]
-        bit_speed += bit_t[j] * y[n + j]
+    for j in range(a0, a1):
+        bit_velocity += d.bit_u[j - a0] * y[n + j]
+    bit_speed = d.top_speed
+    for j in range(t0, t1):
+        bit_speed += d.bit_t[j - t0] * y[n + j]
     return bit_velocity, bit_speed
 
 
 @njit(cache=True)
-def _rhs_kernel(
-    y, out, omega2, damping, generalized_force, blocks, bit_u, bit_t, phi_v, phi_w, phi_tx, gap, outer_diameter,
-    top_speed, weight_on_bit, bit_args, contact_args, tangential,
-    v, w, contact_nodes, c_v, c_w, c_vd, c_wd, c_spin, c_gap, c_od, c_fv, c_fw, c_tq,
-):
-    """dy/dt of the ROM. Each physical quantity is read from its own mode family only
-    (``blocks`` = [axial start, end, torsional start, end, lateral y start, end, lateral z start,
-    end] column ranges; ``bit_u``, ``bit_t``, ``phi_v``, ``phi_w``, ``phi_tx`` hold only those
-    columns, the last three and ``damping`` stored transposed so products run column by column),
-    and contact work is done only at the nodes that touch the borehole."""
-    n = omega2.shape[0]
-    a0, a1, t0, t1, y0, y1, z0, z1 = blocks[0], blocks[1], blocks[2], blocks[3], blocks[4], blocks[5], blocks[6], blocks[7]
+def _bit_rock(d, bit_velocity, bit_speed):
+    b = d.bit_rock
+    return bit_rock_force_floored(bit_velocity, bit_speed, b[0], b[1], b[2], b[3], b[4], b[5], b[6])
+
+
+@njit(cache=True)
+def _lateral_displacements(d, y, v, w):
+    """v and w [m] at every node for the state ``y``."""
+    v[:] = 0.0
+    w[:] = 0.0
+    _columns_matvec(d.phi_v_t, y, d.blocks[4], v, 1.0)
+    _columns_matvec(d.phi_w_t, y, d.blocks[6], w, 1.0)
+
+
+@njit(cache=True)
+def _surely_clear(d, eta):
+    """True when no node can touch the borehole: r_i ≤ |v_i| + |w_i| ≤ Σ_j (max_i |φ_ij|) |η_j| over
+    both lateral families (triangle inequality) is below the smallest gap. Costs one pass over the
+    lateral coordinates instead of the mode shapes at every node."""
+    bound = 0.0
+    for j in range(d.blocks[4], d.blocks[5]):
+        bound += d.lateral_shape_max[j - d.blocks[4]] * abs(eta[j])
+    offset = d.blocks[5] - d.blocks[4]
+    for j in range(d.blocks[6], d.blocks[7]):
+        bound += d.lateral_shape_max[offset + j - d.blocks[6]] * abs(eta[j])
+    return bound < d.smallest_gap
+
+
+@njit(cache=True)
+def _rhs_kernel(d, y, out):
+    """dy/dt of the case-2 ROM (module docstring) from :class:`RhsData` ``d``; contact work is done only
+    at the nodes that touch the borehole."""
+    n = d.omega2.shape[0]
+    a0, a1, t0, t1, y0, y1, z0, z1 = (d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3], d.blocks[4],
+                                      d.blocks[5], d.blocks[6], d.blocks[7])
     eta = y[:n]
     eta_dot = y[n:]
     acc = out[n:]
-    # linear part: -D η̇ - ω² η  (D: dense only where the fluid couples lateral modes)
+    # linear part: -D η̇ - ω² η + the constant generalized force (D dense only where the fluid couples)
     for i in range(n):
         out[i] = eta_dot[i]
-        acc[i] = generalized_force[i] - omega2[i] * eta[i]
-    _columns_matvec(damping, eta_dot, 0, acc, -1.0)  # ``damping`` holds Dᵀ
+        acc[i] = d.generalized_force[i] - d.omega2[i] * eta[i]
+    _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
     # bit-rock interaction at the bit node
-    bit_velocity = 0.0
+    bit_velocity, bit_speed = _bit_motion(d, y)
+    axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
+    axial_force += d.weight_on_bit
     for j in range(a0, a1):
-        bit_velocity += bit_u[j - a0] * eta_dot[j]
-    bit_speed = top_speed
+        acc[j] += d.bit_u[j - a0] * axial_force
     for j in range(t0, t1):
-        bit_speed += bit_t[j - t0] * eta_dot[j]
-    axial_force, bit_torque = bit_rock_force_floored(
-        bit_velocity, bit_speed, bit_args[0], bit_args[1], bit_args[2], bit_args[3], bit_args[4],
-        bit_args[5], bit_args[6],
-    )
-    axial_force += weight_on_bit
-    for j in range(a0, a1):
-        acc[j] += bit_u[j - a0] * axial_force
-    for j in range(t0, t1):
-        acc[j] += bit_t[j - t0] * bit_torque
+        acc[j] += d.bit_t[j - t0] * bit_torque
     # shocks and rubbing: find the nodes outside the gap
-    n_nodes = v.shape[0]
     if y1 == y0 and z1 == z0:
         return
-    v[:] = 0.0
-    w[:] = 0.0
-    _columns_matvec(phi_v, eta, y0, v, 1.0)  # phi_v, phi_w, phi_tx are stored transposed
-    _columns_matvec(phi_w, eta, z0, w, 1.0)
+    if _surely_clear(d, eta):
+        return
+    c = d.work
+    _lateral_displacements(d, eta, c.v, c.w)
     n_c = 0
-    for i in range(n_nodes):
-        if v[i] * v[i] + w[i] * w[i] > gap[i] * gap[i]:
-            contact_nodes[n_c] = i
+    for i in range(c.v.shape[0]):
+        if c.v[i] * c.v[i] + c.w[i] * c.w[i] > d.gap[i] * d.gap[i]:
+            c.nodes[n_c] = i
             n_c += 1
     if n_c == 0:
         return
-    for c in range(n_c):
-        i = contact_nodes[c]
-        c_v[c] = v[i]
-        c_w[c] = w[i]
-        c_gap[c] = gap[i]
-        c_od[c] = outer_diameter[i]
-        spin = top_speed
+    for k in range(n_c):
+        i = c.nodes[k]
+        c.v_c[k] = c.v[i]
+        c.w_c[k] = c.w[i]
+        c.gap[k] = d.gap[i]
+        c.outer_diameter[k] = d.outer_diameter[i]
+        spin = d.top_speed
         for j in range(t0, t1):
-            spin += phi_tx[j - t0, i] * eta_dot[j]
-        c_spin[c] = spin
+            spin += d.phi_tx_t[j - t0, i] * eta_dot[j]
+        c.spin[k] = spin
         vd = 0.0
         wd = 0.0
-        if tangential:
+        if d.tangential:
             for j in range(y0, y1):
-                vd += phi_v[j - y0, i] * eta_dot[j]
+                vd += d.phi_v_t[j - y0, i] * eta_dot[j]
             for j in range(z0, z1):
-                wd += phi_w[j - z0, i] * eta_dot[j]
-        c_vd[c] = vd
-        c_wd[c] = wd
-    contact_forces(c_v[:n_c], c_w[:n_c], c_vd[:n_c], c_wd[:n_c], c_spin[:n_c], c_gap[:n_c],
-                   c_od[:n_c], contact_args[0], contact_args[1], contact_args[2], tangential,
-                   c_fv[:n_c], c_fw[:n_c], c_tq[:n_c])
-    for c in range(n_c):
-        i = contact_nodes[c]
+                wd += d.phi_w_t[j - z0, i] * eta_dot[j]
+        c.v_dot[k] = vd
+        c.w_dot[k] = wd
+    contact_forces(c.v_c[:n_c], c.w_c[:n_c], c.v_dot[:n_c], c.w_dot[:n_c], c.spin[:n_c], c.gap[:n_c],
+                   c.outer_diameter[:n_c], d.contact[0], d.contact[1], d.contact[2], d.tangential,
+                   c.force_v[:n_c], c.force_w[:n_c], c.torque[:n_c])
+    for k in range(n_c):
+        i = c.nodes[k]
         for j in range(y0, y1):
-            acc[j] += phi_v[j - y0, i] * c_fv[c]
+            acc[j] += d.phi_v_t[j - y0, i] * c.force_v[k]
         for j in range(z0, z1):
-            acc[j] += phi_w[j - z0, i] * c_fw[c]
+            acc[j] += d.phi_w_t[j - z0, i] * c.force_w[k]
         for j in range(t0, t1):
-            acc[j] += phi_tx[j - t0, i] * c_tq[c]
+            acc[j] += d.phi_tx_t[j - t0, i] * c.torque[k]
 
 
 @njit(cache=True)
-def _rhs_full_kernel(y, out, case2_args, basis, basis_t, theta_x_dofs, top_speed, inv_length, xi,
-                     weights, slope, rotation, axial_stiffness, polar_inertia, tensor, active, q, qd,
-                     f_se, f_vel, coupling, mass):
-    """Case 1: the case-2 right-hand side plus the strain- and kinetic-energy forces f_se and f_ke
-    (:mod:`drillstring.forces.nonlinear`), evaluated on the physical state ``q̄ = Φη``,
-    ``q̇ = Φη̇ + Ω`` (θx DOFs), projected on the basis. ``f_ke = f_vel − M_nl(q) q̈``: the
-    configuration-dependent mass correction is moved to the left-hand side and
+def _cholesky_solve(a, b, x):
+    """x = a⁻¹ b for a symmetric positive definite ``a`` (n, n), by Cholesky ``a = L Lᵀ`` computed in the
+    lower triangle of ``a`` (overwritten). The case-1 mass ``I + Φᵀ M_nl Φ`` is positive definite wherever
+    the model holds (:mod:`drillstring.forces.nonlinear`); elsewhere (a non-positive pivot) ``x`` is NaN,
+    which the integrator treats as a rejected step. Compiled loops instead of ``np.linalg.solve``: no
+    allocation per call, and a fraction of the latter's compile time."""
+    n = a.shape[0]
+    for j in range(n):
+        d = a[j, j]
+        for k in range(j):
+            d -= a[j, k] * a[j, k]
+        if not d > 0.0:
+            x[:] = np.nan
+            return
+        d = np.sqrt(d)
+        a[j, j] = d
+        for i in range(j + 1, n):
+            s = a[i, j]
+            for k in range(j):
+                s -= a[i, k] * a[j, k]
+            a[i, j] = s / d
+    for i in range(n):  # L z = b
+        s = b[i]
+        for k in range(i):
+            s -= a[i, k] * x[k]
+        x[i] = s / a[i, i]
+    for i in range(n - 1, -1, -1):  # Lᵀ x = z
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= a[k, i] * x[k]
+        x[i] = s / a[i, i]
+
+
+@njit(cache=True)
+def _rhs_full_kernel(f, y, out):
+    """Case 1 from :class:`FullModelData` ``f``: the case-2 right-hand side plus the strain- and
+    kinetic-energy forces f_se and f_ke (:mod:`drillstring.forces.nonlinear`), evaluated on the physical
+    state ``q̄ = Φη``, ``q̇ = Φη̇ + Ω`` (θx DOFs), projected on the basis. ``f_ke = f_vel − M_nl(q) q̈``:
+    the configuration-dependent mass correction is moved to the left-hand side and
     ``(I + Φᵀ M_nl(Φη) Φ) η̈ = …`` is solved at every evaluation (exact, no lagged accelerations)."""
-    _rhs_kernel(y, out, *case2_args)
-    n = basis.shape[1]
+    _rhs_kernel(f.rhs, y, out)
+    n = f.basis.shape[1]
     eta = y[:n]
-    q[:] = 0.0
-    qd[:] = 0.0
-    _columns_matvec(basis_t, y, 0, q, 1.0)
-    _columns_matvec(basis_t, y, n, qd, 1.0)
-    for i in range(theta_x_dofs.shape[0]):
-        qd[theta_x_dofs[i]] += top_speed
-    _strain_energy_forces_kernel(q, inv_length, weights, slope, axial_stiffness, f_se)
-    _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, f_vel, coupling)
-    for i in range(f_se.shape[0]):
-        f_se[i] += f_vel[i]
-    acc = np.empty(n)
-    _matvec(basis_t, f_se, 0, acc)
+    f.q[:] = 0.0
+    f.qd[:] = 0.0
+    _columns_matvec(f.basis_t, y, 0, f.q, 1.0)
+    _columns_matvec(f.basis_t, y, n, f.qd, 1.0)
+    for i in range(f.theta_x_dofs.shape[0]):
+        f.qd[f.theta_x_dofs[i]] += f.rhs.top_speed
+    _strain_energy_forces_kernel(f.q, f.inv_length, f.weights, f.slope, f.axial_stiffness, f.f_se)
+    _kinetic_forces_kernel(f.q, f.qd, f.xi, f.weights, f.rotation, f.polar_inertia, f.f_vel, f.coupling)
+    for i in range(f.f_se.shape[0]):
+        f.f_se[i] += f.f_vel[i]
+    acc = f.acceleration
+    _matvec(f.basis_t, f.f_se, 0, acc)
     for i in range(n):
         acc[i] += out[n + i]
-    contract_mass_tensor(tensor, active, eta, mass)
+    contract_mass_tensor(f.mass_tensor, f.active, eta, f.mass)
     for i in range(n):
-        mass[i, i] += 1.0
-    out[n:] = np.linalg.solve(mass, acc)
+        f.mass[i, i] += 1.0
+    _cholesky_solve(f.mass, acc, out[n:])
 
 
-@njit(cache=True)
-def rhs_dispatch(y, out, full, case2_args, full_args):
-    """The ROM right-hand side: case 2 (``full`` False) or case 1. Both argument tuples always have
-    the same types (case 2 carries empty placeholders for the case-1 data), so the compiled
-    integrator has one cacheable specialisation."""
-    if full:
-        _rhs_full_kernel(y, out, case2_args, *full_args)
+def evaluate_rhs(data, y, out):
+    """dy/dt of the ROM for the state ``y`` written into ``out``: case 2 for :class:`RhsData`, case 1 for
+    :class:`FullModelData`. Callable from Python and from compiled code, where it is resolved by the type
+    of ``data`` at compile time, so a case-2 run never compiles the case-1 kernel."""
+    if isinstance(data, FullModelData):
+        _rhs_full_kernel(data, y, out)
     else:
-        _rhs_kernel(y, out, *case2_args)
+        _rhs_kernel(data, y, out)
 
 
-def _placeholder_full_args():
-    """Empty case-1 arguments with the exact types of real ones (see :func:`rhs_dispatch`)."""
-    f2, f3, i1 = np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0, dtype=np.int64)
-    f1 = np.zeros(0)
-    return (f2, f2, i1, 0.0, f1, f1, f2, f3, f3, f1, f1, f3, i1, f1, f1, f1, f1, f3, f2)
+def _is(numba_type, cls) -> bool:
+    return isinstance(numba_type, types.BaseNamedTuple) and numba_type.instance_class is cls
+
+
+@overload(evaluate_rhs)
+def _evaluate_rhs_compiled(data, y, out):
+    if _is(data, FullModelData):
+        return lambda data, y, out: _rhs_full_kernel(data, y, out)
+    if _is(data, RhsData):
+        return lambda data, y, out: _rhs_kernel(data, y, out)
+    return None
 
 
 @njit(cache=True)
-def _observe_kernel(
-    y, out, omega2, bit_u, bit_t, phi_v, phi_w, phi_tx, gap, top_speed, bit_args, probe_nodes,
-    v, w, v_dot, w_dot, spin, in_contact,
-):
-    n = omega2.shape[0]
-    bit_velocity, bit_speed = _physical_state(
-        y, n, top_speed, bit_u, bit_t, phi_v, phi_w, phi_tx, v, w, v_dot, w_dot, spin
-    )
-    axial_force, bit_torque = bit_rock_force_floored(
-        bit_velocity, bit_speed, bit_args[0], bit_args[1], bit_args[2], bit_args[3], bit_args[4],
-        bit_args[5], bit_args[6],
-    )
+def _observe_kernel(d, o, y, out):
+    """Observables (:data:`OBSERVABLES`, by their columns) and the radial displacement at the probes for
+    the state ``y``, from the case-2 data ``d`` (:class:`RhsData`) and ``o`` (:class:`ObserveData`, whose
+    contact mask it fills). Returns the number of nodes in contact."""
+    bit_velocity, bit_speed = _bit_motion(d, y)
+    axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
+    _lateral_displacements(d, y, o.v, o.w)
     count = 0
-    for i in range(v.shape[0]):
-        in_contact[i] = np.sqrt(v[i] * v[i] + w[i] * w[i]) > gap[i]
-        count += in_contact[i]
-    out[0] = bit_velocity
-    out[1] = bit_speed
-    out[2] = -bit_torque
-    out[3] = -axial_force
+    for i in range(o.v.shape[0]):
+        touching = o.v[i] * o.v[i] + o.w[i] * o.w[i] > d.gap[i] * d.gap[i]
+        o.in_contact[i] = touching
+        count += touching
     depth = 0.0
-    for j in range(n):
-        depth += bit_u[j] * y[j]
-    out[4] = depth
-    out[5] = count
-    for k in range(probe_nodes.shape[0]):
-        j = probe_nodes[k]
-        out[6 + k] = np.sqrt(v[j] * v[j] + w[j] * w[j])
+    a0, a1 = d.blocks[0], d.blocks[1]
+    for j in range(a0, a1):
+        depth += d.bit_u[j - a0] * y[j]
+    out[_ROP] = bit_velocity
+    out[_BIT_SPEED] = bit_speed
+    out[_TOB] = -bit_torque
+    out[_FOB] = -axial_force
+    out[_DEPTH] = depth
+    out[_CONTACTS] = count
+    for k in range(o.probe_nodes.shape[0]):
+        j = o.probe_nodes[k]
+        out[PROBE_COLUMN + k] = np.sqrt(o.v[j] * o.v[j] + o.w[j] * o.w[j])
+    return count
 
 
 @dataclass
@@ -278,6 +471,12 @@ class ReducedOrderModel:
         basis: Φ, (n_dofs, n) global mode shapes.
         family: family label of each basis vector.
         probe_positions: x of the radial-displacement probes [m].
+        generalized_force: (n,) constant generalized force added to the modal acceleration
+            [N/√kg per unit modal mass, i.e. the right-hand side of η̈ = …]; ``None`` means zeros.
+
+    Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
+    and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
+    shared by :meth:`rhs`, :meth:`observe` and the compiled integrator.
     """
 
     static: StaticState
@@ -298,12 +497,19 @@ class ReducedOrderModel:
     generalized_force: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        if self.nonlinear not in ("bit_and_contact", "full"):
+            raise ValueError(f"nonlinear = {self.nonlinear!r}: must be 'bit_and_contact' or 'full'")
         mesh = self.static.mesh
-        self.generalized_force = np.ascontiguousarray(
-            np.zeros(len(self.angular_frequencies)) if self.generalized_force is None
-            else self.generalized_force, dtype=float)
         nodes = np.arange(mesh.n_nodes)
         phi = self.basis
+        n = len(self.angular_frequencies)
+        if self.generalized_force is None:
+            self.generalized_force = np.zeros(n)
+        force = np.array(self.generalized_force, dtype=float)
+        if force.shape != (n,) or not np.all(np.isfinite(force)):
+            raise ValueError(f"generalized_force: must be {n} finite numbers (one per mode), got shape "
+                             f"{force.shape}")
+        self.generalized_force = force
         self.omega2 = np.ascontiguousarray(np.sign(self.angular_frequencies) * self.angular_frequencies**2)
         self.bit_u = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, U)])
         self.bit_t = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, THETA_X)])
@@ -311,19 +517,6 @@ class ReducedOrderModel:
         self.phi_w = np.ascontiguousarray(phi[dof(nodes, W)])
         self.phi_tx = np.ascontiguousarray(phi[dof(nodes, THETA_X)])
         self.probe_nodes = np.array([mesh.node_index(x) for x in self.probe_positions], dtype=np.int64)
-        self.bit_args = np.array(self.bit_rock.kernel_args(), dtype=float)
-        c = self.contact
-        self.contact_args = np.array([c.shock_stiffness, c.friction_coefficient,
-                                      c.speed_regularization])
-        n_nodes = mesh.n_nodes
-        self._in_contact = np.zeros(n_nodes, dtype=np.bool_)
-        # Arguments of the observation kernel after (y, out), shared by observe() and the
-        # compiled integrator; the last one is the contact mask it fills.
-        self.observe_args = (
-            self.omega2, self.bit_u, self.bit_t, self.phi_v, self.phi_w, self.phi_tx, self.gap,
-            float(self.top_speed), self.bit_args, self.probe_nodes,
-            *(np.zeros(n_nodes) for _ in range(5)), self._in_contact,
-        )
         labels = np.array(self.family)
         blocks = []
         for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
@@ -335,41 +528,58 @@ class ReducedOrderModel:
             blocks += [start, end]
         self.blocks = np.array(blocks, dtype=np.int64)
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
-        contact_work = tuple(np.zeros(n_nodes) for _ in range(10))
-        self._rhs_args = (
-            self.omega2, np.ascontiguousarray(self.damping.T), self.generalized_force, self.blocks,
-            np.ascontiguousarray(self.bit_u[a0:a1]), np.ascontiguousarray(self.bit_t[t0:t1]),
-            np.ascontiguousarray(self.phi_v[:, y0:y1].T), np.ascontiguousarray(self.phi_w[:, z0:z1].T),
-            np.ascontiguousarray(self.phi_tx[:, t0:t1].T),
-            np.ascontiguousarray(self.gap), np.ascontiguousarray(self.outer_diameter),
-            float(self.top_speed), float(self.weight_on_bit), self.bit_args, self.contact_args,
-            bool(c.tangential_friction), np.zeros(n_nodes), np.zeros(n_nodes),
-            np.zeros(n_nodes, dtype=np.int64), *contact_work,
+        c = self.contact
+        transposed = np.ascontiguousarray
+        self.case2_data = RhsData(
+            omega2=self.omega2,
+            damping_t=transposed(self.damping.T),
+            damping_blocks=diagonal_blocks(self.damping),
+            generalized_force=self.generalized_force,
+            blocks=self.blocks,
+            bit_u=transposed(self.bit_u[a0:a1]),
+            bit_t=transposed(self.bit_t[t0:t1]),
+            phi_v_t=transposed(self.phi_v[:, y0:y1].T),
+            phi_w_t=transposed(self.phi_w[:, z0:z1].T),
+            phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
+            gap=np.ascontiguousarray(self.gap, dtype=float),
+            smallest_gap=float(np.min(self.gap)),
+            lateral_shape_max=np.concatenate([np.abs(self.phi_v[:, y0:y1]).max(axis=0, initial=0.0),
+                                              np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
+            outer_diameter=np.ascontiguousarray(self.outer_diameter, dtype=float),
+            top_speed=float(self.top_speed),
+            weight_on_bit=float(self.weight_on_bit),
+            bit_rock=np.array(self.bit_rock.kernel_args(), dtype=float),
+            contact=np.array([c.shock_stiffness, c.friction_coefficient, c.speed_regularization],
+                             dtype=float),
+            tangential=bool(c.tangential_friction),
+            work=ContactWork.allocate(mesh.n_nodes),
         )
-        self.full = False
-        self.full_args = _placeholder_full_args()
-        if self.nonlinear == "full":
-            self._setup_full()
-        elif self.nonlinear != "bit_and_contact":
-            raise ValueError(f"nonlinear = {self.nonlinear!r}: must be 'bit_and_contact' or 'full'")
+        self.observe_data = ObserveData(
+            probe_nodes=self.probe_nodes, v=np.zeros(mesh.n_nodes), w=np.zeros(mesh.n_nodes),
+            in_contact=np.zeros(mesh.n_nodes, dtype=np.bool_),
+        )
+        self.full = self.nonlinear == "full"
+        self.rhs_data: RhsData | FullModelData = (
+            self._full_model_data(self.case2_data) if self.full else self.case2_data)
 
-    def _setup_full(self) -> None:
+    def _full_model_data(self, case2: RhsData) -> FullModelData:
         mesh = self.static.mesh
         self.elements: NonlinearElements = nonlinear_elements(mesh)
         basis = np.ascontiguousarray(self.basis)
         active, tensor = modal_mass_tensor(self.elements, basis, tol=1e-14)
         e = self.elements
         n_dofs, n = basis.shape
-        self.full = True
         c = np.ascontiguousarray
-        self.full_args = (
-            basis, c(basis.T),
-            dof(np.arange(mesh.n_nodes), THETA_X).astype(np.int64), float(self.top_speed),
-            c(e.inv_length, dtype=float), c(e.xi, dtype=float), c(e.weights, dtype=float),
-            c(e.slope, dtype=float), c(e.rotation, dtype=float), c(e.axial_stiffness, dtype=float),
-            c(e.polar_inertia, dtype=float), c(tensor, dtype=float), c(active, dtype=np.int64),
-            np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs), np.zeros(n_dofs),
-            np.zeros((e.n_elements, 2, 4)), np.zeros((n, n)),
+        return FullModelData(
+            rhs=case2, basis=basis, basis_t=c(basis.T),
+            theta_x_dofs=dof(np.arange(mesh.n_nodes), THETA_X).astype(np.int64),
+            inv_length=c(e.inv_length, dtype=float), xi=c(e.xi, dtype=float),
+            weights=c(e.weights, dtype=float), slope=c(e.slope, dtype=float),
+            rotation=c(e.rotation, dtype=float), axial_stiffness=c(e.axial_stiffness, dtype=float),
+            polar_inertia=c(e.polar_inertia, dtype=float), mass_tensor=c(tensor, dtype=float),
+            active=c(active, dtype=np.int64), q=np.zeros(n_dofs), qd=np.zeros(n_dofs),
+            f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs), coupling=np.zeros((e.n_elements, 2, 4)),
+            mass=np.zeros((n, n)), acceleration=np.zeros(n),
         )
 
     @property
@@ -384,7 +594,7 @@ class ReducedOrderModel:
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt for y = [η, η̇] (t enters only through the imposed top rotation, which drops out)."""
         out = np.empty_like(y)
-        rhs_dispatch(y, out, self.full, self._rhs_args, self.full_args)
+        evaluate_rhs(self.rhs_data, y, out)
         return out
 
     def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:
@@ -400,9 +610,9 @@ class ReducedOrderModel:
             self.top_speed + self.phi_tx @ eta_dot, self.gap, self.outer_diameter, self.contact,
         )
         generalized = (self.phi_v.T @ force_v + self.phi_w.T @ force_w + self.phi_tx.T @ torque
-                       + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque)
-        acceleration = (generalized + self.generalized_force - self.damping @ eta_dot
-                        - self.omega2 * eta)
+                       + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
+                       + self.generalized_force)
+        acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
         if self.nonlinear == "full":
             q = self.basis @ eta
             qd = self.basis @ eta_dot
@@ -417,13 +627,13 @@ class ReducedOrderModel:
 
     def observe(self, t: float, y: np.ndarray) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement at each probe [m]."""
-        out = np.empty(len(OBSERVABLES) + len(self.probe_nodes))
-        _observe_kernel(y, out, *self.observe_args)
+        out = np.empty(PROBE_COLUMN + len(self.probe_nodes))
+        _observe_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float), out)
         return out
 
     def contact_mask(self) -> np.ndarray:
         """Nodes in contact at the last :meth:`observe` call (a copy)."""
-        return self._in_contact.copy()
+        return self.observe_data.in_contact.copy()
 
     def initial_state(self, lateral_perturbation: float, seed: int) -> np.ndarray:
         """Initial state (SPEC §7): the static state, the whole string spinning at Ω, zero axial

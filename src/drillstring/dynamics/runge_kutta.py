@@ -11,9 +11,8 @@ Methods
   J. Comput. Appl. Math. 6 (1980) 19–26: 7 stages, FSAL, 5th-order solution, 4th-order embedded error
   estimate ("local extrapolation"), with a 4th-order continuous extension (see below).
 - :data:`BOGACKI_SHAMPINE_32` — P. Bogacki & L. F. Shampine, "A 3(2) pair of Runge–Kutta formulas",
-  Appl. Math. Lett. 2 (1989) 321–325: 4 stages, FSAL, 3rd-order solution, 2nd-order embedded. It has no
-  tableau dense output; the stepper then uses the cubic Hermite interpolant of ``y`` and ``f`` at both ends
-  of the step, which is 3rd-order accurate, matching the method.
+  Appl. Math. Lett. 2 (1989) 321–325: 4 stages, FSAL, 3rd-order solution, 2nd-order embedded, with a
+  3rd-order continuous extension (see below).
 
 Step-size control
 -----------------
@@ -29,7 +28,10 @@ ODEs II*, §IV.2)::
 
 with ``q`` the order of the error estimate (the lower of the two orders of the pair). After a rejected step
 the controller falls back to the pure integral rule ``safety · err^(−1/k)`` and forbids growth on the next
-accepted step (Hairer–Nørsett–Wanner §II.4).
+accepted step (Hairer–Nørsett–Wanner §II.4). The rules live in two compiled functions,
+:func:`error_norm` and :func:`step_factor`, called both by :class:`StepSizeController` (this module's
+Python stepper) and by the compiled integrator of :mod:`drillstring.dynamics.compiled`: one
+implementation for both paths.
 
 Dense output
 ------------
@@ -42,8 +44,15 @@ family (our own derivation in exact rational arithmetic). We take the member pub
 "Some practical Runge–Kutta formulas", Math. Comp. 46 (1986) 135–150 (the one used by Hairer's DOPRI5
 code); its θ-averaged sum of squared 5th-order error coefficients is within 3 % of the minimum over the
 family.
+
+For Bogacki–Shampine 3(2) the continuous extension is the cubic Hermite interpolant of ``(y, f)`` at both
+ends of the step (Bogacki & Shampine 1989, §3), written in the stages: FSAL makes ``f(t + h) = k_4``, so
+``y0 + h[h10(θ) k_1 + h01(θ) Σ b_i k_i + h11(θ) k_4]`` (``h10 = θ − 2θ² + θ³``, ``h01 = 3θ² − 2θ³``,
+``h11 = θ³ − θ²``) gives ``b_1(θ) = θ − 4/3 θ² + 5/9 θ³``, ``b_2(θ) = θ² − 2/3 θ³``,
+``b_3(θ) = 4/3 θ² − 8/9 θ³``, ``b_4(θ) = −θ² + θ³``: exactly that interpolant, and of order 3 for every θ
+(all four order conditions up to ``ρ(τ) = 3`` hold identically in θ).
 ``tests/dynamics/test_runge_kutta.py`` checks all the order conditions, the continuity conditions, and the
-observed convergence order.
+observed convergence order of both methods and both continuous extensions.
 
 Failures (SPEC §7: stick and impacts must not crash or hang)
 -----------------------------------------------------------
@@ -63,6 +72,7 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 __all__ = [
     "ButcherTableau",
@@ -70,6 +80,8 @@ __all__ = [
     "BOGACKI_SHAMPINE_32",
     "TABLEAUS",
     "StepSizeController",
+    "error_norm",
+    "step_factor",
     "RungeKuttaStepper",
     "Solution",
     "IntegrationError",
@@ -241,7 +253,7 @@ DORMAND_PRINCE_54 = ButcherTableau(
     ),
 )
 
-#: Bogacki & Shampine (1989) 3(2), FSAL; dense output by cubic Hermite interpolation.
+#: Bogacki & Shampine (1989) 3(2), FSAL, with its cubic Hermite continuous extension (module docstring).
 BOGACKI_SHAMPINE_32 = ButcherTableau(
     name="bs32",
     c=_fr(0, "1/2", "3/4", 1),
@@ -251,7 +263,14 @@ BOGACKI_SHAMPINE_32 = ButcherTableau(
     order=3,
     error_order=2,
     fsal=True,
-    dense=None,
+    dense=np.array(
+        [
+            _fr(1, "-4/3", "5/9"),
+            _fr(0, 1, "-2/3"),
+            _fr(0, "4/3", "-8/9"),
+            _fr(0, -1, 1),
+        ]
+    ),
 )
 
 TABLEAUS: dict[str, ButcherTableau] = {"dopri5": DORMAND_PRINCE_54, "bs32": BOGACKI_SHAMPINE_32}
@@ -312,6 +331,48 @@ def _describe_nonfinite(x: np.ndarray) -> str:
 # Step-size controller
 # ---------------------------------------------------------------------------------------------------------
 
+#: Floor of the previous error norm remembered by the PI controller (HNW's DOPRI5 code).
+ERROR_NORM_FLOOR = 1e-4
+
+
+@njit(cache=True)
+def error_norm(y, y_new, err, rtol, atol):
+    """``‖err / (atol + rtol·max(|y|, |y_new|))‖_RMS`` (HNW I, eq. II.4.11); ``atol`` has one entry per
+    component. 0 for an empty state. One implementation for both integrators (module docstring)."""
+    n = y.shape[0]
+    if n == 0:
+        return 0.0
+    total = 0.0
+    for j in range(n):
+        ratio = abs(err[j]) / (atol[j] + rtol * max(abs(y[j]), abs(y_new[j])))
+        total += ratio * ratio
+    return math.sqrt(total / n)
+
+
+@njit(cache=True)
+def step_factor(norm, err_prev, rejected_last, order, safety, min_factor, max_factor, beta1, beta2):
+    """The PI controller's decision on a step whose error norm is ``norm`` (module docstring).
+
+    ``err_prev``: the previous accepted step's (floored) error norm; ``rejected_last``: whether the
+    previous attempt was rejected; ``order``: ``q``, that of the error estimate (exponents ∝ 1/(q + 1)).
+    Returns ``(accepted, factor, err_prev_next)``: the step is accepted when ``norm ≤ 1``; the next step
+    size is ``factor · h``; a non-finite norm is a rejection by ``min_factor``. The caller keeps
+    ``err_prev_next`` and ``rejected_last = not accepted`` for the next decision."""
+    k = order + 1.0
+    if not math.isfinite(norm):
+        return False, min_factor, err_prev
+    if norm > 1.0:
+        return False, max(min_factor, safety * norm ** (-1.0 / k)), err_prev
+    if norm == 0.0:
+        factor = max_factor
+    else:
+        factor = safety * norm ** (-beta1 / k) * err_prev ** (beta2 / k)
+        factor = min(max_factor, max(min_factor, factor))
+    if rejected_last:
+        factor = min(1.0, factor)
+    return True, factor, max(norm, ERROR_NORM_FLOOR)
+
+
 
 @dataclass
 class StepSizeController:
@@ -356,13 +417,13 @@ class StepSizeController:
         self._err_prev = 1.0
         self._rejected_last = False
 
-    def _scale(self, y: np.ndarray, y_new: np.ndarray) -> np.ndarray:
-        return self.atol + self.rtol * np.maximum(np.abs(y), np.abs(y_new))
+    def atol_vector(self, n: int) -> np.ndarray:
+        """``atol`` as a contiguous array of ``n`` entries (what :func:`error_norm` takes)."""
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(self.atol, dtype=np.float64), (n,)))
 
     def error_norm(self, y: np.ndarray, y_new: np.ndarray, err: np.ndarray) -> float:
-        """RMS of ``err / (atol + rtol·max(|y|, |y_new|))`` (HNW I, eq. II.4.11)."""
-        r = np.abs(err) / self._scale(y, y_new)
-        return float(np.sqrt(np.mean(r * r))) if r.size else 0.0
+        """RMS of ``err / (atol + rtol·max(|y|, |y_new|))`` (HNW I, eq. II.4.11; :func:`error_norm`)."""
+        return float(error_norm(y, y_new, err, float(self.rtol), self.atol_vector(y.shape[0])))
 
     def _norm(self, x: np.ndarray, scale: np.ndarray) -> float:
         r = np.abs(x) / scale
@@ -395,26 +456,13 @@ class StepSizeController:
     def accept(self, error_norm: float, h: float, order: int) -> tuple[bool, float]:
         """Decide on a step with error norm ``error_norm`` taken with size ``h`` (signed).
 
-        Returns ``(accepted, h_next)``; a non-finite ``error_norm`` is a rejection by ``min_factor``."""
-        k = order + 1.0
-        if not math.isfinite(error_norm):
-            self._rejected_last = True
-            return False, self._limit(h * self.min_factor)
-        if error_norm <= 1.0:
-            if error_norm == 0.0:
-                factor = self.max_factor
-            else:
-                factor = (self.safety * error_norm ** (-self.beta1 / k)
-                          * self._err_prev ** (self.beta2 / k))
-                factor = min(self.max_factor, max(self.min_factor, factor))
-            if self._rejected_last:
-                factor = min(1.0, factor)
-            self._err_prev = max(error_norm, 1e-4)
-            self._rejected_last = False
-            return True, self._limit(h * factor)
-        factor = max(self.min_factor, self.safety * error_norm ** (-1.0 / k))
-        self._rejected_last = True
-        return False, self._limit(h * factor)
+        Returns ``(accepted, h_next)``; a non-finite ``error_norm`` is a rejection by ``min_factor``
+        (:func:`step_factor`)."""
+        accepted, factor, self._err_prev = step_factor(
+            float(error_norm), self._err_prev, self._rejected_last, float(order), self.safety,
+            self.min_factor, self.max_factor, self.beta1, self.beta2)
+        self._rejected_last = not accepted
+        return bool(accepted), self._limit(h * factor)
 
     def _limit(self, h: float) -> float:
         return math.copysign(min(abs(h), self.max_step), h)
@@ -582,8 +630,7 @@ class RungeKuttaStepper:
             if ctrl is None:
                 raise self._fail(cause, h)
             self.n_rejected += 1
-            ctrl._rejected_last = True
-            self.h = ctrl._limit(h * ctrl.min_factor)
+            self.h = ctrl.accept(math.nan, h, self._q)[1]  # a rejection by min_factor
             return False
 
         if ctrl is None:

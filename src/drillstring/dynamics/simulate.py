@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from drillstring.dynamics.rom import OBSERVABLES, ReducedOrderModel
+from drillstring.dynamics.rom import OBSERVABLE_COLUMN, OBSERVABLES, PROBE_COLUMN, ReducedOrderModel
 from drillstring.dynamics.runge_kutta import IntegrationError, integrate
 
 
@@ -24,7 +24,10 @@ class SimulationResult:
         impacts: number of times a node entered contact with the borehole, counted between
             successive output times (a contact shorter than one output step may be missed).
         status: "success" or "failed"; ``message`` says where and why a failed run stopped.
-        stats: solver statistics (right-hand-side evaluations, accepted/rejected steps, wall time).
+        stats: solver statistics (right-hand-side evaluations, accepted/rejected steps, the solver's
+            wall time ``wall_time`` [s]; with the compiled engine also ``compile_time`` [s], the time
+            spent compiling the kernels or loading them from Numba's cache before solving, and
+            ``compiled``, whether anything was compiled).
     """
 
     time: np.ndarray
@@ -90,7 +93,6 @@ def simulate_model(
         return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
                                   atol=atol, method=method, max_steps=max_steps, min_step=min_step,
                                   progress=progress, raise_on_failure=raise_on_failure)
-    n_obs = len(OBSERVABLES)
     previous = np.zeros(model.static.mesh.n_nodes, dtype=bool)
     impacts = 0
 
@@ -114,7 +116,7 @@ def simulate_model(
         solution = error.solution
     wall = _time.perf_counter() - start
     values = np.asarray(solution.y) if solution is not None and len(solution.t) else np.zeros(
-        (0, n_obs + len(model.probe_nodes)))
+        (0, PROBE_COLUMN + len(model.probe_nodes)))
     times = np.asarray(solution.t) if solution is not None else np.zeros(0)
     stats = dict(solution.stats) if solution is not None else {}
     stats["wall_time"] = wall
@@ -124,12 +126,11 @@ def simulate_model(
 
 def _result(model, times, values, impacts, message, stats, raise_on_failure) -> SimulationResult:
     """Split the observed rows into a :class:`SimulationResult`; raise if the run failed."""
-    n_obs = len(OBSERVABLES)
     stats["status"] = "failed" if message else "success"
     result = SimulationResult(
         time=times,
-        observables={name: values[:, i] for i, name in enumerate(OBSERVABLES)},
-        radial_displacement=values[:, n_obs:],
+        observables={name: values[:, OBSERVABLE_COLUMN[name]] for name in OBSERVABLES},
+        radial_displacement=values[:, PROBE_COLUMN:],
         probe_positions=model.probe_positions.copy(),
         probe_gaps=model.gap[model.probe_nodes].copy(),
         impacts=impacts,
@@ -157,11 +158,9 @@ def _simulate_compiled(model, y0, *, t_end, output_step, rtol, atol, method, max
     from drillstring.dynamics.compiled import integrate_compiled
 
     grid = output_grid(t_end, output_step)
-    start = _time.perf_counter()
     values, stats, message = integrate_compiled(
         model, y0, grid, tableau=method, rtol=rtol, atol=atol, min_step=min_step,
         max_steps=max_steps, progress=progress,
     )
-    stats["wall_time"] = _time.perf_counter() - start
     impacts = int(stats.pop("impacts"))
     return _result(model, grid[: len(values)], values, impacts, message, stats, raise_on_failure)

@@ -1,7 +1,7 @@
 """DOF numbering, generic sparse assembly, and the global linear matrices of the string.
 
-Global DOF numbering: node ``i`` (0 at the top) owns DOFs ``6 i + k`` with
-``k = U, V, W, THETA_X, THETA_Y, THETA_Z`` (SPEC §2).
+Global DOF numbering (defined in :mod:`drillstring.fem.dofs`, re-exported here): node ``i`` (0 at the
+top) owns DOFs ``6 i + k`` with ``k = U, V, W, THETA_X, THETA_Y, THETA_Z`` (SPEC §2).
 """
 
 from __future__ import annotations
@@ -12,6 +12,18 @@ from typing import Iterable, Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from drillstring.fem.dofs import (  # noqa: F401  (re-exported: the numbering's usual import path)
+    DOFS_PER_ELEMENT,
+    DOFS_PER_NODE,
+    THETA_X,
+    THETA_Y,
+    THETA_Z,
+    U,
+    V,
+    W,
+    dof,
+    element_dofs,
+)
 from drillstring.fem.element import (
     element_geometric_stiffness,
     element_gyroscopic,
@@ -23,27 +35,13 @@ from drillstring.fem.element import (
 from drillstring.fem.fluid import FluidCoefficients, fluid_planar_matrices
 from drillstring.fem.mesh import Mesh
 
-U, V, W, THETA_X, THETA_Y, THETA_Z = range(6)
-DOFS_PER_NODE = 6
-
-
-def dof(node: int | np.ndarray, kind: int) -> int | np.ndarray:
-    """Global index of DOF ``kind`` (``U`` … ``THETA_Z``) of ``node``."""
-    return DOFS_PER_NODE * np.asarray(node) + kind if np.ndim(node) else DOFS_PER_NODE * node + kind
-
-
-def element_dofs(element: int) -> np.ndarray:
-    """The 12 global DOFs of element ``element`` (its two nodes)."""
-    return np.arange(DOFS_PER_NODE * element, DOFS_PER_NODE * element + 12)
-
-
 def assemble_matrix(n_dofs: int, element_matrices: Iterable[np.ndarray]) -> sp.csr_matrix:
     """Sum 12×12 element matrices (element e on nodes e, e+1) into a sparse n_dofs × n_dofs matrix."""
     blocks = [np.asarray(ke) for ke in element_matrices]
     if not blocks:
         return sp.csr_matrix((n_dofs, n_dofs))
     values = np.stack(blocks)  # (n_el, 12, 12)
-    dofs = DOFS_PER_NODE * np.arange(len(blocks))[:, None] + np.arange(12)  # (n_el, 12)
+    dofs = DOFS_PER_NODE * np.arange(len(blocks))[:, None] + np.arange(DOFS_PER_ELEMENT)  # (n_el, 12)
     rows = np.broadcast_to(dofs[:, :, None], values.shape)
     cols = np.broadcast_to(dofs[:, None, :], values.shape)
     return sp.coo_matrix((values.ravel(), (rows.ravel(), cols.ravel())),

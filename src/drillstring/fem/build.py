@@ -54,7 +54,7 @@ def stabilizers(case: Case) -> list[Stabilizer]:
 
 def flow_rate(case: Case) -> float:
     """Mud volume flow Q = U_i A_i of the top section [m³/s] (U_i is the inlet velocity)."""
-    return case.fluid.inlet_velocity * np.pi * case.sections[0].inner_diameter ** 2 / 4.0
+    return case.flow_rate
 
 
 def section_fluid_coefficients(case: Case, mesh: Mesh) -> list[FluidCoefficients]:
@@ -79,14 +79,10 @@ def section_fluid_coefficients(case: Case, mesh: Mesh) -> list[FluidCoefficients
 
 
 def axial_load_per_length(case: Case, mesh: Mesh) -> np.ndarray:
-    """Distributed axial load of each section [N/m] along +x: weight (buoyed if switched on) plus
-    the fluid skin-friction load when ``fluid.axial_loads`` is on."""
-    g = case.environment.gravity if case.model.gravity else 0.0
-    fluid_density = case.fluid.density if case.model.buoyancy else 0.0
-    coefficients = section_fluid_coefficients(case, mesh)
-    return np.array(
-        [
-            (s.density - fluid_density) * s.area * g + c.axial_load
-            for s, c in zip(mesh.sections, coefficients)
-        ]
-    )
+    """Distributed axial load of each mesh section [N/m] along +x: weight (buoyed if switched on) plus
+    the fluid skin-friction load when ``fluid.axial_loads`` is on — the case's own
+    :attr:`~drillstring.case.Case.axial_load_per_length`, so the statics and ``Case.weight`` agree."""
+    loads = np.array(case.axial_load_per_length)
+    if len(loads) != len(mesh.sections):
+        raise ValueError(f"the mesh has {len(mesh.sections)} sections, the case {len(loads)}")
+    return loads

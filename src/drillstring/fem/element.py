@@ -1,8 +1,8 @@
 """The 2-node, 12-DOF Timoshenko beam element (pure functions of a section and a length).
 
-Nodal DOFs, in this order at each node (SPEC §2): axial ``u``, lateral ``v`` (y), lateral ``w`` (z),
-torsion ``θx``, bending rotations ``θy``, ``θz``. Element DOFs 0–5 belong to the first (upper) node,
-6–11 to the second.
+Nodal DOFs, in this order at each node (SPEC §2; numbered in :mod:`drillstring.fem.dofs`): axial
+``u``, lateral ``v`` (y), lateral ``w`` (z), torsion ``θx``, bending rotations ``θy``, ``θz``. Element
+DOFs 0–5 belong to the first (upper) node, 6–11 to the second.
 
 Interpolation (SPEC §3):
 - ``u`` and ``θx``: linear.
@@ -27,13 +27,14 @@ from functools import lru_cache
 
 import numpy as np
 
+from drillstring.fem.dofs import (  # noqa: F401  (element-local DOF sets, named in fem.dofs)
+    AXIAL_DOFS,
+    BENDING_Y_DOFS,
+    BENDING_Z_DOFS,
+    DOFS_PER_ELEMENT,
+    TORSION_DOFS,
+)
 from drillstring.fem.sections import BeamSection
-
-#: Element DOF indices of the axial displacement, torsion and the two bending planes.
-AXIAL_DOFS = np.array([0, 6])
-TORSION_DOFS = np.array([3, 9])
-BENDING_Y_DOFS = np.array([1, 5, 7, 11])  # (v1, θz1, v2, θz2): bending in the x–y plane
-BENDING_Z_DOFS = np.array([2, 4, 8, 10])  # (w1, θy1, w2, θy2): bending in the x–z plane
 #: Sign change that maps the x–y planar matrices onto the x–z plane (θy = −∂w/∂x).
 PLANE_Z_SIGNS = np.array([1.0, -1.0, 1.0, -1.0])
 
@@ -215,7 +216,7 @@ def torsion_matrices(section: BeamSection, length: float) -> tuple[np.ndarray, n
 def place_planar(planar: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Put a planar 4×4 matrix in both bending planes of a 12×12 element matrix (adds to ``out``)."""
     if out is None:
-        out = np.zeros((12, 12))
+        out = np.zeros((DOFS_PER_ELEMENT, DOFS_PER_ELEMENT))
     out[np.ix_(BENDING_Y_DOFS, BENDING_Y_DOFS)] += planar
     out[np.ix_(BENDING_Z_DOFS, BENDING_Z_DOFS)] += PLANE_Z_SIGNS[:, None] * planar * PLANE_Z_SIGNS
     return out
@@ -279,7 +280,7 @@ def element_gyroscopic(section: BeamSection, length: float) -> np.ndarray:
     """
     r = polar_rotary_inertia(section, length)
     rs = r * PLANE_Z_SIGNS  # R S
-    out = np.zeros((12, 12))
+    out = np.zeros((DOFS_PER_ELEMENT, DOFS_PER_ELEMENT))
     out[np.ix_(BENDING_Y_DOFS, BENDING_Z_DOFS)] = rs
     out[np.ix_(BENDING_Z_DOFS, BENDING_Y_DOFS)] = -rs.T
     return out
@@ -287,6 +288,6 @@ def element_gyroscopic(section: BeamSection, length: float) -> np.ndarray:
 
 def element_gravity_load(mass_per_length: float, length: float, gravity: float) -> np.ndarray:
     """Consistent nodal loads of a uniform axial weight ρ_eff A g [N/m] along +x (down): ½ each node."""
-    f = np.zeros(12)
+    f = np.zeros(DOFS_PER_ELEMENT)
     f[AXIAL_DOFS] = 0.5 * mass_per_length * gravity * length
     return f

@@ -24,11 +24,11 @@ represented. Pressure resultants at the bit nozzles and at section changes are n
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from drillstring.derived import flow_velocities, fluid_skin_friction
 from drillstring.fem.element import _frozen, _integrate, planar_shapes, shear_parameter
 from drillstring.fem.sections import BeamSection
 
@@ -76,9 +76,7 @@ def fluid_coefficients(
         raise ValueError(
             f"borehole diameter {d_ch!r} m must exceed the outer diameter {d_o!r} m of the string"
         )
-    annulus = math.pi * (d_ch**2 - d_o**2) / 4.0
-    u_i = flow_rate / section.inner_area if section.inner_area > 0 else 0.0
-    u_o = flow_rate / annulus
+    u_i, u_o = flow_velocities(d_o, d_i, d_ch, flow_rate)
     chi = (d_ch**2 + d_o**2) / (d_ch**2 - d_o**2)
     rho, a_i, a_o = fluid_density, section.inner_area, section.outer_area
     return FluidCoefficients(
@@ -91,7 +89,7 @@ def fluid_coefficients(
         if viscous_damping
         else 0.0,
         centrifugal=(rho * a_i * u_i**2 + chi * rho * a_o * u_o**2) if centrifugal else 0.0,
-        axial_load=0.5 * friction_coefficient * rho * math.pi * (d_i * u_i**2 - d_o * u_o**2)
+        axial_load=fluid_skin_friction(d_o, d_i, d_ch, rho, flow_rate, friction_coefficient)
         if axial_loads
         else 0.0,
     )

@@ -2,21 +2,21 @@
 
 ``x`` is the axial coordinate pointing down from the hook (``x = 0``) to the bit (``x = L``), in m.
 Nodes are placed exactly at section changes and at any requested point (stabilizers, output probes);
-each interval between such points is cut into equal elements no longer than ``max_element_length``.
+each interval between such points is cut into equal elements no longer than ``max_element_length``
+(:func:`drillstring.derived.mesh_breaks` and :func:`~drillstring.derived.element_counts`, which the case
+validation uses too).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
+from drillstring.derived import POSITION_TOLERANCE, element_counts, mesh_breaks
+from drillstring.fem.dofs import DOFS_PER_NODE
 from drillstring.fem.sections import BeamSection
-
-#: Two positions closer than this [m] are the same node.
-POSITION_TOLERANCE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -43,7 +43,7 @@ class Mesh:
 
     @property
     def n_dofs(self) -> int:
-        return 6 * len(self.nodes)
+        return DOFS_PER_NODE * len(self.nodes)
 
     @property
     def length(self) -> float:
@@ -97,15 +97,11 @@ def build_mesh(
     for x in extra_points:
         if not -POSITION_TOLERANCE <= x <= total + POSITION_TOLERANCE:
             raise ValueError(f"point x = {x!r} m lies outside the string [0, {total:g}] m")
-    breaks = np.unique(np.clip(np.concatenate([boundaries, list(extra_points)]), 0.0, total))
-    keep = np.concatenate([[True], np.diff(breaks) > POSITION_TOLERANCE])
-    breaks = breaks[keep]
-    breaks[-1] = total
+    breaks = mesh_breaks(section_lengths, extra_points)
 
     nodes = [0.0]
     element_section = []
-    for start, end in zip(breaks[:-1], breaks[1:]):
-        n = max(1, math.ceil((end - start) / max_element_length - 1e-9))
+    for start, end, n in zip(breaks[:-1], breaks[1:], element_counts(breaks, max_element_length)):
         nodes.extend(np.linspace(start, end, n + 1)[1:])
         middle = 0.5 * (start + end)
         index = int(np.searchsorted(boundaries, middle) - 1)

@@ -97,14 +97,28 @@ import scipy.sparse as sp
 from numba import njit
 
 from drillstring.fem.assembly import assemble_matrix
-from drillstring.fem.element import (
+from drillstring.fem.dofs import (
+    AXIAL_DOFS,
     BENDING_Y_DOFS,
     BENDING_Z_DOFS,
-    PLANE_Z_SIGNS,
+    DOFS_PER_ELEMENT,
+    DOFS_PER_NODE,
+    THETA_X1,
+    THETA_X2,
+    THETA_Y1,
+    THETA_Y2,
+    THETA_Z1,
+    THETA_Z2,
     TORSION_DOFS,
-    planar_shapes,
-    shear_parameter,
+    U1,
+    U2,
+    V1,
+    V2,
+    W1,
+    W2,
+    element_dofs,
 )
+from drillstring.fem.element import PLANE_Z_SIGNS, planar_shapes, shear_parameter
 from drillstring.fem.mesh import Mesh
 from drillstring.fem.sections import BeamSection
 
@@ -150,17 +164,17 @@ def _operators(section: BeamSection, length: float) -> _ElementOperators:
         raise ValueError(f"length = {length!r}: must be > 0 m")
     s = planar_shapes(length, shear_parameter(section, length), N_GAUSS_NL)
     n = len(s.xi)
-    axial = np.zeros(12)
-    axial[[0, 6]] = [-1.0 / length, 1.0 / length]
-    slope_v = np.zeros((n, 12))
+    axial = np.zeros(DOFS_PER_ELEMENT)
+    axial[AXIAL_DOFS] = [-1.0 / length, 1.0 / length]
+    slope_v = np.zeros((n, DOFS_PER_ELEMENT))
     slope_v[:, BENDING_Y_DOFS] = s.slope
-    slope_w = np.zeros((n, 12))
+    slope_w = np.zeros((n, DOFS_PER_ELEMENT))
     slope_w[:, BENDING_Z_DOFS] = s.slope * PLANE_Z_SIGNS
-    torsion = np.zeros((n, 12))
+    torsion = np.zeros((n, DOFS_PER_ELEMENT))
     torsion[:, TORSION_DOFS] = np.stack([1.0 - s.xi, s.xi], axis=1)
-    rot_z = np.zeros((n, 12))
+    rot_z = np.zeros((n, DOFS_PER_ELEMENT))
     rot_z[:, BENDING_Y_DOFS] = s.rotation
-    rot_y = np.zeros((n, 12))
+    rot_y = np.zeros((n, DOFS_PER_ELEMENT))
     rot_y[:, BENDING_Z_DOFS] = -s.rotation * PLANE_Z_SIGNS
     ops = _ElementOperators(s.weights, axial, slope_v, slope_w, torsion, rot_z, rot_y)
     for a in (ops.weights, axial, slope_v, slope_w, torsion, rot_z, rot_y):
@@ -170,7 +184,7 @@ def _operators(section: BeamSection, length: float) -> _ElementOperators:
 
 def _as_element_vector(q, name: str) -> np.ndarray:
     q = np.asarray(q, dtype=np.float64)
-    if q.shape != (12,):
+    if q.shape != (DOFS_PER_ELEMENT,):
         raise ValueError(f"{name} must have shape (12,), got {q.shape}")
     return q
 
@@ -282,10 +296,10 @@ def _strain_energy_forces_kernel(q, inv_length, weights, slope, axial_stiffness,
     n_el, n_g = weights.shape
     out[:] = 0.0
     for e in range(n_el):
-        b = 6 * e
-        du = (q[b + 6] - q[b]) * inv_length[e]
-        v0, v1, v2, v3 = q[b + 1], q[b + 5], q[b + 7], q[b + 11]
-        w0, w1, w2, w3 = q[b + 2], -q[b + 4], q[b + 8], -q[b + 10]
+        b = DOFS_PER_NODE * e
+        du = (q[b + U2] - q[b + U1]) * inv_length[e]
+        v0, v1, v2, v3 = q[b + V1], q[b + THETA_Z1], q[b + V2], q[b + THETA_Z2]
+        w0, w1, w2, w3 = q[b + W1], -q[b + THETA_Y1], q[b + W2], -q[b + THETA_Y2]
         fu = 0.0
         fv0 = fv1 = fv2 = fv3 = 0.0
         fw0 = fw1 = fw2 = fw3 = 0.0
@@ -308,16 +322,16 @@ def _strain_energy_forces_kernel(q, inv_length, weights, slope, axial_stiffness,
             fw2 += cw * s2
             fw3 += cw * s3
         fu *= inv_length[e]
-        out[b] += fu
-        out[b + 6] -= fu
-        out[b + 1] -= fv0
-        out[b + 5] -= fv1
-        out[b + 7] -= fv2
-        out[b + 11] -= fv3
-        out[b + 2] -= fw0
-        out[b + 4] += fw1
-        out[b + 8] -= fw2
-        out[b + 10] += fw3
+        out[b + U1] += fu
+        out[b + U2] -= fu
+        out[b + V1] -= fv0
+        out[b + THETA_Z1] -= fv1
+        out[b + V2] -= fv2
+        out[b + THETA_Z2] -= fv3
+        out[b + W1] -= fw0
+        out[b + THETA_Y1] += fw1
+        out[b + W2] -= fw2
+        out[b + THETA_Y2] += fw3
     return out
 
 
@@ -326,10 +340,10 @@ def _strain_energy_kernel(q, inv_length, weights, slope, axial_stiffness):
     n_el, n_g = weights.shape
     total = 0.0
     for e in range(n_el):
-        b = 6 * e
-        du = (q[b + 6] - q[b]) * inv_length[e]
-        v0, v1, v2, v3 = q[b + 1], q[b + 5], q[b + 7], q[b + 11]
-        w0, w1, w2, w3 = q[b + 2], -q[b + 4], q[b + 8], -q[b + 10]
+        b = DOFS_PER_NODE * e
+        du = (q[b + U2] - q[b + U1]) * inv_length[e]
+        v0, v1, v2, v3 = q[b + V1], q[b + THETA_Z1], q[b + V2], q[b + THETA_Z2]
+        w0, w1, w2, w3 = q[b + W1], -q[b + THETA_Y1], q[b + W2], -q[b + THETA_Y2]
         acc = 0.0
         for g in range(n_g):
             s0, s1, s2, s3 = slope[e, g, 0], slope[e, g, 1], slope[e, g, 2], slope[e, g, 3]
@@ -347,11 +361,11 @@ def _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, out, cou
     n_el, n_g = weights.shape
     out[:] = 0.0
     for e in range(n_el):
-        b = 6 * e
-        ta, tb = qd[b + 3], qd[b + 9]
-        vd0, vd1, vd2, vd3 = qd[b + 1], qd[b + 5], qd[b + 7], qd[b + 11]
-        wd0, wd1, wd2, wd3 = qd[b + 2], -qd[b + 4], qd[b + 8], -qd[b + 10]
-        w0, w1, w2, w3 = q[b + 2], -q[b + 4], q[b + 8], -q[b + 10]
+        b = DOFS_PER_NODE * e
+        ta, tb = qd[b + THETA_X1], qd[b + THETA_X2]
+        vd0, vd1, vd2, vd3 = qd[b + V1], qd[b + THETA_Z1], qd[b + V2], qd[b + THETA_Z2]
+        wd0, wd1, wd2, wd3 = qd[b + W1], -qd[b + THETA_Y1], qd[b + W2], -qd[b + THETA_Y2]
+        w0, w1, w2, w3 = q[b + W1], -q[b + THETA_Y1], q[b + W2], -q[b + THETA_Y2]
         fx0 = fx1 = 0.0
         fz0 = fz1 = fz2 = fz3 = 0.0  # on the (v, θz) planar DOFs
         fy0 = fy1 = fy2 = fy3 = 0.0  # on the (w, −θy) planar DOFs
@@ -391,16 +405,16 @@ def _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, out, cou
             c11 += p * l1 * r1
             c12 += p * l1 * r2
             c13 += p * l1 * r3
-        out[b + 3] += fx0
-        out[b + 9] += fx1
-        out[b + 1] += fz0
-        out[b + 5] += fz1
-        out[b + 7] += fz2
-        out[b + 11] += fz3
-        out[b + 2] += fy0
-        out[b + 4] -= fy1
-        out[b + 8] += fy2
-        out[b + 10] -= fy3
+        out[b + THETA_X1] += fx0
+        out[b + THETA_X2] += fx1
+        out[b + V1] += fz0
+        out[b + THETA_Z1] += fz1
+        out[b + V2] += fz2
+        out[b + THETA_Z2] += fz3
+        out[b + W1] += fy0
+        out[b + THETA_Y1] -= fy1
+        out[b + W2] += fy2
+        out[b + THETA_Y2] -= fy3
         coupling[e, 0, 0] = c00
         coupling[e, 0, 1] = c01
         coupling[e, 0, 2] = c02
@@ -417,8 +431,8 @@ def _mass_coupling_kernel(q, xi, weights, rotation, polar_inertia, coupling):
     """coupling[e, i, j] = ∫ ρI_p θy a_i b_j (depends on the configuration only)."""
     n_el, n_g = weights.shape
     for e in range(n_el):
-        b = 6 * e
-        w0, w1, w2, w3 = q[b + 2], -q[b + 4], q[b + 8], -q[b + 10]
+        b = DOFS_PER_NODE * e
+        w0, w1, w2, w3 = q[b + W1], -q[b + THETA_Y1], q[b + W2], -q[b + THETA_Y2]
         for i in range(2):
             for j in range(4):
                 coupling[e, i, j] = 0.0
@@ -438,10 +452,10 @@ def _kinetic_energy_kernel(q, qd, xi, weights, rotation, polar_inertia):
     n_el, n_g = weights.shape
     total = 0.0
     for e in range(n_el):
-        b = 6 * e
-        ta, tb = qd[b + 3], qd[b + 9]
-        vd0, vd1, vd2, vd3 = qd[b + 1], qd[b + 5], qd[b + 7], qd[b + 11]
-        w0, w1, w2, w3 = q[b + 2], -q[b + 4], q[b + 8], -q[b + 10]
+        b = DOFS_PER_NODE * e
+        ta, tb = qd[b + THETA_X1], qd[b + THETA_X2]
+        vd0, vd1, vd2, vd3 = qd[b + V1], qd[b + THETA_Z1], qd[b + V2], qd[b + THETA_Z2]
+        w0, w1, w2, w3 = q[b + W1], -q[b + THETA_Y1], q[b + W2], -q[b + THETA_Y2]
         acc = 0.0
         for g in range(n_g):
             r0, r1, r2, r3 = rotation[e, g, 0], rotation[e, g, 1], rotation[e, g, 2], rotation[e, g, 3]
@@ -451,10 +465,6 @@ def _kinetic_energy_kernel(q, qd, xi, weights, rotation, polar_inertia):
             acc += weights[e, g] * txd * tzd * ty
         total += polar_inertia[e] * acc
     return total
-
-
-_TORSION = np.array([3, 9])
-_PLANE_Y = np.array([1, 5, 7, 11])
 
 
 @njit(cache=True)
@@ -469,22 +479,21 @@ def _project_coupling_kernel(coupling, phi_elements, out, work):
             c0, c1, c2, c3 = coupling[e, i, 0], coupling[e, i, 1], coupling[e, i, 2], coupling[e, i, 3]
             for m in range(n):
                 work[i, m] = (
-                    c0 * phi_elements[e, 1, m]
-                    + c1 * phi_elements[e, 5, m]
-                    + c2 * phi_elements[e, 7, m]
-                    + c3 * phi_elements[e, 11, m]
+                    c0 * phi_elements[e, V1, m]
+                    + c1 * phi_elements[e, THETA_Z1, m]
+                    + c2 * phi_elements[e, V2, m]
+                    + c3 * phi_elements[e, THETA_Z2, m]
                 )
         for m in range(n):
-            t0 = phi_elements[e, 3, m]
-            t1 = phi_elements[e, 9, m]
+            t0 = phi_elements[e, THETA_X1, m]
+            t1 = phi_elements[e, THETA_X2, m]
             x0 = work[0, m]
             x1 = work[1, m]
             if t0 == 0.0 and t1 == 0.0 and x0 == 0.0 and x1 == 0.0:
                 continue  # mode m has neither torsion nor θy-coupled bending here (row m is zero)
             for k in range(n):
-                out[m, k] += (
-                    t0 * work[0, k] + t1 * work[1, k] + x0 * phi_elements[e, 3, k] + x1 * phi_elements[e, 9, k]
-                )
+                out[m, k] += (t0 * work[0, k] + t1 * work[1, k] + x0 * phi_elements[e, THETA_X1, k]
+                              + x1 * phi_elements[e, THETA_X2, k])
     return out
 
 
@@ -495,13 +504,13 @@ def _project_blocks_kernel(blocks, phi_elements, out, work):
     n = phi_elements.shape[2]
     out[:, :] = 0.0
     for e in range(n_el):
-        for i in range(12):
+        for i in range(DOFS_PER_ELEMENT):
             for m in range(n):
                 acc = 0.0
-                for j in range(12):
+                for j in range(DOFS_PER_ELEMENT):
                     acc += blocks[e, i, j] * phi_elements[e, j, m]
                 work[i, m] = acc
-        for i in range(12):
+        for i in range(DOFS_PER_ELEMENT):
             for m in range(n):
                 p = phi_elements[e, i, m]
                 if p != 0.0:
@@ -643,17 +652,17 @@ def nonlinear_elements(mesh: Mesh, n_gauss: int = N_GAUSS_NL) -> NonlinearElemen
 def expand_mass_coupling(coupling: np.ndarray) -> np.ndarray:
     """The (n_el, 12, 12) element blocks of ``M_nl`` from the compact couplings (n_el, 2, 4)."""
     coupling = np.asarray(coupling, dtype=np.float64)
-    blocks = np.zeros((coupling.shape[0], 12, 12))
-    blocks[:, _TORSION[:, None], _PLANE_Y[None, :]] = coupling
-    blocks[:, _PLANE_Y[:, None], _TORSION[None, :]] = np.swapaxes(coupling, 1, 2)
+    blocks = np.zeros((coupling.shape[0], DOFS_PER_ELEMENT, DOFS_PER_ELEMENT))
+    blocks[:, TORSION_DOFS[:, None], BENDING_Y_DOFS[None, :]] = coupling
+    blocks[:, BENDING_Y_DOFS[:, None], TORSION_DOFS[None, :]] = np.swapaxes(coupling, 1, 2)
     return blocks
 
 
 def element_rows(phi: np.ndarray, n_elements: int | None = None) -> np.ndarray:
     """(n_el, 12, n) contiguous rows of a basis ``Φ`` (n_dofs, n) for each element's 12 DOFs."""
     phi = np.asarray(phi, dtype=np.float64)
-    n_el = phi.shape[0] // 6 - 1 if n_elements is None else n_elements
-    return np.ascontiguousarray(np.stack([phi[6 * e : 6 * e + 12] for e in range(n_el)]))
+    n_el = phi.shape[0] // DOFS_PER_NODE - 1 if n_elements is None else n_elements
+    return np.ascontiguousarray(np.stack([phi[element_dofs(e)] for e in range(n_el)]))
 
 
 def project_mass_correction(

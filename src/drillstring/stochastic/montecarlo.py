@@ -60,7 +60,7 @@ from drillstring.stochastic.execution import (  # noqa: F401  (re-exported)
 )
 from drillstring.stochastic.locks import StudyLock, StudyLocked  # noqa: F401  (re-exported)
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
-from drillstring.stochastic.runs import simulation_options
+from drillstring.stochastic.runs import compile_kernels, simulation_options
 from drillstring.stochastic.store import ArraySpec, TaskStore
 from drillstring.stochastic.store import StoreError as StudyStoreError
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
@@ -438,6 +438,8 @@ def run_study(
             address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
             store = StudyStore(Path(store_path), case, settings)
             indices = ([] if store.nominal_done() else [NOMINAL]) + store.pending()
+            if indices and client is None:
+                compile_kernels(case)
             report = run_tasks(
                 store, partial(_realization_task, case, settings), [(i, i) for i in indices],
                 workers=workers, client=client, address=address, progress=progress,

@@ -47,7 +47,7 @@ from drillstring.stochastic.execution import (
 )
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
-from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, bit_area, run_outputs
+from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, bit_area, compile_kernels, run_outputs
 from drillstring.stochastic.store import ArraySpec, TaskStore
 
 __all__ = [
@@ -286,6 +286,8 @@ def run_map(
             address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
             store = MapStore(Path(store_path), case, settings, critical)
             items = [(i, (i, *settings.point(i))) for i in store.pending()]
+            if items and client is None:
+                compile_kernels(case)
             report = run_tasks(store, partial(_point_task, case, settings), items, workers=workers, client=client,
                                address=address, progress=progress, worker_timeout=worker_timeout, what="map",
                                noun="grid points")

@@ -79,6 +79,19 @@ def simulation_options(case: Case, t_end: float, output_step: float) -> dict[str
                 lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed)
 
 
+def compile_kernels(case: Case) -> None:
+    """Compile the simulation kernels once, in the driver, before local worker processes start (announced
+    on stderr the first time), so that the workers only load them from Numba's cache and no run's time
+    includes compiling."""
+    from drillstring.dynamics.compiled import prepare_kernels
+
+    try:
+        model = case_reduced_model(case)
+    except Exception:  # the runs record why; the kernels then compile in the first of them
+        return
+    prepare_kernels(model, case.simulation.method)
+
+
 def bit_area(case: Case) -> float:
     """Area drilled by the bit [m²]: ``π D²/4`` with D the borehole diameter (the bit drills the hole)."""
     return math.pi * case.borehole.diameter**2 / 4.0

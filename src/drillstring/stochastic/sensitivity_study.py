@@ -41,7 +41,7 @@ from drillstring.stochastic.execution import (
 )
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
-from drillstring.stochastic.runs import RUN_OUTPUTS, run_outputs
+from drillstring.stochastic.runs import RUN_OUTPUTS, compile_kernels, run_outputs
 from drillstring.stochastic.sensitivity import (
     SaltelliDesign,
     SobolResult,
@@ -190,6 +190,8 @@ def run_sensitivity(
             address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
             store = SensitivityStore(Path(store_path), case, settings, design)
             items = [(i, (i, design.values[i])) for i in store.pending()]
+            if items and client is None:
+                compile_kernels(case)
             task = partial(_row_task, case, design.uncertainty.paths, settings)
             report = run_tasks(store, task, items, workers=workers, client=client, address=address,
                                progress=progress, worker_timeout=worker_timeout, lost=_lost, what="sensitivity run",

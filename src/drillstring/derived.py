@@ -1,0 +1,98 @@
+"""Quantities derived from a case's plain numbers, needed both to validate a case and to build the model.
+
+Validating a case (:mod:`drillstring.case`) needs a few numbers that the finite-element model also
+builds on: where the mesh puts its nodes, how many DOFs each mode family has, and the distributed axial
+load on the string (its weight, buoyed or not, plus the drilling fluid's skin friction). Each is computed
+here, once; :mod:`drillstring.case` and :mod:`drillstring.fem` both call these functions, so the case's
+``weight`` and the statics' weight, or the case's mode limits and the mesh, cannot disagree.
+
+Pure functions of numbers, SI units; this module imports nothing from the rest of ``drillstring`` and no
+third-party package.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Sequence
+
+#: Two mesh break points closer than this [m] are the same node.
+POSITION_TOLERANCE = 1e-9
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Mesh layout (used by drillstring.fem.mesh.build_mesh)
+# ---------------------------------------------------------------------------------------------------------
+
+
+def mesh_breaks(section_lengths: Sequence[float], extra_points: Sequence[float] = ()) -> list[float]:
+    """Positions x [m] that must be nodes, sorted, from 0 to the string length: the section ends and the
+    ``extra_points`` (stabilizers, probes; clipped to the string), points closer than
+    :data:`POSITION_TOLERANCE` merged."""
+    boundaries = [0.0, *itertools.accumulate(float(length) for length in section_lengths)]
+    total = boundaries[-1]
+    points = sorted(set(boundaries) | {min(max(float(x), 0.0), total) for x in extra_points})
+    breaks = [points[0]] + [x for previous, x in zip(points[:-1], points[1:])
+                            if x - previous > POSITION_TOLERANCE]
+    breaks[-1] = total
+    return breaks
+
+
+def element_counts(breaks: Sequence[float], max_element_length: float) -> list[int]:
+    """Number of equal elements, each no longer than ``max_element_length`` [m], between consecutive
+    break points (at least one)."""
+    return [max(1, math.ceil((end - start) / max_element_length - 1e-9))
+            for start, end in zip(breaks[:-1], breaks[1:])]
+
+
+def mode_family_sizes(n_nodes: int) -> dict[str, int]:
+    """DOFs of each mode family of a mesh of ``n_nodes`` nodes under the dynamic boundary conditions of
+    :func:`drillstring.modal.family_dofs` (the most modes a family can have): axial ``u`` at every node
+    (both ends free; one of them the rigid translation), torsional ``θx`` below the top (held), lateral
+    per plane ``v`` at the inner nodes (ends pinned) and ``θz`` at every node."""
+    return {"axial": n_nodes, "torsional": n_nodes - 1, "lateral": 2 * n_nodes - 2}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Distributed axial load (used by drillstring.case.Case.weight and the statics)
+# ---------------------------------------------------------------------------------------------------------
+
+
+def circle_area(diameter: float) -> float:
+    """π D² / 4 [m²]."""
+    return math.pi * diameter**2 / 4.0
+
+
+def flow_velocities(outer_diameter: float, inner_diameter: float, borehole_diameter: float,
+                    flow_rate: float) -> tuple[float, float]:
+    """Mean mud velocities [m/s] of a section for the volume flow ``flow_rate`` Q [m³/s]: ``U_i = Q / A_i``
+    down the bore (0 for a solid section) and ``U_o = Q / (A_ch − A_o)`` up the annulus (continuity)."""
+    inner = circle_area(inner_diameter)
+    u_i = flow_rate / inner if inner > 0 else 0.0
+    u_o = flow_rate / (circle_area(borehole_diameter) - circle_area(outer_diameter))
+    return u_i, u_o
+
+
+def fluid_skin_friction(outer_diameter: float, inner_diameter: float, borehole_diameter: float,
+                        fluid_density: float, flow_rate: float, friction_coefficient: float) -> float:
+    """Axial skin-friction load of the mud on a section [N/m] along +x (down):
+    ``f_x = ½ C_f ρ_f π (D_i U_i² − D_o U_o²)`` — the bore flow drags the pipe down, the annular flow up
+    (Païdoussis, *Fluid–Structure Interactions* vol. 1, 2nd ed., 2014, ch. 4; see
+    :mod:`drillstring.fem.fluid`)."""
+    u_i, u_o = flow_velocities(outer_diameter, inner_diameter, borehole_diameter, flow_rate)
+    return 0.5 * friction_coefficient * fluid_density * math.pi * (
+        inner_diameter * u_i**2 - outer_diameter * u_o**2)
+
+
+def axial_load_per_length(*, steel_density: float, area: float, gravity: float, buoyancy_density: float,
+                          skin_friction: float) -> float:
+    """Distributed axial load on a section [N/m] along +x (down): its weight ``(ρ − ρ_b) A g`` with
+    ``ρ_b`` the fluid density when buoyancy is on (else 0) and ``g`` 0 when gravity is off, plus the
+    fluid's skin friction (0 when fluid axial loads are off)."""
+    return (steel_density - buoyancy_density) * area * gravity + skin_friction
+
+
+def string_axial_load(loads_per_length: Sequence[float], lengths: Sequence[float]) -> float:
+    """Total distributed axial load on the string [N], ``Σ q_i L_i``: the string's weight (plus the
+    fluid's skin friction when switched on), which the hook and the bit carry together."""
+    return math.fsum(q * length for q, length in zip(loads_per_length, lengths))

@@ -1,0 +1,48 @@
+"""The README's Python examples: safe to save as scripts, and the first one prints what the README shows."""
+
+import ast
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def _blocks(language: str) -> list[tuple[int, str]]:
+    """(offset, code) of every fenced block of ``language`` in the README."""
+    text = README.read_text(encoding="utf-8")
+    return [(m.start(), m.group(1)) for m in re.finditer(rf"```{language}\n(.*?)```", text, re.S)]
+
+
+def _is_main_guard(node: ast.stmt) -> bool:
+    return (isinstance(node, ast.If) and isinstance(node.test, ast.Compare)
+            and isinstance(node.test.left, ast.Name) and node.test.left.id == "__name__"
+            and isinstance(node.test.comparators[0], ast.Constant)
+            and node.test.comparators[0].value == "__main__")
+
+
+def test_python_examples_run_nothing_on_import():
+    """Saved as a script and imported again by a spawned worker process, an example must do nothing but
+    imports and definitions: everything that runs sits under ``if __name__ == "__main__":``."""
+    blocks = _blocks("python")
+    assert len(blocks) >= 2
+    for _, code in blocks:
+        body = ast.parse(code).body
+        assert any(_is_main_guard(node) for node in body), code
+        for node in body:
+            assert isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef)) or \
+                _is_main_guard(node), ast.unparse(node)
+
+
+@pytest.mark.parametrize("index", [0, 1])  # the quick ones: statics and modes, buckling margin
+def test_example_prints_what_the_readme_shows(tmp_path, index):
+    offset, code = _blocks("python")[index]
+    shown = next(text for start, text in _blocks("text") if start > offset)
+    script = tmp_path / "example.py"
+    script.write_text(code, encoding="utf-8")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == shown.split()
