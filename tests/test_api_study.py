@@ -113,3 +113,48 @@ def test_study_counts_buckled_realizations_and_warns_before_running(small_case, 
     quiet = []
     api.monte_carlo_study(small_case, sigma=3000.0, samples=2, t_end=0.2, workers=1, note=quiet.append)
     assert quiet == []  # P = Φ(−14.1/3) ≈ 1e-6: nothing to say
+
+
+def test_study_of_any_parameters_summarises_each_input(small_case, tmp_path):
+    laws = {"fluid.inlet_velocity": "uniform 1.2 1.8 m/s", "operation.top_speed": "normal 100 5 rpm"}
+    outcome = api.monte_carlo_study(small_case, parameters=laws, samples=3, t_end=0.6, workers=1,
+                                    out=tmp_path / "s")
+    summary = outcome.summary
+    assert summary["sigma"] is None and summary["weight_on_hook_dispersion"] is None  # not random
+    inputs = summary["inputs"]
+    assert list(inputs) == list(laws)
+    assert inputs["fluid.inlet_velocity"]["dispersion"] == pytest.approx((0.6 / np.sqrt(12)) / 1.5)
+    assert inputs["operation.top_speed"]["dispersion"] == pytest.approx(0.05)
+    assert inputs["operation.top_speed"]["law"] == "normal 100 5 rpm" and inputs["operation.top_speed"]["unit"] == "rad/s"
+    drawn = outcome.statistics.input_values.values
+    assert inputs["fluid.inlet_velocity"]["sample_mean"] == pytest.approx(drawn[:, 0].mean())
+    for entry in summary["observables"].values():
+        assert set(entry["ratio_time_mean"]) == set(laws)  # one ratio per input, no weight-on-bit
+        ratio = entry["ratio_time_mean"]["operation.top_speed"]
+        assert ratio == pytest.approx(entry["dispersion_time_mean"] / 0.05)
+    html = (tmp_path / "s" / "report.html").read_text()
+    assert "random fluid.inlet_velocity, operation.top_speed" in html and "uniform 1.2 1.8 m/s" in html
+    assert "mean δ / δ(operation.top_speed)" in html
+
+
+def test_case_file_laws_are_the_default_and_options_replace_them(small_case, tmp_path):
+    from drillstring.case import case_from_dict
+    import tomllib
+
+    data = tomllib.loads(small_case.to_toml())
+    data["uncertainty"] = {"parameters": {"bit_rock.a2": {"law": "gamma", "mean": 5.672e-8, "std": 0.5e-8}}}
+    case = case_from_dict(data)
+    settings, bare = api.study_settings(case, samples=2)
+    assert settings.sigma is None and settings.laws == (("bit_rock.a2", "gamma mean=5.672e-08 std=5e-09"),)
+    assert bare.uncertainty is None and "uncertainty" not in bare.to_toml()
+    settings, _ = api.study_settings(case, samples=2, sigma=3000.0)  # the weight-on-hook added
+    assert settings.sigma == 3000.0 and settings.laws == (("bit_rock.a2", "gamma mean=5.672e-08 std=5e-09"),)
+    settings, _ = api.study_settings(case, samples=2, parameters={"fluid.density": "uniform 1100 1300"})
+    assert settings.laws == (("fluid.density", "uniform 1100 1300"),) and settings.sigma is None
+    settings, _ = api.study_settings(small_case, samples=2)  # nothing declared: the default law
+    assert settings.sigma == DEFAULT_SIGMA and settings.laws == ()
+    data["uncertainty"] = {"parameters": {"bit_rock.a9": "uniform 1 2"}}
+    with pytest.raises(ValueError, match=r"^\[uncertainty\] of the case: unknown case parameter 'bit_rock.a9'"):
+        api.study_settings(case_from_dict(data), samples=2)
+    with pytest.raises(ValueError, match="weight_on_hook is declared twice"):
+        api.study_settings(small_case, samples=2, sigma=1000.0, parameters={"weight_on_hook": "normal 1063 1 kN"})

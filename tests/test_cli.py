@@ -724,8 +724,8 @@ def test_console_script_hides_dask_from_single_run_commands(tmp_path):
 
     assert "simulate" in NO_DASK_COMMANDS and "study" not in NO_DASK_COMMANDS
     nc, png = tmp_path / "r.nc", tmp_path / "r.png"
-    code = ("import sys\nfrom drillstring.cli import main\nsys.argv = ['drillstring', *sys.argv[1:]]\n"
-            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+    code = ("import sys\nfrom drillstring.cli import run\nsys.argv = ['drillstring', *sys.argv[1:]]\n"
+            "try:\n    run()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
             "print([m for m in ('dask.array', 'dask.base', 'distributed') if m in sys.modules], file=sys.stderr)\n")
     done = subprocess.run([sys.executable, "-c", code, "simulate", "reference", "--t-end", "0.2", "--json",
                            "--out", str(nc), "--plot", str(png)], capture_output=True, text=True, timeout=300)
@@ -768,3 +768,109 @@ def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
     result = _invoke("stability", str(path))
     assert result.exit_code == 2
     assert "rate_of_penetration" in result.stderr and "Traceback" not in result.output
+
+
+def test_study_of_several_parameters_with_a_correlation(coarse_case, tmp_path):
+    result = _study(coarse_case, tmp_path / "p", "--param", "operation.top_speed=normal 100 5 rpm",
+                    "--param", 'fluid.inlet_velocity="uniform 1.2 1.8 m/s"', "--sigma", "4000",
+                    "--correlation", "operation.top_speed,weight_on_hook=0.5", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert list(data["inputs"]) == ["weight_on_hook", "operation.top_speed", "fluid.inlet_velocity"]
+    assert data["sigma"] == 4000.0 and data["inputs"]["weight_on_hook"]["std"] == 4000.0
+    assert set(data["input_dispersion"]) == {"weight_on_hook", "operation.top_speed", "fluid.inlet_velocity",
+                                            "weight_on_bit"}
+    table = _study(coarse_case, tmp_path / "p", "--param", "operation.top_speed=normal 100 5 rpm",
+                   "--param", 'fluid.inlet_velocity="uniform 1.2 1.8 m/s"', "--sigma", "4000",
+                   "--correlation", "operation.top_speed,weight_on_hook=0.5")
+    assert table.exit_code == 0, table.output
+    for text in ("operation.top_speed: normal 100 5 rpm", "δ(top_speed)", "δ(inlet_velocity)", "δ_WOB"):
+        assert text in table.stdout, text
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--param", "operation.top_speed"), ["is not PATH=LAW"]),
+    (("--param", "operation.top_speed=normal 100 rpm"), ["operation.top_speed", "normal"]),
+    (("--param", "fluid.coriolis=uniform 0 1"), ["fluid.coriolis is not a numeric parameter"]),
+    (("--param", "operation.top_speed=uniform 50 150 m/s"), ["operation.top_speed", "m/s"]),
+    (("--correlation", "a,b"), ["is not PATH1,PATH2=R"]),
+    (("--param", "operation.top_speed=uniform 50 150 rpm", "--correlation",
+      "operation.top_speed,weight_on_hook=0.2"), ["weight_on_hook", "not a declared uncertain parameter"]),
+])
+def test_study_bad_laws_exit_2_with_one_line(coarse_case, tmp_path, args, words):
+    result = _study(coarse_case, tmp_path / "bad", *args)
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output and len(result.stderr.strip().splitlines()) == 1, result.stderr
+    for word in words:
+        assert word in result.stderr, result.stderr
+    assert not (tmp_path / "bad").exists()
+
+
+@pytest.fixture(scope="module")
+def torsional_case_file(tmp_path_factory):
+    """A coarse reference string without lateral modes: a 2 s run takes a few hundredths of a second."""
+    from drillstring.case import load_case
+
+    case = load_case("reference")
+    case = case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(
+            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 0})})
+    path = tmp_path_factory.mktemp("cases") / "torsional.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    return path
+
+
+def test_map_command_writes_the_map_and_resumes(torsional_case_file, tmp_path):
+    import xarray as xr
+
+    out = tmp_path / "m"
+    args = ("map", str(torsional_case_file), "--top-speed", "80:160:2", "--weight-on-bit", "60 kN,90 kN",
+            "--t-end", "2", "--workers", "1", "--out", str(out))
+    result = _invoke(*args, "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["top_speed"] == pytest.approx([80 * np.pi / 30, 160 * np.pi / 30])  # bare numbers: rpm
+    assert summary["weight_on_bit"] == [6e4, 9e4] and summary["done"] == 4
+    for name in ("map.zarr", "map.nc", "map.json", "map.png", "report.html"):
+        assert (out / name).exists(), name
+    with xr.open_dataset(out / "map.nc", engine="h5netcdf") as ds:
+        assert ds.growth_rate.dims == ("top_speed", "weight_on_bit")
+    table = _invoke(*args)
+    assert table.exit_code == 0, table.output
+    assert "resumed: 4 of 4 grid points" in table.stderr
+    for text in ("Operating map", "largest mean ROP", "critical weight-on-bit", str(out / "report.html")):
+        assert text in table.stdout, text
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--top-speed", "40:200"), ["--top-speed = '40:200'", "A:B:N"]),
+    (("--weight-on-bit", "2e6"), ["--weight-on-bit = 2e+06 N", "string's weight"]),
+    (("--top-speed", "40 m:60 m:3"), ["--top-speed", "m"]),
+])
+def test_map_bad_grid_exits_2_with_one_line(torsional_case_file, tmp_path, args, words):
+    result = _invoke("map", str(torsional_case_file), "--t-end", "1", "--out", str(tmp_path / "m"), *args)
+    assert result.exit_code == 2, result.output
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.output
+    for word in words:
+        assert word in result.stderr, result.stderr
+    assert not (tmp_path / "m").exists()
+
+
+def test_sensitivity_command(torsional_case_file, tmp_path):
+    out = tmp_path / "s"
+    args = ("sensitivity", str(torsional_case_file), "--param", "operation.top_speed=uniform 120 180 rpm",
+            "--param", "operation.weight_on_bit=uniform 60 90 kN", "--samples", "8", "--t-end", "2",
+            "--workers", "1", "--out", str(out))
+    result = _invoke(*args, "--json")
+    assert result.exit_code == 0, result.output
+    payload = json.loads(result.stdout)
+    assert payload["runs"] == 32 and payload["base_samples"] == 8
+    assert json.loads((out / "sensitivity.json").read_text()) == payload
+    table = _invoke(*args)
+    assert table.exit_code == 0, table.output
+    for text in ("Sobol' indices", "mean ROP", "top_speed", "weight_on_bit", "S1", "ST"):
+        assert text in table.stdout, text
+    refused = _invoke("sensitivity", str(torsional_case_file), "--out", str(tmp_path / "none"))
+    assert refused.exit_code == 2 and "no uncertain parameter" in refused.stderr
+    assert not (tmp_path / "none").exists()

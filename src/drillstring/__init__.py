@@ -6,7 +6,9 @@ dynamics (reduced model, Runge-Kutta) -> stochastic (MaxEnt, Monte Carlo, statis
 results, plots, report, cli.
 
 The notebook API: :func:`load_case`, :func:`simulate`, :func:`stability` (steady drilling and its linear
-stability) and :func:`study` for Monte Carlo studies.
+stability), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
+:func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
+(Sobol' indices).
 """
 
 __version__ = "0.1.0"
@@ -25,8 +27,8 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring.api import stability
 
         return stability
-    if name == "study":
-        from drillstring.api import study
+    if name in ("study", "monte_carlo_study", "operating_map", "sensitivity"):
+        from drillstring import api
 
-        return study
+        return getattr(api, name)
     raise AttributeError(f"module 'drillstring' has no attribute {name!r}")

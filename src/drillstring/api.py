@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import xarray as xr
@@ -21,7 +21,7 @@ from drillstring.case import Case, load_case
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.results import run_dataset
-from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
+from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
 
 
 def as_case(case: Case | str | Path) -> Case:
@@ -110,17 +110,27 @@ class StudyOutcome:
 
 #: Captions of the study figures in the report, by figure name.
 _STUDY_CAPTIONS = {
-    "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean weight-on-hook)",
+    "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean of every random "
+                 "parameter)",
     "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
     "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
 }
 
 
-def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_step, transient):
-    """The validated settings and transient of a study (ValueError naming the field otherwise)."""
-    from drillstring.dynamics.indicators import transient_end
+def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None,
+                   samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
+    """The validated settings of a Monte Carlo study of ``case`` (ValueError naming the field or the
+    parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
+
+    The random parameters: ``parameters`` (path -> law spec or table) with ``correlation`` (``{"parameters":
+    [...], "matrix": [[...]]}``) when given, else the case's ``[uncertainty]`` table; plus the weight-on-hook,
+    Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given. With none
+    of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    """
     from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.montecarlo import StudySettings, check_study, nominal_weight_on_hook
+    from drillstring.stochastic.parameters import WEIGHT_ON_HOOK
+    from drillstring.stochastic.uncertainty import declared_uncertainty
 
     if sigma is not None and dispersion is not None:
         raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
@@ -128,20 +138,38 @@ def _study_settings(case: Case, sigma, dispersion, samples, seed, t_end, output_
         if not (isinstance(dispersion, (int, float)) and math.isfinite(dispersion) and dispersion > 0):
             raise ValueError(f"dispersion = {dispersion!r}: must be a finite number > 0")
         sigma = dispersion * nominal_weight_on_hook(case)
-    elif sigma is None:
+    if sigma is not None and not (isinstance(sigma, (int, float)) and not isinstance(sigma, bool)):
+        raise ValueError(f"sigma = {sigma!r} N: must be a finite number > 0")
+    first = None
+    if sigma is not None and math.isfinite(sigma) and sigma > 0:
+        first = {WEIGHT_ON_HOOK: {"law": "normal", "mean": nominal_weight_on_hook(case), "std": float(sigma)}}
+    declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
+    laws, correlated, matrix = (), (), ()
+    if declared is not None:
+        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters if not (first and p.path in first))
+        if declared.correlation is not None:
+            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    if sigma is None and not laws:
         sigma = DEFAULT_SIGMA
+    bare = case.model_copy(update={"uncertainty": None})
     settings = StudySettings(
-        samples=samples, sigma=sigma if not isinstance(sigma, int) else float(sigma), seed=seed,
+        samples=samples, sigma=float(sigma) if sigma is not None else None, seed=seed,
         t_end=case.simulation.t_end if t_end is None else t_end,
         output_step=case.simulation.output_step if output_step is None else output_step,
+        laws=laws, correlated=correlated, correlation=matrix,
     )
-    check_study(case, settings)
+    check_study(bare, settings)
+    return settings, bare
+
+
+def _transient(transient, t_end: float) -> float:
+    from drillstring.dynamics.indicators import transient_end
+
     if transient is None:
-        transient = transient_end(settings.t_end)
-    elif not (isinstance(transient, (int, float)) and math.isfinite(transient)
-              and 0 <= transient <= settings.t_end):
-        raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {settings.t_end:g} s]")
-    return settings, float(transient)
+        return transient_end(t_end)
+    if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient <= t_end):
+        raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {t_end:g} s]")
+    return float(transient)
 
 
 def monte_carlo_study(
@@ -149,6 +177,8 @@ def monte_carlo_study(
     *,
     sigma: float | None = None,
     dispersion: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -161,19 +191,25 @@ def monte_carlo_study(
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
 ) -> StudyOutcome:
-    """Monte Carlo study of a random weight-on-hook (SPEC §8), with its files.
+    """Monte Carlo study of random case parameters (SPEC §8; by default a random weight-on-hook), with
+    its files.
 
-    The weight-on-hook follows the Normal law (Maximum Entropy, known mean and variance) of standard
-    deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of them; default
-    :data:`~drillstring.stochastic.DEFAULT_SIGMA`). ``samples`` realizations (>= 2) of ``t_end`` [s]
+    The random parameters (:func:`study_settings`): each of ``parameters`` (case-parameter path -> law
+    spec, e.g. ``{"fluid.inlet_velocity": "uniform 1.2 1.8 m/s"}``; laws by the Maximum Entropy Principle,
+    :mod:`drillstring.stochastic.uncertainty`), correlated normals by ``correlation`` (``{"parameters":
+    [...], "matrix": [[...]]}``), or the case's ``[uncertainty]`` table when ``parameters`` is None; and the
+    weight-on-hook, Normal of standard deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of
+    them). Nothing declared: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``samples`` realizations (>= 2) of ``t_end`` [s]
     run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
     (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
     ``min(10 s, t_end/2)``). ``progress(done, failed, total)`` follows the realizations; ``note(text)``
     receives notes (a stale lock taken over).
 
-    Everything is checked before anything runs: the settings (ValueError naming the field; a sigma
-    that would put a weight-on-bit outside (0, string weight) with probability above 1e-3 included; a
-    sigma that buckles more than one draw in a thousand is only noted, through ``note``),
+    Everything is checked before anything runs: the settings (ValueError naming the field or the
+    parameter; a law that puts a probability above 1e-3 outside its parameter's range, e.g. a sigma
+    that would put a weight-on-bit outside (0, string weight), included; a weight-on-hook law that
+    buckles more than one draw in a thousand is only noted, through ``note``),
     ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.montecarlo.
     SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
     StudyLocked` while another study runs there; held until every file is written).
@@ -199,9 +235,10 @@ def monte_carlo_study(
         study_buckling_margin,
     )
 
-    case = as_case(case)
-    settings, t_transient = _study_settings(case, sigma, dispersion, samples, seed, t_end, output_step,
-                                            transient)
+    settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
+                                    correlation=correlation, samples=samples, seed=seed, t_end=t_end,
+                                    output_step=output_step)
+    t_transient = _transient(transient, settings.t_end)
     if out is not None:
         problem = output_folder_problem(out)
         if problem:
@@ -294,7 +331,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     })
     write_report(
         paths["report"],
-        title=f"Monte Carlo study: case '{case.name}', random weight-on-hook",
+        title=f"Monte Carlo study: case '{case.name}', random {', '.join(stats.attrs['parameters'])}",
         case_toml=case.to_toml(),
         summary=summary,
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
@@ -324,6 +361,8 @@ def study(
     *,
     sigma: float | None = None,
     dispersion: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -334,18 +373,21 @@ def study(
     transient: float | None = None,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> xr.Dataset:
-    """Monte Carlo study of a random weight-on-hook (SPEC §8); returns the statistics Dataset.
+    """Monte Carlo study of random case parameters (SPEC §8); returns the statistics Dataset.
 
-    The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): at most one
-    of ``sigma`` [N] or ``dispersion`` (σ / mean; default σ = 5000 N); realizations stream to the Zarr
+    The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): laws of
+    ``parameters`` (or the case's ``[uncertainty]`` table), at most one of ``sigma`` [N] or
+    ``dispersion`` (σ / mean) for the weight-on-hook (default, nothing declared: σ = 5000 N); the
+    drawn values are in ``input_values``; realizations stream to the Zarr
     store ``out``/study.zarr (a temporary folder when None), rerunning with the same ``out`` resumes.
     ``transient`` [s]: start of the steady window for the summaries and the per-realization vibration
     indicators (default ``min(10 s, t_end/2)``).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     return monte_carlo_study(
-        case, sigma=sigma, dispersion=dispersion, samples=samples, seed=seed, out=out, workers=workers,
-        scheduler=scheduler, t_end=t_end, output_step=output_step, transient=transient, progress=progress,
+        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation,
+        samples=samples, seed=seed, out=out, workers=workers, scheduler=scheduler, t_end=t_end,
+        output_step=output_step, transient=transient, progress=progress,
     ).statistics
 
 
@@ -469,3 +511,270 @@ def compare(
         "impacts": pair("impacts", int),
     }
     return full, reduced, differences
+
+
+# --- operating maps and global sensitivity -------------------------------------------------------
+
+
+def _engine_folder(out, workers, scheduler, prefix: str) -> Path:
+    """The output folder (checked; a temporary one when ``out`` is None), after checking the workers."""
+    import tempfile
+
+    from drillstring.files import output_folder_problem
+    from drillstring.stochastic.execution import check_workers
+
+    if out is not None:
+        problem = output_folder_problem(out)
+        if problem:
+            raise ValueError(f"out = {str(out)!r}: {problem}")
+    check_workers(workers, scheduler)
+    return Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=prefix))
+
+
+def _run_record(store, run, noun: str) -> dict:
+    """Computation time and workers of a store's sessions, and this call's numbers (JSON-ready)."""
+    from drillstring.stochastic.execution import computation_time
+
+    sessions = store.sessions()
+    wall_time, used = computation_time(sessions)
+    return {
+        "failures": store.failures(),
+        "wall_time": wall_time,
+        "wall_time_this_run": run.wall_time,
+        f"{noun}_this_run": run.computed,
+        "workers": used if isinstance(used, (int, str)) or used is None else str(used),
+        "sessions": sessions,
+    }
+
+
+def _run_table(record: dict, noun: str) -> dict:
+    """Rows of a report's "Run" table."""
+    rows = {"failures": record["failures"], "computation wall time [s]": round(record["wall_time"], 2),
+            "workers": record["workers"]}
+    if record[f"{noun}_this_run"] == 0 or len(record["sessions"]) > 1:
+        rows["wall time of this run [s]"] = round(record["wall_time_this_run"], 2)
+        rows[f"runs that computed {noun}"] = len(record["sessions"])
+    return rows
+
+
+@dataclass
+class MapOutcome:
+    """What :func:`operating_map` did: the map Dataset, its JSON-ready summary (as in ``map.json``), the
+    files written (name -> path) and the points that were in the store before this call."""
+
+    dataset: xr.Dataset
+    summary: dict
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+
+def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, output_step=None, transient=None,
+                 default_units: tuple[str, str] = ("", "")):
+    """The validated :class:`~drillstring.stochastic.operating_map.MapSettings` of a map of ``case``: axes
+    as sequences of SI numbers or grid strings (``"40 rpm:200 rpm:17"``, ``"100,120 kN"``; bare numbers in
+    ``default_units`` or SI), default :data:`~drillstring.stochastic.DEFAULT_MAP_TOP_SPEED` ×
+    :data:`~drillstring.stochastic.DEFAULT_MAP_WEIGHT_ON_BIT`."""
+    from drillstring.case import DIMENSIONS
+    from drillstring.stochastic import DEFAULT_MAP_TOP_SPEED, DEFAULT_MAP_WEIGHT_ON_BIT
+    from drillstring.stochastic.operating_map import MapSettings, check_map, parse_axis
+
+    dimension = {d.name: d for d in DIMENSIONS}
+    speeds = parse_axis(DEFAULT_MAP_TOP_SPEED if top_speed is None else top_speed, dimension["angular speed"],
+                        name="top_speed", default_unit=default_units[0])
+    weights = parse_axis(DEFAULT_MAP_WEIGHT_ON_BIT if weight_on_bit is None else weight_on_bit, dimension["force"],
+                         name="weight_on_bit", default_unit=default_units[1])
+    settings = MapSettings(tuple(speeds), tuple(weights),
+                           t_end=case.simulation.t_end if t_end is None else t_end,
+                           output_step=case.simulation.output_step if output_step is None else output_step,
+                           transient=transient)
+    check_map(case, settings)
+    return settings
+
+
+def operating_map(
+    case: Case | str | Path = "reference",
+    *,
+    top_speed=None,
+    weight_on_bit=None,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+) -> MapOutcome:
+    """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
+    one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
+    ``min(10 s, t_end/2)``) by mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical
+    specific energy, largest radial displacement and impacts, with the linear stability of steady drilling
+    (leading growth rate) and the buckling margin at each point.
+
+    ``top_speed`` [rad/s] and ``weight_on_bit`` [N]: sequences of values or grid strings (``"40 rpm:200
+    rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
+    run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
+    resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
+    ``map.json`` (the summary), ``map.png`` and ``report.html``. Checked before anything runs: the grid
+    (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    import json
+
+    from drillstring.files import write_text_atomic
+    from drillstring.plots import plot_map
+    from drillstring.report import write_map_report
+    from drillstring.results import write_netcdf
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
+    from drillstring.stochastic.locks import StudyLock
+    from drillstring.stochastic.operating_map import map_dataset, map_summary, run_map
+
+    case = as_case(case).model_copy(update={"uncertainty": None})
+    settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
+                            output_step=output_step, transient=transient)
+    folder = _engine_folder(out, workers, scheduler, "drillstring-map-")
+    store_path = folder / "map.zarr"
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what="map") as guard:
+            if guard.note:
+                notify(note, guard.note)
+            run = run_map(case, settings, store_path, workers=workers, scheduler=client, progress=progress,
+                          note=note, worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
+            ds = map_dataset(store_path)
+            summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
+            files: dict[str, Path] = {}
+            if out is not None:
+                files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
+                         "figure": folder / "map.png", "report": folder / "report.html"}
+                write_netcdf(ds, files["map"])
+                plot_map(ds, files["figure"])
+                summary["files"] = {k: str(v) for k, v in files.items()}
+                write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
+                write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
+                                 case_toml=case.to_toml(), summary=summary,
+                                 figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
+                                          "largest radial displacement over the map; black line: linear "
+                                          "stability boundary of steady drilling (hatched: unstable); red "
+                                          "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
+                                 run_info={**_run_table(summary, "points"), "store": str(store_path)})
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+    return MapOutcome(ds, summary, files, run.completed + run.failed - run.computed, guard.note or run.note)
+
+
+@dataclass
+class SensitivityOutcome:
+    """What :func:`sensitivity` did: the Sobol' indices (a :class:`~drillstring.stochastic.sensitivity.
+    SobolResult`), the JSON-ready payload (as in ``sensitivity.json``), the files written and the runs that
+    were in the store before this call."""
+
+    result: object
+    payload: dict
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+
+def sensitivity(
+    case: Case | str | Path = "reference",
+    *,
+    parameters: Mapping[str, Any] | None = None,
+    samples: int = DEFAULT_BASE_SAMPLES,
+    seed: int = 0,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    confidence: float = 0.95,
+    resamples: int = 1000,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+) -> SensitivityOutcome:
+    """Global sensitivity of ``case``: first-order and total Sobol' indices, with bootstrap confidence
+    intervals (level ``confidence``) and a convergence check at N/4, N/2, N, of the time-mean ROP,
+    bit-speed oscillation, mean TOB and FOB and the standard deviations in time of ROP, TOB and FOB
+    (:mod:`drillstring.stochastic.sensitivity_study`).
+
+    The uncertain parameters: ``parameters`` (path -> law, independent), else the case's ``[uncertainty]``
+    table. ``samples`` is the number of base samples N (a power of 2): N(k + 2) runs of ``t_end`` [s]
+    on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/sensitivity.zarr is
+    resumable. In ``out``: ``sensitivity.json`` (per output: ``S1``, ``ST``, their intervals, per
+    parameter; the convergence; the run), ``sobol.png``, ``sobol_convergence.png`` and ``report.html``.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    import json
+
+    from drillstring.files import write_text_atomic
+    from drillstring.plots import plot_sobol, plot_sobol_convergence
+    from drillstring.report import write_sensitivity_report
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
+    from drillstring.stochastic.locks import StudyLock
+    from drillstring.stochastic.sensitivity_study import (
+        SENSITIVITY_OUTPUTS,
+        SensitivitySettings,
+        load_sensitivity,
+        run_sensitivity,
+    )
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    case = as_case(case)
+    declared = declared_uncertainty(case, parameters)
+    if declared is None:
+        raise ValueError("no uncertain parameter: give parameters (path -> law), e.g. --param "
+                         "operation.top_speed=\"uniform 60 140 rpm\", or an [uncertainty] table in the case")
+    case = case.model_copy(update={"uncertainty": None})
+    settings = SensitivitySettings(
+        base_samples=samples, laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters), seed=seed,
+        t_end=case.simulation.t_end if t_end is None else t_end,
+        output_step=case.simulation.output_step if output_step is None else output_step, transient=transient)
+    if declared.correlation is not None:
+        raise ValueError(f"Sobol' indices need independent parameters; {', '.join(declared.correlated)} are "
+                         "correlated (drop the correlation, or use a Monte Carlo study for the joint law)")
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence = {confidence!r}: must be in (0, 1), e.g. 0.95")
+    folder = _engine_folder(out, workers, scheduler, "drillstring-sensitivity-")
+    store_path = folder / "sensitivity.zarr"
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what="sensitivity") as guard:
+            if guard.note:
+                notify(note, guard.note)
+            run = run_sensitivity(case, settings, store_path, workers=workers, scheduler=client,
+                                  progress=progress, note=note,
+                                  worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
+            data = load_sensitivity(store_path)
+            result = data.indices(SENSITIVITY_OUTPUTS, confidence=confidence, resamples=resamples)
+            record = _run_record(run.store, run, "runs")
+            payload = {"case": case.name, **result.to_dict(), "t_end": settings.t_end,
+                       "t_transient": settings.transient, "failed_runs": run.failed,
+                       "run_wall_time_total": float(np.nansum(data.wall_time)), **record}
+            files: dict[str, Path] = {}
+            if out is not None:
+                files = {"store": store_path, "indices": folder / "sensitivity.json",
+                         "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
+                         "report": folder / "report.html"}
+                plot_sobol(payload, files["figure"])
+                plot_sobol_convergence(payload, files["convergence"])
+                payload["files"] = {k: str(v) for k, v in files.items()}
+                write_text_atomic(files["indices"], json.dumps(payload, indent=2, allow_nan=False) + "\n")
+                write_sensitivity_report(
+                    files["report"], title=f"Global sensitivity: case '{case.name}'", case_toml=case.to_toml(),
+                    indices=payload,
+                    figures={"First-order (S1) and total (ST) Sobol' indices with their confidence intervals":
+                             files["figure"],
+                             "The indices at N/4, N/2 and N base samples": files["convergence"]},
+                    run_info={**_run_table(record, "runs"), "runs": result.runs,
+                              "simulated time per run [s]": settings.t_end,
+                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)})
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+    return SensitivityOutcome(result, payload, files, run.completed + run.failed - run.computed,
+                              guard.note or run.note)

@@ -644,6 +644,23 @@ class Initial(_Base):
     seed: int = Field(0, ge=0)
 
 
+class CorrelationTable(_Base):
+    """Correlation of uncertain normal parameters (the MaxEnt joint law is then the multivariate normal)."""
+
+    parameters: list[str] = Field(min_length=2, description="paths of the correlated parameters")
+    matrix: list[list[float]] = Field(description="their correlation matrix, one row per parameter")
+
+
+class UncertaintyTable(_Base):
+    """Uncertain parameters for studies and sensitivity analyses (``drillstring study``, ``drillstring
+    sensitivity``): case-parameter path -> law, as a spec string (``"uniform 1.2 1.8 m/s"``) or a table
+    (``{law = "uniform", min = 1.2, max = 1.8, unit = "m/s"}``). The paths and laws are checked against the
+    case when a study uses them (:mod:`drillstring.stochastic.uncertainty`); a single run ignores them."""
+
+    parameters: dict[str, str | dict[str, str | float]] = Field(min_length=1)
+    correlation: CorrelationTable | None = None
+
+
 #: Most finite elements a case may have (a mesh finer than this is refused at validation: it would take
 #: minutes to build and gigabytes of memory; 10 000 elements is 0.16 m for the 1600 m reference string).
 MAX_ELEMENTS = 10_000
@@ -674,6 +691,8 @@ class Case(_Base):
     simulation: Simulation = Field(default_factory=Simulation)
     initial: Initial = Field(default_factory=Initial)
     bow: Bow = Field(default_factory=Bow)
+    uncertainty: UncertaintyTable | None = Field(
+        None, description="optional [uncertainty] table: the laws of a study's random parameters")
 
     # -- derived quantities ------------------------------------------------------------------------------
 
@@ -838,7 +857,7 @@ class Case(_Base):
     def to_toml(self) -> str:
         """The case as TOML text, every value a plain SI number; ``load_case`` reads it back to an equal Case."""
         header = f"# drillstring case {self.name!r}; all numbers in SI units (m, N, Pa, kg/m3, s, rad/s).\n\n"
-        return header + tomli_w.dumps(self.model_dump(mode="python"))
+        return header + tomli_w.dumps(self.model_dump(mode="python", exclude_none=True))
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -11,8 +11,13 @@ Commands
     The built-in cases.
 ``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
     One drilling run: NetCDF of the observables, a four-panel figure and a summary table.
-``drillstring study [CASE] [--sigma N | --dispersion D] [--samples N] [--seed S] [--out DIR] ...``
-    Monte Carlo study of a random weight-on-hook: Zarr store (resumable), statistics, figures, report.
+``drillstring study [CASE] [--param PATH=LAW ...] [--sigma N | --dispersion D] [--samples N] [--out DIR] ...``
+    Monte Carlo study of random case parameters (default: the weight-on-hook): Zarr store (resumable),
+    statistics, figures, report.
+``drillstring map [CASE] [--top-speed A:B:N] [--weight-on-bit A:B:N] [--t-end S] [--out DIR] ...``
+    Operating map over top speed × weight-on-bit: performance, vibration, stability, buckling margin.
+``drillstring sensitivity [CASE] --param PATH=LAW ... [--samples N] [--out DIR] ...``
+    Global sensitivity: Sobol' indices of ROP, vibration, TOB, FOB.
 ``drillstring compare [CASE] [--t-end S] [--plot FILE.png] [--json]``
     Case 1 (full nonlinear model) against case 2 (bit–rock + contact): differences, wall times, figure.
 
@@ -62,7 +67,14 @@ from rich.table import Table  # noqa: E402
 from drillstring import __version__  # noqa: E402
 from drillstring.case import Case, CaseError, builtin_cases, load_case  # noqa: E402
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO  # noqa: E402
-from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_SIGMA  # noqa: E402
+from drillstring.stochastic import (  # noqa: E402
+    DEFAULT_BASE_SAMPLES,
+    DEFAULT_MAP_TOP_SPEED,
+    DEFAULT_MAP_WEIGHT_ON_BIT,
+    DEFAULT_SAMPLES,
+    DEFAULT_SEED,
+    DEFAULT_SIGMA,
+)
 
 if TYPE_CHECKING:
     from drillstring.buckling import BucklingMargin
@@ -676,25 +688,61 @@ def compare(
 # drillstring study
 # ---------------------------------------------------------------------------------------------------------
 
+ParamOption = Annotated[
+    list[str] | None,
+    typer.Option("--param", "-p", metavar="PATH=LAW",
+                 help='A random case parameter and its law, e.g. --param fluid.inlet_velocity="uniform 1.2 1.8 '
+                      'm/s" (laws: uniform, normal, exponential, gamma, maxent; see docs/uncertainty.md); '
+                      "repeat for several. Replaces the case file's uncertainty table."),
+]
+CorrelationOption = Annotated[
+    list[str] | None,
+    typer.Option("--correlation", metavar="PATH1,PATH2=R",
+                 help="Correlation coefficient of two normal parameters, e.g. "
+                      "operation.top_speed,weight_on_hook=-0.3; repeat for more pairs."),
+]
+
+
+def _declared_laws(param: list[str] | None, correlation: list[str] | None):
+    """The ``--param`` laws (None when none is given) and the ``--correlation`` table; a malformed value
+    ends the command (exit code 2)."""
+    from drillstring.stochastic.parameters import ParameterError
+    from drillstring.stochastic.uncertainty import correlation_table, split_assignment, split_correlation
+
+    try:
+        laws = None
+        if param:
+            laws = {}
+            for text in param:
+                path, spec = split_assignment(text)
+                if path in laws:
+                    raise ParameterError(f"--param {path} is given twice")
+                laws[path] = spec
+        table = correlation_table([split_correlation(t) for t in correlation]) if correlation else None
+    except ParameterError as error:
+        _fail(str(error))
+    return laws, table
+
+
 class _StudyProgress:
-    """``progress(done, failed, total)`` for :func:`run_study`: a rich bar (stderr) of realizations,
-    failures and time left. The bar starts at the first call, so that a study refused before it starts
-    prints no empty bar."""
+    """``progress(done, failed, total)`` for the engine's runs: a rich bar (stderr) of the ``noun``
+    (realizations, grid points, runs), failures and time left. The bar starts at the first call, so that
+    a run refused before it starts prints no empty bar."""
 
-    _COLUMNS = (TextColumn("realizations"), BarColumn(), MofNCompleteColumn(),
-                TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
-                TimeRemainingColumn())
-
-    def __init__(self, console: Console) -> None:
+    def __init__(self, console: Console, noun: str = "realizations") -> None:
         self.console = console
+        self.noun = noun
         self.bar: Progress | None = None
         self.task = None
 
     def __call__(self, done: int, failed: int, total: int) -> None:
         if self.bar is None:
-            self.bar = Progress(*self._COLUMNS, console=self.console)
+            columns = (TextColumn(escape(self.noun)), BarColumn(), MofNCompleteColumn(),
+                       TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
+                       TimeRemainingColumn())
+            self.bar = Progress(*columns, console=self.console)
             self.bar.start()
-            self.task = self.bar.add_task("realizations", total=total, completed=done + failed, failed=failed)
+            self.task = self.bar.add_task(self.noun, total=total, completed=done + failed, failed=failed)
         else:
             self.bar.update(self.task, completed=done + failed, failed=failed)
 
@@ -703,15 +751,34 @@ class _StudyProgress:
             self.bar.stop()
 
 
+def _input_labels(names) -> dict[str, str]:
+    """Short table labels of the random inputs: δ_WOH, δ_WOB, or δ(last part of the path) when that is
+    unambiguous, else δ(path)."""
+    from drillstring.report import INPUT_LABELS
+
+    names = list(names)
+    short = {n: n.split(".")[-1] for n in names}
+    labels = {}
+    for n in names:
+        if n in INPUT_LABELS:
+            labels[n] = f"δ_{INPUT_LABELS[n]}"
+        else:
+            unique = sum(1 for m in names if short[m] == short[n]) == 1
+            labels[n] = f"δ({short[n] if unique else n})"
+    return labels
+
+
 def _study_table(summary: dict[str, Any]) -> Table:
-    """Dispersions per observable over the steady window and over the whole record, in %."""
-    title = (f"Dispersion: δ_WOH = {100 * summary['weight_on_hook_dispersion']:.3g} %, "
-             f"δ_WOB = {100 * summary['weight_on_bit_dispersion']:.3g} %")
+    """Dispersions per observable over the steady window and over the whole record, in %, and their
+    ratios to each input's dispersion."""
+    inputs = summary.get("input_dispersion") or {}
+    labels = _input_labels(inputs)
+    title = "Dispersion: " + ", ".join(f"{labels[k]} = {100 * v:.3g} %" for k, v in inputs.items())
     table = Table(title=escape(title), title_justify="left",
                   caption="whole record: from the first time the mean response leaves 0", caption_justify="left")
     table.add_column("observable")
     table.add_column("window")
-    for header in ("mean δ [%]", "max δ [%]", "at t [s]", "mean/δ_WOH", "mean/δ_WOB"):
+    for header in ("mean δ [%]", "max δ [%]", "at t [s]", *(f"mean/{labels[k]}" for k in inputs)):
         table.add_column(escape(header), justify="right")
     for name, entry in summary["observables"].items():
         whole = entry.get("whole_record")
@@ -725,8 +792,7 @@ def _study_table(summary: dict[str, Any]) -> Table:
                 _fmt(values.get("dispersion_time_mean"), ".3g", 100.0),
                 _fmt(values.get("dispersion_max"), ".3g", 100.0),
                 _fmt(values.get("time_of_max"), ".2f"),
-                _fmt(ratio.get("weight_on_hook"), ".3g"),
-                _fmt(ratio.get("weight_on_bit"), ".3g"),
+                *(_fmt(ratio.get(k), ".3g") for k in inputs),
             )
     return table
 
@@ -762,6 +828,8 @@ def study(
         float | None,
         typer.Option("--dispersion", help="Dispersion σ/mean of the weight-on-hook, instead of --sigma."),
     ] = None,
+    param: ParamOption = None,
+    correlation: CorrelationOption = None,
     samples: Annotated[int, typer.Option("--samples", "-n", help="Number of realizations n_s (>= 2).")
                        ] = DEFAULT_SAMPLES,
     seed: Annotated[int, typer.Option("--seed", help="Root seed of the random draws (>= 0).")] = DEFAULT_SEED,
@@ -791,7 +859,11 @@ def study(
     ] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Monte Carlo study of a random weight-on-hook (Normal law, Maximum Entropy).
+    """Monte Carlo study of random case parameters (laws by the Maximum Entropy Principle).
+
+    The random parameters: each --param PATH=LAW (else the case file's uncertainty table), correlated
+    normals by --correlation, and the weight-on-hook, Normal of standard deviation --sigma (or
+    --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN.
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
     writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
@@ -801,36 +873,19 @@ def study(
     the_case = _load(case)
     if sigma is not None and dispersion is not None:
         _fail("give --sigma or --dispersion, not both")
+    laws, correlated = _declared_laws(param, correlation)
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     _check_output("--out", out, folder=True)
-
-    from drillstring.stochastic.locks import StudyLock, StudyLocked
-
-    err = _err_console()
-
-    def note(text: str) -> None:
-        err.print(escape(f"note: {text}"), soft_wrap=True)
-
-    created = not out.exists()
-    lock = StudyLock(out / "study.zarr")
-    try:  # taken before loading the engine: a second study on this folder is refused at once
-        lock.__enter__()
-    except StudyLocked as error:
-        _fail(str(error))
-    if lock.note:
-        note(lock.note)
-    try:
-        outcome = _run_study(the_case, out, err, note, sigma=sigma, dispersion=dispersion,
-                             samples=samples, seed=seed, workers=workers, scheduler=scheduler, t_end=t_end,
-                             transient=transient)
-    finally:
-        lock.__exit__(None, None, None)
-        if created and out.is_dir() and not any(out.iterdir()):  # refused before anything was written
-            out.rmdir()
+    outcome = _engine_command(
+        out, "study.zarr", "study", "realizations",
+        lambda progress, note: _api().monte_carlo_study(
+            the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
+            correlation=correlated, samples=samples, seed=seed, workers=workers, scheduler=scheduler,
+            t_end=t_end, transient=transient))
     if outcome.already:
-        err.print(escape(f"resumed: {outcome.already} of {samples} realizations were already in "
-                         f"{out / 'study.zarr'}"), soft_wrap=True)
+        _err_console().print(escape(f"resumed: {outcome.already} of {samples} realizations were already in "
+                                    f"{out / 'study.zarr'}"), soft_wrap=True)
 
     payload = outcome.summary
     if as_json:
@@ -839,27 +894,54 @@ def study(
     _print_study(the_case.name, payload, outcome.files)
 
 
-def _run_study(the_case: Case, out: Path, err: Console, note, **settings):
-    """:func:`drillstring.api.monte_carlo_study` with a progress bar; its errors end the command."""
+def _api():
     from drillstring import api
-    from drillstring.files import LockedError
-    from drillstring.stochastic import montecarlo
 
-    tracker = _StudyProgress(err)
+    return api
+
+
+def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
+    """Run ``call(progress, note)`` (an API function of the study engine) for a command writing to ``out``:
+    the store's lock is taken before loading the engine (a second run on the folder is refused at once),
+    a progress bar and notes go to stderr, and every error ends the command with one line: exit 130 when
+    interrupted (what finished is saved), 1 for a run that started and failed, 2 for refused input (settings,
+    store, scheduler, lock). A folder created here and left empty is removed."""
+    from drillstring.files import LockedError
+    from drillstring.stochastic import execution
+    from drillstring.stochastic.locks import StudyLock, StudyLocked
+
+    err = _err_console()
+
+    def note(text: str) -> None:
+        err.print(escape(f"note: {text}"), soft_wrap=True)
+
+    created = not out.exists()
+    lock = StudyLock(out / store_name, what=what)
+    try:  # taken before loading the engine: a second run on this folder is refused at once
+        lock.__enter__()
+    except StudyLocked as error:
+        _fail(str(error))
+    if lock.note:
+        note(lock.note)
+    tracker = _StudyProgress(err, noun)
     try:
         try:
-            return api.monte_carlo_study(the_case, out=out, progress=tracker, note=note, **settings)
+            return call(tracker, note)
         finally:
             tracker.stop()
-    except montecarlo.StudyInterrupted as error:
+    except execution.Interrupted as error:
         _fail(str(error), EXIT_INTERRUPTED)
     except KeyboardInterrupt:
-        _fail(f"interrupted; finished realizations are saved in {out / 'study.zarr'}; run the same command "
-              "again to resume", EXIT_INTERRUPTED)
-    except (montecarlo.StudyWorkersLost, api.StudyFailed) as error:
+        _fail(f"interrupted; finished {noun} are saved in {out / store_name}; run the same command again to "
+              "resume", EXIT_INTERRUPTED)
+    except (execution.WorkersLost, _api().StudyFailed) as error:
         _fail(str(error), EXIT_RUN_FAILED)
     except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
         _fail(str(error))
+    finally:
+        lock.__exit__(None, None, None)
+        if created and out.is_dir() and not any(out.iterdir()):  # refused before anything was written
+            out.rmdir()
 
 
 def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> None:
@@ -873,9 +955,13 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
         timing += f" over {len(payload['sessions'])} runs"
     console.print(escape(
         f"Monte Carlo study: case {name!r}, n_s = {payload['n_samples']} finished"
-        f" ({payload['n_failed']} failed), seed {payload['seed']}, σ_WOH = {payload['sigma'] / _KN:g} kN, "
-        f"{timing}"
+        f" ({payload['n_failed']} failed), seed {payload['seed']}, {timing}"
     ), soft_wrap=True)
+    for path, entry in (payload.get("inputs") or {}).items():
+        unit = f" {entry['unit']}" if entry.get("unit") else ""
+        console.print(escape(f"  {path}: {entry['law']} (mean {entry['mean']:.6g}{unit}, std "
+                             f"{entry['std']:.4g}{unit}, dispersion {_fmt(entry['dispersion'], '.3g', 100.0)} %)"),
+                      soft_wrap=True)
     console.print(_study_table(payload))
     line = _indicator_line(payload)
     if line:
@@ -889,6 +975,202 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
     console.print(escape(f"Figures and report: {files['report']}"), soft_wrap=True)
 
 
+# ---------------------------------------------------------------------------------------------------------
+# drillstring map
+# ---------------------------------------------------------------------------------------------------------
+
+OutOption = Annotated[Path, typer.Option("--out", "-o", help="Output folder; rerunning with the same folder "
+                                                             "resumes. Locked while a run uses it.")]
+WorkersOption = Annotated[
+    int | None,
+    typer.Option("--workers", "-j", help="Local worker processes (default: one per core); 1 runs in this process."),
+]
+SchedulerOption = Annotated[
+    str | None, typer.Option("--scheduler", help="Dask scheduler address (tcp://host:8786) instead of local processes."),
+]
+RunTEndOption = Annotated[
+    float | None, typer.Option("--t-end", help="Simulated time per run, in s (default: the case's t_end)."),
+]
+TransientOption = Annotated[
+    float | None,
+    typer.Option("--transient", help="Start of the window of the outputs, in s (default: min(10 s, t_end/2))."),
+]
+
+
+@app.command("map")
+def map_command(
+    case: CaseArg = "reference",
+    top_speed: Annotated[
+        str | None, typer.Option("--top-speed", help="Top speeds: FROM:TO:N (N values from FROM to TO), a list "
+                                                     "a,b,c, or one value; bare numbers in rpm, or with units: "
+                                                     "'40 rpm:200 rpm:17', '4:21:17 rad/s' (default "
+                                                     f"{DEFAULT_MAP_TOP_SPEED}).")
+    ] = None,
+    weight_on_bit: Annotated[
+        str | None, typer.Option("--weight-on-bit", help="Weights-on-bit, same forms; bare numbers in N, or with "
+                                                         f"units: '60 kN,80 kN' (default {DEFAULT_MAP_WEIGHT_ON_BIT}).")
+    ] = None,
+    t_end: RunTEndOption = None,
+    transient: TransientOption = None,
+    out: OutOption = Path("map"),
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Operating map over top speed × weight-on-bit: one simulation per grid point.
+
+    Per point: mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical specific energy,
+    largest radial displacement and impacts, the leading growth rate of the linear stability of steady
+    drilling and the buckling margin. Writes OUT/map.zarr (resumable), OUT/map.nc, OUT/map.json,
+    OUT/map.png (contours with the stability boundary, the buckling limit and the points) and
+    OUT/report.html.
+    """
+    the_case = _load(case)
+    if workers is not None and scheduler:
+        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+    from drillstring import api
+
+    try:  # bare numbers of the options are in rpm and N; the grid is passed on in SI
+        settings = api.map_settings(the_case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
+                                    transient=transient, default_units=("rpm", "N"))
+    except ValueError as error:
+        _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("weight_on_bit = ", "--weight-on-bit = "))
+    _check_output("--out", out, folder=True)
+    outcome = _engine_command(
+        out, "map.zarr", "map", "grid points",
+        lambda progress, note: api.operating_map(
+            the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
+            transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note))
+    if outcome.already:
+        _err_console().print(escape(f"resumed: {outcome.already} of {settings.points} grid points were already "
+                                    f"in {out / 'map.zarr'}"), soft_wrap=True)
+    if as_json:
+        _print_json(outcome.summary)
+        return
+    _print_map(the_case.name, outcome.summary)
+
+
+def _print_map(name: str, summary: dict[str, Any]) -> None:
+    console = _console()
+    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
+    console.print(escape(
+        f"Operating map: case {name!r}, {len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} "
+        f"rpm) × {len(weights)} weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} kN), "
+        f"{summary['done']} points done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"
+    ), soft_wrap=True)
+    table = Table(title="Highlights", title_justify="left")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("points where steady drilling is linearly stable", f"{summary['linearly_stable_points']}")
+    table.add_row("points in stick-slip", f"{summary['stick_slip_points']}")
+    table.add_row("points without steady drilling (no penetration)", f"{summary['points_without_steady_drilling']}")
+    table.add_row("critical weight-on-bit (lateral buckling)", f"{summary['critical_weight_on_bit'] / _KN:,.1f} kN")
+    best = summary.get("largest_rate_of_penetration")
+    if best:
+        table.add_row("largest mean ROP", f"{best['mean_rate_of_penetration'] * _M_PER_H:.2f} m/h at "
+                                          f"{best['top_speed'] * _RPM:.0f} rpm, {best['weight_on_bit'] / _KN:.0f} kN")
+        table.add_row("  its bit-speed oscillation / MSE", f"{best['bit_speed_oscillation']:.3f} / "
+                                                          f"{best['mechanical_specific_energy'] / 1e6:,.0f} MPa")
+    console.print(table)
+    files = summary.get("files") or {}
+    if files:
+        console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}"),
+                      soft_wrap=True)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring sensitivity
+# ---------------------------------------------------------------------------------------------------------
+
+
+@app.command("sensitivity")
+def sensitivity_command(
+    case: CaseArg = "reference",
+    param: ParamOption = None,
+    samples: Annotated[
+        int, typer.Option("--samples", "-n", help="Base samples N, a power of 2 (>= 8): N(k + 2) runs for k "
+                                                   "parameters; indices also at N/4 and N/2 (convergence).")
+    ] = DEFAULT_BASE_SAMPLES,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the Sobol' sequence and the bootstrap (>= 0).")] = 0,
+    t_end: RunTEndOption = None,
+    transient: TransientOption = None,
+    out: OutOption = Path("sensitivity"),
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Global sensitivity: first-order and total Sobol' indices (Saltelli design, SALib estimators,
+    bootstrap confidence intervals) of the time-mean ROP, bit-speed oscillation, mean TOB and FOB and the
+    standard deviations in time of ROP, TOB and FOB.
+
+    The parameters: each --param PATH=LAW (independent laws), else the case file's uncertainty table.
+    Writes OUT/sensitivity.zarr (resumable), OUT/sensitivity.json (per output: S1, ST, their intervals,
+    per parameter; the convergence at N/4, N/2, N), OUT/sobol.png, OUT/sobol_convergence.png and
+    OUT/report.html.
+    """
+    the_case = _load(case)
+    laws, _ = _declared_laws(param, None)
+    if workers is not None and scheduler:
+        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+    _check_output("--out", out, folder=True)
+    from drillstring import api
+
+    outcome = _engine_command(
+        out, "sensitivity.zarr", "sensitivity", "runs",
+        lambda progress, note: api.sensitivity(
+            the_case, parameters=laws, samples=samples, seed=seed, t_end=t_end, transient=transient, out=out,
+            workers=workers, scheduler=scheduler, progress=progress, note=note))
+    if outcome.already:
+        _err_console().print(escape(f"resumed: {outcome.already} of {outcome.payload['runs']} runs were already "
+                                    f"in {out / 'sensitivity.zarr'}"), soft_wrap=True)
+    if as_json:
+        _print_json(outcome.payload)
+        return
+    _print_sensitivity(the_case.name, outcome.payload)
+
+
+def _print_sensitivity(name: str, payload: dict[str, Any]) -> None:
+    from drillstring.plots import OUTPUT_TITLES, short_labels
+
+    console = _console()
+    console.print(escape(
+        f"Global sensitivity: case {name!r}, N = {payload['base_samples']} ({payload['runs']} runs, "
+        f"{payload['failed_runs']} failed), wall time {payload['wall_time']:,.1f} s"), soft_wrap=True)
+    for path, law in payload["parameters"].items():
+        console.print(escape(f"  {path}: {law}"), soft_wrap=True)
+    parameters = list(payload["parameters"])
+    labels = short_labels(parameters)
+    level = payload["confidence_level"]
+    table = Table(title=escape(f"Sobol' indices (± half-width of the {level:.0%} interval)"), title_justify="left",
+                  caption="change: largest change of an index from N/4 to N/2, N/2 to N", caption_justify="left")
+    table.add_column("output")
+    table.add_column("parameter")
+    for header in ("S1", "ST"):
+        table.add_column(header, justify="right")
+    table.add_column("change", justify="right")
+
+    def cell(value, ci) -> str:
+        if value is None:
+            return "–"
+        half = None if not ci or None in ci else (ci[1] - ci[0]) / 2
+        return f"{value:.3f}" + ("" if half is None else f" ± {half:.3f}")
+
+    for output, entry in payload["outputs"].items():
+        change = entry["convergence"]["max_change"]
+        for k, parameter in enumerate(parameters):
+            table.add_row(escape(OUTPUT_TITLES.get(output, output)) if k == 0 else "", escape(labels[k]),
+                          cell(entry["S1"][parameter], entry["S1_ci"][parameter]),
+                          cell(entry["ST"][parameter], entry["ST_ci"][parameter]),
+                          (", ".join("–" if c is None else f"{c:.3f}" for c in change)) if k == 0 else "")
+    console.print(table)
+    files = payload.get("files") or {}
+    if files:
+        console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+        console.print(escape(f"Indices: {files['indices']}, figures: {files['figure']}, report: "
+                             f"{files['report']}"), soft_wrap=True)
+
+
 #: Commands that run in their own process only and never use Dask. With Dask installed, xarray imports
 #: dask.array and dask.distributed (about 0.4 s of start-up) for ordinary Dataset operations and NetCDF
 #: writes; the console script hides Dask from these commands so that xarray treats it as absent.
@@ -896,7 +1178,7 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
 NO_DASK_COMMANDS = frozenset({"cases", "static", "modes", "stability", "simulate", "compare"})
 
 
-def main() -> None:
+def run() -> None:
     """The ``drillstring`` console script: :data:`app`, with Dask hidden from the commands that do not
     use it (:data:`NO_DASK_COMMANDS`). Only the console script does this: a process that imports the
     package (a notebook, the tests) keeps Dask."""
@@ -909,4 +1191,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    main()
+    run()

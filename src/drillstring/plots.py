@@ -14,6 +14,10 @@ are safe in scripts, notebooks, worker processes and tests.
 * :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB.
 * :func:`plot_dispersion` — dispersion [%] of the same observables vs time, transient shaded.
 * :func:`plot_study` — the three study figures in one folder.
+* :func:`plot_map` — an operating map: ROP, vibration, MSE, lateral displacement over top speed × WOB, with
+  the linear stability boundary, the buckling limit and the simulated points.
+* :func:`plot_sobol` — Sobol' indices (first order and total, with confidence intervals) per output;
+  :func:`plot_sobol_convergence` — the indices at N/4, N/2, N.
 """
 
 from __future__ import annotations
@@ -36,6 +40,9 @@ __all__ = [
     "plot_envelopes",
     "plot_dispersion",
     "plot_study",
+    "plot_map",
+    "plot_sobol",
+    "plot_sobol_convergence",
 ]
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
@@ -320,7 +327,26 @@ def _study_title(stats: xr.Dataset, what: str) -> str:
     sigma = stats.attrs.get("sigma")
     if sigma is not None and np.isfinite(float(sigma)):
         parts.append(f"σ_WOH = {float(sigma) / 1e3:g} kN")
+    others = [str(p) for p in stats.attrs.get("parameters", []) if str(p) != "weight_on_hook"]
+    if others:
+        parts.append("random " + ", ".join(others))
     return ", ".join(parts)
+
+
+def _input_dispersions(stats: xr.Dataset) -> list[tuple[str, float]]:
+    """(label, dispersion) of each random input from the statistics' attributes: std/|mean| of each
+    parameter's law, and δ_WOB when the weight-on-hook is random."""
+    attrs = stats.attrs
+    out = []
+    for path, mean, std in zip(attrs.get("parameters", []), attrs.get("parameter_mean", []),
+                               attrs.get("parameter_std", [])):
+        if float(mean) != 0.0:
+            label = "δ_WOH" if str(path) == "weight_on_hook" else f"δ({path})"
+            out.append((label, float(std) / abs(float(mean))))
+    dispersion = attrs.get("weight_on_bit_dispersion")
+    if dispersion is not None and np.isfinite(float(dispersion)):
+        out.append(("δ_WOB", float(dispersion)))
+    return out
 
 
 def plot_convergence(stats: xr.Dataset, path: str | Path) -> Path:
@@ -385,9 +411,7 @@ def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float) -> 
     axes[-1].set_xlabel("time [s]")
     axes[0].legend(loc="upper right", fontsize="small")
     title = _study_title(stats, "Dispersion of the response")
-    inputs = [(key, stats.attrs.get(f"{key}_dispersion")) for key in ("weight_on_hook", "weight_on_bit")]
-    extra = ", ".join(f"δ_{'WOH' if k == 'weight_on_hook' else 'WOB'} = {100 * float(v):.3g} %"
-                      for k, v in inputs if v is not None)
+    extra = ", ".join(f"{label} = {100 * value:.3g} %" for label, value in _input_dispersions(stats))
     fig.suptitle(f"{title}\n{extra}" if extra else title)
     return _save(fig, path)
 
@@ -402,3 +426,198 @@ def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float) -> di
         "envelopes": plot_envelopes(stats, out / "envelopes.png"),
         "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient),
     }
+
+
+# ---------------------------------------------------------------------------------------------------------
+# An operating map
+# ---------------------------------------------------------------------------------------------------------
+
+#: Panels of :func:`plot_map`: variable, factor from SI, label, colour map, logarithmic scale.
+MAP_PANELS = (
+    ("mean_rate_of_penetration", 3600.0, "mean rate of penetration [m/h]", "viridis", False),
+    ("bit_speed_oscillation", 1.0, "bit-speed oscillation (max − min)/2Ω [-]", "magma_r", False),
+    ("mechanical_specific_energy", 1e-6, "mechanical specific energy [MPa]", "cividis_r", True),
+    ("max_radial_displacement", 1e3, "max radial displacement at the probes [mm]", "plasma", False),
+)
+
+
+def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str, cmap: str,
+               log: bool = False) -> None:
+    """Filled contours of ``z`` (shape (len(x), len(y))) over x (abscissa) and y (on a logarithmic colour
+    scale when ``log`` and every value is positive), or coloured markers when an axis has a single value."""
+    from matplotlib import ticker
+    from matplotlib.colors import LogNorm
+
+    finite = np.isfinite(z)
+    if not finite.any():
+        ax.text(0.5, 0.5, "no value", ha="center", va="center", transform=ax.transAxes)
+        return
+    lo, hi = float(np.min(z[finite])), float(np.max(z[finite]))
+    scale = dict(norm=LogNorm(lo, hi)) if log and lo > 0 and hi > lo else {}
+    ticks = {}
+    levels = 12
+    if scale:  # ten levels per decade, ticks 1-2-5 labelled in plain numbers
+        def within(values):
+            return values[(values > lo) & (values < hi)]
+
+        marks = within(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)).tick_values(lo, hi))
+        ticks = dict(ticks=marks, format=ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        fine = within(ticker.LogLocator(base=10, subs=10 ** (np.arange(10) / 10)).tick_values(lo, hi))
+        levels = np.unique(np.concatenate([[lo], fine, [hi]]))
+    if x.size >= 2 and y.size >= 2 and hi > lo:
+        artist = ax.contourf(x, y, z.T, levels=levels, cmap=cmap, **scale)
+    else:
+        xx, yy = np.meshgrid(x, y, indexing="ij")
+        artist = ax.scatter(xx.ravel(), yy.ravel(), c=z.ravel(), cmap=cmap, s=80, zorder=2, **scale)
+    fig.colorbar(artist, ax=ax, label=label, **ticks)
+
+
+def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """Operating map (a Dataset of :func:`drillstring.stochastic.operating_map.map_dataset`) as four panels
+    over top speed [rpm] × weight-on-bit [kN]: mean ROP, bit-speed oscillation, mechanical specific energy
+    and the largest radial displacement at the probes, each with the boundary of linear stability of
+    steady drilling (growth rate 0; the unstable side hatched), the lateral buckling limit (critical
+    weight-on-bit, dashed) and the simulated points (failed ones as crosses). Written to the PNG ``path``."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    growth = np.asarray(ds["growth_rate"].values, dtype=float)
+    status = np.asarray(ds["status"].values)
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    fig, axes = _figure(2, 2, (12.0, 9.0))
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    contour_ok = x.size >= 2 and y.size >= 2 and np.isfinite(growth).sum() >= 4
+    for ax, (name, factor, label, cmap, log) in zip(axes, MAP_PANELS):
+        values = np.asarray(ds[name].values, dtype=float) * factor
+        values = np.where(status == 1, values, np.nan)
+        _map_panel(ax, fig, x, y, values, label, cmap, log)
+        if contour_ok and np.nanmax(growth) > 0 > np.nanmin(growth):
+            ax.contour(x, y, growth.T, levels=[0.0], colors="k", linewidths=1.6)
+        if contour_ok and np.nanmax(growth) > 0:
+            ax.contourf(x, y, growth.T, levels=[0.0, np.inf], colors="none", hatches=["//"])
+        if np.isfinite(critical) and y.min() <= critical <= y.max():
+            ax.axhline(critical, color="C3", ls="--", lw=1.6)
+        done = status == 1
+        ax.plot(xx[done], yy[done], ".", color="k", ms=3, clip_on=False)
+        if (~done).any():
+            ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6, clip_on=False)
+        ax.set_xlabel("top speed [rpm]")
+        ax.set_ylabel("weight-on-bit [kN]")
+        ax.set_title(label.split(" [")[0], fontsize="medium")
+    buckling = (f"lateral buckling, WOB = {critical:.4g} kN" if np.isfinite(critical)
+                and y.min() <= critical <= y.max() else f"lateral buckling at {critical:.4g} kN (off the map)")
+    handles = [Line2D([], [], color="k", lw=1.6, label="linear stability boundary (growth rate 0)"),
+               Patch(facecolor="none", edgecolor="k", hatch="//", label="steady drilling linearly unstable"),
+               Line2D([], [], color="C3", ls="--", lw=1.6, label=buckling),
+               Line2D([], [], color="k", marker=".", ls="", label="simulated point")]
+    if (status != 1).any():
+        handles.append(Line2D([], [], color="C3", marker="x", ls="", label="failed point"))
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
+    title = "Operating map"
+    name = _case_name(ds.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    t_end, t_tr = ds.attrs.get("t_end"), ds.attrs.get("t_transient")
+    if t_end is not None and t_tr is not None:
+        title += f" (runs of {float(t_end):g} s, outputs over t ≥ {float(t_tr):g} s)"
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Sobol' indices
+# ---------------------------------------------------------------------------------------------------------
+
+#: Display names of the scalar outputs of a run, for the sensitivity figures.
+OUTPUT_TITLES = {
+    "mean_rate_of_penetration": "mean ROP",
+    "bit_speed_oscillation": "bit-speed oscillation",
+    "mean_torque_on_bit": "mean TOB",
+    "mean_force_on_bit": "mean FOB",
+    "std_rate_of_penetration": "ROP std in time",
+    "std_torque_on_bit": "TOB std in time",
+    "std_force_on_bit": "FOB std in time",
+    "stick_time_fraction": "stick time fraction",
+}
+
+
+def short_labels(paths) -> list[str]:
+    """The last part of each parameter path when that is unambiguous among ``paths``, else the path."""
+    paths = [str(p) for p in paths]
+    tails = [p.split(".")[-1] for p in paths]
+    return [t if tails.count(t) == 1 else p for p, t in zip(paths, tails)]
+
+
+def _grid(n: int) -> tuple[int, int]:
+    cols = min(n, 4) if n > 4 else min(n, 2) if n > 1 else 1
+    return math.ceil(n / cols), cols
+
+
+def _values(mapping: dict, parameters: list[str]) -> np.ndarray:
+    return np.array([np.nan if mapping.get(p) is None else float(mapping[p]) for p in parameters])
+
+
+def plot_sobol(indices: dict, path: str | Path) -> Path:
+    """Bar chart of Sobol' indices, one panel per output: first-order S1 (solid) and total ST (light) of
+    each parameter with their confidence intervals as error bars. ``indices`` is the JSON form of a
+    :class:`~drillstring.stochastic.sensitivity.SobolResult` (``to_dict()``, as in ``sensitivity.json``).
+    Written to the PNG ``path``."""
+    parameters = list(indices["parameters"])
+    outputs = list(indices["outputs"])
+    rows, cols = _grid(len(outputs))
+    fig, axes = _figure(rows, cols, (3.3 * cols + 1.0, 3.2 * rows + 0.8))
+    x = np.arange(len(parameters))
+    width = 0.38
+    labels = short_labels(parameters)
+    for ax, name in zip(axes, outputs):
+        entry = indices["outputs"][name]
+        for shift, kind, style in ((-width / 2, "S1", dict(color="C0")),
+                                   (width / 2, "ST", dict(color="C0", alpha=0.35, hatch="//", edgecolor="C0"))):
+            values = _values(entry[kind], parameters)
+            ci = np.array([[np.nan, np.nan] if entry[f"{kind}_ci"].get(p) is None
+                           or None in entry[f"{kind}_ci"][p] else entry[f"{kind}_ci"][p] for p in parameters],
+                          dtype=float)
+            errors = np.abs(np.vstack([values - ci[:, 0], ci[:, 1] - values]))
+            ax.bar(x + shift, np.nan_to_num(values), width, yerr=np.nan_to_num(errors), capsize=2,
+                   label="first order S1" if kind == "S1" else "total ST", **style)
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_xticks(x, labels, rotation=30, ha="right", fontsize="small")
+        ax.set_ylim(min(-0.1, ax.get_ylim()[0]), max(1.05, ax.get_ylim()[1]))
+        ax.set_title(OUTPUT_TITLES.get(name, name), fontsize="medium")
+        ax.grid(True, axis="y", alpha=0.3)
+    for ax in axes[len(outputs):]:
+        ax.set_visible(False)
+    axes[0].legend(loc="upper left", fontsize="small")
+    level = float(indices.get("confidence_level", 0.95))
+    fig.suptitle(f"Sobol' indices, N = {indices['base_samples']} ({indices['runs']} runs); error bars: "
+                 f"{level:.0%} bootstrap intervals")
+    return _save(fig, path)
+
+
+def plot_sobol_convergence(indices: dict, path: str | Path) -> Path:
+    """The Sobol' indices of each output at N/4, N/2 and N base samples (S1 solid, ST dashed, one colour
+    per parameter): converged indices are flat. ``indices`` as for :func:`plot_sobol`."""
+    parameters = list(indices["parameters"])
+    outputs = list(indices["outputs"])
+    rows, cols = _grid(len(outputs))
+    fig, axes = _figure(rows, cols, (3.3 * cols + 1.0, 3.0 * rows + 0.8))
+    labels = short_labels(parameters)
+    for ax, name in zip(axes, outputs):
+        conv = indices["outputs"][name]["convergence"]
+        n = np.asarray(conv["base_samples"], dtype=float)
+        for k, parameter in enumerate(parameters):
+            for kind, ls in (("S1", "-"), ("ST", "--")):
+                values = np.array([np.nan if v is None else v for v in conv[kind][parameter]], dtype=float)
+                ax.plot(n, values, ls=ls, marker="o", ms=3, color=f"C{k % 10}",
+                        label=f"{labels[k]} {kind}" if kind == "S1" else None)
+        ax.set_xscale("log", base=2)
+        ax.set_xlabel("base samples N")
+        ax.set_title(OUTPUT_TITLES.get(name, name), fontsize="medium")
+        ax.grid(True, alpha=0.3)
+    for ax in axes[len(outputs):]:
+        ax.set_visible(False)
+    axes[0].legend(loc="best", fontsize="x-small")
+    fig.suptitle("Convergence of the Sobol' indices (S1 solid, ST dashed)")
+    return _save(fig, path)

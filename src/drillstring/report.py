@@ -5,8 +5,8 @@ base64 PNG ``data:`` URIs, no script and no external resource, so the page can b
 alone. Every piece of text that comes from outside (case TOML, names, messages) is escaped.
 
 The page holds the case (key numbers and the full TOML in a collapsible block), the study's size and
-input dispersions, a dispersion table per observable (time-mean and maximum dispersion after the
-transient in %, and their ratios to the weight-on-hook and weight-on-bit dispersions), the run
+the laws of its random inputs with their dispersions, a dispersion table per observable (time-mean and
+maximum dispersion after the transient in %, and their ratios to each input's dispersion), the run
 information (failures, wall time, ...) and the figures.
 """
 
@@ -24,7 +24,7 @@ from typing import Any
 from drillstring import __version__
 from drillstring.files import write_text_atomic
 
-__all__ = ["write_report"]
+__all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
 
 _RPM = 60.0 / (2.0 * math.pi)
 
@@ -187,22 +187,45 @@ def _study_section(summary: Mapping[str, Any]) -> str:
         rows.append(("failed realizations", _num(summary["n_failed"])))
     if "seed" in summary:
         rows.append(("seed", _num(summary["seed"])))
-    if "sigma" in summary:
+    for path, entry in (summary.get("inputs") or {}).items():
+        unit = f" {entry.get('unit')}" if entry.get("unit") else ""
+        rows.append((f"law of {path}", f"{_esc(entry.get('law'))} (SI: mean {_num(entry.get('mean'))}{_esc(unit)}, "
+                                        f"std {_num(entry.get('std'))}{_esc(unit)}, dispersion "
+                                        f"{_percent(entry.get('dispersion'))} %; sample: mean "
+                                        f"{_num(entry.get('sample_mean'))}, std {_num(entry.get('sample_std'))})"))
+    if summary.get("sigma") is not None:
         rows.append(("σ of the weight-on-hook", f"{_num(float(summary['sigma']) / 1e3)} kN"))
     if "weight_on_hook_mean" in summary:
         rows.append(("mean weight-on-hook", f"{_num(float(summary['weight_on_hook_mean']) / 1e3, 6)} kN"))
-    if "weight_on_hook_dispersion" in summary:
+    if summary.get("weight_on_hook_dispersion") is not None:
         rows.append(("weight-on-hook dispersion δ_WOH", f"{_percent(summary['weight_on_hook_dispersion'])} %"))
-    if "weight_on_bit_dispersion" in summary:
+    if summary.get("weight_on_bit_dispersion") is not None:
         rows.append(("weight-on-bit dispersion δ_WOB", f"{_percent(summary['weight_on_bit_dispersion'])} %"))
     if "t_transient" in summary:
         rows.append(("summaries over", f"t ≥ {_num(summary['t_transient'])} s"))
     return "<h2>Study</h2>" + (_kv_table(rows) if rows else "")
 
 
+#: Short labels of inputs in table headers (others: the parameter path).
+INPUT_LABELS = {"weight_on_hook": "WOH", "weight_on_bit": "WOB"}
+
+
+def input_label(name: str) -> str:
+    """``δ_WOH``, ``δ_WOB``, or ``δ(path)`` for another random parameter."""
+    return f"δ_{INPUT_LABELS[name]}" if name in INPUT_LABELS else f"δ({name})"
+
+
+def _input_names(observables: Mapping[str, Any]) -> list[str]:
+    """The inputs that the dispersion ratios refer to (those of the first observable)."""
+    for entry in observables.values():
+        return list((entry or {}).get("ratio_time_mean") or {})
+    return []
+
+
 def _dispersion_rows(observables: Mapping[str, Any], window: str | None, conv: Mapping[str, Any]) -> str:
     """Table rows of one summary window (``window`` None: the steady window, else the entry's key)."""
     body = []
+    inputs = _input_names(observables)
     for name, entry in observables.items():
         entry = (entry or {}) if window is None else ((entry or {}).get(window) or {})
         rt = entry.get("ratio_time_mean") or {}
@@ -212,10 +235,8 @@ def _dispersion_rows(observables: Mapping[str, Any], window: str | None, conv: M
             _percent(entry.get("dispersion_time_mean")),
             _percent(entry.get("dispersion_max")),
             _num(entry.get("time_of_max")),
-            _num(rt.get("weight_on_hook"), 3),
-            _num(rt.get("weight_on_bit"), 3),
-            _num(rm.get("weight_on_hook"), 3),
-            _num(rm.get("weight_on_bit"), 3),
+            *(_num(rt.get(key), 3) for key in inputs),
+            *(_num(rm.get(key), 3) for key in inputs),
         ]
         if window is None:
             cells.append(_percent(conv.get(name)))
@@ -230,9 +251,11 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
     if not observables:
         return ""
     conv = summary.get("convergence_change_second_half") or {}
+    inputs = _input_names(observables)
     columns = ("<th>observable</th><th>from t [s]</th><th>time-mean δ [%]</th><th>max δ [%]</th>"
-               "<th>time of max [s]</th><th>mean δ / δ_WOH</th><th>mean δ / δ_WOB</th><th>max δ / δ_WOH</th>"
-               "<th>max δ / δ_WOB</th>")
+               "<th>time of max [s]</th>"
+               + "".join(f"<th>mean δ / {_esc(input_label(k))}</th>" for k in inputs)
+               + "".join(f"<th>max δ / {_esc(input_label(k))}</th>" for k in inputs))
     steady = (f"<h3>Steady window (t ≥ {_num(summary.get('t_transient'))} s)</h3>"
               f"<table><tr>{columns}<th>conv(n_s) change, 2nd half [%]</th></tr>"
               f"{_dispersion_rows(observables, None, conv)}</table>")
@@ -245,7 +268,8 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
     return (
         "<h2>Dispersion of the response</h2>"
         "<p>Dispersion δ = std / |mean| over the realizations at each time, summarised over time (mean and "
-        "maximum); ratios above 1 mean that the input uncertainty is amplified.</p>"
+        "maximum), and its ratio to the dispersion of each random input; ratios above 1 mean that the input "
+        "uncertainty is amplified.</p>"
         + steady + whole + _indicators_html(summary)
     )
 
@@ -300,6 +324,30 @@ def _figure_html(name: str, path: str | Path) -> str:
 # ---------------------------------------------------------------------------------------------------------
 
 
+def _page(path: str | Path, title: str, case_toml: str, sections: list[str], figures: Mapping[str, str | Path],
+          run_info: Mapping[str, Any]) -> Path:
+    """One self-contained page: title, the case, ``sections`` (HTML), the run table and the figures."""
+    path = Path(path)
+    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{_esc(title)}</title>",
+        f"<style>{_CSS}</style></head><body>",
+        f"<h1>{_esc(title)}</h1>",
+        f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
+        _case_section(case_toml),
+        *sections,
+        _run_section(run_info),
+    ]
+    if figures:
+        parts.append("<h2>Figures</h2>")
+        parts.extend(_figure_html(name, fig) for name, fig in figures.items())
+    parts.append("</body></html>")
+    return write_text_atomic(path, "\n".join(parts) + "\n")
+
+
 def write_report(
     path: str | Path,
     *,
@@ -320,23 +368,106 @@ def write_report(
         run_info: label -> value rows of the "Run" table (e.g. wall time, workers, failures); a mapping
             value (such as the failures ``{realization: message}``) is shown as a collapsible list.
     """
-    path = Path(path)
-    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_esc(title)}</title>",
-        f"<style>{_CSS}</style></head><body>",
-        f"<h1>{_esc(title)}</h1>",
-        f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
-        _case_section(case_toml),
-        _study_section(summary),
-        _dispersion_table(summary),
-        _run_section(run_info),
-    ]
-    if figures:
-        parts.append("<h2>Figures</h2>")
-        parts.extend(_figure_html(name, fig) for name, fig in figures.items())
-    parts.append("</body></html>")
-    return write_text_atomic(path, "\n".join(parts) + "\n")
+    return _page(path, title, case_toml, [_study_section(summary), _dispersion_table(summary)], figures,
+                 run_info)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Sensitivity and operating maps
+# ---------------------------------------------------------------------------------------------------------
+
+#: Display names of the scalar outputs of a run.
+OUTPUT_NAMES = {
+    "mean_rate_of_penetration": "mean rate of penetration",
+    "bit_speed_oscillation": "bit-speed oscillation",
+    "mean_torque_on_bit": "mean torque-on-bit",
+    "mean_force_on_bit": "mean force-on-bit",
+    "std_rate_of_penetration": "rate of penetration, std in time",
+    "std_torque_on_bit": "torque-on-bit, std in time",
+    "std_force_on_bit": "force-on-bit, std in time",
+    "stick_time_fraction": "stick time fraction",
+}
+
+
+def _interval(ci: Any) -> str:
+    if not ci or None in ci:
+        return "–"
+    return f"[{_num(ci[0], 3)}, {_num(ci[1], 3)}]"
+
+
+def _sobol_tables(indices: Mapping[str, Any]) -> str:
+    parameters = list(indices.get("parameters") or {})
+    rows = [("parameters and laws", _esc("; ".join(f"{p}: {law}" for p, law in indices["parameters"].items()))),
+            ("base samples N", _num(indices.get("base_samples"))), ("runs N(k + 2)", _num(indices.get("runs"))),
+            ("seed", _num(indices.get("seed"))),
+            ("confidence level of the intervals", f"{_percent(indices.get('confidence_level'))} % "
+                                                  f"({_num(indices.get('resamples'))} bootstrap resamples)")]
+    parts = ["<h2>Design</h2>", _kv_table(rows),
+             "<h2>Sobol' indices</h2><p>S1: share of the output's variance explained by the parameter alone; "
+             "ST: with all its interactions. Intervals: bootstrap over the base samples. Convergence: the "
+             "largest change of any index from N/4 to N/2 and from N/2 to N (the same runs).</p>"]
+    head = "<tr><th>output</th><th>parameter</th><th>S1</th><th>S1 interval</th><th>ST</th><th>ST interval</th></tr>"
+    body = []
+    for name, entry in indices["outputs"].items():
+        label = OUTPUT_NAMES.get(name, name)
+        change = entry.get("convergence", {}).get("max_change") or []
+        note = (f" (max change {', '.join(_num(c, 2) for c in change)}"
+                f"{'; ' + _num(entry.get('dropped_base_samples')) + ' base samples dropped' if entry.get('dropped_base_samples') else ''})")
+        for k, parameter in enumerate(parameters):
+            first = (f'<td rowspan="{len(parameters)}">{_esc(label)}<br><small>{_esc(note)}</small></td>'
+                     if k == 0 else "")
+            body.append(f"<tr>{first}<td>{_esc(parameter)}</td>"
+                        f'<td class="num">{_num(entry["S1"].get(parameter), 3)}</td>'
+                        f'<td class="num">{_interval(entry["S1_ci"].get(parameter))}</td>'
+                        f'<td class="num">{_num(entry["ST"].get(parameter), 3)}</td>'
+                        f'<td class="num">{_interval(entry["ST_ci"].get(parameter))}</td></tr>')
+    parts.append(f"<table>{head}{''.join(body)}</table>")
+    return "".join(parts)
+
+
+def write_sensitivity_report(path: str | Path, *, title: str, case_toml: str, indices: Mapping[str, Any],
+                             figures: Mapping[str, str | Path], run_info: Mapping[str, Any]) -> Path:
+    """Write the report of a sensitivity analysis (one self-contained HTML page): the case, the design,
+    a table of the Sobol' indices with their intervals and convergence per output (``indices``: the JSON
+    form of a :class:`~drillstring.stochastic.sensitivity.SobolResult`), the run table and the figures."""
+    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info)
+
+
+def _map_section(summary: Mapping[str, Any]) -> str:
+    speeds = [v * _RPM for v in summary.get("top_speed", [])]
+    weights = [v / 1e3 for v in summary.get("weight_on_bit", [])]
+
+    def axis(values: list[float], unit: str) -> str:
+        if not values:
+            return "–"
+        return f"{_num(min(values))} to {_num(max(values))} {unit} ({len(values)} values)"
+
+    rows = [("top speed", axis(speeds, "rpm")), ("weight-on-bit", axis(weights, "kN")),
+            ("points (done, failed)", f"{_num(summary.get('points'))} ({_num(summary.get('done'))}, "
+                                      f"{_num(summary.get('failed'))})"),
+            ("simulated time per point", f"{_num(summary.get('t_end'))} s, outputs over t ≥ "
+                                         f"{_num(summary.get('t_transient'))} s"),
+            ("critical weight-on-bit (lateral buckling)",
+             f"{_num(float(summary.get('critical_weight_on_bit', math.nan)) / 1e3)} kN"),
+            ("bit area (borehole cross-section) for the MSE", f"{_num(summary.get('bit_area'))} m²"),
+            ("points where steady drilling is linearly stable", _num(summary.get("linearly_stable_points"))),
+            ("points without steady drilling (no penetration)", _num(summary.get("points_without_steady_drilling"))),
+            ("points in stick-slip", _num(summary.get("stick_slip_points")))]
+    best = summary.get("largest_rate_of_penetration")
+    if best:
+        rows.append(("largest mean rate of penetration",
+                     f"{_num(best['mean_rate_of_penetration'] * 3600)} m/h at {_num(best['top_speed'] * _RPM)} rpm, "
+                     f"{_num(best['weight_on_bit'] / 1e3)} kN (bit-speed oscillation "
+                     f"{_num(best['bit_speed_oscillation'], 3)}, MSE {_num(best['mechanical_specific_energy'] / 1e6)} "
+                     f"MPa)"))
+    return ("<h2>Map</h2><p>One simulation per point; outputs after the transient. MSE = WOB/A + Ω·TOB/(A·ROP) "
+            "(Teale) from the time means. The stability boundary is where the leading growth rate of the model "
+            "linearised about steady drilling crosses 0.</p>" + _kv_table(rows))
+
+
+def write_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
+                     figures: Mapping[str, str | Path], run_info: Mapping[str, Any]) -> Path:
+    """Write the report of an operating map (one self-contained HTML page): the case, the grid and its
+    highlights (``summary``: :func:`drillstring.stochastic.operating_map.map_summary`), the run table and
+    the figures."""
+    return _page(path, title, case_toml, [_map_section(summary)], figures, run_info)

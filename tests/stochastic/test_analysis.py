@@ -27,9 +27,12 @@ def synthetic_raw(n_s=400, seed=1):
     data["status"] = (("realization",), np.full(n_s, DONE))
     data["weight_on_hook"] = (("realization",), 1e6 + 5e3 * a / 0.05)
     data["weight_on_bit"] = (("realization",), 1e5 - 5e3 * a / 0.05)
+    data["input_values"] = (("realization", "parameter"), (1e6 + 5e3 * a / 0.05)[:, None])
     raw = xr.Dataset(data, coords={"time": t, "x": ("probe", [1560.0])})
     raw.attrs.update({"settings": {"sigma": 5e3, "seed": 0}, "weight_on_hook_mean": 1e6, "weight": 1.1e6,
-                      "case": "[operation]\ntop_speed = 1.0\n"})
+                      "case": "[operation]\ntop_speed = 1.0\n", "parameters": ["weight_on_hook"],
+                      "laws": ["normal 1000000 5000"], "parameter_units": ["N"], "parameter_mean": [1e6],
+                      "parameter_std": [5e3]})
     return raw, a
 
 

@@ -7,12 +7,15 @@ import subprocess
 import sys
 import threading
 import time
+from functools import partial
 
 import numpy as np
 import pytest
 import zarr
+from scipy.stats import norm
 
 from drillstring.case import load_case
+from drillstring.stochastic import execution
 from drillstring.stochastic import montecarlo as mc
 from drillstring.stochastic.analysis import load_study, study_statistics
 from drillstring.stochastic.maxent import realization_generator
@@ -50,7 +53,8 @@ def test_draws_depend_only_on_seed_and_index(small_case):
     again = [mc.draw_weight_on_hook(small_case, SETTINGS, i) for i in (0, 3, 4)]
     assert first[0] == again[1] and first[1] == again[0] and first[2] == again[2]
     mean = mc.nominal_weight_on_hook(small_case)
-    expected = mean + 5000.0 * realization_generator(11, 3).standard_normal()
+    # the inverse distribution function of the Normal law at the realization's own uniform draw
+    expected = norm.ppf(realization_generator(11, 3).random(1)[0], loc=mean, scale=5000.0)
     assert first[0] == pytest.approx(expected, rel=1e-12)
     assert mc.draw_weight_on_hook(small_case, SETTINGS, mc.NOMINAL) == mean
 
@@ -403,8 +407,9 @@ def test_realization_that_kills_its_worker_is_isolated_and_the_others_stay_paral
     log = tmp_path / "log.txt"
     monkeypatch.setenv("DRILLSTRING_TEST_LOG", str(log))
     store = mc.StudyStore(tmp_path / "crash.zarr", small_case, settings)
-    mc._run_processes(small_case, settings, list(range(settings.samples)), 2, store.write,
-                      task=die_on_index_2)
+    execution._run_processes(partial(die_on_index_2, small_case, settings),
+                             [(i, i) for i in range(settings.samples)], 2, store.write,
+                             lost=partial(mc._worker_died, small_case, settings))
     status = store.status()
     assert status[2] == mc.FAILED and "worker process died" in store.failures()["2"]
     others = [i for i in range(settings.samples) if i != 2]
@@ -436,3 +441,84 @@ def test_drawn_weights_agree_with_the_statics_with_fluid_axial_loads(small_case)
         assert outcome.weight_on_hook == woh
         static = case_static_state(case, weight_on_bit=outcome.weight_on_bit)
         assert static.weight_on_hook == pytest.approx(woh, rel=1e-10)
+
+
+# --- random parameters other than the weight-on-hook --------------------------------------------
+
+LAWS = (("fluid.inlet_velocity", "uniform 1.2 1.8 m/s"), ("operation.top_speed", "normal 100 5 rpm"))
+
+
+def test_a_realization_is_the_case_with_its_drawn_values(small_case):
+    """Realization i of a study drawing two parameters is exactly the deterministic run of the case with
+    the values Uncertainty.draw(seed, i) gives them, and those values are recorded with it."""
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.simulate import simulate_model
+    from drillstring.stochastic.parameters import with_parameters
+    from drillstring.stochastic.runs import simulation_options
+    from drillstring.stochastic.uncertainty import uncertainty
+
+    settings = mc.StudySettings(samples=4, seed=5, t_end=0.5, output_step=0.05, laws=LAWS)
+    law = uncertainty(small_case, dict(LAWS))
+    outcome = mc.run_realization(small_case, settings, 3)
+    assert outcome.status == mc.DONE
+    drawn = law.draw(5, [3])[0]
+    np.testing.assert_array_equal(outcome.inputs, drawn)
+    assert 1.2 <= drawn[0] <= 1.8 and drawn[1] != small_case.operation.top_speed
+    realized = with_parameters(small_case, {"fluid.inlet_velocity": drawn[0], "operation.top_speed": drawn[1]})
+    direct = simulate_model(case_reduced_model(realized), **simulation_options(realized, 0.5, 0.05))
+    np.testing.assert_array_equal(outcome.observables["bit_speed"], direct.observables["bit_speed"])
+    assert outcome.weight_on_hook == small_case.weight_on_hook  # not random here
+    nominal = mc.run_realization(small_case, settings, mc.NOMINAL)
+    np.testing.assert_allclose(nominal.inputs, [1.5, 100 * np.pi / 30], rtol=1e-12)  # the means
+
+
+def test_study_of_several_parameters_records_draws_laws_and_refuses_other_laws(small_case, tmp_path):
+    settings = mc.StudySettings(samples=3, seed=2, t_end=0.3, output_step=0.05, laws=LAWS)
+    run = mc.run_study(small_case, settings, tmp_path / "s.zarr", workers=1)
+    assert run.completed == 3
+    raw = load_study(tmp_path / "s.zarr")
+    assert raw.attrs["parameters"] == ["fluid.inlet_velocity", "operation.top_speed"]
+    assert raw.attrs["laws"] == ["uniform 1.2 1.8 m/s", "normal 100 5 rpm"]
+    assert raw.attrs["parameter_units"] == ["m/s", "rad/s"]
+    expected = mc.study_uncertainty(small_case, settings).draw(2, range(3))
+    np.testing.assert_array_equal(raw.input_values.values, expected)
+    stats = study_statistics(raw)
+    np.testing.assert_array_equal(stats.input_values.values, expected)
+    other = mc.StudySettings(samples=3, seed=2, t_end=0.3, output_step=0.05,
+                             laws=(LAWS[0], ("operation.top_speed", "normal 100 6 rpm")))
+    with pytest.raises(ValueError, match="different study .*laws"):
+        mc.run_study(small_case, other, tmp_path / "s.zarr", workers=1)
+
+
+def test_correlated_normal_draws(small_case):
+    """Top speed and weight-on-hook drawn jointly with correlation −0.6: the study's draws are the
+    multivariate normal (sample correlation, means and standard deviations)."""
+    settings = mc.StudySettings(samples=2, sigma=5000.0, laws=(("operation.top_speed", "normal 100 5 rpm"),),
+                                correlated=("operation.top_speed", "weight_on_hook"),
+                                correlation=((1.0, -0.6), (-0.6, 1.0)))
+    law = mc.study_uncertainty(small_case, settings)
+    assert law.paths == ("weight_on_hook", "operation.top_speed")
+    values = np.array([mc.draw_inputs(small_case, settings, i) for i in range(4000)])
+    r = np.corrcoef(values.T)[0, 1]
+    assert r == pytest.approx(-0.6, abs=4 / np.sqrt(4000))
+    assert values[:, 0].std() == pytest.approx(5000.0, rel=0.05)
+    assert values[:, 1].mean() == pytest.approx(100 * np.pi / 30, abs=4 * (5 * np.pi / 30) / np.sqrt(4000))
+
+
+@pytest.mark.parametrize("laws, message", [
+    ((("operation.top_speed", "normal 10 5 rpm"),), r"probability 0\.0228 outside .*at most 0\.001"),
+    ((("operation.top_sped", "normal 100 5 rpm"),), "did you mean 'top_speed'"),
+    ((("fluid.inlet_velocity", "uniform 1.8 1.2 m/s"),), "fluid.inlet_velocity"),
+    ((("weight_on_hook", "normal 1063 5 kN"),), "weight_on_hook has a law and sigma"),
+])
+def test_impossible_laws_are_refused_before_running(small_case, tmp_path, laws, message):
+    settings = mc.StudySettings(samples=2, sigma=5000.0 if laws[0][0] == "weight_on_hook" else None,
+                                t_end=0.2, output_step=0.05, laws=laws)
+    with pytest.raises(ValueError, match=message):
+        mc.run_study(small_case, settings, tmp_path / "s.zarr", workers=1)
+    assert not (tmp_path / "s.zarr").exists()
+
+
+def test_settings_need_a_random_parameter():
+    with pytest.raises(ValueError, match="no random parameter"):
+        mc.StudySettings(samples=2)

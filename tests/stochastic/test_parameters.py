@@ -145,3 +145,21 @@ def test_gravity_off_weight_on_hook_pushes(case):
     new = with_parameters(weightless, {WEIGHT_ON_HOOK: "-80 kN"})
     assert new.operation.weight_on_bit == pytest.approx(8e4)
     assert "gravity is off" in _error(weightless, {WEIGHT_ON_HOOK: "80 kN"})
+
+
+def test_the_uncertainty_table_is_not_a_parameter():
+    import tomllib
+
+    from drillstring.case import case_from_dict, load_case
+    from drillstring.stochastic.parameters import case_parameter, numeric_parameter_paths, ParameterError
+
+    case = load_case("reference")
+    data = tomllib.loads(case.to_toml())
+    data["uncertainty"] = {"parameters": {"weight_on_hook": "normal 1063 5 kN", "operation.top_speed": "normal 100 5 rpm"},
+                           "correlation": {"parameters": ["weight_on_hook", "operation.top_speed"],
+                                           "matrix": [[1.0, 0.3], [0.3, 1.0]]}}
+    with_table = case_from_dict(data)
+    assert case_from_dict(tomllib.loads(with_table.to_toml())) == with_table  # round trip
+    assert numeric_parameter_paths(with_table) == numeric_parameter_paths(case)
+    with pytest.raises(ParameterError, match="not a numeric parameter .the \\[uncertainty\\] table"):
+        case_parameter(with_table, "uncertainty.correlation.matrix[0][1]")

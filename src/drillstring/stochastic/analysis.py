@@ -94,12 +94,19 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
         lowest, dims="realization", coords={"realization": done.realization.values},
         attrs={"units": "rad^2/s^2", "long_name": "lowest lateral eigenvalue omega_1^2 (< 0: buckled)"},
     )
+    paths = [str(p) for p in raw.attrs.get("parameters", [])]
+    stats["input_values"] = xr.DataArray(
+        np.asarray(raw.input_values.values, dtype=float)[ok], dims=("realization", "parameter"),
+        coords={"realization": done.realization.values, "parameter": paths,
+                "parameter_unit": ("parameter", [str(u) for u in raw.attrs.get("parameter_units", [])])},
+        attrs={"long_name": "drawn values of the random parameters (SI units: see parameter_unit)"},
+    )
     woh = raw.weight_on_hook.values[ok]
     wob = raw.weight_on_bit.values[ok]
     settings = dict(raw.attrs.get("settings", {}))
     mean_woh = float(raw.attrs.get("weight_on_hook_mean", np.nan))
     nominal_wob = float(raw.attrs.get("weight", np.nan)) - mean_woh
-    sigma = float(settings.get("sigma", np.nan))
+    sigma = _woh_std(raw.attrs)
     stats.attrs.update({
         "n_samples": n_done,
         "n_failed": int((raw.status.values == FAILED).sum()),
@@ -116,20 +123,67 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
         "t_transient": t_transient,
         "top_speed": top_speed,
         "buckled_realizations": int(np.sum(lowest < 0.0)),
+        **{key: list(raw.attrs.get(key, [])) for key in INPUT_ATTRIBUTES},
     })
     return stats
 
 
+#: Attributes of a study store (and its statistics) describing the random parameters, one entry each.
+INPUT_ATTRIBUTES = ("parameters", "laws", "parameter_units", "parameter_mean", "parameter_std")
+
+
+def _woh_std(attrs) -> float:
+    """The standard deviation [N] of the weight-on-hook's law, NaN when it is not random."""
+    paths = [str(p) for p in attrs.get("parameters", [])]
+    if "weight_on_hook" not in paths:
+        return float("nan")
+    return float(attrs["parameter_std"][paths.index("weight_on_hook")])
+
+
+def input_dispersions(attrs) -> dict[str, float]:
+    """Dispersion std/|mean| of each random parameter's law (those of mean 0 left out), and of the
+    weight-on-bit when the weight-on-hook is random (``σ_WOH / (weight − mean WOH)``)."""
+    out = {}
+    for path, mean, std in zip(attrs.get("parameters", []), attrs.get("parameter_mean", []),
+                               attrs.get("parameter_std", [])):
+        if float(mean) != 0.0 and float(std) > 0.0:
+            out[str(path)] = float(std) / abs(float(mean))
+    sigma = _woh_std(attrs)
+    if np.isfinite(sigma) and sigma > 0:
+        out["weight_on_bit"] = sigma / float(attrs["weight_on_bit_nominal"])
+    return out
+
+
+def _inputs_summary(stats: xr.Dataset) -> dict[str, dict]:
+    """Per random parameter: its law, unit (SI), mean, std and dispersion, and the sample's mean and std."""
+    out = {}
+    attrs = stats.attrs
+    values = stats["input_values"].values if "input_values" in stats else np.zeros((0, 0))
+    for j, path in enumerate(attrs.get("parameters", [])):
+        mean, std = float(attrs["parameter_mean"][j]), float(attrs["parameter_std"][j])
+        column = values[:, j] if values.size else np.array([np.nan])
+        out[str(path)] = {
+            "law": str(attrs["laws"][j]), "unit": str(attrs["parameter_units"][j]), "mean": mean, "std": std,
+            "dispersion": std / abs(mean) if mean != 0.0 else None,
+            "sample_mean": float(np.mean(column)),
+            "sample_std": float(np.std(column, ddof=1)) if column.size > 1 else None,
+        }
+    return out
+
+
+def _finite_or_none(value) -> float | None:
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
 def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> dict:
     """Per observable: time-mean and maximum dispersion after ``t_transient`` [s] and their ratios to
-    the weight-on-hook and weight-on-bit dispersions, and the same over the whole record
+    the dispersion of each random parameter (and of the weight-on-bit when the weight-on-hook is random,
+    :func:`input_dispersions`), and the same over the whole record
     (``whole_record``: from :func:`~drillstring.stochastic.statistics.record_start`, the first time the
     mean response is away from 0, as the reference study reports them); plus the study's size and
     input dispersions."""
-    inputs = {
-        "weight_on_hook": stats.attrs["weight_on_hook_dispersion"],
-        "weight_on_bit": stats.attrs["weight_on_bit_dispersion"],
-    }
+    inputs = input_dispersions(stats.attrs)
     per_variable = dispersion_summary(
         stats, list(STUDY_OBSERVABLES), t_transient=t_transient, input_dispersion=inputs
     )
@@ -166,10 +220,12 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> 
         "n_samples": int(stats.attrs["n_samples"]),
         "n_failed": int(stats.attrs["n_failed"]),
         "seed": int(stats.attrs["seed"]),
-        "sigma": float(stats.attrs["sigma"]),
+        "sigma": _finite_or_none(stats.attrs["sigma"]),
         "weight_on_hook_mean": float(stats.attrs["weight_on_hook_mean"]),
-        "weight_on_hook_dispersion": inputs["weight_on_hook"],
-        "weight_on_bit_dispersion": inputs["weight_on_bit"],
+        "weight_on_hook_dispersion": inputs.get("weight_on_hook"),
+        "weight_on_bit_dispersion": inputs.get("weight_on_bit"),
+        "inputs": _inputs_summary(stats),
+        "input_dispersion": inputs,
         "t_transient": float(t_transient),
         "observables": per_variable,
         "convergence_change_second_half": convergence,

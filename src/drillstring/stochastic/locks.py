@@ -19,12 +19,14 @@ class StudyLocked(LockedError):
 
 class StudyLock:
     """Context manager holding the lock of the store at ``store_path`` (exclusive, or ``shared`` for
-    readers); a refusal raises :class:`StudyLocked` naming the store and the holder. ``note`` is set
+    readers); a refusal raises :class:`StudyLocked` naming the store (a ``what`` store: study, map,
+    sensitivity) and the holder. ``note`` is set
     when a stale lock (its holder died) was taken over. Re-entrant in one thread."""
 
-    def __init__(self, store_path: str | Path, *, shared: bool = False) -> None:
+    def __init__(self, store_path: str | Path, *, shared: bool = False, what: str = "study") -> None:
         self.store_path = Path(store_path)
         self.shared = shared
+        self.what = what
         self.note: str | None = None
         self._lock = FileLock(self.store_path.with_name(self.store_path.name + ".lock"), shared=shared,
                               purpose="its finished realizations are kept")
@@ -33,9 +35,11 @@ class StudyLock:
         try:
             self.note = self._lock.acquire()
         except LockedError as error:
-            what = ("statistics are computed from a store only when no study is writing it"
-                    if self.shared else "wait for that study to finish or use another --out folder")
-            raise StudyLocked(f"study store {self.store_path} is {error}; {what}") from None
+            advice = (f"results are read from a store only when no {self.what} is writing it"
+                      if self.shared else f"wait for that {self.what} to finish or use another --out folder")
+            if self.shared and self.what == "study":
+                advice = "statistics are computed from a store only when no study is writing it"
+            raise StudyLocked(f"{self.what} store {self.store_path} is {error}; {advice}") from None
         return self
 
     def __exit__(self, *exc) -> None:

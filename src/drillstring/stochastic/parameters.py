@@ -69,6 +69,8 @@ __all__ = [
 #: The derived pseudo-path: weight − weight_on_bit [N].
 WEIGHT_ON_HOOK = "weight_on_hook"
 _WEIGHT_ON_BIT = "operation.weight_on_bit"
+#: The case's [uncertainty] table: laws, not parameters.
+_UNCERTAINTY = "uncertainty"
 
 _FORCE = next(d for d in DIMENSIONS if d.name == "force")
 
@@ -341,6 +343,9 @@ def case_parameter(case: Case, path: str) -> CaseParameter:
             WEIGHT_ON_HOOK, (), _FORCE, False, bounds, "static hook load, weight - weight_on_bit [N]"
         )
     location = _parse_path(text)
+    if location[0] == _UNCERTAINTY:
+        raise ParameterError(f"{text} is not a numeric parameter (the [uncertainty] table declares the laws of "
+                             "a study's parameters; it is not a parameter itself)")
     node: Any = case
     tp: Any = type(case)
     metadata: list[Any] = []
@@ -404,6 +409,8 @@ def numeric_parameter_paths(case: Case, *, integers: bool = True) -> list[str]:
     def walk(node: Any, location: tuple[str | int, ...]) -> None:
         if isinstance(node, BaseModel):
             for name, info in type(node).model_fields.items():
+                if location == () and name == _UNCERTAINTY:
+                    continue
                 tp, _ = _unwrap(info.annotation)
                 value = getattr(node, name)
                 if tp is float or (tp is int and integers):

@@ -31,10 +31,11 @@ Design and estimators
 Model evaluation
 ----------------
 The model is a callable over a batch: ``model(values)`` with ``values`` of shape ``(n, k)`` in SI units
-(columns in the order of ``uncertainty.paths``) returns ``{output name: array of shape (n,)}``. Later it is
-the study engine (one realization per row, on local processes or Dask); :func:`sobol_analysis` calls it in
-batches and analyses, or the design and the analysis can be used separately (:func:`saltelli_design`,
-:func:`sobol_indices`) when the runs are made elsewhere.
+(columns in the order of ``uncertainty.paths``) returns ``{output name: array of shape (n,)}``;
+:func:`sobol_analysis` calls it in batches and analyses. The design and the analysis can also be used
+separately (:func:`saltelli_design`, :func:`sobol_indices`) when the runs are made elsewhere: drilling
+simulations run each design row on the study engine (local processes or Dask, a resumable store),
+:mod:`drillstring.stochastic.sensitivity_study`.
 
 References: I. M. Sobol', Math. Comput. Simul. 55, 271–280 (2001); A. Saltelli et al., "Variance based
 sensitivity analysis of model output. Design and estimator for the total sensitivity index", Comput. Phys.

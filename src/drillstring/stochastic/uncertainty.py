@@ -108,8 +108,12 @@ __all__ = [
     "ParameterLaw",
     "UncertainParameter",
     "Uncertainty",
+    "correlation_table",
+    "declared_uncertainty",
+    "input_attributes",
     "parse_law",
     "split_assignment",
+    "split_correlation",
     "uncertainty",
 ]
 
@@ -404,22 +408,24 @@ class UncertainParameter:
         return self.parameter.path
 
 
-def _check_range(parameter: CaseParameter, law: ParameterLaw, spec_text: str) -> None:
+def _check_range(parameter: CaseParameter, law: ParameterLaw, spec_text: str,
+                 tolerance: float = OUT_OF_RANGE_TOLERANCE) -> None:
     bounds = parameter.bounds
     density = law.density
     below = float(density.cdf(bounds.lower)) if math.isfinite(bounds.lower) else 0.0
     above = 1.0 - float(density.cdf(bounds.upper)) if math.isfinite(bounds.upper) else 0.0
     outside = below + above
-    if outside > OUT_OF_RANGE_TOLERANCE:
+    if outside > tolerance:
         unit = f" {parameter.unit}" if parameter.unit else ""
         raise ParameterError(
             f"{parameter.path} = {spec_text!r}: the law puts probability {outside:.3g} outside the allowed range "
-            f"({bounds.describe()}{unit}); allowed: at most {OUT_OF_RANGE_TOLERANCE:g}, e.g. a law whose support lies "
+            f"({bounds.describe()}{unit}); allowed: at most {tolerance:g}, e.g. a law whose support lies "
             "inside the range (uniform, gamma, exponential, maxent min=... max=...)"
         )
 
 
-def _bind(case: Case, path: str, spec: str | Mapping[str, Any]) -> UncertainParameter:
+def _bind(case: Case, path: str, spec: str | Mapping[str, Any],
+          tolerance: float = OUT_OF_RANGE_TOLERANCE) -> UncertainParameter:
     parameter = case_parameter(case, path)
     text = spec if isinstance(spec, str) else repr(dict(spec)) if isinstance(spec, Mapping) else repr(spec)
     if parameter.integer:
@@ -430,7 +436,7 @@ def _bind(case: Case, path: str, spec: str | Mapping[str, Any]) -> UncertainPara
         law = parse_law(spec, parameter.dimension)
     except ValueError as exc:
         raise ParameterError(f"{parameter.path} = {text!r}: {exc}".replace("\n", " ")) from None
-    _check_range(parameter, law, text)
+    _check_range(parameter, law, text, tolerance)
     return UncertainParameter(parameter, law)
 
 
@@ -522,7 +528,8 @@ class Uncertainty:
         self._cholesky = linalg.cholesky(r, lower=True)
 
     @classmethod
-    def from_mapping(cls, case: Case, mapping: Mapping[str, Any]) -> Uncertainty:
+    def from_mapping(cls, case: Case, mapping: Mapping[str, Any], *,
+                     tolerance: float = OUT_OF_RANGE_TOLERANCE) -> Uncertainty:
         """From the table form ``{"parameters": {path: spec}, "correlation": {"parameters": [...],
         "matrix": [[...]]}}`` (the ``[uncertainty]`` table of the module docstring)."""
         if not isinstance(mapping, Mapping):
@@ -535,10 +542,11 @@ class Uncertainty:
             raise ParameterError("uncertainty.parameters must be a non-empty table path = law")
         correlation = mapping.get("correlation")
         if correlation is None:
-            return uncertainty(case, parameters)
+            return uncertainty(case, parameters, tolerance=tolerance)
         if not isinstance(correlation, Mapping) or set(correlation) != {"parameters", "matrix"}:
             raise ParameterError("uncertainty.correlation must be a table with exactly the keys parameters and matrix")
-        return uncertainty(case, parameters, correlated=correlation["parameters"], correlation=correlation["matrix"])
+        return uncertainty(case, parameters, correlated=correlation["parameters"], correlation=correlation["matrix"],
+                           tolerance=tolerance)
 
     def to_mapping(self) -> dict[str, Any]:
         """The table form (declared units); :meth:`from_mapping` reads it back to an equal Uncertainty."""
@@ -654,18 +662,21 @@ def uncertainty(
     *,
     correlated: Sequence[str] = (),
     correlation: Any = None,
+    tolerance: float = OUT_OF_RANGE_TOLERANCE,
 ) -> Uncertainty:
     """Declare uncertain parameters of ``case``: ``laws`` maps parameter paths to law specs (strings or tables);
     ``correlation`` is the correlation matrix of the normal parameters listed in ``correlated``.
 
     Raises :class:`~drillstring.stochastic.parameters.ParameterError` (one line) for an unknown path, a bad
-    spec, a law outside the parameter's range or an invalid correlation.
+    spec, a law that puts a probability above ``tolerance`` outside the parameter's range (default
+    :data:`OUT_OF_RANGE_TOLERANCE`; a Monte Carlo study accepts up to 1e-3, recording such draws as failed
+    realizations; 1 accepts any law) or an invalid correlation.
     """
     if not isinstance(laws, Mapping):
         raise ParameterError(f"laws must be a mapping path -> law, got {type(laws).__name__}")
     if (correlation is None) != (not correlated):
         raise ParameterError("give both the correlated parameters and their correlation matrix, or neither")
-    parameters = [_bind(case, path, spec) for path, spec in laws.items()]
+    parameters = [_bind(case, path, spec, tolerance) for path, spec in laws.items()]
     return Uncertainty(parameters, correlated, correlation)
 
 
@@ -681,3 +692,100 @@ def split_assignment(text: str) -> tuple[str, str]:
             f"{text!r} is not PATH=LAW, e.g. fluid.inlet_velocity=\"{LAWS['uniform'].example}\""
         )
     return path, spec
+
+
+def split_correlation(text: str) -> tuple[str, str, float]:
+    """``"operation.top_speed,weight_on_hook=-0.3"`` -> ``("operation.top_speed", "weight_on_hook", -0.3)``
+    (a command-line ``--correlation`` value: two parameter paths and their correlation coefficient)."""
+    pair, sep, value = text.partition("=")
+    a, comma, b = pair.partition(",")
+    a, b = a.strip(), b.strip()
+    try:
+        r = float(value)
+    except ValueError:
+        r = math.nan
+    if not sep or not comma or not a or not b or not math.isfinite(r):
+        raise ParameterError(f"{text!r} is not PATH1,PATH2=R, e.g. operation.top_speed,weight_on_hook=-0.3")
+    return a, b, r
+
+
+def correlation_table(pairs: Sequence[tuple[str, str, float]]) -> dict[str, Any]:
+    """The table form ``{"parameters": [...], "matrix": [[...]]}`` of pairwise correlation coefficients
+    (unit diagonal; pairs not given are uncorrelated). A pair given twice is refused."""
+    names: list[str] = []
+    for a, b, _ in pairs:
+        for name in (a, b):
+            if name not in names:
+                names.append(name)
+    n = len(names)
+    matrix = np.eye(n)
+    seen: set[frozenset[str]] = set()
+    for a, b, r in pairs:
+        key = frozenset((a, b))
+        if a == b:
+            raise ParameterError(f"correlation {a},{b}: a parameter with itself (the diagonal is 1)")
+        if key in seen:
+            raise ParameterError(f"correlation {a},{b}: given twice")
+        seen.add(key)
+        i, j = names.index(a), names.index(b)
+        matrix[i, j] = matrix[j, i] = r
+    return {"parameters": names, "matrix": matrix.tolist()}
+
+
+def declared_uncertainty(
+    case: Case,
+    laws: Mapping[str, str | Mapping[str, Any]] | None = None,
+    correlation: Mapping[str, Any] | None = None,
+    *,
+    first: Mapping[str, str | Mapping[str, Any]] | None = None,
+    tolerance: float = OUT_OF_RANGE_TOLERANCE,
+) -> Uncertainty | None:
+    """The uncertain parameters of a study of ``case``: ``laws`` (path -> law) with ``correlation`` (the
+    table form ``{"parameters": [...], "matrix": [[...]]}``) when ``laws`` is given, otherwise the case's
+    ``[uncertainty]`` table; the laws of ``first`` (e.g. the weight-on-hook law of a ``sigma``) come
+    before them. None when nothing is declared at all.
+
+    Raises :class:`~drillstring.stochastic.parameters.ParameterError` (one line; prefixed with
+    ``[uncertainty] of the case:`` when the problem is in the case's table), also for a parameter
+    declared twice."""
+    source = ""
+    if laws is None and case.uncertainty is not None:
+        table = case.uncertainty
+        laws = dict(table.parameters)
+        if table.correlation is not None and correlation is None:
+            correlation = {"parameters": list(table.correlation.parameters), "matrix": table.correlation.matrix}
+        source = "[uncertainty] of the case: "
+    declared: dict[str, Any] = dict(first or {})
+    try:
+        for path, spec in (laws or {}).items():
+            key = path.strip() if isinstance(path, str) else path
+            if key in declared:
+                raise ParameterError(f"{key} is declared twice")
+            declared[key] = spec
+        if not declared:
+            if correlation is not None:
+                raise ParameterError("a correlation is declared without any uncertain parameter")
+            return None
+        if correlation is None:
+            return uncertainty(case, declared, tolerance=tolerance)
+        if not isinstance(correlation, Mapping) or set(correlation) != {"parameters", "matrix"}:
+            raise ParameterError("a correlation must be a table with exactly the keys parameters and matrix")
+        return uncertainty(case, declared, correlated=list(correlation["parameters"]),
+                           correlation=correlation["matrix"], tolerance=tolerance)
+    except ParameterError as error:
+        raise ParameterError(f"{source}{error}") from None
+
+
+def input_attributes(law: Uncertainty) -> dict[str, Any]:
+    """The declared laws as plain attributes of a store or Dataset (lists, one entry per parameter, SI):
+    ``parameters`` (paths), ``laws`` (canonical specs), ``parameter_units``, ``parameter_mean``,
+    ``parameter_std``, and ``correlated`` / ``correlation`` (empty when independent)."""
+    return {
+        "parameters": list(law.paths),
+        "laws": [p.law.to_spec() for p in law.parameters],
+        "parameter_units": list(law.units),
+        "parameter_mean": [float(v) for v in law.mean()],
+        "parameter_std": [float(v) for v in law.std()],
+        "correlated": list(law.correlated) if law.correlation is not None else [],
+        "correlation": law.correlation.tolist() if law.correlation is not None else [],
+    }

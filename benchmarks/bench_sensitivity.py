@@ -1,0 +1,99 @@
+"""Benchmark: a 3-parameter Sobol' study of the reference case with N = 1024 base samples (5 120 runs of
+20 s), on local processes and on a local Dask cluster.
+
+Parameters: the driller's three controls, uniform: weight-on-hook 1033.4–1093.4 kN (weight-on-bit
+70–130 kN, across the lateral buckling limit at 114 kN), fluid inlet velocity 1–2 m/s and top speed
+60–140 rpm (docs/sensitivity.md answers the reference study's question with eight parameters). Prints the wall time, runs per second, the speed-up over the serial cost of the runs
+projected from a random sample run one after the other in this process (the baseline, measured in the same
+run), the sum of the runs' own times over the wall time (the parallelism achieved), the load average (the
+machine is shared), and the indices with their largest change from N/2 to N. Goal: <= 30 min on the project's 2-core
+machine. Run:
+
+    .venv/bin/python benchmarks/bench_sensitivity.py [--samples 1024] [--t-end 20] [--dask] [--sample 8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+# the serial baseline runs in this process: single-threaded linear algebra, as in the worker processes
+os.environ.update({"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+                   "NUMBA_NUM_THREADS": "1"})
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drillstring import api
+from drillstring.case import load_case
+from drillstring.stochastic.sensitivity_study import SensitivitySettings, _row_task, sensitivity_design
+
+LAWS = {"weight_on_hook": "uniform 1033.4 1093.4 kN", "fluid.inlet_velocity": "uniform 1 2 m/s",
+        "operation.top_speed": "uniform 60 140 rpm"}
+
+
+def timed(case, samples, t_end, keep: Path | None = None, **engine):
+    folder = Path(tempfile.mkdtemp(prefix="bench_sensitivity_"))
+    try:
+        start = time.perf_counter()
+        outcome = api.sensitivity(case, parameters=LAWS, samples=samples, t_end=t_end, out=folder, **engine)
+        wall = time.perf_counter() - start
+        if keep is not None:  # the files (not the store), e.g. for the documentation's figures
+            keep.mkdir(parents=True, exist_ok=True)
+            for name in ("sensitivity.json", "sobol.png", "sobol_convergence.png", "report.html"):
+                shutil.copy(folder / name, keep / name)
+        return wall, outcome
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--samples", type=int, default=1024, help="base samples N (power of 2)")
+    parser.add_argument("--t-end", type=float, default=20.0)
+    parser.add_argument("--sample", type=int, default=8, help="runs made serially for the baseline")
+    parser.add_argument("--dask", action="store_true", help="also time a local Dask cluster (2 workers)")
+    parser.add_argument("--keep", type=Path, default=None, help="copy the local run's files to this folder")
+    args = parser.parse_args()
+    case = load_case("reference")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    print("load average at start (1, 5, 15 min): " + ", ".join(f"{v:.2f}" for v in os.getloadavg()))
+    settings = SensitivitySettings(args.samples, tuple(LAWS.items()), t_end=args.t_end)
+    design = sensitivity_design(case, settings)
+    paths = design.uncertainty.paths
+    _row_task(case, paths, settings, (0, design.values[0]))  # warm-up (Numba)
+    picks = np.random.default_rng(0).choice(design.runs, size=min(args.sample, design.runs), replace=False)
+    start = time.perf_counter()
+    for i in picks:
+        _row_task(case, paths, settings, (int(i), design.values[int(i)]))
+    per_run = (time.perf_counter() - start) / len(picks)
+    serial = per_run * design.runs
+    print(f"Sobol' study: 3 parameters, N = {args.samples}, {design.runs} runs of {args.t_end:g} s, {cores} cores;"
+          f" serial cost {per_run:.3f} s per run (sample of {len(picks)}) -> {serial / 60:.1f} min projected serially")
+    rows = [("local processes (one per core)", *timed(case, args.samples, args.t_end, args.keep))]
+    if args.dask:
+        from distributed import LocalCluster
+
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+            rows.append(("local Dask cluster, 2 workers",
+                         *timed(case, args.samples, args.t_end, scheduler=cluster.scheduler_address)))
+    for label, wall, outcome in rows:
+        p = outcome.payload
+        busy = p["run_wall_time_total"]
+        print(f"  {label:32s} {wall / 60:6.1f} min  {design.runs / wall:6.2f} runs/s  speed-up {serial / wall:4.2f}x"
+              f" over the serial projection; sum of the runs' own times {busy / 60:.1f} min = {busy / wall:.2f} x the "
+              f"wall time  (failed {p['failed_runs']}; goal <= 30 min: {'met' if wall <= 1800 else 'NOT met'})")
+    result = rows[0][2].result
+    for o, name in enumerate(result.outputs):
+        change = result.convergence_change(name)
+        s1 = ", ".join(f"{p.split('.')[-1]} {v:.3f}" for p, v in zip(result.parameters, result.S1[o]))
+        st = ", ".join(f"{v:.3f}" for v in result.ST[o])
+        print(f"  {name:28s} S1: {s1}; ST: {st}; max change N/2 -> N {change[-1]:.3f}")
+
+
+if __name__ == "__main__":
+    main()
+    print("load average at end (1, 5, 15 min): " + ", ".join(f"{v:.2f}" for v in os.getloadavg()))

@@ -1,0 +1,540 @@
+"""Running many independent tasks: local worker processes or a Dask cluster, outcomes recorded as they
+finish, resumable through a :class:`~drillstring.stochastic.store.TaskStore`.
+
+A *task* is a picklable callable ``task(argument) -> outcome``; each run is an *item* ``(index, argument)``
+and its outcome carries ``index``, ``status`` (:data:`DONE` or :data:`FAILED`), ``message`` and
+``wall_time`` (a :class:`TaskOutcome`, or any object with those attributes that its store can write).
+Monte Carlo studies (one realization per index), operating maps (one grid point per index) and
+sensitivity designs (one design row per index) all run through :func:`run_tasks`, which
+
+- runs the items in this process (one worker), on a pool of spawned local processes, or on the Dask
+  cluster of a ``distributed.Client`` (:func:`execute`);
+- isolates a worker process that dies: the items that were running when the pool broke are set aside
+  and each rerun alone at the end; the one that kills its worker again is recorded as failed with that
+  cause, the others go on in parallel (:func:`_process_loop`);
+- on Dask, records an item whose workers keep dying (``KilledWorker``) as failed, and stops resumably
+  when the cluster has had no worker for ``worker_timeout`` seconds or the scheduler is gone;
+- writes outcomes to the store in batches (at most :data:`FLUSH_INTERVAL` seconds apart; data first,
+  then status flags), reports ``progress(done, failed, total)`` after each outcome, and on Ctrl-C
+  writes what finished and raises :class:`Interrupted`;
+- records each run that computed something as a *session* (start, wall time, count, workers), so that
+  a resumed study's computation time is the sum of its sessions.
+
+Reaching a scheduler is checked by hand first (:func:`connect_scheduler`): an address that is no Dask
+scheduler fails within seconds with one line, instead of a client waiting forever.
+
+No physics here; nothing above :mod:`drillstring.files` and :mod:`drillstring.stochastic.locks` is
+imported.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import datetime as _dt
+import multiprocessing
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+#: Status of an item in a store.
+PENDING, DONE, FAILED = 0, 1, 2
+
+#: Seconds a Dask run waits with no worker in the cluster before stopping (resumably).
+DASK_WORKER_TIMEOUT = 30.0
+#: Seconds allowed to each step of reaching a Dask scheduler (TCP connection, the server's greeting,
+#: its identity, the client's registration): an address that is no scheduler fails at one of the first
+#: three, so within 12 s.
+SCHEDULER_TIMEOUT = 4.0
+#: Largest delay [s] between an outcome's arrival and its write to the store, unless the store sets its
+#: own ``flush_interval`` (outcomes are written in batches: a kill loses at most this much work; stores of
+#: many cheap scalar rows rewrite their small arrays once per batch instead of once per outcome).
+FLUSH_INTERVAL = 0.5
+
+#: Thread counts for worker processes: one process per core, each single-threaded, so linear
+#: algebra libraries do not oversubscribe the cores.
+WORKER_ENVIRONMENT = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+                      "NUMBA_NUM_THREADS": "1"}
+
+
+@dataclass
+class TaskOutcome:
+    """What one task returns (picklable): its ``values`` are the store's row values by array name."""
+
+    index: int
+    status: int
+    message: str = ""
+    values: dict[str, Any] = field(default_factory=dict)
+    wall_time: float = 0.0
+
+
+class Interrupted(RuntimeError):
+    """The run was interrupted; what finished is in the store and a rerun resumes."""
+
+
+class WorkersLost(RuntimeError):
+    """No worker is left to compute the tasks (Dask workers gone, worker processes that cannot start);
+    what finished is in the store and a rerun resumes."""
+
+
+class SchedulerUnreachable(ValueError):
+    """The ``scheduler`` address does not lead to a Dask scheduler (refused, no answer, another
+    protocol, malformed address)."""
+
+
+ProgressCallback = Callable[[int, int, int], None]  # (done, failed, total)
+#: Outcome of an item whose worker died: ``lost(index, argument, message)``.
+LostOutcome = Callable[[int, Any, str], Any]
+
+
+def bare_failure(index: int, argument: Any, message: str) -> TaskOutcome:
+    """The default outcome of an item whose worker died: failed, with the cause, no values."""
+    return TaskOutcome(index, FAILED, message)
+
+
+# --- checks --------------------------------------------------------------------------------------
+
+
+def check_workers(workers: int | None, scheduler=None) -> None:
+    """Refuse (ValueError) a worker count that is not an integer >= 1, or workers with a scheduler."""
+    if workers is not None and not (isinstance(workers, int) and not isinstance(workers, bool)
+                                    and workers >= 1):
+        raise ValueError(f"workers = {workers!r}: must be an integer >= 1")
+    if workers is not None and scheduler is not None:
+        raise ValueError("give workers (local processes) or scheduler (Dask cluster), not both")
+
+
+def local_workers(workers: int | None) -> int:
+    """The number of local processes: ``workers``, or one per core."""
+    return max(1, workers or multiprocessing.cpu_count())
+
+
+def notify(note: Callable[[str], None] | None, text: str) -> None:
+    """Give ``text`` to ``note``, or issue it as a RuntimeWarning when there is no ``note``."""
+    if note is None:
+        import warnings
+
+        warnings.warn(text, RuntimeWarning, stacklevel=3)
+    else:
+        note(text)
+
+
+def computation_time(sessions: list[dict]) -> tuple[float, int | str | None]:
+    """(total wall time [s] of the runs that computed tasks, the workers of the last one)."""
+    total = float(sum(float(s.get("wall_time", 0.0)) for s in sessions))
+    return total, (sessions[-1].get("workers") if sessions else None)
+
+
+# --- running into a store ------------------------------------------------------------------------
+
+
+@dataclass
+class RunReport:
+    """What :func:`run_tasks` did.
+
+    Attributes:
+        completed, failed: items finished and failed in the store (all runs together).
+        wall_time: wall time of this call [s].
+        workers: what this call ran on (local process count or scheduler address).
+        computed: items computed by this call (0 when everything was already done).
+    """
+
+    completed: int
+    failed: int
+    wall_time: float
+    workers: int | str
+    computed: int = 0
+
+
+def run_tasks(
+    store,
+    task: Callable[[Any], Any],
+    items: Sequence[tuple[int, Any]],
+    *,
+    workers: int | None = None,
+    client=None,
+    address: str | None = None,
+    progress: ProgressCallback | None = None,
+    worker_timeout: float = DASK_WORKER_TIMEOUT,
+    lost: LostOutcome = bare_failure,
+    what: str = "study",
+    noun: str = "realizations",
+) -> RunReport:
+    """Run ``items`` (``(index, argument)``, the store's pending ones) with ``task`` and write each
+    outcome to ``store``; the caller holds the store's lock.
+
+    ``store`` provides ``counts() -> (done, failed)``, ``total`` (items of the whole run),
+    ``write_many(outcomes)``, ``record_session(started, wall_time, count, workers)``, ``path`` and
+    optionally ``flush_interval`` [s] (default :data:`FLUSH_INTERVAL`; 0 writes each outcome at once).
+    Items with an index outside ``[0, total)`` (a study's nominal run) are written but not counted.
+    ``client`` (a ``distributed.Client``, ``address`` its scheduler) runs them on Dask, otherwise
+    ``workers`` local processes (default one per core; 1 runs in this process).
+    Raises :class:`Interrupted` on Ctrl-C and :class:`WorkersLost` when no worker is left, after writing
+    every outcome received; ``what`` and ``noun`` name the run and its items in those messages.
+    """
+    done, failed = store.counts()
+    total = store.total
+    started = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
+    start = time.perf_counter()
+    computed = 0
+    buffer: list = []
+    last_flush = time.monotonic()
+    interval = float(getattr(store, "flush_interval", FLUSH_INTERVAL))
+
+    def flush() -> None:
+        nonlocal last_flush
+        if buffer:
+            store.write_many(buffer)
+            buffer.clear()
+        last_flush = time.monotonic()
+
+    def record(outcome) -> None:
+        nonlocal done, failed, computed
+        buffer.append(outcome)
+        if 0 <= outcome.index < total:
+            computed += 1
+            if outcome.status == DONE:
+                done += 1
+            else:
+                failed += 1
+        if time.monotonic() - last_flush >= interval:
+            flush()
+        if progress:
+            progress(done, failed, total)
+
+    if client is not None:
+        used: int | str = address or str(getattr(client.scheduler, "address", "Dask cluster"))
+    elif local_workers(workers) == 1 or len(items) <= 1:
+        used = 1
+    else:
+        used = local_workers(workers)
+    if progress:
+        progress(done, failed, total)
+    try:
+        try:
+            execute(task, items, record, workers=used if isinstance(used, int) else None, client=client,
+                    address=address, worker_timeout=worker_timeout, lost=lost, noun=noun)
+        finally:
+            flush()
+    except KeyboardInterrupt as error:
+        raise Interrupted(
+            f"{what} interrupted after {done + failed} of {total} {noun}; they are saved in "
+            f"{store.path}; run the same command again to resume"
+        ) from error
+    finally:
+        elapsed = time.perf_counter() - start
+        if computed:
+            store.record_session(started, elapsed, computed, used)
+    return RunReport(done, failed, elapsed, used, computed)
+
+
+def execute(task: Callable[[Any], Any], items: Sequence[tuple[int, Any]], record: Callable[[Any], None], *,
+            workers: int | None = 1, client=None, address: str | None = None,
+            worker_timeout: float = DASK_WORKER_TIMEOUT, lost: LostOutcome = bare_failure,
+            noun: str = "realizations") -> None:
+    """Compute ``task(argument)`` for each ``(index, argument)`` of ``items`` and pass each outcome to
+    ``record`` as it arrives (in completion order): on the Dask cluster of ``client``, in this process
+    (``workers`` 1) or on ``workers`` spawned local processes."""
+    items = list(items)
+    if client is not None:
+        _run_dask(client, address or "the Dask scheduler", task, items, record, worker_timeout, lost, noun)
+    elif (workers or 1) <= 1:
+        for _, argument in items:
+            record(task(argument))
+    else:
+        _run_processes(task, items, workers, record, lost=lost, noun=noun)
+
+
+# --- local processes -----------------------------------------------------------------------------
+
+#: In a worker process: the shared flags "item started" (one per slot, the item's position).
+_STARTED = None
+
+
+def _worker_start(parent_pid: int, started=None) -> None:
+    """Worker initializer: keep the shared "started" flags, and exit as soon as the parent process is
+    gone (killed, not just interrupted), instead of computing tasks nobody will record."""
+    import threading
+
+    global _STARTED
+    _STARTED = started
+
+    def watch() -> None:
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent_pid:
+                os._exit(0)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _tracked(task: Callable, slot: int, argument):
+    """Run ``task`` in a worker after flagging ``slot`` as started (a plain store into shared memory:
+    no lock that a killed worker could leave held)."""
+    if _STARTED is not None:
+        _STARTED[slot] = 1
+    return task(argument)
+
+
+def _run_processes(task: Callable, items: Sequence[tuple[int, Any]], workers: int, record,
+                   lost: LostOutcome = bare_failure, noun: str = "realizations") -> None:
+    """Run ``items`` on ``workers`` spawned processes (single-threaded linear algebra in each)."""
+    context = multiprocessing.get_context("spawn")
+    saved = {k: os.environ.get(k) for k in WORKER_ENVIRONMENT}
+    os.environ.update(WORKER_ENVIRONMENT)  # inherited by the spawned workers only at start-up
+    try:
+        _process_loop(context, task, list(items), workers, record, os.getpid(), lost, noun)
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def _process_loop(context, task, items, workers, record, parent_pid, lost, noun) -> None:
+    """Run ``items`` on a pool of ``workers`` processes.
+
+    If a worker dies (killed, out of memory, crash) the pool breaks and every running item is lost with
+    it. The items that had started and not returned (at most one per worker) are set aside as suspects;
+    the others go on in a fresh pool of ``workers`` processes. At the end each suspect runs alone in its
+    own single-process pool (up to ``workers`` such pools at once): the one that kills its worker there
+    is recorded as failed with that cause (``lost``), the innocent ones finish normally. A pool that
+    breaks before any item started (workers that cannot start) raises :class:`WorkersLost`.
+    """
+    started = context.Array("b", max(len(items), 1), lock=False)
+    remaining = list(range(len(items)))  # slots: positions in items
+    suspects: list[int] = []
+    recorded: set[int] = set()
+    while remaining:
+        for slot in remaining:
+            started[slot] = 0
+        pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(remaining)), mp_context=context,
+                                      initializer=_worker_start, initargs=(parent_pid, started))
+        broken = False
+        try:
+            futures = {pool.submit(_tracked, task, slot, items[slot][1]): slot for slot in remaining}
+            for future in cf.as_completed(futures):
+                error = future.exception()
+                if error is None:
+                    record(future.result())
+                    recorded.add(futures[future])
+                elif isinstance(error, cf.process.BrokenProcessPool):
+                    broken = True
+                else:
+                    raise error
+        finally:
+            pool.shutdown(wait=False, cancel_futures=True)
+        in_flight = [slot for slot in remaining if started[slot] and slot not in recorded]
+        if broken and not in_flight:
+            raise WorkersLost(f"local worker processes died before computing any of the {noun} (they "
+                              "cannot start); finished ones are saved, rerun to resume")
+        suspects.extend(in_flight)
+        remaining = [slot for slot in remaining if slot not in recorded and slot not in in_flight]
+    for first in range(0, len(suspects), workers):
+        batch = suspects[first:first + workers]
+        pools = [cf.ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=_worker_start,
+                                        initargs=(parent_pid, None)) for _ in batch]
+        try:
+            futures = {p.submit(task, items[slot][1]): slot for p, slot in zip(pools, batch)}
+            for future in cf.as_completed(futures):
+                error = future.exception()
+                if error is None:
+                    record(future.result())
+                elif isinstance(error, cf.process.BrokenProcessPool):
+                    index, argument = items[futures[future]]
+                    record(lost(index, argument, "worker process died (killed or crashed) while computing "
+                                                 "this task alone"))
+                else:
+                    raise error
+        finally:
+            for p in pools:
+                p.shutdown(wait=False, cancel_futures=True)
+
+
+# --- Dask ----------------------------------------------------------------------------------------
+
+
+def _receive(sock, n: int) -> bytes:
+    data = b""
+    while len(data) < n:
+        chunk = sock.recv(n - len(data))
+        if not chunk:
+            raise ConnectionError("closed the connection")
+        data += chunk
+    return data
+
+
+def _probe_tcp_scheduler(address: str, host: str, port: int, timeout: float) -> None:
+    """Check that ``host:port`` answers as a Dask server: a TCP connection within ``timeout`` and,
+    within ``timeout`` more, the greeting every Dask server sends first (an 8-byte length, then a
+    msgpack handshake). Raises :class:`SchedulerUnreachable`."""
+    import socket
+    import struct
+
+    def refuse(why: str) -> SchedulerUnreachable:
+        return SchedulerUnreachable(f"scheduler = {address!r}: {why}")
+
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout)
+    except ConnectionRefusedError:
+        raise refuse("connection refused (no server listens on that port)") from None
+    except socket.gaierror as error:
+        raise refuse(f"unknown host {host!r} ({error.strerror})") from None
+    except TimeoutError:
+        raise refuse(f"no answer within {timeout:g} s (unreachable address or filtered port)") from None
+    except OSError as error:
+        raise refuse(f"cannot connect ({error.strerror or error})") from None
+    with sock:
+        sock.settimeout(timeout)
+        not_dask = "the server there does not speak the Dask protocol (not a Dask scheduler)"
+        try:
+            (length,) = struct.unpack("<Q", _receive(sock, 8))
+            if not 0 < length <= 1 << 20:
+                raise refuse(not_dask)
+            payload = _receive(sock, length)
+        except TimeoutError:
+            raise refuse(f"the server there sent no Dask greeting within {timeout:g} s "
+                         "(not a Dask scheduler)") from None
+        except (ConnectionError, OSError):
+            raise refuse(f"{not_dask}: it closed the connection") from None
+    try:
+        import msgpack
+        from distributed.protocol.utils import unpack_frames
+
+        greetings = [msgpack.loads(bytes(frame)) for frame in unpack_frames(payload)]
+    except Exception:
+        raise refuse(not_dask) from None
+    if not any(isinstance(g, dict) and "pickle-protocol" in g for g in greetings):
+        raise refuse(not_dask)
+
+
+def _server_type(address: str, timeout: float) -> str:
+    """The type of the Dask server at ``address`` ("Scheduler", "Worker", "Nanny", ...) from its
+    ``identity``, within ``timeout`` seconds (in a thread of its own, so that it also works where an
+    event loop is already running, as in a notebook)."""
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    from distributed.core import rpc
+
+    async def identity() -> dict:
+        async with rpc(address, timeout=timeout) as server:
+            return await asyncio.wait_for(server.identity(), timeout)
+
+    def ask() -> str:
+        try:
+            info = asyncio.run(asyncio.wait_for(identity(), timeout))
+        except (TimeoutError, asyncio.TimeoutError):
+            raise SchedulerUnreachable(f"scheduler = {address!r}: no answer to a Dask request within "
+                                       f"{timeout:g} s") from None
+        except Exception as error:
+            message = str(error).splitlines()[0] if str(error) else type(error).__name__
+            raise SchedulerUnreachable(f"scheduler = {address!r}: cannot connect ({message})") from None
+        return str(info.get("type", "server of unknown type")) if isinstance(info, dict) else "server"
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        return pool.submit(ask).result()
+
+
+def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT):
+    """A :class:`distributed.Client` connected to the scheduler at ``address``, or
+    :class:`SchedulerUnreachable` (one line) within about ``3 × timeout`` seconds: a TCP address is
+    first probed by hand (:func:`_probe_tcp_scheduler`), since the client waits forever for the
+    greeting of a server that is not a Dask server; then the server must say it is a scheduler (not a
+    worker or nanny)."""
+    from distributed import Client
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+
+    if not isinstance(address, str) or not address.strip():
+        raise SchedulerUnreachable(f"scheduler = {address!r}: give an address like tcp://host:8786")
+    try:
+        scheme, location = parse_address(address.strip())
+        if scheme == "tcp":
+            host, port = parse_host_port(location, 8786)
+    except (ValueError, TypeError) as error:
+        raise SchedulerUnreachable(f"scheduler = {address!r}: not an address like tcp://host:8786 "
+                                   f"({error})") from None
+    if scheme == "tcp":
+        _probe_tcp_scheduler(address, host, int(port), timeout)
+    kind = _server_type(address.strip(), timeout)
+    if kind != "Scheduler":
+        raise SchedulerUnreachable(f"scheduler = {address!r}: that is a Dask {kind}, not a scheduler "
+                                   "(give the scheduler's address, e.g. tcp://host:8786)")
+    try:
+        return Client(address.strip(), timeout=timeout, set_as_default=False)
+    except Exception as error:  # one line, whatever went wrong on the way
+        message = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise SchedulerUnreachable(f"scheduler = {address!r}: cannot connect ({message})") from None
+
+
+def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float, lost: LostOutcome,
+              noun: str) -> None:
+    """Run ``items`` on the cluster of ``client``. An item whose workers keep dying (``KilledWorker``)
+    is recorded as failed with that cause; a cluster left without any worker for ``worker_timeout``
+    seconds, or a lost scheduler, raises :class:`WorkersLost`."""
+    from distributed.scheduler import KilledWorker
+
+    if not items:
+        return
+    futures = client.map(task, [argument for _, argument in items], pure=False)
+    item_of = {future.key: item for future, item in zip(futures, items)}
+    pending = list(futures)
+    alone_since: float | None = None
+    checked = time.monotonic()
+
+    def gone(why: str) -> WorkersLost:
+        return WorkersLost(f"{why}; the finished {noun} are saved, rerun the same command (with workers "
+                           "available) to resume")
+
+    try:
+        while pending:
+            finished = []
+            for future in pending:  # statuses are updated by the client's event loop
+                status = future.status
+                if status == "finished":
+                    try:
+                        outcome = future.result(timeout=worker_timeout)
+                    except TimeoutError:  # its result left with its worker: the scheduler recomputes it
+                        continue
+                    finished.append(future)
+                    record(outcome)
+                elif status == "error":
+                    finished.append(future)
+                    error = future.exception()
+                    index, argument = item_of[future.key]
+                    if not isinstance(error, KilledWorker):
+                        raise gone(f"the Dask cluster at {scheduler} could not compute item {index} "
+                                   f"({type(error).__name__}: {error})")
+                    record(lost(index, argument, "Dask workers died (killed or crashed) while computing "
+                                                 f"this task: {error}"))
+                elif status == "cancelled":
+                    raise gone(f"the Dask scheduler at {scheduler} cancelled the tasks")
+                # "pending", or "lost" (its result left with its worker; recomputed): wait
+            if finished:
+                done_now = set(map(id, finished))
+                pending = [f for f in pending if id(f) not in done_now]
+                alone_since, checked = None, time.monotonic()
+                continue
+            time.sleep(0.05)
+            if pending and time.monotonic() - checked > 1.0:  # no progress: is any worker left?
+                checked = time.monotonic()
+                try:
+                    n_workers = len(client.nthreads())
+                except Exception as error:
+                    raise gone(f"lost the Dask scheduler at {scheduler} ({type(error).__name__})") from None
+                if n_workers:
+                    alone_since = None
+                elif alone_since is None:
+                    alone_since = time.monotonic()
+                elif time.monotonic() - alone_since > worker_timeout:
+                    raise gone(f"the Dask cluster at {scheduler} has had no worker for "
+                               f"{worker_timeout:g} s")
+    finally:
+        if pending:
+            try:
+                client.cancel(list(pending))
+            except Exception:  # the scheduler may be gone: nothing left to cancel there
+                pass
+

@@ -1,0 +1,375 @@
+"""Operating map: drilling performance and vibration over a grid of top speed × weight-on-bit.
+
+One simulation per grid point (the case with ``operation.top_speed`` and ``operation.weight_on_bit`` set,
+:func:`~drillstring.stochastic.parameters.with_parameters`), summarised by the scalar outputs of
+:mod:`drillstring.stochastic.runs` (mean ROP, bit-speed oscillation, stick time, mean TOB and FOB,
+mechanical specific energy, largest radial displacement, impacts) and the linear stability of steady
+drilling at that point (leading growth rate, closed-form steady state). The points run on the study engine
+(:func:`~drillstring.stochastic.execution.run_tasks`: local processes or Dask, a resumable Zarr store, worker
+deaths isolated) and depend only on the case and the settings, so an interrupted map resumes to the same
+result.
+
+The **buckling margin** ``wob_cr − wob`` uses the critical weight-on-bit of the case
+(:func:`~drillstring.buckling.case_buckling_margin`), computed once: the prestressed lateral stiffness
+depends on neither the weight-on-bit of the reference state nor the top speed (module docstring of
+:mod:`drillstring.buckling`).
+
+Grid axes are written ``A:B:N`` (N values from A to B, both included), ``a,b,c`` (a list) or ``a`` (one
+value); each value is a number or a ``"value unit"`` string as in case files (``"40 rpm:200 rpm:17"``); a
+unit written once after the last number (``"40:200:17 rpm"``, ``"100,120,140 kN"``) applies to every bare
+number; bare numbers otherwise take ``default_unit`` (SI in the Python API).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+import xarray as xr
+
+from drillstring.case import Case, Dimension, to_si
+from drillstring.dynamics.indicators import transient_end
+from drillstring.dynamics.simulate import output_grid
+from drillstring.stochastic.execution import (
+    DASK_WORKER_TIMEOUT,
+    DONE,
+    FAILED,
+    ProgressCallback,
+    TaskOutcome,
+    check_workers,
+    connect_scheduler,
+    notify,
+    run_tasks,
+)
+from drillstring.stochastic.locks import StudyLock
+from drillstring.stochastic.parameters import with_parameters
+from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, bit_area, compile_kernels, run_outputs
+from drillstring.stochastic.store import ArraySpec, TaskStore
+
+__all__ = [
+    "MAP_AXES",
+    "MAP_OUTPUTS",
+    "MapSettings",
+    "MapStore",
+    "map_dataset",
+    "map_summary",
+    "parse_axis",
+    "run_map",
+]
+
+#: The map's axes: case parameter path of each.
+MAP_AXES = {"top_speed": "operation.top_speed", "weight_on_bit": "operation.weight_on_bit"}
+#: Every output of a grid point: name -> (unit, description).
+MAP_OUTPUTS = {**RUN_OUTPUTS, **STABILITY_OUTPUTS}
+#: Largest number of grid points of one map.
+MAX_POINTS = 100_000
+
+
+# --- the grid ------------------------------------------------------------------------------------
+
+
+def _split_unit(text: str) -> tuple[str, str]:
+    """``"40 rpm"`` -> ``("40", "rpm")``; ``"40"`` -> ``("40", "")``."""
+    parts = text.strip().split(None, 1)
+    if not parts:
+        return "", ""
+    return parts[0], (parts[1].strip() if len(parts) > 1 else "")
+
+
+def parse_axis(text: str | Sequence[float] | float, dimension: Dimension, *, name: str,
+               default_unit: str = "") -> np.ndarray:
+    """The values [SI] of one grid axis, sorted (see the module docstring for the grammar). A sequence of
+    numbers is taken as SI. Raises ValueError (one line naming ``name``) for a malformed axis, a value that
+    is not a positive number, or a value given twice."""
+    shown = text if isinstance(text, str) else list(np.atleast_1d(text))
+    if isinstance(text, str):
+        values = _parse_axis_text(text, dimension, name, default_unit)
+    else:
+        try:
+            values = np.atleast_1d(np.asarray(text, dtype=float))
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} = {shown!r}: must be numbers [SI] or a grid like 'A:B:N'") from None
+        if values.ndim != 1:
+            raise ValueError(f"{name} = {shown!r}: must be a flat list of values")
+    if values.size == 0:
+        raise ValueError(f"{name} = {shown!r}: no value")
+    if not np.all(np.isfinite(values)) or np.any(values <= 0):
+        raise ValueError(f"{name} = {shown!r}: every value must be a finite number > 0")
+    values = np.sort(values)
+    if np.any(np.diff(values) <= 1e-12 * np.abs(values[1:])):
+        raise ValueError(f"{name} = {shown!r}: a value is given twice")
+    return values
+
+
+def _parse_axis_text(text: str, dimension: Dimension, name: str, default_unit: str) -> np.ndarray:
+    def si(item: str, unit: str) -> float:
+        number, own = _split_unit(item)
+        value = f"{number} {own or unit}".strip()
+        try:
+            return to_si(value if (own or unit) else float(number), dimension)
+        except ValueError as error:
+            raise ValueError(f"{name} = {text!r}: {error}") from None
+
+    grammar = (f"{name} = {text!r}: write A:B:N (N values from A to B), a list a,b,c or one value, each a "
+               "number or 'value unit'")
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise ValueError(grammar)
+        count_text, unit = _split_unit(parts[2])
+        try:
+            count = int(count_text)
+        except ValueError:
+            raise ValueError(f"{name} = {text!r}: N = {count_text!r} must be an integer >= 1") from None
+        if count < 1:
+            raise ValueError(f"{name} = {text!r}: N = {count} must be an integer >= 1")
+        unit = unit or default_unit
+        start, stop = si(parts[0], unit), si(parts[1], unit)
+        if count > 1 and not stop > start:
+            raise ValueError(f"{name} = {text!r}: B must be greater than A")
+        return np.linspace(start, stop, count) if count > 1 else np.array([start])
+    items = [item for item in text.split(",")]
+    if any(not item.strip() for item in items):
+        raise ValueError(grammar)
+    _, last_unit = _split_unit(items[-1])
+    unit = last_unit or default_unit
+    return np.array([si(item, unit) for item in items])
+
+
+@dataclass(frozen=True)
+class MapSettings:
+    """What defines an operating map; a resumed map must have the same settings.
+
+    Attributes:
+        top_speed: top speeds of the grid [rad/s], increasing.
+        weight_on_bit: weights-on-bit of the grid [N], increasing.
+        t_end: simulated time per point [s].
+        output_step: output step [s].
+        transient: start of the window of the outputs [s].
+    """
+
+    top_speed: tuple[float, ...]
+    weight_on_bit: tuple[float, ...]
+    t_end: float = 30.0
+    output_step: float = 0.01
+    transient: float | None = None
+
+    def __post_init__(self) -> None:
+        for axis in MAP_AXES:
+            values = tuple(float(v) for v in getattr(self, axis))
+            if not values or not all(math.isfinite(v) and v > 0 for v in values) or any(
+                    b <= a for a, b in zip(values, values[1:])):
+                raise ValueError(f"{axis} = {values!r}: must be increasing finite values > 0")
+            object.__setattr__(self, axis, values)
+        if len(self.top_speed) * len(self.weight_on_bit) > MAX_POINTS:
+            raise ValueError(f"the grid has {len(self.top_speed) * len(self.weight_on_bit)} points, more than "
+                             f"{MAX_POINTS}")
+        if not (isinstance(self.t_end, (int, float)) and math.isfinite(self.t_end) and self.t_end > 0):
+            raise ValueError(f"t_end = {self.t_end!r} s: must be a finite number > 0")
+        if not (isinstance(self.output_step, (int, float)) and 0 < self.output_step <= self.t_end):
+            raise ValueError(f"output_step = {self.output_step!r} s: must be in (0, t_end = {self.t_end:g} s]")
+        transient = transient_end(self.t_end) if self.transient is None else self.transient
+        if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient < self.t_end):
+            raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {self.t_end:g} s)")
+        object.__setattr__(self, "transient", float(transient))
+        object.__setattr__(self, "t_end", float(self.t_end))
+        object.__setattr__(self, "output_step", float(self.output_step))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return len(self.top_speed), len(self.weight_on_bit)
+
+    @property
+    def points(self) -> int:
+        return self.shape[0] * self.shape[1]
+
+    def point(self, index: int) -> tuple[float, float]:
+        """(top speed [rad/s], weight-on-bit [N]) of point ``index`` (top speed major)."""
+        i, j = divmod(index, self.shape[1])
+        return self.top_speed[i], self.weight_on_bit[j]
+
+
+def check_map(case: Case, settings: MapSettings) -> None:
+    """Refuse (ValueError, one line) a grid whose weights-on-bit reach the string's weight (no such
+    point can run), and a case whose time step does not fit the map's t_end."""
+    heaviest = max(settings.weight_on_bit)
+    if case.model.gravity and heaviest >= case.weight:
+        raise ValueError(f"weight_on_bit = {heaviest:.6g} N: every weight-on-bit of the map must be less than the "
+                         f"string's weight, {case.weight:.6g} N")
+    if len(output_grid(settings.t_end, settings.output_step)) < 2:
+        raise ValueError(f"t_end = {settings.t_end:g} s: must hold at least one output step")
+
+
+# --- the store -----------------------------------------------------------------------------------
+
+
+class MapStore(TaskStore):
+    """A map's Zarr store: one row per grid point (top speed major), each output of :data:`MAP_OUTPUTS`."""
+
+    kind = "map"
+    row_dim = "point"
+    noun = "points"
+    differ = "case or settings differ: grid, t_end, output_step, transient"
+
+    def __init__(self, path: str | Path, case: Case, settings: MapSettings, critical_weight_on_bit: float) -> None:
+        layout = {
+            "top_speed": ArraySpec(("top_speed",), data=np.array(settings.top_speed), attributes={"units": "rad/s"}),
+            "weight_on_bit": ArraySpec(("weight_on_bit",), data=np.array(settings.weight_on_bit),
+                                       attributes={"units": "N"}),
+            **{name: ArraySpec(("point",), attributes={"units": unit, "long_name": text})
+               for name, (unit, text) in MAP_OUTPUTS.items()},
+        }
+        sizes = {"point": settings.points, "top_speed": settings.shape[0], "weight_on_bit": settings.shape[1]}
+        attrs = {"critical_weight_on_bit": float(critical_weight_on_bit), "bit_area": bit_area(case),
+                 "weight": case.weight}
+        super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
+                         attrs=attrs)
+
+
+# --- running -------------------------------------------------------------------------------------
+
+
+def _point_task(case: Case, settings: MapSettings, item: tuple[int, float, float]):
+    """The outcome of one grid point (never raises: a case the point cannot build fails with the cause)."""
+    index, top_speed, weight_on_bit = item
+    try:
+        point_case = with_parameters(case, {MAP_AXES["top_speed"]: top_speed,
+                                            MAP_AXES["weight_on_bit"]: weight_on_bit})
+    except ValueError as error:
+        return TaskOutcome(index, FAILED, str(error))
+    return run_outputs(point_case, index, t_end=settings.t_end, output_step=settings.output_step,
+                       t_transient=settings.transient, with_stability=True)
+
+
+@dataclass
+class MapRun:
+    """What :func:`run_map` did: the store, points finished and failed (all runs together), this call's
+    wall time [s], workers and points computed, and a note (a stale lock taken over) or None."""
+
+    store: MapStore
+    completed: int
+    failed: int
+    wall_time: float
+    workers: int | str
+    computed: int = 0
+    note: str | None = None
+
+
+def run_map(
+    case: Case,
+    settings: MapSettings,
+    store_path: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler=None,
+    progress: ProgressCallback | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float = DASK_WORKER_TIMEOUT,
+) -> MapRun:
+    """Run (or resume) every pending point of a map into its Zarr store (like
+    :func:`~drillstring.stochastic.montecarlo.run_study`: settings checked, scheduler reached and the store
+    locked before anything is created; ``scheduler`` an address or a ``distributed.Client``)."""
+    from drillstring.buckling import case_buckling_margin
+
+    check_workers(workers, scheduler)
+    check_map(case, settings)
+    critical = case_buckling_margin(case).critical_weight_on_bit
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what="map") as guard:
+            if guard.note:
+                notify(note, guard.note)
+            address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
+            store = MapStore(Path(store_path), case, settings, critical)
+            items = [(i, (i, *settings.point(i))) for i in store.pending()]
+            if items and client is None:
+                compile_kernels(case)
+            report = run_tasks(store, partial(_point_task, case, settings), items, workers=workers, client=client,
+                               address=address, progress=progress, worker_timeout=worker_timeout, what="map",
+                               noun="grid points")
+            return MapRun(store, report.completed, report.failed, report.wall_time, report.workers,
+                          report.computed, guard.note)
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+
+
+# --- the result ----------------------------------------------------------------------------------
+
+
+def map_dataset(store_path: str | Path) -> xr.Dataset:
+    """The map as a Dataset of dimensions ``top_speed`` [rad/s] × ``weight_on_bit`` [N]: every output of
+    :data:`MAP_OUTPUTS` (units in attributes), ``status`` (1 done, 2 failed), ``wall_time`` [s] and
+    ``buckling_margin`` = critical weight-on-bit − weight-on-bit [N]; attributes: the case (TOML), the
+    settings, ``critical_weight_on_bit`` [N], ``bit_area`` [m²], the failures' causes. Refused while a map
+    runs on the store (shared lock)."""
+    with StudyLock(store_path, shared=True, what="map"):
+        group = MapStore.open_group(store_path, mode="r")
+        attrs = dict(group.attrs)
+        top = np.asarray(group["top_speed"][:], dtype=float)
+        wob = np.asarray(group["weight_on_bit"][:], dtype=float)
+        shape = (top.size, wob.size)
+        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*MAP_OUTPUTS, "status", "wall_time")}
+    coords = {
+        "top_speed": ("top_speed", top, {"units": "rad/s", "long_name": "top (rotary) speed"}),
+        "weight_on_bit": ("weight_on_bit", wob, {"units": "N", "long_name": "static weight on bit"}),
+    }
+    data = {name: (("top_speed", "weight_on_bit"), arrays[name], {"units": unit, "long_name": text})
+            for name, (unit, text) in MAP_OUTPUTS.items()}
+    data["status"] = (("top_speed", "weight_on_bit"), arrays["status"].astype("i1"),
+                      {"long_name": "0 pending, 1 done, 2 failed"})
+    data["wall_time"] = (("top_speed", "weight_on_bit"), arrays["wall_time"], {"units": "s"})
+    critical = float(attrs["critical_weight_on_bit"])
+    data["buckling_margin"] = (("top_speed", "weight_on_bit"), np.broadcast_to(critical - wob, shape).copy(),
+                               {"units": "N", "long_name": "critical weight on bit (lateral buckling) minus "
+                                                            "weight on bit (< 0: buckled)"})
+    settings = dict(attrs["settings"])
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update({
+        "case": attrs["case"],
+        "critical_weight_on_bit": critical,
+        "bit_area": float(attrs["bit_area"]),
+        "t_end": float(settings["t_end"]),
+        "output_step": float(settings["output_step"]),
+        "t_transient": float(settings["transient"]),
+        "n_points": int(top.size * wob.size),
+        "n_done": int(np.sum(arrays["status"] == DONE)),
+        "n_failed": int(np.sum(arrays["status"] == FAILED)),
+        "failures": "; ".join(f"point {k}: {v}" for k, v in dict(attrs.get("failures", {})).items()),
+    })
+    return ds
+
+
+def map_summary(ds: xr.Dataset) -> dict[str, Any]:
+    """JSON-ready highlights of a map (SI): grid, counts, the point of largest mean ROP, the share of
+    linearly stable points, the critical weight-on-bit."""
+    rop = ds["mean_rate_of_penetration"].where(ds["status"] == DONE)
+    best: dict[str, Any] | None = None
+    if bool(np.isfinite(rop.values).any()):
+        i, j = np.unravel_index(int(np.nanargmax(rop.values)), rop.shape)
+        point = ds.isel(top_speed=i, weight_on_bit=j)
+        best = {"top_speed": float(point.top_speed), "weight_on_bit": float(point.weight_on_bit),
+                **{k: float(point[k]) for k in ("mean_rate_of_penetration", "bit_speed_oscillation",
+                                                "mechanical_specific_energy", "growth_rate")}}
+    growth = ds["growth_rate"].values
+    defined = np.isfinite(growth)
+    done = ds["status"].values == DONE
+    return {
+        "top_speed": [float(v) for v in ds.top_speed.values],
+        "weight_on_bit": [float(v) for v in ds.weight_on_bit.values],
+        "points": int(ds.attrs["n_points"]),
+        "done": int(ds.attrs["n_done"]),
+        "failed": int(ds.attrs["n_failed"]),
+        "t_end": float(ds.attrs["t_end"]),
+        "t_transient": float(ds.attrs["t_transient"]),
+        "critical_weight_on_bit": float(ds.attrs["critical_weight_on_bit"]),
+        "bit_area": float(ds.attrs["bit_area"]),
+        "linearly_stable_points": int(np.sum(growth[defined] < 0.0)),
+        "points_without_steady_drilling": int(np.sum(~defined & done)),
+        "stick_slip_points": int(np.nansum(ds["stick_time_fraction"].values > 0.0)),
+        "largest_rate_of_penetration": best,
+    }

@@ -1,0 +1,243 @@
+"""Global sensitivity of a case: a Saltelli design of its uncertain parameters run on the study engine,
+analysed into Sobol' indices (:mod:`drillstring.stochastic.sensitivity`).
+
+Each row of the design (``N(k + 2)`` rows for ``N`` base samples and ``k`` parameters) is one simulation of
+the case with the row's parameter values set (:func:`~drillstring.stochastic.parameters.with_parameters`),
+summarised by the scalar outputs of :mod:`drillstring.stochastic.runs`. The rows run through
+:func:`~drillstring.stochastic.execution.run_tasks` (local processes or Dask) into a resumable Zarr store
+(:class:`SensitivityStore`); the design depends only on the laws, ``N`` and the seed, so an interrupted
+run resumes to the same result. The analysed outputs (:data:`SENSITIVITY_OUTPUTS`) are the time means of
+ROP, TOB and FOB after the transient, the bit-speed oscillation, and the dispersion in time (standard
+deviation) of ROP, TOB and FOB. A row whose values give no valid case (e.g. a weight-on-bit above the
+string's weight) or whose run fails is left out with its block (see
+:func:`~drillstring.stochastic.sensitivity.sobol_indices`).
+
+The laws must be independent (Sobol' indices of this kind) and must respect their parameters' ranges to
+1e-6 (:data:`~drillstring.stochastic.uncertainty.OUT_OF_RANGE_TOLERANCE`): failures that depend on the
+parameters would bias the indices.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from drillstring.case import Case, case_from_dict
+from drillstring.dynamics.indicators import transient_end
+from drillstring.stochastic.execution import (
+    DASK_WORKER_TIMEOUT,
+    FAILED,
+    ProgressCallback,
+    TaskOutcome,
+    check_workers,
+    connect_scheduler,
+    notify,
+    run_tasks,
+)
+from drillstring.stochastic.locks import StudyLock
+from drillstring.stochastic.parameters import with_parameters
+from drillstring.stochastic.runs import RUN_OUTPUTS, compile_kernels, run_outputs
+from drillstring.stochastic.sensitivity import (
+    SaltelliDesign,
+    SobolResult,
+    _check_power_of_two,
+    saltelli_design,
+    sobol_indices,
+)
+from drillstring.stochastic.store import ArraySpec, TaskStore
+from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
+
+__all__ = [
+    "SENSITIVITY_OUTPUTS",
+    "SensitivitySettings",
+    "SensitivityStore",
+    "load_sensitivity",
+    "run_sensitivity",
+    "sensitivity_design",
+]
+
+#: Outputs whose Sobol' indices are computed (names of :data:`~drillstring.stochastic.runs.RUN_OUTPUTS`).
+SENSITIVITY_OUTPUTS = ("mean_rate_of_penetration", "bit_speed_oscillation", "mean_torque_on_bit",
+                       "mean_force_on_bit", "std_rate_of_penetration", "std_torque_on_bit", "std_force_on_bit")
+
+
+@dataclass(frozen=True)
+class SensitivitySettings:
+    """What defines a sensitivity run; a resumed run must have the same settings.
+
+    Attributes:
+        base_samples: N, a power of 2 (>= 8); the design has N(k + 2) runs.
+        laws: ``((path, spec), ...)`` of the uncertain parameters (canonical specs, independent).
+        seed: scrambling seed of the Sobol' sequence (and of the bootstrap).
+        t_end: simulated time per run [s].
+        output_step: output step [s].
+        transient: start of the window of the outputs [s] (default ``min(10 s, t_end/2)``).
+    """
+
+    base_samples: int
+    laws: tuple[tuple[str, str], ...]
+    seed: int = 0
+    t_end: float = 30.0
+    output_step: float = 0.01
+    transient: float | None = None
+
+    def __post_init__(self) -> None:
+        _check_power_of_two(self.base_samples, "samples")
+        if not self.laws:
+            raise ValueError("no uncertain parameter: give at least one law (--param PATH=LAW)")
+        object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
+        if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0):
+            raise ValueError(f"seed = {self.seed!r}: must be an integer >= 0")
+        if not (isinstance(self.t_end, (int, float)) and math.isfinite(self.t_end) and self.t_end > 0):
+            raise ValueError(f"t_end = {self.t_end!r} s: must be a finite number > 0")
+        if not (isinstance(self.output_step, (int, float)) and 0 < self.output_step <= self.t_end):
+            raise ValueError(f"output_step = {self.output_step!r} s: must be in (0, t_end = {self.t_end:g} s]")
+        transient = transient_end(self.t_end) if self.transient is None else self.transient
+        if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient < self.t_end):
+            raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {self.t_end:g} s)")
+        object.__setattr__(self, "transient", float(transient))
+        object.__setattr__(self, "t_end", float(self.t_end))
+        object.__setattr__(self, "output_step", float(self.output_step))
+
+
+def sensitivity_design(case: Case, settings: SensitivitySettings) -> SaltelliDesign:
+    """The Saltelli design of the settings' laws on ``case`` (raises ParameterError / ValueError, one line,
+    for unknown paths, bad laws, laws outside their ranges or correlated parameters)."""
+    law: Uncertainty = uncertainty(case, dict(settings.laws))
+    return saltelli_design(law, settings.base_samples, seed=settings.seed)
+
+
+class SensitivityStore(TaskStore):
+    """A sensitivity run's Zarr store: one row per design row, its parameter values and scalar outputs."""
+
+    kind = "sensitivity"
+    row_dim = "run"
+    noun = "runs"
+    differ = "case or settings differ: laws, samples, seed, t_end, output_step, transient"
+
+    def __init__(self, path: str | Path, case: Case, settings: SensitivitySettings, design: SaltelliDesign) -> None:
+        layout = {
+            "input_values": ArraySpec(("run", "parameter"), attributes={
+                "long_name": "parameter values of each run (SI; see the parameter_units attribute)"}),
+            **{name: ArraySpec(("run",), attributes={"units": unit, "long_name": text})
+               for name, (unit, text) in RUN_OUTPUTS.items()},
+        }
+        sizes = {"run": design.runs, "parameter": design.uncertainty.size}
+        attrs = {**input_attributes(design.uncertainty), "base_samples": design.base_samples}
+        super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
+                         attrs=attrs)
+
+
+def _row_task(case: Case, paths: tuple[str, ...], settings: SensitivitySettings, item) -> TaskOutcome:
+    """The outcome of one design row (never raises: values that give no valid case fail with the cause)."""
+    index, row = item
+    row = np.asarray(row, dtype=float)
+    try:
+        run_case = with_parameters(case, dict(zip(paths, row)))
+    except ValueError as error:
+        return TaskOutcome(index, FAILED, str(error), {"input_values": row})
+    outcome = run_outputs(run_case, index, t_end=settings.t_end, output_step=settings.output_step,
+                          t_transient=settings.transient)
+    outcome.values["input_values"] = row
+    return outcome
+
+
+def _lost(index: int, item, message: str) -> TaskOutcome:
+    return TaskOutcome(index, FAILED, message, {"input_values": np.asarray(item[1], dtype=float)})
+
+
+@dataclass
+class SensitivityRun:
+    """What :func:`run_sensitivity` did: the store and design, runs finished and failed (all calls
+    together), this call's wall time [s], workers and runs computed, and a note or None."""
+
+    store: SensitivityStore
+    design: SaltelliDesign
+    completed: int
+    failed: int
+    wall_time: float
+    workers: int | str
+    computed: int = 0
+    note: str | None = None
+
+
+def run_sensitivity(
+    case: Case,
+    settings: SensitivitySettings,
+    store_path: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler=None,
+    progress: ProgressCallback | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float = DASK_WORKER_TIMEOUT,
+) -> SensitivityRun:
+    """Run (or resume) every pending row of the design into the Zarr store at ``store_path`` (like
+    :func:`~drillstring.stochastic.montecarlo.run_study`: the laws, the scheduler and the lock are checked
+    before anything is created)."""
+    check_workers(workers, scheduler)
+    design = sensitivity_design(case, settings)
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what="sensitivity") as guard:
+            if guard.note:
+                notify(note, guard.note)
+            address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
+            store = SensitivityStore(Path(store_path), case, settings, design)
+            items = [(i, (i, design.values[i])) for i in store.pending()]
+            if items and client is None:
+                compile_kernels(case)
+            task = partial(_row_task, case, design.uncertainty.paths, settings)
+            report = run_tasks(store, task, items, workers=workers, client=client, address=address,
+                               progress=progress, worker_timeout=worker_timeout, lost=_lost, what="sensitivity run",
+                               noun="runs")
+            return SensitivityRun(store, design, report.completed, report.failed, report.wall_time,
+                                  report.workers, report.computed, guard.note)
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+
+
+@dataclass
+class SensitivityData:
+    """A sensitivity store read back: the design, every output of every run (design order), the status,
+    the per-run wall time [s] and the store's attributes."""
+
+    design: SaltelliDesign
+    outputs: dict[str, np.ndarray]
+    status: np.ndarray
+    wall_time: np.ndarray
+    attrs: dict[str, Any]
+
+    def indices(self, outputs=SENSITIVITY_OUTPUTS, *, confidence: float = 0.95, resamples: int = 1000) -> SobolResult:
+        """Sobol' indices of ``outputs`` (failed runs left out with their blocks)."""
+        values = {name: np.where(self.status == 1, self.outputs[name], np.nan) for name in outputs}
+        return sobol_indices(self.design, values, confidence=confidence, resamples=resamples,
+                             seed=self.design.seed)
+
+
+def load_sensitivity(store_path: str | Path) -> SensitivityData:
+    """Read a sensitivity store (shared lock: refused while a run writes it), rebuilding its design from the
+    recorded case and laws and checking it against the recorded parameter values."""
+    import tomllib
+
+    with StudyLock(store_path, shared=True, what="sensitivity"):
+        group = SensitivityStore.open_group(store_path, mode="r")
+        attrs = dict(group.attrs)
+        outputs = {name: np.asarray(group[name][:], dtype=float) for name in RUN_OUTPUTS}
+        status = np.asarray(group["status"][:])
+        wall = np.asarray(group["wall_time"][:], dtype=float)
+        values = np.asarray(group["input_values"][:], dtype=float)
+    settings = SensitivitySettings(**{**attrs["settings"], "laws": tuple(map(tuple, attrs["settings"]["laws"]))})
+    case = case_from_dict(tomllib.loads(attrs["case"]), source=str(store_path))
+    design = sensitivity_design(case, settings)
+    written = np.isfinite(values).all(axis=1)
+    if not np.array_equal(values[written], design.values[written]):
+        raise ValueError(f"{store_path}: the recorded parameter values differ from the design of its laws "
+                         "(written by another version of drillstring?); delete it to start over")
+    return SensitivityData(design, outputs, status, wall, attrs)

@@ -1,0 +1,72 @@
+"""The task runner: in-process and local processes give the same outcomes; interruption keeps what
+finished; a task that kills its worker is recorded as failed (the study-level tests cover Dask, SIGKILL
+of the parent and the lock)."""
+
+import os
+
+import pytest
+
+from drillstring.stochastic import execution
+from drillstring.stochastic.execution import DONE, FAILED, TaskOutcome
+
+
+def square(argument):
+    index, x = argument
+    if x == 13:
+        os._exit(3)  # a crash that kills the worker process
+    return TaskOutcome(index, DONE, "", {"y": x * x})
+
+
+def collect(items, **kwargs):
+    got = []
+    execution.execute(square, items, got.append, **kwargs)
+    return {o.index: (o.status, o.values.get("y"), o.message) for o in got}
+
+
+def test_processes_and_in_process_agree_and_a_crash_is_isolated():
+    items = [(i, (i, float(i))) for i in range(6)]
+    assert collect(items, workers=1) == collect(items, workers=2) == {i: (DONE, i * i, "") for i in range(6)}
+    crashing = items + [(6, (6, 13.0))]
+    result = collect(crashing, workers=2, noun="rows")
+    assert result[6][0] == FAILED and "worker process died" in result[6][2]
+    assert all(result[i] == (DONE, i * i, "") for i in range(6))
+
+
+class Memory:
+    """A minimal store for run_tasks."""
+
+    path = "memory"
+
+    def __init__(self, total):
+        self.total, self.rows, self.sessions = total, {}, []
+
+    def counts(self):
+        return sum(o.status == DONE for o in self.rows.values()), sum(o.status == FAILED for o in self.rows.values())
+
+    def write_many(self, outcomes):
+        self.rows.update({o.index: o for o in outcomes})
+
+    def record_session(self, *args):
+        self.sessions.append(args)
+
+
+def test_interruption_writes_what_finished():
+    store = Memory(5)
+
+    def stop(done, failed, total):
+        if done == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(execution.Interrupted, match="map interrupted after 3 of 5 points"):
+        execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(5)], workers=1, progress=stop,
+                            what="map", noun="points")
+    assert sorted(store.rows) == [0, 1, 2] and len(store.sessions) == 1
+    report = execution.run_tasks(store, square, [(i, (i, float(i))) for i in (3, 4)], workers=1)
+    assert report.completed == 5 and report.computed == 2
+
+
+def test_bad_worker_counts():
+    with pytest.raises(ValueError, match="workers = 0"):
+        execution.check_workers(0)
+    with pytest.raises(ValueError, match="not both"):
+        execution.check_workers(2, "tcp://x:1")

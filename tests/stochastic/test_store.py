@@ -1,0 +1,51 @@
+"""The resumable task store: creation, refusals, batched writes (data before status)."""
+
+import numpy as np
+import pytest
+import zarr
+
+from drillstring.stochastic.execution import DONE, FAILED, PENDING, TaskOutcome
+from drillstring.stochastic.store import ArraySpec, StoreError, TaskStore
+
+
+class Squares(TaskStore):
+    kind = "squares"
+    row_dim = "row"
+    noun = "rows"
+
+    def __init__(self, path, n, offset=0.0):
+        layout = {"x": ArraySpec(("row",), data=np.arange(n, dtype=float)), "y": ArraySpec(("row",)),
+                  "series": ArraySpec(("row", "time"), chunk_rows=1)}
+        super().__init__(path, case_toml="# none\n", settings={"n": n, "offset": offset}, layout=layout,
+                         sizes={"row": n, "time": 3})
+
+
+class Other(Squares):
+    kind = "other"
+
+
+def test_batched_writes_and_counts(tmp_path):
+    store = Squares(tmp_path / "s.zarr", 4)
+    assert store.pending() == [0, 1, 2, 3] and store.counts() == (0, 0)
+    store.write_many([TaskOutcome(2, DONE, "", {"y": 4.0, "series": np.array([1.0, 2.0, 3.0])}, 0.5),
+                      TaskOutcome(0, FAILED, "boom", {}, 0.1)])
+    group = zarr.open_group(str(tmp_path / "s.zarr"), mode="r")
+    np.testing.assert_array_equal(group["status"][:], [FAILED, PENDING, DONE, PENDING])
+    np.testing.assert_array_equal(group["series"][2], [1.0, 2.0, 3.0])
+    assert group["y"][2] == 4.0 and np.isnan(group["y"][0]) and group["wall_time"][2] == 0.5
+    assert store.failures() == {"0": "boom"} and store.counts() == (1, 1) and store.pending() == [1, 3]
+    store.record_session("now", 1.5, 2, 1)
+    assert Squares(tmp_path / "s.zarr", 4).sessions() == [{"started": "now", "wall_time": 1.5, "rows": 2,
+                                                           "workers": 1}]
+
+
+def test_refusals(tmp_path):
+    Squares(tmp_path / "s.zarr", 4)
+    with pytest.raises(ValueError, match="holds a different squares"):
+        Squares(tmp_path / "s.zarr", 4, offset=1.0)
+    with pytest.raises(StoreError, match="not a drillstring other store .it is a squares store"):
+        Other.open_group(tmp_path / "s.zarr")
+    group = zarr.open_group(str(tmp_path / "s.zarr"), mode="a")
+    del group["y"]
+    with pytest.raises(StoreError, match=r"missing array\(s\): y"):
+        Squares(tmp_path / "s.zarr", 4)
