@@ -82,7 +82,7 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     residual = np.abs(k @ rigid).max()
     if residual > 1e-9 * np.abs(k).max():
         raise ValueError(f"the family has no rigid mode: |K r| = {residual:.3g} (K must be unconstrained)")
-    omega2, shapes = sla.eigh(k, m)
+    omega2, shapes = sla.eigh(k, m, driver="gvd")
     rigid_mass = float(rigid @ m @ rigid)
     # Use the exact rigid shape; eigh's other vectors are already M-orthogonal to it to round-off.
     shapes[:, 0] = rigid / np.sqrt(rigid_mass)
@@ -90,7 +90,7 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     omega[0] = 0.0
     coefficients = 2.0 * damping_ratio * omega
     coefficients[0] = rigid_coefficient / rigid_mass
-    m_phi = m @ shapes
+    m_phi = (sp.csr_matrix(mass) if sp.issparse(mass) else m) @ shapes  # the family's mass is banded
     matrix = (m_phi * coefficients) @ m_phi.T
     return FreeFreeDamping(0.5 * (matrix + matrix.T), omega, shapes, coefficients, rigid_mass)
 
