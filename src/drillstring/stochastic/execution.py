@@ -146,6 +146,65 @@ class RunReport:
     computed: int = 0
 
 
+@dataclass
+class StoreRun:
+    """What :func:`run_locked` did: the ``store``, its items finished and failed (all runs together), this
+    call's wall time [s], what it ran on (local process count or scheduler address), the items it
+    computed, and a ``note`` for the user (a stale lock taken over) or None."""
+
+    store: Any
+    completed: int
+    failed: int
+    wall_time: float
+    workers: int | str
+    computed: int = 0
+    note: str | None = None
+
+
+def run_locked(
+    store_path,
+    open_store: Callable[[], Any],
+    pending: Callable[[Any], Sequence[tuple[int, Any]]],
+    task: Callable[[Any], Any],
+    *,
+    workers: int | None = None,
+    scheduler=None,
+    progress: ProgressCallback | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float = DASK_WORKER_TIMEOUT,
+    lost: LostOutcome = bare_failure,
+    prepare: Callable[[], None] | None = None,
+    what: str = "study",
+    noun: str = "realizations",
+    lock_name: str | None = None,
+) -> StoreRun:
+    """The one way studies, maps and sensitivity runs execute: reach the scheduler (an address — refused
+    within about 12 s when it is no Dask scheduler — or a connected ``distributed.Client``, left open),
+    lock the store at ``store_path`` (:class:`~drillstring.stochastic.locks.StudyLock`, named
+    ``lock_name``, default ``what``), open or create it (``open_store()``), run its ``pending(store)``
+    items with ``task`` (:func:`run_tasks`) and release everything. ``prepare()`` runs once before local
+    worker processes start (compiling the kernels in this process, so the workers load them)."""
+    from drillstring.stochastic.locks import StudyLock
+
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    try:
+        with StudyLock(store_path, what=lock_name or what) as guard:
+            if guard.note:
+                notify(note, guard.note)
+            address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
+            store = open_store()
+            items = list(pending(store))
+            if items and client is None and prepare is not None:
+                prepare()
+            report = run_tasks(store, task, items, workers=workers, client=client, address=address,
+                               progress=progress, worker_timeout=worker_timeout, lost=lost, what=what, noun=noun)
+            return StoreRun(store, report.completed, report.failed, report.wall_time, report.workers,
+                            report.computed, guard.note)
+    finally:
+        if isinstance(scheduler, str) and client is not None:
+            client.close()
+
+
 def run_tasks(
     store,
     task: Callable[[Any], Any],

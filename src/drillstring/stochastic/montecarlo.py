@@ -55,8 +55,9 @@ from drillstring.stochastic.execution import (  # noqa: F401  (re-exported)
     check_workers,
     computation_time,
     connect_scheduler,
+    StoreRun,
     notify,
-    run_tasks,
+    run_locked,
 )
 from drillstring.stochastic.locks import StudyLock, StudyLocked  # noqa: F401  (re-exported)
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
@@ -419,25 +420,9 @@ class StudyStore(TaskStore):
 # --- execution -----------------------------------------------------------------------------------
 
 
-@dataclass
-class StudyRun:
-    """What :func:`run_study` did.
-
-    Attributes:
-        completed, failed: realizations finished and failed in the store (all runs together).
-        wall_time: wall time of this call [s].
-        computed: realizations computed by this call (0 when the study was already finished).
-        workers: what this call ran on (local process count or scheduler address).
-        note: a note for the user (e.g. a stale lock taken over), or None.
-    """
-
-    store: StudyStore
-    completed: int
-    failed: int
-    wall_time: float
-    workers: int | str
-    computed: int = 0
-    note: str | None = None
+#: What :func:`run_study` did (:class:`~drillstring.stochastic.execution.StoreRun`: the store, realizations
+#: finished and failed, wall time, workers, realizations computed by this call, a note or None).
+StudyRun = StoreRun
 
 
 def run_study(
@@ -469,26 +454,15 @@ def run_study(
     """
     check_workers(workers, scheduler)
     check_study(case, settings)
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
-    try:
-        with StudyLock(store_path) as guard:
-            if guard.note:
-                notify(note, guard.note)
-            address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
-            store = StudyStore(Path(store_path), case, settings)
-            indices = ([] if store.nominal_done() else [NOMINAL]) + store.pending()
-            if indices and client is None:
-                compile_kernels(case)
-            report = run_tasks(
-                store, partial(_realization_task, case, settings), [(i, i) for i in indices],
-                workers=workers, client=client, address=address, progress=progress,
-                worker_timeout=worker_timeout, lost=partial(_worker_died, case, settings),
-                what="study", noun="realizations")
-            return StudyRun(store, report.completed, report.failed, report.wall_time, report.workers,
-                            report.computed, guard.note)
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            client.close()
+
+    def pending(store: StudyStore):
+        return [(i, i) for i in ([] if store.nominal_done() else [NOMINAL]) + store.pending()]
+
+    return run_locked(store_path, partial(StudyStore, Path(store_path), case, settings), pending,
+                      partial(_realization_task, case, settings), workers=workers, scheduler=scheduler,
+                      progress=progress, note=note, worker_timeout=worker_timeout,
+                      lost=partial(_worker_died, case, settings), prepare=partial(compile_kernels, case),
+                      what="study", noun="realizations")
 
 
 def _realization_task(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:

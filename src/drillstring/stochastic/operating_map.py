@@ -40,10 +40,9 @@ from drillstring.stochastic.execution import (
     FAILED,
     ProgressCallback,
     TaskOutcome,
+    StoreRun,
     check_workers,
-    connect_scheduler,
-    notify,
-    run_tasks,
+    run_locked,
 )
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
@@ -245,18 +244,9 @@ def _point_task(case: Case, settings: MapSettings, item: tuple[int, float, float
                        t_transient=settings.transient, with_stability=True)
 
 
-@dataclass
-class MapRun:
-    """What :func:`run_map` did: the store, points finished and failed (all runs together), this call's
-    wall time [s], workers and points computed, and a note (a stale lock taken over) or None."""
-
-    store: MapStore
-    completed: int
-    failed: int
-    wall_time: float
-    workers: int | str
-    computed: int = 0
-    note: str | None = None
+#: What :func:`run_map` did (:class:`~drillstring.stochastic.execution.StoreRun`: the store, points finished
+#: and failed, wall time, workers, points computed by this call, a note or None).
+MapRun = StoreRun
 
 
 def run_map(
@@ -278,24 +268,11 @@ def run_map(
     check_workers(workers, scheduler)
     check_map(case, settings)
     critical = case_buckling_margin(case).critical_weight_on_bit
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
-    try:
-        with StudyLock(store_path, what="map") as guard:
-            if guard.note:
-                notify(note, guard.note)
-            address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
-            store = MapStore(Path(store_path), case, settings, critical)
-            items = [(i, (i, *settings.point(i))) for i in store.pending()]
-            if items and client is None:
-                compile_kernels(case)
-            report = run_tasks(store, partial(_point_task, case, settings), items, workers=workers, client=client,
-                               address=address, progress=progress, worker_timeout=worker_timeout, what="map",
-                               noun="grid points")
-            return MapRun(store, report.completed, report.failed, report.wall_time, report.workers,
-                          report.computed, guard.note)
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            client.close()
+    return run_locked(store_path, partial(MapStore, Path(store_path), case, settings, critical),
+                      lambda store: [(i, (i, *settings.point(i))) for i in store.pending()],
+                      partial(_point_task, case, settings), workers=workers, scheduler=scheduler,
+                      progress=progress, note=note, worker_timeout=worker_timeout,
+                      prepare=partial(compile_kernels, case), what="map", noun="grid points")
 
 
 # --- the result ----------------------------------------------------------------------------------

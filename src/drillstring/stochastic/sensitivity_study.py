@@ -34,10 +34,9 @@ from drillstring.stochastic.execution import (
     FAILED,
     ProgressCallback,
     TaskOutcome,
+    StoreRun,
     check_workers,
-    connect_scheduler,
-    notify,
-    run_tasks,
+    run_locked,
 )
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
@@ -152,18 +151,11 @@ def _lost(index: int, item, message: str) -> TaskOutcome:
 
 
 @dataclass
-class SensitivityRun:
-    """What :func:`run_sensitivity` did: the store and design, runs finished and failed (all calls
-    together), this call's wall time [s], workers and runs computed, and a note or None."""
+class SensitivityRun(StoreRun):
+    """What :func:`run_sensitivity` did: a :class:`~drillstring.stochastic.execution.StoreRun` (the store,
+    runs finished and failed, wall time, workers, runs computed by this call, a note) and the design."""
 
-    store: SensitivityStore
-    design: SaltelliDesign
-    completed: int
-    failed: int
-    wall_time: float
-    workers: int | str
-    computed: int = 0
-    note: str | None = None
+    design: SaltelliDesign | None = None
 
 
 def run_sensitivity(
@@ -182,25 +174,13 @@ def run_sensitivity(
     before anything is created)."""
     check_workers(workers, scheduler)
     design = sensitivity_design(case, settings)
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
-    try:
-        with StudyLock(store_path, what="sensitivity") as guard:
-            if guard.note:
-                notify(note, guard.note)
-            address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
-            store = SensitivityStore(Path(store_path), case, settings, design)
-            items = [(i, (i, design.values[i])) for i in store.pending()]
-            if items and client is None:
-                compile_kernels(case)
-            task = partial(_row_task, case, design.uncertainty.paths, settings)
-            report = run_tasks(store, task, items, workers=workers, client=client, address=address,
-                               progress=progress, worker_timeout=worker_timeout, lost=_lost, what="sensitivity run",
-                               noun="runs")
-            return SensitivityRun(store, design, report.completed, report.failed, report.wall_time,
-                                  report.workers, report.computed, guard.note)
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            client.close()
+    run = run_locked(store_path, partial(SensitivityStore, Path(store_path), case, settings, design),
+                     lambda store: [(i, (i, design.values[i])) for i in store.pending()],
+                     partial(_row_task, case, design.uncertainty.paths, settings), workers=workers,
+                     scheduler=scheduler, progress=progress, note=note, worker_timeout=worker_timeout,
+                     lost=_lost, prepare=partial(compile_kernels, case), what="sensitivity run", noun="runs",
+                     lock_name="sensitivity")
+    return SensitivityRun(**vars(run), design=design)
 
 
 @dataclass
