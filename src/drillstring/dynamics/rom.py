@@ -107,6 +107,13 @@ def observation_width(n_probes: int) -> int:
 VECTOR_MATH = {"reassoc", "contract"}
 
 
+def inner_kernel(**options):
+    """``njit(cache=True)`` for a kernel called only from other compiled kernels: no CPython wrapper is
+    generated for it (each wrapper unpacks the large structured arguments and cost about 0.15 s of the
+    first compilation; 1.6 s in all). Such a kernel cannot be called from Python."""
+    return njit(cache=True, no_cpython_wrapper=True, **options)
+
+
 # ---------------------------------------------------------------------------------------------------------
 # Kernel data: everything a compiled kernel reads, built once per model by ReducedOrderModel
 # ---------------------------------------------------------------------------------------------------------
@@ -248,7 +255,7 @@ class ObserveData(NamedTuple):
 # ---------------------------------------------------------------------------------------------------------
 
 
-@njit(cache=True, fastmath=VECTOR_MATH)
+@inner_kernel(fastmath=VECTOR_MATH)
 def _matvec(matrix, vector, offset, out):
     """out = matrix @ vector[offset:offset + matrix.shape[1]] with compiled loops (no BLAS, so no
     thread oversubscription when several worker processes run)."""
@@ -280,7 +287,7 @@ def diagonal_blocks(matrix: np.ndarray) -> np.ndarray:
     return np.array(blocks, dtype=np.int64).reshape(-1, 2)
 
 
-@njit(cache=True)
+@inner_kernel()
 def _block_damping(damping_t, blocks, velocity, out):
     """out −= D velocity, D block diagonal (``blocks`` from :func:`diagonal_blocks`, ``damping_t`` = Dᵀ)."""
     for b in range(blocks.shape[0]):
@@ -292,7 +299,7 @@ def _block_damping(damping_t, blocks, velocity, out):
                     out[i] -= damping_t[j, i] * x
 
 
-@njit(cache=True)
+@inner_kernel()
 def _columns_matvec(matrix_t, vector, offset, out, sign):
     """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
     column, so the inner loop is contiguous and vectorises without reassociating sums."""
@@ -303,7 +310,7 @@ def _columns_matvec(matrix_t, vector, offset, out, sign):
                 out[i] += matrix_t[j, i] * x
 
 
-@njit(cache=True)
+@inner_kernel()
 def _bit_motion(d, y):
     """Axial velocity [m/s] and spin speed [rad/s] of the bit for the state ``y`` = [η, η̇]."""
     n = d.omega2.shape[0]
@@ -317,13 +324,13 @@ def _bit_motion(d, y):
     return bit_velocity, bit_speed
 
 
-@njit(cache=True)
+@inner_kernel()
 def _bit_rock(d, bit_velocity, bit_speed):
     b = d.bit_rock
     return bit_rock_force_floored(bit_velocity, bit_speed, b[0], b[1], b[2], b[3], b[4], b[5], b[6])
 
 
-@njit(cache=True)
+@inner_kernel()
 def _lateral_displacements(d, y, v, w):
     """v and w [m] at every node for the state ``y``."""
     v[:] = 0.0
@@ -346,7 +353,7 @@ def _surely_clear(d, eta):
     return bound < d.smallest_gap
 
 
-@njit(cache=True)
+@inner_kernel()
 def _turning_loads(d, t, y, acc):
     """Add the projected loads that turn with the string (:class:`TurningLoadData`) to ``acc``."""
     r = d.turning
@@ -446,7 +453,7 @@ def _rhs_kernel(d, t, y, out):
             acc[j] += d.phi_tx_t[j - t0, i] * tq
 
 
-@njit(cache=True)
+@inner_kernel()
 def _expand(shapes_t, dofs, y, offset, out):
     """out[dofs] += shapesᵀ-columns · y[offset:offset + n_f] (one family's part of Φη)."""
     for j in range(shapes_t.shape[0]):
@@ -456,7 +463,7 @@ def _expand(shapes_t, dofs, y, offset, out):
                 out[dofs[i]] += shapes_t[j, i] * x
 
 
-@njit(cache=True)
+@inner_kernel()
 def _project(shapes_t, dofs, force, offset, out):
     """out[offset + j] = Σ_i shapes_t[j, i] force[dofs[i]] (one family's part of Φᵀ f)."""
     for j in range(shapes_t.shape[0]):
@@ -595,7 +602,7 @@ def _evaluate_rhs_compiled(data, t, y, out):
     return None
 
 
-@njit(cache=True)
+@inner_kernel()
 def _contact_state(d, y, v, w, in_contact):
     """Fill ``v``, ``w`` (every node) and ``in_contact`` (nodes with a station outside its gap) for the
     state ``y``; returns the total normal force of the wall Σ k_i (r_i − g_i)₊ [N]."""
@@ -645,7 +652,8 @@ def _track_impacts(d, o, y):
         return 0
     _contact_state(d, y, o.v, o.w, o.current)
     new = new_contact_zones(o.current, o.previous)
-    o.previous[:] = o.current
+    for i in range(o.current.shape[0]):  # a loop, not `previous[:] = current`: the slice assignment's
+        o.previous[i] = o.current[i]     # shape-mismatch error message costs ~2.5 s of compilation
     return new
 
 
