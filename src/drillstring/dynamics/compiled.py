@@ -240,7 +240,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
 # ---------------------------------------------------------------------------------------------------------
 
 #: About how long the first compilation takes on a 2-core machine [s], per nonlinear model.
-COMPILE_ESTIMATE = {"bit_and_contact": 10, "full": 15}
+COMPILE_ESTIMATE = {"bit_and_contact": 12, "full": 17}
 
 
 def _notify_stderr(message: str) -> None:
