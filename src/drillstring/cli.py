@@ -121,6 +121,13 @@ def _fail(message: str, code: int = EXIT_INVALID_INPUT) -> NoReturn:
     raise typer.Exit(code)
 
 
+def _note_resumed(already: int, total: int, noun: str, store: Path) -> None:
+    """Say on stderr how many of the ``total`` items a resumed run found already in ``store``."""
+    if already:
+        _err_console().print(escape(f"resumed: {already} of {total} {noun} were already in {store}"),
+                             soft_wrap=True)
+
+
 def _load(case_arg: str) -> Case:
     """The case named or pointed to by ``case_arg``; a :class:`CaseError` ends the command with exit code 2."""
     try:
@@ -883,9 +890,7 @@ def study(
             the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
             correlation=correlated, samples=samples, seed=seed, workers=workers, scheduler=scheduler,
             t_end=t_end, transient=transient))
-    if outcome.already:
-        _err_console().print(escape(f"resumed: {outcome.already} of {samples} realizations were already in "
-                                    f"{out / 'study.zarr'}"), soft_wrap=True)
+    _note_resumed(outcome.already, samples, "realizations", out / "study.zarr")
 
     payload = outcome.summary
     if as_json:
@@ -1041,9 +1046,7 @@ def map_command(
         lambda progress, note: api.operating_map(
             the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
             transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note))
-    if outcome.already:
-        _err_console().print(escape(f"resumed: {outcome.already} of {settings.points} grid points were already "
-                                    f"in {out / 'map.zarr'}"), soft_wrap=True)
+    _note_resumed(outcome.already, settings.points, "grid points", out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)
         return
@@ -1121,9 +1124,7 @@ def sensitivity_command(
         lambda progress, note: api.sensitivity(
             the_case, parameters=laws, samples=samples, seed=seed, t_end=t_end, transient=transient, out=out,
             workers=workers, scheduler=scheduler, progress=progress, note=note))
-    if outcome.already:
-        _err_console().print(escape(f"resumed: {outcome.already} of {outcome.payload['runs']} runs were already "
-                                    f"in {out / 'sensitivity.zarr'}"), soft_wrap=True)
+    _note_resumed(outcome.already, outcome.payload["runs"], "runs", out / "sensitivity.zarr")
     if as_json:
         _print_json(outcome.payload)
         return
