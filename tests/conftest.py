@@ -30,6 +30,29 @@ def coarse_case(reference_case):
     return reference_case.model_copy(update={"mesh": mesh, "reduced_model": reduced})
 
 
+def _coarse_reference(reference_case, axial_modes: int, torsional_modes: int, lateral_modes: int):
+    """The reference string on a 50 m mesh with a small basis (no lateral frequency cut-off)."""
+    return reference_case.model_copy(update={
+        "mesh": reference_case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": reference_case.reduced_model.model_copy(update={
+            "axial_modes": axial_modes, "torsional_modes": torsional_modes, "lateral_modes": lateral_modes,
+            "lateral_cutoff": 0.0}),
+    })
+
+
+@pytest.fixture(scope="session")
+def small_case(reference_case):
+    """The reference string on a coarse mesh with a small basis (3 lateral modes): ~0.1 s per realization."""
+    return _coarse_reference(reference_case, 2, 2, 3)
+
+
+@pytest.fixture(scope="session")
+def torsional_case(reference_case):
+    """The reference string on a coarse mesh, lateral modes off (no contact can occur): 0.05–0.3 s for a
+    150 s run."""
+    return _coarse_reference(reference_case, 3, 3, 0)
+
+
 def _can_create_in(folder) -> bool:
     import os
 

@@ -6,20 +6,9 @@ import numpy as np
 import pytest
 
 from drillstring import api
-from drillstring.case import load_case
 from drillstring.results import read_netcdf
 from drillstring.stochastic import DEFAULT_SIGMA
 from drillstring.dynamics.indicators import transient_end
-
-
-@pytest.fixture(scope="module")
-def small_case():
-    case = load_case("reference")
-    return case.model_copy(update={
-        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
-        "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3, "lateral_cutoff": 0.0}),
-    })
 
 
 def test_study_files_defaults_and_rerun(small_case, tmp_path):

@@ -807,17 +807,10 @@ def test_study_bad_laws_exit_2_with_one_line(coarse_case, tmp_path, args, words)
 
 
 @pytest.fixture(scope="module")
-def torsional_case_file(tmp_path_factory):
+def torsional_case_file(torsional_case, tmp_path_factory):
     """A coarse reference string without lateral modes: a 2 s run takes a few hundredths of a second."""
-    from drillstring.case import load_case
-
-    case = load_case("reference")
-    case = case.model_copy(update={
-        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
-        "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 0})})
     path = tmp_path_factory.mktemp("cases") / "torsional.toml"
-    path.write_text(case.to_toml(), encoding="utf-8")
+    path.write_text(torsional_case.to_toml(), encoding="utf-8")
     return path
 
 

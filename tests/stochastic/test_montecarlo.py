@@ -14,7 +14,6 @@ import pytest
 import zarr
 from scipy.stats import norm
 
-from drillstring.case import load_case
 from drillstring.stochastic import execution
 from drillstring.stochastic import montecarlo as mc
 from drillstring.stochastic.analysis import load_study, study_statistics
@@ -22,17 +21,6 @@ from drillstring.stochastic.maxent import realization_generator
 
 ARRAYS = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit",
           "radial_displacement", "weight_on_hook", "status", "nominal_bit_speed")
-
-
-@pytest.fixture(scope="module")
-def small_case():
-    """The reference string on a coarse mesh with a small basis: ~0.1 s per realization."""
-    case = load_case("reference")
-    return case.model_copy(update={
-        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
-        "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 2, "torsional_modes": 2, "lateral_modes": 3, "lateral_cutoff": 0.0}),
-    })
 
 
 SETTINGS = mc.StudySettings(samples=5, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)

@@ -8,24 +8,13 @@ import pytest
 import xarray as xr
 
 from drillstring import api
-from drillstring.case import DIMENSIONS, load_case
+from drillstring.case import DIMENSIONS
 from drillstring.stochastic import execution
 from drillstring.stochastic import operating_map as om
 from drillstring.stochastic.store import StoreError
 
 DIM = {d.name: d for d in DIMENSIONS}
 RPM = math.pi / 30.0
-
-
-@pytest.fixture(scope="module")
-def torsional_case():
-    """The reference string on a coarse mesh, lateral modes off: 0.05–0.3 s for a 150 s run."""
-    case = load_case("reference")
-    return case.model_copy(update={
-        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
-        "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 0}),
-    })
 
 
 @pytest.mark.parametrize("text, default, expected", [

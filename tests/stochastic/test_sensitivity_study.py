@@ -6,20 +6,8 @@ import numpy as np
 import pytest
 
 from drillstring import api
-from drillstring.case import load_case
 from drillstring.stochastic import execution
 from drillstring.stochastic import sensitivity_study as ss
-
-
-@pytest.fixture(scope="module")
-def torsional_case():
-    """The reference string on a coarse mesh, lateral modes off (no contact can occur)."""
-    case = load_case("reference")
-    return case.model_copy(update={
-        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
-        "reduced_model": case.reduced_model.model_copy(
-            update={"axial_modes": 3, "torsional_modes": 3, "lateral_modes": 0}),
-    })
 
 
 LAWS = {"operation.weight_on_bit": "uniform 60 90 kN", "operation.top_speed": "uniform 120 180 rpm",
