@@ -12,17 +12,9 @@ load average is printed too: the machine is shared. Goal: <= 3 min on the projec
 from __future__ import annotations
 
 import argparse
-import os
-
-# the serial baseline runs in this process: single-threaded linear algebra, as in the worker processes
-os.environ.update({"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-                   "NUMBA_NUM_THREADS": "1"})
-import shutil
-import tempfile
-import time
 from pathlib import Path
 
-import numpy as np
+from _engine import cores, load_average, local_dask_cluster, serial_cost, timed_in_folder  # before NumPy
 
 from drillstring import api
 from drillstring.case import load_case
@@ -30,19 +22,11 @@ from drillstring.stochastic.operating_map import _point_task
 
 
 def timed_map(case, settings, keep: Path | None = None, **engine):
-    folder = Path(tempfile.mkdtemp(prefix="bench_map_"))
-    try:
-        start = time.perf_counter()
-        outcome = api.operating_map(case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit,
-                                    t_end=settings.t_end, out=folder, **engine)
-        wall = time.perf_counter() - start
-        if keep is not None:  # the map's files (not its store), e.g. for the documentation's figure
-            keep.mkdir(parents=True, exist_ok=True)
-            for name in ("map.nc", "map.json", "map.png", "report.html"):
-                shutil.copy(folder / name, keep / name)
-        return wall, outcome
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
+    return timed_in_folder(
+        "bench_map_", lambda folder: api.operating_map(
+            case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=settings.t_end,
+            out=folder, **engine),
+        keep, ("map.nc", "map.json", "map.png", "report.html"))
 
 
 def main() -> None:
@@ -57,28 +41,21 @@ def main() -> None:
     case = load_case("reference")
     settings = api.map_settings(case, top_speed=f"40 rpm:200 rpm:{n_speed}", weight_on_bit=f"40 kN:160 kN:{n_wob}",
                                 t_end=args.t_end)
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    print("load average at start (1, 5, 15 min): " + ", ".join(f"{v:.2f}" for v in os.getloadavg()))
+    print(load_average("start"))
 
-    # baseline: a sample of the points, one after the other in this process (first one warms up Numba)
-    _point_task(case, settings, (0, *settings.point(0)))
-    picks = np.random.default_rng(0).choice(settings.points, size=min(args.sample, settings.points), replace=False)
-    start = time.perf_counter()
-    for i in picks:
-        _point_task(case, settings, (int(i), *settings.point(int(i))))
-    per_point = (time.perf_counter() - start) / len(picks)
+    # baseline: a sample of the points, one after the other in this process
+    per_point, sampled = serial_cost(lambda i: _point_task(case, settings, (i, *settings.point(i))),
+                                     settings.points, args.sample)
     serial = per_point * settings.points
-    print(f"map {n_speed} x {n_wob} = {settings.points} points, runs of {args.t_end:g} s, {cores} cores; "
-          f"serial cost {per_point:.3f} s per point (sample of {len(picks)}) -> {serial:.1f} s projected serially")
+    print(f"map {n_speed} x {n_wob} = {settings.points} points, runs of {args.t_end:g} s, {cores()} cores; "
+          f"serial cost {per_point:.3f} s per point (sample of {sampled}) -> {serial:.1f} s projected serially")
 
     rows = []
     wall, outcome = timed_map(case, settings, args.keep)
     rows.append(("local processes (one per core)", wall, outcome))
     if args.dask:
-        from distributed import LocalCluster
-
-        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-            wall, outcome = timed_map(case, settings, scheduler=cluster.scheduler_address)
+        with local_dask_cluster() as address:
+            wall, outcome = timed_map(case, settings, scheduler=address)
         rows.append(("local Dask cluster, 2 workers", wall, outcome))
     for label, wall, outcome in rows:
         s = outcome.summary
@@ -93,4 +70,4 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
-    print("load average at end (1, 5, 15 min): " + ", ".join(f"{v:.2f}" for v in os.getloadavg()))
+    print(load_average("end"))

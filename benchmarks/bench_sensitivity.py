@@ -15,17 +15,9 @@ machine. Run:
 from __future__ import annotations
 
 import argparse
-import os
-
-# the serial baseline runs in this process: single-threaded linear algebra, as in the worker processes
-os.environ.update({"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-                   "NUMBA_NUM_THREADS": "1"})
-import shutil
-import tempfile
-import time
 from pathlib import Path
 
-import numpy as np
+from _engine import cores, load_average, local_dask_cluster, serial_cost, timed_in_folder  # before NumPy
 
 from drillstring import api
 from drillstring.case import load_case
@@ -36,18 +28,10 @@ LAWS = {"weight_on_hook": "uniform 1033.4 1093.4 kN", "fluid.inlet_velocity": "u
 
 
 def timed(case, samples, t_end, keep: Path | None = None, **engine):
-    folder = Path(tempfile.mkdtemp(prefix="bench_sensitivity_"))
-    try:
-        start = time.perf_counter()
-        outcome = api.sensitivity(case, parameters=LAWS, samples=samples, t_end=t_end, out=folder, **engine)
-        wall = time.perf_counter() - start
-        if keep is not None:  # the files (not the store), e.g. for the documentation's figures
-            keep.mkdir(parents=True, exist_ok=True)
-            for name in ("sensitivity.json", "sobol.png", "sobol_convergence.png", "report.html"):
-                shutil.copy(folder / name, keep / name)
-        return wall, outcome
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
+    return timed_in_folder(
+        "bench_sensitivity_", lambda folder: api.sensitivity(
+            case, parameters=LAWS, samples=samples, t_end=t_end, out=folder, **engine),
+        keep, ("sensitivity.json", "sobol.png", "sobol_convergence.png", "report.html"))
 
 
 def main() -> None:
@@ -59,27 +43,19 @@ def main() -> None:
     parser.add_argument("--keep", type=Path, default=None, help="copy the local run's files to this folder")
     args = parser.parse_args()
     case = load_case("reference")
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    print("load average at start (1, 5, 15 min): " + ", ".join(f"{v:.2f}" for v in os.getloadavg()))
+    print(load_average("start"))
     settings = SensitivitySettings(args.samples, tuple(LAWS.items()), t_end=args.t_end)
     design = sensitivity_design(case, settings)
     paths = design.uncertainty.paths
-    _row_task(case, paths, settings, (0, design.values[0]))  # warm-up (Numba)
-    picks = np.random.default_rng(0).choice(design.runs, size=min(args.sample, design.runs), replace=False)
-    start = time.perf_counter()
-    for i in picks:
-        _row_task(case, paths, settings, (int(i), design.values[int(i)]))
-    per_run = (time.perf_counter() - start) / len(picks)
+    per_run, sampled = serial_cost(lambda i: _row_task(case, paths, settings, (i, design.values[i])),
+                                   design.runs, args.sample)
     serial = per_run * design.runs
-    print(f"Sobol' study: 3 parameters, N = {args.samples}, {design.runs} runs of {args.t_end:g} s, {cores} cores;"
-          f" serial cost {per_run:.3f} s per run (sample of {len(picks)}) -> {serial / 60:.1f} min projected serially")
+    print(f"Sobol' study: 3 parameters, N = {args.samples}, {design.runs} runs of {args.t_end:g} s, {cores()} cores;"
+          f" serial cost {per_run:.3f} s per run (sample of {sampled}) -> {serial / 60:.1f} min projected serially")
     rows = [("local processes (one per core)", *timed(case, args.samples, args.t_end, args.keep))]
     if args.dask:
-        from distributed import LocalCluster
-
-        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-            rows.append(("local Dask cluster, 2 workers",
-                         *timed(case, args.samples, args.t_end, scheduler=cluster.scheduler_address)))
+        with local_dask_cluster() as address:
+            rows.append(("local Dask cluster, 2 workers", *timed(case, args.samples, args.t_end, scheduler=address)))
     for label, wall, outcome in rows:
         p = outcome.payload
         busy = p["run_wall_time_total"]
@@ -96,4 +72,4 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
-    print("load average at end (1, 5, 15 min): " + ", ".join(f"{v:.2f}" for v in os.getloadavg()))
+    print(load_average("end"))
