@@ -63,6 +63,7 @@ __all__ = [
     "PenetrationPerForce",
     "RotationalDamping",
     "BitRock",
+    "TopDrive",
     "Borehole",
     "Bow",
     "Case",
@@ -323,12 +324,14 @@ LINEAR_DAMPING = Dimension("damping per unit length", {"N*s/m2": 1.0, "N*s/m^2":
 PENETRATION_PER_FORCE = Dimension("bit-rock coefficient a2", {"m/(N*s)": 1.0, "m/(N.s)": 1.0})
 LENGTH_PER_ANGLE = Dimension("length per angle", {"m/rad": 1.0})
 FORCE_ANGLE = Dimension("force times angle", {"N*rad": 1.0, "N.rad": 1.0})
+MOMENT_OF_INERTIA = Dimension("moment of inertia", {"kg*m2": 1.0, "kg*m^2": 1.0, "kg.m2": 1.0})
+ROTATIONAL_STIFFNESS = Dimension("rotational stiffness", {"N*m/rad": 1.0, "N.m/rad": 1.0, "kN*m/rad": 1e3})
 
 #: Every dimension, for error messages naming the dimension a misplaced unit belongs to.
 DIMENSIONS: tuple[Dimension, ...] = (
     LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, STIFFNESS_PER_LENGTH, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION, ANGLE,
     DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING, LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE,
-    FORCE_ANGLE,
+    FORCE_ANGLE, MOMENT_OF_INERTIA, ROTATIONAL_STIFFNESS,
 )  # fmt: skip
 
 _QUANTITY = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
@@ -407,6 +410,8 @@ LinearDamping = _quantity(LINEAR_DAMPING)  #: [N*s/m^2]
 PenetrationPerForce = _quantity(PENETRATION_PER_FORCE)  #: [m/(N*s)]
 LengthPerAngle = _quantity(LENGTH_PER_ANGLE)  #: [m/rad]
 ForceAngle = _quantity(FORCE_ANGLE)  #: [N*rad]
+MomentOfInertia = _quantity(MOMENT_OF_INERTIA)  #: [kg*m^2]
+RotationalStiffness = _quantity(ROTATIONAL_STIFFNESS)  #: [N*m/rad]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -536,7 +541,11 @@ class Fluid(_Base):
 
 
 class BitRock(_Base):
-    """Bit-rock interaction law (Tucker & Wang), coefficients a1..a5 and regularisation e."""
+    """Bit-rock interaction law: ``law = "tucker_wang"`` (coefficients a1..a5 and regularisation e) or
+    ``"off_bottom"`` (the bit hangs free: no bit-rock force, weight-on-bit 0, the hook carries the whole
+    string; ``operation.weight_on_bit`` is then not used)."""
+
+    law: Literal["tucker_wang", "off_bottom"] = Field("tucker_wang", description="bit-rock law")
 
     a1: Velocity = Field(3.429e-3, ge=0, description="a1 [m/s]")
     a2: PenetrationPerForce = Field(5.672e-8, gt=0, description="a2 [m/(N*s)]")
@@ -570,6 +579,39 @@ class Operation(_Base):
         to_si("100 rpm", ANGULAR_SPEED), gt=0, description="rotation speed imposed at the top [rad/s]"
     )
     weight_on_bit: Force = Field(1e5, gt=0, description="initial (static) weight-on-bit [N]")
+
+
+class TopDrive(_Base):
+    """The top boundary of the torsion (:mod:`drillstring.forces.top_drive`). ``controller =
+    "imposed_speed"``: the top turns at ``operation.top_speed`` exactly (the reference study); ``"pi"``,
+    ``"soft_torque"``, ``"z_torque"``: a top drive of rotary inertia ``inertia`` at the quill, driven by a
+    motor whose torque, saturated at ``max_torque``, a controller sets from the quill speed (and the
+    surface torque for ``z_torque``), with ``operation.top_speed`` as set point, reached after
+    ``ramp_time`` from rest when that is > 0. ``pi`` needs both gains; the tuned controllers compute the
+    gains left out (docs/model.md, "Top drive")."""
+
+    controller: Literal["imposed_speed", "pi", "soft_torque", "z_torque"] = Field(
+        "imposed_speed", description="top boundary of the torsion")
+    inertia: MomentOfInertia = Field(
+        1000.0, gt=0, description="rotary inertia of motor, gearbox and quill at the quill J_td [kg*m^2]")
+    proportional_gain: RotationalDamping | None = Field(
+        None, ge=0, description="k_p of the speed controller [N*m*s/rad]; tuned when left out")
+    integral_gain: RotationalStiffness | None = Field(
+        None, ge=0, description="k_i of the speed controller [N*m/rad]; tuned when left out")
+    max_torque: Torque = Field(60e3, gt=0, description="largest motor torque tau_max [N*m]")
+    ramp_time: Time = Field(0.0, ge=0, description="set point ramped from 0 over this time [s]; 0: none")
+    filter_frequency: AngularSpeed | None = Field(
+        None, gt=0, description="z_torque: corner of the high-pass filter on the surface torque [rad/s];"
+        " tuned when left out")
+
+    @model_validator(mode="after")
+    def _gains_given(self) -> TopDrive:
+        if self.controller == "pi":
+            missing = [k for k in ("proportional_gain", "integral_gain") if getattr(self, k) is None]
+            if missing:
+                raise _Problems([((missing[0],), None, 'must be given for controller = "pi" (in N*m*s/rad'
+                                  ' and N*m/rad; "soft_torque" and "z_torque" tune their gains)')])
+        return self
 
 
 class Damping(_Base):
@@ -683,6 +725,7 @@ class Case(_Base):
     bit_rock: BitRock = Field(default_factory=BitRock)
     contact: Contact = Field(default_factory=Contact)
     operation: Operation = Field(default_factory=Operation)
+    top_drive: TopDrive = Field(default_factory=TopDrive)
     damping: Damping = Field(default_factory=Damping)
     environment: Environment = Field(default_factory=Environment)
     model: Model = Field(default_factory=Model)
@@ -838,9 +881,10 @@ class Case(_Base):
                                f"(about max_element_length >= {length / MAX_ELEMENTS:.3g} m for this "
                                f"{length:g} m string)")]
         nodes = elements + 1
-        sizes = mode_family_sizes(nodes)
+        top_free = self.top_drive.controller != "imposed_speed"
+        sizes = mode_family_sizes(nodes, top_free)
         problems = []
-        for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", 0),
+        for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", int(top_free)),
                                    ("lateral_modes", "lateral", 0)):
             requested = getattr(self.reduced_model, key)
             most = sizes[family] - rigid
