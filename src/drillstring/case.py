@@ -655,7 +655,7 @@ class ReducedModel(_Base):
     whose frequency is below ``lateral_cutoff`` times the rotation frequency (all the family's modes at most)."""
 
     axial_modes: int = Field(10, ge=0)
-    torsional_modes: int = Field(10, ge=1)
+    torsional_modes: int = Field(10, ge=1, description="elastic torsional modes (a top drive adds the rigid rotation)")
     lateral_modes: int = Field(20, ge=0)
     lateral_cutoff: Dimensionless = Field(
         1.5, ge=0, description="keep every lateral mode below this multiple of the rotation frequency [-]")

@@ -431,6 +431,7 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
     t = np.asarray(ds["time"].values, dtype=float)
     top = float(ds.attrs.get("top_speed", np.nan))
     radial = np.asarray(ds["radial_displacement"].values, dtype=float)
+    steady = t >= t_transient - 1e-9 * max(1.0, t_transient)
     x = np.atleast_1d(np.asarray(ds["x"].values, dtype=float))
     gap = np.atleast_1d(np.asarray(ds["gap"].values, dtype=float))
 
@@ -439,12 +440,20 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
         return float(finite.max()) if finite.size else None
 
     radial_max = [largest(radial[:, j]) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+
+    def steady_range(name: str) -> tuple[float | None, float | None]:
+        values = np.asarray(ds[name].values, dtype=float)[steady] if name in ds else np.zeros(0)
+        values = values[np.isfinite(values)]
+        return (float(values.min()), float(values.max())) if values.size else (None, None)
+
     contact = np.asarray(ds["contact_force"].values, dtype=float) if "contact_force" in ds else np.zeros(0)
-    steady = t >= t_transient - 1e-9 * max(1.0, t_transient)
     indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
                                      t_transient)
     return {
         **indicators,
+        "quill_speed_min": steady_range("quill_speed")[0], "quill_speed_max": steady_range("quill_speed")[1],
+        "surface_torque_min": steady_range("surface_torque")[0],
+        "surface_torque_max": steady_range("surface_torque")[1],
         "max_radial_displacement": radial_max,
         "gap": [float(g) for g in gap],
         "probe_x": [float(v) for v in x],
@@ -488,6 +497,12 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
         escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
         _fmt(numbers["stick_time_fraction"], ".1%"), "",
     )
+    table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
+                  f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
+                  "rpm")
+    table.add_row(escape(f"surface torque min / max (t ≥ {t_tr:g} s)"),
+                  f"{_fmt(numbers['surface_torque_min'], ',.2f', 1.0 / _KN)} / "
+                  f"{_fmt(numbers['surface_torque_max'], ',.2f', 1.0 / _KN)}", "kN·m")
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
         table.add_row(escape(f"max radial displacement at x = {x:g} m / gap"),
                       f"{_fmt(r, ',.3f', _MM)} / {gap * _MM:,.1f}", "mm")

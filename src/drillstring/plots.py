@@ -52,6 +52,8 @@ DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
     "rate_of_penetration": (3600.0, "m/h", "rate of penetration"),
     "bit_speed": (_RPM, "rpm", "bit speed"),
     "torque_on_bit": (1e-3, "kN·m", "torque-on-bit"),
+    "quill_speed": (_RPM, "rpm", "quill speed"),
+    "surface_torque": (1e-3, "kN·m", "surface torque"),
     "force_on_bit": (1e-3, "kN", "force-on-bit"),
     "radial_displacement": (1e3, "mm", "radial displacement"),
     "contact_force": (1e-3, "kN", "contact force"),
@@ -134,8 +136,12 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
 
     ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed"), lw=0.9, label="bit")
     top = ds.attrs.get("top_speed")
+    imposed = ds.attrs.get("top_drive", "imposed_speed") == "imposed_speed"
+    if "quill_speed" in ds and not imposed:
+        ax_speed.plot(t, _scaled(ds["quill_speed"].values, "quill_speed"), lw=0.9, label="quill")
     if top is not None:
-        ax_speed.axhline(float(top) * _RPM, color="k", ls="--", lw=0.9, label="top (imposed)")
+        ax_speed.axhline(float(top) * _RPM, color="k", ls="--", lw=0.9,
+                         label="top (imposed)" if imposed else "set point")
     ax_speed.set_ylabel(_label("bit_speed"))
     ax_speed.legend(loc="best", fontsize="small")
 
@@ -158,8 +164,11 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
         ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
     ax_radial.set_ylabel(_label("radial_displacement"))
 
-    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), lw=0.9)
-    ax_tob.set_ylabel(_label("torque_on_bit"))
+    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), lw=0.9, label="on bit")
+    if "surface_torque" in ds:
+        ax_tob.plot(t, _scaled(ds["surface_torque"].values, "surface_torque"), lw=0.9, label="surface")
+        ax_tob.legend(loc="best", fontsize="small")
+    ax_tob.set_ylabel(_label("torque_on_bit").replace("torque-on-bit", "torque"))
 
     _orbit_panel(ax_orbit, ((ds, "orbit", {"lw": 0.6}),), probe_x)
     _contact_panel(ax_contact, ((ds, None, {"lw": 0.8}),))
