@@ -388,6 +388,18 @@ def stability(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
     table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
     table.add_row("torque on bit", f"{steady['torque_on_bit'] / _KN:,.3f}", "kN·m")
     table.add_row("force on bit", f"{steady['force_on_bit'] / _KN:,.3f}", "kN")
+    drive = payload.get("top_drive")
+    if drive:
+        tuned = set(drive["tuned"])
+        mark = {name: " (tuned)" if name in tuned else "" for name in ("proportional_gain", "integral_gain")}
+        table.add_row(escape(f"top drive: {drive['controller']}, inertia"), f"{drive['inertia']:,.1f}", "kg·m²")
+        table.add_row("proportional gain" + mark["proportional_gain"], f"{drive['proportional_gain']:,.1f}",
+                      "N·m·s/rad")
+        table.add_row("integral gain" + mark["integral_gain"], f"{drive['integral_gain']:,.1f}", "N·m/rad")
+        table.add_row("pipe impedance Z_p", f"{drive['pipe_impedance']:,.2f}", "N·m·s/rad")
+        if "filter_frequency" in drive:
+            table.add_row("high-pass corner" + (" (tuned)" if "filter_frequency" in tuned else ""),
+                          f"{drive['filter_frequency']:.4f}", "rad/s")
     console.print(table)
     modes_table = Table(title="Eigenvalues of the linearised model (sorted by frequency)", title_justify="left")
     for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):

@@ -267,3 +267,16 @@ def test_tuned_gains_are_reported_and_the_family_sizes_agree(reference_case):
     # the free torsional family: the rigid rotation first, then the elastic modes
     t0 = model.rigid_rotation_column
     assert model.angular_frequencies[t0] == 0.0 and np.all(model.angular_frequencies[t0 + 1:t0 + 4] > 0)
+
+
+def test_controller_parameters_vary_like_any_numeric_case_field(reference_case):
+    from drillstring.case import load_case
+    from drillstring.stochastic.parameters import ParameterError, parameter_value, with_parameters
+
+    stick = load_case("stick_slip")
+    assert parameter_value(stick, "top_drive.proportional_gain") == 3e4
+    varied = with_parameters(stick, {"top_drive.proportional_gain": 5e3,
+                                     "top_drive.inertia": "800 kg*m2"})
+    assert varied.top_drive.proportional_gain == 5e3 and varied.top_drive.inertia == 800.0
+    with pytest.raises(ParameterError, match=r"top_drive.proportional_gain is not set"):
+        parameter_value(reference_case, "top_drive.proportional_gain")
