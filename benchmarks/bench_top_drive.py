@@ -24,8 +24,8 @@ from pathlib import Path
 CONTROLLERS = {
     "imposed_speed": {"controller": "imposed_speed"},
     "pi": {"controller": "pi", "proportional_gain": 1e5, "integral_gain": 3e6},
-    "soft_torque": {"controller": "soft_torque"},
-    "z_torque": {"controller": "z_torque"},
+    "soft_torque": {"controller": "soft_torque", "proportional_gain": None, "integral_gain": None},
+    "z_torque": {"controller": "z_torque", "proportional_gain": None, "integral_gain": None},
 }
 
 
@@ -38,14 +38,13 @@ def worker(controllers: list[str], repeat: int) -> dict:
     from drillstring.dynamics.rom import case_reduced_model
     from drillstring.dynamics.simulate import simulate_model
 
-    case = load_case("reference")
-    s = case.simulation
+    base = load_case("reference")
+    s = base.simulation
     kwargs = dict(t_end=s.t_end, output_step=s.output_step, rtol=s.rtol, atol=s.atol,
-                  lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed)
+                  lateral_perturbation=base.initial.lateral_perturbation, seed=base.initial.seed)
     out: dict = {"compile_time": None, "runs": {}}
     for name in controllers:
-        if name != "imposed_speed":
-            case = case.model_copy(update={"top_drive": case.top_drive.model_copy(update=CONTROLLERS[name])})
+        case = base.model_copy(update={"top_drive": base.top_drive.model_copy(update=CONTROLLERS[name])})
         model = case_reduced_model(case)
         start = time.perf_counter()
         first = simulate_model(model, t_end=0.1, output_step=0.01, lateral_perturbation=0.0)

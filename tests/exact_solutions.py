@@ -194,18 +194,11 @@ def beam_resting_on_a_wall(stiffness, rows, station_stiffness, gaps, initial):
     raise RuntimeError("the active set did not settle")
 
 
-def torsional_rod_top_drive_roots(
-    lengths: tuple[float, float],
-    impedances: tuple[float, float],
-    wave_speed: float,
-    inertia: float,
-    proportional_gain: float,
-    integral_gain: float,
-    max_frequency: float,
-) -> np.ndarray:
+def torsional_rod_top_drive_roots(lengths: tuple[float, float], impedances: tuple[float, float], wave_speed: float,
+                                  top_drive: tuple[float, float, float], max_frequency: float) -> np.ndarray:
     """Exact closed-loop eigenvalues s (Im s > 0, |Im s| < 2π max_frequency) of a distributed two-section
     torsional rod (impedances Z_i = I_i √(Gρ), one wave speed c = √(G/ρ)), bit end free, turned at the top by
-    an inertia J under a PI speed controller, no damping.
+    an inertia J under a PI speed controller, ``top_drive = (J, k_p, k_i)``, no damping.
 
     Each section carries θ(x) = A cosh(γx) + B sinh(γx), γ = s/c, torque T = G I θ' = Z s (A sinh + B cosh),
     so across a section of length ℓ: θ(ℓ) = ch θ(0) + sh T(0)/(Z s), T(ℓ) = Z s sh θ(0) + ch T(0). The top
@@ -214,6 +207,7 @@ def torsional_rod_top_drive_roots(
     characteristic function is T(L; s). Roots by Newton's method from a grid of starts along the imaginary
     axis (no finite-element information used), deduplicated."""
     (l1, l2), (z1, z2) = lengths, impedances
+    inertia, proportional_gain, integral_gain = top_drive
 
     def f(s):
         theta, torque = 1.0 + 0j, inertia * s * s + proportional_gain * s + integral_gain

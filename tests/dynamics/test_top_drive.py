@@ -58,7 +58,7 @@ def test_closed_loop_eigenvalues_match_the_exact_rod_with_a_pi_top_drive(referen
     polar = [math.pi * (s.outer_diameter**4 - s.inner_diameter**4) / 32 for s in case.sections]
     exact = torsional_rod_top_drive_roots(
         (case.sections[0].length, case.sections[1].length), tuple(p * math.sqrt(g * rho) for p in polar),
-        math.sqrt(g / rho), drive["inertia"], drive["proportional_gain"], drive["integral_gain"], 3.0)
+        math.sqrt(g / rho), (drive["inertia"], drive["proportional_gain"], drive["integral_gain"]), 3.0)
     assert len(exact) >= 3
     for root, mode in zip(exact, fe):
         assert mode.frequency == pytest.approx(root.imag / (2 * math.pi), rel=5e-3)
@@ -280,3 +280,30 @@ def test_controller_parameters_vary_like_any_numeric_case_field(reference_case):
     assert varied.top_drive.proportional_gain == 5e3 and varied.top_drive.inertia == 800.0
     with pytest.raises(ParameterError, match=r"top_drive.proportional_gain is not set"):
         parameter_value(reference_case, "top_drive.proportional_gain")
+
+
+def test_cli_stability_reports_the_closed_loop_and_the_tuned_gains(tmp_path):
+    """``drillstring stability`` on a case file with a soft_torque top drive: the gains it tuned, in the table
+    and the JSON."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from drillstring.case import load_case
+    from drillstring.cli import app
+
+    case = load_case("stick_slip")
+    case = _with(case, top_drive={"controller": "soft_torque", "proportional_gain": None, "integral_gain": None},
+                 mesh={"max_element_length": 100.0},
+                 reduced_model={"axial_modes": 2, "torsional_modes": 3, "lateral_modes": 0})
+    path = tmp_path / "soft.toml"
+    path.write_text(case.to_toml())
+    runner = CliRunner()
+    table = runner.invoke(app, ["stability", str(path)], env={"COLUMNS": "200", "FORCE_COLOR": None})
+    assert table.exit_code == 0, table.stdout
+    assert "top drive: soft_torque" in table.stdout and "proportional gain (tuned)" in table.stdout
+    result = runner.invoke(app, ["stability", str(path), "--json"])
+    payload = json.loads(result.stdout)
+    assert payload["top_drive"]["controller"] == "soft_torque"
+    assert payload["top_drive"]["tuned"] == ["integral_gain", "proportional_gain"]
+    assert payload["top_drive"]["proportional_gain"] == pytest.approx(payload["top_drive"]["pipe_impedance"])
