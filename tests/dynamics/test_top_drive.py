@@ -46,7 +46,7 @@ def _material(case):
 def test_closed_loop_eigenvalues_match_the_exact_rod_with_a_pi_top_drive(reference_case):
     """The reference string off bottom, undamped, turned by a PI top drive: the eigenvalues of the linearised
     reduced model (controller state included) against the roots of the exact characteristic equation of the
-    distributed two-section rod with the top drive as boundary condition, to 0.5 % in frequency."""
+    distributed two-section rod with the top drive as boundary condition (0.5 % in frequency asked; 1e-3 held)."""
     drive = {"controller": "pi", "inertia": 500.0, "proportional_gain": 2000.0, "integral_gain": 5000.0}
     case = _linear_torsion(reference_case, top_drive=drive,
                            reduced_model={"axial_modes": 1, "torsional_modes": 12, "lateral_modes": 0,
@@ -61,9 +61,9 @@ def test_closed_loop_eigenvalues_match_the_exact_rod_with_a_pi_top_drive(referen
         math.sqrt(g / rho), (drive["inertia"], drive["proportional_gain"], drive["integral_gain"]), 3.0)
     assert len(exact) >= 3
     for root, mode in zip(exact, fe):
-        assert mode.frequency == pytest.approx(root.imag / (2 * math.pi), rel=5e-3)
+        assert mode.frequency == pytest.approx(root.imag / (2 * math.pi), rel=1e-3)  # 0.5 % asked; 1e-4 found
         # the damping the controller gives each mode, to the same accuracy relative to |λ|
-        assert abs(mode.growth_rate - root.real) < 5e-3 * abs(root)
+        assert abs(mode.growth_rate - root.real) < 1e-3 * abs(root)
     # the top drive damps the modes: a held top (r = -1) would leave them undamped
     assert all(root.real < -1e-3 for root in exact[:3])
 
