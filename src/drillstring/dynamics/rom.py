@@ -1061,8 +1061,11 @@ class ReducedOrderModel:
         converges to the physical shape as lateral modes are added. With a top drive the rigid rotation
         carries Ω (or the string starts at rest when the set point is ramped) and the controller's states
         start at 0 (the motor torque builds up from 0)."""
-        y0 = np.concatenate([self.turning_whirl(), np.zeros(self.top_drive.n_states)])
-        if self.rigid_rotation_column is not None and not self.top_drive.ramp_time > 0.0:
+        at_rest = self.top_drive.ramp_time > 0.0  # a ramped set point starts from rest: no spin, no whirl
+        y0 = np.zeros(self.state_size)
+        if not at_rest:
+            y0[:2 * self.size] = self.turning_whirl()
+        if self.rigid_rotation_column is not None and not at_rest:
             r = self.rigid_rotation_column  # spinning at Ω: the rigid rotation carries it
             y0[self.size + r] = self.top_speed / self.quill_shapes[r]
         lateral = np.array([f.startswith("lateral") for f in self.family])
