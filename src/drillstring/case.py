@@ -868,6 +868,14 @@ class Case(_Base):
             raise _Problems(problems)
         return self
 
+    @model_validator(mode="after")
+    def _top_drive_model(self) -> Case:
+        if self.top_drive.controller != "imposed_speed" and self.model.nonlinear == "full":
+            raise _Problems([(("top_drive", "controller"), self.top_drive.controller,
+                              'a top drive needs model.nonlinear = "bit_and_contact" (case 1 with a top drive '
+                              'is not supported yet); use "imposed_speed" for case 1')])
+        return self
+
     def _mesh_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
         """The case can be meshed (element length within the string, at most :data:`MAX_ELEMENTS`
         elements) and reduced (no family asks for more modes than the mesh has DOFs)."""

@@ -680,6 +680,9 @@ def compare(
         _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
               f"({the_case.simulation.output_step:g} s)")
     _check_output("--plot", plot)
+    if the_case.top_drive.controller != "imposed_speed":
+        _fail(f"top_drive.controller = {the_case.top_drive.controller!r}: compare runs case 1, which needs "
+              f"\"imposed_speed\" (case 1 with a top drive is not supported yet)")
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
