@@ -44,7 +44,8 @@ def worker(controllers: list[str], repeat: int) -> dict:
                   lateral_perturbation=base.initial.lateral_perturbation, seed=base.initial.seed)
     out: dict = {"compile_time": None, "runs": {}}
     for name in controllers:
-        case = base.model_copy(update={"top_drive": base.top_drive.model_copy(update=CONTROLLERS[name])})
+        case = base if name == "imposed_speed" else base.model_copy(  # the baseline may have no [top_drive]
+            update={"top_drive": base.top_drive.model_copy(update=CONTROLLERS[name])})
         model = case_reduced_model(case)
         start = time.perf_counter()
         first = simulate_model(model, t_end=0.1, output_step=0.01, lateral_perturbation=0.0)
@@ -67,7 +68,9 @@ def run_tree(tree: Path, controllers: list[str], repeat: int) -> dict:
         env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=cache, OMP_NUM_THREADS="1",
                    OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", NUMBA_NUM_THREADS="1")
         done = subprocess.run([sys.executable, __file__, "--worker", ",".join(controllers), "--repeat", str(repeat)],
-                              env=env, capture_output=True, text=True, check=True)
+                              env=env, capture_output=True, text=True)
+    if done.returncode:
+        raise SystemExit(f"the worker in {tree} failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
