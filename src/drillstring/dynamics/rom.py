@@ -14,7 +14,11 @@ modes, giving a dense torsional block; or ``2 ξ ω_i`` on every basis mode;
 :attr:`ReducedOrderModel.generalized_force`, zero when not given), ``C_f`` the fluid (Coriolis + viscous)
 damping, and ``wob e_bit,u`` removes the static bit reaction that ``q_S`` already balances (the hook force
 stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed:
-``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``.
+``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``; or, with a top drive
+(:mod:`drillstring.forces.top_drive`), the torsional family is free at the top (rigid rotation first, the
+top drive's inertia lumped at the top node), ``θx = (Φ η)_θx`` carries the whole spin, the motor torque
+``τ_m`` adds ``φ_top τ_m`` to the torsional equations and the controller's states follow the modal
+coordinates in the state vector ``[η, η̇, s]``. ``bit_rock.law = "off_bottom"`` removes the bit–rock force.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
 the bit node, the borehole shocks and rubbing at the contact stations
@@ -61,19 +65,19 @@ from drillstring.forces.contact import (
     mesh_contact_stations,
 )
 from drillstring.forces.excitation import TurningLoads, bow_loads, imbalance_loads
-from drillstring.forces.top_drive import (
-    Z_TORQUE,
-    TopDriveParameters,
-    case_top_drive,
-    evaluate_top_drive,
-    top_drive_law,
-)
 from drillstring.forces.nonlinear import (
     NonlinearElements,
     _kinetic_forces_kernel,
     _strain_energy_forces_kernel,
     modal_mass_coupling,
     nonlinear_elements,
+)
+from drillstring.forces.top_drive import (
+    Z_TORQUE,
+    TopDriveParameters,
+    case_top_drive,
+    evaluate_top_drive,
+    top_drive_law,
 )
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
 from drillstring.statics import StaticState, case_static_state
