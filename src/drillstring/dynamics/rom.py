@@ -187,17 +187,6 @@ class TurningLoadData(NamedTuple):
     load_z: np.ndarray  # (m, n_z)
 
 
-class TopData(NamedTuple):
-    """The top boundary as the kernels read it (:mod:`drillstring.forces.top_drive`): the law's arguments
-    (code 0: imposed speed, nothing to do), the torsional mode shapes at the top's θx (where the motor
-    torque acts; zero when the top is held) and the surface-torque row ``(K Φ)`` at the top's θx over the
-    torsional columns."""
-
-    args: np.ndarray  # (9,) TopDriveParameters.kernel_args()
-    quill_t: np.ndarray  # (n_t,)
-    torque_t: np.ndarray  # (n_t,)
-
-
 class RhsData(NamedTuple):
     """What the case-2 right-hand side reads (SI units). Each physical quantity is read from its own
     mode family only: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
@@ -221,7 +210,11 @@ class RhsData(NamedTuple):
     weight_on_bit: float  # static bit reaction [N]
     bit_rock: np.ndarray  # (7,) arguments of bit_rock_force_floored after the speeds
     bit_on_bottom: bool  # False: bit_rock.law = "off_bottom", no bit-rock force
-    top: TopData
+    # The top boundary (drillstring.forces.top_drive), as plain arrays (a nested named tuple would cost
+    # ~0.2 ms of argument typing at every call of the compiled loop):
+    top_args: np.ndarray  # (9,) TopDriveParameters.kernel_args(); code 0: imposed speed, nothing to do
+    quill_t: np.ndarray  # (n_t,) torsional shapes at the top's θx, where the motor torque acts (0: held)
+    surface_torque_t: np.ndarray  # (n_t,) the surface-torque row (K Φ) at the top's θx, torsional columns
     contact: ContactData
     turning: TurningLoadData
 
@@ -408,14 +401,13 @@ def _turning_loads(d, t, y, acc):
 @inner_kernel()
 def _top_motion(d, y):
     """Quill speed θ̇₀ [rad/s] and surface torque T_s [N·m] for the state ``y``."""
-    top = d.top
     n = d.omega2.shape[0]
     t0, t1 = d.blocks[2], d.blocks[3]
     quill = d.top_speed
     torque = 0.0
     for j in range(t0, t1):
-        quill += top.quill_t[j - t0] * y[n + j]
-        torque += top.torque_t[j - t0] * y[j]
+        quill += d.quill_t[j - t0] * y[n + j]
+        torque += d.surface_torque_t[j - t0] * y[j]
     return quill, torque
 
 
@@ -423,15 +415,14 @@ def _top_motion(d, y):
 def _top_drive(d, t, y, out):
     """The top drive's motor torque on the torsional modes and its controller's state derivatives
     (``y[2n:]``, ``out[2n:]``; :func:`~drillstring.forces.top_drive.top_drive_law`)."""
-    top = d.top
     n = d.omega2.shape[0]
     t0, t1 = d.blocks[2], d.blocks[3]
     quill, surface = _top_motion(d, y)
-    z_torque = top.args[0] == Z_TORQUE
+    z_torque = d.top_args[0] == Z_TORQUE
     filtered = y[2 * n + 1] if z_torque else 0.0
-    torque, d_integral, d_filtered = top_drive_law(top.args, t, quill, surface, y[2 * n], filtered)
+    torque, d_integral, d_filtered = top_drive_law(d.top_args, t, quill, surface, y[2 * n], filtered)
     for j in range(t0, t1):
-        out[n + j] += top.quill_t[j - t0] * torque
+        out[n + j] += d.quill_t[j - t0] * torque
     out[2 * n] = d_integral
     if z_torque:
         out[2 * n + 1] = d_filtered
@@ -452,7 +443,7 @@ def _rhs_kernel(d, t, y, out):
         out[i] = eta_dot[i]
         acc[i] = d.generalized_force[i] - d.omega2[i] * eta[i]
     _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
-    if d.top.args[0] != 0.0:
+    if d.top_args[0] != 0.0:
         _top_drive(d, t, y, out)
     # bit-rock interaction at the bit node
     bit_velocity, bit_speed = _bit_motion(d, y)
@@ -873,8 +864,8 @@ class ReducedOrderModel:
             weight_on_bit=float(self.weight_on_bit),
             bit_rock=np.array(self.bit_rock.kernel_args(), dtype=float),
             bit_on_bottom=self.bit_rock.law != "off_bottom",
-            top=TopData(args=self.top_drive.kernel_args(), quill_t=transposed(self.quill_shapes[t0:t1]),
-                        torque_t=transposed(self.surface_torque_shapes[t0:t1])),
+            top_args=self.top_drive.kernel_args(), quill_t=transposed(self.quill_shapes[t0:t1]),
+            surface_torque_t=transposed(self.surface_torque_shapes[t0:t1]),
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
