@@ -8,6 +8,8 @@ import pytest
 from typer.testing import CliRunner
 
 from drillstring.cli import app
+from drillstring.stochastic import execution
+from drillstring.stochastic.locks import StudyLocked
 
 runner = CliRunner()
 
@@ -403,7 +405,7 @@ def test_study_interrupted_exit_130(coarse_case, tmp_path, monkeypatch):
     from drillstring.stochastic import montecarlo
 
     def interrupted(*args, **kwargs):
-        raise montecarlo.StudyInterrupted(
+        raise execution.Interrupted(
             "study interrupted after 1 of 3 realizations; they are saved in x; run the same command again "
             "to resume")
 
@@ -525,10 +527,10 @@ def test_study_run_errors_are_one_line(coarse_case, tmp_path, monkeypatch, error
     from drillstring import api
     from drillstring.stochastic import montecarlo
 
-    raised = {"workers_lost": montecarlo.StudyWorkersLost("the Dask cluster at tcp://x:1 has had no worker "
+    raised = {"workers_lost": execution.WorkersLost("the Dask cluster at tcp://x:1 has had no worker "
                                                           "for 30 s; the finished realizations are saved"),
               "failed": api.StudyFailed("only 1 finished realization(s): statistics need at least 2"),
-              "locked": montecarlo.StudyLocked("study store s is in use by pid 1 on host h")}[error]
+              "locked": StudyLocked("study store s is in use by pid 1 on host h")}[error]
 
     def fail(*args, **kwargs):
         raise raised

@@ -11,7 +11,7 @@ stability), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of
 (Sobol' indices).
 """
 
-__version__ = "0.1.0"
+from drillstring._version import __version__  # noqa: F401  (the package's version)
 
 
 def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the command line

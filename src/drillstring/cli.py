@@ -64,7 +64,7 @@ from rich.progress import (  # noqa: E402
 )
 from rich.table import Table  # noqa: E402
 
-from drillstring import __version__  # noqa: E402
+from drillstring._version import __version__  # noqa: E402
 from drillstring.case import Case, CaseError, builtin_cases, load_case  # noqa: E402
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO  # noqa: E402
 from drillstring.stochastic import (  # noqa: E402
