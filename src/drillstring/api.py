@@ -13,16 +13,15 @@ import math
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
-import xarray as xr
 
 from drillstring.case import Case, load_case
-from drillstring.dynamics.rom import case_reduced_model
-from drillstring.dynamics.simulate import SimulationError, simulate_model
-from drillstring.results import run_dataset
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
+
+if TYPE_CHECKING:  # the simulating modules load with the functions that use them (light static, modes)
+    import xarray as xr
 
 #: Largest number of bootstrap resamples of a sensitivity run's confidence intervals.
 MAX_RESAMPLES = 100_000
@@ -67,11 +66,14 @@ def simulate(
     """Simulate one drilling run of ``case`` (SPEC §7) and return its observables as a Dataset.
 
     Arguments left as None take the case's ``[simulation]`` values; ``weight_on_bit`` [N] overrides
-    the static weight-on-bit. A run that stops early raises :class:`SimulationError` whose
+    the static weight-on-bit. A run that stops early raises :class:`~drillstring.dynamics.simulate.SimulationError` whose
     ``.dataset`` holds what was computed (or, with ``raise_on_failure=False``, that Dataset is
     returned with ``attrs["status"] == "failed"``).
     """
     from drillstring.checks import real_number
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.simulate import SimulationError, simulate_model
+    from drillstring.results import run_dataset
 
     case = as_case(case)
     s = case.simulation
@@ -383,6 +385,42 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     return {**paths, **figures}
 
 
+def static(case: Case | str | Path = "reference"):
+    """The prestressed static state of ``case`` and its lateral buckling margin.
+
+    Returns ``(state, margin)``: a :class:`~drillstring.statics.StaticState` (``weight``,
+    ``weight_on_hook``, ``weight_on_bit`` [N], ``neutral_point_height`` [m], the mesh and the axial
+    force ``axial_force`` [N] at its nodes, tension positive) and a :class:`~drillstring.buckling.
+    BucklingMargin` (``critical_weight_on_bit`` [N], ``buckled``)."""
+    from drillstring.buckling import case_buckling_margin
+    from drillstring.statics import case_static_state
+
+    case = as_case(case)
+    state = case_static_state(case)
+    return state, case_buckling_margin(case, state)
+
+
+#: Largest number of modes per family :func:`modes` computes.
+MAX_MODES = 1000
+
+
+def modes(case: Case | str | Path = "reference", *, count: int = 10):
+    """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
+    of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
+
+    Returns ``(modes, margin)``: :class:`~drillstring.modal.Modes` (``.axial.frequencies`` [Hz], ...) and a
+    :class:`~drillstring.buckling.BucklingMargin`. ``count``: an integer in [1, :data:`MAX_MODES`]."""
+    from drillstring.buckling import buckling_margin
+    from drillstring.checks import integer
+    from drillstring.modal import case_linear_system, compute_modes
+    from drillstring.statics import case_static_state
+
+    count = integer("count", count, low=1, high=MAX_MODES)
+    case = as_case(case)
+    system = case_linear_system(case, case_static_state(case))
+    return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
+
+
 def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
     """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
     about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
@@ -490,11 +528,12 @@ def compare(
     integration, measured around the call), ``ratio`` = full / bit_and_contact; ``solver_wall_time`` and
     ``n_rhs`` the integrator's own numbers. ``progress(model, t)`` is called with the model name
     ("full" or "bit_and_contact") and the simulated time [s]. A run that stops early raises
-    :class:`SimulationError` (``.dataset`` the partial run, ``.nonlinear`` which model failed).
+    :class:`~drillstring.dynamics.simulate.SimulationError` (``.dataset`` the partial run, ``.nonlinear`` which model failed).
     """
     import time
 
     from drillstring.dynamics.indicators import transient_end
+    from drillstring.dynamics.simulate import SimulationError
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}

@@ -10,7 +10,7 @@ Commands
 ``drillstring cases``
     The built-in cases.
 ``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
-    One drilling run: NetCDF of the observables, a four-panel figure and a summary table.
+    One drilling run: NetCDF of the observables, a six-panel figure and a summary table.
 ``drillstring study [CASE] [--param PATH=LAW ...] [--sigma N | --dispersion D] [--samples N] [--out DIR] ...``
     Monte Carlo study of random case parameters (default: the weight-on-hook): Zarr store (resumable),
     statistics, figures, report.
@@ -240,12 +240,10 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
     """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
     weight-on-bit (lateral buckling), axial force."""
-    from drillstring.buckling import case_buckling_margin
-    from drillstring.statics import case_static_state
+    from drillstring import api
 
     the_case = _load(case)
-    state = case_static_state(the_case)
-    margin = case_buckling_margin(the_case, state)
+    state, margin = api.static(the_case)
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -314,14 +312,13 @@ def modes(
     as_json: JsonOpt = False,
 ) -> None:
     """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
-    from drillstring.buckling import buckling_margin
-    from drillstring.modal import case_linear_system, compute_modes
-    from drillstring.statics import case_static_state
+    from drillstring import api
 
     the_case = _load(case)
-    state = case_static_state(the_case)
-    system = case_linear_system(the_case, state)
-    found = compute_modes(system, axial=count, torsional=count, lateral=count)
+    try:
+        found, margin = api.modes(the_case, count=count)
+    except ValueError as error:
+        _fail(str(error))
     families = {
         "axial": [float(f) for f in found.axial.frequencies],
         "torsional": [float(f) for f in found.torsional.frequencies],
@@ -346,7 +343,7 @@ def modes(
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
         "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
         "mode, -sqrt(|ω²|)/2π.",
-        _buckling_note(buckling_margin(system)),
+        _buckling_note(margin),
     ):
         console.print(escape(note), soft_wrap=True)
 
@@ -511,7 +508,8 @@ def simulate(
     out: Annotated[Path, typer.Option("--out", "-o", help="NetCDF file of the observables.")] = Path(
         "simulation.nc"
     ),
-    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the four-panel figure.")] = Path(
+    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the six-panel figure (ROP, bit speed, radial "
+                                                      "displacement, TOB, whirl orbit, contact force).")] = Path(
         "simulation.png"
     ),
     as_json: JsonOpt = False,
@@ -524,13 +522,14 @@ def simulate(
     the bit turns slower than 10 % of the top speed (stick). A run
     that stops early still writes what it computed, reports where it stopped and exits with code 1.
     """
+    from drillstring.dynamics.simulate import run_window
+
     the_case = _load(case)
-    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
-    if not (math.isfinite(t_final) and t_final > 0):
-        _fail(f"--t-end = {t_final!r} s: must be > 0")
-    if the_case.simulation.output_step > t_final:
-        _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
-              f"({the_case.simulation.output_step:g} s)")
+    try:
+        t_final = run_window(the_case.simulation.t_end if t_end is None else t_end, the_case.simulation.output_step,
+                             names={"t_end": "simulation.t_end" if t_end is None else "--t-end"}).t_end
+    except ValueError as error:
+        _fail(str(error))
     _check_output("--out", out)
     _check_output("--plot", plot)
     if Path(out).resolve() == Path(plot).resolve():
@@ -633,25 +632,26 @@ def _compare_times(differences: dict[str, Any]) -> Table:
 def compare(
     case: CaseArg = "reference",
     t_end: TEndOption = None,
-    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the overlaid four-panel figure.")] = Path(
+    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the overlaid six-panel figure.")] = Path(
         "compare.png"
     ),
     as_json: JsonOpt = False,
 ) -> None:
     """Case 1 (full nonlinear model) against case 2 (bit–rock and contact forces only) on the same case.
 
-    Runs both, writes a four-panel figure with both overlaid (case 1 solid, case 2 dashed) and prints, per
+    Runs both, writes a six-panel figure with both overlaid (case 1 solid, case 2 dashed) and prints, per
     observable, the largest difference, the RMS difference relative to case 2, and the difference of the
     means after the transient (t >= min(10 s, t_end/2)), then the wall time of each run and their ratio.
     A run that stops early ends the command with exit code 1.
     """
+    from drillstring.dynamics.simulate import run_window
+
     the_case = _load(case)
-    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
-    if not (math.isfinite(t_final) and t_final > 0):
-        _fail(f"--t-end = {t_final!r} s: must be > 0")
-    if the_case.simulation.output_step > t_final:
-        _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
-              f"({the_case.simulation.output_step:g} s)")
+    try:
+        t_final = run_window(the_case.simulation.t_end if t_end is None else t_end, the_case.simulation.output_step,
+                             names={"t_end": "simulation.t_end" if t_end is None else "--t-end"}).t_end
+    except ValueError as error:
+        _fail(str(error))
     _check_output("--plot", plot)
 
     from drillstring import api

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -194,21 +194,24 @@ class RunWindow:
         return output_grid(self.t_end, self.output_step)
 
 
-def run_window(t_end, output_step, transient=None, *, max_points: int = MAX_OUTPUT_POINTS) -> RunWindow:
+def run_window(t_end, output_step, transient=None, *, max_points: int = MAX_OUTPUT_POINTS,
+               names: Mapping[str, str] | None = None) -> RunWindow:
     """The checked :class:`RunWindow`: ``t_end`` [s] a finite number > 0, ``output_step`` [s] in (0, t_end],
     at most ``max_points`` output times (checked before anything is allocated), ``transient`` [s] in
     [0, t_end) (None: :func:`~drillstring.dynamics.indicators.transient_end`, ``min(10 s, t_end/2)``).
-    TypeError for a value that is not a number, ValueError (one line naming the argument) otherwise."""
-    t_end = real_number("t_end", t_end, unit="s", low=0.0, low_open=True)
-    output_step = real_number("output_step", output_step, unit="s", low=0.0, low_open=True, high=t_end,
+    TypeError for a value that is not a number, ValueError (one line naming the argument: its name in
+    ``names`` when given there, e.g. ``{"t_end": "--t-end"}``) otherwise."""
+    name = {"t_end": "t_end", "output_step": "output_step", "transient": "transient", **(names or {})}
+    t_end = real_number(name["t_end"], t_end, unit="s", low=0.0, low_open=True)
+    output_step = real_number(name["output_step"], output_step, unit="s", low=0.0, low_open=True, high=t_end,
                               allowed=f"a number in (0, t_end = {t_end:g} s]")
     points = output_points(t_end, output_step)
     if points > max_points:
-        raise ValueError(f"t_end = {t_end:g} s at output_step = {output_step:g} s: {points} output times, above "
-                         f"the limit of {max_points} (lengthen output_step or shorten t_end)")
+        raise ValueError(f"{name['t_end']} = {t_end:g} s at output_step = {output_step:g} s: {points} output "
+                         f"times, above the limit of {max_points} (lengthen output_step or shorten t_end)")
     if transient is None:
         transient = transient_end(t_end)
-    transient = real_number("transient", transient, unit="s", low=0.0, high=t_end, high_open=True,
+    transient = real_number(name["transient"], transient, unit="s", low=0.0, high=t_end, high_open=True,
                             allowed=f"a number in [0, t_end = {t_end:g} s)")
     return RunWindow(t_end, output_step, transient)
 
