@@ -151,11 +151,16 @@ def _err_console() -> Console:
     return Console(stderr=True, highlight=False)
 
 
-def _default_transient(t_end: float) -> float:
-    """Start of the steady regime used by the summaries [s]: 10 s, or half the run when shorter."""
-    from drillstring.dynamics.indicators import transient_end
+def _run_window(case: Case, t_end: float | None):
+    """The run window of ``case`` with ``--t-end`` (:func:`~drillstring.dynamics.simulate.run_window`; its
+    ``transient``, min(10 s, t_end/2), starts the summaries); refused (exit code 2) in one line."""
+    from drillstring.dynamics.simulate import run_window
 
-    return transient_end(t_end)
+    try:
+        return run_window(case.simulation.t_end if t_end is None else t_end, case.simulation.output_step,
+                          names={"t_end": "simulation.t_end" if t_end is None else "--t-end"})
+    except ValueError as error:
+        _fail(str(error))
 
 
 def _check_output(option: str, path: Path, *, folder: bool = False) -> None:
@@ -522,14 +527,9 @@ def simulate(
     the bit turns slower than 10 % of the top speed (stick). A run
     that stops early still writes what it computed, reports where it stopped and exits with code 1.
     """
-    from drillstring.dynamics.simulate import run_window
-
     the_case = _load(case)
-    try:
-        t_final = run_window(the_case.simulation.t_end if t_end is None else t_end, the_case.simulation.output_step,
-                             names={"t_end": "simulation.t_end" if t_end is None else "--t-end"}).t_end
-    except ValueError as error:
-        _fail(str(error))
+    window = _run_window(the_case, t_end)
+    t_final = window.t_end
     _check_output("--out", out)
     _check_output("--plot", plot)
     if Path(out).resolve() == Path(plot).resolve():
@@ -557,7 +557,7 @@ def simulate(
 
     netcdf = write_netcdf(ds, out)
     figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
-    numbers = _run_numbers(ds, _default_transient(t_final))
+    numbers = _run_numbers(ds, window.transient)
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
     if failure is not None:
@@ -644,14 +644,9 @@ def compare(
     means after the transient (t >= min(10 s, t_end/2)), then the wall time of each run and their ratio.
     A run that stops early ends the command with exit code 1.
     """
-    from drillstring.dynamics.simulate import run_window
-
     the_case = _load(case)
-    try:
-        t_final = run_window(the_case.simulation.t_end if t_end is None else t_end, the_case.simulation.output_step,
-                             names={"t_end": "simulation.t_end" if t_end is None else "--t-end"}).t_end
-    except ValueError as error:
-        _fail(str(error))
+    window = _run_window(the_case, t_end)
+    t_final = window.t_end
     _check_output("--plot", plot)
 
     from drillstring import api
