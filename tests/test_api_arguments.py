@@ -46,6 +46,18 @@ def test_simulate_refuses_bad_arguments_before_building_anything(small_case, no_
         api.simulate(small_case, **kwargs)
 
 
+@pytest.mark.parametrize("call, kwargs, error, message", [
+    ("stability", dict(weight_on_bit="100 kN"), TypeError, r"^weight_on_bit = '100 kN' N: must be a number, not str$"),
+    ("stability", dict(weight_on_bit=-1.0), ValueError, r"^weight_on_bit = -1.0 N: must be a finite number > 0$"),
+    ("modes", dict(count=0), ValueError, r"^count = 0: must be an integer in \[1, 1000\]$"),
+    ("modes", dict(count=2.5), TypeError, r"^count = 2.5: must be an integer, not float$"),
+    ("compare", dict(t_end=-1.0), ValueError, r"^t_end = -1.0 s: must be a finite number > 0$"),
+])
+def test_other_functions_refuse_bad_arguments(small_case, no_work, call, kwargs, error, message):
+    with pytest.raises(error, match=message):
+        getattr(api, call)(small_case, **kwargs)
+
+
 @pytest.mark.parametrize("case", [{"name": "mine", "sections": []}, 42, None])
 def test_a_case_must_be_a_case_a_name_or_a_path(case, no_work):
     """A dict is refused (not guessed at): Case objects come from load_case or case_from_dict."""

@@ -431,9 +431,13 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
     overrides the case's.
     """
+    from drillstring.checks import real_number
     from drillstring.dynamics.stability import case_stability
 
-    return case_stability(as_case(case), weight_on_bit=weight_on_bit)
+    case = as_case(case)
+    if weight_on_bit is not None:
+        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+    return case_stability(case, weight_on_bit=weight_on_bit)
 
 
 def study(

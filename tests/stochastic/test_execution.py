@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from drillstring.stochastic import execution
-from drillstring.stochastic.execution import DONE, FAILED, TaskOutcome
+from drillstring.stochastic.execution import TaskOutcome
+from drillstring.stochastic.store import DONE, FAILED
 
 
 def square(argument):

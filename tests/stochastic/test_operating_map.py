@@ -11,7 +11,7 @@ from drillstring import api
 from drillstring.case import DIMENSIONS
 from drillstring.stochastic import execution
 from drillstring.stochastic import operating_map as om
-from drillstring.stochastic.store import StoreError
+from drillstring.stochastic.store import DONE, StoreError
 
 DIM = {d.name: d for d in DIMENSIONS}
 RPM = math.pi / 30.0
@@ -109,7 +109,7 @@ def test_an_interrupted_map_resumes_to_the_same_map(torsional_case, tmp_path):
     with pytest.raises(execution.Interrupted, match="map interrupted after 2 of 6 grid points.*resume"):
         om.run_map(torsional_case, settings, tmp_path / "cut.zarr",
                    execution.Engine(workers=1, progress=interrupt_after_two))
-    assert om.MapStore.open_group(tmp_path / "cut.zarr")["status"][:].tolist().count(execution.DONE) == 2
+    assert om.MapStore.open_group(tmp_path / "cut.zarr")["status"][:].tolist().count(DONE) == 2
     resumed = om.run_map(torsional_case, settings, tmp_path / "cut.zarr", execution.Engine(workers=2))
     assert resumed.completed == 6 and resumed.computed == 4
     a, b = om.map_dataset(tmp_path / "whole.zarr"), om.map_dataset(tmp_path / "cut.zarr")
