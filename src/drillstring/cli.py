@@ -856,7 +856,7 @@ def study(
     ] = None,
     transient: Annotated[
         float | None,
-        typer.Option("--transient", help="Start of the steady regime for the summaries [s] "
+        typer.Option("--transient", help="Start of the steady regime for the summaries, in s, in [0, t_end) "
                                          "(default: min(10 s, t_end/2))."),
     ] = None,
     as_json: JsonOpt = False,
@@ -993,7 +993,8 @@ RunTEndOption = Annotated[
 ]
 TransientOption = Annotated[
     float | None,
-    typer.Option("--transient", help="Start of the window of the outputs, in s (default: min(10 s, t_end/2))."),
+    typer.Option("--transient", help="Start of the window of the outputs, in s, in [0, t_end) (default: "
+                                     "min(10 s, t_end/2))."),
 ]
 
 
