@@ -117,6 +117,14 @@ def observation_width(n_probes: int) -> int:
     return PROBE_COLUMN + 3 * n_probes
 
 
+#: Where the boundary laws' numbers sit in ``RhsData.laws``: [0:7] the bit–rock law's (the trailing arguments of
+#: :func:`~drillstring.forces.bit_rock.bit_rock_force_floored`), [7] 1.0 on bottom / 0.0 off bottom, [8:17] the
+#: top drive's (:meth:`~drillstring.forces.top_drive.TopDriveParameters.kernel_args`; code 0: imposed speed).
+#: One array, not a field each: every field of RhsData is an argument of each inner kernel, and four more
+#: fields made the reference realization 30 % slower (measured; LLVM inlines less).
+_ON_BOTTOM = 7
+_TOP_DRIVE = 8
+
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
 VECTOR_MATH = {"reassoc", "contract"}
@@ -190,7 +198,7 @@ class TurningLoadData(NamedTuple):
 class RhsData(NamedTuple):
     """What the case-2 right-hand side reads (SI units). Each physical quantity is read from its own
     mode family only: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
-    lateral z start, end] column ranges; ``bit_u``, ``bit_t`` hold only their family's columns and
+    lateral z start, end] column ranges; ``bit_u``, ``torsion_rows`` hold only their family's columns and
     ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (family columns × nodes) and ``damping_t`` are stored
     transposed so that products run column by column."""
 
@@ -200,7 +208,8 @@ class RhsData(NamedTuple):
     generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
     blocks: np.ndarray  # (8,) int64
     bit_u: np.ndarray  # axial mode shapes at the bit's u
-    bit_t: np.ndarray  # torsional mode shapes at the bit's θx
+    torsion_rows: np.ndarray  # (3, n_t) torsional columns of: θx at the bit, θx at the top (the quill, where
+    #                           the motor torque acts; 0 when held), the surface-torque row (K Φ) at the top's θx
     phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
     phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
     phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
@@ -208,13 +217,7 @@ class RhsData(NamedTuple):
     lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    bit_rock: np.ndarray  # (7,) arguments of bit_rock_force_floored after the speeds
-    bit_on_bottom: bool  # False: bit_rock.law = "off_bottom", no bit-rock force
-    # The top boundary (drillstring.forces.top_drive), as plain arrays (a nested named tuple would cost
-    # ~0.2 ms of argument typing at every call of the compiled loop):
-    top_args: np.ndarray  # (9,) TopDriveParameters.kernel_args(); code 0: imposed speed, nothing to do
-    quill_t: np.ndarray  # (n_t,) torsional shapes at the top's θx, where the motor torque acts (0: held)
-    surface_torque_t: np.ndarray  # (n_t,) the surface-torque row (K Φ) at the top's θx, torsional columns
+    laws: np.ndarray  # (17,) the boundary laws' numbers (_ON_BOTTOM, _TOP_DRIVE)
     contact: ContactData
     turning: TurningLoadData
 
@@ -341,15 +344,15 @@ def _bit_motion(d, y):
         bit_velocity += d.bit_u[j - a0] * y[n + j]
     bit_speed = d.top_speed
     for j in range(t0, t1):
-        bit_speed += d.bit_t[j - t0] * y[n + j]
+        bit_speed += d.torsion_rows[0, j - t0] * y[n + j]
     return bit_velocity, bit_speed
 
 
 @inner_kernel()
 def _bit_rock(d, bit_velocity, bit_speed):
-    if not d.bit_on_bottom:
+    b = d.laws
+    if b[_ON_BOTTOM] == 0.0:
         return 0.0, 0.0
-    b = d.bit_rock
     return bit_rock_force_floored(bit_velocity, bit_speed, b[0], b[1], b[2], b[3], b[4], b[5], b[6])
 
 
@@ -406,8 +409,8 @@ def _top_motion(d, y):
     quill = d.top_speed
     torque = 0.0
     for j in range(t0, t1):
-        quill += d.quill_t[j - t0] * y[n + j]
-        torque += d.surface_torque_t[j - t0] * y[j]
+        quill += d.torsion_rows[1, j - t0] * y[n + j]
+        torque += d.torsion_rows[2, j - t0] * y[j]
     return quill, torque
 
 
@@ -418,11 +421,12 @@ def _top_drive(d, t, y, out):
     n = d.omega2.shape[0]
     t0, t1 = d.blocks[2], d.blocks[3]
     quill, surface = _top_motion(d, y)
-    z_torque = d.top_args[0] == Z_TORQUE
+    args = d.laws[_TOP_DRIVE:]
+    z_torque = args[0] == Z_TORQUE
     filtered = y[2 * n + 1] if z_torque else 0.0
-    torque, d_integral, d_filtered = top_drive_law(d.top_args, t, quill, surface, y[2 * n], filtered)
+    torque, d_integral, d_filtered = top_drive_law(args, t, quill, surface, y[2 * n], filtered)
     for j in range(t0, t1):
-        out[n + j] += d.quill_t[j - t0] * torque
+        out[n + j] += d.torsion_rows[1, j - t0] * torque
     out[2 * n] = d_integral
     if z_torque:
         out[2 * n + 1] = d_filtered
@@ -443,7 +447,7 @@ def _rhs_kernel(d, t, y, out):
         out[i] = eta_dot[i]
         acc[i] = d.generalized_force[i] - d.omega2[i] * eta[i]
     _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
-    if d.top_args[0] != 0.0:
+    if d.laws[_TOP_DRIVE] != 0.0:
         _top_drive(d, t, y, out)
     # bit-rock interaction at the bit node
     bit_velocity, bit_speed = _bit_motion(d, y)
@@ -452,7 +456,7 @@ def _rhs_kernel(d, t, y, out):
     for j in range(a0, a1):
         acc[j] += d.bit_u[j - a0] * axial_force
     for j in range(t0, t1):
-        acc[j] += d.bit_t[j - t0] * bit_torque
+        acc[j] += d.torsion_rows[0, j - t0] * bit_torque
     if y1 == y0 and z1 == z0:
         return
     _turning_loads(d, t, y, acc)
@@ -853,7 +857,8 @@ class ReducedOrderModel:
             generalized_force=self.generalized_force,
             blocks=self.blocks,
             bit_u=transposed(self.bit_u[a0:a1]),
-            bit_t=transposed(self.bit_t[t0:t1]),
+            torsion_rows=transposed(np.vstack([self.bit_t[t0:t1], self.quill_shapes[t0:t1],
+                                               self.surface_torque_shapes[t0:t1]])),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
@@ -862,10 +867,8 @@ class ReducedOrderModel:
                                               np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
             top_speed=self.base_speed,
             weight_on_bit=float(self.weight_on_bit),
-            bit_rock=np.array(self.bit_rock.kernel_args(), dtype=float),
-            bit_on_bottom=self.bit_rock.law != "off_bottom",
-            top_args=self.top_drive.kernel_args(), quill_t=transposed(self.quill_shapes[t0:t1]),
-            surface_torque_t=transposed(self.surface_torque_shapes[t0:t1]),
+            laws=np.concatenate([self.bit_rock.kernel_args(), [float(self.bit_rock.law != "off_bottom")],
+                                 self.top_drive.kernel_args()]),
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
