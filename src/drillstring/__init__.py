@@ -8,7 +8,7 @@ results, plots, report, cli.
 The notebook API: :func:`load_case`, :func:`simulate`, :func:`stability` (steady drilling and its linear
 stability), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
 :func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
-(Sobol' indices).
+(Sobol' indices), :func:`campbell` (Campbell diagram and critical speeds).
 """
 
 __version__ = "0.1.0"
@@ -27,7 +27,7 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring.api import stability
 
         return stability
-    if name in ("study", "monte_carlo_study", "operating_map", "sensitivity"):
+    if name in ("study", "monte_carlo_study", "operating_map", "sensitivity", "campbell"):
         from drillstring import api
 
         return getattr(api, name)

@@ -356,6 +356,31 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     return case_stability(as_case(case), weight_on_bit=weight_on_bit)
 
 
+def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
+             default_unit: str = ""):
+    """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
+    torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
+    the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
+    and ``blades``× (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
+
+    ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
+    in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
+    :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
+    line naming the argument) for a bad grid or blade count."""
+    from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, case_campbell
+    from drillstring.case import DIMENSIONS
+    from drillstring.stochastic.operating_map import parse_axis
+
+    the_case = as_case(case)
+    dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
+    speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
+                        name="top_speed", default_unit=default_unit)
+    blades = DEFAULT_BLADES if blades is None else blades
+    if isinstance(blades, bool) or not isinstance(blades, (int, np.integer)) or blades < 1:
+        raise ValueError(f"blades = {blades!r}: must be an integer >= 1")
+    return case_campbell(the_case, speeds, int(blades))
+
+
 def study(
     case: Case | str | Path = "reference",
     *,

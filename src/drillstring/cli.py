@@ -7,6 +7,8 @@ Commands
     weight-on-bit (lateral buckling), axial force.
 ``drillstring modes [CASE] [--count N] [--json]``
     The lowest natural frequencies of the axial, torsional and lateral mode families.
+``drillstring campbell [CASE] [--top-speed A:B:N] [--blades N] [--plot FILE.png] [--json]``
+    Campbell diagram: frequencies of each family against rotary speed, excitation lines, critical speeds.
 ``drillstring cases``
     The built-in cases.
 ``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
@@ -348,6 +350,100 @@ def modes(
         "mode, -sqrt(|ω²|)/2π.",
         _buckling_note(buckling_margin(system)),
     ):
+        console.print(escape(note), soft_wrap=True)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring campbell
+# ---------------------------------------------------------------------------------------------------------
+
+
+@app.command()
+def campbell(
+    case: CaseArg = "reference",
+    top_speed: Annotated[
+        str | None, typer.Option("--top-speed", help="Rotary speeds: FROM:TO:N, a list a,b,c, or one value; bare "
+                                                     "numbers in rpm, or with units (default 5 rpm:300 rpm:60).")
+    ] = None,
+    blades: Annotated[
+        int | None, typer.Option("--blades", help="Blades (or cones) of the bit: the n× excitation line "
+                                                  "(default 3).")
+    ] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Write the diagram as a PNG figure.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Campbell diagram: natural frequencies of each family against rotary speed (prestress, drilling fluid,
+    gyroscopic forward/backward whirl), the 1× and blade excitation lines, the critical speeds and the
+    case's operating speed."""
+    the_case = _load(case)
+    if plot is not None:
+        _check_output("--plot", plot)
+    from drillstring import api
+
+    try:
+        diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm")
+    except ValueError as error:
+        _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("blades = ", "--blades = "))
+    payload = diagram.to_dict()
+    if plot is not None:
+        from drillstring.plots import plot_campbell
+
+        plot_campbell(payload, plot, f"Campbell diagram: case {the_case.name!r}")
+        payload["figure"] = str(plot)
+    if as_json:
+        _print_json(payload)
+        return
+    _print_campbell(the_case.name, diagram, plot)
+
+
+def _print_campbell(name: str, diagram, plot: Path | None) -> None:
+    from drillstring.critical_speeds import BHA_SHARE
+
+    console = _console()
+    speeds = diagram.speeds * _RPM
+    orders = ", ".join(f"{k}×" for k in diagram.orders)
+    console.print(escape(f"Campbell diagram: case {name!r}, {len(speeds)} speeds {speeds[0]:g}–{speeds[-1]:g} rpm, "
+                         f"lines {orders}, frequencies up to {diagram.max_frequency:.2f} Hz"), soft_wrap=True)
+    rows: dict[tuple, dict] = {}
+    skipped = 0
+    for c in diagram.critical_speeds:
+        if c.family == "lateral" and c.bha_energy_share < BHA_SHARE:
+            skipped += 1
+            continue
+        row = rows.setdefault((c.family, c.mode, c.order), {"frequency": c.frequency, "share": c.bha_energy_share})
+        row[c.whirl or "speed"] = c.speed * _RPM
+    table = Table(title="Critical speeds (excitation line × natural frequency)", title_justify="left")
+    for title in ("line", "family", "mode", "frequency [Hz]", "critical speed [rpm]", "backward whirl [rpm]",
+                  "BHA energy"):
+        table.add_column(escape(title), justify="left" if title in ("line", "family") else "right")
+    operating = diagram.operating_speed * _RPM if diagram.operating_speed else None
+    ordered = sorted(rows.items(), key=lambda item: min(v for k, v in item[1].items() if k in ("speed", "forward",
+                                                                                           "backward")))
+    for (family, mode, order), row in ordered:
+        main = row.get("speed", row.get("forward"))
+        table.add_row(f"{order}×", family, str(mode), f"{row['frequency']:.3f}",
+                      "" if main is None else f"{main:.1f}" + (" fwd" if family == "lateral" else ""),
+                      f"{row['backward']:.1f}" if "backward" in row else "",
+                      "" if row["share"] is None else f"{row['share']:.0%}")
+    console.print(table)
+    notes = [f"lateral: the BHA modes (at least {BHA_SHARE:.0%} of the kinetic energy below the top section); "
+             f"{skipped} crossings with drill-pipe lateral modes are in --json."]
+    if operating:
+        below = [r for (_, r) in ordered if max(v for k, v in r.items() if k in ("speed", "forward", "backward"))
+                 <= operating]
+        above = [r for (_, r) in ordered if min(v for k, v in r.items() if k in ("speed", "forward", "backward"))
+                 > operating]
+        near = []
+        if below:
+            near.append(f"{max(r.get('speed', r.get('forward', 0.0)) for r in below):.1f} rpm below")
+        if above:
+            near.append(f"{min(r.get('speed', r.get('forward', math.inf)) for r in above):.1f} rpm above")
+        notes.append(f"Operating speed {operating:.1f} rpm; nearest critical speeds: {', '.join(near) or 'none'}.")
+    notes.append("Axial and torsional frequencies do not depend on the rotary speed in the linear model; gyroscopic "
+                 "terms split each lateral pair into forward and backward whirl.")
+    if plot is not None:
+        notes.append(f"Figure: {plot}")
+    for note in notes:
         console.print(escape(note), soft_wrap=True)
 
 
