@@ -185,3 +185,27 @@ def test_cli_campbell_json_table_plot_and_errors(tmp_path):
     assert bad.exit_code == 2 and "--blades = 0: must be an integer >= 1" in bad.output
     bad = runner.invoke(app, ["campbell", "reference", "--top-speed", "10:5"])
     assert bad.exit_code == 2 and "--top-speed = '10:5'" in bad.output
+
+
+def test_docs_table_of_the_reference_critical_speeds_is_the_command_s(reference_case):
+    """docs/campbell.md lists the reference case's critical speeds (default speeds and lines): each row is a
+    crossing the code finds, to the table's rounding, and every BHA, axial and torsional crossing is a row."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "campbell.md").read_text(encoding="utf-8")
+    block = text.split("<!-- reference critical speeds: begin -->")[1].split("<!-- reference critical speeds: end -->")[0]
+    rows = [[cell.strip() for cell in line.strip("|").split("|")] for line in block.strip().splitlines()[2:]]
+    diagram = case_campbell(reference_case, np.linspace(5.0, 300.0, 60) * RPM)
+    found = {}
+    for c in diagram.critical_speeds:
+        if c.family != "lateral" or c.bha_energy_share >= BHA_SHARE:
+            found[(f"{c.order}×", c.family, str(c.mode), c.whirl or "forward")] = c
+    assert len(rows) == len({key[:3] for key in found})
+    for line, family, mode, frequency, speed, backward, share in rows:
+        forward = found[(line, family, mode, "forward")]
+        assert f"{forward.frequency:.3f}" == frequency and f"{forward.speed / RPM:.1f}" == speed
+        if family == "lateral":
+            assert f"{found[(line, family, mode, 'backward')].speed / RPM:.1f}" == backward
+            assert f"{forward.bha_energy_share:.0%}" == share
+        assert re.fullmatch(r"\d+×", line)

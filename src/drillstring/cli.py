@@ -410,8 +410,10 @@ def _print_campbell(name: str, diagram, plot: Path | None) -> None:
         if c.family == "lateral" and c.bha_energy_share < BHA_SHARE:
             skipped += 1
             continue
-        row = rows.setdefault((c.family, c.mode, c.order), {"frequency": c.frequency, "share": c.bha_energy_share})
+        row = rows.setdefault((c.family, c.mode, c.order), {"share": c.bha_energy_share})
         row[c.whirl or "speed"] = c.speed * _RPM
+        if c.whirl != "backward":
+            row["frequency"] = c.frequency
     table = Table(title="Critical speeds (excitation line × natural frequency)", title_justify="left")
     for title in ("line", "family", "mode", "frequency [Hz]", "critical speed [rpm]", "backward whirl [rpm]",
                   "BHA energy"):
