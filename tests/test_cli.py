@@ -691,7 +691,7 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
 
 
 #: Modules that only the simulating commands need.
-_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr")
+_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr", "plotly")
 
 
 @pytest.mark.parametrize("argv, unwanted", [

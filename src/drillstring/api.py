@@ -286,7 +286,7 @@ def monte_carlo_study(
             })
             files: dict[str, Path] = {}
             if out is not None:
-                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient)
+                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw)
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
@@ -294,18 +294,27 @@ def monte_carlo_study(
                         guard.note or run.note)
 
 
-def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:
-    """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
-    statistics' ``summary`` and the run information from ``payload``)."""
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
+                       raw=None) -> dict[str, Path]:
+    """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
+    statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
+    finished realizations of ``raw``, the study's raw Dataset)."""
     import json
 
     from drillstring.files import write_text_atomic
-    from drillstring.plots import plot_study
-    from drillstring.report import write_report
+    from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
+    from drillstring.plots import STUDY_PANELS, plot_study
+    from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
+    from drillstring.stochastic.montecarlo import DONE
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
-             "statistics": folder / "statistics.nc", "report": folder / "report.html"}
+             "statistics": folder / "statistics.nc", "report": folder / "report.html",
+             "interactive": folder / INTERACTIVE_PAGE}
+    shown = None
+    if raw is not None:
+        finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
+        shown = raw[list(STUDY_PANELS)].isel(realization=finished)
     write_netcdf(stats, paths["statistics"])
     figures = plot_study(stats, folder, t_transient)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
@@ -337,6 +346,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
                  for k in ("envelopes", "dispersion", "convergence")},
         run_info=run_info,
+        interactive=study_figures(stats, shown),
     )
     return {**paths, **figures}
 
@@ -649,8 +659,9 @@ def operating_map(
     import json
 
     from drillstring.files import write_text_atomic
+    from drillstring.interactive import map_figures
     from drillstring.plots import plot_map
-    from drillstring.report import write_map_report
+    from drillstring.report import INTERACTIVE_PAGE, write_map_report
     from drillstring.results import write_netcdf
     from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
     from drillstring.stochastic.locks import StudyLock
@@ -673,7 +684,8 @@ def operating_map(
             files: dict[str, Path] = {}
             if out is not None:
                 files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                         "figure": folder / "map.png", "report": folder / "report.html"}
+                         "figure": folder / "map.png", "report": folder / "report.html",
+                         "interactive": folder / INTERACTIVE_PAGE}
                 write_netcdf(ds, files["map"])
                 plot_map(ds, files["figure"])
                 summary["files"] = {k: str(v) for k, v in files.items()}
@@ -684,7 +696,8 @@ def operating_map(
                                           "largest radial displacement over the map; black line: linear "
                                           "stability boundary of steady drilling (hatched: unstable); red "
                                           "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
-                                 run_info={**_run_table(summary, "points"), "store": str(store_path)})
+                                 run_info={**_run_table(summary, "points"), "store": str(store_path)},
+                                 interactive=map_figures(ds))
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
@@ -737,8 +750,9 @@ def sensitivity(
     import json
 
     from drillstring.files import write_text_atomic
+    from drillstring.interactive import sensitivity_figures
     from drillstring.plots import plot_sobol, plot_sobol_convergence
-    from drillstring.report import write_sensitivity_report
+    from drillstring.report import INTERACTIVE_PAGE, write_sensitivity_report
     from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
     from drillstring.stochastic.locks import StudyLock
     from drillstring.stochastic.sensitivity_study import (
@@ -784,7 +798,7 @@ def sensitivity(
             if out is not None:
                 files = {"store": store_path, "indices": folder / "sensitivity.json",
                          "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
-                         "report": folder / "report.html"}
+                         "report": folder / "report.html", "interactive": folder / INTERACTIVE_PAGE}
                 plot_sobol(payload, files["figure"])
                 plot_sobol_convergence(payload, files["convergence"])
                 payload["files"] = {k: str(v) for k, v in files.items()}
@@ -797,7 +811,8 @@ def sensitivity(
                              "The indices at N/4, N/2 and N base samples": files["convergence"]},
                     run_info={**_run_table(record, "runs"), "runs": result.runs,
                               "simulated time per run [s]": settings.t_end,
-                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)})
+                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
+                    interactive=sensitivity_figures(payload))
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
