@@ -47,8 +47,8 @@ def test_spinning_shaft_campbell_diagram_against_exact_solution(shaft, drill_col
         np.testing.assert_allclose(forward, exact[:, 0], rtol=1e-4)
         np.testing.assert_allclose(backward, exact[:, 1], rtol=1e-4)
         assert np.all(np.diff(forward) > 0) and np.all(np.diff(backward) < 0)
-    first = diagram.curve("lateral", 1, "forward").frequencies[-1] / diagram.curve("lateral", 1, "backward").frequencies[-1]
-    assert first - 1 > 0.1
+    forward, backward = (diagram.curve("lateral", 1, whirl).frequencies[-1] for whirl in ("forward", "backward"))
+    assert forward / backward - 1 > 0.1
 
 
 def test_spinning_shaft_critical_speed_against_exact_solution(shaft, drill_collar):
@@ -166,7 +166,8 @@ def test_cli_campbell_json_table_plot_and_errors(tmp_path):
 
     runner = CliRunner()
     figure = tmp_path / "campbell.png"
-    result = runner.invoke(app, ["campbell", "reference", "--top-speed", "10:20:5", "--blades", "1", "--plot", str(figure), "--json"])
+    result = runner.invoke(app, ["campbell", "reference", "--top-speed", "10:20:5", "--blades", "1",
+                                 "--plot", str(figure), "--json"])
     assert result.exit_code == 0, result.output
     payload = json.loads(result.stdout)
     assert payload["orders"] == [1] and len(payload["speeds"]) == 5
@@ -194,7 +195,8 @@ def test_docs_table_of_the_reference_critical_speeds_is_the_command_s(reference_
     from pathlib import Path
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "campbell.md").read_text(encoding="utf-8")
-    block = text.split("<!-- reference critical speeds: begin -->")[1].split("<!-- reference critical speeds: end -->")[0]
+    block = text.split("<!-- reference critical speeds: begin -->")[1]
+    block = block.split("<!-- reference critical speeds: end -->")[0]
     rows = [[cell.strip() for cell in line.strip("|").split("|")] for line in block.strip().splitlines()[2:]]
     diagram = case_campbell(reference_case, np.linspace(5.0, 300.0, 60) * RPM)
     found = {}

@@ -237,7 +237,8 @@ def figures_html(figures: Sequence[Mapping[str, Any]]) -> str:
         spec = {"data": list(fig["data"]), "layout": dict(fig["layout"]), "config": _CONFIG}
         parts.append(f'<figure><div class="plot" id="{target}"></div>'
                      f'<figcaption>{html.escape(str(fig.get("caption", "")))}</figcaption></figure>'
-                     f'<script type="application/json" class="figure-spec" data-target="{target}">{_json(spec)}</script>')
+                     f'<script type="application/json" class="figure-spec" data-target="{target}">'
+                     f"{_json(spec)}</script>")
     return "\n".join(parts)
 
 
