@@ -132,6 +132,20 @@ def test_reference_critical_speeds_of_constant_curves_are_exact(reference_diagra
     assert speeds == sorted(speeds)
 
 
+def test_buckled_string_leaves_out_its_unstable_mode_and_keeps_the_numbers(reference_case):
+    """At 130 kN (beyond the critical 114 kN) the lowest lateral mode has ω² < 0: it has no whirl frequency, is
+    left out with a note, and the other curves keep the numbers and (at rest) the frequencies of `modes`."""
+    system = case_linear_system(reference_case, case_static_state(reference_case, weight_on_bit=130e3))
+    diagram = campbell_diagram(system, [0.0, 10 * RPM], (1,), max_frequency=0.5)
+    modes = compute_modes(system, axial=1, torsional=1, lateral=10).lateral.frequencies
+    assert modes[0] < 0 < modes[1]
+    assert len(diagram.notes) == 1 and diagram.notes[0].startswith("BUCKLED: 1 lateral mode(s)")
+    lateral = [c for c in diagram.curves if c.family == "lateral" and c.whirl == "forward"]
+    assert lateral[0].mode == 2
+    np.testing.assert_allclose([c.frequencies[0] for c in lateral[:9]], modes[1:10], rtol=1e-9)
+    assert diagram.to_dict()["notes"] == list(diagram.notes)
+
+
 def test_one_section_string_is_all_bha(shaft):
     diagram = campbell_diagram(shaft, [0.0, 100.0], (1,), max_frequency=500.0)
     assert {c.bha_energy_share for c in diagram.curves if c.family == "lateral"} == {1.0}

@@ -443,6 +443,7 @@ def _print_campbell(name: str, diagram, plot: Path | None) -> None:
         notes.append(f"Operating speed {operating:.1f} rpm; nearest critical speeds: {', '.join(near) or 'none'}.")
     notes.append("Axial and torsional frequencies do not depend on the rotary speed in the linear model; gyroscopic "
                  "terms split each lateral pair into forward and backward whirl.")
+    notes.extend(diagram.notes)
     if plot is not None:
         notes.append(f"Figure: {plot}")
     for note in notes:

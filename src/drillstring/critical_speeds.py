@@ -119,6 +119,7 @@ class CampbellDiagram:
         critical_speeds: crossings of the lines with the curves, by speed.
         operating_speed: the case's top speed [rad/s] (None when not given).
         max_frequency: highest frequency shown [Hz]: the highest line's at the highest speed.
+        notes: warnings, e.g. a buckled string's unstable lateral modes left out.
     """
 
     speeds: np.ndarray
@@ -148,6 +149,7 @@ class CampbellDiagram:
                         "bha_energy_share": c.bha_energy_share,
                         "frequencies": [float(f) for f in c.frequencies]} for c in self.curves],
             "critical_speeds": [c.to_dict() for c in self.critical_speeds],
+            "notes": list(self.notes),
         }
 
 
@@ -173,12 +175,13 @@ def turned_plane(mesh, shapes_y: np.ndarray) -> np.ndarray:
     return out
 
 
-def lateral_whirl(system: LinearSystem, speeds, basis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def lateral_whirl(system: LinearSystem, speeds, basis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Forward and backward whirl angular frequencies [rad/s] of the lateral family at each spin speed
     (module docstring), on the ``basis`` lowest non-rotating modes of one plane.
 
-    Returns ``(forward, backward, share)``: arrays (n_speeds, basis), each row ascending (NaN where a root
-    is not real: an unstable mode of a buckled string), and each basis mode's BHA energy share."""
+    Returns ``(forward, backward, share, eigenvalues)``: arrays (n_speeds, basis), each row ascending (NaN
+    where a root is not real: an unstable mode of a buckled string), each basis mode's BHA energy share and
+    its ω² [rad²/s²] at rest (ascending, negative for an unstable mode)."""
     found = family_modes(system, "lateral_y", basis)
     phi_y = found.shapes
     n = phi_y.shape[1]
@@ -202,7 +205,7 @@ def lateral_whirl(system: LinearSystem, speeds, basis: int) -> tuple[np.ndarray,
         bwd = np.sort(-roots[roots < 0.0])[:n]
         forward[i, :len(fwd)] = fwd
         backward[i, :len(bwd)] = bwd
-    return forward, backward, bha_energy_share(system, phi_y)
+    return forward, backward, bha_energy_share(system, phi_y), lam
 
 
 def _crossings(speeds: np.ndarray, frequencies: np.ndarray, order: int) -> list[tuple[float, float]]:
@@ -259,12 +262,21 @@ def campbell_diagram(system: LinearSystem, speeds, orders=(1, DEFAULT_BLADES), *
     if lateral_basis is None:
         lateral_basis = max(_MIN_BASIS, len(family_modes_below(system, "lateral_y", 1,
                                                                  _BASIS_FACTOR * cutoff).frequencies))
-    forward, backward, share = lateral_whirl(system, speeds, lateral_basis)
+    forward, backward, share, eigenvalues = lateral_whirl(system, speeds, lateral_basis)
+    # A buckled string's statically unstable modes (ω² < 0, listed first by `drillstring modes`) have no real
+    # whirl frequency: they are left out, and the other modes keep their numbers.
+    unstable = int(np.count_nonzero(eigenvalues < 0.0))
+    notes = []
+    if unstable:
+        notes.append(f"BUCKLED: {unstable} lateral mode(s) with ω² < 0 (statically unstable at the case's "
+                     "weight-on-bit) have no whirl frequency and are not drawn")
     for whirl, omega in (("forward", forward), ("backward", backward)):
         hz = omega / (2.0 * math.pi)
         for j in range(hz.shape[1]):
-            if np.nanmin(hz[:, j]) <= max_frequency:
-                curves.append(CampbellCurve("lateral", j + 1, whirl, hz[:, j], float(share[j])))
+            finite = hz[np.isfinite(hz[:, j]), j]
+            if finite.size and finite.min() <= max_frequency:
+                curves.append(CampbellCurve("lateral", unstable + j + 1, whirl, hz[:, j],
+                                            float(share[unstable + j])))
     critical = []
     for c in curves:
         for order in orders:
@@ -272,7 +284,8 @@ def campbell_diagram(system: LinearSystem, speeds, orders=(1, DEFAULT_BLADES), *
                 critical.append(CriticalSpeed(c.family, c.mode, c.whirl, order, speed, frequency,
                                               c.bha_energy_share))
     critical.sort(key=lambda c: (c.speed, c.order, c.family, c.mode))
-    return CampbellDiagram(speeds, tuple(curves), orders, tuple(critical), operating_speed, float(max_frequency))
+    return CampbellDiagram(speeds, tuple(curves), orders, tuple(critical), operating_speed, float(max_frequency),
+                           tuple(notes))
 
 
 def case_campbell(case, speeds, blades: int = DEFAULT_BLADES) -> CampbellDiagram:
