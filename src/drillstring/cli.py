@@ -1076,7 +1076,8 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
                       soft_wrap=True)
     console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
     console.print(escape(f"Summary: {files['summary']}, statistics: {files['statistics']}"), soft_wrap=True)
-    console.print(escape(f"Figures and report: {files['report']}"), soft_wrap=True)
+    console.print(escape(f"Figures and report: {files['report']}, interactive: {files['interactive']}"),
+                  soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -1177,8 +1178,8 @@ def _print_map(name: str, summary: dict[str, Any]) -> None:
     files = summary.get("files") or {}
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
-        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}"),
-                      soft_wrap=True)
+        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}, "
+                             f"interactive: {files['interactive']}"), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -1268,7 +1269,7 @@ def _print_sensitivity(name: str, payload: dict[str, Any]) -> None:
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
         console.print(escape(f"Indices: {files['indices']}, figures: {files['figure']}, report: "
-                             f"{files['report']}"), soft_wrap=True)
+                             f"{files['report']}, interactive: {files['interactive']}"), soft_wrap=True)
 
 
 #: Commands that run in their own process only and never use Dask. With Dask installed, xarray imports
