@@ -174,8 +174,10 @@ def test_api_campbell_parses_speeds_and_blades(reference_case):
     assert diagram.orders == (1, 2)
     assert diagram.operating_speed == pytest.approx(100 * RPM)
     assert diagram.max_frequency == pytest.approx(0.4)
-    with pytest.raises(ValueError, match=r"^blades = 0: must be an integer >= 1$"):
+    with pytest.raises(ValueError, match=r"^blades = 0: must be an integer in \[1, 24\]$"):
         drillstring.campbell(reference_case, blades=0)
+    with pytest.raises(TypeError, match=r"^blades = 3.0: must be an integer, not float$"):
+        drillstring.campbell(reference_case, blades=3.0)
     with pytest.raises(ValueError, match="top_speed"):
         drillstring.campbell(reference_case, top_speed="0:10:2")
 
@@ -204,7 +206,7 @@ def test_cli_campbell_json_table_plot_and_errors(tmp_path):
     assert "Critical speeds" in table.stdout and "Operating speed 100.0 rpm" in table.stdout
 
     bad = runner.invoke(app, ["campbell", "reference", "--blades", "0"])
-    assert bad.exit_code == 2 and "--blades = 0: must be an integer >= 1" in bad.output
+    assert bad.exit_code == 2 and "--blades = 0: must be an integer in [1, 24]" in bad.output
     bad = runner.invoke(app, ["campbell", "reference", "--top-speed", "10:5"])
     assert bad.exit_code == 2 and "--top-speed = '10:5'" in bad.output
 

@@ -67,6 +67,8 @@ DEFAULT_CAMPBELL_TOP_SPEED = "5 rpm:300 rpm:60"
 #: Blades (or cones) of the bit when the case does not say: a three-cone or three-bladed bit, whose 3×
 #: line is the classic bit-bounce excitation of the axial family.
 DEFAULT_BLADES = 3
+#: Most blades accepted (PDC bits have 3 to about 12; more only multiplies the modes to compute).
+MAX_BLADES = 24
 #: A lateral mode is a BHA mode when at least this share of its kinetic energy lies below the top section.
 BHA_SHARE = 0.5
 #: The lateral basis holds every mode below this multiple of the diagram's highest frequency.
