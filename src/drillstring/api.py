@@ -297,9 +297,8 @@ def monte_carlo_study(
 def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
     statistics' ``summary`` and the run information from ``payload``)."""
-    import json
 
-    from drillstring.files import write_text_atomic
+    from drillstring.files import strict_json, write_text_atomic
     from drillstring.plots import plot_study
     from drillstring.report import write_report
     from drillstring.results import write_netcdf
@@ -309,7 +308,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     write_netcdf(stats, paths["statistics"])
     figures = plot_study(stats, folder, t_transient)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
-    write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
+    write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {
         "realizations requested": settings.samples,
         "failures": payload["failures"],

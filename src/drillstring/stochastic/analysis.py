@@ -14,9 +14,11 @@ from drillstring.stochastic.montecarlo import (
     DONE,
     FAILED,
     STUDY_OBSERVABLES,
+    StudyStoreError,
     open_study_group,
 )
 from drillstring.stochastic.locks import StudyLock
+from drillstring.stochastic.store import damage
 from drillstring.stochastic.statistics import (
     dispersion_summary,
     mean_square_convergence,
@@ -34,8 +36,16 @@ def load_study(store_path: str | Path) -> xr.Dataset:
     folder that is not a complete study store (:class:`~drillstring.stochastic.montecarlo.
     StudyStoreError`)."""
     with StudyLock(store_path, shared=True):
-        open_study_group(store_path, mode="r")
-        ds = xr.open_zarr(str(store_path), consolidated=False).load()
+        group = open_study_group(store_path, mode="r")
+        advice = "run the same study command again to recompute the damaged realizations"
+        damaged = damage(group, decode=False)  # a missing chunk would read as NaN
+        if damaged:
+            raise StudyStoreError(f"{store_path} is damaged ({'; '.join(damaged)}); {advice}")
+        try:
+            ds = xr.open_zarr(str(store_path), consolidated=False).load()
+        except Exception as error:  # a chunk that does not decode (checksum, truncated file)
+            found = "; ".join(damage(group)) or f"{type(error).__name__}: {error}"
+            raise StudyStoreError(f"{store_path} is damaged ({found}); {advice}") from None
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in STUDY_OBSERVABLES + ("radial_displacement",):

@@ -193,6 +193,8 @@ def run_locked(
                 notify(note, guard.note)
             address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
             store = open_store()
+            for repair in getattr(store, "repairs", ()):  # damaged chunks found: their rows run again
+                notify(note, repair)
             items = list(pending(store))
             if items and client is None and prepare is not None:
                 prepare()
