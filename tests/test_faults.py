@@ -30,15 +30,10 @@ def _invoke(*args):
 
 
 @pytest.fixture(scope="module")
-def case_file(tmp_path_factory):
-    """The reference case on a 40 m mesh: a 1 s realization takes a fraction of a second."""
-    from drillstring.case import load_case
-
-    case = load_case("reference")
-    case = case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 40.0}),
-                                   "reduced_model": case.reduced_model.model_copy(update={"lateral_cutoff": 0.0})})
+def case_file(coarse_case, tmp_path_factory):
+    """The coarse reference case (conftest) as a case file: a 1 s realization takes a fraction of a second."""
     path = tmp_path_factory.mktemp("cases") / "coarse.toml"
-    path.write_text(case.to_toml(), encoding="utf-8")
+    path.write_text(coarse_case.to_toml(), encoding="utf-8")
     return path
 
 

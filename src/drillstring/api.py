@@ -225,6 +225,7 @@ def monte_carlo_study(
     from drillstring.files import output_folder_problem
     from drillstring.stochastic.locks import StudyLock
     from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+    from drillstring.stochastic.execution import close_client
     from drillstring.stochastic.montecarlo import (
         DASK_WORKER_TIMEOUT,
         check_workers,
@@ -289,7 +290,7 @@ def monte_carlo_study(
                 files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient)
     finally:
         if isinstance(scheduler, str) and client is not None:
-            client.close()
+            close_client(client)  # in bounded time, even with the scheduler gone
     return StudyOutcome(stats, payload, files, run.completed + run.failed - run.computed,
                         guard.note or run.note)
 
@@ -626,7 +627,7 @@ def operating_map(
     from drillstring.plots import plot_map
     from drillstring.report import write_map_report
     from drillstring.results import write_netcdf
-    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, close_client, connect_scheduler, notify
     from drillstring.stochastic.locks import StudyLock
     from drillstring.stochastic.operating_map import map_dataset, map_summary, run_map
 
@@ -661,7 +662,7 @@ def operating_map(
                                  run_info={**_run_table(summary, "points"), "store": str(store_path)})
     finally:
         if isinstance(scheduler, str) and client is not None:
-            client.close()
+            close_client(client)  # in bounded time, even with the scheduler gone
     return MapOutcome(ds, summary, files, run.completed + run.failed - run.computed, guard.note or run.note)
 
 
@@ -713,7 +714,7 @@ def sensitivity(
     from drillstring.files import write_text_atomic
     from drillstring.plots import plot_sobol, plot_sobol_convergence
     from drillstring.report import write_sensitivity_report
-    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, close_client, connect_scheduler, notify
     from drillstring.stochastic.locks import StudyLock
     from drillstring.stochastic.sensitivity_study import (
         SENSITIVITY_OUTPUTS,
@@ -774,6 +775,6 @@ def sensitivity(
                               "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)})
     finally:
         if isinstance(scheduler, str) and client is not None:
-            client.close()
+            close_client(client)  # in bounded time, even with the scheduler gone
     return SensitivityOutcome(result, payload, files, run.completed + run.failed - run.computed,
                               guard.note or run.note)

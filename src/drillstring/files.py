@@ -94,7 +94,8 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         os.replace(temporary, path)
     except BaseException as error:
         temporary.unlink(missing_ok=True)
-        if isinstance(error, OSError) and error.filename in (None, str(temporary), temporary):
+        if isinstance(error, OSError) and error.errno is not None and error.filename in (None, str(temporary),
+                                                                                         temporary):
             error.filename = str(path)  # name the output, not the temporary file (or nothing)
         raise
 

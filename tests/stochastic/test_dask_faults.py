@@ -147,37 +147,31 @@ def test_dask_fault_stops_in_bounded_time_and_resumes(small_case, tmp_path, clus
     for name, values in _arrays(local_result).items():  # what was stored is the local result's
         if name != "status" and values.ndim >= 1 and values.shape[0] == SETTINGS.samples:
             np.testing.assert_array_equal(_arrays(store)[name][done == 1], values[done == 1], err_msg=name)
-    if fault == "workers stopped":  # the wait was said, with the workers answering
-        assert any(re.match(r"no realizations finished for \d+ s on the Dask cluster at tcp://127\.0\.0\.1:\d+: "
-                            r"0 of 1 worker\(s\) answering", n) for n in notes), notes
+    # The workers' start (imports, kernels: several seconds) was a long wait with a worker answering: noted.
+    assert any(re.match(r"no realizations finished for \d+ s on the Dask cluster at tcp://127\.0\.0\.1:\d+: "
+                        r"1 of 1 worker\(s\) answering", n) for n in notes), notes
+    assert not any("0 of" in n for n in notes), notes  # a wait without an answering worker ends in the stop
     mc.run_study(small_case, SETTINGS, store, workers=1)  # resumed locally
     _same(_arrays(store), _arrays(local_result))
 
 
-def _trickling_server(greeting: bytes, gap: float) -> socket.socket:
-    """A loopback TCP server that accepts connections and sends ``greeting`` one byte every ``gap``
-    seconds."""
-    server = socket.socket()
-    server.bind(("127.0.0.1", 0))
-    server.listen()
+def _trickling_server(greeting: bytes, gap: float):
+    """A loopback TCP server (``socketserver``, serving in a thread) that sends ``greeting`` to each
+    connection one byte every ``gap`` seconds."""
+    import socketserver
 
-    def trickle(conn):
-        try:
-            for byte in greeting:
-                conn.sendall(bytes([byte]))
-                time.sleep(gap)
-        except OSError:
-            pass
-
-    def serve():
-        while True:
+    class Trickle(socketserver.BaseRequestHandler):
+        def handle(self):
             try:
-                conn, _ = server.accept()
+                for byte in greeting:
+                    self.request.sendall(bytes([byte]))
+                    time.sleep(gap)
             except OSError:
-                return
-            threading.Thread(target=trickle, args=(conn,), daemon=True).start()
+                pass
 
-    threading.Thread(target=serve, daemon=True).start()
+    server = socketserver.ThreadingTCPServer(("127.0.0.1", 0), Trickle)
+    server.daemon_threads = True
+    threading.Thread(target=server.serve_forever, daemon=True).start()
     return server
 
 
@@ -186,11 +180,12 @@ def test_a_server_answering_one_byte_at_a_time_is_refused_in_bounded_time(small_
     greeting's timeout, not after the greeting's length times it."""
     greeting = (64).to_bytes(8, "little") + b"\x81" * 64
     server = _trickling_server(greeting, 0.2)
-    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    address = f"tcp://127.0.0.1:{server.server_address[1]}"
     try:
         start = time.monotonic()
         with pytest.raises(mc.SchedulerUnreachable, match=r"sent no Dask greeting within 1 s"):
             mc.connect_scheduler(address, timeout=1.0)
         assert time.monotonic() - start < 3.0
     finally:
-        server.close()
+        server.shutdown()
+        server.server_close()

@@ -16,8 +16,8 @@ sensitivity designs (one design row per index) all run through :func:`run_tasks`
   (:class:`WorkersLost`, one line) when, for ``worker_timeout`` seconds (:data:`DASK_WORKER_TIMEOUT`),
   the cluster has had no worker, or none of its workers has answered the scheduler (stopped with SIGSTOP,
   frozen), or the scheduler has not answered (each request bounded by :data:`SCHEDULER_TIMEOUT`); at once
-  when the scheduler is gone (connection closed). While nothing finishes, a note says so every
-  ``worker_timeout`` seconds (:class:`_ClusterWatch`);
+  when the scheduler is gone (connection closed). While nothing finishes but some worker answers, a
+  note says so every ``worker_timeout`` seconds (:class:`_ClusterWatch`);
 - writes outcomes to the store in batches (at most :data:`FLUSH_INTERVAL` seconds apart; data first,
   then status flags), reports ``progress(done, failed, total)`` after each outcome, and on Ctrl-C
   writes what finished and raises :class:`Interrupted`;
@@ -585,7 +585,7 @@ class _ClusterWatch:
         self.reports: dict[str, tuple[Any, float]] = {}  # worker -> (last report, when it changed)
         now = time.monotonic()
         self.answered = now  # the scheduler's last answer
-        self.alive = now  # the last time a worker was known to answer
+        self.alive = now  # the last time the cluster was seen with workers
         self.finished = now  # the last time an item finished
         self.noted = self.checked = self.started = now
         self.unanswered = 0  # scheduler requests unanswered in a row
@@ -626,14 +626,14 @@ class _ClusterWatch:
         # hold their interpreter): they get STARTUP_FACTOR times the timeout then.
         patience = self.timeout * (1 if self.finished > self.started else STARTUP_FACTOR)
         answering = [a for a, (_, changed) in self.reports.items() if now - changed <= patience]
-        if answering:
-            self.alive = now
-        elif not self.reports and now - self.alive > self.timeout:
+        if self.reports:
+            self.alive = now  # the cluster has workers; whether they answer is their reports' age
+            if not answering:
+                return (f"none of the {len(self.reports)} Dask worker(s) of {self.scheduler} has answered for "
+                        f"{patience:g} s (stopped or frozen)")
+        elif now - self.alive > self.timeout:
             return f"the Dask cluster at {self.scheduler} has had no worker for {self.timeout:g} s"
-        elif self.reports and now - self.alive > patience:
-            return (f"none of the {len(self.reports)} Dask worker(s) of {self.scheduler} has answered for "
-                    f"{patience:g} s (stopped or frozen)")
-        if self.note is not None and now - self.noted >= self.timeout:
+        if self.note is not None and answering and now - self.noted >= self.timeout:  # a long, live wait
             self.noted = now
             self.note(f"no {self.noun} finished for {now - self.finished:.0f} s on the Dask cluster at "
                       f"{self.scheduler}: {len(answering)} of {len(self.reports)} worker(s) answering")

@@ -70,7 +70,7 @@ def _named(path: Path) -> Iterator[None]:
     try:
         yield
     except OSError as error:
-        if error.filename is None:
+        if error.filename is None and error.errno is not None:  # a system error, not a bare message
             error.filename = str(path)
         raise
 
