@@ -633,10 +633,14 @@ class _ClusterWatch:
                         f"{patience:g} s (stopped or frozen)")
         elif now - self.alive > self.timeout:
             return f"the Dask cluster at {self.scheduler} has had no worker for {self.timeout:g} s"
-        if self.note is not None and answering and now - self.noted >= self.timeout:  # a long, live wait
+        # A long wait with workers that answer now (within half the timeout, 5 s at least) is said; one
+        # whose workers are going silent ends in the stop instead.
+        lively = [a for a, (_, changed) in self.reports.items()
+                  if now - changed <= min(self.timeout, max(self.timeout / 2, 5.0))]
+        if self.note is not None and lively and now - self.noted >= self.timeout:
             self.noted = now
             self.note(f"no {self.noun} finished for {now - self.finished:.0f} s on the Dask cluster at "
-                      f"{self.scheduler}: {len(answering)} of {len(self.reports)} worker(s) answering")
+                      f"{self.scheduler}: {len(lively)} of {len(self.reports)} worker(s) answering")
         return None
 
 

@@ -80,6 +80,12 @@ def _chunk_damage(group: zarr.Group, name: str, decode: bool = True) -> list[tup
     unreadable: ``(chunk index, "missing" | "unreadable")``, in chunk order."""
     array = group[name]
     root = Path(str(group.store.root)) / array.path
+    if decode:
+        try:
+            array[...]  # one read of every chunk (concurrent); chunk by chunk only if one fails
+            decode = False
+        except Exception:
+            pass
     found = []
     for index in np.ndindex(*array.cdata_shape):
         key = array.metadata.encode_chunk_key(index)
