@@ -299,12 +299,12 @@ def test_damaged_chunk_is_named_recomputed_and_the_study_equals_the_whole_one(ca
 ])
 def test_a_damaged_store_is_never_read_as_data(uninterrupted, tmp_path, name, chunk, how):
     from drillstring.stochastic.analysis import load_study
-    from drillstring.stochastic.montecarlo import StudyStoreError
+    from drillstring.stochastic.store import StoreError
 
     store = tmp_path / "study.zarr"
     shutil.copytree(uninterrupted[0] / "study.zarr", store)
     _damage(store, name, chunk, how)
-    with pytest.raises(StudyStoreError) as raised:
+    with pytest.raises(StoreError) as raised:
         load_study(store)
     message = str(raised.value)
     assert f"{store} is damaged ({name} c/{chunk} (" in message and "run the same study command again" in message

@@ -15,11 +15,22 @@ import time
 import pytest
 
 from drillstring.stochastic import montecarlo as mc
-from drillstring.stochastic.execution import SCHEDULER_TIMEOUT
+from drillstring.stochastic.execution import (
+    SCHEDULER_TIMEOUT,
+    Engine,
+    SchedulerUnreachable,
+    WorkersLost,
+    connect_scheduler,
+)
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGSTOP"), reason="POSIX signals")
 
-SETTINGS = mc.StudySettings(samples=6, sigma=5000.0, seed=11, t_end=1.0, output_step=0.01)
+
+def _settings(case):
+    """Six realizations of a random weight-on-hook (Normal, σ = 5 kN), 1 s each."""
+    return mc.StudySettings(laws=(mc.weight_on_hook_normal(case, 5000.0),), samples=6, seed=11, t_end=1.0,
+                            output_step=0.01)
+
 TIMEOUT = 2.0  # worker_timeout of these tests [s]
 #: The bound of a stop after the fault: two unanswered scheduler requests and the 1 s polls (the
 #: documented worker_timeout + SCHEDULER_TIMEOUT + 2 s, where the timeout is shorter than a request), plus
@@ -87,7 +98,7 @@ def cluster():
 @pytest.fixture(scope="module")
 def local_result(small_case, tmp_path_factory):
     store = tmp_path_factory.mktemp("local") / "local.zarr"
-    mc.run_study(small_case, SETTINGS, store, workers=1)
+    mc.run_study(small_case, _settings(small_case), store, Engine(workers=1))
     return store
 
 
@@ -134,24 +145,25 @@ def test_dask_fault_stops_in_bounded_time_and_resumes(small_case, tmp_path, clus
     progress, state = _stop_after(2, lambda: cluster.signal(which, sig))
     notes: list[str] = []
     store = tmp_path / "dask.zarr"
-    with pytest.raises(mc.StudyWorkersLost) as raised:
-        mc.run_study(small_case, SETTINGS, store, scheduler=cluster.address, progress=progress,
-                     worker_timeout=TIMEOUT, note=notes.append)
+    settings = _settings(small_case)
+    with pytest.raises(WorkersLost) as raised:
+        mc.run_study(small_case, settings, store, Engine(scheduler=cluster.address, progress=progress,
+                                                         worker_timeout=TIMEOUT, note=notes.append))
     elapsed = time.monotonic() - state["at"]
     text = str(raised.value)
     assert re.search(message, text), text
     assert "\n" not in text and "saved, rerun the same command" in text
     assert elapsed < BOUND, elapsed
     done = _arrays(store)["status"]
-    assert 2 <= int(np.sum(done == 1)) < SETTINGS.samples
+    assert 2 <= int(np.sum(done == 1)) < settings.samples
     for name, values in _arrays(local_result).items():  # what was stored is the local result's
-        if name != "status" and values.ndim >= 1 and values.shape[0] == SETTINGS.samples:
+        if name != "status" and values.ndim >= 1 and values.shape[0] == settings.samples:
             np.testing.assert_array_equal(_arrays(store)[name][done == 1], values[done == 1], err_msg=name)
     # The workers' start (imports, kernels: several seconds) was a long wait with a worker answering: noted.
     assert any(re.match(r"no realizations finished for \d+ s on the Dask cluster at tcp://127\.0\.0\.1:\d+: "
                         r"1 of 1 worker\(s\) answering", n) for n in notes), notes
     assert not any("0 of" in n for n in notes), notes  # a wait without an answering worker ends in the stop
-    mc.run_study(small_case, SETTINGS, store, workers=1)  # resumed locally
+    mc.run_study(small_case, settings, store, Engine(workers=1))  # resumed locally
     _same(_arrays(store), _arrays(local_result))
 
 
@@ -183,8 +195,8 @@ def test_a_server_answering_one_byte_at_a_time_is_refused_in_bounded_time(small_
     address = f"tcp://127.0.0.1:{server.server_address[1]}"
     try:
         start = time.monotonic()
-        with pytest.raises(mc.SchedulerUnreachable, match=r"sent no Dask greeting within 1 s"):
-            mc.connect_scheduler(address, timeout=1.0)
+        with pytest.raises(SchedulerUnreachable, match=r"sent no Dask greeting within 1 s"):
+            connect_scheduler(address, timeout=1.0)
         assert time.monotonic() - start < 3.0
     finally:
         server.shutdown()

@@ -45,11 +45,13 @@ from typing import Any, ClassVar, Iterable, Iterator
 import numpy as np
 import zarr
 
-from drillstring import __version__
+from drillstring._version import __version__
 from drillstring.files import folder_write_problem
-from drillstring.stochastic.execution import DONE, FAILED, PENDING
 
 __all__ = ["ArraySpec", "StoreError", "TaskStore", "damage", "fingerprint", "DONE", "FAILED", "PENDING"]
+
+#: Status of a row in a store: not computed yet, finished, failed (its cause in the ``failures`` attribute).
+PENDING, DONE, FAILED = 0, 1, 2
 
 #: Temporary files of Zarr's local store (``<key>.<uuid hex>.partial``), left by a killed writer.
 _PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
