@@ -383,3 +383,25 @@ def test_read_only_store_on_rerun_is_one_line(case_file, tmp_path, uninterrupted
     assert result.exit_code == 0, result.output
     _same_result(json.loads(result.stdout), uninterrupted[1])
     _same_store(out / "study.zarr", uninterrupted[0] / "study.zarr")
+
+
+def test_a_damaged_map_store_is_named_and_its_points_recomputed(case_file, tmp_path):
+    """The same machinery for every kind of store: a deleted chunk of a map's output (one chunk for all
+    points) is named, the points are recomputed and the map equals the uninterrupted one."""
+    args = ("map", case_file, "--top-speed", "90,110", "--weight-on-bit", "100 kN", "--t-end", "1", "--workers",
+            "1", "--json")
+    whole = _invoke(*args, "--out", tmp_path / "whole")
+    assert whole.exit_code == 0, whole.output
+    out = tmp_path / "damaged"
+    shutil.copytree(tmp_path / "whole", out)
+    (out / "map.zarr" / "mean_rate_of_penetration" / "c" / "0").unlink()
+    again = _invoke(*args, "--out", out)
+    assert again.exit_code == 0, again.output
+    notes = [line for line in again.stderr.splitlines() if line.startswith("note: ")]
+    assert len(notes) == 1 and "mean_rate_of_penetration c/0 (missing)" in notes[0], again.stderr
+    assert "all 2 points will be recomputed" in notes[0]
+    damaged, reference = (zarr.open_group(str(folder / "map.zarr"), mode="r") for folder in (out, tmp_path / "whole"))
+    outputs = [name for name in reference.attrs["layout"] if name != "wall_time"]
+    assert "mean_rate_of_penetration" in outputs and "status" in outputs
+    for name in outputs:
+        np.testing.assert_array_equal(damaged[name][...], reference[name][...], err_msg=name)
