@@ -263,9 +263,8 @@ def _damage(store, name: str, chunk: str, how: str) -> None:
 
 
 @pytest.mark.parametrize("name, chunk, how, recomputed", [
-    ("rate_of_penetration", "1/0", "delete", "realizations 1 will be recomputed"),
-    ("rate_of_penetration", "2/0", "truncate", "realizations 2 will be recomputed"),
-    ("radial_displacement", "0/0/0", "truncate", "realizations 0 will be recomputed"),
+    ("rate_of_penetration", "1/0", "delete", "realization 1 will be recomputed"),
+    ("rate_of_penetration", "2/0", "truncate", "realization 2 will be recomputed"),
     ("status", "0", "truncate", "all 3 realizations will be recomputed"),
     ("weight_on_hook", "0", "delete", "all 3 realizations will be recomputed"),
     ("input_values", "0/0", "truncate", "all 3 realizations will be recomputed"),

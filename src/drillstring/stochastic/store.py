@@ -399,7 +399,8 @@ class TaskStore:
         if "status" in lost or len(again) == self.total:
             what.append(f"all {self.total} {self.noun} will be recomputed")
         elif again:
-            what.append(f"{self.noun} {_describe_rows(again)} will be recomputed")
+            noun = self.noun if len(again) > 1 else self.noun.removesuffix("s")
+            what.append(f"{noun} {_describe_rows(again)} will be recomputed")
         what.extend(f"{self.owner_label(owner)} will be recomputed"
                     for owner in sorted(set(reset) | set(lost)) if owner != "status")
         self.repairs.append(f"{self.path} was damaged ({'; '.join(named)}): "
