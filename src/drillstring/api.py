@@ -343,14 +343,13 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
     statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
     finished realizations of ``raw``, the study's raw Dataset)."""
-    import json
 
-    from drillstring.files import write_text_atomic
+    from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
     from drillstring.plots import STUDY_PANELS, plot_study
     from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
-    from drillstring.stochastic.montecarlo import DONE
+    from drillstring.stochastic.store import DONE
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
              "statistics": folder / "statistics.nc", "report": folder / "report.html",
@@ -362,7 +361,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     write_netcdf(stats, paths["statistics"])
     figures = plot_study(stats, folder, t_transient)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
-    write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
+    write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {
         "realizations requested": settings.samples,
         "failures": payload["failures"],
@@ -739,9 +738,7 @@ def operating_map(
 
 def _finish_map(case, folder, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
-    import json
-
-    from drillstring.files import write_text_atomic
+    from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import map_figures
     from drillstring.plots import plot_map
     from drillstring.report import INTERACTIVE_PAGE, write_map_report
@@ -759,7 +756,7 @@ def _finish_map(case, folder, run):
         write_netcdf(ds, files["map"])
         plot_map(ds, files["figure"])
         summary["files"] = {k: str(v) for k, v in files.items()}
-        write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
+        write_text_atomic(files["summary"], strict_json(summary) + "\n")  # undefined values: null
         write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
                          case_toml=case.to_toml(), summary=summary,
                          figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "

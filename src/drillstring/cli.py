@@ -636,6 +636,7 @@ def simulate(
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
+    from drillstring.files import NotARegularFile
     from drillstring.plots import plot_run
     from drillstring.results import write_netcdf
 
@@ -654,8 +655,15 @@ def simulate(
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
-    netcdf = write_netcdf(ds, out)
-    figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+    try:
+        netcdf = write_netcdf(ds, out)
+        figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+    except OSError as error:  # disk full, no permission: the run is lost, the old files are left as they were
+        from drillstring.files import write_error_message
+
+        _fail(write_error_message(error), EXIT_RUN_FAILED)
+    except NotARegularFile as error:  # an output that became a device or FIFO during the run
+        _fail(str(error), EXIT_RUN_FAILED)
     numbers = _run_numbers(ds, window.transient)
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
@@ -1003,9 +1011,11 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     """Run ``call(progress, note)`` (an API function of the study engine) for a command writing to ``out``:
     the store's lock is taken before loading the engine (a second run on the folder is refused at once),
     a progress bar and notes go to stderr, and every error ends the command with one line: exit 130 when
-    interrupted (what finished is saved), 1 for a run that started and failed, 2 for refused input (settings,
-    store, scheduler, lock). A folder created here and left empty is removed."""
-    from drillstring.files import LockedError
+    interrupted (what finished is saved), 1 for a run that started and failed (an output write that failed:
+    disk full, no permission), 2 for refused input (settings, store, scheduler, lock, another kind of run in
+    the folder, an output path that is not a regular file). Temporary files left in ``out`` by a killed run
+    are removed. A folder created here and left empty is removed."""
+    from drillstring.files import LockedError, remove_stale_temporaries, write_error_message
     from drillstring.stochastic import execution
     from drillstring.stochastic.locks import StudyLock, StudyLocked
 
@@ -1024,6 +1034,7 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
         note(lock.note)
     tracker = _StudyProgress(err, noun)
     try:
+        remove_stale_temporaries(out)
         try:
             return call(tracker, note)
         finally:
@@ -1035,6 +1046,8 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
               "resume", EXIT_INTERRUPTED)
     except (execution.WorkersLost, _api().StudyFailed) as error:
         _fail(str(error), EXIT_RUN_FAILED)
+    except OSError as error:  # an output write that failed: disk full, no permission, read-only filesystem
+        _fail(write_error_message(error, f"finished {noun} are kept in {out / store_name}"), EXIT_RUN_FAILED)
     except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
         _fail(str(error))
     finally:
