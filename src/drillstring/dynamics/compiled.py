@@ -17,6 +17,12 @@ and its duration is reported as ``compile_time``, apart from the solver's ``wall
 
 The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
 step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
+A chunk also pauses after a bounded number of step attempts (about :data:`CALL_SECONDS` of work), so the
+loop returns to Python often: Ctrl-C (``KeyboardInterrupt``) takes effect within a fraction of a second
+even when the step size has collapsed, and the collapse itself is detected early: a run whose mean step
+over the last :data:`COLLAPSE_WINDOW` attempts is below :data:`COLLAPSE_RATIO` times the output step stops
+with the time, the step size and the likely stiff term (:mod:`drillstring.dynamics.stiffness`), keeping
+the rows already computed.
 """
 
 from __future__ import annotations
@@ -38,11 +44,20 @@ from drillstring.dynamics.runge_kutta import (
     error_norm,
     step_factor,
 )
+from drillstring.dynamics.stiffness import stiffness_diagnosis
 
-SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE = 0, 1, 2, 3
-# indices into the integrator's scalar state array
-T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE = range(10)
-N_STATE = 10
+SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE, PAUSED, COLLAPSED = 0, 1, 2, 3, 4, 5
+# indices into the integrator's scalar state array (PAUSE_AT: step attempts after which a chunk pauses)
+T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE, PAUSE_AT = range(11)
+N_STATE = 11
+#: Wall time [s] one call of the compiled loop aims at before it returns to Python (Ctrl-C, progress).
+CALL_SECONDS = 0.1
+#: Step attempts of the first call (then adapted to take about CALL_SECONDS each).
+FIRST_CALL_ATTEMPTS = 200
+#: Step attempts over which the mean step is measured, and the fraction of the output step below which
+#: that mean is a collapse: a million attempts per output step (the contact case's impacts take steps of
+#: about 1e-4 of its output step; the fluid at 1e4 m/s, 3e-8).
+COLLAPSE_WINDOW, COLLAPSE_RATIO = 20_000, 1e-6
 CAUSES = {0: "", 1: "error estimate not met", 2: "non-finite values in the right-hand side"}
 
 
@@ -138,6 +153,8 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
             return SUCCESS
         if state[N_ACCEPTED] + state[N_REJECTED] >= st.max_steps:
             return MAX_STEPS
+        if state[N_ACCEPTED] + state[N_REJECTED] >= state[PAUSE_AT]:
+            return PAUSED
         h = state[H]
         remaining = t_end - t
         last = False
@@ -354,10 +371,26 @@ def integrate_compiled(
         _observe(work, 0, work.y, case2, observe_data)
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
+    output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])
+    budget, window = float(FIRST_CALL_ATTEMPTS), (0.0, float(state[T]))  # attempts per call; (attempts, t) at the window's start
     for t_stop in stops:
-        status = _run_chunk(work, float(t_stop), settings, rhs_data, case2, observe_data)
-        if progress is not None:
-            progress(float(state[T]))
+        while True:
+            attempts = state[N_ACCEPTED] + state[N_REJECTED]
+            state[PAUSE_AT] = attempts + budget
+            called = _time.perf_counter()
+            status = _run_chunk(work, float(t_stop), settings, rhs_data, case2, observe_data)
+            elapsed = _time.perf_counter() - called  # Ctrl-C is raised here, between calls
+            if progress is not None:
+                progress(float(state[T]))
+            if status != PAUSED:
+                break
+            budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
+            attempts = state[N_ACCEPTED] + state[N_REJECTED]
+            if attempts - window[0] >= COLLAPSE_WINDOW:
+                if (state[T] - window[1]) / (attempts - window[0]) < COLLAPSE_RATIO * output_step:
+                    status = COLLAPSED
+                    break
+                window = (attempts, float(state[T]))
         if status != SUCCESS:
             break
     n_written = int(state[N_OUT])
@@ -380,9 +413,14 @@ def integrate_compiled(
             MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
             MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
             NON_FINITE: "non-finite state after an accepted step",
+            COLLAPSED: (f"step size collapsed: mean step {(t - window[1]) / (attempts - window[0]):.3g} s over "
+                        f"the last {attempts - window[0]:,.0f} attempts, below {COLLAPSE_RATIO:g} × the output "
+                        f"step ({output_step:g} s)"),
         }[status]
         last = CAUSES.get(int(state[LAST_CAUSE]), "")
         if last and status != NON_FINITE:
             cause += f"; last rejection: {last}"
+        if status != NON_FINITE:
+            cause += "; " + stiffness_diagnosis(model, t, work.y, tab.name)
         message = f"integration failed at t = {t:.10g} s (h = {h:.3g} s): {cause}"
     return work.out[:n_written], stats, message
