@@ -867,3 +867,23 @@ def test_sensitivity_command(torsional_case_file, tmp_path):
     refused = _invoke("sensitivity", str(torsional_case_file), "--out", str(tmp_path / "none"))
     assert refused.exit_code == 2 and "no uncertain parameter" in refused.stderr
     assert not (tmp_path / "none").exists()
+
+
+@pytest.mark.parametrize("old, new, line", [
+    ('length = "1400 m"', 'length = "1e306 km"',
+     "sections[0].length = inf: must be within [0.001, 100000] m (it overflows to infinity)"),
+    ('young_modulus = "210 GPa"', 'young_modulus = "1e300 GPa"',
+     "materials.steel.young_modulus = inf: must be within [1e+06, 1e+13] Pa (it overflows to infinity)"),
+    ("atol = 1e-9", "atol = 1e-300", "simulation.atol = 1e-300: must be within [1e-20, 1000]"),
+    ("a2 = 5.672e-8", "a2 = 5e-324", "bit_rock.a2 = 5e-324: must be within [1e-15, 0.001] m/(N*s)"),
+])
+def test_values_that_overflow_or_underflow_are_refused_naming_field_value_and_range(tmp_path, old, new, line):
+    text = _reference_toml()
+    assert old in text
+    path = tmp_path / "extreme.toml"
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    result = _invoke("simulate", str(path), "--out", str(tmp_path / "run.nc"), "--plot", str(tmp_path / "run.png"))
+    assert result.exit_code == 2, result.output
+    problems = [row.strip() for row in result.stderr.splitlines()[1:]]
+    assert problems == [line]  # one problem line, after the "invalid case" heading
+    assert not (tmp_path / "run.nc").exists()

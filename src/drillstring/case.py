@@ -53,6 +53,7 @@ from drillstring.derived import (
 __all__ = [
     "DIMENSIONS",
     "MAX_ELEMENTS",
+    "PHYSICAL_BOUNDS",
     "Acceleration",
     "Angle",
     "AngularSpeed",
@@ -666,6 +667,68 @@ class UncertaintyTable(_Base):
 MAX_ELEMENTS = 10_000
 
 
+#: Plausible physical ranges [SI] of the values whose extremes overflow, underflow or make the integration
+#: degenerate (a product of a length and a modulus beyond 1.8e308, a division by a subnormal a2 or atol):
+#: path (``*``: every item of a list or table), lowest, highest, SI unit. Checked before any other rule.
+PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
+    (("materials", "*", "young_modulus"), 1e6, 1e13, "Pa"),
+    (("materials", "*", "density"), 1.0, 1e5, "kg/m3"),
+    (("sections", "*", "length"), 1e-3, 1e5, "m"),
+    (("sections", "*", "outer_diameter"), 1e-3, 10.0, "m"),
+    (("sections", "*", "inner_diameter"), 0.0, 10.0, "m"),
+    (("borehole", "diameter"), 1e-3, 10.0, "m"),
+    (("stabilizers", "*", "stiffness"), 0.0, 1e15, "N/m"),
+    (("fluid", "density"), 0.0, 1e5, "kg/m3"),
+    (("fluid", "inlet_velocity"), 0.0, 1e3, "m/s"),
+    (("fluid", "friction_coefficient"), 0.0, 10.0, ""),
+    (("fluid", "viscous_coefficient"), 0.0, 1e9, "N*s/m2"),
+    (("bit_rock", "a1"), 0.0, 10.0, "m/s"),
+    (("bit_rock", "a2"), 1e-15, 1e-3, "m/(N*s)"),
+    (("bit_rock", "a3"), 0.0, 1.0, "m/rad"),
+    (("bit_rock", "a4"), 0.0, 1e12, "N*rad"),
+    (("bit_rock", "a5"), 0.0, 1e9, "N*m"),
+    (("bit_rock", "regularization"), 1e-6, 1e3, "rad/s"),
+    (("bit_rock", "stick_stiffening_limit"), 1.0, 1e6, ""),
+    (("contact", "shock_stiffness"), 0.0, 1e15, "N/m2"),
+    (("contact", "friction_coefficient"), 0.0, 10.0, ""),
+    (("contact", "speed_regularization"), 1e-6, 1e3, "rad/s"),
+    (("operation", "top_speed"), 0.0, 1e3, "rad/s"),
+    (("operation", "weight_on_bit"), 0.0, 1e9, "N"),
+    (("damping", "rigid_axial"), 0.0, 1e12, "N*s/m"),
+    (("damping", "rigid_rotation"), 0.0, 1e12, "N*m*s/rad"),
+    (("environment", "gravity"), 0.0, 100.0, "m/s2"),
+    (("simulation", "rtol"), 1e-14, 1.0, ""),
+    (("simulation", "atol"), 1e-20, 1e3, ""),
+    (("simulation", "min_step"), 1e-20, 1.0, "s"),
+)
+
+
+def _bound_problems(case: BaseModel) -> list[tuple[tuple[str | int, ...], Any, str]]:
+    """Every value of ``case`` outside its :data:`PHYSICAL_BOUNDS` range, as cross-field problems."""
+    problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+
+    def visit(node: Any, rest: tuple[str, ...], loc: tuple[str | int, ...], low: float, high: float,
+              unit: str) -> None:
+        if not rest:
+            if isinstance(node, float) and not low <= node <= high:
+                overflow = " (it overflows to infinity)" if math.isinf(node) else ""
+                problems.append((loc, node, f"must be within [{low:g}, {high:g}] {unit}".rstrip() + overflow))
+            return
+        key, rest = rest[0], rest[1:]
+        if key != "*":
+            visit(getattr(node, key), rest, loc + (key,), low, high, unit)
+        elif isinstance(node, Mapping):
+            for name, item in node.items():
+                visit(item, rest, loc + (name,), low, high, unit)
+        else:
+            for i, item in enumerate(node):
+                visit(item, rest, loc + (i,), low, high, unit)
+
+    for path, low, high, unit in PHYSICAL_BOUNDS:
+        visit(case, path, (), low, high, unit)
+    return problems
+
+
 def _default_materials() -> dict[str, Material]:
     return {"steel": Material(young_modulus=210e9, density=7850.0, poisson_ratio=0.29)}
 
@@ -764,7 +827,9 @@ class Case(_Base):
 
     @model_validator(mode="after")
     def _cross_field(self) -> Case:
-        problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        problems = _bound_problems(self)
+        if problems:  # the rules below compute with these values
+            raise _Problems(problems)
         defined = ", ".join(self.materials) or "none"
         for i, s in enumerate(self.sections):
             if s.material not in self.materials:
