@@ -884,6 +884,38 @@ def test_values_that_overflow_or_underflow_are_refused_naming_field_value_and_ra
     path.write_text(text.replace(old, new, 1), encoding="utf-8")
     result = _invoke("simulate", str(path), "--out", str(tmp_path / "run.nc"), "--plot", str(tmp_path / "run.png"))
     assert result.exit_code == 2, result.output
-    problems = [row.strip() for row in result.stderr.splitlines()[1:]]
-    assert problems == [line]  # one problem line, after the "invalid case" heading
+    assert result.stderr.splitlines() == [f"error: invalid case {path}: {line}"]
     assert not (tmp_path / "run.nc").exists()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero", "/dev/urandom", "folder", "too_large", "too_deep",
+                                  "long_name"])
+def test_only_sane_case_files_are_read(tmp_path, kind):
+    """A FIFO, a device, a folder, a file over 1 MB, TOML nested deeper than 16 levels and a name over 200
+    characters are refused at once, in one line, exit code 2."""
+    import os
+
+    path = tmp_path / "case.toml"
+    expected = {"fifo": "is not a regular file", "/dev/zero": "is not a regular file",
+                "/dev/urandom": "is not a regular file", "folder": "is not a regular file",
+                "too_large": "more than the 1,000,000 allowed", "too_deep": "nested more than 16 levels deep",
+                "long_name": "name = 'AAAA"}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind.startswith("/dev/"):
+        path = kind
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "too_large":
+        path.write_text(_reference_toml() + "#" * 1_000_000, encoding="utf-8")
+    elif kind == "too_deep":
+        path.write_text('name = "x"\nv = ' + "[" * 3000 + "]" * 3000 + "\n", encoding="utf-8")
+    else:
+        path.write_text(_reference_toml().replace('name = "reference"', f'name = "{"A" * 10_000}"'),
+                        encoding="utf-8")
+    result = _invoke("static", str(path))
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: invalid case {path}: ") and expected in lines[0]
+    if kind == "long_name":
+        assert lines[0].endswith("must be at most 200 characters (it has 10,000)")

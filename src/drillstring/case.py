@@ -30,7 +30,9 @@ of numbers shared with the finite-element model: mesh layout, mode-family sizes,
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
 import tomllib
 import typing
 from dataclasses import dataclass
@@ -123,7 +125,10 @@ class CaseError(ValueError):
         self.problems: list[str] = [_format_entry(e) for e in self.entries]
         self.source: str = source
         n = len(self.problems)
-        head = f"invalid case {source}: {n} problem{'s' if n != 1 else ''}"
+        if n == 1:  # one problem, one line
+            super().__init__(f"invalid case {source}: {self.problems[0]}")
+            return
+        head = f"invalid case {source}: {n} problems"
         super().__init__("\n".join([head, *(f"  {p}" for p in self.problems)]))
 
     def __reduce__(self) -> Any:  # picklable (worker processes)
@@ -264,6 +269,9 @@ def _entries_from_validation_error(exc: ValidationError, root: type[BaseModel], 
             out.append((loc, value, f"unknown key; allowed keys here: {allowed}"))
         elif kind in _OPS:
             out.append((loc, value, f"must be {_OPS[kind]} {_fmt_limit(next(iter(ctx.values())))}"))
+        elif kind == "string_too_long":
+            out.append((loc, value, f"must be at most {ctx['max_length']:,} characters "
+                                    f"(it has {len(err.get('input', '')):,})"))
         elif kind == "too_short" and "min_length" in ctx:
             n = ctx["min_length"]
             out.append((loc, value, f"must have at least {n} item{'s' if n != 1 else ''}"))
@@ -729,6 +737,32 @@ def _bound_problems(case: BaseModel) -> list[tuple[tuple[str | int, ...], Any, s
     return problems
 
 
+#: Longest case name and description [characters] (they are titles and table cells, not documents).
+MAX_NAME_LENGTH, MAX_DESCRIPTION_LENGTH = 200, 2000
+#: Largest case file read [bytes]: the annotated reference case is 14 kB.
+MAX_CASE_FILE_BYTES = 1_000_000
+#: Deepest nesting of tables and arrays in a case (the format needs 4: uncertainty.correlation.matrix rows).
+MAX_CASE_DEPTH = 16
+
+
+def _depth(data: Any) -> int:
+    """Nesting depth of tables and arrays in ``data`` (iterative: any depth is measured)."""
+    deepest, stack = 0, [(data, 0)]
+    while stack:
+        node, level = stack.pop()
+        if isinstance(node, Mapping):
+            children = node.values()
+        elif isinstance(node, (list, tuple)):
+            children = node
+        else:
+            continue
+        deepest = max(deepest, level + 1)
+        if deepest > MAX_CASE_DEPTH:
+            return deepest
+        stack.extend((child, level + 1) for child in children)
+    return deepest
+
+
 def _default_materials() -> dict[str, Material]:
     return {"steel": Material(young_modulus=210e9, density=7850.0, poisson_ratio=0.29)}
 
@@ -736,8 +770,8 @@ def _default_materials() -> dict[str, Material]:
 class Case(_Base):
     """A complete drilling case. Sections are ordered from the top (x = 0) to the bit (x = L)."""
 
-    name: str
-    description: str = ""
+    name: str = Field(max_length=MAX_NAME_LENGTH)
+    description: str = Field("", max_length=MAX_DESCRIPTION_LENGTH)
     materials: dict[str, Material] = Field(default_factory=_default_materials)
     sections: list[Section] = Field(min_length=1)
     borehole: Borehole
@@ -948,6 +982,8 @@ def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
     """Validate a (TOML-like) mapping into a :class:`Case`; raises :class:`CaseError` listing every problem."""
     if not isinstance(data, Mapping):
         raise CaseError(f"a case must be a table (mapping), got {type(data).__name__}", source=source)
+    if _depth(data) > MAX_CASE_DEPTH:
+        raise CaseError(f"tables and arrays nested more than {MAX_CASE_DEPTH} levels deep", source=source)
     try:
         return Case.model_validate(dict(data))
     except CaseError as exc:
@@ -956,6 +992,32 @@ def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
 
 def _looks_like_path(source: str) -> bool:
     return source.endswith(".toml") or "/" in source or "\\" in source or Path(source).is_file()
+
+
+def _read_case_file(path: Path, label: str) -> bytes:
+    """The bytes of a case file: a regular file of at most :data:`MAX_CASE_FILE_BYTES` (a FIFO, a device
+    such as /dev/zero or a folder is refused at once, without opening it)."""
+    try:
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise CaseError(f"case file {label} is not a regular file (a folder, FIFO, socket or device)",
+                            source=label)
+        if info.st_size > MAX_CASE_FILE_BYTES:
+            raise CaseError(f"case file {label} has {info.st_size:,} bytes, more than the "
+                            f"{MAX_CASE_FILE_BYTES:,} allowed", source=label)
+        # Read no more than the bound even if the file grew since (or its size was not reported).
+        with open(path, "rb", opener=lambda name, flags: os.open(name, flags | os.O_NONBLOCK)) as handle:
+            if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):  # replaced since the check
+                raise CaseError(f"case file {label} is not a regular file", source=label)
+            raw = handle.read(MAX_CASE_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise CaseError(f"case file not found: {label}", source=label) from None
+    except OSError as exc:
+        raise CaseError(f"cannot read case file {label}: {exc.strerror or exc}", source=label) from None
+    if len(raw) > MAX_CASE_FILE_BYTES:
+        raise CaseError(f"case file {label} has more than the {MAX_CASE_FILE_BYTES:,} bytes allowed",
+                        source=label)
+    return raw
 
 
 def load_case(source: str | Path) -> Case:
@@ -968,12 +1030,7 @@ def load_case(source: str | Path) -> Case:
     if isinstance(source, Path) or _looks_like_path(str(source)):
         path = Path(source)
         label = str(path)
-        try:
-            raw = path.read_bytes()
-        except FileNotFoundError:
-            raise CaseError(f"case file not found: {label}", source=label) from None
-        except OSError as exc:
-            raise CaseError(f"cannot read case file {label}: {exc.strerror or exc}", source=label) from None
+        raw = _read_case_file(path, label)
     else:
         name = str(source)
         resource = _cases_dir().joinpath(f"{name}.toml")
@@ -991,4 +1048,7 @@ def load_case(source: str | Path) -> Case:
         raise CaseError(f"{label}: not UTF-8 text ({exc.reason} at byte {exc.start})", source=label) from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{label}: TOML syntax error: {exc}", source=label) from None
+    except RecursionError:
+        raise CaseError(f"{label}: tables and arrays nested more than {MAX_CASE_DEPTH} levels deep",
+                        source=label) from None
     return case_from_dict(data, source=label)
