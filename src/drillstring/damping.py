@@ -56,7 +56,6 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from drillstring.fem.assembly import THETA_X, U, dof
-from drillstring.modal import DENSE_LIMIT
 
 #: The damping definitions: on the free–free modes (default) or on the constrained basis modes.
 DAMPING_BASES = ("free_free", "constrained")
@@ -106,10 +105,15 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     return FreeFreeDamping(0.5 * (matrix + matrix.T), omega, shapes, coefficients, rigid_mass)
 
 
+#: Families of more DOFs than this get the projection of eq. (2) instead of the dense eigenproblem (on 2 001
+#: DOFs: 0.3 s instead of 39 s, agreeing to 8e-12; the reference string's 161 stay dense).
+DENSE_LIMIT = 500
 #: Step of the trapezoidal rule of eq. (2) in ``s = ln t``; relative error about ``exp(−π²/Δs)``.
 _QUADRATURE_STEP = 0.3
 #: The rule of eq. (2) stops on each side once a node adds less than this fraction of the sum so far.
 _QUADRATURE_TAIL = 1e-16
+#: ... or once its nodes decrease geometrically to this relative accuracy (the rest is then summed exactly).
+_GEOMETRIC_TAIL = 1e-9
 
 
 def _has_rigid_mode(mass, stiffness) -> tuple[np.ndarray, float]:
@@ -135,19 +139,22 @@ def _elastic_square_root_form(mass: sp.spmatrix, stiffness: sp.spmatrix, shapes:
 
     # (t² M + K) x = M ψ' bordered by the constraint rᵀ M x = 0: regular down to t = 0 (K r = 0), and its
     # solution is the one of the unbordered system for t > 0 (M ψ' has no rigid component).
+    # The border last and SuperLU in natural order: the banded family matrices fill only their band.
     border = sp.csc_matrix(m_rigid[:, None])
+    bordered_m = sp.bmat([[m, None], [None, sp.csc_matrix((1, 1))]], format="csc")
+    bordered_k = sp.bmat([[k, border], [border.T, None]], format="csc")
     rhs = np.vstack([right, np.zeros((1, right.shape[1]))])
 
     def node(s: float) -> np.ndarray:
         t = np.exp(s)
-        bordered = sp.bmat([[t * t * m + k, border], [border.T, None]], format="csc")
-        solved = spla.splu(bordered).solve(rhs)[:-1]
-        return t * (left.T @ solved)
+        lu = spla.splu((t * t * bordered_m + bordered_k).tocsc(), permc_spec="NATURAL")
+        return t * (left.T @ lu.solve(rhs)[:-1])
 
     total = node(centre)
     scale = np.abs(total).max()
+    ratio = np.exp(-_QUADRATURE_STEP)
     for direction in (1.0, -1.0):
-        s = centre
+        s, previous = centre, total
         while True:
             s += direction * _QUADRATURE_STEP
             term = node(s)
@@ -155,6 +162,12 @@ def _elastic_square_root_form(mass: sp.spmatrix, stiffness: sp.spmatrix, shapes:
             scale = max(scale, np.abs(total).max())
             if np.abs(term).max() <= _QUADRATURE_TAIL * scale:
                 break
+            # Far beyond the spectrum each node is the previous one times e^{−Δs} (the integrand goes like
+            # ψᵀKψ'/t above it and t ψ'ᵀMψ' below it, to relative order (ω/t)²): add the geometric rest.
+            if np.abs(term - ratio * previous).max() <= _GEOMETRIC_TAIL * np.abs(term).max():
+                total = total + term * (ratio / (1.0 - ratio))
+                break
+            previous = term
     form = (2.0 / np.pi) * _QUADRATURE_STEP * total
     return 0.5 * (form + form.T)
 
