@@ -20,8 +20,9 @@ step sequence does not depend on the chunking (steps never land on chunk boundar
 A chunk also pauses after a bounded number of step attempts (about :data:`CALL_SECONDS` of work), so the
 loop returns to Python often: Ctrl-C (``KeyboardInterrupt``) takes effect within a fraction of a second
 even when the step size has collapsed, and the collapse itself is detected early: a run whose mean step
-over the last :data:`COLLAPSE_WINDOW` attempts is below :data:`COLLAPSE_RATIO` times the output step stops
-with the time, the step size and the likely stiff term (:mod:`drillstring.dynamics.stiffness`), keeping
+(over the last :data:`COLLAPSE_WINDOW` attempts, and since the start unless the recent one is below
+:data:`COLLAPSE_RATIO` times the output step) would take more than ``max_steps`` attempts to reach t_end
+stops with the time, the step size and the likely stiff term (:mod:`drillstring.dynamics.stiffness`), keeping
 the rows already computed.
 """
 
@@ -54,10 +55,12 @@ N_STATE = 11
 CALL_SECONDS = 0.1
 #: Step attempts of the first call (then adapted to take about CALL_SECONDS each).
 FIRST_CALL_ATTEMPTS = 200
-#: Step attempts over which the mean step is measured, and the fraction of the output step below which
-#: that mean is a collapse: a million attempts per output step (the contact case's impacts take steps of
-#: about 1e-4 of its output step; the fluid at 1e4 m/s, 3e-8).
-COLLAPSE_WINDOW, COLLAPSE_RATIO = 20_000, 1e-6
+#: Step attempts over which the mean step is measured (the window), and the fraction of the output step
+#: below which that mean alone predicts the run's length: a run stops as collapsed when reaching t_end
+#: would take more than max_steps attempts at the window's mean step, if it is below this floor, else at
+#: the larger of the window's and the whole run's mean steps. The contact case's impacts take steps of
+#: about 1e-4 of its output step; a fluid at 1e3 m/s, 2e-6; at 1e4 m/s, 3e-8.
+COLLAPSE_WINDOW, COLLAPSE_RATIO = 20_000, 1e-5
 CAUSES = {0: "", 1: "error estimate not met", 2: "non-finite values in the right-hand side"}
 
 
@@ -387,7 +390,14 @@ def integrate_compiled(
             budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
             attempts = state[N_ACCEPTED] + state[N_REJECTED]
             if attempts - window[0] >= COLLAPSE_WINDOW:
-                if (state[T] - window[1]) / (attempts - window[0]) < COLLAPSE_RATIO * output_step:
+                recent = (state[T] - window[1]) / (attempts - window[0])  # mean step of the window [s]
+                average = state[T] / attempts  # mean step of the whole run [s]
+                remaining = grid[-1] - state[T]
+                # the attempts reaching t_end would take: at the recent mean step when it is below the floor,
+                # else at the larger of the recent and the whole run's (both must say it cannot finish)
+                rate = recent if recent < COLLAPSE_RATIO * output_step else max(recent, average)
+                needed = attempts + remaining / max(rate, 1e-300)
+                if needed > max_steps:
                     status = COLLAPSED
                     break
                 window = (attempts, float(state[T]))
@@ -413,9 +423,9 @@ def integrate_compiled(
             MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
             MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
             NON_FINITE: "non-finite state after an accepted step",
-            COLLAPSED: (f"step size collapsed: mean step {(t - window[1]) / (attempts - window[0]):.3g} s over "
-                        f"the last {attempts - window[0]:,.0f} attempts, below {COLLAPSE_RATIO:g} × the output "
-                        f"step ({output_step:g} s)"),
+            COLLAPSED: (f"step size collapsed: mean step {recent:.3g} s over the last {attempts - window[0]:,.0f} "
+                        f"attempts ({average:.3g} s since t = 0); reaching t_end would take about {needed:.3g} "
+                        f"attempts, more than max_steps = {max_steps:,}"),
         }[status]
         last = CAUSES.get(int(state[LAST_CAUSE]), "")
         if last and status != NON_FINITE:
