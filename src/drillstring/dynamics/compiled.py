@@ -419,14 +419,16 @@ def integrate_compiled(
     message = ""
     if status != SUCCESS:
         t, h = state[T], state[H]
-        cause = {
-            MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
-            MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
-            NON_FINITE: "non-finite state after an accepted step",
-            COLLAPSED: (f"step size collapsed: mean step {recent:.3g} s over the last {attempts - window[0]:,.0f} "
-                        f"attempts ({average:.3g} s since t = 0); reaching t_end would take about {needed:.3g} "
-                        f"attempts, more than max_steps = {max_steps:,}"),
-        }[status]
+        if status == COLLAPSED:
+            cause = (f"step size collapsed: mean step {recent:.3g} s over the last {attempts - window[0]:,.0f} "
+                     f"attempts ({average:.3g} s since t = 0); reaching t_end would take about {needed:.3g} "
+                     f"attempts, more than max_steps = {max_steps:,}")
+        else:
+            cause = {
+                MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
+                MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
+                NON_FINITE: "non-finite state after an accepted step",
+            }[status]
         last = CAUSES.get(int(state[LAST_CAUSE]), "")
         if last and status != NON_FINITE:
             cause += f"; last rejection: {last}"
