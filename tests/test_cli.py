@@ -35,6 +35,15 @@ def _reference_toml() -> str:
     return resources.files("drillstring").joinpath("cases", "reference.toml").read_text(encoding="utf-8")
 
 
+def _edited_reference(folder, old: str, new: str, name: str = "bad.toml"):
+    """The reference case file with ``old`` replaced by ``new`` (which must be there), written in ``folder``."""
+    text = _reference_toml()
+    assert old in text
+    path = folder / name
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    return path
+
+
 @pytest.fixture
 def heavier_bit_case(tmp_path):
     """A copy of the reference case with 150 kN on the bit instead of 100 kN."""
@@ -188,10 +197,7 @@ def test_invalid_case_file_exit_code_2(tmp_path):
     ('max_element_length = "10 m"', 'max_element_length = "2 km"', "mesh.max_element_length = 2000.0"),
 ])
 def test_cases_that_cannot_be_meshed_or_reduced_exit_2_naming_the_field(tmp_path, old, new, field):
-    text = _reference_toml()
-    assert old in text
-    path = tmp_path / "bad.toml"
-    path.write_text(text.replace(old, new), encoding="utf-8")
+    path = _edited_reference(tmp_path, old, new)
     for command in ("static", "modes", "simulate"):
         result = _invoke(command, str(path), "--json")
         assert result.exit_code == 2, result.output
@@ -878,10 +884,7 @@ def test_sensitivity_command(torsional_case_file, tmp_path):
     ("a2 = 5.672e-8", "a2 = 5e-324", "bit_rock.a2 = 5e-324: must be within [1e-15, 0.001] m/(N*s)"),
 ])
 def test_values_that_overflow_or_underflow_are_refused_naming_field_value_and_range(tmp_path, old, new, line):
-    text = _reference_toml()
-    assert old in text
-    path = tmp_path / "extreme.toml"
-    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    path = _edited_reference(tmp_path, old, new)
     result = _invoke("simulate", str(path), "--out", str(tmp_path / "run.nc"), "--plot", str(tmp_path / "run.png"))
     assert result.exit_code == 2, result.output
     assert result.stderr.splitlines() == [f"error: invalid case {path}: {line}"]
