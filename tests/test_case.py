@@ -522,3 +522,29 @@ def test_weight_is_the_statics_weight(reference, axial_loads, buoyancy, gravity)
             sum(q * s.length for q, s in zip(case.axial_load_per_length, case.sections))
             - sum(q * s.length for q, s in zip(plain.axial_load_per_length, plain.sections)), rel=1e-12)
         assert abs(case.weight - plain.weight) > 1e3
+
+
+def test_fine_meshes_up_to_max_elements_are_accepted(data):
+    """The set-up is sparse (no dense n × n matrix): 0.17 m elements on the 1600 m string (9,414 elements,
+    which once died building a dense 2.6 GiB matrix) and 10,000 elements are accepted; one more is refused
+    with the count."""
+    data["mesh"]["max_element_length"] = "0.17 m"
+    assert case_from_dict(data).element_count == 9_414
+    data["mesh"]["max_element_length"] = "0.16 m"
+    assert case_from_dict(data).element_count == 10_000
+    data["mesh"]["max_element_length"] = "0.1599 m"
+    assert_problem(refused(data), "mesh.max_element_length", "0.1599", "10,008 elements, more than the 10,000")
+
+
+def test_refuses_an_eccentricity_or_a_bow_beyond_the_radial_gap(data):
+    """The collar's radial gap is (300 − 228.6)/2 = 35.7 mm: a 1 m mass eccentricity or a 50 mm bow there
+    would put the string beyond the borehole wall."""
+    data["sections"][1]["eccentricity"] = "1 m"
+    assert_problem(refused(data), "sections[1].eccentricity", "1.0", "must be less than the section's radial gap "
+                   "(0.0357 m)")
+    del data["sections"][1]["eccentricity"]
+    data["bow"] = {"amplitude": "50 mm", "start": 1450.0, "end": 1550.0}
+    assert_problem(refused(data), "bow.amplitude", "0.05", "must be less than the radial gap along the bow "
+                   "(0.0357 m, section 'drill collar')")
+    data["bow"]["amplitude"] = "30 mm"
+    case_from_dict(data)

@@ -670,8 +670,8 @@ class UncertaintyTable(_Base):
     correlation: CorrelationTable | None = None
 
 
-#: Most finite elements a case may have (a mesh finer than this is refused at validation: it would take
-#: minutes to build and gigabytes of memory; 10 000 elements is 0.16 m for the 1600 m reference string).
+#: Most finite elements a case may have (a mesh finer than this is refused at validation; 10 000 elements is
+#: 0.16 m for the 1600 m reference string, 1 m for a 10 km string, whose sparse set-up takes about 450 MiB).
 MAX_ELEMENTS = 10_000
 
 
@@ -893,6 +893,7 @@ class Case(_Base):
                                  f"must be less than bow.end ({self.bow.end:g} m)"))
         if problems:  # the rules below need valid materials and gaps
             raise _Problems(problems)
+        problems.extend(self._offset_problems())
 
         problems.extend(self._mesh_problems())
 
@@ -923,6 +924,27 @@ class Case(_Base):
         if problems:
             raise _Problems(problems)
         return self
+
+    def _offset_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
+        """A section's mass eccentricity and the bow must be less than the radial gap where they are: a
+        larger offset puts the string's unloaded shape (bow) or its imbalance orbit (eccentricity) beyond the
+        borehole wall, where the contact law would answer with absurd forces instead of a drilling run."""
+        problems = []
+        top = 0.0
+        bowed = []
+        for i, s in enumerate(self.sections):
+            gap = (self.borehole.diameter - s.outer_diameter) / 2.0
+            if s.eccentricity >= gap:
+                problems.append((("sections", i, "eccentricity"), s.eccentricity,
+                                 f"must be less than the section's radial gap ({gap:.6g} m)"))
+            if self.bow.amplitude > 0.0 and top < self.bow.end and top + s.length > self.bow.start:
+                bowed.append((gap, s.name))
+            top += s.length
+        if bowed and self.bow.amplitude >= min(bowed)[0]:
+            gap, name = min(bowed)
+            problems.append((("bow", "amplitude"), self.bow.amplitude,
+                             f"must be less than the radial gap along the bow ({gap:.6g} m, section {name!r})"))
+        return problems
 
     def _mesh_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
         """The case can be meshed (element length within the string, at most :data:`MAX_ELEMENTS`
