@@ -956,3 +956,20 @@ def test_only_sane_case_files_are_read(tmp_path, kind):
     assert len(lines) == 1 and lines[0].startswith(f"error: invalid case {path}: ") and expected in lines[0]
     if kind == "long_name":
         assert lines[0].endswith("must be at most 200 characters (it has 10,000)")
+
+
+def test_a_collapsing_step_size_stops_the_run_early_naming_the_stiff_term(tmp_path):
+    """a2 = 1e-12 m/(N·s) (within its range) makes the bit–rock law's axial resistance 1/(a2 Z²) stiff:
+    the run stops after about 20,000 attempts, not at max_steps, exit code 1, one line with t, h and the
+    bit–rock law as the stiff term; the partial run is written."""
+    path = _edited_reference(tmp_path, "a2 = 5.672e-8 ", "a2 = 1e-12 ")
+    coarse = path.read_text(encoding="utf-8").replace('max_element_length = "10 m"', 'max_element_length = "50 m"')
+    path.write_text(coarse.replace("lateral_modes = 20", "lateral_modes = 3"), encoding="utf-8")
+    out = tmp_path / "run.nc"
+    result = _invoke("simulate", str(path), "--t-end", "1", "--out", str(out), "--plot", str(tmp_path / "run.png"))
+    assert result.exit_code == 1, result.output
+    errors = [row for row in result.stderr.splitlines() if row.startswith("error:")]
+    assert len(errors) == 1
+    assert "integration failed at t = " in errors[0] and "(h = " in errors[0]
+    assert "step size collapsed" in errors[0] and "likely stiff term: bit–rock law" in errors[0]
+    assert f"the partial run is in {out}" in errors[0] and out.exists()

@@ -375,7 +375,8 @@ def integrate_compiled(
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
     output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])
-    budget, window = float(FIRST_CALL_ATTEMPTS), (0.0, float(state[T]))  # attempts per call; (attempts, t) at the window's start
+    # step attempts per call; (attempts, t) at the start of the window of the collapse check
+    budget, window = float(FIRST_CALL_ATTEMPTS), (0.0, float(state[T]))
     for t_stop in stops:
         while True:
             attempts = state[N_ACCEPTED] + state[N_REJECTED]

@@ -61,7 +61,8 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
         else np.full_like(jacobian, np.inf)
     labels = np.asarray(model.family)
     lateral = np.char.startswith(labels, "lateral")
-    for name, keep in (("bit–rock law (the nonlinear axial and torsional forces)", ~lateral), ("borehole contact (the nonlinear lateral forces)", lateral)):
+    for name, keep in (("bit–rock law (the nonlinear axial and torsional forces)", ~lateral),
+                       ("borehole contact (the nonlinear lateral forces)", lateral)):
         index = np.concatenate([np.nonzero(keep)[0], n + np.nonzero(keep)[0]])
         rates[name] = _radius(nonlinear[np.ix_(index, index)])
     return dict(sorted(rates.items(), key=lambda item: -item[1]))
