@@ -386,11 +386,10 @@ def integrate_compiled(
             elapsed = _time.perf_counter() - called  # Ctrl-C is raised here, between calls
             if progress is not None:
                 progress(float(state[T]))
-            if status != PAUSED:
-                break
-            budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
+            if status == PAUSED:
+                budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
             attempts = state[N_ACCEPTED] + state[N_REJECTED]
-            if attempts - window[0] >= COLLAPSE_WINDOW:
+            if status in (PAUSED, SUCCESS) and state[T] < grid[-1] and attempts - window[0] >= COLLAPSE_WINDOW:
                 recent = (state[T] - window[1]) / (attempts - window[0])  # mean step of the window [s]
                 average = state[T] / attempts  # mean step of the whole run [s]
                 remaining = grid[-1] - state[T]
@@ -402,6 +401,8 @@ def integrate_compiled(
                     status = COLLAPSED
                     break
                 window = (attempts, float(state[T]))
+            if status != PAUSED:
+                break
         if status != SUCCESS:
             break
     n_written = int(state[N_OUT])
