@@ -69,13 +69,16 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
 
 
 def stiffness_diagnosis(model, t: float, y: np.ndarray, method: str = "dopri5") -> str:
-    """One phrase naming the likely stiff term at ``(t, y)`` and the step size it allows, e.g.
-    ``likely stiff term: fluid damping (...), λ = 1.2e+09 1/s, stable steps ≲ 2.7e-09 s``."""
+    """One phrase naming the likely stiff term at ``(t, y)``, the step size it allows and the next term, e.g.
+    ``likely stiff term: fluid damping (...), λ = 1.2e+09 1/s, stable steps ≲ 2.7e-09 s (next: ...)``.
+    The rates depend on the state: a stiffness that drove the state far (a huge stabilizer stiffness
+    seen by the modes) may leave another term the stiffest where the run stops, so the next one is named."""
     try:
         rates = stiffness_rates(model, t, y)
     except (ValueError, FloatingPointError, np.linalg.LinAlgError):  # a state the model cannot evaluate
         return "likely stiff term: unknown (the right-hand side cannot be differentiated there)"
-    name, rate = next(iter(rates.items()))
+    (name, rate), (second, second_rate) = list(rates.items())[:2]
     radius = STABILITY_RADIUS.get(method, 3.3)
     allowed = radius / rate if rate > 0 else float("inf")
-    return f"likely stiff term: {name}, λ = {rate:.3g} 1/s, stable steps ≲ {allowed:.3g} s"
+    return (f"likely stiff term: {name}, λ = {rate:.3g} 1/s, stable steps ≲ {allowed:.3g} s "
+            f"(next: {second}, λ = {second_rate:.3g} 1/s)")
