@@ -214,3 +214,12 @@ def test_plot_compare_writes_png(run_dataset, tmp_path, drawn):
     bare = run_dataset.drop_vars(["radial_displacement", "x", "gap"])
     _assert_png(plots.plot_compare(bare, partial.drop_vars(["radial_displacement", "x", "gap"]),
                                    tmp_path / "partial.png"))
+
+
+@pytest.mark.parametrize("name", ["Well $A", "Well $A$ and $\\\\frac{1}{$"])
+def test_case_names_are_plain_text_in_figures(run_dataset, tmp_path, name):
+    """A case name is drawn as written: dollar signs never start Matplotlib's mathtext."""
+    ds = run_dataset.assign_attrs(case=f'name = "{name}"\n')
+    assert plots._case_name(ds.attrs["case"]).replace("\\$", "$") == name.replace("\\\\", "\\")
+    _assert_png(plots.plot_run(ds, tmp_path / "run.png"))
+    _assert_png(plots.plot_compare(ds, ds, tmp_path / "compare.png"))

@@ -25,6 +25,7 @@ are safe in scripts, notebooks, worker processes and tests.
 from __future__ import annotations
 
 import math
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -305,7 +306,17 @@ def _contact_panel(ax, runs) -> None:
 
 
 def _case_name(case_toml: str) -> str:
-    """The ``name = "..."`` of a case's TOML text ('' when absent)."""
+    """The ``name = "..."`` of a case's TOML text ('' when absent), as plain text for a figure: its dollar
+    signs escaped, so that Matplotlib never reads it as mathtext."""
+    try:
+        name = tomllib.loads(str(case_toml)).get("name", "")
+    except (tomllib.TOMLDecodeError, RecursionError):
+        name = _case_name_line(case_toml)
+    return str(name).replace("$", r"\$")
+
+
+def _case_name_line(case_toml: str) -> str:
+    """The ``name = "..."`` line of a TOML text that does not parse ('' when absent)."""
     for line in str(case_toml).splitlines():
         stripped = line.strip()
         if stripped.startswith("name") and "=" in stripped:
