@@ -265,7 +265,7 @@ def monte_carlo_study(
                 listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
                 raise StudyFailed(f"{error} ({len(failures)} failure(s)"
                                   f"{': ' + listing if listing else ''})") from None
-            summary = study_summary(stats, t_transient=t_transient)
+            summary = study_summary(stats, t_transient=t_transient, boundary=_stability_boundary(case))
             sessions = run.store.sessions()
             wall_time, used = computation_time(sessions)
             if not sessions:  # a store written before sessions were recorded
@@ -292,6 +292,17 @@ def monte_carlo_study(
             client.close()
     return StudyOutcome(stats, payload, files, run.completed + run.failed - run.computed,
                         guard.note or run.note)
+
+
+def _stability_boundary(case: Case) -> dict | None:
+    """The case's stability boundary along the weight-on-bit (:func:`~drillstring.dynamics.stability.
+    weight_on_bit_boundary`), None where steady drilling does not exist."""
+    from drillstring.dynamics.stability import weight_on_bit_boundary
+
+    try:
+        return weight_on_bit_boundary(case)
+    except ValueError:
+        return None
 
 
 def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:

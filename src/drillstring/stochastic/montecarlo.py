@@ -61,7 +61,14 @@ from drillstring.stochastic.execution import (  # noqa: F401  (re-exported)
 )
 from drillstring.stochastic.locks import StudyLock, StudyLocked  # noqa: F401  (re-exported)
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
-from drillstring.stochastic.runs import compile_kernels, simulation_options
+from drillstring.stochastic.runs import (
+    REALIZATION_METRICS,
+    compile_kernels,
+    metrics_transient,
+    realization_metrics,
+    simulation_options,
+    stability_outputs,
+)
 from drillstring.stochastic.store import ArraySpec, TaskStore
 from drillstring.stochastic.store import StoreError as StudyStoreError
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
@@ -155,6 +162,7 @@ class RealizationOutcome:
     n_rhs: int = 0
     lowest_lateral_eigenvalue: float = math.nan
     inputs: np.ndarray | None = None
+    metrics: dict[str, float] = field(default_factory=dict)
 
 
 def nominal_weight_on_hook(case: Case) -> float:
@@ -313,6 +321,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         outcome.weight_on_bit = realized.operation.weight_on_bit
         model = case_reduced_model(realized)
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
+        outcome.metrics["growth_rate"] = stability_outputs(model)[0]["growth_rate"]
         try:
             result: SimulationResult = simulate_model(
                 model, **simulation_options(realized, settings.t_end, settings.output_step))
@@ -329,6 +338,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         radial[:k] = result.radial_displacement
         outcome.radial_displacement = radial
         outcome.n_rhs = int(result.stats.get("n_rhs", 0))
+        outcome.metrics.update(realization_metrics(result, realized, metrics_transient(settings)))
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"
@@ -370,6 +380,10 @@ class StudyStore(TaskStore):
             "weight_on_hook": ArraySpec(("realization",)),
             "weight_on_bit": ArraySpec(("realization",)),
             "lowest_lateral_eigenvalue": ArraySpec(("realization",)),
+            **{name: ArraySpec(("realization",), attributes={"units": unit})
+               for name, (unit, _) in REALIZATION_METRICS.items()},
+            **{f"nominal_{name}": ArraySpec(("one",), attributes={"units": unit})
+               for name, (unit, _) in REALIZATION_METRICS.items()},
             **{name: ArraySpec(("realization", "time"), **per_row) for name in STUDY_OBSERVABLES},
             **{f"nominal_{name}": ArraySpec(("time",)) for name in STUDY_OBSERVABLES},
             "radial_displacement": ArraySpec(("realization", "time", "probe"), **per_row),
@@ -384,9 +398,21 @@ class StudyStore(TaskStore):
         mean = law.mean()
         woh_mean = (float(mean[law.paths.index(WEIGHT_ON_HOOK)]) if WEIGHT_ON_HOOK in law.paths
                     else nominal_weight_on_hook(case))
-        attrs = {"weight_on_hook_mean": woh_mean, "weight": case.weight, **input_attributes(law)}
+        attrs = {"weight_on_hook_mean": woh_mean, "weight": case.weight, **input_attributes(law),
+                 "metrics_transient": metrics_transient(settings)}
         super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
                          attrs=attrs)
+
+    @classmethod
+    def open_group(cls, path: str | Path, mode: str = "r") -> zarr.Group:
+        """:meth:`TaskStore.open_group`, refusing a store written before the per-realization metrics
+        (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`) were stored."""
+        group = super().open_group(path, mode)
+        missing = [name for name in REALIZATION_METRICS if name not in dict(group.attrs["layout"])]
+        if missing:
+            raise StudyStoreError(f"{path} is a study store of an older drillstring version (no {missing[0]} per "
+                                  "realization); delete it (or use another --out folder) to start over")
+        return group
 
     def nominal_done(self) -> bool:
         return int(self.group["nominal_status"][0]) != PENDING
@@ -398,6 +424,8 @@ class StudyStore(TaskStore):
                 for name in STUDY_OBSERVABLES:
                     yield f"nominal_{name}", Ellipsis, outcome.observables[name]
                 yield "nominal_radial_displacement", Ellipsis, outcome.radial_displacement
+            for name, value in outcome.metrics.items():
+                yield f"nominal_{name}", 0, value
             if outcome.inputs is not None:
                 yield "nominal_input_values", Ellipsis, outcome.inputs
             return
@@ -409,6 +437,8 @@ class StudyStore(TaskStore):
             yield "radial_displacement", i, outcome.radial_displacement
         for name in ("weight_on_hook", "weight_on_bit", "wall_time", "lowest_lateral_eigenvalue"):
             yield name, i, getattr(outcome, name)
+        for name, value in outcome.metrics.items():
+            yield name, i, value
 
     def status_entry(self, outcome: RealizationOutcome):
         return ("nominal_status", 0) if outcome.index == NOMINAL else ("status", outcome.index)
