@@ -47,6 +47,13 @@ def load_study(store_path: str | Path) -> xr.Dataset:
     return ds
 
 
+#: Prefix of the per-realization results in the statistics (``realization_stick_slip_index``, ...): apart
+#: from the pointwise statistics of the observables (``rate_of_penetration_mean`` is the mean over the
+#: realizations at each time; ``realization_rate_of_penetration_mean`` each realization's time mean).
+REALIZATION_PREFIX = "realization_"
+#: The per-realization results summarised under ``realizations``: the cycle metrics and the bit-speed
+#: oscillation (max − min)/2Ω of maps and sensitivity runs.
+SUMMARY_METRICS = (*CYCLE_METRICS, "bit_speed_oscillation")
 #: Quantiles [%] of the per-realization distributions in the summary.
 REALIZATION_QUANTILES = (2.5, 50.0, 97.5)
 #: Length [s] by which the windows of the time convergence grow.
@@ -90,10 +97,11 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     Variables: ``<v>_mean``, ``<v>_std``, ``<v>_lower``, ``<v>_upper`` (the ``level`` quantile envelope),
     ``<v>_dispersion`` (std/|mean|), ``<v>_nominal`` and ``<v>_convergence`` (dimension ``n_samples``),
     for ``v`` in the study observables and ``radial_displacement`` (per probe); and, per finished
-    realization (dimension ``realization``), what its worker computed from its realized case
-    (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`: the cycle metrics after ``t_transient`` [s]
-    (default ``min(10 s, t_end/2)``), its top speed, bit area and the leading ``growth_rate`` of steady
-    drilling; the nominal run's value in each one's attribute ``nominal``) and the
+    realization (dimension ``realization``), what its worker computed from its realized case, each named
+    ``realization_<name>`` (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`: the cycle metrics after
+    ``t_transient`` [s] (default ``min(10 s, t_end/2)``), its top speed, bit area and the leading
+    ``growth_rate`` of steady drilling; and ``bit_speed_oscillation`` (max − min)/2Ω with its own Ω; the
+    nominal run's value in each one's attribute ``nominal``) and the
     ``lowest_lateral_eigenvalue`` ω₁² [rad²/s²] of its prestressed string (negative: statically buckled;
     attribute ``buckled_realizations``).
     """
@@ -118,11 +126,17 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     rows = np.nonzero(ok)[0]
     metrics = _realization_metrics(raw, rows, t_transient)
     nominal = _realization_metrics(raw, rows, t_transient, prefix="nominal_")
+    coords = {"realization": done.realization.values}
     for name, (unit, description) in REALIZATION_METRICS.items():
         window = f" after t = {t_transient:g} s" if name in CYCLE_METRICS else ""
-        stats[name] = xr.DataArray(metrics[name], dims="realization", coords={"realization": done.realization.values},
-                                   attrs={"units": unit, "long_name": description + window,
-                                          "nominal": float(nominal[name])})
+        stats[REALIZATION_PREFIX + name] = xr.DataArray(
+            metrics[name], dims="realization", coords=coords,
+            attrs={"units": unit, "long_name": description + window, "nominal": float(nominal[name])})
+    stats[REALIZATION_PREFIX + "bit_speed_oscillation"] = xr.DataArray(
+        (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * metrics["top_speed"]), dims="realization",
+        coords=coords, attrs={"units": "1", "long_name": f"bit-speed oscillation (max - min)/(2 top speed) after t = {t_transient:g} s",
+                              "nominal": float((nominal["bit_speed_max"] - nominal["bit_speed_min"])
+                                               / (2.0 * nominal["top_speed"]))})
     lowest = (raw.lowest_lateral_eigenvalue.values[ok] if "lowest_lateral_eigenvalue" in raw
               else np.full(n_done, np.nan))
     stats["lowest_lateral_eigenvalue"] = xr.DataArray(
@@ -225,16 +239,18 @@ def distribution_summary(values) -> dict:
 
 
 def realizations_summary(stats: xr.Dataset) -> dict:
-    """Per cycle metric (:data:`~drillstring.dynamics.indicators.CYCLE_METRICS`, unit SI): its distribution
+    """Per cycle metric (:data:`SUMMARY_METRICS`, unit SI): its distribution
     over the realizations (:func:`distribution_summary`), the nominal run's value and unit; plus
     ``stick_slip_realizations`` (stick time fraction > 0) and ``t_transient`` [s]."""
     out: dict = {}
-    for name, (unit, description) in CYCLE_METRICS.items():
-        if name in stats:
-            out[name] = {**distribution_summary(stats[name].values), "unit": unit,
-                         "nominal": _finite_or_none(stats[name].attrs.get("nominal", math.nan))}
-    if "stick_time_fraction" in stats:
-        out["stick_slip_realizations"] = int((stats["stick_time_fraction"].values > 0).sum())
+    for name in SUMMARY_METRICS:
+        values = stats.get(REALIZATION_PREFIX + name)
+        if values is not None:
+            out[name] = {**distribution_summary(values.values), "unit": values.attrs.get("units"),
+                         "nominal": _finite_or_none(values.attrs.get("nominal", math.nan))}
+    fraction = stats.get(REALIZATION_PREFIX + "stick_time_fraction")
+    if fraction is not None:
+        out["stick_slip_realizations"] = int((fraction.values > 0).sum())
     out["t_transient"] = float(stats.attrs.get("t_transient", math.nan))
     return out
 
@@ -245,15 +261,16 @@ def stability_summary(stats: xr.Dataset, boundary: dict | None = None) -> dict:
     (:func:`distribution_summary`) and the nominal run's; ``boundary``: the nominal case's stability
     boundary along the weight-on-bit (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`) when
     given."""
-    growth = np.asarray(stats["growth_rate"].values, dtype=float) if "growth_rate" in stats else np.zeros(0)
+    rates = stats.get(REALIZATION_PREFIX + "growth_rate")
+    growth = np.asarray(rates.values, dtype=float) if rates is not None else np.zeros(0)
     finite = growth[np.isfinite(growth)]
     return {
         "unstable_fraction": float(np.mean(finite > 0.0)) if finite.size else None,
         "unstable_realizations": int(np.sum(finite > 0.0)),
         "realizations_with_growth_rate": int(finite.size),
         "growth_rate": distribution_summary(finite),
-        "nominal_growth_rate": (_finite_or_none(stats["growth_rate"].attrs.get("nominal", math.nan))
-                                if "growth_rate" in stats else None),
+        "nominal_growth_rate": (_finite_or_none(rates.attrs.get("nominal", math.nan)) if rates is not None
+                                else None),
         "boundary": boundary,
     }
 
