@@ -113,7 +113,9 @@ _STUDY_CAPTIONS = {
     "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean of every random "
                  "parameter)",
     "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
-    "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
+    "convergence": "Convergence: mean-square conv(n_s), each observable divided by its last value (left); maximum "
+                   "and time-mean dispersion over records of growing length (right)",
+    "realizations": "Per-realization cycle metrics after t = {t_transient:g} s: histograms, mean and nominal run",
 }
 
 
@@ -216,7 +218,7 @@ def monte_carlo_study(
 
     In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
     realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
-    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png`` and
+    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png``, ``realizations.png`` and
     ``report.html``. Fewer than 2 finished realizations raise :class:`StudyFailed`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
@@ -295,12 +297,9 @@ def monte_carlo_study(
 
 
 def _stability_boundary(case: Case) -> dict | None:
-    """The case's stability boundary along the weight-on-bit (:func:`~drillstring.dynamics.stability.
-    weight_on_bit_boundary`), None where steady drilling does not exist."""
-    from drillstring.dynamics.stability import weight_on_bit_boundary
-
+    """:func:`stability_boundary`, None where steady drilling does not exist."""
     try:
-        return weight_on_bit_boundary(case)
+        return stability_boundary(case)
     except ValueError:
         return None
 
@@ -318,7 +317,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
              "statistics": folder / "statistics.nc", "report": folder / "report.html"}
     write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, folder, t_transient)
+    figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"))
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
     write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
     run_info = {
@@ -346,7 +345,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         case_toml=case.to_toml(),
         summary=summary,
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
-                 for k in ("envelopes", "dispersion", "convergence")},
+                 for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
         run_info=run_info,
     )
     return {**paths, **figures}
@@ -365,6 +364,17 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     from drillstring.dynamics.stability import case_stability
 
     return case_stability(as_case(case), weight_on_bit=weight_on_bit)
+
+
+def stability_boundary(case: Case | str | Path = "reference") -> dict:
+    """The stability boundary of steady drilling along the weight-on-bit at the case's top speed (SI):
+    ``weight_on_bit`` [N] where the leading growth rate crosses 0 nearest the case's weight-on-bit (None
+    when it does not between 0 and the string's weight), ``top_speed`` [rad/s], ``nominal_weight_on_bit``
+    [N] and ``nominal_growth_rate`` [1/s] (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`).
+    ValueError when the case itself has no steady drilling."""
+    from drillstring.dynamics.stability import weight_on_bit_boundary
+
+    return weight_on_bit_boundary(as_case(case))
 
 
 def study(
