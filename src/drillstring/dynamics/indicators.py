@@ -56,6 +56,14 @@ def mechanical_specific_energy(force_on_bit: float, torque_on_bit: float, top_sp
     return force_on_bit / area + top_speed * torque_on_bit / (area * rate_of_penetration)
 
 
+def steady_window(time, t_transient: float) -> np.ndarray:
+    """Mask of the output times at or after ``t_transient`` [s] (to 1e-9 relative); the whole run when it
+    ended before (a failed run: use what there is)."""
+    time = np.asarray(time, dtype=float)
+    steady = time >= t_transient - 1e-9 * max(1.0, abs(t_transient))
+    return steady if steady.any() else np.ones_like(time, dtype=bool)
+
+
 def _finite(values: np.ndarray) -> np.ndarray:
     values = np.asarray(values, dtype=float)
     return values[np.isfinite(values)]
@@ -66,10 +74,7 @@ def drilling_indicators(time, rate_of_penetration, bit_speed, top_speed: float, 
     ``mean_rate_of_penetration`` [m/s], ``bit_speed_min``, ``bit_speed_max`` [rad/s],
     ``bit_speed_oscillation`` [-], ``stick_time_fraction`` [-], ``stick_slip`` (bool); None where a
     failed run left no finite value."""
-    time = np.asarray(time, dtype=float)
-    steady = time >= t_transient - 1e-9 * max(1.0, abs(t_transient))
-    if not steady.any():
-        steady = np.ones_like(time, dtype=bool)
+    steady = steady_window(time, t_transient)
     rop = _finite(np.asarray(rate_of_penetration)[steady])
     speed = _finite(np.asarray(bit_speed)[steady])
     if speed.size == 0:
@@ -151,9 +156,7 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
 
     NaN where a failed run left no finite value."""
     t = np.asarray(time, dtype=float)
-    steady = t >= t_transient - 1e-9 * max(1.0, abs(t_transient))
-    if not steady.any():
-        steady = np.ones_like(t, dtype=bool)
+    steady = steady_window(t, t_transient)
     out = {name: math.nan for name in CYCLE_METRICS}
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
         values = _finite(np.asarray(observables[name])[steady])

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from drillstring.case import Case
-from drillstring.dynamics.indicators import CYCLE_METRICS, bit_area, cycle_metrics, transient_end
+from drillstring.dynamics.indicators import CYCLE_METRICS, bit_area, cycle_metrics, steady_window, transient_end
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.dynamics.stability import STABILITY_FAMILIES, stability
@@ -130,9 +130,7 @@ def result_outputs(result, case: Case, t_transient: float) -> dict[str, float]:
     top_speed = case.operation.top_speed
     obs = result.observables
     cycle = cycle_metrics(t, obs, top_speed, bit_area(case), t_transient)
-    steady = t >= t_transient - 1e-9 * max(1.0, abs(t_transient))
-    if not steady.any():
-        steady = np.ones_like(t, dtype=bool)
+    steady = steady_window(t, t_transient)
     out = {name: math.nan for name in RUN_OUTPUTS}
     for name in ("stick_time_fraction", "bit_speed_min", "bit_speed_max", "mechanical_specific_energy"):
         out[name] = cycle[name]
