@@ -174,3 +174,12 @@ def test_weight_on_bit_boundary_of_the_reference_case(reference_case):
     assert 90e3 < wob < 100e3 and found["nominal_growth_rate"] > 0
     assert case_stability(reference_case, weight_on_bit=wob - 50.0).leading.growth_rate < 0
     assert case_stability(reference_case, weight_on_bit=wob + 50.0).leading.growth_rate > 0
+
+
+@pytest.mark.parametrize("weight_on_bit", [90e3, 100e3])
+def test_leading_growth_rate_from_the_eigenvalues_alone(coarse_case, weight_on_bit):
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.stability import leading_growth_rate
+
+    model = case_reduced_model(coarse_case, weight_on_bit=weight_on_bit)
+    assert leading_growth_rate(model) == pytest.approx(stability(model).leading.growth_rate, rel=1e-9, abs=1e-12)

@@ -185,14 +185,30 @@ def _family_of(model: ReducedOrderModel) -> np.ndarray:
                      for f in model.family])
 
 
+def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:
+    """The state matrix without the rigid axial position (the depth drilled: no equation depends on it),
+    and the mask of the rows kept."""
+    n = model.size
+    keep = np.ones(2 * n, dtype=bool)
+    keep[_rigid_column(model)] = False
+    return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
+
+
+def leading_growth_rate(model: ReducedOrderModel) -> float:
+    """The largest real part [1/s] of the eigenvalues of ``model`` linearised about steady drilling (> 0:
+    steady drilling is unstable): :func:`stability`'s ``leading.growth_rate`` from the eigenvalues alone
+    (no eigenvectors, no families), for a study's every realization. ValueError when there is no steady
+    drilling."""
+    matrix, _ = _informative_matrix(model, steady_drilling(model))
+    return float(np.max(sla.eigvals(matrix).real))
+
+
 def stability(model: ReducedOrderModel) -> StabilityResult:
     """Steady drilling of ``model`` and the eigenvalues of the model linearised about it."""
     steady = steady_drilling(model)
     n = model.size
-    a = linearized_matrix(model, steady)
-    keep = np.ones(2 * n, dtype=bool)
-    keep[_rigid_column(model)] = False  # the depth drilled: no equation depends on it
-    values, vectors = sla.eig(a[np.ix_(keep, keep)])
+    matrix, keep = _informative_matrix(model, steady)
+    values, vectors = sla.eig(matrix)
     full = np.zeros((2 * n, len(values)), dtype=complex)
     full[keep] = vectors
     # modal energy of each coordinate: ½ (|δη̇|² + |ω²| |δη|²)
@@ -279,9 +295,11 @@ def weight_on_bit_boundary(case) -> dict:
     torsional mode's damping turns negative through the velocity-weakening bit torque)."""
     from functools import lru_cache
 
+    from drillstring.dynamics.rom import case_reduced_model
+
     @lru_cache(maxsize=None)
     def growth(weight_on_bit: float) -> float:
-        return case_stability(case, weight_on_bit=weight_on_bit).leading.growth_rate
+        return leading_growth_rate(case_reduced_model(case, weight_on_bit=weight_on_bit))
 
     wob = float(case.operation.weight_on_bit)
     nominal = growth(wob)

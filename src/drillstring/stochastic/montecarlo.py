@@ -35,6 +35,7 @@ import zarr
 
 from drillstring.case import Case
 from drillstring.dynamics.rom import case_reduced_model
+from drillstring.dynamics.stability import leading_growth_rate
 from drillstring.dynamics.simulate import (
     SimulationError,
     SimulationResult,
@@ -67,7 +68,6 @@ from drillstring.stochastic.runs import (
     metrics_transient,
     realization_metrics,
     simulation_options,
-    stability_outputs,
 )
 from drillstring.stochastic.store import ArraySpec, TaskStore
 from drillstring.stochastic.store import StoreError as StudyStoreError
@@ -321,7 +321,10 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         outcome.weight_on_bit = realized.operation.weight_on_bit
         model = case_reduced_model(realized)
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
-        outcome.metrics["growth_rate"] = stability_outputs(model)[0]["growth_rate"]
+        try:
+            outcome.metrics["growth_rate"] = leading_growth_rate(model)
+        except ValueError:  # no steady drilling at these inputs: the bit-rock law gives no penetration
+            outcome.metrics["growth_rate"] = math.nan
         try:
             result: SimulationResult = simulate_model(
                 model, **simulation_options(realized, settings.t_end, settings.output_step))
