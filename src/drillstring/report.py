@@ -289,7 +289,8 @@ def _indicators_html(summary: Mapping[str, Any]) -> str:
                 continue
             cells = [_num(None if entry[k] is None else entry[k] * factor)
                      for k in ("mean", "std")] + [_percent(entry["dispersion"])]
-            cells += [_num(None if entry[k] is None else entry[k] * factor) for k in ("q2.5", "q50", "q97.5", "nominal")]
+            cells += [_num(None if entry[k] is None else entry[k] * factor)
+                      for k in ("q2.5", "q50", "q97.5", "nominal")]
             rows.append(f"<tr><td>{_esc(label)}</td><td>{_esc(unit)}</td>"
                         + "".join(f'<td class="num">{c}</td>' for c in cells)
                         + f'<td class="num">{entry["n"]}</td></tr>')

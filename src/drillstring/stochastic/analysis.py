@@ -132,11 +132,12 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
         stats[REALIZATION_PREFIX + name] = xr.DataArray(
             metrics[name], dims="realization", coords=coords,
             attrs={"units": unit, "long_name": description + window, "nominal": float(nominal[name])})
+    oscillation, nominal_oscillation = ((v["bit_speed_max"] - v["bit_speed_min"]) / (2.0 * v["top_speed"])
+                                        for v in (metrics, nominal))
     stats[REALIZATION_PREFIX + "bit_speed_oscillation"] = xr.DataArray(
-        (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * metrics["top_speed"]), dims="realization",
-        coords=coords, attrs={"units": "1", "long_name": f"bit-speed oscillation (max - min)/(2 top speed) after t = {t_transient:g} s",
-                              "nominal": float((nominal["bit_speed_max"] - nominal["bit_speed_min"])
-                                               / (2.0 * nominal["top_speed"]))})
+        oscillation, dims="realization", coords=coords,
+        attrs={"units": "1", "nominal": float(nominal_oscillation),
+               "long_name": f"bit-speed oscillation (max - min)/(2 top speed) after t = {t_transient:g} s"})
     lowest = (raw.lowest_lateral_eigenvalue.values[ok] if "lowest_lateral_eigenvalue" in raw
               else np.full(n_done, np.nan))
     stats["lowest_lateral_eigenvalue"] = xr.DataArray(

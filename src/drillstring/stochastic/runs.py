@@ -19,9 +19,9 @@ name                           unit    definition
 ``impacts``                    1       impacts on the borehole wall over the whole run (contact zones that appear)
 =============================  ======  ========================================================================
 
-(the bit-speed, ROP, TOB, FOB and MSE outputs from :func:`~drillstring.dynamics.indicators.cycle_metrics`). With ``stability``,
-the linear stability of steady drilling (:func:`~drillstring.dynamics.stability.stability`, on the same
-reduced model) adds ``growth_rate`` [1/s] (the leading eigenvalue's real part; > 0: steady drilling is
+(the bit-speed, ROP, TOB, FOB and MSE outputs from :func:`~drillstring.dynamics.indicators.cycle_metrics`).
+With ``stability``, the linear stability of steady drilling (:func:`~drillstring.dynamics.stability.stability`, on
+the same reduced model) adds ``growth_rate`` [1/s] (the leading eigenvalue's real part; > 0: steady drilling is
 unstable), ``leading_frequency`` [Hz], ``leading_family`` (0 axial, 1 torsional, 2 lateral) and the
 closed-form steady state ``steady_rate_of_penetration`` [m/s], ``steady_torque_on_bit`` [N m],
 ``steady_force_on_bit`` [N] (NaN where the bit–rock law gives no penetration).
