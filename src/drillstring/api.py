@@ -114,7 +114,7 @@ _STUDY_CAPTIONS = {
                  "parameter)",
     "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
     "convergence": "Convergence: mean-square conv(n_s), each observable divided by its last value (left); maximum "
-                   "and time-mean dispersion over records of growing length (right)",
+                   "and time-mean dispersion over records of growing length after the transient (right)",
     "realizations": "Per-realization cycle metrics after t = {t_transient:g} s: histograms, mean and nominal run",
 }
 

@@ -355,7 +355,7 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict
     observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices. With
     ``time_convergence`` (the summary's section, :func:`~drillstring.stochastic.analysis.time_convergence`),
     a second panel: the maximum and time-mean dispersion of each observable over records of growing
-    length — curves still rising at the right show statistics not converged in time."""
+    length after the transient — curves still rising at the right show statistics not converged in time."""
     fig, axes = _figure(1, 2 if time_convergence else 1, (13.0 if time_convergence else 8.0, 4.8))
     ax = axes[0]
     names = [str(v)[: -len("_convergence")] for v in stats.data_vars if str(v).endswith("_convergence")]
@@ -383,7 +383,7 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict
             for key, style, label in (("dispersion_max", "-", "max"), ("dispersion_time_mean", "--", "time mean")):
                 values = [np.nan if w[key] is None else 100.0 * w[key] for w in entry["windows"]]
                 ax.plot(ends, values, style, marker="o", ms=3, color=f"C{k}", lw=1.1, label=f"{title}, {label}")
-        ax.set_xlabel("record length: dispersion over [start, t] [s]")
+        ax.set_xlabel(f"end of the record t: dispersion over [{time_convergence.get('t_start', 0.0):g} s, t] [s]")
         ax.set_ylabel("dispersion [%]")
         ax.set_title(f"in time (records growing by {time_convergence['window']:g} s)", fontsize="medium")
         ax.grid(True, alpha=0.3)

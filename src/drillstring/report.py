@@ -325,7 +325,8 @@ def _indicators_html(summary: Mapping[str, Any]) -> str:
             rows.append((OBSERVABLE_NAMES.get(name, name), _esc(windows)))
         note = convergence.get("warning")
         out += (f"<h3>Convergence in time (records growing by {_num(convergence['window'])} s)</h3>"
-                "<p>Maximum dispersion [%] over the record from its start to each length.</p>" + _kv_table(rows)
+                f"<p>Maximum dispersion [%] over the record from t = {_num(convergence.get('t_start'))} s to each "
+                "end.</p>" + _kv_table(rows)
                 + (f"<p><b>Warning:</b> {_esc(note)}</p>" if note else ""))
     return out
 

@@ -139,12 +139,13 @@ def test_stability_of_the_draws():
 
 def test_time_convergence_over_growing_windows():
     """The ROP's dispersion grows in time, std(a)(1 + t/30)/mean(1 + a(1 + t/30)), so its maximum over a
-    window ending at T is that value at T and keeps changing; the torque's is constant and converged."""
+    record from 10 s to T is that value at T and keeps changing; the torque's is constant and converged."""
     raw, a = synthetic_raw(n_s=200)
     section = study_summary(study_statistics(raw, t_transient=10.0), t_transient=10.0)["time_convergence"]
     assert section["window"] == 10.0 and section["threshold"] == TIME_CONVERGENCE_THRESHOLD
+    assert section["t_start"] == 10.0
     rop = section["observables"]["rate_of_penetration"]
-    assert [w["t_end"] for w in rop["windows"]] == pytest.approx([10.0, 20.0, 30.0])
+    assert [w["t_end"] for w in rop["windows"]] == pytest.approx([20.0, 30.0])
     for window in rop["windows"]:
         factor = 1 + window["t_end"] / 30.0
         expected = factor * a.std(ddof=1) / abs(np.mean(1 + factor * a))
@@ -152,7 +153,12 @@ def test_time_convergence_over_growing_windows():
         assert window["time_of_max"] == pytest.approx(window["t_end"])
     last, before = rop["windows"][-1]["dispersion_max"], rop["windows"][-2]["dispersion_max"]
     assert rop["change"]["dispersion_max"] == pytest.approx(abs(last - before) / last, rel=1e-12)
+    assert rop["change"]["dispersion_max"] > TIME_CONVERGENCE_THRESHOLD
     torque = section["observables"]["torque_on_bit"]
     assert torque["change"]["dispersion_max"] == pytest.approx(0.0, abs=1e-9)
+    assert torque["change"]["dispersion_time_mean"] == pytest.approx(0.0, abs=1e-9)
     assert "rate_of_penetration" in section["warning"] and "torque_on_bit" not in section["warning"]
     assert "t_end" in section["warning"]
+    short = study_summary(study_statistics(raw, t_transient=25.0), t_transient=25.0)["time_convergence"]
+    assert [w["t_end"] for w in short["observables"]["torque_on_bit"]["windows"]] == [30.0]
+    assert short["warning"] is None  # one record: nothing to compare
