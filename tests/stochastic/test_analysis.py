@@ -158,6 +158,7 @@ def test_time_convergence_over_growing_windows():
     assert torque["change"]["dispersion_max"] == pytest.approx(0.0, abs=1e-9)
     assert torque["change"]["dispersion_time_mean"] == pytest.approx(0.0, abs=1e-9)
     assert "rate_of_penetration" in section["warning"] and "torque_on_bit" not in section["warning"]
+    assert "maximum" in section["warning"]
     assert "t_end" in section["warning"]
     short = study_summary(study_statistics(raw, t_transient=25.0), t_transient=25.0)["time_convergence"]
     assert [w["t_end"] for w in short["observables"]["torque_on_bit"]["windows"]] == [30.0]

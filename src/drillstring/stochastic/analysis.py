@@ -58,9 +58,9 @@ SUMMARY_METRICS = (*CYCLE_METRICS, "bit_speed_oscillation")
 REALIZATION_QUANTILES = (2.5, 50.0, 97.5)
 #: Length [s] by which the windows of the time convergence grow.
 TIME_WINDOW = 10.0
-#: Relative change of an observable's time-mean or maximum dispersion between the last two records above
-#: which the summary warns that the time statistics are not converged (2 % per 10 s: a statistic still
-#: drifting at that rate would move by 20 % over 100 s more).
+#: Relative change of an observable's maximum dispersion between the last two records above which the
+#: summary warns that it is not converged in time (2 % per 10 s: a maximum still drifting at that rate would
+#: move by 20 % over 100 s more).
 TIME_CONVERGENCE_THRESHOLD = 0.02
 
 
@@ -284,9 +284,12 @@ def time_convergence(stats: xr.Dataset, t_start: float, window: float = TIME_WIN
     end of the record), the time-mean and the maximum of its dispersion (:func:`~drillstring.stochastic.
     statistics.dispersion_summary`), and ``change``: the relative change of each between the last two.
 
-    ``warning``: one line when a change is above ``threshold`` (the time statistics still move with the
-    record length: a longer ``t_end`` is needed to tell where they settle), else None (also when the
-    record holds fewer than two windows)."""
+    ``warning``: one line when the maximum's change is above ``threshold`` (it still moves with the record
+    length: a longer ``t_end`` is needed to tell where it settles), else None (also when the record holds
+    fewer than two windows). The time mean's change is reported but not judged: over records of a few
+    periods of an oscillating dispersion it moves by a few % with the records' phase alone (4.8 % for the
+    torque-on-bit of the settled σ = 1000 N reference study between 10 and 20 s records), while the
+    maximum of a settled oscillation no longer changes once a record holds a whole period."""
     time = np.asarray(stats.time.values, dtype=float)
     tolerance = 1e-9 * window
     ends = [float(t) for t in np.arange(t_start + window, time[-1] + tolerance, window)]
@@ -307,14 +310,14 @@ def time_convergence(stats: xr.Dataset, t_start: float, window: float = TIME_WIN
             last = [row[key] for row in rows[-2:]]
             change[key] = (abs(last[1] - last[0]) / abs(last[1]) if len(last) == 2 and None not in last
                            and last[1] != 0 else None)
-        worst = max((v for v in change.values() if v is not None), default=None)
+        worst = change["dispersion_max"]
         if worst is not None and worst > threshold:
             moving.append(f"{name} {100 * worst:.3g} %")
         out["observables"][name] = {"windows": rows, "change": change}
     out["warning"] = None
     if moving:
-        out["warning"] = (f"the dispersion is not converged in time: from t = {t_start:g} s to {ends[-2]:g} s and to "
-                          f"{ends[-1]:g} s its time mean or maximum changed by more than {100 * threshold:g} % "
+        out["warning"] = (f"the dispersion is not converged in time: its maximum from t = {t_start:g} s to "
+                          f"{ends[-2]:g} s and to {ends[-1]:g} s changed by more than {100 * threshold:g} % "
                           f"({', '.join(moving)}); run longer (a larger t_end) to see where it settles")
     return out
 
