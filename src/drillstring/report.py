@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from drillstring import __version__
+from drillstring._version import __version__
 from drillstring.files import write_text_atomic
 
 __all__ = ["write_map_report", "write_report", "write_sensitivity_report"]

@@ -6,8 +6,9 @@ import xarray as xr
 
 from drillstring.dynamics.indicators import CYCLE_METRICS
 from drillstring.stochastic.analysis import TIME_CONVERGENCE_THRESHOLD, study_statistics, study_summary
-from drillstring.stochastic.montecarlo import DONE, STUDY_OBSERVABLES
+from drillstring.stochastic.montecarlo import STUDY_OBSERVABLES
 from drillstring.stochastic.runs import REALIZATION_METRICS
+from drillstring.stochastic.store import DONE
 
 
 def synthetic_raw(n_s=400, seed=1, top_speed=1.0):
