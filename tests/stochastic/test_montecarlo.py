@@ -539,7 +539,7 @@ def test_store_without_the_per_realization_metrics_is_refused(small_case, tmp_pa
     """A store written before the workers stored their cycle metrics and growth rate is refused with one
     line (a resumed study would have nowhere to write them)."""
     path = tmp_path / "old.zarr"
-    store = mc.StudyStore(path, small_case, mc.StudySettings(samples=2, sigma=1000.0, t_end=0.2))
+    store = mc.StudyStore(path, small_case, woh_settings(small_case, 1000.0, samples=2, t_end=0.2))
     assert "growth_rate" in store.group.attrs["layout"]
     layout = dict(store.group.attrs["layout"])
     del layout["growth_rate"]
