@@ -337,8 +337,11 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     saved = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert saved == first
     for name in ("study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png",
-                 "envelopes.png", "dispersion.png"):
+                 "envelopes.png", "dispersion.png", "realizations.png"):
         assert (out / name).exists(), name
+    assert {"realizations", "stability", "time_convergence"} <= set(first)
+    assert first["realizations"]["stick_slip_index"]["n"] == 3
+    assert first["stability"]["boundary"]["weight_on_bit"] > 0
     assert first["n_samples"] == 3 and first["n_failed"] == 0 and first["failures"] == {}
     assert first["seed"] == 0 and first["sigma"] == 5000.0  # the defaults
     assert first["workers"] == 1 and first["wall_time"] > 0.0
@@ -368,6 +371,7 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     assert buckling["buckled_realizations"] == 0 and 0 < buckling["probability"] < 1e-2
     assert (buckling["warning"] is None) == (buckling["probability"] <= 1e-3)
     for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}",
+                 "Per realization, after t = 0.5 s", "stick-slip index", "steady drilling unstable",
                  "Buckled strings (lowest lateral ω² < 0): 0 of 3 realizations",
                  f"wall time {first['wall_time']:,.1f} s", "this run only recomputed the statistics"):
         assert text in table.stdout, text
@@ -657,7 +661,7 @@ def test_two_studies_on_one_folder(coarse_case, tmp_path):
         np.testing.assert_allclose(mean, nominal, rtol=0.2, err_msg=name)  # around the nominal run
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["study.zarr", "summary.json", "statistics.nc", "report.html", "interactive.html", "convergence.png",
-         "envelopes.png", "dispersion.png"])  # no lock, no temporary file left
+         "envelopes.png", "dispersion.png", "realizations.png"])  # no lock, no temporary file left
 
 
 def test_simulate_output_paths_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
@@ -796,6 +800,22 @@ def test_stability_json_and_table(coarse_case):
     assert result.exit_code == 0, result.output
     for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
         assert text in result.stdout, text
+
+
+def test_stability_boundary_along_the_weight_on_bit(coarse_case):
+    """--boundary: the weight-on-bit where the leading growth rate crosses 0 (checked on both sides)."""
+    from drillstring import api
+
+    data = _json("stability", str(coarse_case), "--boundary", "--json")
+    found = data["boundary"]
+    wob = found["weight_on_bit"]
+    assert found["nominal_weight_on_bit"] == pytest.approx(1e5) and found["nominal_growth_rate"] > 0
+    assert api.stability(coarse_case, weight_on_bit=wob - 50.0).leading.growth_rate < 0 < api.stability(
+        coarse_case, weight_on_bit=wob + 50.0).leading.growth_rate
+    result = _invoke("stability", str(coarse_case), "--boundary")
+    assert result.exit_code == 0, result.output
+    assert (f"Stability boundary at the top speed 100 rpm: weight-on-bit {wob / 1e3:,.2f} kN (steady drilling "
+            f"unstable above it); the case's 100.00 kN is {(1e5 - wob) / 1e3:,.2f} kN above it") in result.stdout
 
 
 def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):

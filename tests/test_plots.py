@@ -180,6 +180,22 @@ def test_plot_dispersion_writes_png(stats_dataset, tmp_path, drawn):
     assert drawn[0]._suptitle.get_text() == "Dispersion of the response, n_s = 8, σ_WOH = 5 kN\nδ_WOB = 5 %"
 
 
+def test_plot_realizations_one_histogram_per_metric(stats_dataset, tmp_path):
+    from drillstring.quantities import METRIC_DISPLAY
+
+    with pytest.raises(ValueError, match="realization_"):
+        plots.plot_realizations(stats_dataset, tmp_path / "none.png")
+    stats = stats_dataset.copy()
+    n_s = 8
+    for name in METRIC_DISPLAY:
+        stats[f"realization_{name}"] = xr.DataArray(np.linspace(1.0, 2.0, n_s), dims="realization",
+                                                     attrs={"nominal": 1.5})
+    stats["realization_period"] = xr.DataArray(np.full(n_s, np.nan), dims="realization")  # never oscillates
+    _assert_png(plots.plot_realizations(stats, tmp_path / "realizations.png"))
+    figures = plots.plot_study(stats, tmp_path / "out", t_transient=1.0)
+    assert set(figures) == {"convergence", "envelopes", "dispersion", "realizations"}
+
+
 def test_plot_study_writes_the_three_figures(stats_dataset, tmp_path):
     figures = plots.plot_study(stats_dataset, tmp_path / "out", t_transient=1.0)
     assert set(figures) == {"convergence", "envelopes", "dispersion"}
