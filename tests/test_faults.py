@@ -199,12 +199,12 @@ def test_write_refused_midway_stops_in_one_line_and_resumes(case_file, tmp_path,
 
 @pytest.fixture
 def small_filesystem(tmp_path):
-    """A 160 KiB tmpfs mounted for the test (skipped where mounting is not permitted), and a function that
+    """A 240 KiB tmpfs mounted for the test (skipped where mounting is not permitted), and a function that
     resizes it."""
     where = tmp_path / "small"
     where.mkdir()
     try:
-        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=160k", "tmpfs", str(where)], check=True,
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=240k", "tmpfs", str(where)], check=True,
                        capture_output=True, timeout=20)
     except (OSError, subprocess.SubprocessError):
         pytest.skip("cannot mount a small filesystem here (needs mount privileges)")
@@ -230,12 +230,12 @@ def test_full_disk_stops_in_one_line_and_resumes_when_there_is_room(case_file, s
     reference = zarr.open_group(str(uninterrupted[0] / "study.zarr"), mode="r")
     for i in np.nonzero(group["status"][...] == 1)[0]:  # what was stored is whole
         np.testing.assert_array_equal(group["rate_of_penetration"][i], reference["rate_of_penetration"][i])
-    resize("400k")  # the store fits, the figures and report do not
+    resize("480k")  # the store (400 KiB in pages) fits, the figures and reports do not
     _one_line(_study(case_file, out), 1, "No space left on device", f"finished realizations are kept in {out}")
     _no_leftovers(where)
     assert not (out / "summary.json").exists() and not (out / "report.html").exists()
     _same_store(out / "study.zarr", uninterrupted[0] / "study.zarr")
-    resize("4m")
+    resize("12m")  # the interactive page alone is about 5 MB
     result = _study(case_file, out)
     assert result.exit_code == 0, result.output
     _same_result(json.loads(result.stdout), uninterrupted[1])
@@ -243,7 +243,7 @@ def test_full_disk_stops_in_one_line_and_resumes_when_there_is_room(case_file, s
 
 def test_simulate_on_a_full_disk_is_one_line(case_file, small_filesystem):
     where, _ = small_filesystem
-    (where / "filler").write_bytes(b"x" * (150 * 1024))
+    (where / "filler").write_bytes(b"x" * (230 * 1024))
     _one_line(_invoke("simulate", case_file, "--t-end", "1", "--out", where / "run.nc", "--plot", where / "run.png"),
               1, "No space left on device")
     _no_leftovers(where)

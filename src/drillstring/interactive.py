@@ -67,7 +67,7 @@ def study_figures(stats, realizations=None) -> list[dict]:
     """Figures of a Monte Carlo study: per observable the 95 % envelope, mean and nominal response with the
     single ``realizations`` (a Dataset with dimension ``realization``, at most :data:`REALIZATIONS_SHOWN`
     used, each hidden until clicked in the legend); the dispersion [%] against time with the transient
-    shaded; the convergence ``conv(n_s)``; the bit-speed oscillation of each realization against its drawn
+    shaded; the convergence ``conv(n_s)``; the stick-slip index of each realization against its drawn
     inputs. ``stats``: :func:`drillstring.stochastic.analysis.study_statistics`."""
     from drillstring.plots import DISPLAY_UNITS, STUDY_PANELS
 
@@ -123,19 +123,20 @@ def study_figures(stats, realizations=None) -> list[dict]:
     figures.append(_figure("Mean-square convergence", "conv(n_s) / conv(n_s max): levelling off at 1 shows that "
                            "the number of realizations suffices.", convergence, "number of realizations n_s",
                            "conv(n_s) / conv(n_s max)"))
-    if "bit_speed_oscillation" in stats and "input_values" in stats and stats["input_values"].size:
+    metric = "realization_stick_slip_index"
+    if metric in stats and "input_values" in stats and stats["input_values"].size:
         inputs = stats["input_values"]
         data = []
         for k, path in enumerate(inputs["parameter"].values):
             unit = str(inputs["parameter_unit"].values[k]) if "parameter_unit" in inputs.coords else ""
             data.append({"type": "scatter", "mode": "markers", "x": _values(inputs.isel(parameter=k).values),
-                         "y": _values(stats["bit_speed_oscillation"].values),
+                         "y": _values(stats[metric].values),
                          "text": [f"realization {int(r)}" for r in inputs["realization"].values],
                          "name": f"{path} [{unit}]" if unit else str(path), "visible": True if k == 0 else "legendonly",
-                         "hovertemplate": "%{text}<br>input %{x:.6g}<br>oscillation %{y:.4g}<extra></extra>"})
-        figures.append(_figure("Bit-speed oscillation of each realization", "(max − min)/2Ω of the bit speed after "
+                         "hovertemplate": "%{text}<br>input %{x:.6g}<br>stick-slip index %{y:.4g}<extra></extra>"})
+        figures.append(_figure("Stick-slip index of each realization", "(max − min)/(2·mean) of the bit speed after "
                                "the transient against each drawn input (SI units; one input shown at a time from "
-                               "the legend).", data, "drawn input [SI]", "bit-speed oscillation [-]"))
+                               "the legend).", data, "drawn input [SI]", "stick-slip index [-]"))
     return figures
 
 

@@ -465,16 +465,19 @@ class TaskStore:
             self._assign(flags)
 
     def _assign(self, writes: dict[str, list]) -> None:
-        for name, rows in writes.items():
-            array = self.group[name]
-            if array.ndim > 1 and array.chunks[0] == 1:  # one chunk per row: write each row
-                for index, value in rows:
-                    array[index] = value
-            else:  # small arrays in one chunk: rewritten whole
-                whole = array[...]
-                for index, value in rows:
-                    whole[index] = value
-                array[...] = whole
+        # Every chunk written is stored, even one equal to the fill value (a finished row whose metric is
+        # undefined, NaN): a missing chunk then always means damage (:func:`damage`).
+        with zarr.config.set({"array.write_empty_chunks": True}):
+            for name, rows in writes.items():
+                array = zarr.open_array(self.group.store, path=self.group[name].path, mode="r+")
+                if array.ndim > 1 and array.chunks[0] == 1:  # one chunk per row: write each row
+                    for index, value in rows:
+                        array[index] = value
+                else:  # small arrays in one chunk: rewritten whole
+                    whole = array[...]
+                    for index, value in rows:
+                        whole[index] = value
+                    array[...] = whole
 
     def failures(self) -> dict[str, str]:
         return dict(self.group.attrs.get("failures", {}))
