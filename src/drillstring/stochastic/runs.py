@@ -68,6 +68,11 @@ STABILITY_OUTPUTS: dict[str, tuple[str, str]] = {
     "steady_torque_on_bit": ("N m", "torque on bit of steady drilling (closed form)"),
     "steady_force_on_bit": ("N", "force on bit of steady drilling (closed form)"),
 }
+#: Outputs added for a realization of random inputs (the probabilistic operating map).
+REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
+    "lowest_lateral_eigenvalue": ("rad^2/s^2", "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
+    "stick_slip_index": ("1", "stick-slip index (max - min)/(2 mean) of the bit speed"),
+}
 
 
 def simulation_options(case: Case, t_end: float, output_step: float) -> dict[str, Any]:
@@ -150,6 +155,20 @@ def result_outputs(result, case: Case, t_transient: float) -> dict[str, float]:
     return out
 
 
+def stick_slip_index(time, bit_speed, t_transient: float) -> float:
+    """The stick-slip index ``(max − min)/(2·mean)`` of the bit speed over ``time >= t_transient`` [s]
+    (the field's definition, divided by the time-mean bit speed; NaN when that mean is not positive or no
+    finite value is left)."""
+    t = np.asarray(time, dtype=float)
+    steady = t >= t_transient - 1e-9 * max(1.0, abs(t_transient))
+    if not steady.any():
+        steady = np.ones_like(t, dtype=bool)
+    speed = _steady(bit_speed, steady)
+    if not speed.size or not float(speed.mean()) > 0.0:
+        return math.nan
+    return float((speed.max() - speed.min()) / (2.0 * speed.mean()))
+
+
 def stability_outputs(model) -> tuple[dict[str, float], str]:
     """The outputs of :data:`STABILITY_OUTPUTS` of a reduced model, and a note ('' or why they are NaN)."""
     out = {name: math.nan for name in STABILITY_OUTPUTS}
@@ -171,20 +190,24 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
 
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,
-                with_stability: bool = False) -> TaskOutcome:
+                with_stability: bool = False, with_realization: bool = False) -> TaskOutcome:
     """Simulate ``case`` for ``t_end`` [s] and return its scalar outputs as the outcome of task ``index``
-    (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability``). Never
+    (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability`` and
+    :data:`REALIZATION_OUTPUTS` when ``with_realization``). Never
     raises: a run that stops early is FAILED with its cause and the outputs of what it computed; a case
     that cannot be built is FAILED with NaN outputs."""
     start = time.perf_counter()
     t_transient = transient_end(t_end) if t_transient is None else t_transient
-    names = list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
+    names = (list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
+             + (list(REALIZATION_OUTPUTS) if with_realization else []))
     outcome = TaskOutcome(index, FAILED, "", {name: math.nan for name in names})
     try:
         model = case_reduced_model(case)
         if with_stability:
             values, _ = stability_outputs(model)
             outcome.values.update(values)
+        if with_realization:
+            outcome.values["lowest_lateral_eigenvalue"] = float(model.lowest_lateral_eigenvalue)
         try:
             result = simulate_model(model, **simulation_options(case, t_end, output_step))
             outcome.status = DONE
@@ -192,6 +215,9 @@ def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_t
             result = error.result
             outcome.message = str(error)
         outcome.values.update(result_outputs(result, case, t_transient))
+        if with_realization:
+            outcome.values["stick_slip_index"] = stick_slip_index(result.time, result.observables["bit_speed"],
+                                                                  t_transient)
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"
