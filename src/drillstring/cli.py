@@ -1063,13 +1063,13 @@ def map_command(
     except ValueError as error:
         _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("weight_on_bit = ", "--weight-on-bit = "))
     _check_output("--out", out, folder=True)
+    noun = "grid points" if samples is None else "realizations"
     outcome = _engine_command(
-        out, "map.zarr", "map", "grid points",
+        out, "map.zarr", "map", noun,
         lambda progress, note: api.operating_map(
             the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
             transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note,
             samples=samples, sigma=sigma, parameters=laws, correlation=correlated, seed=seed))
-    noun = "grid points" if samples is None else "realizations"
     _note_resumed(outcome.already, settings.points * (samples or 1), noun, out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)
@@ -1088,8 +1088,9 @@ def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
         f"{max(speeds) * _RPM:g} rpm) × {len(weights)} weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} "
         f"kN), {summary['samples']} realizations per point: {summary['done']} done, {summary['failed']} failed; "
         f"wall time {summary['wall_time']:,.1f} s"), soft_wrap=True)
-    table = Table(title="Probabilities per point (± binomial standard error) and quantiles 50 % (2.5–97.5 %)",
-                  title_justify="left")
+    table = Table(title="Probabilities per point and quantiles 50 % (2.5–97.5 %)", title_justify="left",
+                  caption="binomial standard errors of the probabilities in map.json and the report",
+                  caption_justify="left")
     for header in ("rpm", "WOB [kN]", "n", "P(stick-slip)", "P(buckled)", "P(impact)", "P(unstable)",
                    "mean ROP [m/h]", "stick-slip index"):
         table.add_column(escape(header), justify="right")
@@ -1104,8 +1105,7 @@ def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
             cells = [f"{speed * _RPM:g}", f"{wob / _KN:g}", f"{summary['samples_done'][i][j]}"]
             for key in ("stick_slip_probability", "buckling_probability", "impact_probability",
                         "instability_probability"):
-                entry = probabilities[key]
-                cells.append(f"{_fmt(entry['values'][i][j], '.3f')} ± {_fmt(entry['standard_error'][i][j], '.2f')}")
+                cells.append(_fmt(probabilities[key]["values"][i][j], ".3f"))
             cells += [spread("rate_of_penetration_q", i, j, _M_PER_H), spread("stick_slip_index_q", i, j, 1.0)]
             table.add_row(*cells)
     console.print(table)

@@ -400,7 +400,7 @@ def sampled_map_summary(ds: xr.Dataset) -> dict[str, Any]:
         "t_end": float(ds.attrs["t_end"]),
         "t_transient": float(ds.attrs["t_transient"]),
         "critical_weight_on_bit": float(ds.attrs["critical_weight_on_bit"]),
-        "samples_done": _grid_list(ds["samples_done"].values),
+        "samples_done": [[int(v) for v in row] for row in ds["samples_done"].values],
         "probabilities": {},
         "quantile_levels": list(QUANTILES),
         "quantiles": {},
