@@ -12,7 +12,7 @@ from drillstring.stochastic import execution
 from drillstring.stochastic import probabilistic_map as pm
 from drillstring.stochastic.maxent import realization_generator
 from drillstring.stochastic.operating_map import MapSettings
-from drillstring.stochastic.store import DONE
+from drillstring.stochastic.store import DONE, StoreError
 
 RPM = math.pi / 30.0
 SIGMA = 5e3
@@ -80,3 +80,52 @@ def test_per_point_statistics_from_the_realizations(buckling_map):
     summary = pm.sampled_map_summary(ds)
     assert summary["probabilities"]["buckling_probability"]["values"][0] == pytest.approx(
         list(ds.buckling_probability.values[0]))
+
+
+def test_an_interrupted_map_resumes_to_the_same_map_and_a_deterministic_store_is_refused(torsional_case, tmp_path):
+    grid = MapSettings((8.0, 12.0), (6e4,), t_end=2.0, output_step=0.05)
+    settings = pm.SampledMapSettings(grid, samples=3, seed=1, sigma=4e3)
+    whole = pm.run_sampled_map(torsional_case, settings, tmp_path / "whole.zarr", execution.Engine(workers=1))
+    assert whole.completed == 6
+
+    def interrupt_after_two(done, failed, total):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(execution.Interrupted, match="map interrupted after 2 of 6 realizations.*resume"):
+        pm.run_sampled_map(torsional_case, settings, tmp_path / "cut.zarr",
+                           execution.Engine(workers=1, progress=interrupt_after_two))
+    resumed = pm.run_sampled_map(torsional_case, settings, tmp_path / "cut.zarr", execution.Engine(workers=1))
+    assert resumed.completed == 6 and resumed.computed == 4
+    a, b = pm.sampled_map_dataset(tmp_path / "whole.zarr"), pm.sampled_map_dataset(tmp_path / "cut.zarr")
+    for name in (*pm.SAMPLE_OUTPUTS, "input_values", *pm.PROBABILITIES, *pm.QUANTILE_OUTPUTS.values()):
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    other = pm.SampledMapSettings(grid, samples=3, seed=2, sigma=4e3)
+    with pytest.raises(ValueError, match="holds a different probabilistic map"):
+        pm.run_sampled_map(torsional_case, other, tmp_path / "cut.zarr", execution.Engine(workers=1))
+    from drillstring.stochastic import operating_map as om
+
+    om.run_map(torsional_case, grid, tmp_path / "deterministic.zarr", execution.Engine(workers=1))
+    with pytest.raises(StoreError, match="it is a map store"):
+        pm.sampled_map_dataset(tmp_path / "deterministic.zarr")
+
+
+@pytest.mark.parametrize("extra, message", [
+    ({"samples": 1}, "samples = 1"),
+    ({"laws": (("weight_on_hook", "normal 1e6 1e3"),)}, "weight_on_hook: cannot carry a law on a map"),
+    ({"laws": (("operation.weight_on_bit", "uniform 5e4 7e4"),)}, "operation.weight_on_bit: cannot carry"),
+    ({"sigma": None}, "no random parameter"),
+    ({"samples": 40_000}, "above the limit of 100000"),
+])
+def test_bad_settings_are_refused_in_one_line(extra, message):
+    grid = MapSettings((8.0, 12.0), (6e4, 7e4), t_end=2.0, output_step=0.05)
+    with pytest.raises(ValueError, match=message) as error:
+        pm.SampledMapSettings(grid, **({"samples": 4, "sigma": 4e3} | extra))
+    assert "\n" not in str(error.value)
+
+
+def test_a_sigma_that_puts_a_point_out_of_range_is_refused_naming_the_point(torsional_case):
+    """At 10 kN on the bit, σ = 5 kN puts wob < 0 with probability Φ(−2) = 0.023 > 1e-3."""
+    grid = MapSettings((8.0,), (1e4, 1e5), t_end=2.0, output_step=0.05)
+    with pytest.raises(ValueError, match=r"at the point 76.39 rpm, 10 kN.*probability 0.0228"):
+        pm.check_sampled_map(torsional_case, pm.SampledMapSettings(grid, samples=4, sigma=5e3))
