@@ -726,32 +726,42 @@ def operating_map(
 
 def _finish_map(case, folder, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
+    from drillstring.plots import plot_map
+    from drillstring.report import write_map_report
+    from drillstring.stochastic.operating_map import map_dataset, map_summary
+
+    figures = {"figure": ("map.png", plot_map,
+                          "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
+                          "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
+                          "red dashed: lateral buckling limit; dots: simulated points")}
+    return _map_files(case, folder, run, map_dataset, map_summary, "points", figures, write_map_report,
+                      f"Operating map: case '{case.name}'")
+
+
+def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str):
+    """A map's Dataset (``dataset(store)``), summary (``summarize(ds)`` with the run's record) and, in ``folder``
+    unless None, ``map.nc``, ``map.json``, the ``figures`` (key -> (file name, plot function, caption)) and
+    the ``report`` (``report(path, title=..., case_toml=..., summary=..., figures=..., run_info=...)``)."""
     import json
 
     from drillstring.files import write_text_atomic
-    from drillstring.plots import plot_map
-    from drillstring.report import write_map_report
     from drillstring.results import write_netcdf
-    from drillstring.stochastic.operating_map import map_dataset, map_summary
 
     store_path = run.store.path
-    ds = map_dataset(store_path)
-    summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
+    ds = dataset(store_path)
+    summary = {"case": case.name, **summarize(ds), **_run_record(run.store, run, noun)}
     files: dict[str, Path] = {}
     if folder is not None:
         files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                 "figure": folder / "map.png", "report": folder / "report.html"}
+                 **{key: folder / name for key, (name, _, _) in figures.items()}, "report": folder / "report.html"}
         write_netcdf(ds, files["map"])
-        plot_map(ds, files["figure"])
+        for key, (_, plot, _) in figures.items():
+            plot(ds, files[key])
         summary["files"] = {k: str(v) for k, v in files.items()}
         write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
-        write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
-                         case_toml=case.to_toml(), summary=summary,
-                         figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
-                                  "largest radial displacement over the map; black line: linear "
-                                  "stability boundary of steady drilling (hatched: unstable); red "
-                                  "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
-                         run_info={**_run_table(summary, "points"), "store": str(store_path)})
+        report(files["report"], title=title, case_toml=case.to_toml(), summary=summary,
+               figures={caption: files[key] for key, (_, _, caption) in figures.items()},
+               run_info={**_run_table(summary, noun), "store": str(store_path)})
     return ds, summary, files
 
 
@@ -782,37 +792,19 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
 
 def _finish_sampled_map(case, folder, run):
     """Under the map's lock: the probabilistic map's Dataset, summary and (in ``folder``, unless None) files."""
-    import json
-
-    from drillstring.files import write_text_atomic
     from drillstring.plots import plot_probability_map, plot_quantile_map
     from drillstring.report import write_probability_map_report
-    from drillstring.results import write_netcdf
     from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
 
-    store_path = run.store.path
-    ds = sampled_map_dataset(store_path)
-    summary = {"case": case.name, **sampled_map_summary(ds), **_run_record(run.store, run, "realizations")}
-    files: dict[str, Path] = {}
-    if folder is not None:
-        files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                 "figure": folder / "probabilities.png", "quantiles": folder / "quantiles.png",
-                 "report": folder / "report.html"}
-        write_netcdf(ds, files["map"])
-        plot_probability_map(ds, files["figure"])
-        plot_quantile_map(ds, files["quantiles"])
-        summary["files"] = {k: str(v) for k, v in files.items()}
-        write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
-        write_probability_map_report(
-            files["report"], title=f"Probabilistic operating map: case '{case.name}'", case_toml=case.to_toml(),
-            summary=summary,
-            figures={"Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
-                     "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
-                     "buckling limit; dots: the points": files["figure"],
-                     "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each point's "
-                     "realizations": files["quantiles"]},
-            run_info={**_run_table(summary, "realizations"), "store": str(store_path)})
-    return ds, summary, files
+    figures = {"figure": ("probabilities.png", plot_probability_map,
+                          "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
+                          "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
+                          "buckling limit; dots: the points"),
+               "quantiles": ("quantiles.png", plot_quantile_map,
+                             "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
+                             "point's realizations")}
+    return _map_files(case, folder, run, sampled_map_dataset, sampled_map_summary, "realizations", figures,
+                      write_probability_map_report, f"Probabilistic operating map: case '{case.name}'")
 
 
 @dataclass

@@ -1084,10 +1084,9 @@ def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
     console = _console()
     speeds, weights = summary["top_speed"], summary["weight_on_bit"]
     console.print(escape(
-        f"Probabilistic operating map: case {name!r}, {len(speeds)} top speeds ({min(speeds) * _RPM:g}–"
-        f"{max(speeds) * _RPM:g} rpm) × {len(weights)} weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} "
-        f"kN), {summary['samples']} realizations per point: {summary['done']} done, {summary['failed']} failed; "
-        f"wall time {summary['wall_time']:,.1f} s"), soft_wrap=True)
+        f"Probabilistic operating map: case {name!r}, {_grid_text(summary)}, {summary['samples']} realizations per "
+        f"point: {summary['done']} done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"),
+        soft_wrap=True)
     table = Table(title="Probabilities per point and quantiles 50 % (2.5–97.5 %)", title_justify="left",
                   caption="binomial standard errors of the probabilities in map.json and the report",
                   caption_justify="left")
@@ -1118,12 +1117,17 @@ def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
                              f"{files['report']}"), soft_wrap=True)
 
 
+def _grid_text(summary: dict[str, Any]) -> str:
+    """'N top speeds (a–b rpm) × M weights-on-bit (c–d kN)' of a map's summary."""
+    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
+    return (f"{len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} rpm) × {len(weights)} "
+            f"weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} kN)")
+
+
 def _print_map(name: str, summary: dict[str, Any]) -> None:
     console = _console()
-    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
     console.print(escape(
-        f"Operating map: case {name!r}, {len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} "
-        f"rpm) × {len(weights)} weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} kN), "
+        f"Operating map: case {name!r}, {_grid_text(summary)}, "
         f"{summary['done']} points done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"
     ), soft_wrap=True)
     table = Table(title="Highlights", title_justify="left")

@@ -555,6 +555,16 @@ def _points_and_buckling(ax, ds: xr.Dataset, x: np.ndarray, y: np.ndarray) -> No
     ax.set_ylabel("weight-on-bit [kN]")
 
 
+def _map_legend(fig, ds: xr.Dataset) -> None:
+    from matplotlib.lines import Line2D
+
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    handles = [Line2D([], [], color="C3", ls="--", lw=1.6,
+                      label=f"lateral buckling of the nominal string, WOB = {critical:.4g} kN"),
+               Line2D([], [], color="k", marker=".", ls="", label="grid point")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize="small")
+
+
 def plot_probability_map(ds: xr.Dataset, path: str | Path) -> Path:
     """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
     sampled_map_dataset`) as four panels over top speed [rpm] × the points' nominal weight-on-bit [kN]: the
@@ -578,13 +588,15 @@ def plot_probability_map(ds: xr.Dataset, path: str | Path) -> Path:
         fig.colorbar(artist, ax=ax, label=label, ticks=levels[::2])
         _points_and_buckling(ax, ds, x, y)
         ax.set_title(label, fontsize="medium")
+    _map_legend(fig, ds)
     fig.suptitle(_sampled_map_title(ds, "Probabilistic operating map"))
     return _save(fig, path)
 
 
 def plot_quantile_map(ds: xr.Dataset, path: str | Path) -> Path:
     """The 2.5, 50 and 97.5 % quantiles of the mean ROP [m/h] (top row) and of the stick-slip index (bottom
-    row) over each point's realizations, over top speed [rpm] × weight-on-bit [kN]; one colour scale per row.
+    row) over each point's realizations, over top speed [rpm] × weight-on-bit [kN], each panel on its own colour
+    scale.
     Written to the PNG ``path``."""
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
     y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
@@ -599,6 +611,7 @@ def plot_quantile_map(ds: xr.Dataset, path: str | Path) -> Path:
             _map_panel(ax, fig, x, y, values[..., k], label, cmap)
             _points_and_buckling(ax, ds, x, y)
             ax.set_title(f"{label.split(' [')[0]}: {100 * q:g} % quantile", fontsize="medium")
+    _map_legend(fig, ds)
     fig.suptitle(_sampled_map_title(ds, "Quantiles over the realizations"))
     return _save(fig, path)
 

@@ -56,7 +56,7 @@ from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
-from drillstring.stochastic.operating_map import MAP_AXES, MAX_POINTS, MapSettings, check_map
+from drillstring.stochastic.operating_map import MAP_AXES, MAX_POINTS, MapSettings, check_map, map_attributes
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, with_parameters
 from drillstring.stochastic.runs import (
     REALIZATION_OUTPUTS,
@@ -354,15 +354,9 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
                                {"units": "N", "long_name": "critical weight on bit (lateral buckling) minus the point's "
                                                             "nominal weight on bit (< 0: buckled)"})
     settings = dict(attrs["settings"])
-    grid = dict(settings["grid"])
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({
-        "case": attrs["case"],
-        "critical_weight_on_bit": critical,
-        "bit_area": float(attrs["bit_area"]),
-        "t_end": float(grid["t_end"]),
-        "output_step": float(grid["output_step"]),
-        "t_transient": float(grid["transient"]),
+        **map_attributes(attrs, dict(settings["grid"])),
         "samples": samples,
         "seed": int(settings["seed"]),
         "sigma": math.nan if settings.get("sigma") is None else float(settings["sigma"]),
