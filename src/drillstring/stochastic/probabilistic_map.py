@@ -136,8 +136,8 @@ class SampledMapSettings:
                           allowed=f"an integer >= {MIN_SAMPLES} (realizations per point)")
         total = samples * self.grid.points
         if total > MAX_POINTS:
-            raise ValueError(f"samples = {samples}: {self.grid.points} points × {samples} realizations = {total} runs, "
-                             f"above the limit of {MAX_POINTS} (fewer points or samples)")
+            raise ValueError(f"samples = {samples}: {self.grid.points} points × {samples} realizations = {total} "
+                             f"runs, above the limit of {MAX_POINTS} (fewer points or samples)")
         object.__setattr__(self, "samples", samples)
         object.__setattr__(self, "seed", check_seed(self.seed))
         if self.sigma is not None:
@@ -208,8 +208,8 @@ def check_sampled_map(case: Case, settings: SampledMapSettings) -> None:
             if p > OUT_OF_RANGE_PROBABILITY:
                 top_speed, wob = settings.grid.point(point)
                 raise ValueError(
-                    f"sigma = {settings.sigma:.6g} N: at the point {top_speed * 30 / math.pi:.4g} rpm, {wob / 1e3:.6g} kN "
-                    f"the weight-on-bit falls outside (0, {case.weight / 1e3:.6g} kN) with probability {p:.3g}, above "
+                    f"sigma = {settings.sigma:.6g} N: at the point {top_speed * 30 / math.pi:.4g} rpm, "
+                    f"{wob / 1e3:.6g} kN the weight-on-bit falls outside (0, {case.weight / 1e3:.6g} kN) with probability {p:.3g}, above "
                     f"{OUT_OF_RANGE_PROBABILITY:g}: such realizations cannot run (a smaller sigma, or weights-on-bit "
                     "farther from 0 and from the string's weight)")
     try:
@@ -351,8 +351,8 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
                       {"units": unit, "long_name": f"quantiles of the {text} over the point's realizations"})
     critical = float(attrs["critical_weight_on_bit"])
     data["buckling_margin"] = (dims[:2], np.broadcast_to(critical - wob, shape[:2]).copy(),
-                               {"units": "N", "long_name": "critical weight on bit (lateral buckling) minus the point's "
-                                                            "nominal weight on bit (< 0: buckled)"})
+                               {"units": "N", "long_name": "critical weight on bit (lateral buckling) minus the "
+                                                            "point's nominal weight on bit (< 0: buckled)"})
     settings = dict(attrs["settings"])
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({

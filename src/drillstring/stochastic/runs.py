@@ -70,7 +70,8 @@ STABILITY_OUTPUTS: dict[str, tuple[str, str]] = {
 }
 #: Outputs added for a realization of random inputs (the probabilistic operating map).
 REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
-    "lowest_lateral_eigenvalue": ("rad^2/s^2", "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
+    "lowest_lateral_eigenvalue": ("rad^2/s^2",
+                                  "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
     "stick_slip_index": ("1", "stick-slip index (max - min)/(2 mean) of the bit speed"),
 }
 
