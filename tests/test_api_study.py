@@ -20,7 +20,7 @@ def test_study_files_defaults_and_rerun(small_case, tmp_path):
     assert first.already == 0 and summary["realizations_this_run"] == 3
     assert json.loads((out / "summary.json").read_text()) == summary
     assert set(first.files) == {"store", "summary", "statistics", "report", "envelopes", "dispersion",
-                                "convergence"}
+                                "convergence", "interactive"}
     assert all(path.exists() for path in first.files.values())
     stored = read_netcdf(out / "statistics.nc")
     np.testing.assert_array_equal(stored.rate_of_penetration_mean.values,

@@ -650,8 +650,8 @@ def test_two_studies_on_one_folder(coarse_case, tmp_path):
         assert np.all(np.abs(nominal) > 0), name  # the reported failure: all-zero statistics
         np.testing.assert_allclose(mean, nominal, rtol=0.2, err_msg=name)  # around the nominal run
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png", "envelopes.png",
-         "dispersion.png"])  # no lock, no temporary file left
+        ["study.zarr", "summary.json", "statistics.nc", "report.html", "interactive.html", "convergence.png",
+         "envelopes.png", "dispersion.png"])  # no lock, no temporary file left
 
 
 def test_simulate_output_paths_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
@@ -725,7 +725,7 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
 
 
 #: Modules that only the simulating commands need.
-_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr")
+_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr", "plotly")
 
 
 @pytest.mark.parametrize("argv, unwanted", [

@@ -334,26 +334,34 @@ def _finish_study(case, settings, t_transient, buckling, folder, run):
     })
     files: dict[str, Path] = {}
     if folder is not None:
-        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient)
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw)
     return stats, payload, files
 
 
-def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:
-    """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
-    statistics' ``summary`` and the run information from ``payload``)."""
-    import json
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
+                       raw=None) -> dict[str, Path]:
+    """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
+    statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
+    finished realizations of ``raw``, the study's raw Dataset)."""
 
-    from drillstring.files import write_text_atomic
-    from drillstring.plots import plot_study
-    from drillstring.report import write_report
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
+    from drillstring.plots import STUDY_PANELS, plot_study
+    from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
+    from drillstring.stochastic.store import DONE
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
-             "statistics": folder / "statistics.nc", "report": folder / "report.html"}
+             "statistics": folder / "statistics.nc", "report": folder / "report.html",
+             "interactive": folder / INTERACTIVE_PAGE}
+    shown = None
+    if raw is not None:
+        finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
+        shown = raw[list(STUDY_PANELS)].isel(realization=finished)
     write_netcdf(stats, paths["statistics"])
     figures = plot_study(stats, folder, t_transient)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
-    write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
+    write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {
         "realizations requested": settings.samples,
         "failures": payload["failures"],
@@ -381,6 +389,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
                  for k in ("envelopes", "dispersion", "convergence")},
         run_info=run_info,
+        interactive=study_figures(stats, shown),
     )
     return {**paths, **figures}
 
@@ -438,6 +447,31 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     if weight_on_bit is not None:
         weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
     return case_stability(case, weight_on_bit=weight_on_bit)
+
+
+def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
+             default_unit: str = ""):
+    """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
+    torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
+    the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
+    and ``blades``× (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
+
+    ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
+    in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
+    :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
+    line naming the argument) for a bad grid or a blade count outside [1, :data:`~drillstring.critical_speeds.
+    MAX_BLADES`], TypeError for a blade count that is not an integer."""
+    from drillstring.case import DIMENSIONS
+    from drillstring.checks import integer
+    from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, MAX_BLADES, case_campbell
+    from drillstring.stochastic.operating_map import parse_axis
+
+    the_case = as_case(case)
+    blades = integer("blades", DEFAULT_BLADES if blades is None else blades, low=1, high=MAX_BLADES)
+    dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
+    speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
+                        name="top_speed", default_unit=default_unit)
+    return case_campbell(the_case, speeds, blades)
 
 
 def study(
@@ -726,6 +760,7 @@ def operating_map(
 
 def _finish_map(case, folder, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
+    from drillstring.interactive import map_figures
     from drillstring.plots import plot_map
     from drillstring.report import write_map_report
     from drillstring.stochastic.operating_map import map_dataset, map_summary
@@ -735,16 +770,16 @@ def _finish_map(case, folder, run):
                           "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
                           "red dashed: lateral buckling limit; dots: simulated points")}
     return _map_files(case, folder, run, map_dataset, map_summary, "points", figures, write_map_report,
-                      f"Operating map: case '{case.name}'")
+                      f"Operating map: case '{case.name}'", map_figures)
 
 
-def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str):
+def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str, interactive):
     """A map's Dataset (``dataset(store)``), summary (``summarize(ds)`` with the run's record) and, in ``folder``
     unless None, ``map.nc``, ``map.json``, the ``figures`` (key -> (file name, plot function, caption)) and
-    the ``report`` (``report(path, title=..., case_toml=..., summary=..., figures=..., run_info=...)``)."""
-    import json
-
-    from drillstring.files import write_text_atomic
+    the ``report`` (``report(path, title=..., case_toml=..., summary=..., figures=..., run_info=...,
+    interactive=...)``) with its ``interactive(ds)`` figures beside it."""
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.report import INTERACTIVE_PAGE
     from drillstring.results import write_netcdf
 
     store_path = run.store.path
@@ -753,15 +788,16 @@ def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, 
     files: dict[str, Path] = {}
     if folder is not None:
         files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                 **{key: folder / name for key, (name, _, _) in figures.items()}, "report": folder / "report.html"}
+                 **{key: folder / name for key, (name, _, _) in figures.items()}, "report": folder / "report.html",
+                 "interactive": folder / INTERACTIVE_PAGE}
         write_netcdf(ds, files["map"])
         for key, (_, plot, _) in figures.items():
             plot(ds, files[key])
         summary["files"] = {k: str(v) for k, v in files.items()}
-        write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
+        write_text_atomic(files["summary"], strict_json(summary) + "\n")  # undefined values: null
         report(files["report"], title=title, case_toml=case.to_toml(), summary=summary,
                figures={caption: files[key] for key, (_, _, caption) in figures.items()},
-               run_info={**_run_table(summary, noun), "store": str(store_path)})
+               run_info={**_run_table(summary, noun), "store": str(store_path)}, interactive=interactive(ds))
     return ds, summary, files
 
 
@@ -792,6 +828,7 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
 
 def _finish_sampled_map(case, folder, run):
     """Under the map's lock: the probabilistic map's Dataset, summary and (in ``folder``, unless None) files."""
+    from drillstring.interactive import probability_map_figures
     from drillstring.plots import plot_probability_map, plot_quantile_map
     from drillstring.report import write_probability_map_report
     from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
@@ -804,7 +841,8 @@ def _finish_sampled_map(case, folder, run):
                              "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
                              "point's realizations")}
     return _map_files(case, folder, run, sampled_map_dataset, sampled_map_summary, "realizations", figures,
-                      write_probability_map_report, f"Probabilistic operating map: case '{case.name}'")
+                      write_probability_map_report, f"Probabilistic operating map: case '{case.name}'",
+                      probability_map_figures)
 
 
 @dataclass
@@ -885,8 +923,9 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, run):
     import json
 
     from drillstring.files import write_text_atomic
+    from drillstring.interactive import sensitivity_figures
     from drillstring.plots import plot_sobol, plot_sobol_convergence
-    from drillstring.report import write_sensitivity_report
+    from drillstring.report import INTERACTIVE_PAGE, write_sensitivity_report
     from drillstring.stochastic.sensitivity_study import SENSITIVITY_OUTPUTS, load_sensitivity
 
     store_path = run.store.path
@@ -900,7 +939,7 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, run):
     if folder is not None:
         files = {"store": store_path, "indices": folder / "sensitivity.json",
                  "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
-                 "report": folder / "report.html"}
+                 "report": folder / "report.html", "interactive": folder / INTERACTIVE_PAGE}
         plot_sobol(payload, files["figure"])
         plot_sobol_convergence(payload, files["convergence"])
         payload["files"] = {k: str(v) for k, v in files.items()}
@@ -913,5 +952,6 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, run):
                      "The indices at N/4, N/2 and N base samples": files["convergence"]},
             run_info={**_run_table(record, "runs"), "runs": result.runs,
                       "simulated time per run [s]": settings.t_end,
-                      "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)})
+                      "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
+            interactive=sensitivity_figures(payload))
     return result, payload, files

@@ -7,6 +7,8 @@ Commands
     weight-on-bit (lateral buckling), axial force.
 ``drillstring modes [CASE] [--count N] [--json]``
     The lowest natural frequencies of the axial, torsional and lateral mode families.
+``drillstring campbell [CASE] [--top-speed A:B:N] [--blades N] [--plot FILE.png] [--json]``
+    Campbell diagram: frequencies of each family against rotary speed, excitation lines, critical speeds.
 ``drillstring cases``
     The built-in cases.
 ``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
@@ -356,6 +358,103 @@ def modes(
 
 
 # ---------------------------------------------------------------------------------------------------------
+# drillstring campbell
+# ---------------------------------------------------------------------------------------------------------
+
+
+@app.command()
+def campbell(
+    case: CaseArg = "reference",
+    top_speed: Annotated[
+        str | None, typer.Option("--top-speed", help="Rotary speeds: FROM:TO:N, a list a,b,c, or one value; bare "
+                                                     "numbers in rpm, or with units (default 5 rpm:300 rpm:60).")
+    ] = None,
+    blades: Annotated[
+        int | None, typer.Option("--blades", help="Blades (or cones) of the bit: the n× excitation line "
+                                                  "(default 3).")
+    ] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Write the diagram as a PNG figure.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Campbell diagram: natural frequencies of each family against rotary speed (prestress, drilling fluid,
+    gyroscopic forward/backward whirl), the 1× and blade excitation lines, the critical speeds and the
+    case's operating speed."""
+    the_case = _load(case)
+    if plot is not None:
+        _check_output("--plot", plot)
+    from drillstring import api
+
+    try:
+        diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm")
+    except ValueError as error:
+        _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("blades = ", "--blades = "))
+    payload = diagram.to_dict()
+    if plot is not None:
+        from drillstring.plots import plot_campbell
+
+        plot_campbell(payload, plot, f"Campbell diagram: case {the_case.name!r}")
+        payload["figure"] = str(plot)
+    if as_json:
+        _print_json(payload)
+        return
+    _print_campbell(the_case.name, diagram, plot)
+
+
+def _print_campbell(name: str, diagram, plot: Path | None) -> None:
+    from drillstring.critical_speeds import BHA_SHARE
+
+    console = _console()
+    speeds = diagram.speeds * _RPM
+    orders = ", ".join(f"{k}×" for k in diagram.orders)
+    console.print(escape(f"Campbell diagram: case {name!r}, {len(speeds)} speeds {speeds[0]:g}–{speeds[-1]:g} rpm, "
+                         f"lines {orders}, frequencies up to {diagram.max_frequency:.2f} Hz"), soft_wrap=True)
+    rows: dict[tuple, dict] = {}
+    skipped = 0
+    for c in diagram.critical_speeds:
+        if c.family == "lateral" and c.bha_energy_share < BHA_SHARE:
+            skipped += 1
+            continue
+        row = rows.setdefault((c.family, c.mode, c.order), {"share": c.bha_energy_share})
+        row[c.whirl or "speed"] = c.speed * _RPM
+        if c.whirl != "backward":
+            row["frequency"] = c.frequency
+    table = Table(title="Critical speeds (excitation line × natural frequency)", title_justify="left")
+    for title in ("line", "family", "mode", "frequency [Hz]", "critical speed [rpm]", "backward whirl [rpm]",
+                  "BHA energy"):
+        table.add_column(escape(title), justify="left" if title in ("line", "family") else "right")
+    operating = diagram.operating_speed * _RPM if diagram.operating_speed else None
+    ordered = sorted(rows.items(), key=lambda item: min(v for k, v in item[1].items() if k in ("speed", "forward",
+                                                                                           "backward")))
+    for (family, mode, order), row in ordered:
+        main = row.get("speed", row.get("forward"))
+        table.add_row(f"{order}×", family, str(mode), f"{row['frequency']:.3f}",
+                      "" if main is None else f"{main:.1f}" + (" fwd" if family == "lateral" else ""),
+                      f"{row['backward']:.1f}" if "backward" in row else "",
+                      "" if row["share"] is None else f"{row['share']:.0%}")
+    console.print(table)
+    notes = [f"lateral: the BHA modes (at least {BHA_SHARE:.0%} of the kinetic energy below the top section); "
+             f"{skipped} crossings with drill-pipe lateral modes are in --json."]
+    if operating:
+        below = [r for (_, r) in ordered if max(v for k, v in r.items() if k in ("speed", "forward", "backward"))
+                 <= operating]
+        above = [r for (_, r) in ordered if min(v for k, v in r.items() if k in ("speed", "forward", "backward"))
+                 > operating]
+        near = []
+        if below:
+            near.append(f"{max(r.get('speed', r.get('forward', 0.0)) for r in below):.1f} rpm below")
+        if above:
+            near.append(f"{min(r.get('speed', r.get('forward', math.inf)) for r in above):.1f} rpm above")
+        notes.append(f"Operating speed {operating:.1f} rpm; nearest critical speeds: {', '.join(near) or 'none'}.")
+    notes.append("Axial and torsional frequencies do not depend on the rotary speed in the linear model; gyroscopic "
+                 "terms split each lateral pair into forward and backward whirl.")
+    notes.extend(diagram.notes)
+    if plot is not None:
+        notes.append(f"Figure: {plot}")
+    for note in notes:
+        console.print(escape(note), soft_wrap=True)
+
+
+# ---------------------------------------------------------------------------------------------------------
 # drillstring stability
 # ---------------------------------------------------------------------------------------------------------
 
@@ -539,6 +638,7 @@ def simulate(
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
+    from drillstring.files import NotARegularFile
     from drillstring.plots import plot_run
     from drillstring.results import write_netcdf
 
@@ -557,8 +657,15 @@ def simulate(
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
-    netcdf = write_netcdf(ds, out)
-    figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+    try:
+        netcdf = write_netcdf(ds, out)
+        figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+    except OSError as error:  # disk full, no permission: the run is lost, the old files are left as they were
+        from drillstring.files import write_error_message
+
+        _fail(write_error_message(error), EXIT_RUN_FAILED)
+    except NotARegularFile as error:  # an output that became a device or FIFO during the run
+        _fail(str(error), EXIT_RUN_FAILED)
     numbers = _run_numbers(ds, window.transient)
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
@@ -906,9 +1013,11 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     """Run ``call(progress, note)`` (an API function of the study engine) for a command writing to ``out``:
     the store's lock is taken before loading the engine (a second run on the folder is refused at once),
     a progress bar and notes go to stderr, and every error ends the command with one line: exit 130 when
-    interrupted (what finished is saved), 1 for a run that started and failed, 2 for refused input (settings,
-    store, scheduler, lock). A folder created here and left empty is removed."""
-    from drillstring.files import LockedError
+    interrupted (what finished is saved), 1 for a run that started and failed (an output write that failed:
+    disk full, no permission), 2 for refused input (settings, store, scheduler, lock, another kind of run in
+    the folder, an output path that is not a regular file). Temporary files left in ``out`` by a killed run
+    are removed. A folder created here and left empty is removed."""
+    from drillstring.files import LockedError, remove_stale_temporaries, write_error_message
     from drillstring.stochastic import execution
     from drillstring.stochastic.locks import StudyLock, StudyLocked
 
@@ -927,6 +1036,7 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
         note(lock.note)
     tracker = _StudyProgress(err, noun)
     try:
+        remove_stale_temporaries(out)
         try:
             return call(tracker, note)
         finally:
@@ -938,6 +1048,8 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
               "resume", EXIT_INTERRUPTED)
     except (execution.WorkersLost, _api().StudyFailed) as error:
         _fail(str(error), EXIT_RUN_FAILED)
+    except OSError as error:  # an output write that failed: disk full, no permission, read-only filesystem
+        _fail(write_error_message(error, f"finished {noun} are kept in {out / store_name}"), EXIT_RUN_FAILED)
     except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
         _fail(str(error))
     finally:
@@ -974,7 +1086,8 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
                       soft_wrap=True)
     console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
     console.print(escape(f"Summary: {files['summary']}, statistics: {files['statistics']}"), soft_wrap=True)
-    console.print(escape(f"Figures and report: {files['report']}"), soft_wrap=True)
+    console.print(escape(f"Figures and report: {files['report']}, interactive: {files['interactive']}"),
+                  soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -1147,8 +1260,8 @@ def _print_map(name: str, summary: dict[str, Any]) -> None:
     files = summary.get("files") or {}
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
-        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}"),
-                      soft_wrap=True)
+        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}, "
+                             f"interactive: {files['interactive']}"), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -1238,7 +1351,7 @@ def _print_sensitivity(name: str, payload: dict[str, Any]) -> None:
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
         console.print(escape(f"Indices: {files['indices']}, figures: {files['figure']}, report: "
-                             f"{files['report']}"), soft_wrap=True)
+                             f"{files['report']}, interactive: {files['interactive']}"), soft_wrap=True)
 
 
 #: Commands that run in their own process only and never use Dask. With Dask installed, xarray imports

@@ -16,6 +16,8 @@ are safe in scripts, notebooks, worker processes and tests.
 * :func:`plot_study` — the three study figures in one folder.
 * :func:`plot_map` — an operating map: ROP, vibration, MSE, lateral displacement over top speed × WOB, with
   the linear stability boundary, the buckling limit and the simulated points.
+* :func:`plot_campbell` — a Campbell diagram: frequencies of each family vs rotary speed, excitation lines,
+  critical speeds, the operating speed.
 * :func:`plot_sobol` — Sobol' indices (first order and total, with confidence intervals) per output;
   :func:`plot_sobol_convergence` — the indices at N/4, N/2, N.
 """
@@ -43,6 +45,7 @@ __all__ = [
     "plot_map",
     "plot_sobol",
     "plot_sobol_convergence",
+    "plot_campbell",
 ]
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
@@ -433,6 +436,52 @@ def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float) -> di
 # ---------------------------------------------------------------------------------------------------------
 
 #: Panels of :func:`plot_map`: variable, factor from SI, label, colour map, logarithmic scale.
+_FAMILY_COLORS = {"axial": "C0", "torsional": "C1", "lateral": "C2"}
+
+
+def plot_campbell(diagram: dict, path: str | Path, title: str = "Campbell diagram") -> Path:
+    """A Campbell diagram from :meth:`drillstring.critical_speeds.CampbellDiagram.to_dict` (SI): frequency [Hz]
+    against rotary speed [rpm]; axial and torsional curves, lateral BHA modes (forward whirl solid,
+    backward dashed; the drill-pipe lateral modes thin grey), the excitation lines, the critical speeds
+    of the BHA modes (dots) and the operating speed."""
+    rpm = np.asarray(diagram["speeds"], dtype=float) * _RPM
+    top = float(diagram["max_frequency"])
+    threshold = diagram["bha_share_threshold"]
+    fig, axes = _figure(1, 1, (10.0, 7.0))
+    ax = axes[0]
+    labelled: set[str] = set()
+    for curve in diagram["curves"]:
+        family, whirl, share = curve["family"], curve["whirl"], curve["bha_energy_share"]
+        f = np.asarray(curve["frequencies"], dtype=float)
+        if family == "lateral" and share < threshold:
+            ax.plot(rpm, f, color="0.8", lw=0.4, zorder=1)
+            continue
+        key = f"{family} {whirl}".strip()
+        ax.plot(rpm, f, color=_FAMILY_COLORS[family], lw=1.1, ls="--" if whirl == "backward" else "-",
+                label=None if key in labelled else (f"lateral BHA, {whirl}" if family == "lateral" else family),
+                zorder=2)
+        labelled.add(key)
+    for k, order in enumerate(diagram["orders"]):
+        ax.plot(rpm, order * rpm / 60.0, color="k", lw=1.2, ls=(":", "-.", "--")[k % 3], label=f"{order}× excitation",
+                zorder=3)
+    shown = [c for c in diagram["critical_speeds"]
+             if c["family"] != "lateral" or c["bha_energy_share"] >= threshold]
+    if shown:
+        ax.plot([c["speed"] * _RPM for c in shown], [c["frequency"] for c in shown], "o", ms=3.5, color="k",
+                mfc="w", zorder=4, label="critical speeds")
+    if diagram.get("operating_speed"):
+        ax.axvline(diagram["operating_speed"] * _RPM, color="C3", lw=1.5, zorder=3,
+                   label=f"operating speed {diagram['operating_speed'] * _RPM:.0f} rpm")
+    ax.set_xlim(rpm[0], rpm[-1])
+    ax.set_ylim(0.0, top)
+    ax.set_xlabel("rotary speed [rpm]")
+    ax.set_ylabel("natural frequency [Hz]")
+    ax.set_title(f"{title} (grey: drill-pipe lateral modes)", fontsize="medium")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small", framealpha=0.9)
+    return _save(fig, path)
+
+
 MAP_PANELS = (
     ("mean_rate_of_penetration", 3600.0, "mean rate of penetration [m/h]", "viridis", False),
     ("bit_speed_oscillation", 1.0, "bit-speed oscillation (max − min)/2Ω [-]", "magma_r", False),

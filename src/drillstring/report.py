@@ -17,7 +17,7 @@ import datetime as _dt
 import html
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,8 @@ from drillstring.files import write_text_atomic
 __all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
 
 _RPM = 60.0 / (2.0 * math.pi)
+#: The interactive page written beside a report when it has interactive figures.
+INTERACTIVE_PAGE = "interactive.html"
 
 #: Display names of the study observables, in table order.
 OBSERVABLE_NAMES = {
@@ -325,22 +327,32 @@ def _figure_html(name: str, path: str | Path) -> str:
 
 
 def _page(path: str | Path, title: str, case_toml: str, sections: list[str], figures: Mapping[str, str | Path],
-          run_info: Mapping[str, Any]) -> Path:
-    """One self-contained page: title, the case, ``sections`` (HTML), the run table and the figures."""
+          run_info: Mapping[str, Any], interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
+    """One self-contained page: title, the case, ``sections`` (HTML), the run table and the figures. With
+    ``interactive`` figures (:mod:`drillstring.interactive`), the same page with them, zoomable, is written
+    beside it as ``interactive.html``, and this page links to it."""
     path = Path(path)
     stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
+    head = "\n".join([
+        '<meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f"<title>{_esc(title)}</title>",
-        f"<style>{_CSS}</style></head><body>",
+        f"<style>{_CSS}</style>",
+    ])
+    body = [
         f"<h1>{_esc(title)}</h1>",
         f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
         _case_section(case_toml),
         *sections,
         _run_section(run_info),
     ]
+    if interactive is not None:
+        from drillstring.interactive import write_interactive_page
+
+        write_interactive_page(path.with_name(INTERACTIVE_PAGE), head, "\n".join(body), interactive)
+        body.insert(2, f'<p>Zoomable figures (values on hover, single realizations on demand): '
+                       f'<a href="{INTERACTIVE_PAGE}">{INTERACTIVE_PAGE}</a>, beside this page.</p>')
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head>', head, "</head><body>", *body]
     if figures:
         parts.append("<h2>Figures</h2>")
         parts.extend(_figure_html(name, fig) for name, fig in figures.items())
@@ -356,6 +368,7 @@ def write_report(
     summary: Mapping[str, Any],
     figures: Mapping[str, str | Path],
     run_info: Mapping[str, Any],
+    interactive: Sequence[Mapping[str, Any]] | None = None,
 ) -> Path:
     """Write the study report as one self-contained HTML page at ``path``; returns the path.
 
@@ -367,9 +380,11 @@ def write_report(
         figures: caption -> PNG file, embedded in this order as base64 ``data:`` URIs.
         run_info: label -> value rows of the "Run" table (e.g. wall time, workers, failures); a mapping
             value (such as the failures ``{realization: message}``) is shown as a collapsible list.
+        interactive: figures of :func:`drillstring.interactive.study_figures`: the same page with them is
+            written beside as ``interactive.html`` (see :func:`_page`).
     """
     return _page(path, title, case_toml, [_study_section(summary), _dispersion_table(summary)], figures,
-                 run_info)
+                 run_info, interactive)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -426,11 +441,12 @@ def _sobol_tables(indices: Mapping[str, Any]) -> str:
 
 
 def write_sensitivity_report(path: str | Path, *, title: str, case_toml: str, indices: Mapping[str, Any],
-                             figures: Mapping[str, str | Path], run_info: Mapping[str, Any]) -> Path:
+                             figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                             interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
     """Write the report of a sensitivity analysis (one self-contained HTML page): the case, the design,
     a table of the Sobol' indices with their intervals and convergence per output (``indices``: the JSON
     form of a :class:`~drillstring.stochastic.sensitivity.SobolResult`), the run table and the figures."""
-    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info)
+    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info, interactive)
 
 
 def _axis(values: list[float], unit: str) -> str:
@@ -468,11 +484,12 @@ def _map_section(summary: Mapping[str, Any]) -> str:
 
 
 def write_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
-                     figures: Mapping[str, str | Path], run_info: Mapping[str, Any]) -> Path:
+                     figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                     interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
     """Write the report of an operating map (one self-contained HTML page): the case, the grid and its
     highlights (``summary``: :func:`drillstring.stochastic.operating_map.map_summary`), the run table and
     the figures."""
-    return _page(path, title, case_toml, [_map_section(summary)], figures, run_info)
+    return _page(path, title, case_toml, [_map_section(summary)], figures, run_info, interactive)
 
 
 #: Columns of the per-point table of a probabilistic map: summary key, header.
@@ -526,8 +543,9 @@ def _probability_map_section(summary: Mapping[str, Any]) -> str:
 
 
 def write_probability_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
-                                 figures: Mapping[str, str | Path], run_info: Mapping[str, Any]) -> Path:
+                                 figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                                 interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
     """Write the report of a probabilistic operating map (one self-contained HTML page): the case, the grid,
     the random parameters, a table of every point's probabilities and quantiles (``summary``:
     :func:`drillstring.stochastic.probabilistic_map.sampled_map_summary`), the run table and the figures."""
-    return _page(path, title, case_toml, [_probability_map_section(summary)], figures, run_info)
+    return _page(path, title, case_toml, [_probability_map_section(summary)], figures, run_info, interactive)

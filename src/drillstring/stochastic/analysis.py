@@ -12,7 +12,7 @@ from drillstring.dynamics.indicators import DEFAULT_TRANSIENT, drilling_indicato
 from drillstring.quantities import LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import STUDY_OBSERVABLES, open_study_group
 from drillstring.stochastic.locks import StudyLock
-from drillstring.stochastic.store import DONE, FAILED
+from drillstring.stochastic.store import DONE, FAILED, StoreError, damage
 from drillstring.stochastic.statistics import (
     dispersion_summary,
     mean_square_convergence,
@@ -27,11 +27,19 @@ def load_study(store_path: str | Path) -> xr.Dataset:
 
     Refused while another process runs a study on the store (:class:`~drillstring.stochastic.
     locks.StudyLocked`: statistics are never computed from a store being written), and for a
-    folder that is not a complete study store (:class:`~drillstring.stochastic.store.
-    StoreError`)."""
+    folder that is not a complete study store, or a damaged one (a missing or unreadable chunk, named;
+    :class:`~drillstring.stochastic.store.StoreError`): a damaged store is never read as data."""
     with StudyLock(store_path, shared=True):
-        open_study_group(store_path, mode="r")
-        ds = xr.open_zarr(str(store_path), consolidated=False).load()
+        group = open_study_group(store_path, mode="r")
+        advice = "run the same study command again to recompute the damaged realizations"
+        damaged = damage(group, decode=False)  # a missing chunk would read as NaN
+        if damaged:
+            raise StoreError(f"{store_path} is damaged ({'; '.join(damaged)}); {advice}")
+        try:
+            ds = xr.open_zarr(str(store_path), consolidated=False).load()
+        except Exception as error:  # a chunk that does not decode (checksum, truncated file)
+            found = "; ".join(damage(group)) or f"{type(error).__name__}: {error}"
+            raise StoreError(f"{store_path} is damaged ({found}); {advice}") from None
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in STUDY_OBSERVABLES + ("radial_displacement",):

@@ -381,6 +381,13 @@ class StudyStore(TaskStore):
         super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
                          attrs=attrs)
 
+    def owner_status(self, name: str) -> str | None:
+        """The nominal run's arrays belong to its status ``nominal_status``."""
+        return "nominal_status" if name.startswith("nominal_") else None
+
+    def owner_label(self, owner: str) -> str:
+        return "the nominal run"
+
     def nominal_done(self) -> bool:
         return int(self.group["nominal_status"][0]) != PENDING
 
