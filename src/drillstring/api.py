@@ -146,7 +146,9 @@ _STUDY_CAPTIONS = {
     "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean of every random "
                  "parameter)",
     "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
-    "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
+    "convergence": "Convergence: mean-square conv(n_s), each observable divided by its last value (left); maximum "
+                   "and time-mean dispersion over records of growing length after the transient (right)",
+    "realizations": "Per-realization cycle metrics after t = {t_transient:g} s: histograms, mean and nominal run",
 }
 
 
@@ -280,7 +282,7 @@ def monte_carlo_study(
 
     In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
     realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
-    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png`` and
+    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png``, ``realizations.png`` and
     ``report.html``. Fewer than 2 finished realizations raise :class:`StudyFailed`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
@@ -314,7 +316,7 @@ def _finish_study(case, settings, t_transient, buckling, folder, run):
         listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
         raise StudyFailed(f"{error} ({len(failures)} failure(s)"
                           f"{': ' + listing if listing else ''})") from None
-    summary = study_summary(stats, t_transient=t_transient)
+    summary = study_summary(stats, t_transient=t_transient, boundary=_stability_boundary(case))
     sessions = run.store.sessions()
     wall_time, used = computation_time(sessions)
     if not sessions:  # a store written before sessions were recorded
@@ -338,6 +340,14 @@ def _finish_study(case, settings, t_transient, buckling, folder, run):
     return stats, payload, files
 
 
+def _stability_boundary(case: Case) -> dict | None:
+    """:func:`stability_boundary`, None where steady drilling does not exist."""
+    try:
+        return stability_boundary(case)
+    except ValueError:
+        return None
+
+
 def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
                        raw=None) -> dict[str, Path]:
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
@@ -359,7 +369,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
         shown = raw[list(STUDY_PANELS)].isel(realization=finished)
     write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, folder, t_transient)
+    figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"))
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
     write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {
@@ -387,7 +397,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         case_toml=case.to_toml(),
         summary=summary,
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
-                 for k in ("envelopes", "dispersion", "convergence")},
+                 for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
         run_info=run_info,
         interactive=study_figures(stats, shown),
     )
@@ -472,6 +482,17 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
                         name="top_speed", default_unit=default_unit)
     return case_campbell(the_case, speeds, blades)
+
+
+def stability_boundary(case: Case | str | Path = "reference") -> dict:
+    """The stability boundary of steady drilling along the weight-on-bit at the case's top speed (SI):
+    ``weight_on_bit`` [N] where the leading growth rate crosses 0 nearest the case's weight-on-bit (None
+    when it does not between 0 and the string's weight), ``top_speed`` [rad/s], ``nominal_weight_on_bit``
+    [N] and ``nominal_growth_rate`` [1/s] (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`).
+    ValueError when the case itself has no steady drilling."""
+    from drillstring.dynamics.stability import weight_on_bit_boundary
+
+    return weight_on_bit_boundary(as_case(case))
 
 
 def study(

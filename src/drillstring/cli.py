@@ -463,21 +463,31 @@ _STABILITY_LATERAL_ROWS = 4
 
 
 @app.command()
-def stability(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
+def stability(
+    case: CaseArg = "reference",
+    boundary: Annotated[bool, typer.Option(
+        "--boundary", help="Also find the stability boundary along the weight-on-bit at the case's top speed "
+                           "(the weight-on-bit where the leading growth rate crosses 0).")] = False,
+    as_json: JsonOpt = False,
+) -> None:
     """Steady drilling (closed form) and its linear stability: eigenvalues of the reduced model
     linearised about it, bit–rock law included.
 
     A mode with a positive growth rate grows from any small perturbation of steady drilling: the string
-    then settles into a self-excited vibration (the torsional one, through the bit–rock law).
+    then settles into a self-excited vibration (the torsional one, through the bit–rock law). With
+    --boundary, the weight-on-bit at which that happens (a Hopf bifurcation), everything else fixed.
     """
     the_case = _load(case)
     from drillstring import api
 
     try:
         result = api.stability(the_case)
+        found = api.stability_boundary(the_case) if boundary else None
     except ValueError as error:  # no steady drilling (the law gives no penetration)
         _fail(str(error))
     payload = result.to_dict()
+    if boundary:
+        payload["boundary"] = found
     if as_json:
         _print_json(payload)
         return
@@ -518,6 +528,21 @@ def stability(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
             f"Steady drilling is UNSTABLE: the {leading.family} mode at {leading.frequency:.4f} Hz grows at "
             f"{leading.growth_rate:.4g} 1/s (e-folding time {1 / leading.growth_rate:.3g} s); the string "
             f"settles into a self-excited vibration."), soft_wrap=True)
+    if boundary:
+        console.print(escape(_boundary_line(found)), soft_wrap=True)
+
+
+def _boundary_line(found: dict) -> str:
+    """One line on the stability boundary along the weight-on-bit."""
+    at = f"at the top speed {found['top_speed'] * _RPM:.4g} rpm"
+    if found["weight_on_bit"] is None:
+        return (f"Stability boundary {at}: the leading growth rate does not cross 0 between 0 and the string's "
+                f"weight (weight-on-bit {found['nominal_weight_on_bit'] / _KN:,.2f} kN: "
+                f"{found['nominal_growth_rate']:.4g} 1/s)")
+    wob, nominal = found["weight_on_bit"], found["nominal_weight_on_bit"]
+    return (f"Stability boundary {at}: weight-on-bit {wob / _KN:,.2f} kN (steady drilling unstable above it); "
+            f"the case's {nominal / _KN:,.2f} kN is {abs(nominal - wob) / _KN:,.2f} kN "
+            f"{'above' if nominal > wob else 'below'} it (growth rate {found['nominal_growth_rate']:.4g} 1/s)")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -916,16 +941,48 @@ def _buckling_line(summary: dict[str, Any]) -> str:
             f"of a buckled draw {b['probability']:.3g}")
 
 
-def _indicator_line(summary: dict[str, Any]) -> str | None:
-    """One line on the realizations' vibration: bit-speed oscillation and stick-slip."""
-    indicators = summary.get("indicators") or {}
-    oscillation = indicators.get("bit_speed_oscillation")
-    if not oscillation:
+def _realizations_table(summary: dict[str, Any]) -> Table | None:
+    """The distributions of the per-realization cycle metrics: mean, std, dispersion, 2.5/50/97.5 %
+    quantiles and the nominal run's value, in engineering units."""
+    from drillstring.quantities import METRIC_DISPLAY
+
+    section = summary.get("realizations") or {}
+    if not section:
         return None
-    return (f"Bit-speed oscillation (max − min)/2Ω after {indicators['t_transient']:g} s: mean "
-            f"{oscillation['mean']:.3f}, range {oscillation['min']:.3f} – {oscillation['max']:.3f}; "
-            f"stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
-            f"{indicators['stick_slip_realizations']} of {summary['n_samples']} realizations")
+    table = Table(title=escape(f"Per realization, after t = {section['t_transient']:g} s (cycle metrics)"),
+                  title_justify="left", caption="stick-slip index (max − min)/(2 mean) of the bit speed; MSE "
+                  "(Teale) from the time means; stick: bit below 10 % of the top speed; oscillation/2Ω: "
+                  "(max − min)/(2 top speed)", caption_justify="left")
+    for header in ("metric", "unit", "mean", "std", "δ [%]", "2.5 %", "50 %", "97.5 %", "nominal", "n"):
+        table.add_column(escape(header), justify="left" if header in ("metric", "unit") else "right")
+    for name, (factor, unit, label) in METRIC_DISPLAY.items():
+        entry = section.get(name)
+        if not entry:
+            continue
+        cells = [_fmt(entry[key], ".4g", factor) for key in ("mean", "std")]
+        cells.append(_fmt(entry["dispersion"], ".3g", 100.0))
+        cells += [_fmt(entry[key], ".4g", factor) for key in ("q2.5", "q50", "q97.5", "nominal")]
+        table.add_row(escape(label), escape(unit), *cells, str(entry["n"]))
+    return table
+
+
+def _indicator_line(summary: dict[str, Any]) -> str | None:
+    """One line on the realizations' stick-slip and the linear stability of their steady drilling."""
+    section = summary.get("realizations") or {}
+    parts = []
+    if "stick_slip_realizations" in section:
+        parts.append(f"Stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
+                     f"{section['stick_slip_realizations']} of {summary['n_samples']} realizations")
+    stability = summary.get("stability") or {}
+    if stability.get("unstable_fraction") is not None:
+        text = (f"steady drilling unstable (growth rate > 0) in {stability['unstable_realizations']} of "
+                f"{stability['realizations_with_growth_rate']} ({100 * stability['unstable_fraction']:.3g} %)")
+        boundary = stability.get("boundary") or {}
+        if boundary.get("weight_on_bit") is not None:
+            text += (f"; nominal case's boundary at weight-on-bit {boundary['weight_on_bit'] / _KN:,.2f} kN "
+                     f"(top speed {boundary['top_speed'] * _RPM:.4g} rpm)")
+        parts.append(text)
+    return "; ".join(parts) or None
 
 
 @app.command()
@@ -977,7 +1034,7 @@ def study(
     --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN.
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
-    writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
+    writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png, realizations.png and
     dispersion.png, and the self-contained report OUT/report.html. Settings, the output folder and the
     scheduler are checked before anything runs; a second study on the same OUT is refused while one runs.
     """
@@ -1077,9 +1134,15 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
                              f"{entry['std']:.4g}{unit}, dispersion {_fmt(entry['dispersion'], '.3g', 100.0)} %)"),
                       soft_wrap=True)
     console.print(_study_table(payload))
+    metrics = _realizations_table(payload)
+    if metrics is not None:
+        console.print(metrics)
     line = _indicator_line(payload)
     if line:
         console.print(escape(line), soft_wrap=True)
+    warning = (payload.get("time_convergence") or {}).get("warning")
+    if warning:
+        console.print(escape(f"warning: {warning}"), soft_wrap=True)
     console.print(escape(_buckling_line(payload)), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),

@@ -25,6 +25,7 @@ are safe in scripts, notebooks, worker processes and tests.
 from __future__ import annotations
 
 import math
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +40,7 @@ __all__ = [
     "plot_run",
     "plot_compare",
     "plot_convergence",
+    "plot_realizations",
     "plot_envelopes",
     "plot_dispersion",
     "plot_study",
@@ -305,7 +307,17 @@ def _contact_panel(ax, runs) -> None:
 
 
 def _case_name(case_toml: str) -> str:
-    """The ``name = "..."`` of a case's TOML text ('' when absent)."""
+    """The ``name = "..."`` of a case's TOML text ('' when absent), as plain text for a figure: its dollar
+    signs escaped, so that Matplotlib never reads it as mathtext."""
+    try:
+        name = tomllib.loads(str(case_toml)).get("name", "")
+    except (tomllib.TOMLDecodeError, RecursionError):
+        name = _case_name_line(case_toml)
+    return str(name).replace("$", r"\$")
+
+
+def _case_name_line(case_toml: str) -> str:
+    """The ``name = "..."`` line of a TOML text that does not parse ('' when absent)."""
     for line in str(case_toml).splitlines():
         stripped = line.strip()
         if stripped.startswith("name") and "=" in stripped:
@@ -352,10 +364,14 @@ def _input_dispersions(stats: xr.Dataset) -> list[tuple[str, float]]:
     return out
 
 
-def plot_convergence(stats: xr.Dataset, path: str | Path) -> Path:
+def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict | None = None) -> Path:
     """``conv(n_s)`` of each observable (``<v>_convergence``), divided by its last value so that all
-    observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices."""
-    fig, (ax,) = _figure(1, 1, (8.0, 4.8))
+    observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices. With
+    ``time_convergence`` (the summary's section, :func:`~drillstring.stochastic.analysis.time_convergence`),
+    a second panel: the maximum and time-mean dispersion of each observable over records of growing
+    length after the transient — curves still rising at the right show statistics not converged in time."""
+    fig, axes = _figure(1, 2 if time_convergence else 1, (13.0 if time_convergence else 8.0, 4.8))
+    ax = axes[0]
     names = [str(v)[: -len("_convergence")] for v in stats.data_vars if str(v).endswith("_convergence")]
     if not names:
         raise ValueError("stats has no <observable>_convergence variable")
@@ -370,9 +386,58 @@ def plot_convergence(stats: xr.Dataset, path: str | Path) -> Path:
     ax.axhline(1.0, color="k", lw=0.7, ls=":")
     ax.set_xlabel("number of realizations $n_s$")
     ax.set_ylabel("conv($n_s$) / conv($n_s^{max}$)")
+    ax.set_title("in the number of realizations", fontsize="medium")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    fig.suptitle(_study_title(stats, "Mean-square convergence"))
+    if time_convergence:
+        ax = axes[1]
+        for k, (name, entry) in enumerate(time_convergence["observables"].items()):
+            ends = [w["t_end"] for w in entry["windows"]]
+            title = DISPLAY_UNITS[name][2] if name in DISPLAY_UNITS else name
+            for key, style, label in (("dispersion_max", "-", "max"), ("dispersion_time_mean", "--", "time mean")):
+                values = [np.nan if w[key] is None else 100.0 * w[key] for w in entry["windows"]]
+                ax.plot(ends, values, style, marker="o", ms=3, color=f"C{k}", lw=1.1, label=f"{title}, {label}")
+        ax.set_xlabel(f"end of the record t: dispersion over [{time_convergence.get('t_start', 0.0):g} s, t] [s]")
+        ax.set_ylabel("dispersion [%]")
+        ax.set_title(f"in time (records growing by {time_convergence['window']:g} s)", fontsize="medium")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize="x-small", ncol=2)
+    fig.suptitle(_study_title(stats, "Convergence"))
+    return _save(fig, path)
+
+
+def plot_realizations(stats: xr.Dataset, path: str | Path) -> Path:
+    """Histograms of the per-realization cycle metrics (``realization_<name>`` of :data:`~drillstring.
+    quantities.METRIC_DISPLAY`) in engineering units, the mean (solid) and the nominal run's value (dashed);
+    the panel of a metric without finite values says so."""
+    from drillstring.quantities import METRIC_DISPLAY
+
+    names = [name for name in METRIC_DISPLAY if f"realization_{name}" in stats]
+    if not names:
+        raise ValueError("stats has no realization_<metric> variable")
+    rows, cols = _grid(len(names))
+    fig, axes = _figure(rows, cols, (3.6 * cols, 2.8 * rows))
+    for ax, name in zip(axes, names):
+        factor, unit, label = METRIC_DISPLAY[name]
+        values = np.asarray(stats[f"realization_{name}"].values, dtype=float) * factor
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            ax.hist(finite, bins=min(30, max(5, int(np.sqrt(finite.size)))), color="C0", alpha=0.7)
+            ax.axvline(finite.mean(), color="k", lw=1.0, label="mean")
+        else:
+            ax.text(0.5, 0.5, "undefined for every realization", ha="center", va="center", transform=ax.transAxes)
+        nominal = float(stats[f"realization_{name}"].attrs.get("nominal", np.nan)) * factor
+        if np.isfinite(nominal):
+            ax.axvline(nominal, color=_NOMINAL_COLOR, lw=1.0, ls="--", label="nominal")
+        ax.set_xlabel(f"{label} [{unit}]", fontsize="small")
+        ax.set_ylabel("realizations", fontsize="small")
+        ax.grid(True, alpha=0.3)
+    for ax in axes[len(names):]:
+        ax.set_visible(False)
+    axes[0].legend(loc="best", fontsize="x-small")
+    t0 = stats.attrs.get("t_transient")
+    fig.suptitle(_study_title(stats, "Per-realization cycle metrics" + (f" after t = {float(t0):g} s" if t0 is not None
+                                                                         else "")))
     return _save(fig, path)
 
 
@@ -419,16 +484,21 @@ def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float) -> 
     return _save(fig, path)
 
 
-def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float) -> dict[str, Path]:
-    """The three study figures in ``out_dir``: ``convergence.png``, ``envelopes.png``, ``dispersion.png``
-    (returned by those names without the extension)."""
+def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float,
+               time_convergence: dict | None = None) -> dict[str, Path]:
+    """The study figures in ``out_dir``: ``convergence.png`` (in n_s, and in time with ``time_convergence``),
+    ``envelopes.png``, ``dispersion.png`` and, when the statistics hold per-realization cycle metrics,
+    ``realizations.png`` (returned by those names without the extension)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return {
-        "convergence": plot_convergence(stats, out / "convergence.png"),
+    figures = {
+        "convergence": plot_convergence(stats, out / "convergence.png", time_convergence),
         "envelopes": plot_envelopes(stats, out / "envelopes.png"),
         "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient),
     }
+    if any(str(v).startswith("realization_") for v in stats.data_vars):
+        figures["realizations"] = plot_realizations(stats, out / "realizations.png")
+    return figures
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -277,21 +277,60 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
 
 
 def _indicators_html(summary: Mapping[str, Any]) -> str:
-    indicators = summary.get("indicators") or {}
-    rows = []
-    labels = {"bit_speed_oscillation": "bit-speed oscillation (max − min)/2Ω",
-              "stick_time_fraction": "stick time fraction (bit below 10 % of the top speed)"}
-    for key, label in labels.items():
-        entry = indicators.get(key)
-        if entry:
-            rows.append((label, f"mean {_num(entry['mean'], 3)}, std {_num(entry['std'], 3)}, "
-                                f"range {_num(entry['min'], 3)} – {_num(entry['max'], 3)}"))
-    if "stick_slip_realizations" in indicators:
-        rows.append(("realizations in stick-slip", _num(indicators["stick_slip_realizations"])))
-    if not rows:
-        return ""
-    return (f"<h3>Vibration of the realizations (after t = {_num(indicators.get('t_transient'))} s)</h3>"
-            + _kv_table(rows))
+    """The per-realization cycle metrics (distribution table), the stability of the draws and the
+    convergence of the dispersions in time."""
+    from drillstring.quantities import METRIC_DISPLAY
+
+    section = summary.get("realizations") or {}
+    out = ""
+    if section:
+        rows = []
+        for name, (factor, unit, label) in METRIC_DISPLAY.items():
+            entry = section.get(name)
+            if not entry:
+                continue
+            cells = [_num(None if entry[k] is None else entry[k] * factor)
+                     for k in ("mean", "std")] + [_percent(entry["dispersion"])]
+            cells += [_num(None if entry[k] is None else entry[k] * factor)
+                      for k in ("q2.5", "q50", "q97.5", "nominal")]
+            rows.append(f"<tr><td>{_esc(label)}</td><td>{_esc(unit)}</td>"
+                        + "".join(f'<td class="num">{c}</td>' for c in cells)
+                        + f'<td class="num">{entry["n"]}</td></tr>')
+        out += (f"<h3>Per realization (after t = {_num(section.get('t_transient'))} s)</h3>"
+                "<p>Cycle metrics of each realization, computed from its own (realized) case; their "
+                "distribution over the realizations. Stick-slip index (max − min)/(2·mean) of the bit speed; "
+                "MSE = WOB/A + Ω·TOB/(A·ROP) (Teale) from the time means, A the borehole cross-section.</p>"
+                "<table><tr><th>metric</th><th>unit</th><th>mean</th><th>std</th><th>δ [%]</th><th>2.5 %</th>"
+                "<th>50 %</th><th>97.5 %</th><th>nominal</th><th>n</th></tr>" + "".join(rows) + "</table>")
+        if "stick_slip_realizations" in section:
+            out += _kv_table([("realizations in stick-slip (bit below 10 % of the top speed)",
+                               _num(section["stick_slip_realizations"]))])
+    stability = summary.get("stability") or {}
+    if stability.get("unstable_fraction") is not None:
+        boundary = stability.get("boundary") or {}
+        rows = [("draws whose steady drilling is unstable (growth rate > 0)",
+                 f"{stability['unstable_realizations']} of {stability['realizations_with_growth_rate']} "
+                 f"({_percent(stability['unstable_fraction'])} %)"),
+                ("growth rate [1/s]: mean, 2.5 – 97.5 %",
+                 f"{_num(stability['growth_rate']['mean'])}, {_num(stability['growth_rate']['q2.5'])} – "
+                 f"{_num(stability['growth_rate']['q97.5'])}"),
+                ("nominal growth rate [1/s]", _num(stability.get("nominal_growth_rate")))]
+        if boundary.get("weight_on_bit") is not None:
+            rows.append(("stability boundary of the nominal case along the weight-on-bit [kN]",
+                         _num(boundary["weight_on_bit"] / 1e3)))
+        out += "<h3>Linear stability of steady drilling at each draw</h3>" + _kv_table(rows)
+    convergence = summary.get("time_convergence") or {}
+    if convergence.get("observables"):
+        rows = []
+        for name, entry in convergence["observables"].items():
+            windows = ", ".join(f"{_num(w['t_end'], 3)} s: {_percent(w['dispersion_max'])}" for w in entry["windows"])
+            rows.append((OBSERVABLE_NAMES.get(name, name), _esc(windows)))
+        note = convergence.get("warning")
+        out += (f"<h3>Convergence in time (records growing by {_num(convergence['window'])} s)</h3>"
+                f"<p>Maximum dispersion [%] over the record from t = {_num(convergence.get('t_start'))} s to each "
+                "end.</p>" + _kv_table(rows)
+                + (f"<p><b>Warning:</b> {_esc(note)}</p>" if note else ""))
+    return out
 
 
 def _value_html(value: Any) -> str:

@@ -7,7 +7,8 @@ import pytest
 
 from drillstring.case import load_case
 from drillstring.dynamics.simulate import SimulationResult
-from drillstring.stochastic.runs import RUN_OUTPUTS, bit_area, mechanical_specific_energy, result_outputs
+from drillstring.dynamics.indicators import bit_area, mechanical_specific_energy
+from drillstring.stochastic.runs import RUN_OUTPUTS, result_outputs
 
 
 def test_mechanical_specific_energy_is_teale():
@@ -53,15 +54,3 @@ def test_outputs_of_a_run_with_known_histories():
     rop = 2 + (math.cos(10.0) - math.cos(40.0)) / 30
     area = math.pi * 0.3**2 / 4
     assert out["mechanical_specific_energy"] == pytest.approx(fob / area + 3.0 * omega / (area * rop), rel=1e-5)
-
-
-def test_stick_slip_index_of_a_sampled_oscillation():
-    """Ω(1 + a sin ωt) after the transient: (max − min)/(2 mean) = a (the samples hit both extremes); the
-    transient before t = 5 s, with a larger swing, is left out; a mean that is not positive gives NaN."""
-    from drillstring.stochastic.runs import stick_slip_index
-
-    t = np.linspace(0.0, 10.0, 4001)
-    speed = 10.0 * (1.0 + np.where(t < 5.0, 0.9, 0.4) * np.sin(2 * np.pi * t))
-    assert stick_slip_index(t, speed, 5.0) == pytest.approx(0.4, rel=1e-12)
-    assert stick_slip_index(t, speed, 0.0) == pytest.approx(0.9, rel=1e-12)
-    assert math.isnan(stick_slip_index(t, -speed, 5.0))

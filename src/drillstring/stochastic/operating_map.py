@@ -36,7 +36,8 @@ from drillstring.dynamics.simulate import run_window
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
-from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, bit_area, compile_kernels, run_outputs
+from drillstring.dynamics.indicators import bit_area
+from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, compile_kernels, run_outputs
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 
 __all__ = [

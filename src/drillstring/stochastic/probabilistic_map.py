@@ -52,20 +52,14 @@ import numpy as np
 import xarray as xr
 
 from drillstring.case import Case
+from drillstring.dynamics.indicators import bit_area
 from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.operating_map import MAP_AXES, MAX_POINTS, MapSettings, check_map, map_attributes
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, with_parameters
-from drillstring.stochastic.runs import (
-    REALIZATION_OUTPUTS,
-    RUN_OUTPUTS,
-    STABILITY_OUTPUTS,
-    bit_area,
-    compile_kernels,
-    run_outputs,
-)
+from drillstring.stochastic.runs import REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS, compile_kernels, run_outputs
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
