@@ -466,7 +466,9 @@ class TaskStore:
 
     def _assign(self, writes: dict[str, list]) -> None:
         for name, rows in writes.items():
-            array = self.group[name]
+            # every chunk written, even one holding only the fill value (NaN: e.g. a lowest lateral
+            # eigenvalue without lateral modes): a finished row's missing chunk means damage
+            array = self.group[name].with_config({"write_empty_chunks": True})
             if array.ndim > 1 and array.chunks[0] == 1:  # one chunk per row: write each row
                 for index, value in rows:
                     array[index] = value
