@@ -1,6 +1,7 @@
 """The command line: JSON payloads (SI), human-readable tables (units), user case files, errors."""
 
 import json
+import re
 from importlib import resources
 
 import numpy as np
@@ -947,11 +948,17 @@ def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_f
     assert summary["parameters"] == ["weight_on_hook", "fluid.inlet_velocity"]
     assert set(summary["probabilities"]) == {"stick_slip_probability", "buckling_probability", "impact_probability",
                                              "instability_probability"}
-    for name in ("map.zarr", "map.nc", "map.json", "probabilities.png", "quantiles.png", "report.html"):
+    for name in ("map.zarr", "map.nc", "map.json", "probabilities.png", "quantiles.png", "report.html",
+                 "interactive.html"):
         assert (out / name).exists(), name
     with xr.open_dataset(out / "map.nc", engine="h5netcdf") as ds:
         assert ds.stick_slip_probability.dims == ("top_speed", "weight_on_bit")
         assert ds.rate_of_penetration_q.dims == ("top_speed", "weight_on_bit", "quantile")
+        instability = ds.instability_probability.values
+    page = (out / "interactive.html").read_text(encoding="utf-8")
+    specs = [json.loads(t) for t in re.findall(r'class="figure-spec"[^>]*>(.*?)</script>', page, re.S)]
+    assert [spec["layout"]["title"]["text"] for spec in specs][3] == "probability of unstable steady drilling"
+    np.testing.assert_allclose(np.array(specs[3]["data"][0]["z"], dtype=float), instability.T, atol=1e-6)
     table = _invoke(*args)
     assert table.exit_code == 0, table.output
     assert "resumed: 12 of 12 realizations" in table.stderr
