@@ -756,8 +756,8 @@ def operating_map(
     ``correlation``, else the case's ``[uncertainty]`` table; nothing declared: ``sigma`` =
     :data:`~drillstring.stochastic.DEFAULT_SIGMA` —, drawn from the streams ``(seed, sample)``; per point the
     probabilities of stick-slip, buckling, wall impact and unstable steady drilling and quantiles of the ROP and
-    of the stick-slip index; files ``map.nc``, ``map.json``, ``probabilities.png``, ``quantiles.png`` and
-    ``report.html``. Without ``samples``, ``sigma``, ``parameters``, ``correlation`` and ``seed`` are unused
+    of the stick-slip index; files ``map.nc``, ``map.json``, ``probabilities.png``, ``quantiles.png``,
+    ``report.html`` and ``interactive.html``. Without ``samples``, ``sigma``, ``parameters``, ``correlation`` and ``seed`` are unused
     (giving one of the first three is refused) and the map is deterministic.
     """
     from drillstring.stochastic.operating_map import run_map
