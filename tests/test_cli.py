@@ -1,6 +1,7 @@
 """The command line: JSON payloads (SI), human-readable tables (units), user case files, errors."""
 
 import json
+import re
 from importlib import resources
 
 import numpy as np
@@ -927,6 +928,44 @@ def test_sensitivity_command(torsional_case_file, tmp_path):
     refused = _invoke("sensitivity", str(torsional_case_file), "--out", str(tmp_path / "none"))
     assert refused.exit_code == 2 and "no uncertain parameter" in refused.stderr
     assert not (tmp_path / "none").exists()
+
+
+def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_file, tmp_path):
+    import xarray as xr
+
+    out = tmp_path / "pm"
+    args = ("map", str(torsional_case_file), "--top-speed", "80:160:2", "--weight-on-bit", "60 kN,90 kN",
+            "--t-end", "1", "--workers", "1", "--samples", "3", "--sigma", "4000",
+            "--param", "operation.top_speed=uniform 0 10 rpm", "--out", str(out))
+    refused = _invoke(*args, "--json")  # a law of a grid parameter
+    assert refused.exit_code == 2 and "operation.top_speed: cannot carry a law on a map" in refused.stderr
+    assert not out.exists()
+    args = args[:-4] + ("--param", "fluid.inlet_velocity=uniform 1.2 1.8 m/s", "--out", str(out))
+    result = _invoke(*args, "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["samples"] == 3 and summary["done"] == 12 and summary["sigma"] == 4000.0
+    assert summary["parameters"] == ["weight_on_hook", "fluid.inlet_velocity"]
+    assert set(summary["probabilities"]) == {"stick_slip_probability", "buckling_probability", "impact_probability",
+                                             "instability_probability"}
+    for name in ("map.zarr", "map.nc", "map.json", "probabilities.png", "quantiles.png", "report.html",
+                 "interactive.html"):
+        assert (out / name).exists(), name
+    with xr.open_dataset(out / "map.nc", engine="h5netcdf") as ds:
+        assert ds.stick_slip_probability.dims == ("top_speed", "weight_on_bit")
+        assert ds.rate_of_penetration_q.dims == ("top_speed", "weight_on_bit", "quantile")
+        instability = ds.instability_probability.values
+    page = (out / "interactive.html").read_text(encoding="utf-8")
+    specs = [json.loads(t) for t in re.findall(r'class="figure-spec"[^>]*>(.*?)</script>', page, re.S)]
+    assert [spec["layout"]["title"]["text"] for spec in specs][3] == "probability of unstable steady drilling"
+    np.testing.assert_allclose(np.array(specs[3]["data"][0]["z"], dtype=float), instability.T, atol=1e-6)
+    table = _invoke(*args)
+    assert table.exit_code == 0, table.output
+    assert "resumed: 12 of 12 realizations" in table.stderr
+    for text in ("Probabilistic operating map", "P(buckled)", "3 realizations per point", "probabilities.png"):
+        assert text in table.stdout, text
+    lonely = _invoke("map", str(torsional_case_file), "--sigma", "4000", "--out", str(tmp_path / "none"))
+    assert lonely.exit_code == 2 and "give --samples N" in lonely.stderr
 
 
 @pytest.mark.parametrize("old, new, line", [

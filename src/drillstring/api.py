@@ -730,6 +730,11 @@ def operating_map(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    samples: int | None = None,
+    sigma: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
+    seed: int = DEFAULT_SEED,
 ) -> MapOutcome:
     """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
     one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
@@ -744,13 +749,30 @@ def operating_map(
     ``map.json`` (the summary), ``map.png`` and ``report.html``. Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+
+    With ``samples`` (>= 2) the map is probabilistic (:mod:`drillstring.stochastic.probabilistic_map`):
+    ``samples`` realizations per point of the declared uncertainty — the weight-on-hook Normal around each
+    point's hook load of standard deviation ``sigma`` [N], and ``parameters`` (path -> law) with
+    ``correlation``, else the case's ``[uncertainty]`` table; nothing declared: ``sigma`` =
+    :data:`~drillstring.stochastic.DEFAULT_SIGMA` —, drawn from the streams ``(seed, sample)``; per point the
+    probabilities of stick-slip, buckling, wall impact and unstable steady drilling and quantiles of the ROP and
+    of the stick-slip index; files ``map.nc``, ``map.json``, ``probabilities.png``, ``quantiles.png``,
+    ``report.html`` and ``interactive.html``. Without ``samples``, ``sigma``, ``parameters``, ``correlation`` and ``seed`` are unused
+    (giving one of the first three is refused) and the map is deterministic.
     """
     from drillstring.stochastic.operating_map import run_map
 
-    case = as_case(case).model_copy(update={"uncertainty": None})
+    case = as_case(case)
     settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
                             output_step=output_step, transient=transient)
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    if samples is not None:
+        return _sampled_map(case, settings, engine, out, samples=samples, sigma=sigma, parameters=parameters,
+                            correlation=correlation, seed=seed)
+    if sigma is not None or parameters is not None or correlation is not None:
+        raise ValueError("sigma, parameters and correlation declare the uncertainty of a probabilistic map: give "
+                         "samples (realizations per point) too")
+    case = case.model_copy(update={"uncertainty": None})
     folder = _output_folder(out, "drillstring-map-")
     run = run_map(case, settings, folder / "map.zarr", engine,
                   finish=partial(_finish_map, case, folder if out is not None else None))
@@ -759,34 +781,89 @@ def operating_map(
 
 def _finish_map(case, folder, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
-    from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import map_figures
     from drillstring.plots import plot_map
-    from drillstring.report import INTERACTIVE_PAGE, write_map_report
-    from drillstring.results import write_netcdf
+    from drillstring.report import write_map_report
     from drillstring.stochastic.operating_map import map_dataset, map_summary
 
+    figures = {"figure": ("map.png", plot_map,
+                          "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
+                          "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
+                          "red dashed: lateral buckling limit; dots: simulated points")}
+    return _map_files(case, folder, run, map_dataset, map_summary, "points", figures, write_map_report,
+                      f"Operating map: case '{case.name}'", map_figures)
+
+
+def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str, interactive):
+    """A map's Dataset (``dataset(store)``), summary (``summarize(ds)`` with the run's record) and, in ``folder``
+    unless None, ``map.nc``, ``map.json``, the ``figures`` (key -> (file name, plot function, caption)) and
+    the ``report`` (``report(path, title=..., case_toml=..., summary=..., figures=..., run_info=...,
+    interactive=...)``) with its ``interactive(ds)`` figures beside it."""
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.report import INTERACTIVE_PAGE
+    from drillstring.results import write_netcdf
+
     store_path = run.store.path
-    ds = map_dataset(store_path)
-    summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
+    ds = dataset(store_path)
+    summary = {"case": case.name, **summarize(ds), **_run_record(run.store, run, noun)}
     files: dict[str, Path] = {}
     if folder is not None:
         files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                 "figure": folder / "map.png", "report": folder / "report.html",
+                 **{key: folder / name for key, (name, _, _) in figures.items()}, "report": folder / "report.html",
                  "interactive": folder / INTERACTIVE_PAGE}
         write_netcdf(ds, files["map"])
-        plot_map(ds, files["figure"])
+        for key, (_, plot, _) in figures.items():
+            plot(ds, files[key])
         summary["files"] = {k: str(v) for k, v in files.items()}
         write_text_atomic(files["summary"], strict_json(summary) + "\n")  # undefined values: null
-        write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
-                         case_toml=case.to_toml(), summary=summary,
-                         figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
-                                  "largest radial displacement over the map; black line: linear "
-                                  "stability boundary of steady drilling (hatched: unstable); red "
-                                  "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
-                         run_info={**_run_table(summary, "points"), "store": str(store_path)},
-                         interactive=map_figures(ds))
+        report(files["report"], title=title, case_toml=case.to_toml(), summary=summary,
+               figures={caption: files[key] for key, (_, _, caption) in figures.items()},
+               run_info={**_run_table(summary, noun), "store": str(store_path)}, interactive=interactive(ds))
     return ds, summary, files
+
+
+def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, seed) -> MapOutcome:
+    """A probabilistic map (:func:`operating_map` with ``samples``)."""
+    from drillstring.stochastic import DEFAULT_SIGMA
+    from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    _mapping("parameters", parameters)
+    _mapping("correlation", correlation)
+    declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
+    if declared is None and sigma is None:
+        sigma = DEFAULT_SIGMA
+    laws, correlated, matrix = (), (), ()
+    if declared is not None:
+        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters)
+        if declared.correlation is not None:
+            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    settings = SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, laws=laws, correlated=correlated,
+                                  correlation=matrix)
+    case = case.model_copy(update={"uncertainty": None})
+    folder = _output_folder(out, "drillstring-map-")
+    run = run_sampled_map(case, settings, folder / "map.zarr", engine,
+                          finish=partial(_finish_sampled_map, case, folder if out is not None else None))
+    return MapOutcome(*run.result, run.already, run.note)
+
+
+def _finish_sampled_map(case, folder, run):
+    """Under the map's lock: the probabilistic map's Dataset, summary and (in ``folder``, unless None) files."""
+    from drillstring.interactive import probability_map_figures
+    from drillstring.plots import plot_probability_map, plot_quantile_map
+    from drillstring.report import write_probability_map_report
+    from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
+
+    figures = {"figure": ("probabilities.png", plot_probability_map,
+                          "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
+                          "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
+                          "buckling limit; dots: the points"),
+               "quantiles": ("quantiles.png", plot_quantile_map,
+                             "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
+                             "point's realizations")}
+    return _map_files(case, folder, run, sampled_map_dataset, sampled_map_summary, "realizations", figures,
+                      write_probability_map_report, f"Probabilistic operating map: case '{case.name}'",
+                      probability_map_figures)
 
 
 @dataclass

@@ -17,7 +17,9 @@ Commands
     Monte Carlo study of random case parameters (default: the weight-on-hook): Zarr store (resumable),
     statistics, figures, report.
 ``drillstring map [CASE] [--top-speed A:B:N] [--weight-on-bit A:B:N] [--t-end S] [--out DIR] ...``
-    Operating map over top speed × weight-on-bit: performance, vibration, stability, buckling margin.
+    Operating map over top speed × weight-on-bit: performance, vibration, stability, buckling margin;
+    with ``--samples N`` (and ``--sigma``/``--param``), probabilities of stick-slip, buckling, impact and
+    instability at each point.
 ``drillstring sensitivity [CASE] --param PATH=LAW ... [--samples N] [--out DIR] ...``
     Global sensitivity: Sobol' indices of ROP, vibration, TOB, FOB.
 ``drillstring compare [CASE] [--t-end S] [--plot FILE.png] [--json]``
@@ -1192,9 +1194,30 @@ def map_command(
     out: OutOption = Path("map"),
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
+    samples: Annotated[
+        int | None,
+        typer.Option("--samples", "-n", help="Realizations per point (>= 2): a probabilistic map of the declared "
+                                             "uncertainty (default: deterministic, one run per point).")
+    ] = None,
+    sigma: Annotated[
+        float | None,
+        typer.Option("--sigma", help="With --samples: standard deviation [N] of the weight-on-hook, Normal around "
+                                     f"each point's hook load (default {DEFAULT_SIGMA:g} N when nothing else is "
+                                     "declared).")
+    ] = None,
+    param: ParamOption = None,
+    correlation: CorrelationOption = None,
+    seed: Annotated[int, typer.Option("--seed", help="With --samples: root seed of the random draws (>= 0).")
+                    ] = DEFAULT_SEED,
     as_json: JsonOpt = False,
 ) -> None:
     """Operating map over top speed × weight-on-bit: one simulation per grid point.
+
+    With --samples N: N realizations per point of the declared uncertainty (--sigma for the weight-on-hook
+    around each point's hook load, --param PATH=LAW and --correlation, else the case file's uncertainty table)
+    and per point the probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady
+    drilling, with the 2.5/50/97.5 % quantiles of the mean ROP and of the stick-slip index; OUT/probabilities.png
+    and OUT/quantiles.png instead of OUT/map.png.
 
     Per point: mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical specific energy,
     largest radial displacement and impacts, the leading growth rate of the linear stability of steady
@@ -1205,6 +1228,9 @@ def map_command(
     the_case = _load(case)
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+    if samples is None and (sigma is not None or param or correlation):
+        _fail("--sigma, --param and --correlation declare the uncertainty of a probabilistic map: give --samples N")
+    laws, correlated = _declared_laws(param, correlation)
     from drillstring import api
 
     try:  # bare numbers of the options are in rpm and N; the grid is passed on in SI
@@ -1213,24 +1239,71 @@ def map_command(
     except ValueError as error:
         _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("weight_on_bit = ", "--weight-on-bit = "))
     _check_output("--out", out, folder=True)
+    noun = "grid points" if samples is None else "realizations"
     outcome = _engine_command(
-        out, "map.zarr", "map", "grid points",
+        out, "map.zarr", "map", noun,
         lambda progress, note: api.operating_map(
             the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
-            transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note))
-    _note_resumed(outcome.already, settings.points, "grid points", out / "map.zarr")
+            transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note,
+            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, seed=seed))
+    _note_resumed(outcome.already, settings.points * (samples or 1), noun, out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)
         return
-    _print_map(the_case.name, outcome.summary)
+    if samples is None:
+        _print_map(the_case.name, outcome.summary)
+    else:
+        _print_probability_map(the_case.name, outcome.summary)
+
+
+def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
+    console = _console()
+    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
+    console.print(escape(
+        f"Probabilistic operating map: case {name!r}, {_grid_text(summary)}, {summary['samples']} realizations per "
+        f"point: {summary['done']} done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"),
+        soft_wrap=True)
+    table = Table(title="Probabilities per point and quantiles 50 % (2.5–97.5 %)", title_justify="left",
+                  caption="binomial standard errors of the probabilities in map.json and the report",
+                  caption_justify="left")
+    for header in ("rpm", "WOB [kN]", "n", "P(stick-slip)", "P(buckled)", "P(impact)", "P(unstable)",
+                   "mean ROP [m/h]", "stick-slip index"):
+        table.add_column(escape(header), justify="right")
+    probabilities, quantiles = summary["probabilities"], summary["quantiles"]
+
+    def spread(key: str, i: int, j: int, scale: float) -> str:
+        low, mid, high = (quantiles[key][k][i][j] for k in ("2.5", "50", "97.5"))
+        return f"{_fmt(mid, '.3g', scale)} ({_fmt(low, '.3g', scale)}–{_fmt(high, '.3g', scale)})"
+
+    for i, speed in enumerate(speeds):
+        for j, wob in enumerate(weights):
+            cells = [f"{speed * _RPM:g}", f"{wob / _KN:g}", f"{summary['samples_done'][i][j]}"]
+            for key in ("stick_slip_probability", "buckling_probability", "impact_probability",
+                        "instability_probability"):
+                cells.append(_fmt(probabilities[key]["values"][i][j], ".3f"))
+            cells += [spread("rate_of_penetration_q", i, j, _M_PER_H), spread("stick_slip_index_q", i, j, 1.0)]
+            table.add_row(*cells)
+    console.print(table)
+    console.print(escape(f"critical weight-on-bit (lateral buckling, nominal case): "
+                         f"{summary['critical_weight_on_bit'] / _KN:,.1f} kN"), soft_wrap=True)
+    files = summary.get("files") or {}
+    if files:
+        console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+        console.print(escape(f"Map: {files['map']}, figures: {files['figure']}, {files['quantiles']}, report: "
+                             f"{files['report']}"), soft_wrap=True)
+
+
+def _grid_text(summary: dict[str, Any]) -> str:
+    """'N top speeds (a–b rpm) × M weights-on-bit (c–d kN)' of a map's summary."""
+    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
+    return (f"{len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} rpm) × {len(weights)} "
+            f"weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} kN)")
 
 
 def _print_map(name: str, summary: dict[str, Any]) -> None:
     console = _console()
-    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
     console.print(escape(
-        f"Operating map: case {name!r}, {len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} "
-        f"rpm) × {len(weights)} weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} kN), "
+        f"Operating map: case {name!r}, {_grid_text(summary)}, "
         f"{summary['done']} points done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"
     ), soft_wrap=True)
     table = Table(title="Highlights", title_justify="left")

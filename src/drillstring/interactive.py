@@ -155,21 +155,55 @@ def map_figures(ds) -> list[dict]:
     for name, factor, label, _, _ in MAP_PANELS:
         values = np.where(done, np.asarray(ds[name].values, dtype=float) * factor, np.nan)
         title = label.split(" [")[0]
-        data = [{"type": "heatmap", "x": _values(speeds), "y": _values(weights), "z": _grid(values.T),
-                 "colorscale": "Viridis", "colorbar": {"title": {"text": label, "side": "right"}}, "name": title,
-                 "hovertemplate": "%{x:.4g} rpm, %{y:.4g} kN<br>" + html.escape(title) + " %{z:.4g}<extra></extra>"}]
+        data = [_heatmap(speeds, weights, values, label, title)]
         if speeds.size >= 2 and weights.size >= 2 and np.nanmax(growth) > 0 > np.nanmin(growth):
             data.append({"type": "contour", "x": _values(speeds), "y": _values(weights), "z": _grid(growth.T),
                          "contours": {"start": 0, "end": 0, "size": 1, "coloring": "none"}, "showscale": False,
                          "line": {"color": "black", "width": 2}, "name": "stability boundary (growth rate 0)",
                          "showlegend": True, "hoverinfo": "skip"})
-        shapes = []
-        if np.isfinite(critical) and weights.min() <= critical <= weights.max():
-            shapes.append({"type": "line", "xref": "paper", "x0": 0, "x1": 1, "yref": "y", "y0": critical,
-                           "y1": critical, "line": {"color": "#d62728", "dash": "dash", "width": 2}})
         figures.append(_figure(title, f"{label} over the map; black: linear stability boundary of steady drilling; "
                                f"red dashed: lateral buckling limit ({critical:.4g} kN).", data, "top speed [rpm]",
-                               "weight-on-bit [kN]", shapes=shapes, legend={"orientation": "h", "y": -0.2}))
+                               "weight-on-bit [kN]", shapes=_buckling_line(critical, weights),
+                               legend={"orientation": "h", "y": -0.2}))
+    return figures
+
+
+def _heatmap(speeds, weights, values, label: str, title: str, **extra: Any) -> dict:
+    """A heat map of ``values`` (top speed × weight-on-bit) over ``speeds`` [rpm] × ``weights`` [kN]."""
+    return {"type": "heatmap", "x": _values(speeds), "y": _values(weights), "z": _grid(np.asarray(values).T),
+            "colorscale": "Viridis", "colorbar": {"title": {"text": label, "side": "right"}}, "name": title,
+            "hovertemplate": "%{x:.4g} rpm, %{y:.4g} kN<br>" + html.escape(title) + " %{z:.4g}<extra></extra>",
+            **extra}
+
+
+def _buckling_line(critical: float, weights) -> list[dict]:
+    """The lateral buckling limit ``critical`` [kN] as a dashed line, when it lies on the map."""
+    if np.isfinite(critical) and np.min(weights) <= critical <= np.max(weights):
+        return [{"type": "line", "xref": "paper", "x0": 0, "x1": 1, "yref": "y", "y0": critical, "y1": critical,
+                 "line": {"color": "#d62728", "dash": "dash", "width": 2}}]
+    return []
+
+
+def probability_map_figures(ds) -> list[dict]:
+    """Figures of a probabilistic operating map (:func:`drillstring.stochastic.probabilistic_map.
+    sampled_map_dataset`): one heat map per probability (scale 0–1) over top speed [rpm] × weight-on-bit [kN],
+    the hover showing each point's value and binomial standard error, with the nominal lateral buckling limit."""
+    from drillstring.plots import PROBABILITY_PANELS
+
+    speeds = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    weights = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    figures = []
+    for name, label in PROBABILITY_PANELS:
+        error = _grid(np.asarray(ds[f"{name}_standard_error"].values, dtype=float).T)
+        data = [_heatmap(speeds, weights, ds[name].values, label, label, zmin=0.0, zmax=1.0, colorscale="RdYlGn",
+                         reversescale=True, customdata=error,
+                         hovertemplate="%{x:.4g} rpm, %{y:.4g} kN<br>" + html.escape(label)
+                         + " %{z:.3f} ± %{customdata:.3f}<extra></extra>")]
+        figures.append(_figure(label, f"{label.capitalize()} over the map, from {int(ds.attrs['samples'])} "
+                               "realizations per point (± binomial standard error); red dashed: lateral buckling "
+                               f"limit of the nominal string ({critical:.4g} kN).", data, "top speed [rpm]",
+                               "weight-on-bit [kN]", shapes=_buckling_line(critical, weights)))
     return figures
 
 

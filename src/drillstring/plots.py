@@ -645,6 +645,96 @@ def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
     return _save(fig, path)
 
 
+#: Panels of a probabilistic map: variable, label.
+PROBABILITY_PANELS = (
+    ("stick_slip_probability", "probability of stick-slip"),
+    ("buckling_probability", "probability of a buckled string"),
+    ("impact_probability", "probability of wall impact"),
+    ("instability_probability", "probability of unstable steady drilling"),
+)
+
+
+def _sampled_map_title(ds: xr.Dataset, what: str) -> str:
+    title = what
+    name = _case_name(ds.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    return title + (f" ({int(ds.attrs['samples'])} realizations per point, runs of {float(ds.attrs['t_end']):g} s, "
+                    f"outputs over t ≥ {float(ds.attrs['t_transient']):g} s)")
+
+
+def _points_and_buckling(ax, ds: xr.Dataset, x: np.ndarray, y: np.ndarray) -> None:
+    """The grid points (dots) and the nominal lateral buckling limit (red dashed) on a map panel."""
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    if np.isfinite(critical) and y.min() <= critical <= y.max():
+        ax.axhline(critical, color="C3", ls="--", lw=1.6)
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    ax.plot(xx.ravel(), yy.ravel(), ".", color="k", ms=3, clip_on=False)
+    ax.set_xlabel("top speed [rpm]")
+    ax.set_ylabel("weight-on-bit [kN]")
+
+
+def _map_legend(fig, ds: xr.Dataset) -> None:
+    from matplotlib.lines import Line2D
+
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    handles = [Line2D([], [], color="C3", ls="--", lw=1.6,
+                      label=f"lateral buckling of the nominal string, WOB = {critical:.4g} kN"),
+               Line2D([], [], color="k", marker=".", ls="", label="grid point")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize="small")
+
+
+def plot_probability_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
+    sampled_map_dataset`) as four panels over top speed [rpm] × the points' nominal weight-on-bit [kN]: the
+    probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady drilling (colour
+    scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``."""
+    from matplotlib.colors import Normalize
+
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    fig, axes = _figure(2, 2, (12.0, 9.0))
+    levels = np.linspace(0.0, 1.0, 11)
+    for ax, (name, label) in zip(axes, PROBABILITY_PANELS):
+        z = np.asarray(ds[name].values, dtype=float)
+        if x.size >= 2 and y.size >= 2:
+            artist = ax.contourf(x, y, np.nan_to_num(z.T, nan=np.nan), levels=levels, cmap="RdYlGn_r",
+                                 norm=Normalize(0.0, 1.0), extend="neither")
+        else:
+            xx, yy = np.meshgrid(x, y, indexing="ij")
+            artist = ax.scatter(xx.ravel(), yy.ravel(), c=z.ravel(), cmap="RdYlGn_r", vmin=0.0, vmax=1.0, s=80,
+                                zorder=2)
+        fig.colorbar(artist, ax=ax, label=label, ticks=levels[::2])
+        _points_and_buckling(ax, ds, x, y)
+        ax.set_title(label, fontsize="medium")
+    _map_legend(fig, ds)
+    fig.suptitle(_sampled_map_title(ds, "Probabilistic operating map"))
+    return _save(fig, path)
+
+
+def plot_quantile_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """The 2.5, 50 and 97.5 % quantiles of the mean ROP [m/h] (top row) and of the stick-slip index (bottom
+    row) over each point's realizations, over top speed [rpm] × weight-on-bit [kN], each panel on its own colour
+    scale.
+    Written to the PNG ``path``."""
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    levels = [float(q) for q in ds["quantile"].values]
+    fig, axes = _figure(2, len(levels), (5.0 * len(levels), 9.0))
+    rows = (("rate_of_penetration_q", 3600.0, "mean ROP [m/h]", "viridis"),
+            ("stick_slip_index_q", 1.0, "stick-slip index [-]", "magma_r"))
+    for r, (name, factor, label, cmap) in enumerate(rows):
+        values = np.asarray(ds[name].values, dtype=float) * factor
+        for k, q in enumerate(levels):
+            ax = axes[r * len(levels) + k]
+            _map_panel(ax, fig, x, y, values[..., k], label, cmap)
+            _points_and_buckling(ax, ds, x, y)
+            ax.set_title(f"{label.split(' [')[0]}: {100 * q:g} % quantile", fontsize="medium")
+    _map_legend(fig, ds)
+    fig.suptitle(_sampled_map_title(ds, "Quantiles over the realizations"))
+    return _save(fig, path)
+
+
 # ---------------------------------------------------------------------------------------------------------
 # Sobol' indices
 # ---------------------------------------------------------------------------------------------------------

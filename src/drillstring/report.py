@@ -488,15 +488,17 @@ def write_sensitivity_report(path: str | Path, *, title: str, case_toml: str, in
     return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info, interactive)
 
 
+def _axis(values: list[float], unit: str) -> str:
+    """A map axis for a table cell: 'first to last unit (n values)'."""
+    if not values:
+        return "–"
+    return f"{_num(min(values))} to {_num(max(values))} {unit} ({len(values)} values)"
+
+
 def _map_section(summary: Mapping[str, Any]) -> str:
     speeds = [v * _RPM for v in summary.get("top_speed", [])]
     weights = [v / 1e3 for v in summary.get("weight_on_bit", [])]
-
-    def axis(values: list[float], unit: str) -> str:
-        if not values:
-            return "–"
-        return f"{_num(min(values))} to {_num(max(values))} {unit} ({len(values)} values)"
-
+    axis = _axis
     rows = [("top speed", axis(speeds, "rpm")), ("weight-on-bit", axis(weights, "kN")),
             ("points (done, failed)", f"{_num(summary.get('points'))} ({_num(summary.get('done'))}, "
                                       f"{_num(summary.get('failed'))})"),
@@ -527,3 +529,62 @@ def write_map_report(path: str | Path, *, title: str, case_toml: str, summary: M
     highlights (``summary``: :func:`drillstring.stochastic.operating_map.map_summary`), the run table and
     the figures."""
     return _page(path, title, case_toml, [_map_section(summary)], figures, run_info, interactive)
+
+
+#: Columns of the per-point table of a probabilistic map: summary key, header.
+_PROBABILITY_COLUMNS = (("stick_slip_probability", "P(stick-slip)"), ("buckling_probability", "P(buckled)"),
+                        ("impact_probability", "P(impact)"), ("instability_probability", "P(unstable)"))
+
+
+def _probability_map_section(summary: Mapping[str, Any]) -> str:
+    speeds, weights = list(summary.get("top_speed", [])), list(summary.get("weight_on_bit", []))
+    sigma = summary.get("sigma")
+    laws = [f"weight_on_hook: normal around each point's hook load, σ = {_num(sigma / 1e3)} kN"] if sigma else []
+    laws += [str(v) for v in summary.get("laws", [])[1 if sigma else 0:]]
+    rows = [("top speed", _axis([v * _RPM for v in speeds], "rpm")),
+            ("weight-on-bit (nominal at each point)", _axis([v / 1e3 for v in weights], "kN")),
+            ("realizations per point", _num(summary.get("samples"))),
+            ("random parameters", _esc("; ".join(f"{p}" for p in laws)) or "–"),
+            ("realizations (done, failed)", f"{_num(summary.get('realizations'))} ({_num(summary.get('done'))}, "
+                                            f"{_num(summary.get('failed'))})"),
+            ("simulated time per realization", f"{_num(summary.get('t_end'))} s, outputs over t ≥ "
+                                               f"{_num(summary.get('t_transient'))} s"),
+            ("critical weight-on-bit (lateral buckling, nominal case)",
+             f"{_num(float(summary.get('critical_weight_on_bit', math.nan)) / 1e3)} kN")]
+    probabilities = summary.get("probabilities", {})
+    quantiles = summary.get("quantiles", {})
+    head = ("<tr><th>top speed [rpm]</th><th>WOB [kN]</th><th>n</th>"
+            + "".join(f"<th>{_esc(h)}</th>" for _, h in _PROBABILITY_COLUMNS)
+            + "<th>mean ROP [m/h]: 50 % (2.5–97.5 %)</th><th>stick-slip index: 50 % (2.5–97.5 %)</th></tr>")
+
+    def spread(name: str, i: int, j: int, factor: float) -> str:
+        q = quantiles.get(name, {})
+        low, mid, high = (q.get(k, [[None]])[i][j] for k in ("2.5", "50", "97.5"))
+        scale = (lambda v: None if v is None else v * factor)
+        return f"{_num(scale(mid), 3)} ({_num(scale(low), 3)}–{_num(scale(high), 3)})"
+
+    body = []
+    for i, speed in enumerate(speeds):
+        for j, wob in enumerate(weights):
+            cells = [_num(speed * _RPM), _num(wob / 1e3), _num(summary.get("samples_done", [[None]])[i][j])]
+            for key, _ in _PROBABILITY_COLUMNS:
+                value = probabilities.get(key, {}).get("values", [[None]])[i][j]
+                error = probabilities.get(key, {}).get("standard_error", [[None]])[i][j]
+                cells.append(f"{_num(value, 3)} ± {_num(error, 2)}")
+            cells += [spread("rate_of_penetration_q", i, j, 3600.0), spread("stick_slip_index_q", i, j, 1.0)]
+            body.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    return ("<h2>Map</h2><p>At each point, realizations of the declared uncertainty (one random stream per "
+            "realization index, common to the points). Each probability is the share of the point's finished "
+            "realizations with the event (± its binomial standard error): stick-slip, the bit below 10 % of the top "
+            "speed; buckled, the lowest lateral eigenvalue of the realized string below 0; impact, a contact with "
+            "the borehole wall; unstable, a positive growth rate of steady drilling.</p>" + _kv_table(rows)
+            + f"<h2>Points</h2><table>{head}{''.join(body)}</table>")
+
+
+def write_probability_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
+                                 figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                                 interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
+    """Write the report of a probabilistic operating map (one self-contained HTML page): the case, the grid,
+    the random parameters, a table of every point's probabilities and quantiles (``summary``:
+    :func:`drillstring.stochastic.probabilistic_map.sampled_map_summary`), the run table and the figures."""
+    return _page(path, title, case_toml, [_probability_map_section(summary)], figures, run_info, interactive)

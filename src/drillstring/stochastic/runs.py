@@ -68,6 +68,12 @@ STABILITY_OUTPUTS: dict[str, tuple[str, str]] = {
     "steady_torque_on_bit": ("N m", "torque on bit of steady drilling (closed form)"),
     "steady_force_on_bit": ("N", "force on bit of steady drilling (closed form)"),
 }
+#: Outputs added for a realization of random inputs (the probabilistic operating map).
+REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
+    "lowest_lateral_eigenvalue": ("rad^2/s^2",
+                                  "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
+    "stick_slip_index": CYCLE_METRICS["stick_slip_index"],
+}
 
 
 #: Scalar results of each realization of a Monte Carlo study, computed in the worker from its realized
@@ -124,20 +130,21 @@ def _steady(values: np.ndarray, steady: np.ndarray) -> np.ndarray:
     return values[np.isfinite(values)]
 
 
-def result_outputs(result, case: Case, t_transient: float) -> dict[str, float]:
+def result_outputs(result, case: Case, t_transient: float, *, cycle: tuple[str, ...] = ()) -> dict[str, float]:
     """The scalar outputs of :data:`RUN_OUTPUTS` of one run (a :class:`~drillstring.dynamics.simulate.
-    SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s]; NaN where undefined."""
+    SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s], and the ``cycle`` metrics named
+    (:data:`~drillstring.dynamics.indicators.CYCLE_METRICS`); NaN where undefined."""
     t = np.asarray(result.time, dtype=float)
     top_speed = case.operation.top_speed
     obs = result.observables
-    cycle = cycle_metrics(t, obs, top_speed, bit_area(case), t_transient)
+    metrics = cycle_metrics(t, obs, top_speed, bit_area(case), t_transient)
     steady = steady_window(t, t_transient)
-    out = {name: math.nan for name in RUN_OUTPUTS}
+    out = {name: math.nan for name in RUN_OUTPUTS} | {name: metrics[name] for name in cycle}
     for name in ("stick_time_fraction", "bit_speed_min", "bit_speed_max", "mechanical_specific_energy"):
-        out[name] = cycle[name]
-    out["bit_speed_oscillation"] = (cycle["bit_speed_max"] - cycle["bit_speed_min"]) / (2.0 * top_speed)
+        out[name] = metrics[name]
+    out["bit_speed_oscillation"] = (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * top_speed)
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
-        out[f"mean_{name}"] = cycle[f"{name}_mean"]
+        out[f"mean_{name}"] = metrics[f"{name}_mean"]
         values = _steady(obs[name], steady)
         if values.size:
             out[f"std_{name}"] = float(values.std())
@@ -170,27 +177,32 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
 
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,
-                with_stability: bool = False) -> TaskOutcome:
+                with_stability: bool = False, with_realization: bool = False) -> TaskOutcome:
     """Simulate ``case`` for ``t_end`` [s] and return its scalar outputs as the outcome of task ``index``
-    (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability``). Never
+    (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability`` and
+    :data:`REALIZATION_OUTPUTS` when ``with_realization``). Never
     raises: a run that stops early is FAILED with its cause and the outputs of what it computed; a case
     that cannot be built is FAILED with NaN outputs."""
     start = time.perf_counter()
     t_transient = transient_end(t_end) if t_transient is None else t_transient
-    names = list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
+    names = (list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
+             + (list(REALIZATION_OUTPUTS) if with_realization else []))
     outcome = TaskOutcome(index, FAILED, "", {name: math.nan for name in names})
     try:
         model = case_reduced_model(case)
         if with_stability:
             values, _ = stability_outputs(model)
             outcome.values.update(values)
+        if with_realization:
+            outcome.values["lowest_lateral_eigenvalue"] = float(model.lowest_lateral_eigenvalue)
         try:
             result = simulate_model(model, **simulation_options(case, t_end, output_step))
             outcome.status = DONE
         except SimulationError as error:
             result = error.result
             outcome.message = str(error)
-        outcome.values.update(result_outputs(result, case, t_transient))
+        outcome.values.update(result_outputs(result, case, t_transient,
+                                             cycle=("stick_slip_index",) if with_realization else ()))
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"
