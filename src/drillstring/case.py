@@ -8,10 +8,12 @@ mesh, reduced-order model, time integration and initial state. It is a tree of i
 Units at the edge
 -----------------
 Every physical field accepts either a plain number, taken in SI units, or a string ``"value unit"``, e.g.
-``"100 rpm"``, ``"100 kN"``, ``"1400 m"``, ``"8.5 in"``, ``"1.5 m/s"``, ``"17.5 MN/m"``. The string is converted
-to SI when the case is validated; a unit of the wrong dimension, or an unknown unit, is refused with the list
-of allowed units. Units are case-sensitive (``mm`` is not ``Mm``); ``*`` and ``.`` both denote a product, and
-spaces inside the unit are ignored. The unit tables are in :data:`DIMENSIONS`.
+``"100 rpm"``, ``"100 kN"``, ``"1400 m"``, ``"8.5 in"``, ``"10 ppg"``, ``"3000 psi"``, ``"17.5 MN/m"``, in any unit of
+the field's dimension. The string is read by pint and converted to SI when the case is validated
+(:mod:`drillstring.units`: writing rules, the oilfield units ppg, gpm and rev); a unit of the wrong dimension, or
+an unknown unit, is refused naming the dimension expected. Two inputs are converted with the rest of the case:
+``fluid.flow_rate`` (a volume flow, e.g. ``"600 gpm"``) gives ``fluid.inlet_velocity`` through the bore of the
+top section, and a ``[[components]]`` list (:mod:`drillstring.components`) gives the sections and stabilizers.
 
 Errors
 ------
@@ -24,16 +26,15 @@ Cross-field rules (which need the whole case) are checked only once every field 
 Entry points: :func:`load_case`, :func:`case_from_dict`, :func:`builtin_cases`, :meth:`Case.to_toml`.
 
 This module imports nothing from the rest of ``drillstring`` but :mod:`drillstring.derived` (pure functions
-of numbers shared with the finite-element model: mesh layout, mode-family sizes, axial loads).
+of numbers shared with the finite-element model: mesh layout, mode-family sizes, axial loads),
+:mod:`drillstring.units` (reading units) and :mod:`drillstring.components` (strings from components).
 """
 
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 import typing
-from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
@@ -48,6 +49,32 @@ from drillstring.derived import (
     mesh_breaks,
     mode_family_sizes,
     string_axial_load,
+)
+from drillstring.units import (
+    ACCELERATION,
+    ANGLE,
+    ANGULAR_SPEED,
+    AXIAL_DAMPING,
+    DENSITY,
+    DIMENSIONLESS,
+    DIMENSIONS,
+    FORCE,
+    FORCE_ANGLE,
+    LENGTH,
+    LENGTH_PER_ANGLE,
+    LINEAR_DAMPING,
+    MASS_PER_LENGTH,
+    PENETRATION_PER_FORCE,
+    PRESSURE,
+    ROTATIONAL_DAMPING,
+    STIFFNESS,
+    STIFFNESS_PER_LENGTH,
+    TIME,
+    TORQUE,
+    VELOCITY,
+    VOLUME_FLOW,
+    Dimension,
+    to_si,
 )
 
 __all__ = [
@@ -77,6 +104,7 @@ __all__ = [
     "Force",
     "Initial",
     "Length",
+    "MassPerLength",
     "Material",
     "Mesh",
     "Model",
@@ -91,6 +119,7 @@ __all__ = [
     "Time",
     "Torque",
     "Velocity",
+    "VolumeFlow",
     "builtin_cases",
     "case_from_dict",
     "load_case",
@@ -281,103 +310,8 @@ def _entries_from_validation_error(exc: ValidationError, root: type[BaseModel], 
 # ---------------------------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Dimension:
-    """A physical dimension: its name and its units, each with the factor that converts it to SI."""
-
-    name: str
-    units: Mapping[str, float]
-
-    @property
-    def allowed(self) -> str:
-        return ", ".join(self.units) if self.units else "none (a plain number)"
-
-
-_TWO_PI = 2.0 * math.pi
-_LBF = 4.4482216152605  # N
-
-LENGTH = Dimension("length", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "km": 1e3, "in": 0.0254, "ft": 0.3048})
-FORCE = Dimension("force", {"N": 1.0, "kN": 1e3, "MN": 1e6, "lbf": _LBF, "klbf": 1e3 * _LBF})
-ANGULAR_SPEED = Dimension(
-    "angular speed", {"rad/s": 1.0, "rpm": _TWO_PI / 60.0, "rev/min": _TWO_PI / 60.0, "Hz": _TWO_PI, "rev/s": _TWO_PI}
-)
-VELOCITY = Dimension(
-    "velocity", {"m/s": 1.0, "m/min": 1.0 / 60.0, "m/h": 1.0 / 3600.0, "ft/s": 0.3048, "ft/h": 0.3048 / 3600.0}
-)
-STIFFNESS = Dimension("stiffness", {"N/m": 1.0, "kN/m": 1e3, "MN/m": 1e6})
-# A stiffness per metre of string [N/m per m = N/m²]. "N/m" is accepted too, read per metre, because the
-# reference data write the shock stiffness so ("1e8 N/m" for the shocks, per meter of string).
-STIFFNESS_PER_LENGTH = Dimension("stiffness per length",
-                                 {"N/m2": 1.0, "N/m^2": 1.0, "N/m/m": 1.0, "kN/m2": 1e3, "MN/m2": 1e6, "N/m": 1.0})
-PRESSURE = Dimension("pressure", {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9})
-DENSITY = Dimension("density", {"kg/m3": 1.0, "kg/m^3": 1.0, "g/cm3": 1e3, "g/cm^3": 1e3})
-TIME = Dimension("time", {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
-TORQUE = Dimension("torque", {"N*m": 1.0, "N.m": 1.0, "kN*m": 1e3, "kN.m": 1e3})
-ACCELERATION = Dimension("acceleration", {"m/s2": 1.0, "m/s^2": 1.0})
-ANGLE = Dimension("angle", {"rad": 1.0, "deg": math.pi / 180.0})
-DIMENSIONLESS = Dimension("dimensionless number", {})
-# Coefficients that only ever appear in SI; the unit string is still accepted so a file can say what it means.
-AXIAL_DAMPING = Dimension("axial damping coefficient", {"N*s/m": 1.0, "N.s/m": 1.0})
-ROTATIONAL_DAMPING = Dimension("rotational damping coefficient", {"N*m*s/rad": 1.0, "N.m.s/rad": 1.0})
-LINEAR_DAMPING = Dimension("damping per unit length", {"N*s/m2": 1.0, "N*s/m^2": 1.0, "N.s/m2": 1.0})
-PENETRATION_PER_FORCE = Dimension("bit-rock coefficient a2", {"m/(N*s)": 1.0, "m/(N.s)": 1.0})
-LENGTH_PER_ANGLE = Dimension("length per angle", {"m/rad": 1.0})
-FORCE_ANGLE = Dimension("force times angle", {"N*rad": 1.0, "N.rad": 1.0})
-
-#: Every dimension, for error messages naming the dimension a misplaced unit belongs to.
-DIMENSIONS: tuple[Dimension, ...] = (
-    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, STIFFNESS_PER_LENGTH, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION, ANGLE,
-    DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING, LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE,
-    FORCE_ANGLE,
-)  # fmt: skip
-
-_QUANTITY = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
-_UNIT_SUBST = {"·": "*", "⋅": "*", "²": "2", "³": "3"}
-
-
-def _normalise_unit(unit: str) -> str:
-    for old, new in _UNIT_SUBST.items():
-        unit = unit.replace(old, new)
-    return "".join(unit.split())
-
-
-def to_si(value: Any, dim: Dimension) -> float:
-    """Convert a plain number (taken as SI) or a ``"value unit"`` string of dimension ``dim`` to an SI float.
-
-    Raises ``ValueError`` with a one-line explanation (the allowed units) when the value cannot be converted.
-    """
-    if isinstance(value, bool):
-        raise ValueError(f"expected a number, got a boolean; allowed units: {dim.allowed}")
-    if isinstance(value, (int, float)):
-        number = float(value)
-        unit = ""
-    elif isinstance(value, str):
-        match = _QUANTITY.match(value)
-        if match is None:
-            hint = f'a number or a "value unit" string (allowed units: {dim.allowed})'
-            if not dim.units:
-                hint = "a plain number"
-            raise ValueError(f"not {hint}")
-        number = float(match.group(1))
-        unit = _normalise_unit(match.group(2))
-    else:
-        try:  # numpy scalars and the like
-            number = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"expected a number, got {type(value).__name__}") from None
-        unit = ""
-    if not math.isfinite(number):
-        raise ValueError("must be a finite number")
-    if not unit:
-        return number
-    if unit in dim.units:
-        return number * dim.units[unit]
-    if not dim.units:
-        raise ValueError(f"a plain number without unit is expected ({dim.name}), got unit '{unit}'")
-    other = next((d for d in DIMENSIONS if unit in d.units), None)
-    if other is not None:
-        raise ValueError(f"unit '{unit}' is a {other.name} unit, not a {dim.name} unit; allowed units: {dim.allowed}")
-    raise ValueError(f"unknown unit '{unit}', not a {dim.name} unit; allowed units: {dim.allowed}")
+# The dimensions and the conversion live in drillstring.units (pint); case.py names the field types.
+_RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
 
 def _quantity(dim: Dimension) -> Any:
@@ -407,6 +341,8 @@ LinearDamping = _quantity(LINEAR_DAMPING)  #: [N*s/m^2]
 PenetrationPerForce = _quantity(PENETRATION_PER_FORCE)  #: [m/(N*s)]
 LengthPerAngle = _quantity(LENGTH_PER_ANGLE)  #: [m/rad]
 ForceAngle = _quantity(FORCE_ANGLE)  #: [N*rad]
+MassPerLength = _quantity(MASS_PER_LENGTH)  #: [kg/m]
+VolumeFlow = _quantity(VOLUME_FLOW)  #: [m^3/s]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -567,7 +503,7 @@ class Operation(_Base):
     """Operating point: what the driller controls."""
 
     top_speed: AngularSpeed = Field(
-        to_si("100 rpm", ANGULAR_SPEED), gt=0, description="rotation speed imposed at the top [rad/s]"
+        100.0 * _RPM, gt=0, description="rotation speed imposed at the top [rad/s]"
     )
     weight_on_bit: Force = Field(1e5, gt=0, description="initial (static) weight-on-bit [N]")
 
