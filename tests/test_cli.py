@@ -151,7 +151,7 @@ def test_cases_lists_reference_and_contact():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
     names = [line.split()[0] for line in result.stdout.splitlines()]
-    assert names == ["contact", "reference"]
+    assert names == ["contact", "reference", "reference_components"]
     assert "hits the wall" in result.stdout
 
 

@@ -94,6 +94,7 @@ __all__ = [
     "Bow",
     "Case",
     "CaseError",
+    "Component",
     "Contact",
     "Damping",
     "Density",
@@ -117,6 +118,7 @@ __all__ = [
     "Stiffness",
     "StiffnessPerLength",
     "Time",
+    "ToolJoint",
     "Torque",
     "Velocity",
     "VolumeFlow",
@@ -597,6 +599,155 @@ class UncertaintyTable(_Base):
     correlation: CorrelationTable | None = None
 
 
+# ---------------------------------------------------------------------------------------------------------
+# Strings from components (expanded into sections and stabilizers by drillstring.components)
+# ---------------------------------------------------------------------------------------------------------
+
+
+class ToolJoint(_Base):
+    """The tool joints of a drill pipe or heavy-weight pipe, smeared as added mass along it
+    (:mod:`drillstring.components`)."""
+
+    outer_diameter: Length = Field(gt=0, description="tool-joint outer diameter [m]")
+    inner_diameter: Length | None = Field(
+        None, ge=0, description="tool-joint bore [m]; the pipe's by default")
+    length: Length = Field(gt=0, description="length of one tool joint (box and pin together) [m]")
+    spacing: Length = Field(9.144, gt=0, description="pipe length per tool joint [m]; 30 ft (range 2) by default")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> ToolJoint:
+        if self.inner_diameter is not None and self.inner_diameter >= self.outer_diameter:
+            raise _Problems([(("inner_diameter",), self.inner_diameter,
+                              f"must be less than outer_diameter ({self.outer_diameter:g} m)")])
+        if self.length >= self.spacing:
+            raise _Problems([(("length",), self.length, f"must be less than spacing ({self.spacing:g} m)")])
+        return self
+
+
+class Component(_Base):
+    """One component of the string, listed from the top to the bit in ``[[components]]``
+    (:mod:`drillstring.components` says how it becomes sections and stabilizers)."""
+
+    type: Literal["drill_pipe", "heavy_weight", "collar", "mwd", "motor", "stabilizer", "bit"]
+    name: str | None = Field(None, description="section name; by default from the type ('drill pipe', ...)")
+    length: Length = Field(0.0, ge=0, description="length [m]; > 0 except for a stabilizer (0: a point)")
+    outer_diameter: Length | None = Field(None, gt=0, description="outer diameter D_o [m]")
+    inner_diameter: Length | None = Field(None, ge=0, description="inner (bore) diameter D_i [m]")
+    weight_per_length: MassPerLength | None = Field(
+        None, gt=0, description="nominal mass per length, e.g. '19.5 lb/ft' [kg/m]: with inner_diameter, the "
+        "section's linear mass; without it, sets the bore of the plain tube of that mass")
+    material: str = Field("steel", description="key into Case.materials")
+    shear_factor: Dimensionless = Field(6.0 / 7.0, gt=0, le=1, description="Timoshenko shear factor k_s [-]")
+    eccentricity: Length = Field(0.0, ge=0, description="mass-centre offset e [m] (see Section)")
+    eccentricity_angle: Angle = Field(0.0, description="direction of the offset [rad] (see Section)")
+    tool_joint: ToolJoint | None = Field(None, description="drill pipe and heavy-weight pipe only")
+    stiffness: Stiffness | None = Field(None, gt=0, description="stabilizer only: lateral stiffness [N/m]")
+    blade_diameter: Length | None = Field(
+        None, gt=0, description="stabilizer only: blade (gauge) diameter [m], at most the borehole's")
+
+    @model_validator(mode="after")
+    def _fields_of_type(self) -> Component:
+        problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        stabilizer = self.type == "stabilizer"
+        for key in ("stiffness", "blade_diameter"):
+            if not stabilizer and getattr(self, key) is not None:
+                problems.append(((key,), getattr(self, key), f"only for a stabilizer, not a {self.type}"))
+        if stabilizer and self.stiffness is None:
+            problems.append((("stiffness",), "(missing)", "required for a stabilizer"))
+        if self.tool_joint is not None and self.type not in ("drill_pipe", "heavy_weight"):
+            problems.append((("tool_joint",), self.tool_joint, "only for drill_pipe and heavy_weight"))
+        tube = not stabilizer or self.length > 0.0
+        if not stabilizer and self.length == 0.0:
+            problems.append((("length",), self.length, f"must be > 0 for a {self.type}"))
+        if tube:
+            if self.outer_diameter is None:
+                problems.append((("outer_diameter",), "(missing)", "required"))
+            if self.inner_diameter is None and self.weight_per_length is None:
+                problems.append((("inner_diameter",), "(missing)", "give inner_diameter or weight_per_length"))
+            if (self.outer_diameter is not None and self.inner_diameter is not None
+                    and self.inner_diameter >= self.outer_diameter):
+                problems.append((("inner_diameter",), self.inner_diameter,
+                                 f"must be less than outer_diameter ({self.outer_diameter:g} m)"))
+            if (stabilizer and self.blade_diameter is not None and self.outer_diameter is not None
+                    and self.blade_diameter < self.outer_diameter):
+                problems.append((("blade_diameter",), self.blade_diameter,
+                                 f"must be at least the body's outer_diameter ({self.outer_diameter:g} m)"))
+            if (self.tool_joint is not None and self.outer_diameter is not None
+                    and self.tool_joint.outer_diameter < self.outer_diameter):
+                problems.append((("tool_joint", "outer_diameter"), self.tool_joint.outer_diameter,
+                                 f"must be at least the pipe's outer_diameter ({self.outer_diameter:g} m)"))
+        if problems:
+            raise _Problems(problems)
+        return self
+
+
+def _from_components(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with its ``components`` list replaced by the sections, stabilizers and materials they make
+    (:func:`drillstring.components.expand`); raises :class:`CaseError` naming the component fields at fault."""
+    from drillstring.components import ComponentProblem, expand
+
+    raw = data.pop("components")
+    if "sections" in data:
+        raise _Problems([(("components",), "[...]", "give either [[components]] or [[sections]], not both")])
+    if not isinstance(raw, list) or not raw:
+        raise _Problems([(("components",), raw, "must be a non-empty list of tables")])
+    entries: list[_Entry] = []
+    components = []
+    for i, item in enumerate(raw):
+        try:
+            components.append(Component.model_validate(item))
+        except CaseError as exc:
+            entries.extend((("components", i) + loc, value, message) for loc, value, message in exc.entries)
+    raw_materials = data.get("materials")
+    try:
+        materials = _default_materials() if raw_materials is None else {
+            name: Material.model_validate(m) for name, m in dict(raw_materials).items()}
+    except (CaseError, TypeError, ValueError):
+        materials = None  # reported by the case's own validation
+    try:
+        borehole = to_si(data["borehole"]["diameter"], LENGTH)
+    except (KeyError, TypeError, ValueError):
+        borehole = None
+    if entries or materials is None:
+        if entries:
+            raise CaseError(entries)
+        return data
+    try:
+        expansion = expand(components, materials, borehole)
+    except ComponentProblem as exc:
+        raise _Problems(exc.problems) from None
+    data["sections"] = expansion.sections
+    data["stabilizers"] = list(data.get("stabilizers", [])) + expansion.stabilizers
+    if expansion.materials:
+        data["materials"] = {**(raw_materials if raw_materials is not None else
+                                {n: m.model_dump() for n, m in materials.items()}), **expansion.materials}
+    return data
+
+
+def _inlet_velocity_from_flow(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with ``fluid.flow_rate`` (a volume flow Q) replaced by ``fluid.inlet_velocity`` = Q / A_i, A_i
+    the bore of the top section; left as it is when that bore cannot be read (reported elsewhere)."""
+    fluid = dict(data["fluid"])
+    flow = fluid.pop("flow_rate")
+    where = ("fluid", "flow_rate")
+    try:
+        rate = to_si(flow, VOLUME_FLOW)
+    except ValueError as exc:
+        raise _Problems([(where, flow, str(exc))]) from None
+    if "inlet_velocity" in fluid:
+        raise _Problems([(where, flow, "give either fluid.flow_rate or fluid.inlet_velocity, not both")])
+    try:
+        bore = to_si(data["sections"][0]["inner_diameter"], LENGTH)
+    except (KeyError, IndexError, TypeError, ValueError):
+        return data
+    if rate < 0.0 or bore <= 0.0:
+        problem = "must be >= 0" if rate < 0.0 else "needs a bore: the top section's inner_diameter is 0"
+        raise _Problems([(where, flow, problem)])
+    fluid["inlet_velocity"] = rate / (math.pi * bore**2 / 4.0)
+    data["fluid"] = fluid
+    return data
+
+
 #: Most finite elements a case may have (a mesh finer than this is refused at validation: it would take
 #: minutes to build and gigabytes of memory; 10 000 elements is 0.16 m for the 1600 m reference string).
 MAX_ELEMENTS = 10_000
@@ -629,6 +780,20 @@ class Case(_Base):
     bow: Bow = Field(default_factory=Bow)
     uncertainty: UncertaintyTable | None = Field(
         None, description="optional [uncertainty] table: the laws of a study's random parameters")
+
+    # -- inputs converted with the whole case: components, flow rate -------------------------------------
+
+    @model_validator(mode="before")
+    @classmethod
+    def _whole_case_inputs(cls, data: Any) -> Any:
+        if not isinstance(data, Mapping):
+            return data
+        data = dict(data)
+        if "components" in data:
+            data = _from_components(data)
+        if isinstance(data.get("fluid"), Mapping) and "flow_rate" in data["fluid"]:
+            data = _inlet_velocity_from_flow(data)
+        return data
 
     # -- derived quantities ------------------------------------------------------------------------------
 
