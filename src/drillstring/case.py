@@ -604,6 +604,16 @@ class UncertaintyTable(_Base):
 # ---------------------------------------------------------------------------------------------------------
 
 
+class _Missing:
+    """A required field's value in a problem line."""
+
+    def __repr__(self) -> str:
+        return "(missing)"
+
+
+_MISSING = _Missing()
+
+
 class ToolJoint(_Base):
     """The tool joints of a drill pipe or heavy-weight pipe, smeared as added mass along it
     (:mod:`drillstring.components`)."""
@@ -653,7 +663,7 @@ class Component(_Base):
             if not stabilizer and getattr(self, key) is not None:
                 problems.append(((key,), getattr(self, key), f"only for a stabilizer, not a {self.type}"))
         if stabilizer and self.stiffness is None:
-            problems.append((("stiffness",), "(missing)", "required for a stabilizer"))
+            problems.append((("stiffness",), _MISSING, "required for a stabilizer"))
         if self.tool_joint is not None and self.type not in ("drill_pipe", "heavy_weight"):
             problems.append((("tool_joint",), self.tool_joint, "only for drill_pipe and heavy_weight"))
         tube = not stabilizer or self.length > 0.0
@@ -661,9 +671,9 @@ class Component(_Base):
             problems.append((("length",), self.length, f"must be > 0 for a {self.type}"))
         if tube:
             if self.outer_diameter is None:
-                problems.append((("outer_diameter",), "(missing)", "required"))
+                problems.append((("outer_diameter",), _MISSING, "required"))
             if self.inner_diameter is None and self.weight_per_length is None:
-                problems.append((("inner_diameter",), "(missing)", "give inner_diameter or weight_per_length"))
+                problems.append((("inner_diameter",), _MISSING, "give inner_diameter or weight_per_length"))
             if (self.outer_diameter is not None and self.inner_diameter is not None
                     and self.inner_diameter >= self.outer_diameter):
                 problems.append((("inner_diameter",), self.inner_diameter,
