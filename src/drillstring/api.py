@@ -190,6 +190,7 @@ def monte_carlo_study(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    units: str | None = None,
 ) -> StudyOutcome:
     """Monte Carlo study of random case parameters (SPEC §8; by default a random weight-on-hook), with
     its files.
@@ -217,7 +218,9 @@ def monte_carlo_study(
     In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
     realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
     ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png`` and
-    ``report.html``. Fewer than 2 finished realizations raise :class:`StudyFailed`.
+    ``report.html``; figures and report in the unit system ``units`` (``"si"`` or ``"field"``; None:
+    ``$DRILLSTRING_UNITS``, else si; JSON and NetCDF stay SI). Fewer than 2 finished realizations raise
+    :class:`StudyFailed`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     import tempfile
@@ -286,7 +289,7 @@ def monte_carlo_study(
             })
             files: dict[str, Path] = {}
             if out is not None:
-                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient)
+                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, units)
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
@@ -294,7 +297,8 @@ def monte_carlo_study(
                         guard.note or run.note)
 
 
-def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient) -> dict[str, Path]:
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
+                       units: str | None) -> dict[str, Path]:
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
     statistics' ``summary`` and the run information from ``payload``)."""
     import json
@@ -303,11 +307,13 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     from drillstring.plots import plot_study
     from drillstring.report import write_report
     from drillstring.results import write_netcdf
+    from drillstring.units import display_unit, unit_system
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
              "statistics": folder / "statistics.nc", "report": folder / "report.html"}
+    force = display_unit("force", unit_system(units))
     write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, folder, t_transient)
+    figures = plot_study(stats, folder, t_transient, units=units)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
     write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
     run_info = {
@@ -316,7 +322,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         "computation wall time [s]": round(payload["wall_time"], 2),
         "buckled realizations (lowest lateral ω² < 0)": (
             f"{payload['buckling']['buckled_realizations']} of {payload['n_samples']}; critical weight-on-bit "
-            f"{payload['buckling']['critical_weight_on_bit'] / 1e3:.5g} kN, probability of a buckled draw "
+            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}, probability of a buckled draw "
             f"{payload['buckling']['probability']:.3g}"),
         "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
         "workers": payload["workers"],
@@ -337,6 +343,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
                  for k in ("envelopes", "dispersion", "convergence")},
         run_info=run_info,
+        units=units,
     )
     return {**paths, **figures}
 
@@ -606,6 +613,7 @@ def operating_map(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    units: str | None = None,
 ) -> MapOutcome:
     """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
     one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
@@ -617,7 +625,8 @@ def operating_map(
     rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
     run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
     resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
-    ``map.json`` (the summary), ``map.png`` and ``report.html``. Checked before anything runs: the grid
+    ``map.json`` (the summary), ``map.png`` and ``report.html`` (figure and report in the unit system ``units``,
+    ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si). Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
@@ -650,7 +659,7 @@ def operating_map(
                 files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
                          "figure": folder / "map.png", "report": folder / "report.html"}
                 write_netcdf(ds, files["map"])
-                plot_map(ds, files["figure"])
+                plot_map(ds, files["figure"], units=units)
                 summary["files"] = {k: str(v) for k, v in files.items()}
                 write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
                 write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
@@ -659,7 +668,8 @@ def operating_map(
                                           "largest radial displacement over the map; black line: linear "
                                           "stability boundary of steady drilling (hatched: unstable); red "
                                           "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
-                                 run_info={**_run_table(summary, "points"), "store": str(store_path)})
+                                 run_info={**_run_table(summary, "points"), "store": str(store_path)},
+                                 units=units)
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
@@ -696,6 +706,7 @@ def sensitivity(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    units: str | None = None,
 ) -> SensitivityOutcome:
     """Global sensitivity of ``case``: first-order and total Sobol' indices, with bootstrap confidence
     intervals (level ``confidence``) and a convergence check at N/4, N/2, N, of the time-mean ROP,
@@ -706,7 +717,8 @@ def sensitivity(
     table. ``samples`` is the number of base samples N (a power of 2): N(k + 2) runs of ``t_end`` [s]
     on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/sensitivity.zarr is
     resumable. In ``out``: ``sensitivity.json`` (per output: ``S1``, ``ST``, their intervals, per
-    parameter; the convergence; the run), ``sobol.png``, ``sobol_convergence.png`` and ``report.html``.
+    parameter; the convergence; the run), ``sobol.png``, ``sobol_convergence.png`` and ``report.html`` (its
+    case table in the unit system ``units``, ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     import json
@@ -772,7 +784,8 @@ def sensitivity(
                              "The indices at N/4, N/2 and N base samples": files["convergence"]},
                     run_info={**_run_table(record, "runs"), "runs": result.runs,
                               "simulated time per run [s]": settings.t_end,
-                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)})
+                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
+                    units=units)
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()
