@@ -65,10 +65,26 @@ OILFIELD_UNITS: tuple[str, ...] = (
 )
 
 
+#: Optional libraries pint imports when they are installed, to support their arrays (unused here: only
+#: unit strings are read). Hidden while pint is imported, unless already loaded: Dask alone costs about
+#: 0.3 s of start-up, and the light commands load neither (tests/test_cli.py).
+_PINT_OPTIONAL = ("dask", "scipy", "uncertainties", "babel")
+
+
 @functools.cache
 def registry() -> Any:
     """The unit registry (pint's default definitions plus :data:`OILFIELD_UNITS`), built on first use."""
-    import pint
+    import sys
+
+    hidden = [name for name in _PINT_OPTIONAL if name not in sys.modules]
+    for name in hidden:
+        sys.modules[name] = None  # type: ignore[assignment]  # `import name` raises ImportError
+    try:
+        import pint
+    finally:
+        for name in hidden:
+            if sys.modules.get(name, 0) is None:
+                del sys.modules[name]
 
     ureg = pint.UnitRegistry()
     for definition in OILFIELD_UNITS:
