@@ -229,3 +229,15 @@ def test_flow_rate_refusals(fluid, fragments):
     with pytest.raises(CaseError) as info:
         case_from_dict(data)
     assert all(f in str(info.value) for f in fragments), str(info.value)
+
+
+def test_api_refuses_a_bad_unit_system_before_running(monkeypatch, tmp_path):
+    from drillstring import api
+
+    with pytest.raises(ValueError, match="units = 'metric': must be one of si, field"):
+        api.operating_map("reference", top_speed="100 rpm", weight_on_bit="100 kN", t_end=1.0, units="metric",
+                          out=tmp_path / "map")
+    monkeypatch.setenv(units.UNITS_ENVIRONMENT, "cubits")
+    with pytest.raises(ValueError, match="DRILLSTRING_UNITS = 'cubits'"):
+        api.monte_carlo_study("reference", samples=2, t_end=1.0, out=tmp_path / "study")
+    assert not (tmp_path / "map").exists() and not (tmp_path / "study").exists()

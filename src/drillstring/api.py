@@ -22,6 +22,7 @@ from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.results import run_dataset
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
+from drillstring.units import display_unit, unit_system
 
 
 def as_case(case: Case | str | Path) -> Case:
@@ -238,6 +239,7 @@ def monte_carlo_study(
         study_buckling_margin,
     )
 
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
                                     correlation=correlation, samples=samples, seed=seed, t_end=t_end,
                                     output_step=output_step)
@@ -307,7 +309,6 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     from drillstring.plots import plot_study
     from drillstring.report import write_report
     from drillstring.results import write_netcdf
-    from drillstring.units import display_unit, unit_system
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
              "statistics": folder / "statistics.nc", "report": folder / "report.html"}
@@ -640,6 +641,7 @@ def operating_map(
     from drillstring.stochastic.locks import StudyLock
     from drillstring.stochastic.operating_map import map_dataset, map_summary, run_map
 
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case).model_copy(update={"uncertainty": None})
     settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
                             output_step=output_step, transient=transient)
@@ -736,6 +738,7 @@ def sensitivity(
     )
     from drillstring.stochastic.uncertainty import declared_uncertainty
 
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case)
     declared = declared_uncertainty(case, parameters)
     if declared is None:

@@ -842,7 +842,8 @@ def _buckling_line(summary: dict[str, Any], units: str) -> str:
     """One line on the realizations' lateral buckling margin."""
     b, force = summary["buckling"], _unit("force", units)
     return (f"Buckled strings (lowest lateral ω² < 0): {b['buckled_realizations']} of {summary['n_samples']} "
-            f"realizations; critical weight-on-bit {force(b['critical_weight_on_bit']):,.2f} {force.label}, probability "
+            f"realizations; critical weight-on-bit {force(b['critical_weight_on_bit']):,.2f} {force.label}, "
+            "probability "
             f"of a buckled draw {b['probability']:.3g}")
 
 

@@ -308,12 +308,13 @@ class DisplayUnit:
         return value_si * self.scale
 
 
-def unit_system(choice: str | None = None) -> UnitSystem:
+def unit_system(choice: str | None = None, name: str = "--units") -> UnitSystem:
     """The unit system of output: ``choice`` when given, else ``$DRILLSTRING_UNITS``, else ``"si"``.
 
-    Raises ``ValueError`` (one line, naming where the value came from) for anything but ``si`` or ``field``.
+    Raises ``ValueError`` (one line, naming where the value came from: ``name`` for ``choice``) for anything
+    but ``si`` or ``field``.
     """
-    source = "--units"
+    source = name
     if choice is None:
         choice, source = os.environ.get(UNITS_ENVIRONMENT, "").strip() or "si", UNITS_ENVIRONMENT
     text = choice.strip().lower()
