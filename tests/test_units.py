@@ -241,3 +241,14 @@ def test_api_refuses_a_bad_unit_system_before_running(monkeypatch, tmp_path):
     with pytest.raises(ValueError, match="DRILLSTRING_UNITS = 'cubits'"):
         api.monte_carlo_study("reference", samples=2, t_end=1.0, out=tmp_path / "study")
     assert not (tmp_path / "map").exists() and not (tmp_path / "study").exists()
+
+
+def test_uncertainty_laws_accept_field_units():
+    """A study's law written in field units is the law of the SI values (the parameter's dimension)."""
+    from drillstring.stochastic.uncertainty import parse_law
+
+    law = parse_law("normal 10 0.25 ppg", units.DENSITY)
+    assert law.density.mean() == pytest.approx(10 * PPG_EXACT, rel=1e-12)
+    assert law.density.std() == pytest.approx(0.25 * PPG_EXACT, rel=1e-12)
+    law = parse_law("uniform 20 30 klbf", units.FORCE)
+    assert law.support == pytest.approx((20 * KLBF, 30 * KLBF), rel=1e-15)

@@ -142,7 +142,7 @@ STIFFNESS = Dimension("stiffness", "N/m", ("kN/m", "MN/m", "lbf/in"))
 PRESSURE = Dimension("pressure", "Pa", ("kPa", "MPa", "GPa", "psi", "ksi"))
 # A stiffness per metre of string [N/m per m = N/m²]. "N/m" is accepted too, read per metre, because the
 # reference data write the shock stiffness so ("1e8 N/m" for the shocks, per meter of string).
-STIFFNESS_PER_LENGTH = Dimension("stiffness per length", "N/m2", ("kN/m2", "MN/m2"), also=("N/m", "MN/m"))
+STIFFNESS_PER_LENGTH = Dimension("stiffness per length", "N/m2", ("kN/m2", "MN/m2"), also=("N/m",))
 DENSITY = Dimension("density", "kg/m3", ("g/cm3", "ppg", "lb/ft3"))
 TIME = Dimension("time", "s", ("ms", "min", "h"))
 TORQUE = Dimension("torque", "N*m", ("kN*m", "ft*lbf", "kft*lbf"))
