@@ -149,6 +149,15 @@ def test_component_refusals_name_the_field(components, fragments):
     assert all(f in str(info.value) for f in fragments), str(info.value)
 
 
+def test_an_invalid_material_is_reported_with_the_components():
+    data = _string(dict(PIPE, length="-3 ft"), COLLAR)
+    data["materials"]["steel"]["density"] = "7850 psi"
+    with pytest.raises(CaseError) as info:
+        case_from_dict(data)
+    assert info.value.problems[0].startswith("components[0].length = '-3 ft'")
+    assert "materials.steel.density = '7850 psi': unit 'psi' is a pressure unit" in str(info.value)
+
+
 def test_components_and_sections_together_are_refused():
     data = _components_data()
     data["sections"] = load_case("reference").model_dump()["sections"]

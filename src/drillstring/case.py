@@ -709,19 +709,18 @@ def _from_components(data: dict[str, Any]) -> dict[str, Any]:
         except CaseError as exc:
             entries.extend((("components", i) + loc, value, message) for loc, value, message in exc.entries)
     raw_materials = data.get("materials")
-    try:
-        materials = _default_materials() if raw_materials is None else {
-            name: Material.model_validate(m) for name, m in dict(raw_materials).items()}
-    except (CaseError, TypeError, ValueError):
-        materials = None  # reported by the case's own validation
+    materials = _default_materials() if raw_materials is None else {}
+    for name, raw_material in (raw_materials.items() if isinstance(raw_materials, Mapping) else ()):
+        try:
+            materials[name] = Material.model_validate(raw_material)
+        except CaseError as exc:  # needed for the expansion: reported here
+            entries.extend((("materials", name) + loc, value, message) for loc, value, message in exc.entries)
     try:
         borehole = to_si(data["borehole"]["diameter"], LENGTH)
     except (KeyError, TypeError, ValueError):
         borehole = None
-    if entries or materials is None:
-        if entries:
-            raise CaseError(entries)
-        return data
+    if entries:
+        raise CaseError(entries)
     try:
         expansion = expand(components, materials, borehole)
     except ComponentProblem as exc:
