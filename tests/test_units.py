@@ -139,6 +139,7 @@ def test_unit_system_from_option_then_environment(monkeypatch):
     assert unit_system() == "si"
     monkeypatch.setenv(units.UNITS_ENVIRONMENT, "field")
     assert unit_system() == "field"
+    assert display_unit("force").label == "klbf"  # no system given: the user's setting
     assert unit_system("SI") == "si"  # the option wins
     monkeypatch.setenv(units.UNITS_ENVIRONMENT, "imperial")
     with pytest.raises(ValueError, match="DRILLSTRING_UNITS = 'imperial': must be one of si, field"):

@@ -70,7 +70,7 @@ from rich.table import Table  # noqa: E402
 from drillstring import __version__  # noqa: E402
 from drillstring.case import Case, CaseError, builtin_cases, load_case  # noqa: E402
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO  # noqa: E402
-from drillstring.units import DisplayUnit, display_unit, unit_system  # noqa: E402
+from drillstring.units import display_unit, unit_system  # noqa: E402
 from drillstring.stochastic import (  # noqa: E402
     DEFAULT_BASE_SAMPLES,
     DEFAULT_MAP_TOP_SPEED,
@@ -131,11 +131,6 @@ UnitsOpt = Annotated[
                  help="Units of tables, figures and reports: si (kN, m, m/h, kN·m, mm) or field (klbf, ft, ft/h, "
                       "kft·lbf, in); rpm and Hz in both. Default: $DRILLSTRING_UNITS, else si. JSON stays SI."),
 ]
-
-
-def _unit(kind: str, units: str) -> DisplayUnit:
-    """The display unit of a quantity ``kind`` (``"force"``, ``"length"``, ...) in the unit system ``units``."""
-    return display_unit(kind, units)
 
 
 def _fail(message: str, code: int = EXIT_INVALID_INPUT) -> NoReturn:
@@ -285,7 +280,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
         return
 
     console = _console()
-    force, length = _unit("force", units), _unit("length", units)
+    force, length = display_unit("force", units), display_unit("length", units)
     summary = Table(title=escape(f"Static state: case {the_case.name!r}"), title_justify="left")
     summary.add_column("quantity")
     summary.add_column("value", justify="right")
@@ -316,7 +311,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
 
 def _buckling_note(margin: BucklingMargin, units: str) -> str:
     """One line: the lateral buckling margin of the case at its weight-on-bit."""
-    force = _unit("force", units)
+    force = display_unit("force", units)
     critical, wob, kn = force(margin.critical_weight_on_bit), force(margin.weight_on_bit), force.label
     if margin.buckled:
         return (f"BUCKLED: weight-on-bit {wob:,.2f} {kn} exceeds the critical {critical:,.2f} {kn}; the straight "
@@ -410,7 +405,7 @@ def stability(case: CaseArg = "reference", as_json: JsonOpt = False, units: Unit
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_column("unit")
-    rop, torque, force = (_unit(k, units) for k in ("rate_of_penetration", "torque", "force"))
+    rop, torque, force = (display_unit(k, units) for k in ("rate_of_penetration", "torque", "force"))
     table.add_row("rate of penetration", f"{rop(steady['rate_of_penetration']):,.3f}", rop.label)
     table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
     table.add_row("torque on bit", f"{torque(steady['torque_on_bit']):,.3f}", torque.label)
@@ -498,7 +493,8 @@ def _fmt(value: float | None, spec: str, scale: float = 1.0) -> str:
 
 def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
     t_tr = numbers["t_transient"]
-    rop, force, small, length = (_unit(k, units) for k in ("rate_of_penetration", "force", "small_length", "length"))
+    rop, force, small, length = (display_unit(k, units)
+                                 for k in ("rate_of_penetration", "force", "small_length", "length"))
     table = Table(
         title=escape(f"Simulation: case {name!r}, t = 0 to {numbers['t_end']:g} s"), title_justify="left"
     )
@@ -634,10 +630,10 @@ def _compare_table(name: str, differences: dict[str, Any], units: str) -> Table:
         table.add_column(escape(header), justify="right")
     for key, entry in differences["observables"].items():
         base = "radial_displacement" if key.startswith("radial_displacement") else key
-        label, shown = _COMPARE_ROWS[base], _unit(DISPLAY_KINDS[base], units)
+        label, shown = _COMPARE_ROWS[base], display_unit(DISPLAY_KINDS[base], units)
         scale = shown.scale
         if "probe_x" in entry:
-            length = _unit("length", units)
+            length = display_unit("length", units)
             label += f" at x = {length(entry['probe_x']):g} {length.label}"
         table.add_row(
             escape(f"{label} [{shown.label}]"),
@@ -840,7 +836,7 @@ def _study_table(summary: dict[str, Any]) -> Table:
 
 def _buckling_line(summary: dict[str, Any], units: str) -> str:
     """One line on the realizations' lateral buckling margin."""
-    b, force = summary["buckling"], _unit("force", units)
+    b, force = summary["buckling"], display_unit("force", units)
     return (f"Buckled strings (lowest lateral ω² < 0): {b['buckled_realizations']} of {summary['n_samples']} "
             f"realizations; critical weight-on-bit {force(b['critical_weight_on_bit']):,.2f} {force.label}, "
             "probability "
@@ -1093,7 +1089,7 @@ def map_command(
 
 def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
     console = _console()
-    force, rop = _unit("force", units), _unit("rate_of_penetration", units)
+    force, rop = display_unit("force", units), display_unit("rate_of_penetration", units)
     speeds, weights = summary["top_speed"], summary["weight_on_bit"]
     console.print(escape(
         f"Operating map: case {name!r}, {len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} "
@@ -1110,7 +1106,7 @@ def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
                   f"{force(summary['critical_weight_on_bit']):,.1f} {force.label}")
     best = summary.get("largest_rate_of_penetration")
     if best:
-        pressure = _unit("pressure", units)
+        pressure = display_unit("pressure", units)
         table.add_row("largest mean ROP", f"{rop(best['mean_rate_of_penetration']):.2f} {rop.label} at "
                                           f"{best['top_speed'] * _RPM:.0f} rpm, {force(best['weight_on_bit']):.0f} "
                                           f"{force.label}")

@@ -34,7 +34,7 @@ from matplotlib.figure import Figure
 
 from drillstring.files import atomic_output
 from drillstring.quantities import DISPLAY_KINDS
-from drillstring.units import DisplayUnit, display_unit, unit_system
+from drillstring.units import DisplayUnit, display_unit
 
 __all__ = [
     "TITLES",
@@ -94,17 +94,12 @@ def _save(fig: Figure, path: str | Path) -> Path:
     return path
 
 
-def _unit(kind: str, units: str | None) -> DisplayUnit:
-    """The display unit of a quantity ``kind`` in the unit system ``units`` (None: the user's setting)."""
-    return display_unit(kind, unit_system(units))
-
-
 def _label(name: str, units: str | None) -> str:
-    return f"{TITLES[name]} [{_unit(DISPLAY_KINDS[name], units).label}]"
+    return f"{TITLES[name]} [{display_unit(DISPLAY_KINDS[name], units).label}]"
 
 
 def _scaled(values, name: str, units: str | None) -> np.ndarray:
-    return np.asarray(values, dtype=float) * _unit(DISPLAY_KINDS[name], units).scale
+    return np.asarray(values, dtype=float) * display_unit(DISPLAY_KINDS[name], units).scale
 
 
 def _probe_index(x: np.ndarray, probe_x: float) -> int:
@@ -134,7 +129,7 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
     string [kN] vs time. A failed (partial) run is plotted as far as it went, with its status in the title.
     Units of ``units`` (see the module docstring).
     """
-    small, length = _unit("small_length", units), _unit("length", units)
+    small, length = display_unit("small_length", units), display_unit("length", units)
     t = np.asarray(ds["time"].values, dtype=float)
     fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
     ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
@@ -201,7 +196,7 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
     ROP [m/h], bit speed [rpm] with the top speed, radial displacement [mm] at the probe nearest
     ``probe_x`` [m] with its gap, torque-on-bit [kN·m] vs time [s], the whirl orbits at that probe and the
     contact forces [kN] vs time. Written to the PNG ``path``, in the units of ``units``."""
-    small, length = _unit("small_length", units), _unit("length", units)
+    small, length = display_unit("small_length", units), display_unit("length", units)
     fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
     ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
     runs = ((full, *_COMPARE_STYLES[0]), (reduced, *_COMPARE_STYLES[1]))
@@ -270,7 +265,7 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
 def _orbit_panel(ax, runs, probe_x: float, units: str | None) -> None:
     """The whirl orbit (w against v [mm]) at the probe nearest ``probe_x`` [m] of each ``(ds, label, style)``,
     with the borehole wall (a circle of radius the probe's gap) and equal axes."""
-    small, length = _unit("small_length", units), _unit("length", units)
+    small, length = display_unit("small_length", units), display_unit("length", units)
     gap = None
     drawn = False
     for ds, label, style in runs:
@@ -334,7 +329,7 @@ def _case_name(case_toml: str) -> str:
 
 
 def _study_title(stats: xr.Dataset, what: str, units: str | None = None) -> str:
-    force = _unit("force", units)
+    force = display_unit("force", units)
     parts = [what]
     n = stats.attrs.get("n_samples")
     if n is not None:
@@ -501,7 +496,7 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     from matplotlib.patches import Patch
 
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
-    force = _unit("force", units)
+    force = display_unit("force", units)
     y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
     growth = np.asarray(ds["growth_rate"].values, dtype=float)
     status = np.asarray(ds["status"].values)
@@ -510,7 +505,7 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     xx, yy = np.meshgrid(x, y, indexing="ij")
     contour_ok = x.size >= 2 and y.size >= 2 and np.isfinite(growth).sum() >= 4
     for ax, (name, kind, title, cmap, log) in zip(axes, MAP_PANELS):
-        shown = DisplayUnit("-", 1.0) if kind is None else _unit(kind, units)
+        shown = DisplayUnit("-", 1.0) if kind is None else display_unit(kind, units)
         label = f"{title} [{shown.label}]"
         values = shown(np.asarray(ds[name].values, dtype=float))
         values = np.where(status == 1, values, np.nan)

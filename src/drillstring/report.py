@@ -23,7 +23,7 @@ from typing import Any
 
 from drillstring import __version__
 from drillstring.files import write_text_atomic
-from drillstring.units import DisplayUnit, display_unit, unit_system
+from drillstring.units import display_unit
 
 __all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
 
@@ -101,16 +101,11 @@ def _kv_table(rows: list[tuple[str, str]]) -> str:
 # ---------------------------------------------------------------------------------------------------------
 
 
-def _unit(kind: str, units: str | None) -> DisplayUnit:
-    """The display unit of a quantity ``kind`` in the unit system ``units`` (None: the user's setting)."""
-    return display_unit(kind, unit_system(units))
-
-
 def _case_rows(case_toml: str, units: str | None = None) -> list[tuple[str, str]]:
     """Key numbers of a case from its TOML (SI numbers, as written by ``Case.to_toml``), in the display units
     of ``units``. Missing or unparsable entries are left out: the full TOML is shown anyway."""
-    length, diameter, force = _unit("length", units), _unit("diameter", units), _unit("force", units)
-    stiffness, density = _unit("stiffness", units), _unit("density", units)
+    length, diameter, force = (display_unit(k, units) for k in ("length", "diameter", "force"))
+    stiffness, density = (display_unit(k, units) for k in ("stiffness", "density"))
     try:
         data = tomllib.loads(case_toml)
     except (tomllib.TOMLDecodeError, TypeError):
@@ -188,7 +183,7 @@ def _case_section(case_toml: str, units: str | None = None) -> str:
 
 
 def _study_section(summary: Mapping[str, Any], units: str | None = None) -> str:
-    force = _unit("force", units)
+    force = display_unit("force", units)
     rows: list[tuple[str, str]] = []
     if "n_samples" in summary:
         rows.append(("realizations used (n_s)", _num(summary["n_samples"])))
@@ -447,7 +442,7 @@ def write_sensitivity_report(path: str | Path, *, title: str, case_toml: str, in
 
 
 def _map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
-    force, rop, pressure = _unit("force", units), _unit("rate_of_penetration", units), _unit("pressure", units)
+    force, rop, pressure = (display_unit(k, units) for k in ("force", "rate_of_penetration", "pressure"))
     speeds = [v * _RPM for v in summary.get("top_speed", [])]
     weights = [force(v) for v in summary.get("weight_on_bit", [])]
 

@@ -323,11 +323,16 @@ def unit_system(choice: str | None = None, name: str = "--units") -> UnitSystem:
     return text  # type: ignore[return-value]
 
 
-@functools.lru_cache(maxsize=64)
-def display_unit(kind: str, system: str = "si") -> DisplayUnit:
-    """The unit in which ``system`` shows a quantity of ``kind`` (``"force"``, ``"length"``, ``"diameter"``,
+def display_unit(kind: str, system: str | None = None) -> DisplayUnit:
+    """The unit in which ``system`` (``"si"``, ``"field"``; None: :func:`unit_system`'s default) shows a
+    quantity of ``kind`` (``"force"``, ``"length"``, ``"diameter"``, ``"small_length"``,
     ``"rate_of_penetration"``, ``"torque"``, ``"angular_speed"``, ``"density"``, ``"pressure"``, ``"stiffness"``,
     ``"flow"``, ``"mass_per_length"``)."""
+    return _display_unit(kind, unit_system(system))
+
+
+@functools.lru_cache(maxsize=64)
+def _display_unit(kind: str, system: str) -> DisplayUnit:
     dim, si_unit, field_unit = _DISPLAY[kind]
-    unit = field_unit if unit_system(system) == "field" else si_unit
+    unit = field_unit if system == "field" else si_unit
     return DisplayUnit(_LABELS.get(unit, unit), 1.0 / unit_factor(unit, dim))
