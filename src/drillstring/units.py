@@ -189,11 +189,11 @@ def _root(unit: str) -> _Root:
     ureg = registry()
     try:
         quantity = ureg.parse_expression(_normalise_unit(unit))
-    except Exception:  # pint raises UndefinedUnitError, DefinitionSyntaxError, tokenizer errors, ...
+        if not isinstance(quantity, ureg.Quantity):  # a bare number
+            return float(quantity), ()
+        root = quantity.to_root_units()
+    except Exception:  # pint raises UndefinedUnitError, DefinitionSyntaxError, offset-unit and tokenizer errors
         raise ValueError(unit) from None
-    if not isinstance(quantity, ureg.Quantity):  # a bare number
-        return float(quantity), ()
-    root = quantity.to_root_units()
     powers = tuple(sorted((str(name), float(power)) for name, power in root._units.items()))
     return float(root.magnitude), powers
 
