@@ -20,14 +20,15 @@ from pathlib import Path
 from drillstring.case import load_case
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import simulate_model
-from drillstring.stochastic.montecarlo import StudySettings, run_study
+from drillstring.stochastic.execution import Engine
+from drillstring.stochastic.montecarlo import StudySettings, run_study, weight_on_hook_normal
 
 
 def timed_study(case, settings, workers=None, scheduler=None):
     folder = Path(tempfile.mkdtemp(prefix="bench_study_"))
     try:
         start = time.perf_counter()
-        run = run_study(case, settings, folder / "study.zarr", workers=workers, scheduler=scheduler)
+        run = run_study(case, settings, folder / "study.zarr", Engine(workers=workers, scheduler=scheduler))
         return time.perf_counter() - start, run
     finally:
         shutil.rmtree(folder, ignore_errors=True)
@@ -39,7 +40,7 @@ def main() -> None:
     parser.add_argument("--dask", action="store_true", help="also time a local Dask cluster")
     args = parser.parse_args()
     case = load_case("reference")
-    settings = StudySettings(samples=args.samples, sigma=5000.0, seed=0,
+    settings = StudySettings(samples=args.samples, seed=0, laws=(weight_on_hook_normal(case, 5000.0),),
                              t_end=case.simulation.t_end, output_step=case.simulation.output_step)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 

@@ -8,6 +8,7 @@ import pytest
 from drillstring import api
 from drillstring.results import read_netcdf
 from drillstring.stochastic import DEFAULT_SIGMA
+from drillstring.stochastic.store import FAILED
 from drillstring.dynamics.indicators import transient_end
 
 
@@ -42,7 +43,8 @@ def test_study_files_defaults_and_rerun(small_case, tmp_path):
     (dict(sigma=1.0, dispersion=0.01), "not both"),
     (dict(dispersion=float("nan")), "^dispersion = nan: must be a finite number > 0"),
     (dict(t_end=float("inf")), "^t_end = inf s"),
-    (dict(transient=2.0), r"^transient = 2.0 s: must be in \[0, t_end = 1 s\]"),
+    (dict(transient=2.0), r"^transient = 2.0 s: must be a number in \[0, t_end = 1 s\)"),
+    (dict(transient=1.0), r"^transient = 1.0 s: must be a number in \[0, t_end = 1 s\)"),
     (dict(workers=0), "^workers = 0"),
     (dict(workers=2, scheduler="tcp://127.0.0.1:1"), "not both"),
 ])
@@ -63,7 +65,7 @@ def test_study_with_too_few_finished_realizations_fails_with_the_causes(small_ca
     from drillstring.stochastic import montecarlo
 
     def fail(case, settings, index):
-        return montecarlo.RealizationOutcome(index, 1.0, 1.0, montecarlo.FAILED, f"made to fail {index}")
+        return montecarlo.RealizationOutcome(index, 1.0, 1.0, FAILED, f"made to fail {index}")
 
     monkeypatch.setattr(montecarlo, "run_realization", fail)
     with pytest.raises(api.StudyFailed, match=r"only 0 finished realization\(s\): statistics need at least 2 \(3 failure\(s\): nominal: made to fail -1; 0: made to fail 0"):
@@ -133,15 +135,20 @@ def test_case_file_laws_are_the_default_and_options_replace_them(small_case, tmp
     data = tomllib.loads(small_case.to_toml())
     data["uncertainty"] = {"parameters": {"bit_rock.a2": {"law": "gamma", "mean": 5.672e-8, "std": 0.5e-8}}}
     case = case_from_dict(data)
+    from drillstring.stochastic.montecarlo import nominal_weight_on_hook
+
+    def woh(sigma):  # the law a sigma declares: the weight-on-hook Normal around the hook load, first
+        return ("weight_on_hook", f"normal {nominal_weight_on_hook(case)!r} {sigma:g}")
+
     settings, bare = api.study_settings(case, samples=2)
-    assert settings.sigma is None and settings.laws == (("bit_rock.a2", "gamma mean=5.672e-08 std=5e-09"),)
+    assert settings.laws == (("bit_rock.a2", "gamma mean=5.672e-08 std=5e-09"),)
     assert bare.uncertainty is None and "uncertainty" not in bare.to_toml()
     settings, _ = api.study_settings(case, samples=2, sigma=3000.0)  # the weight-on-hook added
-    assert settings.sigma == 3000.0 and settings.laws == (("bit_rock.a2", "gamma mean=5.672e-08 std=5e-09"),)
+    assert settings.laws == (woh(3000.0), ("bit_rock.a2", "gamma mean=5.672e-08 std=5e-09"))
     settings, _ = api.study_settings(case, samples=2, parameters={"fluid.density": "uniform 1100 1300"})
-    assert settings.laws == (("fluid.density", "uniform 1100 1300"),) and settings.sigma is None
+    assert settings.laws == (("fluid.density", "uniform 1100 1300"),)
     settings, _ = api.study_settings(small_case, samples=2)  # nothing declared: the default law
-    assert settings.sigma == DEFAULT_SIGMA and settings.laws == ()
+    assert settings.laws == (woh(DEFAULT_SIGMA),)
     data["uncertainty"] = {"parameters": {"bit_rock.a9": "uniform 1 2"}}
     with pytest.raises(ValueError, match=r"^\[uncertainty\] of the case: unknown case parameter 'bit_rock.a9'"):
         api.study_settings(case_from_dict(data), samples=2)

@@ -150,13 +150,14 @@ def test_stabilizer_raises_the_critical_load(drill_collar):
 
 def test_buckling_probability_normal_law():
     """P(wob > wob_cr) for a Normal weight-on-hook, also through the study's MaxEnt law."""
-    from drillstring.stochastic.maxent import weight_on_hook_law
+    from drillstring.stochastic.maxent import maximum_entropy, variance_constraints
 
     weight, critical, mean, sigma = 1.1634e6, 114.13e3, 1.0634e6, 5000.0
     expected = stats.norm.cdf((weight - critical - mean) / sigma)
     law = stats.norm(mean, sigma)
     assert buckling_probability(law, weight, critical) == pytest.approx(expected, rel=1e-12)
-    assert buckling_probability(weight_on_hook_law(mean, sigma=sigma), weight, critical) == (
+    assert buckling_probability(maximum_entropy((-math.inf, math.inf), variance_constraints(mean, sigma)),
+                                weight, critical) == (
         pytest.approx(expected, rel=1e-3))
     assert 1 / 500 < expected < 1 / 300  # "about one realization in 500" (issue 10): 1 in 425
     assert buckling_probability(law, weight, math.inf) == 0.0

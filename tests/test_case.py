@@ -522,3 +522,30 @@ def test_weight_is_the_statics_weight(reference, axial_loads, buoyancy, gravity)
             sum(q * s.length for q, s in zip(case.axial_load_per_length, case.sections))
             - sum(q * s.length for q, s in zip(plain.axial_load_per_length, plain.sections)), rel=1e-12)
         assert abs(case.weight - plain.weight) > 1e3
+
+
+def test_refuses_a_mesh_whose_set_up_would_not_fit_in_memory(data):
+    """0.17 m elements on the 1600 m string: 9,414 elements, within MAX_ELEMENTS, but the dense set-up of the
+    axial and torsional damping would take 3.3 GiB: refused with that size before anything is allocated."""
+    from drillstring.case import MAX_SETUP_BYTES
+
+    data["mesh"]["max_element_length"] = "0.17 m"
+    assert_problem(refused(data), "mesh.max_element_length", "0.17", "9,414 elements (9,415 nodes)",
+                   "would take 3.3 GiB (5 dense 9,415 x 9,415 matrices)", f"limit of {MAX_SETUP_BYTES / 2**30:g} GiB",
+                   "max_element_length >= 0.218 m")
+    data["mesh"]["max_element_length"] = "0.22 m"
+    case_from_dict(data)  # just within the limit
+
+
+def test_refuses_an_eccentricity_or_a_bow_beyond_the_radial_gap(data):
+    """The collar's radial gap is (300 − 228.6)/2 = 35.7 mm: a 1 m mass eccentricity or a 50 mm bow there
+    would put the string beyond the borehole wall."""
+    data["sections"][1]["eccentricity"] = "1 m"
+    assert_problem(refused(data), "sections[1].eccentricity", "1.0", "must be less than the section's radial gap "
+                   "(0.0357 m)")
+    del data["sections"][1]["eccentricity"]
+    data["bow"] = {"amplitude": "50 mm", "start": 1450.0, "end": 1550.0}
+    assert_problem(refused(data), "bow.amplitude", "0.05", "must be less than the radial gap along the bow "
+                   "(0.0357 m, section 'drill collar')")
+    data["bow"]["amplitude"] = "30 mm"
+    case_from_dict(data)

@@ -8,6 +8,8 @@ import pytest
 from typer.testing import CliRunner
 
 from drillstring.cli import app
+from drillstring.stochastic import execution
+from drillstring.stochastic.locks import StudyLocked
 
 runner = CliRunner()
 
@@ -454,7 +456,7 @@ def test_study_interrupted_exit_130(coarse_case, tmp_path, monkeypatch):
     from drillstring.stochastic import montecarlo
 
     def interrupted(*args, **kwargs):
-        raise montecarlo.StudyInterrupted(
+        raise execution.Interrupted(
             "study interrupted after 1 of 3 realizations; they are saved in x; run the same command again "
             "to resume")
 
@@ -479,13 +481,14 @@ def _one_line_error(result, *expected):
 def nothing_runs(monkeypatch):
     """Any simulation or study started by a command fails the test: refusals must come first."""
     from drillstring import api
-    from drillstring.stochastic import montecarlo
+    from drillstring.stochastic import montecarlo, operating_map, sensitivity_study
 
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the input was checked")
 
     for module, name in ((api, "simulate"), (api, "compare"), (montecarlo, "run_study"),
-                         (montecarlo, "run_realization")):
+                         (montecarlo, "run_realization"), (operating_map, "run_map"),
+                         (sensitivity_study, "run_sensitivity")):
         monkeypatch.setattr(module, name, forbidden)
 
 
@@ -498,13 +501,35 @@ def nothing_runs(monkeypatch):
     (("--dispersion", "0.5"), ["sigma = 531716 N", "probability"]),
     (("--t-end", "inf"), ["t_end = inf s: must be a finite number > 0"]),
     (("--t-end", "-2"), ["t_end = -2.0 s"]),
-    (("--seed", "-1"), ["seed = -1: must be an integer >= 0"]),
+    (("--seed", "-1"), ["seed = -1: must be an integer in [0, 2**64 - 1"]),
+    (("--seed", "18446744073709551616"), ["seed = 18446744073709551616: must be an integer in [0, 2**64 - 1"]),
+    (("--samples", "1000000000"), ["samples = 1000000000 realizations of 101 output times", "GiB, above the limit "
+                                   "of 4 GiB"]),
+    (("--t-end", "1e9"), ["t_end = 1e+09 s at output_step = 0.01 s: 100000000001 output times, above the limit "
+                          "of 2000000"]),
     (("--transient", "nan"), ["transient = nan s"]),
+    (("--param", "simulation.t_end=uniform 20 30"), ["simulation.t_end = 'uniform 20 30': cannot be random"]),
 ])
 def test_study_impossible_settings_refused_before_running(coarse_case, tmp_path, nothing_runs, args, expected):
     out = tmp_path / "bad"
     _one_line_error(_study(coarse_case, out, *args), *expected)
     assert not out.exists()  # nothing created
+
+
+@pytest.mark.parametrize("args, expected", [
+    (("simulate", "--t-end", "1e7"), "--t-end = 1e+07 s at output_step = 0.01 s: 1000000001 output times, above "
+                                     "the limit of 2000000"),
+    (("simulate", "--t-end", "1e12"), "--t-end = 1e+12 s at output_step = 0.01 s:"),
+    (("map", "--top-speed", "40:200:999999999999"), "--top-speed = '40:200:999999999999': N = 999999999999 values, "
+                                                    "above the limit of 100000 grid points"),
+    (("sensitivity", "--param", "operation.top_speed=uniform 60 140 rpm", "--samples", "1099511627776"),
+     "samples = 1099511627776: above the limit of 262144 (2**18) base samples"),
+])
+def test_absurd_sizes_refused_before_anything(coarse_case, tmp_path, nothing_runs, args, expected):
+    command, *rest = args
+    out = ["--out", str(tmp_path / ("run.nc" if command == "simulate" else "run"))]
+    _one_line_error(_invoke(command, str(coarse_case), *rest, *out), expected)
+    assert not (tmp_path / "run").exists() and not (tmp_path / "run.nc").exists()
 
 
 def test_study_workers_zero_refused(coarse_case, tmp_path, nothing_runs):
@@ -576,10 +601,10 @@ def test_study_run_errors_are_one_line(coarse_case, tmp_path, monkeypatch, error
     from drillstring import api
     from drillstring.stochastic import montecarlo
 
-    raised = {"workers_lost": montecarlo.StudyWorkersLost("the Dask cluster at tcp://x:1 has had no worker "
+    raised = {"workers_lost": execution.WorkersLost("the Dask cluster at tcp://x:1 has had no worker "
                                                           "for 30 s; the finished realizations are saved"),
               "failed": api.StudyFailed("only 1 finished realization(s): statistics need at least 2"),
-              "locked": montecarlo.StudyLocked("study store s is in use by pid 1 on host h")}[error]
+              "locked": StudyLocked("study store s is in use by pid 1 on host h")}[error]
 
     def fail(*args, **kwargs):
         raise raised
@@ -592,8 +617,17 @@ def test_study_run_errors_are_one_line(coarse_case, tmp_path, monkeypatch, error
     assert "Traceback" not in result.output
 
 
-def test_study_scheduler_refused_port(coarse_case, tmp_path, nothing_runs):
+def test_study_scheduler_refused_port(coarse_case, tmp_path, monkeypatch):
+    """The engine reaches the scheduler before it creates the store or computes anything."""
     import socket
+
+    from drillstring.stochastic import montecarlo
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("computation started before the scheduler was reached")
+
+    for name in ("run_realization", "compile_kernels", "StudyStore"):
+        monkeypatch.setattr(montecarlo, name, forbidden)
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

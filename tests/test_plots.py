@@ -1,4 +1,6 @@
-"""Figures: every plotting function writes a non-empty PNG from small synthetic Datasets (no simulation)."""
+"""Figures: every plotting function writes a PNG from small synthetic Datasets (no simulation), and the
+figure it draws holds the data it was given: the curves (in display units), the panels, labels and titles
+(read back from the Matplotlib figure before it is saved)."""
 
 import math
 
@@ -18,6 +20,26 @@ def _assert_png(path):
     data = path.read_bytes()
     assert data.startswith(PNG_SIGNATURE)
     assert len(data) > 5_000  # axes, curves and labels, not an empty canvas
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The figures the plotting functions save, in order (each still written to its file)."""
+    figures = []
+    save = plots._save
+
+    def keep(fig, path):
+        figures.append(fig)
+        return save(fig, path)
+
+    monkeypatch.setattr(plots, "_save", keep)
+    return figures
+
+
+def _lines(ax):
+    """(x, y) of each plotted line of ``ax`` (reference lines of axhline included)."""
+    return [(np.asarray(line.get_xdata(), dtype=float), np.asarray(line.get_ydata(), dtype=float))
+            for line in ax.get_lines()]
 
 
 @pytest.fixture
@@ -71,39 +93,91 @@ def stats_dataset():
     )
 
 
-def test_plot_run_writes_png(run_dataset, tmp_path):
+def test_plot_run_writes_png(run_dataset, tmp_path, drawn):
     path = plots.plot_run(run_dataset, tmp_path / "sub" / "run.png", probe_x=1560.0)
     assert path == tmp_path / "sub" / "run.png"
     _assert_png(path)
+    (fig,) = drawn
+    rop, speed, radial, tob, orbit, contact = fig.axes
+    t = run_dataset.time.values
+    (x, y), = _lines(rop)  # ROP in m/h
+    np.testing.assert_allclose(x, t)
+    np.testing.assert_allclose(y, 3600 * run_dataset.rate_of_penetration.values)
+    (_, bit), (_, top) = _lines(speed)  # bit speed and the imposed top speed, in rpm
+    np.testing.assert_allclose(bit, run_dataset.bit_speed.values * 60 / (2 * math.pi))
+    np.testing.assert_allclose(top, 100.0)
+    assert radial.get_title() == "probe at x = 1560 m"
+    (_, r), (_, gap) = _lines(radial)  # the probe's radial displacement and its gap, in mm
+    np.testing.assert_allclose(r, 1e3 * run_dataset.radial_displacement.isel(probe=1).values)
+    np.testing.assert_allclose(gap, 35.7)
+    np.testing.assert_allclose(_lines(tob)[0][1], run_dataset.torque_on_bit.values / 1e3)  # kN·m
+    assert "rate of penetration" in rop.get_ylabel().lower() and "[m/h]" in rop.get_ylabel()
+    assert fig._suptitle.get_text() == "Drilling run: case 'synthetic'"
 
 
-def test_plot_run_partial_failed_run(run_dataset, tmp_path):
+def test_plot_run_partial_failed_run(run_dataset, tmp_path, drawn):
     partial = run_dataset.isel(time=slice(0, 10)).assign_attrs(status="failed")
     _assert_png(plots.plot_run(partial, tmp_path / "partial.png"))
+    (fig,) = drawn
+    assert fig._suptitle.get_text() == "Drilling run: case 'synthetic' (failed, stopped at t = 0.45 s)"
+    assert len(_lines(fig.axes[0])[0][1]) == 10  # plotted as far as it went
 
 
-def test_plot_run_differs_with_the_probe(run_dataset, tmp_path):
-    near_first = plots.plot_run(run_dataset, tmp_path / "a.png", probe_x=1490.0).read_bytes()
-    near_second = plots.plot_run(run_dataset, tmp_path / "b.png", probe_x=1570.0).read_bytes()
-    assert near_first != near_second
+def test_plot_run_differs_with_the_probe(run_dataset, tmp_path, drawn):
+    plots.plot_run(run_dataset, tmp_path / "a.png", probe_x=1490.0)
+    plots.plot_run(run_dataset, tmp_path / "b.png", probe_x=1570.0)
+    first, second = (fig.axes[2] for fig in drawn)
+    assert (first.get_title(), second.get_title()) == ("probe at x = 1500 m", "probe at x = 1560 m")
+    np.testing.assert_allclose(_lines(first)[0][1], 1e3 * run_dataset.radial_displacement.isel(probe=0).values)
+    np.testing.assert_allclose(_lines(second)[0][1], 1e3 * run_dataset.radial_displacement.isel(probe=1).values)
 
 
-def test_plot_convergence_writes_png(stats_dataset, tmp_path):
+def test_plot_convergence_writes_png(stats_dataset, tmp_path, drawn):
+    """conv(n_s) of each observable divided by its last value: four curves ending at 1, and the line at 1."""
     _assert_png(plots.plot_convergence(stats_dataset, tmp_path / "convergence.png"))
-
-
+    (ax,) = drawn[0].axes
+    *curves, (_, one) = _lines(ax)
+    assert len(curves) == len(OBSERVABLES)
+    np.testing.assert_allclose(one, 1.0)
+    for (n, y), name in zip(curves, OBSERVABLES):
+        conv = stats_dataset[f"{name}_convergence"].values
+        np.testing.assert_array_equal(n, np.arange(1, 9))
+        np.testing.assert_allclose(y, conv / conv[-1])
+        assert y[-1] == 1.0
 def test_plot_convergence_needs_convergence_variables(stats_dataset, tmp_path):
     bare = stats_dataset.drop_vars([f"{v}_convergence" for v in OBSERVABLES])
     with pytest.raises(ValueError, match="convergence"):
         plots.plot_convergence(bare, tmp_path / "none.png")
 
 
-def test_plot_envelopes_writes_png(stats_dataset, tmp_path):
+def test_plot_envelopes_writes_png(stats_dataset, tmp_path, drawn):
+    """One panel per observable: the 95 % envelope between lower and upper, the mean and the nominal run."""
     _assert_png(plots.plot_envelopes(stats_dataset, tmp_path / "envelopes.png"))
+    axes = drawn[0].axes
+    assert len(axes) == 4
+    for ax, name, factor in zip(axes, OBSERVABLES, (3600.0, 60 / (2 * math.pi), 1e-3, 1e-3)):
+        (_, mean), (_, nominal) = _lines(ax)
+        np.testing.assert_allclose(mean, factor * stats_dataset[f"{name}_mean"].values)
+        np.testing.assert_allclose(nominal, factor * stats_dataset[f"{name}_nominal"].values)
+        (band,) = ax.collections  # the envelope's polygon spans exactly lower..upper
+        y = band.get_paths()[0].vertices[:, 1]
+        assert y.min() == pytest.approx(factor * stats_dataset[f"{name}_lower"].values.min())
+        assert y.max() == pytest.approx(factor * stats_dataset[f"{name}_upper"].values.max())
+    assert [t.get_text() for t in axes[0].get_legend().get_texts()] == ["95% envelope", "mean", "nominal"]
 
 
-def test_plot_dispersion_writes_png(stats_dataset, tmp_path):
+def test_plot_dispersion_writes_png(stats_dataset, tmp_path, drawn):
+    """Dispersion in % of each observable vs time, the transient t < 1 s shaded."""
     _assert_png(plots.plot_dispersion(stats_dataset, tmp_path / "dispersion.png", t_transient=1.0))
+    axes = drawn[0].axes
+    assert len(axes) == 4
+    for ax, name in zip(axes, OBSERVABLES):
+        (t, y), = _lines(ax)
+        np.testing.assert_allclose(y, 100 * stats_dataset[f"{name}_dispersion"].values)
+        (shade,) = ax.patches
+        x = shade.get_patch_transform().transform(shade.get_path().vertices)[:, 0]  # Rectangle or Polygon
+        assert (x.min(), x.max()) == pytest.approx((0.0, 1.0))
+    assert drawn[0]._suptitle.get_text() == "Dispersion of the response, n_s = 8, σ_WOH = 5 kN\nδ_WOB = 5 %"
 
 
 def test_plot_study_writes_the_three_figures(stats_dataset, tmp_path):
@@ -123,12 +197,18 @@ def test_no_global_pyplot_state(stats_dataset, tmp_path):
     assert plt.get_fignums() == before
 
 
-def test_plot_compare_writes_png(run_dataset, tmp_path):
+def test_plot_compare_writes_png(run_dataset, tmp_path, drawn):
     reduced = run_dataset.copy(deep=True)
     reduced["bit_speed"] = reduced["bit_speed"] * 1.01
     path = plots.plot_compare(run_dataset, reduced, tmp_path / "sub" / "compare.png", probe_x=1560.0)
     assert path == tmp_path / "sub" / "compare.png"
     _assert_png(path)
+    speed = drawn[0].axes[1]  # case 1 solid, case 2 dashed, each its own bit speed
+    full, dashed = (line for line in speed.get_lines() if line.get_label().startswith("case"))
+    assert (full.get_linestyle(), dashed.get_linestyle()) == ("-", "--")
+    assert full.get_label() == "case 1 (full)" and dashed.get_label() == "case 2 (bit–rock + contact)"
+    np.testing.assert_allclose(full.get_ydata(), run_dataset.bit_speed.values * 60 / (2 * math.pi))
+    np.testing.assert_allclose(dashed.get_ydata(), 1.01 * run_dataset.bit_speed.values * 60 / (2 * math.pi))
     # a partial (failed) run and a dataset without probes still plot
     partial = reduced.isel(time=slice(0, 10)).assign_attrs(status="failed")
     bare = run_dataset.drop_vars(["radial_displacement", "x", "gap"])

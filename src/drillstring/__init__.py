@@ -5,13 +5,14 @@ case -> fem (sections, elements, mesh, assembly) -> statics -> modal -> forces -
 dynamics (reduced model, Runge-Kutta) -> stochastic (MaxEnt, Monte Carlo, statistics) ->
 results, plots, report, cli.
 
-The notebook API: :func:`load_case`, :func:`simulate`, :func:`stability` (steady drilling and its linear
-stability), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
+The notebook API: :func:`load_case`, :func:`static` (the prestressed static state and the buckling margin),
+:func:`modes` (natural frequencies), :func:`simulate`, :func:`stability` (steady drilling and its linear
+stability), :func:`compare` (case 1 against case 2), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
 :func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
 (Sobol' indices).
 """
 
-__version__ = "0.1.0"
+from drillstring._version import __version__  # noqa: F401  (the package's version)
 
 
 def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the command line
@@ -27,7 +28,7 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring.api import stability
 
         return stability
-    if name in ("study", "monte_carlo_study", "operating_map", "sensitivity"):
+    if name in ("static", "modes", "study", "monte_carlo_study", "operating_map", "sensitivity", "compare"):
         from drillstring import api
 
         return getattr(api, name)

@@ -11,23 +11,46 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
-import xarray as xr
 
 from drillstring.case import Case, load_case
-from drillstring.dynamics.rom import case_reduced_model
-from drillstring.dynamics.simulate import SimulationError, simulate_model
-from drillstring.results import run_dataset
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
 from drillstring.units import display_unit, unit_system
 
+if TYPE_CHECKING:  # the simulating modules load with the functions that use them (light static, modes)
+    import xarray as xr
+
+#: Largest number of bootstrap resamples of a sensitivity run's confidence intervals.
+MAX_RESAMPLES = 100_000
+
 
 def as_case(case: Case | str | Path) -> Case:
-    """A Case as is, or loaded from a built-in name or a TOML path."""
-    return case if isinstance(case, Case) else load_case(case)
+    """A Case as is, or loaded from a built-in name or a TOML path. Anything else — a dict included (build
+    a Case from one with :func:`drillstring.case.case_from_dict`) — raises TypeError naming ``case``."""
+    if isinstance(case, Case):
+        return case
+    if isinstance(case, (str, Path)):
+        return load_case(case)
+    hint = " (build one from a dict with drillstring.case.case_from_dict)" if isinstance(case, Mapping) else ""
+    raise TypeError(f"case = {type(case).__name__}: must be a Case, a built-in case name or a path to a TOML "
+                    f"file{hint}")
+
+
+def _tolerance(name: str, value) -> float | None:
+    """An integration tolerance override: None, or a number in (0, 1)."""
+    from drillstring.checks import real_number
+
+    return None if value is None else real_number(name, value, low=0.0, high=1.0, low_open=True, high_open=True,
+                                                   allowed="a number in (0, 1), e.g. 1e-6")
+
+
+def _callable(name: str, value) -> None:
+    if value is not None and not callable(value):
+        raise TypeError(f"{name} = {value!r}: must be a callable or None")
 
 
 def simulate(
@@ -44,12 +67,22 @@ def simulate(
     """Simulate one drilling run of ``case`` (SPEC §7) and return its observables as a Dataset.
 
     Arguments left as None take the case's ``[simulation]`` values; ``weight_on_bit`` [N] overrides
-    the static weight-on-bit. A run that stops early raises :class:`SimulationError` whose
+    the static weight-on-bit. A run that stops early raises :class:`~drillstring.dynamics.simulate.SimulationError` whose
     ``.dataset`` holds what was computed (or, with ``raise_on_failure=False``, that Dataset is
     returned with ``attrs["status"] == "failed"``).
     """
+    from drillstring.checks import real_number
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.simulate import SimulationError, simulate_model
+    from drillstring.results import run_dataset
+
     case = as_case(case)
     s = case.simulation
+    window = _window(case, t_end, output_step)
+    rtol, atol = _tolerance("rtol", rtol), _tolerance("atol", atol)
+    if weight_on_bit is not None:
+        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+    _callable("progress", progress)
     model = case_reduced_model(case, weight_on_bit=weight_on_bit)
     extra = {
         "weight_on_hook": model.static.weight_on_hook,
@@ -60,8 +93,8 @@ def simulate(
         "elements": model.static.mesh.n_elements,
     }
     kwargs = dict(
-        t_end=s.t_end if t_end is None else t_end,
-        output_step=s.output_step if output_step is None else output_step,
+        t_end=window.t_end,
+        output_step=window.output_step,
         rtol=s.rtol if rtol is None else rtol,
         atol=s.atol if atol is None else atol,
         method=s.method,
@@ -120,57 +153,87 @@ _STUDY_CAPTIONS = {
 
 def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None,
                    samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
-    """The validated settings of a Monte Carlo study of ``case`` (ValueError naming the field or the
-    parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
+    """The validated settings of a Monte Carlo study of ``case`` (TypeError / ValueError naming the field or
+    the parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
 
     The random parameters: ``parameters`` (path -> law spec or table) with ``correlation`` (``{"parameters":
     [...], "matrix": [[...]]}``) when given, else the case's ``[uncertainty]`` table; plus the weight-on-hook,
-    Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given. With none
-    of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given (a
+    shorthand for the law ``weight_on_hook = "normal mean=<hook load> std=<sigma>"``, declared first). With
+    none of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
     """
+    from drillstring.checks import real_number
     from drillstring.stochastic import DEFAULT_SIGMA
-    from drillstring.stochastic.montecarlo import StudySettings, check_study, nominal_weight_on_hook
-    from drillstring.stochastic.parameters import WEIGHT_ON_HOOK
+    from drillstring.stochastic.montecarlo import (
+        StudySettings,
+        check_study,
+        nominal_weight_on_hook,
+        weight_on_hook_normal,
+    )
     from drillstring.stochastic.uncertainty import declared_uncertainty
 
     if sigma is not None and dispersion is not None:
         raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
     if dispersion is not None:
-        if not (isinstance(dispersion, (int, float)) and math.isfinite(dispersion) and dispersion > 0):
-            raise ValueError(f"dispersion = {dispersion!r}: must be a finite number > 0")
-        sigma = dispersion * nominal_weight_on_hook(case)
-    if sigma is not None and not (isinstance(sigma, (int, float)) and not isinstance(sigma, bool)):
-        raise ValueError(f"sigma = {sigma!r} N: must be a finite number > 0")
-    first = None
-    if sigma is not None and math.isfinite(sigma) and sigma > 0:
-        first = {WEIGHT_ON_HOOK: {"law": "normal", "mean": nominal_weight_on_hook(case), "std": float(sigma)}}
+        sigma = real_number("dispersion", dispersion, low=0.0, low_open=True) * nominal_weight_on_hook(case)
+    if sigma is not None:
+        sigma = real_number("sigma", sigma, unit="N", low=0.0, low_open=True)
+    _mapping("parameters", parameters)
+    _mapping("correlation", correlation)
+    first = dict([weight_on_hook_normal(case, sigma)]) if sigma is not None else None
     declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
-    laws, correlated, matrix = (), (), ()
-    if declared is not None:
-        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters if not (first and p.path in first))
-        if declared.correlation is not None:
-            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
-    if sigma is None and not laws:
-        sigma = DEFAULT_SIGMA
+    if declared is None:
+        first = dict([weight_on_hook_normal(case, DEFAULT_SIGMA)])
+        declared = declared_uncertainty(case, None, None, first=first, tolerance=1.0)
+    correlated, matrix = (), ()
+    if declared.correlation is not None:
+        correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    window = _window(case, t_end, output_step)
     bare = case.model_copy(update={"uncertainty": None})
-    settings = StudySettings(
-        samples=samples, sigma=float(sigma) if sigma is not None else None, seed=seed,
-        t_end=case.simulation.t_end if t_end is None else t_end,
-        output_step=case.simulation.output_step if output_step is None else output_step,
-        laws=laws, correlated=correlated, correlation=matrix,
-    )
+    settings = StudySettings(samples=samples, seed=seed, t_end=window.t_end, output_step=window.output_step,
+                             laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
+                             correlated=correlated, correlation=matrix)
     check_study(bare, settings)
     return settings, bare
 
 
-def _transient(transient, t_end: float) -> float:
-    from drillstring.dynamics.indicators import transient_end
+def _mapping(name: str, value) -> None:
+    """Refuse (TypeError) ``value`` unless None or a mapping (a table: path -> law, or parameters/matrix)."""
+    if value is not None and not isinstance(value, Mapping):
+        raise TypeError(f"{name} = {type(value).__name__}: must be a dict (path -> law spec), e.g. "
+                        "{'operation.top_speed': 'uniform 60 140 rpm'}")
 
-    if transient is None:
-        return transient_end(t_end)
-    if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient <= t_end):
-        raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {t_end:g} s]")
-    return float(transient)
+
+def _window(case: Case, t_end=None, output_step=None, transient=None):
+    """The run window (:func:`~drillstring.dynamics.simulate.run_window`) of ``case`` with the given overrides."""
+    from drillstring.dynamics.simulate import run_window
+
+    return run_window(case.simulation.t_end if t_end is None else t_end,
+                      case.simulation.output_step if output_step is None else output_step, transient)
+
+
+def _output_folder(out, prefix: str) -> Path:
+    """The output folder, checked (ValueError naming ``out``), or a new temporary one when ``out`` is None."""
+    import tempfile
+
+    from drillstring.files import output_folder_problem
+
+    if out is None:
+        return Path(tempfile.mkdtemp(prefix=prefix))
+    if not isinstance(out, (str, Path)):
+        raise TypeError(f"out = {out!r}: must be a folder path (str or Path) or None")
+    problem = output_folder_problem(out)
+    if problem:
+        raise ValueError(f"out = {str(out)!r}: {problem}")
+    return Path(out)
+
+
+def _engine(workers, scheduler, progress, note, worker_timeout):
+    """The :class:`~drillstring.stochastic.execution.Engine` of a study, map or sensitivity run (checked)."""
+    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, Engine
+
+    return Engine(workers=workers, scheduler=scheduler, progress=progress, note=note,
+                  worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
 
 
 def monte_carlo_study(
@@ -205,14 +268,15 @@ def monte_carlo_study(
     ``samples`` realizations (>= 2) of ``t_end`` [s]
     run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
     (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
-    ``min(10 s, t_end/2)``). ``progress(done, failed, total)`` follows the realizations; ``note(text)``
-    receives notes (a stale lock taken over).
+    ``min(10 s, t_end/2)``; in [0, t_end)). ``progress(done, failed, total)`` follows the realizations;
+    ``note(text)`` receives notes (a stale lock taken over).
 
-    Everything is checked before anything runs: the settings (ValueError naming the field or the
-    parameter; a law that puts a probability above 1e-3 outside its parameter's range, e.g. a sigma
-    that would put a weight-on-bit outside (0, string weight), included; a weight-on-hook law that
-    buckles more than one draw in a thousand is only noted, through ``note``),
-    ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.montecarlo.
+    Everything is checked before anything runs (TypeError or ValueError naming the argument): the
+    arguments, the run window and the study's size (:data:`~drillstring.stochastic.montecarlo.
+    MAX_STUDY_BYTES`), the settings (a law that puts a probability above 1e-3 outside its parameter's
+    range, e.g. a sigma that would put a weight-on-bit outside (0, string weight), included; a
+    weight-on-hook law that buckles more than one draw in a thousand is only noted, through ``note``),
+    ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.execution.
     SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
     StudyLocked` while another study runs there; held until every file is written).
 
@@ -224,85 +288,66 @@ def monte_carlo_study(
     :class:`StudyFailed`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
-    import tempfile
-
-    from drillstring.files import output_folder_problem
-    from drillstring.stochastic.locks import StudyLock
-    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
-    from drillstring.stochastic.montecarlo import (
-        DASK_WORKER_TIMEOUT,
-        check_workers,
-        computation_time,
-        connect_scheduler,
-        notify,
-        run_study,
-        study_buckling_margin,
-    )
+    from drillstring.stochastic.execution import notify
+    from drillstring.stochastic.montecarlo import run_study, study_buckling_margin
 
     units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
                                     correlation=correlation, samples=samples, seed=seed, t_end=t_end,
                                     output_step=output_step)
-    t_transient = _transient(transient, settings.t_end)
-    if out is not None:
-        problem = output_folder_problem(out)
-        if problem:
-            raise ValueError(f"out = {str(out)!r}: {problem}")
-    check_workers(workers, scheduler)
+    t_transient = _window(case, settings.t_end, settings.output_step, transient).transient
+    engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    folder = _output_folder(out, "drillstring-study-")
     buckling = study_buckling_margin(case, settings)
     if buckling["warning"]:
         notify(note, buckling["warning"])
-    folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="drillstring-study-"))
-    store = folder / "study.zarr"
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
+    finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None,
+                     units)
+    run = run_study(case, settings, folder / "study.zarr", engine, finish=finish)
+    return StudyOutcome(*run.result, run.already, run.note)
+
+
+def _finish_study(case, settings, t_transient, buckling, folder, units, run):
+    """Under the study's lock: its statistics, summary and (in ``folder``, unless None) files."""
+    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+    from drillstring.stochastic.execution import computation_time
+
+    raw = load_study(run.store.path)
+    failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
     try:
-        with StudyLock(store) as guard:
-            if guard.note:
-                notify(note, guard.note)
-            run = run_study(case, settings, store, workers=workers, scheduler=client, progress=progress,
-                            note=note, worker_timeout=(DASK_WORKER_TIMEOUT if worker_timeout is None
-                                                       else worker_timeout))
-            raw = load_study(store)
-            failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
-            try:
-                stats = study_statistics(raw, t_transient=t_transient)
-            except ValueError as error:
-                listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
-                raise StudyFailed(f"{error} ({len(failures)} failure(s)"
-                                  f"{': ' + listing if listing else ''})") from None
-            summary = study_summary(stats, t_transient=t_transient)
-            sessions = run.store.sessions()
-            wall_time, used = computation_time(sessions)
-            if not sessions:  # a store written before sessions were recorded
-                wall_time, used = run.wall_time, run.workers
-            realization_time = float(np.nansum(raw["wall_time"].values))
-            payload = dict(summary)
-            payload["buckling"] = {**summary["buckling"], **buckling}
-            payload.update({
-                "case": case.name,
-                "samples": settings.samples,
-                "failures": failures,
-                "wall_time": wall_time,
-                "wall_time_this_run": run.wall_time,
-                "realizations_this_run": run.computed,
-                "realization_wall_time_total": realization_time,
-                "workers": used if isinstance(used, (int, str)) else str(used),
-                "sessions": sessions,
-            })
-            files: dict[str, Path] = {}
-            if out is not None:
-                files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, units)
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            client.close()
-    return StudyOutcome(stats, payload, files, run.completed + run.failed - run.computed,
-                        guard.note or run.note)
+        stats = study_statistics(raw, t_transient=t_transient)
+    except ValueError as error:
+        listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
+        raise StudyFailed(f"{error} ({len(failures)} failure(s)"
+                          f"{': ' + listing if listing else ''})") from None
+    summary = study_summary(stats, t_transient=t_transient)
+    sessions = run.store.sessions()
+    wall_time, used = computation_time(sessions)
+    if not sessions:  # a store written before sessions were recorded
+        wall_time, used = run.wall_time, run.workers
+    payload = dict(summary)
+    payload["buckling"] = {**summary["buckling"], **buckling}
+    payload.update({
+        "case": case.name,
+        "samples": settings.samples,
+        "failures": failures,
+        "wall_time": wall_time,
+        "wall_time_this_run": run.wall_time,
+        "realizations_this_run": run.computed,
+        "realization_wall_time_total": float(np.nansum(raw["wall_time"].values)),
+        "workers": used if isinstance(used, (int, str)) else str(used),
+        "sessions": sessions,
+    })
+    files: dict[str, Path] = {}
+    if folder is not None:
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, units)
+    return stats, payload, files
 
 
 def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
-                       units: str | None) -> dict[str, Path]:
+                       units: str) -> dict[str, Path]:
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
-    statistics' ``summary`` and the run information from ``payload``)."""
+    statistics' ``summary`` and the run information from ``payload``); figures and report in ``units``."""
     import json
 
     from drillstring.files import write_text_atomic
@@ -312,7 +357,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
              "statistics": folder / "statistics.nc", "report": folder / "report.html"}
-    force = display_unit("force", unit_system(units))
+    force = display_unit("force", units)
     write_netcdf(stats, paths["statistics"])
     figures = plot_study(stats, folder, t_transient, units=units)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
@@ -349,6 +394,42 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     return {**paths, **figures}
 
 
+def static(case: Case | str | Path = "reference"):
+    """The prestressed static state of ``case`` and its lateral buckling margin.
+
+    Returns ``(state, margin)``: a :class:`~drillstring.statics.StaticState` (``weight``,
+    ``weight_on_hook``, ``weight_on_bit`` [N], ``neutral_point_height`` [m], the mesh and the axial
+    force ``axial_force`` [N] at its nodes, tension positive) and a :class:`~drillstring.buckling.
+    BucklingMargin` (``critical_weight_on_bit`` [N], ``buckled``)."""
+    from drillstring.buckling import case_buckling_margin
+    from drillstring.statics import case_static_state
+
+    case = as_case(case)
+    state = case_static_state(case)
+    return state, case_buckling_margin(case, state)
+
+
+#: Largest number of modes per family :func:`modes` computes.
+MAX_MODES = 1000
+
+
+def modes(case: Case | str | Path = "reference", *, count: int = 10):
+    """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
+    of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
+
+    Returns ``(modes, margin)``: :class:`~drillstring.modal.Modes` (``.axial.frequencies`` [Hz], ...) and a
+    :class:`~drillstring.buckling.BucklingMargin`. ``count``: an integer in [1, :data:`MAX_MODES`]."""
+    from drillstring.buckling import buckling_margin
+    from drillstring.checks import integer
+    from drillstring.modal import case_linear_system, compute_modes
+    from drillstring.statics import case_static_state
+
+    count = integer("count", count, low=1, high=MAX_MODES)
+    case = as_case(case)
+    system = case_linear_system(case, case_static_state(case))
+    return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
+
+
 def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
     """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
     about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
@@ -359,9 +440,13 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
     overrides the case's.
     """
+    from drillstring.checks import real_number
     from drillstring.dynamics.stability import case_stability
 
-    return case_stability(as_case(case), weight_on_bit=weight_on_bit)
+    case = as_case(case)
+    if weight_on_bit is not None:
+        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+    return case_stability(case, weight_on_bit=weight_on_bit)
 
 
 def study(
@@ -456,11 +541,12 @@ def compare(
     integration, measured around the call), ``ratio`` = full / bit_and_contact; ``solver_wall_time`` and
     ``n_rhs`` the integrator's own numbers. ``progress(model, t)`` is called with the model name
     ("full" or "bit_and_contact") and the simulated time [s]. A run that stops early raises
-    :class:`SimulationError` (``.dataset`` the partial run, ``.nonlinear`` which model failed).
+    :class:`~drillstring.dynamics.simulate.SimulationError` (``.dataset`` the partial run, ``.nonlinear`` which model failed).
     """
     import time
 
     from drillstring.dynamics.indicators import transient_end
+    from drillstring.dynamics.simulate import SimulationError
 
     case = as_case(case)
     runs: dict[str, xr.Dataset] = {}
@@ -524,21 +610,6 @@ def compare(
 # --- operating maps and global sensitivity -------------------------------------------------------
 
 
-def _engine_folder(out, workers, scheduler, prefix: str) -> Path:
-    """The output folder (checked; a temporary one when ``out`` is None), after checking the workers."""
-    import tempfile
-
-    from drillstring.files import output_folder_problem
-    from drillstring.stochastic.execution import check_workers
-
-    if out is not None:
-        problem = output_folder_problem(out)
-        if problem:
-            raise ValueError(f"out = {str(out)!r}: {problem}")
-    check_workers(workers, scheduler)
-    return Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=prefix))
-
-
 def _run_record(store, run, noun: str) -> dict:
     """Computation time and workers of a store's sessions, and this call's numbers (JSON-ready)."""
     from drillstring.stochastic.execution import computation_time
@@ -592,10 +663,9 @@ def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, 
                         name="top_speed", default_unit=default_units[0])
     weights = parse_axis(DEFAULT_MAP_WEIGHT_ON_BIT if weight_on_bit is None else weight_on_bit, dimension["force"],
                          name="weight_on_bit", default_unit=default_units[1])
-    settings = MapSettings(tuple(speeds), tuple(weights),
-                           t_end=case.simulation.t_end if t_end is None else t_end,
-                           output_step=case.simulation.output_step if output_step is None else output_step,
-                           transient=transient)
+    window = _window(case, t_end, output_step, transient)
+    settings = MapSettings(tuple(speeds), tuple(weights), t_end=window.t_end, output_step=window.output_step,
+                           transient=window.transient)
     check_map(case, settings)
     return settings
 
@@ -631,51 +701,48 @@ def operating_map(
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
+    from drillstring.stochastic.operating_map import run_map
+
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
+    case = as_case(case).model_copy(update={"uncertainty": None})
+    settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
+                            output_step=output_step, transient=transient)
+    engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    folder = _output_folder(out, "drillstring-map-")
+    run = run_map(case, settings, folder / "map.zarr", engine,
+                  finish=partial(_finish_map, case, folder if out is not None else None, units))
+    return MapOutcome(*run.result, run.already, run.note)
+
+
+def _finish_map(case, folder, units, run):
+    """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
     import json
 
     from drillstring.files import write_text_atomic
     from drillstring.plots import plot_map
     from drillstring.report import write_map_report
     from drillstring.results import write_netcdf
-    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
-    from drillstring.stochastic.locks import StudyLock
-    from drillstring.stochastic.operating_map import map_dataset, map_summary, run_map
+    from drillstring.stochastic.operating_map import map_dataset, map_summary
 
-    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
-    case = as_case(case).model_copy(update={"uncertainty": None})
-    settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
-                            output_step=output_step, transient=transient)
-    folder = _engine_folder(out, workers, scheduler, "drillstring-map-")
-    store_path = folder / "map.zarr"
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
-    try:
-        with StudyLock(store_path, what="map") as guard:
-            if guard.note:
-                notify(note, guard.note)
-            run = run_map(case, settings, store_path, workers=workers, scheduler=client, progress=progress,
-                          note=note, worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
-            ds = map_dataset(store_path)
-            summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
-            files: dict[str, Path] = {}
-            if out is not None:
-                files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                         "figure": folder / "map.png", "report": folder / "report.html"}
-                write_netcdf(ds, files["map"])
-                plot_map(ds, files["figure"], units=units)
-                summary["files"] = {k: str(v) for k, v in files.items()}
-                write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
-                write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
-                                 case_toml=case.to_toml(), summary=summary,
-                                 figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
-                                          "largest radial displacement over the map; black line: linear "
-                                          "stability boundary of steady drilling (hatched: unstable); red "
-                                          "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
-                                 run_info={**_run_table(summary, "points"), "store": str(store_path)},
-                                 units=units)
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            client.close()
-    return MapOutcome(ds, summary, files, run.completed + run.failed - run.computed, guard.note or run.note)
+    store_path = run.store.path
+    ds = map_dataset(store_path)
+    summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
+    files: dict[str, Path] = {}
+    if folder is not None:
+        files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
+                 "figure": folder / "map.png", "report": folder / "report.html"}
+        write_netcdf(ds, files["map"])
+        plot_map(ds, files["figure"], units=units)
+        summary["files"] = {k: str(v) for k, v in files.items()}
+        write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
+        write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
+                         case_toml=case.to_toml(), summary=summary,
+                         figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
+                                  "largest radial displacement over the map; black line: linear "
+                                  "stability boundary of steady drilling (hatched: unstable); red "
+                                  "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
+                         run_info={**_run_table(summary, "points"), "store": str(store_path)}, units=units)
+    return ds, summary, files
 
 
 @dataclass
@@ -723,74 +790,70 @@ def sensitivity(
     case table in the unit system ``units``, ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
+    from drillstring.checks import integer, real_number
+    from drillstring.checks import seed as check_seed
+    from drillstring.stochastic.sensitivity_study import SensitivitySettings, run_sensitivity
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
+    case = as_case(case)
+    _mapping("parameters", parameters)
+    confidence = real_number("confidence", confidence, low=0.0, high=1.0, low_open=True, high_open=True,
+                             allowed="a number in (0, 1), e.g. 0.95")
+    resamples = integer("resamples", resamples, low=1, high=MAX_RESAMPLES)
+    window = _window(case, t_end, output_step, transient)
+    declared = declared_uncertainty(case, parameters)
+    if declared is None:
+        raise ValueError("no uncertain parameter: give parameters (path -> law), e.g. --param "
+                         "operation.top_speed=\"uniform 60 140 rpm\", or an [uncertainty] table in the case")
+    if declared.correlation is not None:
+        raise ValueError(f"Sobol' indices need independent parameters; {', '.join(declared.correlated)} are "
+                         "correlated (drop the correlation, or use a Monte Carlo study for the joint law)")
+    case = case.model_copy(update={"uncertainty": None})
+    settings = SensitivitySettings(
+        base_samples=samples, laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
+        seed=check_seed(seed), t_end=window.t_end, output_step=window.output_step, transient=window.transient)
+    engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    folder = _output_folder(out, "drillstring-sensitivity-")
+    run = run_sensitivity(case, settings, folder / "sensitivity.zarr", engine,
+                          finish=partial(_finish_sensitivity, case, settings, confidence, resamples,
+                                         folder if out is not None else None, units))
+    return SensitivityOutcome(*run.result, run.already, run.note)
+
+
+def _finish_sensitivity(case, settings, confidence, resamples, folder, units, run):
+    """Under the sensitivity run's lock: its Sobol' indices, payload and (in ``folder``, unless None) files."""
     import json
 
     from drillstring.files import write_text_atomic
     from drillstring.plots import plot_sobol, plot_sobol_convergence
     from drillstring.report import write_sensitivity_report
-    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, connect_scheduler, notify
-    from drillstring.stochastic.locks import StudyLock
-    from drillstring.stochastic.sensitivity_study import (
-        SENSITIVITY_OUTPUTS,
-        SensitivitySettings,
-        load_sensitivity,
-        run_sensitivity,
-    )
-    from drillstring.stochastic.uncertainty import declared_uncertainty
+    from drillstring.stochastic.sensitivity_study import SENSITIVITY_OUTPUTS, load_sensitivity
 
-    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
-    case = as_case(case)
-    declared = declared_uncertainty(case, parameters)
-    if declared is None:
-        raise ValueError("no uncertain parameter: give parameters (path -> law), e.g. --param "
-                         "operation.top_speed=\"uniform 60 140 rpm\", or an [uncertainty] table in the case")
-    case = case.model_copy(update={"uncertainty": None})
-    settings = SensitivitySettings(
-        base_samples=samples, laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters), seed=seed,
-        t_end=case.simulation.t_end if t_end is None else t_end,
-        output_step=case.simulation.output_step if output_step is None else output_step, transient=transient)
-    if declared.correlation is not None:
-        raise ValueError(f"Sobol' indices need independent parameters; {', '.join(declared.correlated)} are "
-                         "correlated (drop the correlation, or use a Monte Carlo study for the joint law)")
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence = {confidence!r}: must be in (0, 1), e.g. 0.95")
-    folder = _engine_folder(out, workers, scheduler, "drillstring-sensitivity-")
-    store_path = folder / "sensitivity.zarr"
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
-    try:
-        with StudyLock(store_path, what="sensitivity") as guard:
-            if guard.note:
-                notify(note, guard.note)
-            run = run_sensitivity(case, settings, store_path, workers=workers, scheduler=client,
-                                  progress=progress, note=note,
-                                  worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
-            data = load_sensitivity(store_path)
-            result = data.indices(SENSITIVITY_OUTPUTS, confidence=confidence, resamples=resamples)
-            record = _run_record(run.store, run, "runs")
-            payload = {"case": case.name, **result.to_dict(), "t_end": settings.t_end,
-                       "t_transient": settings.transient, "failed_runs": run.failed,
-                       "run_wall_time_total": float(np.nansum(data.wall_time)), **record}
-            files: dict[str, Path] = {}
-            if out is not None:
-                files = {"store": store_path, "indices": folder / "sensitivity.json",
-                         "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
-                         "report": folder / "report.html"}
-                plot_sobol(payload, files["figure"])
-                plot_sobol_convergence(payload, files["convergence"])
-                payload["files"] = {k: str(v) for k, v in files.items()}
-                write_text_atomic(files["indices"], json.dumps(payload, indent=2, allow_nan=False) + "\n")
-                write_sensitivity_report(
-                    files["report"], title=f"Global sensitivity: case '{case.name}'", case_toml=case.to_toml(),
-                    indices=payload,
-                    figures={"First-order (S1) and total (ST) Sobol' indices with their confidence intervals":
-                             files["figure"],
-                             "The indices at N/4, N/2 and N base samples": files["convergence"]},
-                    run_info={**_run_table(record, "runs"), "runs": result.runs,
-                              "simulated time per run [s]": settings.t_end,
-                              "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
-                    units=units)
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            client.close()
-    return SensitivityOutcome(result, payload, files, run.completed + run.failed - run.computed,
-                              guard.note or run.note)
+    store_path = run.store.path
+    data = load_sensitivity(store_path)
+    result = data.indices(SENSITIVITY_OUTPUTS, confidence=confidence, resamples=resamples)
+    record = _run_record(run.store, run, "runs")
+    payload = {"case": case.name, **result.to_dict(), "t_end": settings.t_end,
+               "t_transient": settings.transient, "failed_runs": run.failed,
+               "run_wall_time_total": float(np.nansum(data.wall_time)), **record}
+    files: dict[str, Path] = {}
+    if folder is not None:
+        files = {"store": store_path, "indices": folder / "sensitivity.json",
+                 "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
+                 "report": folder / "report.html"}
+        plot_sobol(payload, files["figure"])
+        plot_sobol_convergence(payload, files["convergence"])
+        payload["files"] = {k: str(v) for k, v in files.items()}
+        write_text_atomic(files["indices"], json.dumps(payload, indent=2, allow_nan=False) + "\n")
+        write_sensitivity_report(
+            files["report"], title=f"Global sensitivity: case '{case.name}'", case_toml=case.to_toml(),
+            indices=payload,
+            figures={"First-order (S1) and total (ST) Sobol' indices with their confidence intervals":
+                     files["figure"],
+                     "The indices at N/4, N/2 and N base samples": files["convergence"]},
+            run_info={**_run_table(record, "runs"), "runs": result.runs,
+                      "simulated time per run [s]": settings.t_end,
+                      "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
+            units=units)
+    return result, payload, files

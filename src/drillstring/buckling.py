@@ -196,9 +196,9 @@ def buckling_probability(weight_on_hook_law, weight: float, critical_weight_on_b
     ``wob > wob_cr``, i.e. ``woh < weight − wob_cr``. Returns ``P(woh < weight − wob_cr)``.
 
     Args:
-        weight_on_hook_law: any law with a ``cdf`` method [N → probability], e.g. the study's
-            :func:`drillstring.stochastic.maxent.weight_on_hook_law` (mean, σ) or a frozen
-            ``scipy.stats`` distribution.
+        weight_on_hook_law: any law with a ``cdf`` method [N → probability], e.g. the density of a
+            study's ``weight_on_hook`` law (a :class:`drillstring.stochastic.maxent.MaxEntDensity`) or a
+            frozen ``scipy.stats`` distribution.
         weight: the string's weight [N].
         critical_weight_on_bit: wob_cr [N].
     """

@@ -80,6 +80,7 @@ from drillstring.units import (
 __all__ = [
     "DIMENSIONS",
     "MAX_ELEMENTS",
+    "MAX_SETUP_BYTES",
     "Acceleration",
     "Angle",
     "AngularSpeed",
@@ -760,6 +761,13 @@ def _inlet_velocity_from_flow(data: dict[str, Any]) -> dict[str, Any]:
 #: Most finite elements a case may have (a mesh finer than this is refused at validation: it would take
 #: minutes to build and gigabytes of memory; 10 000 elements is 0.16 m for the 1600 m reference string).
 MAX_ELEMENTS = 10_000
+#: Largest memory [bytes] of the model's set-up: the free-free damping of the axial and torsional families
+#: (:func:`drillstring.damping.free_free_damping`) works on dense matrices of one row per node, about
+#: :data:`SETUP_DENSE_MATRICES` of them at once (mass, stiffness, mode shapes, their products, the damping
+#: matrix), 8 bytes per entry. A mesh whose set-up would take more is refused at validation with that size,
+#: before anything is allocated: 2 GiB allows 7,300 nodes (0.22 m elements on the 1600 m reference string).
+MAX_SETUP_BYTES = 2 * 2**30
+SETUP_DENSE_MATRICES = 5
 
 
 def _default_materials() -> dict[str, Material]:
@@ -904,6 +912,7 @@ class Case(_Base):
                                  f"must be less than bow.end ({self.bow.end:g} m)"))
         if problems:  # the rules below need valid materials and gaps
             raise _Problems(problems)
+        problems.extend(self._offset_problems())
 
         problems.extend(self._mesh_problems())
 
@@ -935,6 +944,27 @@ class Case(_Base):
             raise _Problems(problems)
         return self
 
+    def _offset_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
+        """A section's mass eccentricity and the bow must be less than the radial gap where they are: a
+        larger offset puts the string's unloaded shape (bow) or its imbalance orbit (eccentricity) beyond the
+        borehole wall, where the contact law would answer with absurd forces instead of a drilling run."""
+        problems = []
+        top = 0.0
+        bowed = []
+        for i, s in enumerate(self.sections):
+            gap = (self.borehole.diameter - s.outer_diameter) / 2.0
+            if s.eccentricity >= gap:
+                problems.append((("sections", i, "eccentricity"), s.eccentricity,
+                                 f"must be less than the section's radial gap ({gap:.6g} m)"))
+            if self.bow.amplitude > 0.0 and top < self.bow.end and top + s.length > self.bow.start:
+                bowed.append((gap, s.name))
+            top += s.length
+        if bowed and self.bow.amplitude >= min(bowed)[0]:
+            gap, name = min(bowed)
+            problems.append((("bow", "amplitude"), self.bow.amplitude,
+                             f"must be less than the radial gap along the bow ({gap:.6g} m, section {name!r})"))
+        return problems
+
     def _mesh_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
         """The case can be meshed (element length within the string, at most :data:`MAX_ELEMENTS`
         elements) and reduced (no family asks for more modes than the mesh has DOFs)."""
@@ -948,6 +978,13 @@ class Case(_Base):
                                f"(about max_element_length >= {length / MAX_ELEMENTS:.3g} m for this "
                                f"{length:g} m string)")]
         nodes = elements + 1
+        setup = SETUP_DENSE_MATRICES * 8 * nodes**2
+        if setup > MAX_SETUP_BYTES:
+            fewest = math.sqrt(MAX_SETUP_BYTES / (8 * SETUP_DENSE_MATRICES))
+            return [(where, h, f"gives {elements:,} elements ({nodes:,} nodes): the model's set-up would take "
+                               f"{setup / 2**30:.3g} GiB ({SETUP_DENSE_MATRICES} dense {nodes:,} x {nodes:,} "
+                               f"matrices), above the limit of {MAX_SETUP_BYTES / 2**30:g} GiB (about "
+                               f"max_element_length >= {length / fewest:.3g} m for this {length:g} m string)")]
         sizes = mode_family_sizes(nodes)
         problems = []
         for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", 0),

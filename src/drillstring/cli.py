@@ -10,7 +10,7 @@ Commands
 ``drillstring cases``
     The built-in cases.
 ``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
-    One drilling run: NetCDF of the observables, a four-panel figure and a summary table.
+    One drilling run: NetCDF of the observables, a six-panel figure and a summary table.
 ``drillstring study [CASE] [--param PATH=LAW ...] [--sigma N | --dispersion D] [--samples N] [--out DIR] ...``
     Monte Carlo study of random case parameters (default: the weight-on-hook): Zarr store (resumable),
     statistics, figures, report.
@@ -67,7 +67,7 @@ from rich.progress import (  # noqa: E402
 )
 from rich.table import Table  # noqa: E402
 
-from drillstring import __version__  # noqa: E402
+from drillstring._version import __version__  # noqa: E402
 from drillstring.case import Case, CaseError, builtin_cases, load_case  # noqa: E402
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO  # noqa: E402
 from drillstring.units import display_unit, unit_system  # noqa: E402
@@ -169,11 +169,16 @@ def _err_console() -> Console:
     return Console(stderr=True, highlight=False)
 
 
-def _default_transient(t_end: float) -> float:
-    """Start of the steady regime used by the summaries [s]: 10 s, or half the run when shorter."""
-    from drillstring.dynamics.indicators import transient_end
+def _run_window(case: Case, t_end: float | None):
+    """The run window of ``case`` with ``--t-end`` (:func:`~drillstring.dynamics.simulate.run_window`; its
+    ``transient``, min(10 s, t_end/2), starts the summaries); refused (exit code 2) in one line."""
+    from drillstring.dynamics.simulate import run_window
 
-    return transient_end(t_end)
+    try:
+        return run_window(case.simulation.t_end if t_end is None else t_end, case.simulation.output_step,
+                          names={"t_end": "simulation.t_end" if t_end is None else "--t-end"})
+    except ValueError as error:
+        _fail(str(error))
 
 
 def _check_output(option: str, path: Path, *, folder: bool = False) -> None:
@@ -258,12 +263,10 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOpt = None) -> None:
     """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
     weight-on-bit (lateral buckling), axial force."""
-    from drillstring.buckling import case_buckling_margin
-    from drillstring.statics import case_static_state
+    from drillstring import api
 
     the_case = _load(case)
-    state = case_static_state(the_case)
-    margin = case_buckling_margin(the_case, state)
+    state, margin = api.static(the_case)
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -335,14 +338,13 @@ def modes(
     units: UnitsOpt = None,
 ) -> None:
     """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
-    from drillstring.buckling import buckling_margin
-    from drillstring.modal import case_linear_system, compute_modes
-    from drillstring.statics import case_static_state
+    from drillstring import api
 
     the_case = _load(case)
-    state = case_static_state(the_case)
-    system = case_linear_system(the_case, state)
-    found = compute_modes(system, axial=count, torsional=count, lateral=count)
+    try:
+        found, margin = api.modes(the_case, count=count)
+    except ValueError as error:
+        _fail(str(error))
     families = {
         "axial": [float(f) for f in found.axial.frequencies],
         "torsional": [float(f) for f in found.torsional.frequencies],
@@ -367,7 +369,7 @@ def modes(
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
         "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
         "mode, -sqrt(|ω²|)/2π.",
-        _buckling_note(buckling_margin(system), units),
+        _buckling_note(margin, units),
     ):
         console.print(escape(note), soft_wrap=True)
 
@@ -535,7 +537,8 @@ def simulate(
     out: Annotated[Path, typer.Option("--out", "-o", help="NetCDF file of the observables.")] = Path(
         "simulation.nc"
     ),
-    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the four-panel figure.")] = Path(
+    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the six-panel figure (ROP, bit speed, radial "
+                                                      "displacement, TOB, whirl orbit, contact force).")] = Path(
         "simulation.png"
     ),
     as_json: JsonOpt = False,
@@ -550,12 +553,8 @@ def simulate(
     that stops early still writes what it computed, reports where it stopped and exits with code 1.
     """
     the_case = _load(case)
-    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
-    if not (math.isfinite(t_final) and t_final > 0):
-        _fail(f"--t-end = {t_final!r} s: must be > 0")
-    if the_case.simulation.output_step > t_final:
-        _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
-              f"({the_case.simulation.output_step:g} s)")
+    window = _run_window(the_case, t_end)
+    t_final = window.t_end
     _check_output("--out", out)
     _check_output("--plot", plot)
     if Path(out).resolve() == Path(plot).resolve():
@@ -583,7 +582,7 @@ def simulate(
 
     netcdf = write_netcdf(ds, out)
     figure = plot_run(ds, plot, units=units) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
-    numbers = _run_numbers(ds, _default_transient(t_final))
+    numbers = _run_numbers(ds, window.transient)
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
     if failure is not None:
@@ -662,7 +661,7 @@ def _compare_times(differences: dict[str, Any]) -> Table:
 def compare(
     case: CaseArg = "reference",
     t_end: TEndOption = None,
-    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the overlaid four-panel figure.")] = Path(
+    plot: Annotated[Path, typer.Option("--plot", help="PNG file of the overlaid six-panel figure.")] = Path(
         "compare.png"
     ),
     as_json: JsonOpt = False,
@@ -670,18 +669,14 @@ def compare(
 ) -> None:
     """Case 1 (full nonlinear model) against case 2 (bit–rock and contact forces only) on the same case.
 
-    Runs both, writes a four-panel figure with both overlaid (case 1 solid, case 2 dashed) and prints, per
+    Runs both, writes a six-panel figure with both overlaid (case 1 solid, case 2 dashed) and prints, per
     observable, the largest difference, the RMS difference relative to case 2, and the difference of the
     means after the transient (t >= min(10 s, t_end/2)), then the wall time of each run and their ratio.
     A run that stops early ends the command with exit code 1.
     """
     the_case = _load(case)
-    t_final = the_case.simulation.t_end if t_end is None else float(t_end)
-    if not (math.isfinite(t_final) and t_final > 0):
-        _fail(f"--t-end = {t_final!r} s: must be > 0")
-    if the_case.simulation.output_step > t_final:
-        _fail(f"--t-end = {t_final:g} s: must be at least the case's output step "
-              f"({the_case.simulation.output_step:g} s)")
+    window = _run_window(the_case, t_end)
+    t_final = window.t_end
     _check_output("--plot", plot)
 
     from drillstring import api
@@ -892,7 +887,7 @@ def study(
     ] = None,
     transient: Annotated[
         float | None,
-        typer.Option("--transient", help="Start of the steady regime for the summaries [s] "
+        typer.Option("--transient", help="Start of the steady regime for the summaries, in s, in [0, t_end) "
                                          "(default: min(10 s, t_end/2))."),
     ] = None,
     as_json: JsonOpt = False,
@@ -1030,7 +1025,8 @@ RunTEndOption = Annotated[
 ]
 TransientOption = Annotated[
     float | None,
-    typer.Option("--transient", help="Start of the window of the outputs, in s (default: min(10 s, t_end/2))."),
+    typer.Option("--transient", help="Start of the window of the outputs, in s, in [0, t_end) (default: "
+                                     "min(10 s, t_end/2))."),
 ]
 
 

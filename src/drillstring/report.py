@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from drillstring import __version__
+from drillstring._version import __version__
 from drillstring.files import write_text_atomic
 from drillstring.units import display_unit
 

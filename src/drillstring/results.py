@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from drillstring import __version__
+from drillstring._version import __version__
 from drillstring.dynamics.simulate import SimulationResult
 from drillstring.files import atomic_output
 from drillstring.quantities import LONG_NAMES, UNITS

@@ -372,8 +372,25 @@ def test_tableau_by_name_and_unknown():
 
 
 def test_array_atol_and_max_step():
+    """An array atol weighs each component by its own tolerance. Two copies of y' = −y, the second with an
+    atol so large that its error never counts: the RMS of the error ratios is that of the first copy divided
+    by √2, i.e. the problem alone with rtol and atol both × √2, so the steps are the same (41). Reading the
+    array wrongly gives other steps: its first entry for both copies 44, its largest 8. max_step bounds every
+    step."""
+    def decay(t, y):
+        return -y
+
+    rtol, atol = 1e-6, 1e-9
+    pair = integrate(decay, (0.0, 10.0), [1.0, 1.0], rtol=rtol, atol=np.array([atol, 1e30]))
+    alone = integrate(decay, (0.0, 10.0), [1.0], rtol=rtol * math.sqrt(2.0), atol=atol * math.sqrt(2.0))
+    assert (pair.n_accepted, pair.n_rejected) == (alone.n_accepted, alone.n_rejected) == (41, 0)
+    np.testing.assert_allclose(pair.t, alone.t, rtol=1e-8)  # the same steps, to the rounding of the √2 factors
+    np.testing.assert_allclose(np.asarray(pair.y)[:, 0], np.asarray(alone.y)[:, 0], rtol=0, atol=1e-8)
+    first = integrate(decay, (0.0, 10.0), [1.0, 1.0], rtol=rtol, atol=atol)
+    largest = integrate(decay, (0.0, 10.0), [1.0, 1.0], rtol=rtol, atol=1e30)
+    assert (first.n_accepted, largest.n_accepted) == (44, 8)
     sol = integrate(oscillator, (0.0, 10.0), [1.0, 0.0], atol=np.array([1e-9, 1e-9]), max_step=0.01)
-    assert sol.n_accepted >= 1000
+    assert sol.n_accepted >= 1000 and np.all(np.diff(sol.t) <= 0.01 * (1 + 1e-12))
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -5,7 +5,8 @@ import pytest
 import xarray as xr
 
 from drillstring.stochastic.analysis import study_statistics, study_summary
-from drillstring.stochastic.montecarlo import DONE, STUDY_OBSERVABLES
+from drillstring.stochastic.montecarlo import STUDY_OBSERVABLES
+from drillstring.stochastic.store import DONE
 
 
 def synthetic_raw(n_s=400, seed=1):

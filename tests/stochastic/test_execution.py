@@ -4,10 +4,12 @@ of the parent and the lock)."""
 
 import os
 
+import numpy as np
 import pytest
 
 from drillstring.stochastic import execution
-from drillstring.stochastic.execution import DONE, FAILED, TaskOutcome
+from drillstring.stochastic.execution import TaskOutcome
+from drillstring.stochastic.store import DONE, FAILED
 
 
 def square(argument):
@@ -65,8 +67,20 @@ def test_interruption_writes_what_finished():
     assert report.completed == 5 and report.computed == 2
 
 
-def test_bad_worker_counts():
-    with pytest.raises(ValueError, match="workers = 0"):
-        execution.check_workers(0)
-    with pytest.raises(ValueError, match="not both"):
-        execution.check_workers(2, "tcp://x:1")
+@pytest.mark.parametrize("kwargs, error, message", [
+    (dict(workers=0), ValueError, "^workers = 0: must be an integer >= 1"),
+    (dict(workers=1.5), TypeError, "^workers = 1.5: must be an integer"),
+    (dict(workers=True), TypeError, "^workers = True: must be an integer"),
+    (dict(workers=2, scheduler="tcp://x:1"), ValueError, "not both"),
+    (dict(scheduler=8786), TypeError, "^scheduler = 8786: must be an address like 'tcp://host:8786' or a"),
+    (dict(progress="bar"), TypeError, "^progress = 'bar': must be a callable"),
+    (dict(worker_timeout=0.0), ValueError, "^worker_timeout = 0.0 s: must be a finite number > 0"),
+])
+def test_bad_engine_options(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        execution.Engine(**kwargs)
+
+
+def test_engine_takes_numpy_integers():
+    engine = execution.Engine(workers=np.int64(2))
+    assert type(engine.workers) is int and engine.workers == 2

@@ -16,14 +16,12 @@ from scipy import optimize, special, stats
 from drillstring.stochastic import maxent as me
 from drillstring.stochastic.maxent import (
     Constraint,
-    draw_realizations,
     log_mean,
     maximum_entropy,
     mean,
     realization_generator,
     second_moment,
     variance_constraints,
-    weight_on_hook_law,
 )
 
 INF = math.inf
@@ -271,64 +269,37 @@ def test_numerical_density_distribution_function_and_sampling():
     # inverse-CDF sampling: moments within 5 standard errors and a Kolmogorov–Smirnov test
     rng = np.random.default_rng(12345)
     n = 20000
-    s = law.sample(rng, n)
+    s = law.ppf(rng.random(n))  # the studies' draw: the inverse distribution function of uniform draws
     assert s.shape == (n,)
     assert np.all((s > 0.0) & (s < 1.0))
     assert abs(s.mean() - 0.3) < 5 * law.std() / math.sqrt(n)
     assert stats.kstest(s, law.cdf).pvalue > 1e-3
-    assert isinstance(law.sample(rng), float)
 
 
 # ---------------------------------------------------------------------------------------------------------
-# The weight-on-hook law
+# The Normal law (support ℝ, known mean and standard deviation: the weight-on-hook's law of the studies)
 # ---------------------------------------------------------------------------------------------------------
 
 
-def test_weight_on_hook_law_sigma_and_dispersion():
-    law = weight_on_hook_law(WOH_MEAN, sigma=5000.0)
+def test_normal_law_from_mean_and_standard_deviation():
+    law = maximum_entropy((-INF, INF), variance_constraints(WOH_MEAN, 5000.0))
     assert law.kind == "normal"
     assert law.support == (-INF, INF)
     assert law.mean() == pytest.approx(WOH_MEAN, rel=1e-14)
     assert law.std() == pytest.approx(5000.0, rel=1e-9)
     assert law.frozen.dist.name == "norm"
-    by_dispersion = weight_on_hook_law(WOH_MEAN, dispersion=5000.0 / WOH_MEAN)
-    assert by_dispersion.kind == "normal"
-    assert by_dispersion.std() == pytest.approx(5000.0, rel=1e-9)
     x = WOH_MEAN + 5000.0 * np.array([-3.0, -1.0, 0.0, 0.5, 2.0])
-    _close(by_dispersion.pdf(x), stats.norm(WOH_MEAN, 5000.0).pdf(x), 1e-9)
-    _close(law.pdf(x), by_dispersion.pdf(x), 1e-9)
-    # the reference study's dispersions
-    for sigma in (1000.0, 3000.0, 5000.0):
-        assert weight_on_hook_law(WOH_MEAN, sigma=sigma).std() / WOH_MEAN == pytest.approx(sigma / WOH_MEAN)
+    _close(law.pdf(x), stats.norm(WOH_MEAN, 5000.0).pdf(x), 1e-9)
 
 
 @pytest.mark.parametrize("sigma", [1000.0, 3000.0, 5000.0])
-def test_weight_on_hook_law_matches_numerical_dual_for_study_sigmas(sigma):
-    closed = weight_on_hook_law(WOH_MEAN, sigma=sigma)
+def test_normal_law_matches_numerical_dual_for_study_sigmas(sigma):
+    closed = maximum_entropy((-INF, INF), variance_constraints(WOH_MEAN, sigma))
     numerical = maximum_entropy((-INF, INF), variance_constraints(WOH_MEAN, sigma), method="numerical")
     x = WOH_MEAN + sigma * np.array([-3.0, -1.0, 0.0, 2.0])
     _close(numerical.pdf(x), closed.pdf(x), 1e-6)
     _close(numerical.std(), sigma, 1e-8)
     _close(numerical.lagrange_multipliers, closed.lagrange_multipliers, 1e-6)
-
-
-@pytest.mark.parametrize(
-    ("kwargs", "match"),
-    [
-        ({"mean": WOH_MEAN}, "exactly one"),
-        ({"mean": WOH_MEAN, "sigma": 5000.0, "dispersion": 0.005}, "exactly one"),
-        ({"mean": WOH_MEAN, "sigma": 0.0}, r"sigma = 0\.0 N must be finite and > 0"),
-        ({"mean": WOH_MEAN, "sigma": -1.0}, "sigma"),
-        ({"mean": WOH_MEAN, "sigma": math.nan}, "sigma"),
-        ({"mean": WOH_MEAN, "dispersion": -0.01}, r"dispersion = -0\.01"),
-        ({"mean": -WOH_MEAN, "sigma": 5000.0}, "mean"),
-        ({"mean": 0.0, "dispersion": 0.01}, "mean"),
-    ],
-)
-def test_weight_on_hook_law_validation(kwargs, match):
-    m = kwargs.pop("mean")
-    with pytest.raises(ValueError, match=match):
-        weight_on_hook_law(m, **kwargs)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -351,30 +322,10 @@ def test_realization_generator_depends_only_on_seed_and_index():
         realization_generator(1, 1.5)
 
 
-@pytest.mark.parametrize("numerical", [False, True], ids=["closed-form", "numerical"])
-def test_draws_do_not_depend_on_order_or_worker_split(numerical):
-    method = "numerical" if numerical else "auto"
-    law = maximum_entropy((-INF, INF), variance_constraints(WOH_MEAN, 5000.0), method=method)
-    seed = 314
-    all_draws = draw_realizations(law, seed, range(20))
-    assert all_draws.shape == (20,)
-    order = [13, 2, 19, 0, 7, 5]
-    np.testing.assert_array_equal(draw_realizations(law, seed, order), all_draws[order])
-    # two "workers" with interleaved chunks, drawn in reverse order
-    worker_a = draw_realizations(law, seed, range(19, -1, -2))
-    worker_b = draw_realizations(law, seed, range(0, 20, 2))
-    np.testing.assert_array_equal(worker_a, all_draws[19::-2])
-    np.testing.assert_array_equal(worker_b, all_draws[0::2])
-    # one realization alone
-    assert law.sample(realization_generator(seed, 11)) == all_draws[11]
-    assert len(np.unique(all_draws)) == 20
-    assert not np.array_equal(draw_realizations(law, seed + 1, range(20)), all_draws)
-
-
 def test_closed_form_and_numerical_normal_draws_are_statistically_equivalent():
-    closed = weight_on_hook_law(WOH_MEAN, sigma=3000.0)
+    closed = maximum_entropy((-INF, INF), variance_constraints(WOH_MEAN, 3000.0))
     numerical = maximum_entropy((-INF, INF), variance_constraints(WOH_MEAN, 3000.0), method="numerical")
-    draws = numerical.sample(np.random.default_rng(99), 5000)
+    draws = numerical.ppf(np.random.default_rng(99).random(5000))
     assert stats.kstest(draws, closed.cdf).pvalue > 1e-3
 
 

@@ -17,13 +17,23 @@ from scipy.stats import norm
 from drillstring.stochastic import execution
 from drillstring.stochastic import montecarlo as mc
 from drillstring.stochastic.analysis import load_study, study_statistics
+from drillstring.stochastic.locks import StudyLocked
 from drillstring.stochastic.maxent import realization_generator
+from drillstring.stochastic.store import DONE, FAILED, StoreError
 
 ARRAYS = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit",
           "radial_displacement", "weight_on_hook", "status", "nominal_bit_speed")
 
 
-SETTINGS = mc.StudySettings(samples=5, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
+def woh_settings(case, sigma=5000.0, **kwargs):
+    """Study settings of a random weight-on-hook, Normal of standard deviation ``sigma`` [N] (what a study's
+    ``sigma`` declares)."""
+    return mc.StudySettings(laws=(mc.weight_on_hook_normal(case, sigma),), **kwargs)
+
+
+@pytest.fixture
+def study5(small_case):
+    return woh_settings(small_case, samples=5, seed=11, t_end=1.0, output_step=0.05)
 
 
 def arrays(path):
@@ -36,39 +46,44 @@ def assert_same(a, b):
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
 
 
-def test_draws_depend_only_on_seed_and_index(small_case):
-    first = [mc.draw_weight_on_hook(small_case, SETTINGS, i) for i in (3, 0, 4)]
-    again = [mc.draw_weight_on_hook(small_case, SETTINGS, i) for i in (0, 3, 4)]
+def woh_draw(case, settings, index):
+    """The weight-on-hook [N] of realization ``index`` (the first random parameter of ``woh_settings``)."""
+    return float(mc.draw_inputs(case, settings, index)[0])
+
+
+def test_draws_depend_only_on_seed_and_index(small_case, study5):
+    first = [woh_draw(small_case, study5, i) for i in (3, 0, 4)]
+    again = [woh_draw(small_case, study5, i) for i in (0, 3, 4)]
     assert first[0] == again[1] and first[1] == again[0] and first[2] == again[2]
     mean = mc.nominal_weight_on_hook(small_case)
     # the inverse distribution function of the Normal law at the realization's own uniform draw
     expected = norm.ppf(realization_generator(11, 3).random(1)[0], loc=mean, scale=5000.0)
     assert first[0] == pytest.approx(expected, rel=1e-12)
-    assert mc.draw_weight_on_hook(small_case, SETTINGS, mc.NOMINAL) == mean
+    assert woh_draw(small_case, study5, mc.NOMINAL) == mean
 
 
-def test_one_and_two_workers_give_identical_results(small_case, tmp_path):
-    one = mc.run_study(small_case, SETTINGS, tmp_path / "one.zarr", workers=1)
-    two = mc.run_study(small_case, SETTINGS, tmp_path / "two.zarr", workers=2)
-    assert one.completed == two.completed == SETTINGS.samples
+def test_one_and_two_workers_give_identical_results(small_case, study5, tmp_path):
+    one = mc.run_study(small_case, study5, tmp_path / "one.zarr", execution.Engine(workers=1))
+    two = mc.run_study(small_case, study5, tmp_path / "two.zarr", execution.Engine(workers=2))
+    assert one.completed == two.completed == study5.samples
     assert_same(arrays(tmp_path / "one.zarr"), arrays(tmp_path / "two.zarr"))
 
 
-def test_interrupted_study_resumes_to_the_same_result(small_case, tmp_path):
-    reference = mc.run_study(small_case, SETTINGS, tmp_path / "ref.zarr", workers=1)
+def test_interrupted_study_resumes_to_the_same_result(small_case, study5, tmp_path):
+    reference = mc.run_study(small_case, study5, tmp_path / "ref.zarr", execution.Engine(workers=1))
     assert reference.failed == 0
 
     def interrupt_after_two(done, failed, total):
         if done == 2:
             raise KeyboardInterrupt
 
-    with pytest.raises(mc.StudyInterrupted, match="resume"):
-        mc.run_study(small_case, SETTINGS, tmp_path / "cut.zarr", workers=1,
-                     progress=interrupt_after_two)
+    with pytest.raises(execution.Interrupted, match="resume"):
+        mc.run_study(small_case, study5, tmp_path / "cut.zarr",
+                     execution.Engine(workers=1, progress=interrupt_after_two))
     status = zarr.open_group(str(tmp_path / "cut.zarr"))["status"][:]
-    assert np.sum(status == mc.DONE) == 2
-    resumed = mc.run_study(small_case, SETTINGS, tmp_path / "cut.zarr", workers=1)
-    assert resumed.completed == SETTINGS.samples
+    assert np.sum(status == DONE) == 2
+    resumed = mc.run_study(small_case, study5, tmp_path / "cut.zarr", execution.Engine(workers=1))
+    assert resumed.completed == study5.samples
     assert_same(arrays(tmp_path / "ref.zarr"), arrays(tmp_path / "cut.zarr"))
 
 
@@ -76,17 +91,18 @@ KILL_SCRIPT = """
 import sys
 from drillstring.case import case_from_dict
 import tomllib
-from drillstring.stochastic import montecarlo as mc
+from drillstring.stochastic import execution, montecarlo as mc
 if __name__ == "__main__":
     case = case_from_dict(tomllib.loads(open(sys.argv[1]).read()))
-    settings = mc.StudySettings(samples=40, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
-    mc.run_study(case, settings, sys.argv[2], workers=2)
+    settings = mc.StudySettings(samples=40, seed=11, t_end=1.0, output_step=0.05,
+                                laws=(mc.weight_on_hook_normal(case, 5000.0),))
+    mc.run_study(case, settings, sys.argv[2], execution.Engine(workers=2))
 """
 
 
 def _done_in(store) -> int:
     try:
-        return int(np.sum(zarr.open_group(str(store), mode="r")["status"][:] == mc.DONE))
+        return int(np.sum(zarr.open_group(str(store), mode="r")["status"][:] == DONE))
     except Exception:  # not created yet
         return 0
 
@@ -94,7 +110,7 @@ def _done_in(store) -> int:
 def test_killed_process_resumes_to_the_same_result(small_case, tmp_path):
     """kill -9 of a study running on 2 worker processes: the rerun takes over the stale lock (with a
     note), its workers are gone, and it resumes to exactly the uninterrupted result."""
-    settings = mc.StudySettings(samples=40, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
+    settings = woh_settings(small_case, 5000.0, samples=40, seed=11, t_end=1.0, output_step=0.05)
     case_file = tmp_path / "case.toml"
     case_file.write_text(small_case.to_toml())
     script = tmp_path / "kill_me.py"  # a file, so that spawned workers can import the main module
@@ -111,10 +127,10 @@ def test_killed_process_resumes_to_the_same_result(small_case, tmp_path):
     assert 3 <= done < 40, "the process should have been killed mid-study"
     assert (tmp_path / "killed.zarr.lock").read_text().strip(), "the killed study left its lock record"
     with pytest.warns(RuntimeWarning, match=f"stale lock .*pid {proc.pid}"):
-        resumed = mc.run_study(small_case, settings, store, workers=2)
+        resumed = mc.run_study(small_case, settings, store, execution.Engine(workers=2))
     assert resumed.completed == 40 and resumed.computed == 40 - _done_before(resumed)
     assert not (tmp_path / "killed.zarr.lock").exists()  # released cleanly
-    mc.run_study(small_case, settings, tmp_path / "full.zarr", workers=1)
+    mc.run_study(small_case, settings, tmp_path / "full.zarr", execution.Engine(workers=1))
     assert_same(arrays(store), arrays(tmp_path / "full.zarr"))
 
 
@@ -122,7 +138,7 @@ def _done_before(run) -> int:
     return run.completed + run.failed - run.computed
 
 
-def test_failed_realizations_are_recorded_and_excluded(small_case, tmp_path, monkeypatch):
+def test_failed_realizations_are_recorded_and_excluded(small_case, study5, tmp_path, monkeypatch):
     """Two failure kinds: a diverging integration, and a draw that is physically impossible."""
     real = mc.simulate_model
     nominal_wob = small_case.operation.weight_on_bit
@@ -133,7 +149,7 @@ def test_failed_realizations_are_recorded_and_excluded(small_case, tmp_path, mon
         return real(model, **kwargs)
 
     monkeypatch.setattr(mc, "simulate_model", diverge_above_nominal)
-    run = mc.run_study(small_case, SETTINGS, tmp_path / "f.zarr", workers=1)
+    run = mc.run_study(small_case, study5, tmp_path / "f.zarr", execution.Engine(workers=1))
     raw = load_study(tmp_path / "f.zarr")
     above = raw.weight_on_bit.values > nominal_wob
     assert run.failed == int(above.sum()) > 0 and run.completed == int((~above).sum()) >= 2
@@ -147,32 +163,39 @@ def test_failed_realizations_are_recorded_and_excluded(small_case, tmp_path, mon
 
     # A draw outside (0, string weight) cannot run: recorded as failed with the cause (a study with
     # such a sigma is refused before running, see test_impossible_sigma_is_refused_before_running).
-    wild = mc.StudySettings(samples=6, sigma=3e5, seed=1, t_end=0.2, output_step=0.05)
-    draws = [mc.draw_weight_on_hook(small_case, wild, i) for i in range(6)]
+    wild = woh_settings(small_case, 3e5, samples=6, seed=1, t_end=0.2, output_step=0.05)
+    draws = [woh_draw(small_case, wild, i) for i in range(6)]
     impossible = next(i for i, woh in enumerate(draws) if not 0 < small_case.weight - woh < small_case.weight)
     outcome = mc.run_realization(small_case, wild, impossible)
-    assert outcome.status == mc.FAILED and "weight_on_bit" in outcome.message
+    assert outcome.status == FAILED and "weight_on_bit" in outcome.message
 
 
-def test_store_with_other_settings_is_refused(small_case, tmp_path):
-    mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
-    other = mc.StudySettings(samples=5, sigma=1000.0, seed=11, t_end=1.0, output_step=0.05)
+def test_store_with_other_settings_is_refused(small_case, study5, tmp_path):
+    mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(workers=1))
+    other = woh_settings(small_case, 1000.0, samples=5, seed=11, t_end=1.0, output_step=0.05)
     with pytest.raises(ValueError, match="different study"):
-        mc.run_study(small_case, other, tmp_path / "s.zarr", workers=1)
+        mc.run_study(small_case, other, tmp_path / "s.zarr", execution.Engine(workers=1))
+
+
+TOP_SPEED = (("operation.top_speed", "normal 100 5 rpm"),)
 
 
 @pytest.mark.parametrize("kwargs, field", [
-    (dict(samples=0, sigma=1.0), "samples"), (dict(samples=1, sigma=1.0), "samples"),
-    (dict(samples=2.5, sigma=1.0), "samples"), (dict(samples=2, sigma=-1.0), "sigma"),
-    (dict(samples=2, sigma=float("nan")), "sigma"), (dict(samples=2, sigma=float("inf")), "sigma"),
-    (dict(samples=2, sigma=1.0, seed=-3), "seed"), (dict(samples=2, sigma=1.0, t_end=0.0), "t_end"),
-    (dict(samples=2, sigma=1.0, t_end=float("inf")), "t_end"),
-    (dict(samples=2, sigma=1.0, t_end=1.0, output_step=float("nan")), "output_step"),
-    (dict(samples=2, sigma=1.0, t_end=1.0, output_step=-0.1), "output_step"),
+    (dict(samples=0), "samples"), (dict(samples=1), "samples"), (dict(samples=2.5), "samples"),
+    (dict(samples=2, seed=-3), "seed"), (dict(samples=2, seed=2**64), "seed"), (dict(samples=2, seed=1.0), "seed"),
+    (dict(samples=2, t_end=0.0), "t_end"), (dict(samples=2, t_end=float("inf")), "t_end"),
+    (dict(samples=2, t_end=1.0, output_step=float("nan")), "output_step"),
+    (dict(samples=2, t_end=1.0, output_step=-0.1), "output_step"),
+    (dict(samples=2, laws=TOP_SPEED * 2), "operation.top_speed is declared twice"),
 ])
 def test_bad_settings_are_refused(kwargs, field):
-    with pytest.raises(ValueError, match=f"^{field} = "):
-        mc.StudySettings(**kwargs)
+    with pytest.raises((TypeError, ValueError), match=f"^{field}"):
+        mc.StudySettings(**{"laws": TOP_SPEED, **kwargs})
+
+
+def test_numpy_integers_are_integers():
+    settings = mc.StudySettings(samples=np.int64(3), seed=np.uint64(2**64 - 1), laws=TOP_SPEED)
+    assert type(settings.samples) is int and settings.samples == 3 and settings.seed == 2**64 - 1
 
 
 def test_out_of_range_probability_against_the_normal_law(small_case):
@@ -184,7 +207,8 @@ def test_out_of_range_probability_against_the_normal_law(small_case):
     for sigma in (1e4, 3e4, 1e5, 1e6):
         expected = norm.cdf(0.0, loc=wob, scale=sigma) + norm.sf(weight, loc=wob, scale=sigma)
         assert mc.weight_on_bit_out_of_range_probability(small_case, sigma) == pytest.approx(expected, rel=1e-9)
-    drawn = small_case.weight - mc.nominal_weight_on_hook(small_case) - 1e5 * np.random.default_rng(0).standard_normal(200_000)
+    wide = woh_settings(small_case, 1e5, samples=2, seed=3)  # the study's own draws
+    drawn = small_case.weight - mc.study_uncertainty(small_case, wide).draw(wide.seed, range(200_000))[:, 0]
     observed = np.mean((drawn <= 0) | (drawn >= weight))
     assert observed == pytest.approx(mc.weight_on_bit_out_of_range_probability(small_case, 1e5), rel=0.02)
     limit = mc.largest_accepted_sigma(small_case)
@@ -194,47 +218,47 @@ def test_out_of_range_probability_against_the_normal_law(small_case):
 
 
 def test_impossible_sigma_is_refused_before_running(small_case, tmp_path):
-    settings = mc.StudySettings(samples=10, sigma=1e6, seed=0, t_end=1.0, output_step=0.05)
+    settings = woh_settings(small_case, 1e6, samples=10, seed=0, t_end=1.0, output_step=0.05)
     with pytest.raises(ValueError, match=r"^sigma = 1e\+06 N: .* probability 0\.\d+, above 0\.001.* at most 32\.\d+ kN"):
-        mc.run_study(small_case, settings, tmp_path / "s.zarr", workers=1)
+        mc.run_study(small_case, settings, tmp_path / "s.zarr", execution.Engine(workers=1))
     assert not (tmp_path / "s.zarr").exists()
-    accepted = mc.StudySettings(samples=2, sigma=0.99 * mc.largest_accepted_sigma(small_case), t_end=0.1,
+    accepted = woh_settings(small_case, 0.99 * mc.largest_accepted_sigma(small_case), samples=2, t_end=0.1,
                                 output_step=0.05)
     mc.check_study(small_case, accepted)  # just below the threshold: accepted
 
 
-def test_a_finished_study_keeps_its_computation_time(small_case, tmp_path):
-    first = mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
-    again = mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
-    assert first.computed == SETTINGS.samples and again.computed == 0
+def test_a_finished_study_keeps_its_computation_time(small_case, study5, tmp_path):
+    first = mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(workers=1))
+    again = mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(workers=1))
+    assert first.computed == study5.samples and again.computed == 0
     sessions = again.store.sessions()
-    assert len(sessions) == 1 and sessions[0]["realizations"] == SETTINGS.samples
-    assert mc.computation_time(sessions) == (first.wall_time, 1)
+    assert len(sessions) == 1 and sessions[0]["realizations"] == study5.samples
+    assert execution.computation_time(sessions) == (first.wall_time, 1)
 
 
 # --- store checks and locks ---------------------------------------------------------------------
 
 
-def test_a_folder_that_is_not_a_study_store_is_refused(small_case, tmp_path):
-    mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
+def test_a_folder_that_is_not_a_study_store_is_refused(small_case, study5, tmp_path):
+    mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(workers=1))
     group = zarr.open_group(str(tmp_path / "s.zarr"), mode="a")
     del group["status"]
-    for attempt in (lambda: mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1),
+    for attempt in (lambda: mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(workers=1)),
                     lambda: load_study(tmp_path / "s.zarr")):
-        with pytest.raises(mc.StudyStoreError, match=r"missing array\(s\): status\); delete it"):
+        with pytest.raises(StoreError, match=r"missing array\(s\): status\); delete it"):
             attempt()
     foreign = tmp_path / "foreign.zarr"
     foreign.mkdir()
     (foreign / "notes.txt").write_text("mine")
-    with pytest.raises(mc.StudyStoreError, match="not a drillstring study store .no zarr.json"):
-        mc.run_study(small_case, SETTINGS, foreign, workers=1)
+    with pytest.raises(StoreError, match="not a drillstring study store .no zarr.json"):
+        mc.run_study(small_case, study5, foreign, execution.Engine(workers=1))
     assert (foreign / "notes.txt").read_text() == "mine"  # left alone
     other = tmp_path / "other.zarr"
     zarr.open_group(str(other), mode="w").create_array("a", shape=(2,), dtype="f8")
-    with pytest.raises(mc.StudyStoreError, match="no fingerprint, settings, case attribute"):
+    with pytest.raises(StoreError, match="no fingerprint, settings, case attribute"):
         load_study(other)
     (other / "zarr.json").write_text("{not json")
-    with pytest.raises(mc.StudyStoreError, match="not a readable Zarr store"):
+    with pytest.raises(StoreError, match="not a readable Zarr store"):
         load_study(other)
 
 
@@ -247,71 +271,71 @@ with StudyLock(sys.argv[1]):
 """
 
 
-def test_a_store_in_use_is_refused_for_writing_and_reading(small_case, tmp_path):
+def test_a_store_in_use_is_refused_for_writing_and_reading(small_case, study5, tmp_path):
     """Another process holds the study's lock: running or reading that store is refused at once,
     naming the holder; once it is gone (kill -9), its stale lock is taken over with a note."""
     store = tmp_path / "s.zarr"
-    mc.run_study(small_case, SETTINGS, store, workers=1)
+    mc.run_study(small_case, study5, store, execution.Engine(workers=1))
     holder = subprocess.Popen([sys.executable, "-c", HOLD_SCRIPT, str(store)], stdout=subprocess.PIPE,
                               text=True)
     try:
         assert holder.stdout.readline().strip() == "locked"
-        with pytest.raises(mc.StudyLocked, match=f"in use by pid {holder.pid} on host .*another --out"):
-            mc.run_study(small_case, SETTINGS, store, workers=1)
-        with pytest.raises(mc.StudyLocked, match="no study is writing it"):
+        with pytest.raises(StudyLocked, match=f"in use by pid {holder.pid} on host .*another --out"):
+            mc.run_study(small_case, study5, store, execution.Engine(workers=1))
+        with pytest.raises(StudyLocked, match="no study is writing it"):
             load_study(store)
     finally:
         holder.kill()
         holder.wait()
     notes = []
-    run = mc.run_study(small_case, SETTINGS, store, workers=1, note=notes.append)
-    assert run.completed == SETTINGS.samples and len(notes) == 1
+    run = mc.run_study(small_case, study5, store, execution.Engine(workers=1, note=notes.append))
+    assert run.completed == study5.samples and len(notes) == 1
     assert f"stale lock (pid {holder.pid}" in notes[0] and run.note == notes[0]
-    assert load_study(store).sizes["realization"] == SETTINGS.samples
+    assert load_study(store).sizes["realization"] == study5.samples
 
 
-def test_a_store_is_created_whole_or_not_at_all(small_case, tmp_path, monkeypatch):
+def test_a_store_is_created_whole_or_not_at_all(small_case, study5, tmp_path, monkeypatch):
     """A creation that fails midway leaves no store (and no temporary folder) behind."""
     def broken(*args, **kwargs):
         raise OSError("disk full")
 
     monkeypatch.setattr(mc.StudyStore, "_create", staticmethod(broken))
     with pytest.raises(OSError, match="disk full"):
-        mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", workers=1)
+        mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(workers=1))
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
 # --- Dask ----------------------------------------------------------------------------------------
 
 
-def test_dask_cluster_gives_the_same_result_and_stops_resumably_without_workers(small_case, tmp_path):
+def test_dask_cluster_gives_the_same_result_and_stops_resumably_without_workers(small_case, study5, tmp_path):
     """A real cluster (2 worker processes) computes exactly the local result. When every worker
     leaves mid-study, the study says so and stops; with workers back, the rerun resumes."""
     from distributed import LocalCluster
 
-    local = mc.run_study(small_case, SETTINGS, tmp_path / "local.zarr", workers=1)
+    local = mc.run_study(small_case, study5, tmp_path / "local.zarr", execution.Engine(workers=1))
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster:
-        whole = mc.run_study(small_case, SETTINGS, tmp_path / "dask.zarr",
-                             scheduler=cluster.scheduler_address)
+        whole = mc.run_study(small_case, study5, tmp_path / "dask.zarr",
+                             execution.Engine(scheduler=cluster.scheduler_address))
         assert whole.completed == local.completed and whole.workers == cluster.scheduler_address
         worker = next(iter(cluster.scheduler_info["workers"]))
-        with pytest.raises(mc.SchedulerUnreachable, match="that is a Dask Worker, not a scheduler"):
-            mc.connect_scheduler(worker)
+        with pytest.raises(execution.SchedulerUnreachable, match="that is a Dask Worker, not a scheduler"):
+            execution.connect_scheduler(worker)
 
         def workers_leave(done, failed, total):
             if done == 2 and cluster.workers:
                 cluster.scale(0)
 
-        with pytest.raises(mc.StudyWorkersLost, match="no worker for 2 s.*saved.*resume"):
-            mc.run_study(small_case, SETTINGS, tmp_path / "lost.zarr", scheduler=cluster.scheduler_address,
-                         progress=workers_leave, worker_timeout=2.0)
-        assert 2 <= _done_in(tmp_path / "lost.zarr") < SETTINGS.samples
+        with pytest.raises(execution.WorkersLost, match="no worker for 2 s.*saved.*resume"):
+            mc.run_study(small_case, study5, tmp_path / "lost.zarr", execution.Engine(
+                scheduler=cluster.scheduler_address, progress=workers_leave, worker_timeout=2.0))
+        assert 2 <= _done_in(tmp_path / "lost.zarr") < study5.samples
         cluster.scale(2)
         cluster.wait_for_workers(2)
-        resumed = mc.run_study(small_case, SETTINGS, tmp_path / "lost.zarr",
-                               scheduler=cluster.scheduler_address)
-        assert resumed.completed == SETTINGS.samples and _done_before(resumed) >= 2
+        resumed = mc.run_study(small_case, study5, tmp_path / "lost.zarr",
+                               execution.Engine(scheduler=cluster.scheduler_address))
+        assert resumed.completed == study5.samples and _done_before(resumed) >= 2
     assert_same(arrays(tmp_path / "local.zarr"), arrays(tmp_path / "dask.zarr"))
     assert_same(arrays(tmp_path / "local.zarr"), arrays(tmp_path / "lost.zarr"))
 
@@ -351,7 +375,7 @@ def _tcp_server(greeting: bytes | None) -> socket.socket:
     ("http", "the server there does not speak the Dask protocol .not a Dask scheduler"),
     ("malformed", "not an address like tcp://host:8786"),
 ])
-def test_a_scheduler_address_that_is_no_scheduler_fails_fast(small_case, tmp_path, kind, message):
+def test_a_scheduler_address_that_is_no_scheduler_fails_fast(small_case, study5, tmp_path, kind, message):
     server = None
     if kind == "closed":
         address = f"tcp://127.0.0.1:{_closed_port()}"
@@ -363,10 +387,10 @@ def test_a_scheduler_address_that_is_no_scheduler_fails_fast(small_case, tmp_pat
         server = _tcp_server(greeting)
         address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
     try:
-        with pytest.raises(mc.SchedulerUnreachable, match=f"^scheduler = '{address}': {message}"):
-            mc.connect_scheduler(address, timeout=1.0)
-        with pytest.raises(mc.SchedulerUnreachable):  # nothing created
-            mc.run_study(small_case, SETTINGS, tmp_path / "s.zarr", scheduler=address)
+        with pytest.raises(execution.SchedulerUnreachable, match=f"^scheduler = '{address}': {message}"):
+            execution.connect_scheduler(address, timeout=1.0)
+        with pytest.raises(execution.SchedulerUnreachable):  # nothing created
+            mc.run_study(small_case, study5, tmp_path / "s.zarr", execution.Engine(scheduler=address))
         assert not (tmp_path / "s.zarr").exists()
     finally:
         if server is not None:
@@ -391,7 +415,7 @@ def test_realization_that_kills_its_worker_is_isolated_and_the_others_stay_paral
     """Only the realizations running when the worker died are rerun alone (the culprit is recorded as
     failed, the innocent one finishes); the others keep running on the 2-process pool: at most 3 pools'
     worth of processes, not one fresh process per remaining realization."""
-    settings = mc.StudySettings(samples=10, sigma=5000.0, seed=11, t_end=1.0, output_step=0.05)
+    settings = woh_settings(small_case, 5000.0, samples=10, seed=11, t_end=1.0, output_step=0.05)
     log = tmp_path / "log.txt"
     monkeypatch.setenv("DRILLSTRING_TEST_LOG", str(log))
     store = mc.StudyStore(tmp_path / "crash.zarr", small_case, settings)
@@ -399,21 +423,21 @@ def test_realization_that_kills_its_worker_is_isolated_and_the_others_stay_paral
                              [(i, i) for i in range(settings.samples)], 2, store.write,
                              lost=partial(mc._worker_died, small_case, settings))
     status = store.status()
-    assert status[2] == mc.FAILED and "worker process died" in store.failures()["2"]
+    assert status[2] == FAILED and "worker process died" in store.failures()["2"]
     others = [i for i in range(settings.samples) if i != 2]
-    assert np.all(status[others] == mc.DONE)
+    assert np.all(status[others] == DONE)
     started = [line.split() for line in log.read_text().splitlines()]  # (index, pid) per start
     pids = {pid for _, pid in started}
     assert len(pids) <= 3 * 2, f"{len(pids)} worker processes for {settings.samples} realizations"
     assert [index for index, _ in started].count("2") == 2  # in the pool, then alone
     # The others are exactly what an undisturbed run computes.
-    mc.run_study(small_case, settings, tmp_path / "ref.zarr", workers=1)
+    mc.run_study(small_case, settings, tmp_path / "ref.zarr", execution.Engine(workers=1))
     a, b = arrays(tmp_path / "crash.zarr"), arrays(tmp_path / "ref.zarr")
     for name in ("rate_of_penetration", "bit_speed", "weight_on_hook"):
         np.testing.assert_array_equal(a[name][others], b[name][others])
 
 
-def test_drawn_weights_agree_with_the_statics_with_fluid_axial_loads(small_case):
+def test_drawn_weights_agree_with_the_statics_with_fluid_axial_loads(small_case, study5):
     """One source of truth for the string's weight: with the mud's axial loads on (8.7 kN on the
     reference string), the mean weight-on-hook is the static hook load and each drawn weight-on-hook is
     the hook load of the static state at the derived weight-on-bit."""
@@ -423,9 +447,9 @@ def test_drawn_weights_agree_with_the_statics_with_fluid_axial_loads(small_case)
     assert abs(case.weight - small_case.weight) > 5e3
     assert mc.nominal_weight_on_hook(case) == pytest.approx(case_static_state(case).weight_on_hook, rel=1e-10)
     for index in (0, 3):
-        woh = mc.draw_weight_on_hook(case, SETTINGS, index)
-        outcome = mc.run_realization(case, mc.StudySettings(samples=5, sigma=5000.0, seed=11, t_end=0.1,
-                                                            output_step=0.05), index)
+        woh = woh_draw(case, woh_settings(case, 5000.0, samples=5, seed=11), index)
+        outcome = mc.run_realization(case, woh_settings(case, 5000.0, samples=5, seed=11, t_end=0.1,
+                                                        output_step=0.05), index)
         assert outcome.weight_on_hook == woh
         static = case_static_state(case, weight_on_bit=outcome.weight_on_bit)
         assert static.weight_on_hook == pytest.approx(woh, rel=1e-10)
@@ -448,7 +472,7 @@ def test_a_realization_is_the_case_with_its_drawn_values(small_case):
     settings = mc.StudySettings(samples=4, seed=5, t_end=0.5, output_step=0.05, laws=LAWS)
     law = uncertainty(small_case, dict(LAWS))
     outcome = mc.run_realization(small_case, settings, 3)
-    assert outcome.status == mc.DONE
+    assert outcome.status == DONE
     drawn = law.draw(5, [3])[0]
     np.testing.assert_array_equal(outcome.inputs, drawn)
     assert 1.2 <= drawn[0] <= 1.8 and drawn[1] != small_case.operation.top_speed
@@ -462,7 +486,7 @@ def test_a_realization_is_the_case_with_its_drawn_values(small_case):
 
 def test_study_of_several_parameters_records_draws_laws_and_refuses_other_laws(small_case, tmp_path):
     settings = mc.StudySettings(samples=3, seed=2, t_end=0.3, output_step=0.05, laws=LAWS)
-    run = mc.run_study(small_case, settings, tmp_path / "s.zarr", workers=1)
+    run = mc.run_study(small_case, settings, tmp_path / "s.zarr", execution.Engine(workers=1))
     assert run.completed == 3
     raw = load_study(tmp_path / "s.zarr")
     assert raw.attrs["parameters"] == ["fluid.inlet_velocity", "operation.top_speed"]
@@ -475,13 +499,13 @@ def test_study_of_several_parameters_records_draws_laws_and_refuses_other_laws(s
     other = mc.StudySettings(samples=3, seed=2, t_end=0.3, output_step=0.05,
                              laws=(LAWS[0], ("operation.top_speed", "normal 100 6 rpm")))
     with pytest.raises(ValueError, match="different study .*laws"):
-        mc.run_study(small_case, other, tmp_path / "s.zarr", workers=1)
+        mc.run_study(small_case, other, tmp_path / "s.zarr", execution.Engine(workers=1))
 
 
 def test_correlated_normal_draws(small_case):
     """Top speed and weight-on-hook drawn jointly with correlation −0.6: the study's draws are the
     multivariate normal (sample correlation, means and standard deviations)."""
-    settings = mc.StudySettings(samples=2, sigma=5000.0, laws=(("operation.top_speed", "normal 100 5 rpm"),),
+    settings = mc.StudySettings(samples=2, laws=(mc.weight_on_hook_normal(small_case, 5000.0), *TOP_SPEED),
                                 correlated=("operation.top_speed", "weight_on_hook"),
                                 correlation=((1.0, -0.6), (-0.6, 1.0)))
     law = mc.study_uncertainty(small_case, settings)
@@ -497,13 +521,12 @@ def test_correlated_normal_draws(small_case):
     ((("operation.top_speed", "normal 10 5 rpm"),), r"probability 0\.0228 outside .*at most 0\.001"),
     ((("operation.top_sped", "normal 100 5 rpm"),), "did you mean 'top_speed'"),
     ((("fluid.inlet_velocity", "uniform 1.8 1.2 m/s"),), "fluid.inlet_velocity"),
-    ((("weight_on_hook", "normal 1063 5 kN"),), "weight_on_hook has a law and sigma"),
+    ((("weight_on_hook", "normal 1063 300 kN"),), r"^sigma = 300000 N: .* at most 32\.\d+ kN"),
 ])
 def test_impossible_laws_are_refused_before_running(small_case, tmp_path, laws, message):
-    settings = mc.StudySettings(samples=2, sigma=5000.0 if laws[0][0] == "weight_on_hook" else None,
-                                t_end=0.2, output_step=0.05, laws=laws)
+    settings = mc.StudySettings(samples=2, t_end=0.2, output_step=0.05, laws=laws)
     with pytest.raises(ValueError, match=message):
-        mc.run_study(small_case, settings, tmp_path / "s.zarr", workers=1)
+        mc.run_study(small_case, settings, tmp_path / "s.zarr", execution.Engine(workers=1))
     assert not (tmp_path / "s.zarr").exists()
 
 

@@ -11,7 +11,7 @@ from drillstring import api
 from drillstring.case import DIMENSIONS
 from drillstring.stochastic import execution
 from drillstring.stochastic import operating_map as om
-from drillstring.stochastic.store import StoreError
+from drillstring.stochastic.store import DONE, StoreError
 
 DIM = {d.name: d for d in DIMENSIONS}
 RPM = math.pi / 30.0
@@ -99,7 +99,7 @@ def test_buckling_margin_does_not_depend_on_top_speed_or_weight_on_bit(torsional
 
 def test_an_interrupted_map_resumes_to_the_same_map(torsional_case, tmp_path):
     settings = om.MapSettings(top_speed=(8.0, 12.0, 16.0), weight_on_bit=(6e4, 9e4), t_end=4.0, output_step=0.05)
-    whole = om.run_map(torsional_case, settings, tmp_path / "whole.zarr", workers=1)
+    whole = om.run_map(torsional_case, settings, tmp_path / "whole.zarr", execution.Engine(workers=1))
     assert whole.completed == 6
 
     def interrupt_after_two(done, failed, total):
@@ -107,16 +107,17 @@ def test_an_interrupted_map_resumes_to_the_same_map(torsional_case, tmp_path):
             raise KeyboardInterrupt
 
     with pytest.raises(execution.Interrupted, match="map interrupted after 2 of 6 grid points.*resume"):
-        om.run_map(torsional_case, settings, tmp_path / "cut.zarr", workers=1, progress=interrupt_after_two)
-    assert om.MapStore.open_group(tmp_path / "cut.zarr")["status"][:].tolist().count(execution.DONE) == 2
-    resumed = om.run_map(torsional_case, settings, tmp_path / "cut.zarr", workers=2)
+        om.run_map(torsional_case, settings, tmp_path / "cut.zarr",
+                   execution.Engine(workers=1, progress=interrupt_after_two))
+    assert om.MapStore.open_group(tmp_path / "cut.zarr")["status"][:].tolist().count(DONE) == 2
+    resumed = om.run_map(torsional_case, settings, tmp_path / "cut.zarr", execution.Engine(workers=2))
     assert resumed.completed == 6 and resumed.computed == 4
     a, b = om.map_dataset(tmp_path / "whole.zarr"), om.map_dataset(tmp_path / "cut.zarr")
     for name in om.MAP_OUTPUTS:
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
     other = om.MapSettings(top_speed=(8.0, 12.0), weight_on_bit=(6e4, 9e4), t_end=4.0, output_step=0.05)
     with pytest.raises(ValueError, match="holds a different map"):
-        om.run_map(torsional_case, other, tmp_path / "cut.zarr", workers=1)
+        om.run_map(torsional_case, other, tmp_path / "cut.zarr", execution.Engine(workers=1))
     with pytest.raises(StoreError, match="not a drillstring map store"):
         om.map_dataset(tmp_path)
 

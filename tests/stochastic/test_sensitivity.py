@@ -204,9 +204,13 @@ def test_result_to_json(ishigami, tmp_path):
         ishigami.indices("rop")
 
 
-@pytest.mark.parametrize("n", [0, 7, 100, 1000, 4.0, True])
-def test_base_samples_must_be_a_power_of_two(uniform3, n):
-    with pytest.raises(ValueError, match="must be a power of 2 and >= 8"):
+@pytest.mark.parametrize("n, error, message", [
+    (0, ValueError, "must be a power of 2 and >= 8"), (7, ValueError, "must be a power of 2 and >= 8"),
+    (100, ValueError, "must be a power of 2 and >= 8"), (1000, ValueError, "must be a power of 2 and >= 8"),
+    (2**19, ValueError, "524288: above the limit of 262144"),
+    (4.0, TypeError, "must be an integer"), (True, TypeError, "must be an integer")])
+def test_base_samples_must_be_a_power_of_two(uniform3, n, error, message):
+    with pytest.raises(error, match=message):
         saltelli_design(uniform3, n)
 
 

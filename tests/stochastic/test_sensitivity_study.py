@@ -59,15 +59,16 @@ def test_sensitivity_files(analysed):
 def test_an_interrupted_sensitivity_run_resumes_to_the_same_runs(torsional_case, tmp_path):
     settings = ss.SensitivitySettings(8, (("operation.top_speed", "uniform 120 180 rpm"),), t_end=2.0,
                                       output_step=0.05)
-    ss.run_sensitivity(torsional_case, settings, tmp_path / "whole.zarr", workers=1)
+    ss.run_sensitivity(torsional_case, settings, tmp_path / "whole.zarr", execution.Engine(workers=1))
 
     def interrupt(done, failed, total):
         if done == 5:
             raise KeyboardInterrupt
 
     with pytest.raises(execution.Interrupted, match="after 5 of 24 runs"):
-        ss.run_sensitivity(torsional_case, settings, tmp_path / "cut.zarr", workers=1, progress=interrupt)
-    resumed = ss.run_sensitivity(torsional_case, settings, tmp_path / "cut.zarr", workers=1)
+        ss.run_sensitivity(torsional_case, settings, tmp_path / "cut.zarr",
+                           execution.Engine(workers=1, progress=interrupt))
+    resumed = ss.run_sensitivity(torsional_case, settings, tmp_path / "cut.zarr", execution.Engine(workers=1))
     assert resumed.computed == 19 and resumed.completed == 24
     a, b = ss.load_sensitivity(tmp_path / "whole.zarr"), ss.load_sensitivity(tmp_path / "cut.zarr")
     for name in ss.SENSITIVITY_OUTPUTS:

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import zarr
 
-from drillstring.stochastic.execution import DONE, FAILED, PENDING, TaskOutcome
+from drillstring.stochastic.execution import TaskOutcome
+from drillstring.stochastic.store import DONE, FAILED, PENDING
 from drillstring.stochastic.store import ArraySpec, StoreError, TaskStore
 
 

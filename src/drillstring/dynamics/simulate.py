@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import math
 import time as _time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
 
+from drillstring.checks import real_number
+from drillstring.dynamics.indicators import transient_end
 from drillstring.dynamics.rom import (
     OBSERVABLE_COLUMN,
     OBSERVABLES,
@@ -151,6 +154,66 @@ def _result(model, times, values, impacts, message, stats, raise_on_failure) -> 
     if message and raise_on_failure:
         raise SimulationError(f"simulation stopped early: {message}", result)
     return result
+
+
+#: Largest number of output times of one run: every observable of a run (and of each realization of a
+#: study) is kept in memory on this grid; 2 million times of the ~14 observed columns take about 220 MB
+#: (e.g. 20,000 s of drilling at the default 0.01 s output step).
+MAX_OUTPUT_POINTS = 2_000_000
+
+
+def output_points(t_end: float, output_step: float) -> int:
+    """The number of times of :func:`output_grid` (computed without building it)."""
+    n = math.floor(t_end / output_step + 1e-9)
+    return n + 1 + (t_end - n * output_step > 1e-9 * output_step)
+
+
+@dataclass(frozen=True)
+class RunWindow:
+    """The time window of a run, checked once (:func:`run_window`) for every kind of run.
+
+    Attributes:
+        t_end: simulated time [s], finite and > 0.
+        output_step: output step [s], in (0, t_end].
+        transient: start of the steady window of the summaries [s], in [0, t_end) (strictly below
+            t_end: the window after it holds at least one output step).
+    """
+
+    t_end: float
+    output_step: float
+    transient: float
+
+    @property
+    def points(self) -> int:
+        """Number of output times."""
+        return output_points(self.t_end, self.output_step)
+
+    @property
+    def time(self) -> np.ndarray:
+        """The output grid [s] (:func:`output_grid`)."""
+        return output_grid(self.t_end, self.output_step)
+
+
+def run_window(t_end, output_step, transient=None, *, max_points: int = MAX_OUTPUT_POINTS,
+               names: Mapping[str, str] | None = None) -> RunWindow:
+    """The checked :class:`RunWindow`: ``t_end`` [s] a finite number > 0, ``output_step`` [s] in (0, t_end],
+    at most ``max_points`` output times (checked before anything is allocated), ``transient`` [s] in
+    [0, t_end) (None: :func:`~drillstring.dynamics.indicators.transient_end`, ``min(10 s, t_end/2)``).
+    TypeError for a value that is not a number, ValueError (one line naming the argument: its name in
+    ``names`` when given there, e.g. ``{"t_end": "--t-end"}``) otherwise."""
+    name = {"t_end": "t_end", "output_step": "output_step", "transient": "transient", **(names or {})}
+    t_end = real_number(name["t_end"], t_end, unit="s", low=0.0, low_open=True)
+    output_step = real_number(name["output_step"], output_step, unit="s", low=0.0, low_open=True, high=t_end,
+                              allowed=f"a number in (0, t_end = {t_end:g} s]")
+    points = output_points(t_end, output_step)
+    if points > max_points:
+        raise ValueError(f"{name['t_end']} = {t_end:g} s at output_step = {output_step:g} s: {points} output "
+                         f"times, above the limit of {max_points} (lengthen output_step or shorten t_end)")
+    if transient is None:
+        transient = transient_end(t_end)
+    transient = real_number(name["transient"], transient, unit="s", low=0.0, high=t_end, high_open=True,
+                            allowed=f"a number in [0, t_end = {t_end:g} s)")
+    return RunWindow(t_end, output_step, transient)
 
 
 def output_grid(t_end: float, output_step: float) -> np.ndarray:

@@ -10,13 +10,9 @@ import xarray as xr
 
 from drillstring.dynamics.indicators import DEFAULT_TRANSIENT, drilling_indicators, transient_end
 from drillstring.quantities import LONG_NAMES, UNITS
-from drillstring.stochastic.montecarlo import (
-    DONE,
-    FAILED,
-    STUDY_OBSERVABLES,
-    open_study_group,
-)
+from drillstring.stochastic.montecarlo import STUDY_OBSERVABLES, open_study_group
 from drillstring.stochastic.locks import StudyLock
+from drillstring.stochastic.store import DONE, FAILED
 from drillstring.stochastic.statistics import (
     dispersion_summary,
     mean_square_convergence,
@@ -31,8 +27,8 @@ def load_study(store_path: str | Path) -> xr.Dataset:
 
     Refused while another process runs a study on the store (:class:`~drillstring.stochastic.
     locks.StudyLocked`: statistics are never computed from a store being written), and for a
-    folder that is not a complete study store (:class:`~drillstring.stochastic.montecarlo.
-    StudyStoreError`)."""
+    folder that is not a complete study store (:class:`~drillstring.stochastic.store.
+    StoreError`)."""
     with StudyLock(store_path, shared=True):
         open_study_group(store_path, mode="r")
         ds = xr.open_zarr(str(store_path), consolidated=False).load()

@@ -23,8 +23,8 @@ sensitivity designs (one design row per index) all run through :func:`run_tasks`
 Reaching a scheduler is checked by hand first (:func:`connect_scheduler`): an address that is no Dask
 scheduler fails within seconds with one line, instead of a client waiting forever.
 
-No physics here; nothing above :mod:`drillstring.files` and :mod:`drillstring.stochastic.locks` is
-imported.
+No physics here; nothing above :mod:`drillstring.files`, :mod:`drillstring.stochastic.locks` and
+:mod:`drillstring.stochastic.store` (the status flags) is imported.
 """
 
 from __future__ import annotations
@@ -37,8 +37,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
-#: Status of an item in a store.
-PENDING, DONE, FAILED = 0, 1, 2
+from drillstring.stochastic.store import DONE, FAILED
 
 #: Seconds a Dask run waits with no worker in the cluster before stopping (resumably).
 DASK_WORKER_TIMEOUT = 30.0
@@ -92,16 +91,48 @@ def bare_failure(index: int, argument: Any, message: str) -> TaskOutcome:
     return TaskOutcome(index, FAILED, message)
 
 
-# --- checks --------------------------------------------------------------------------------------
+# --- how a run executes --------------------------------------------------------------------------
 
 
-def check_workers(workers: int | None, scheduler=None) -> None:
-    """Refuse (ValueError) a worker count that is not an integer >= 1, or workers with a scheduler."""
-    if workers is not None and not (isinstance(workers, int) and not isinstance(workers, bool)
-                                    and workers >= 1):
-        raise ValueError(f"workers = {workers!r}: must be an integer >= 1")
-    if workers is not None and scheduler is not None:
-        raise ValueError("give workers (local processes) or scheduler (Dask cluster), not both")
+@dataclass(frozen=True)
+class Engine:
+    """How a study, map or sensitivity run executes, given once to :func:`run_locked` (through
+    ``run_study``, ``run_map``, ``run_sensitivity``) instead of one argument per layer.
+
+    Attributes:
+        workers: local worker processes (an integer >= 1; None: one per core; 1 runs in this process).
+        scheduler: a Dask scheduler address (``tcp://host:8786``) or a connected ``distributed.Client``
+            (left open); the tasks then run on its cluster. Not together with ``workers``.
+        progress: called as ``progress(done, failed, total)`` after each outcome.
+        note: called with one-line notes for the user (a stale lock taken over); None: a RuntimeWarning.
+        worker_timeout: seconds a Dask run waits with no worker left before stopping (resumably).
+
+    Checked when built: TypeError or ValueError naming the argument.
+    """
+
+    workers: int | None = None
+    scheduler: Any = None
+    progress: ProgressCallback | None = None
+    note: Callable[[str], None] | None = None
+    worker_timeout: float = DASK_WORKER_TIMEOUT
+
+    def __post_init__(self) -> None:
+        from drillstring.checks import integer, real_number
+
+        if self.workers is not None:
+            object.__setattr__(self, "workers", integer("workers", self.workers, low=1))
+        scheduler = self.scheduler
+        if scheduler is not None and not isinstance(scheduler, str) and not (
+                hasattr(scheduler, "map") and hasattr(scheduler, "scheduler")):
+            raise TypeError(f"scheduler = {scheduler!r}: must be an address like 'tcp://host:8786' or a "
+                            "distributed.Client")
+        if self.workers is not None and scheduler is not None:
+            raise ValueError("give workers (local processes) or scheduler (Dask cluster), not both")
+        for name in ("progress", "note"):
+            if getattr(self, name) is not None and not callable(getattr(self, name)):
+                raise TypeError(f"{name} = {getattr(self, name)!r}: must be a callable or None")
+        object.__setattr__(self, "worker_timeout", real_number("worker_timeout", self.worker_timeout, unit="s",
+                                                               low=0.0, low_open=True))
 
 
 def local_workers(workers: int | None) -> int:
@@ -150,7 +181,8 @@ class RunReport:
 class StoreRun:
     """What :func:`run_locked` did: the ``store``, its items finished and failed (all runs together), this
     call's wall time [s], what it ran on (local process count or scheduler address), the items it
-    computed, and a ``note`` for the user (a stale lock taken over) or None."""
+    computed, a ``note`` for the user (a stale lock taken over) or None, and ``result``: what ``finish``
+    returned (None without one)."""
 
     store: Any
     completed: int
@@ -159,6 +191,12 @@ class StoreRun:
     workers: int | str
     computed: int = 0
     note: str | None = None
+    result: Any = None
+
+    @property
+    def already(self) -> int:
+        """Items that were in the store before this call (a resumed or finished run)."""
+        return self.completed + self.failed - self.computed
 
 
 def run_locked(
@@ -166,40 +204,44 @@ def run_locked(
     open_store: Callable[[], Any],
     pending: Callable[[Any], Sequence[tuple[int, Any]]],
     task: Callable[[Any], Any],
+    engine: Engine = Engine(),
     *,
-    workers: int | None = None,
-    scheduler=None,
-    progress: ProgressCallback | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float = DASK_WORKER_TIMEOUT,
     lost: LostOutcome = bare_failure,
     prepare: Callable[[], None] | None = None,
+    finish: Callable[["StoreRun"], Any] | None = None,
     what: str = "study",
     noun: str = "realizations",
     lock_name: str | None = None,
 ) -> StoreRun:
-    """The one way studies, maps and sensitivity runs execute: reach the scheduler (an address — refused
-    within about 12 s when it is no Dask scheduler — or a connected ``distributed.Client``, left open),
-    lock the store at ``store_path`` (:class:`~drillstring.stochastic.locks.StudyLock`, named
-    ``lock_name``, default ``what``), open or create it (``open_store()``), run its ``pending(store)``
-    items with ``task`` (:func:`run_tasks`) and release everything. ``prepare()`` runs once before local
-    worker processes start (compiling the kernels in this process, so the workers load them)."""
+    """The one way studies, maps and sensitivity runs execute: reach the ``engine``'s scheduler (an address —
+    refused within about 12 s when it is no Dask scheduler — or a connected ``distributed.Client``, left
+    open), lock the store at ``store_path`` (:class:`~drillstring.stochastic.locks.StudyLock`, named
+    ``lock_name``, default ``what``) once, open or create it (``open_store()``), run its ``pending(store)``
+    items with ``task`` (:func:`run_tasks`), then ``finish(run)`` (reading the store and writing the
+    result files, still under the lock; its value is the run's ``result``) and release everything.
+    ``prepare()`` runs once before local worker processes start (compiling the kernels in this process,
+    so the workers load them)."""
     from drillstring.stochastic.locks import StudyLock
 
+    scheduler = engine.scheduler
     client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
     try:
         with StudyLock(store_path, what=lock_name or what) as guard:
             if guard.note:
-                notify(note, guard.note)
+                notify(engine.note, guard.note)
             address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
             store = open_store()
             items = list(pending(store))
             if items and client is None and prepare is not None:
                 prepare()
-            report = run_tasks(store, task, items, workers=workers, client=client, address=address,
-                               progress=progress, worker_timeout=worker_timeout, lost=lost, what=what, noun=noun)
-            return StoreRun(store, report.completed, report.failed, report.wall_time, report.workers,
-                            report.computed, guard.note)
+            report = run_tasks(store, task, items, workers=engine.workers, client=client, address=address,
+                               progress=engine.progress, worker_timeout=engine.worker_timeout, lost=lost,
+                               what=what, noun=noun)
+            run = StoreRun(store, report.completed, report.failed, report.wall_time, report.workers,
+                           report.computed, guard.note)
+            if finish is not None:
+                run.result = finish(run)
+            return run
     finally:
         if isinstance(scheduler, str) and client is not None:
             client.close()

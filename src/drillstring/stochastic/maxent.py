@@ -117,9 +117,7 @@ __all__ = [
     "variance_constraints",
     "log_mean",
     "maximum_entropy",
-    "weight_on_hook_law",
     "realization_generator",
-    "draw_realizations",
     "gamma_shape",
 ]
 
@@ -436,22 +434,6 @@ class MaxEntDensity:
             return float(self.frozen.expect(lambda x: function(np.asarray(x, dtype=float))))
         return self._num.expect(function)
 
-    # -- sampling ---------------------------------------------------------------------------------------------
-    def sample(self, rng: np.random.Generator, size: int | tuple[int, ...] | None = None) -> np.ndarray | float:
-        """Independent draws (units of ``x``) from ``rng``; a float when ``size`` is ``None``.
-
-        Closed forms use ``frozen.rvs(random_state=rng)``; numerical densities use the inverse CDF of the
-        tabulated distribution function applied to ``rng.random(size)``.
-        """
-        if not isinstance(rng, np.random.Generator):
-            raise TypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-        if self.frozen is not None:
-            out = self.frozen.rvs(size=size, random_state=rng)
-        else:
-            out = self._num.ppf(np.asarray(rng.random(size), dtype=float), clip=True)
-        if size is None:
-            return float(np.asarray(out).reshape(()))
-        return np.asarray(out, dtype=float)
 
 
 def _scalar_or_array(v: Any) -> np.ndarray | float:
@@ -1078,45 +1060,6 @@ def maximum_entropy(
     return _solve_numerical(a, b, constraints, named, location, scale)
 
 
-def weight_on_hook_law(
-    mean: float, *, sigma: float | None = None, dispersion: float | None = None
-) -> MaxEntDensity:
-    """The reference study's law of the random weight-on-hook (SPEC §8).
-
-    Available information: support ℝ, ``E{WOH} = mean`` and a known standard deviation, so the MaxEnt law is
-    Normal ``N(mean, σ²)`` (built through :func:`maximum_entropy`, not hard-coded).
-
-    Parameters
-    ----------
-    mean:
-        Mean weight-on-hook [N], > 0 (e.g. 1.0634e6 N in the reference case).
-    sigma:
-        Standard deviation σ [N], > 0.
-    dispersion:
-        Coefficient of variation ``δ = σ / mean`` (dimensionless), > 0.
-
-    Exactly one of ``sigma`` and ``dispersion`` must be given. The Normal law gives a negative WOH with
-    probability ``Φ(−1/δ)``, negligible for the study's ``δ ≤ 0.5 %``.
-    """
-    m = float(mean)
-    if not (math.isfinite(m) and m > 0.0):
-        raise ValueError(f"weight-on-hook mean = {mean!r} N must be finite and > 0 (allowed range: (0, inf))")
-    if (sigma is None) == (dispersion is None):
-        raise ValueError("give exactly one of sigma [N] and dispersion (sigma / mean)")
-    if sigma is not None:
-        sig = float(sigma)
-        if not (math.isfinite(sig) and sig > 0.0):
-            raise ValueError(f"weight-on-hook sigma = {sigma!r} N must be finite and > 0 (allowed range: (0, inf))")
-    else:
-        dis = float(dispersion)  # type: ignore[arg-type]
-        if not (math.isfinite(dis) and dis > 0.0):
-            raise ValueError(
-                f"weight-on-hook dispersion = {dispersion!r} must be finite and > 0 (allowed range: (0, inf))"
-            )
-        sig = dis * m
-    return maximum_entropy((-math.inf, math.inf), variance_constraints(m, sig))
-
-
 # ---------------------------------------------------------------------------------------------------------
 # Reproducible random streams
 # ---------------------------------------------------------------------------------------------------------
@@ -1139,13 +1082,3 @@ def realization_generator(seed: int, index: int) -> np.random.Generator:
     s = _check_nonnegative_int(seed, "seed")
     i = _check_nonnegative_int(index, "realization index")
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence(s, spawn_key=(i,))))
-
-
-def draw_realizations(law: MaxEntDensity, seed: int, indices: Iterable[int]) -> np.ndarray:
-    """One draw of ``law`` per realization index, each from its own :func:`realization_generator` stream
-    (units of the law's variable; shape ``(len(indices),)``)."""
-    idx = list(indices)
-    out = np.empty(len(idx), dtype=float)
-    for n, i in enumerate(idx):
-        out[n] = float(law.sample(realization_generator(seed, i)))
-    return out

@@ -1,9 +1,11 @@
-"""Monte Carlo study of a random weight-on-hook (SPEC §8): realizations, their Zarr store and resume.
+"""Monte Carlo study of random case parameters (SPEC §8): realizations, their Zarr store and resume.
 
-Each realization ``s`` draws a weight-on-hook from the Maximum-Entropy law with its own random stream
-(:func:`~drillstring.stochastic.maxent.realization_generator`, keyed by ``(seed, s)`` only), derives the
-consistent weight-on-bit ``wob = weight − woh``, recomputes the static state, the prestress and the
-modes, integrates the time response and returns the observables on the common output grid.
+Each realization ``s`` draws the values of the study's random parameters from their Maximum-Entropy laws
+with its own random stream (:meth:`~drillstring.stochastic.uncertainty.Uncertainty.draw`, keyed by
+``(seed, s)`` only; a random weight-on-hook is one such parameter, the derived path ``weight_on_hook``,
+whose draw sets the consistent weight-on-bit ``wob = weight − woh``), builds the realized case, recomputes
+the static state, the prestress and the modes, integrates the time response and returns the observables on
+the common output grid.
 
 Realizations run through :func:`~drillstring.stochastic.execution.run_tasks` (local processes by
 default, or a Dask distributed cluster when a scheduler address is given; worker deaths isolated) into a
@@ -17,8 +19,9 @@ A study's store is locked while a study runs on it (a second study on the same s
 once, a lock left by a killed study is taken over with a note), created atomically (built under a
 temporary name, then renamed), and checked when opened (a folder that is not a complete study store is
 refused with what is missing). Settings that would make realizations fail are refused before running:
-fewer than 2 realizations, or a weight-on-hook law that puts a probability above
-:data:`OUT_OF_RANGE_PROBABILITY` of the weight-on-bit outside (0, string weight).
+fewer than 2 realizations, a law that puts a probability above :data:`OUT_OF_RANGE_PROBABILITY` outside its
+parameter's range (for the weight-on-hook: a weight-on-bit outside (0, string weight)), or time histories
+larger than :data:`MAX_STUDY_BYTES`.
 """
 
 from __future__ import annotations
@@ -34,36 +37,21 @@ import numpy as np
 import zarr
 
 from drillstring.case import Case
+from drillstring.checks import integer
+from drillstring.checks import seed as check_seed
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import (
     SimulationError,
     SimulationResult,
     output_grid,
+    output_points,
+    run_window,
     simulate_model,
 )
-from drillstring.stochastic.execution import (  # noqa: F401  (re-exported)
-    DASK_WORKER_TIMEOUT,
-    DONE,
-    FAILED,
-    PENDING,
-    SCHEDULER_TIMEOUT,
-    WORKER_ENVIRONMENT,
-    Interrupted as StudyInterrupted,
-    ProgressCallback,
-    SchedulerUnreachable,
-    WorkersLost as StudyWorkersLost,
-    check_workers,
-    computation_time,
-    connect_scheduler,
-    StoreRun,
-    notify,
-    run_locked,
-)
-from drillstring.stochastic.locks import StudyLock, StudyLocked  # noqa: F401  (re-exported)
+from drillstring.stochastic.execution import Engine, StoreRun, run_locked
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
 from drillstring.stochastic.runs import compile_kernels, simulation_options
-from drillstring.stochastic.store import ArraySpec, TaskStore
-from drillstring.stochastic.store import StoreError as StudyStoreError
+from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
 #: Observables kept for every realization (each (realization, time)); plus radial_displacement.
@@ -78,29 +66,35 @@ MIN_SAMPLES = 2
 OUT_OF_RANGE_PROBABILITY = 1e-3
 
 
+#: Largest memory [bytes] of a study's time histories (every realization's observables and radial
+#: displacements on the output grid): its statistics load them at once. 4 GiB, e.g. 20,000 realizations of
+#: the reference case's 30 s at 0.01 s.
+MAX_STUDY_BYTES = 4 * 2**30
+
+
 @dataclass(frozen=True)
 class StudySettings:
     """What defines a study's realizations; a resumed study must have the same settings.
 
-    The random parameters are the weight-on-hook, Normal of standard deviation ``sigma`` around the case's
-    hook load (when ``sigma`` is given), and every ``(path, law)`` of ``laws`` (case-parameter paths and
-    law specs, :mod:`drillstring.stochastic.uncertainty`); at least one of them. ``correlated`` and
-    ``correlation`` declare a correlation matrix of some normal parameters (among them ``weight_on_hook``
-    when ``sigma`` is given).
+    The random parameters are every ``(path, law)`` of ``laws`` (case-parameter paths and law specs,
+    :mod:`drillstring.stochastic.uncertainty`; a random weight-on-hook is the path ``weight_on_hook``, e.g.
+    :func:`weight_on_hook_normal`), at least one. ``correlated`` and ``correlation`` declare a correlation
+    matrix of some normal parameters.
 
     Attributes:
         samples: number of realizations n_s.
-        sigma: standard deviation of the weight-on-hook [N], or None.
-        seed: root seed of the realizations' random streams.
+        seed: root seed of the realizations' random streams, in [0, 2**64 - 1].
         t_end: simulated time per realization [s].
         output_step: output step [s].
-        laws: ``((path, spec), ...)`` of the other random parameters (canonical specs).
+        laws: ``((path, spec), ...)`` of the random parameters (canonical specs).
         correlated: paths of the correlated normal parameters.
         correlation: their correlation matrix (rows of numbers).
+
+    Checked when built (TypeError / ValueError naming the field; the time window by
+    :func:`~drillstring.dynamics.simulate.run_window`).
     """
 
     samples: int
-    sigma: float | None = None
     seed: int = 0
     t_end: float = 30.0
     output_step: float = 0.01
@@ -109,21 +103,19 @@ class StudySettings:
     correlation: tuple[tuple[float, ...], ...] = ()
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.samples, int) and not isinstance(self.samples, bool)
-                and self.samples >= MIN_SAMPLES):
-            raise ValueError(f"samples = {self.samples!r}: must be an integer >= {MIN_SAMPLES} (the "
-                             "statistics need at least 2 realizations)")
-        if self.sigma is not None and not (_is_real(self.sigma) and math.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma = {self.sigma!r} N: must be a finite number > 0")
-        if self.sigma is None and not self.laws:
-            raise ValueError("no random parameter: give sigma (the weight-on-hook's standard deviation) or at "
-                             "least one parameter law")
-        if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0):
-            raise ValueError(f"seed = {self.seed!r}: must be an integer >= 0")
-        if not (_is_real(self.t_end) and math.isfinite(self.t_end) and self.t_end > 0):
-            raise ValueError(f"t_end = {self.t_end!r} s: must be a finite number > 0")
-        if not (_is_real(self.output_step) and 0 < self.output_step <= self.t_end):
-            raise ValueError(f"output_step = {self.output_step!r} s: must be in (0, t_end = {self.t_end:g} s]")
+        samples = integer("samples", self.samples, low=MIN_SAMPLES,
+                          allowed=f"an integer >= {MIN_SAMPLES} (the statistics need at least 2 realizations)")
+        if not self.laws:
+            raise ValueError("no random parameter: give at least one parameter law (e.g. of weight_on_hook)")
+        paths = [str(path).strip() for path, _ in self.laws]
+        twice = next((path for i, path in enumerate(paths) if path in paths[:i]), None)
+        if twice is not None:
+            raise ValueError(f"{twice} is declared twice")
+        window = run_window(self.t_end, self.output_step)
+        object.__setattr__(self, "samples", samples)
+        object.__setattr__(self, "seed", check_seed(self.seed))
+        object.__setattr__(self, "t_end", window.t_end)
+        object.__setattr__(self, "output_step", window.output_step)
         object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
         object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
         object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
@@ -134,8 +126,21 @@ class StudySettings:
         return output_grid(self.t_end, self.output_step)
 
 
-def _is_real(value) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+def check_study_size(case: Case, settings: StudySettings) -> None:
+    """Refuse (ValueError, one line with the numbers) a study whose time histories would take more than
+    :data:`MAX_STUDY_BYTES`: samples × output times × (4 observables + probes) × 8 bytes."""
+    points = output_points(settings.t_end, settings.output_step)
+    size = settings.samples * points * (len(STUDY_OBSERVABLES) + len(case.mesh.probes)) * 8
+    if size > MAX_STUDY_BYTES:
+        raise ValueError(f"samples = {settings.samples} realizations of {points} output times: their time histories "
+                         f"take {size / 2**30:.3g} GiB, above the limit of {MAX_STUDY_BYTES / 2**30:g} GiB (fewer "
+                         "samples, a longer output_step or a shorter t_end)")
+
+
+def weight_on_hook_normal(case: Case, sigma: float) -> tuple[str, str]:
+    """The ``(path, spec)`` of the weight-on-hook Normal around the case's hook load
+    (:func:`nominal_weight_on_hook`) of standard deviation ``sigma`` [N] (the law of a study's ``sigma``)."""
+    return WEIGHT_ON_HOOK, f"normal {float(nominal_weight_on_hook(case))!r} {float(sigma)!r}"
 
 
 @dataclass
@@ -167,8 +172,7 @@ _UNCERTAINTIES: dict[tuple, Uncertainty] = {}
 
 
 def study_uncertainty(case: Case, settings: StudySettings, *, check: bool = False) -> Uncertainty:
-    """The study's random parameters and their joint law: ``weight_on_hook`` Normal(hook load, ``sigma``)
-    first when ``sigma`` is given, then ``settings.laws`` in order.
+    """The study's random parameters and their joint law: ``settings.laws`` in order.
 
     ``check=True`` refuses (:class:`~drillstring.stochastic.parameters.ParameterError`, one line) a law that
     puts a probability above :data:`OUT_OF_RANGE_PROBABILITY` outside its parameter's range; otherwise any
@@ -176,16 +180,8 @@ def study_uncertainty(case: Case, settings: StudySettings, *, check: bool = Fals
     key = (case.to_toml(), settings, check)
     if key in _UNCERTAINTIES:
         return _UNCERTAINTIES[key]
-    declared: dict[str, Any] = {}
-    if settings.sigma is not None:
-        declared[WEIGHT_ON_HOOK] = {"law": "normal", "mean": nominal_weight_on_hook(case), "std": settings.sigma}
-    for path, spec in settings.laws:
-        if path.strip() in declared:
-            raise ParameterError(f"{path} has a law and sigma (the weight-on-hook's standard deviation): give "
-                                 "one of them")
-        declared[path] = spec
     correlation = [list(row) for row in settings.correlation] if settings.correlated else None
-    found = uncertainty(case, declared, correlated=settings.correlated, correlation=correlation,
+    found = uncertainty(case, dict(settings.laws), correlated=settings.correlated, correlation=correlation,
                         tolerance=OUT_OF_RANGE_PROBABILITY if check else 1.0)
     if len(_UNCERTAINTIES) > 16:
         _UNCERTAINTIES.clear()
@@ -200,15 +196,6 @@ def draw_inputs(case: Case, settings: StudySettings, index: int) -> np.ndarray:
     if index == NOMINAL:
         return law.mean()
     return law.draw(settings.seed, [index])[0]
-
-
-def draw_weight_on_hook(case: Case, settings: StudySettings, index: int) -> float:
-    """The weight-on-hook [N] of realization ``index``: drawn when it is random (the mean for
-    :data:`NOMINAL`), else the case's."""
-    law = study_uncertainty(case, settings)
-    if WEIGHT_ON_HOOK not in law.paths:
-        return nominal_weight_on_hook(case)
-    return float(draw_inputs(case, settings, index)[law.paths.index(WEIGHT_ON_HOOK)])
 
 
 def _normal_tail(z: float) -> float:
@@ -279,15 +266,21 @@ def study_buckling_margin(case: Case, settings: StudySettings) -> dict:
 
 
 def check_study(case: Case, settings: StudySettings) -> None:
-    """Refuse (ValueError, one line) settings whose draws would often be impossible: a ``sigma`` with a
-    probability above :data:`OUT_OF_RANGE_PROBABILITY` of a weight-on-bit outside (0, string weight)
-    (the message names the largest accepted sigma), and any law that puts more than that probability
-    outside its parameter's range; also unknown paths, bad laws and correlations."""
-    if settings.sigma is not None:
-        p = weight_on_bit_out_of_range_probability(case, settings.sigma)
+    """Refuse (ValueError, one line) settings whose draws would often be impossible: a Normal weight-on-hook
+    with a probability above :data:`OUT_OF_RANGE_PROBABILITY` of a weight-on-bit outside (0, string weight)
+    (the message names the largest accepted standard deviation), and any law that puts more than that
+    probability outside its parameter's range; also unknown paths, bad laws and correlations, drawn
+    parameters that would not take effect (:data:`~drillstring.stochastic.parameters.NOT_DRAWN`) and a
+    study too large for memory (:func:`check_study_size`)."""
+    check_study_size(case, settings)
+    law = study_uncertainty(case, settings)
+    if WEIGHT_ON_HOOK in law.paths:
+        declared = law.parameters[law.paths.index(WEIGHT_ON_HOOK)].law
+        sigma = declared.density.std() if declared.law == "normal" else None
+        p = weight_on_bit_out_of_range_probability(case, sigma) if sigma else 0.0
         if p > OUT_OF_RANGE_PROBABILITY:
             raise ValueError(
-                f"sigma = {settings.sigma:.6g} N: with the weight-on-hook Normal around "
+                f"sigma = {sigma:.6g} N: with the weight-on-hook Normal around "
                 f"{nominal_weight_on_hook(case) / 1e3:.6g} kN, the weight-on-bit falls outside (0, "
                 f"{case.weight / 1e3:.6g} kN) (the string's weight) with probability {p:.3g}, above "
                 f"{OUT_OF_RANGE_PROBABILITY:g}: such realizations cannot run; sigma must be at most "
@@ -341,7 +334,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
 
 def open_study_group(path: str | Path, mode: str = "r") -> zarr.Group:
     """Open the study store at ``path``, checking that it is one (:meth:`StudyStore.open_group`);
-    raises :class:`StudyStoreError` saying what is wrong otherwise."""
+    raises :class:`~drillstring.stochastic.store.StoreError` saying what is wrong otherwise."""
     return StudyStore.open_group(path, mode)
 
 
@@ -351,7 +344,7 @@ class StudyStore(TaskStore):
 
     A new store is built under a temporary name and renamed into place once complete; an existing one
     is checked (:func:`open_study_group`) and must hold the same study (case and settings). Writers
-    hold its :class:`StudyLock` (as :func:`run_study` does)."""
+    hold its :class:`~drillstring.stochastic.locks.StudyLock` (as :func:`run_study` does)."""
 
     kind = "study"
     row_dim = "realization"
@@ -425,44 +418,25 @@ class StudyStore(TaskStore):
 StudyRun = StoreRun
 
 
-def run_study(
-    case: Case,
-    settings: StudySettings,
-    store_path: str | Path,
-    *,
-    workers: int | None = None,
-    scheduler=None,
-    progress: ProgressCallback | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float = DASK_WORKER_TIMEOUT,
-) -> StudyRun:
-    """Run (or resume) every pending realization of a study into its Zarr store.
+def run_study(case: Case, settings: StudySettings, store_path: str | Path, engine: Engine = Engine(), *,
+              finish: Callable[[StoreRun], Any] | None = None) -> StudyRun:
+    """Run (or resume) every pending realization of a study into its Zarr store on ``engine``
+    (:class:`~drillstring.stochastic.execution.Engine`: local processes, default one per core, or a Dask
+    cluster; progress, notes, the Dask worker timeout), then ``finish(run)`` under the store's lock.
 
     Before anything is created: the settings are checked against the case (:func:`check_study`), a
-    scheduler is reached (:class:`SchedulerUnreachable` within about 12 s), and the store is locked
-    (:class:`StudyLocked` if another study runs on it).
-
-    Args:
-        workers: local processes (default: one per core); 1 runs in this process.
-        scheduler: address of a Dask distributed scheduler (``tcp://host:8786``), or a connected
-            ``distributed.Client`` (left open); when given, the realizations run on that cluster's
-            workers instead of local processes.
-        progress: called as ``progress(done, failed, total)`` after each realization.
-        note: called with a one-line note for the user (a stale lock taken over); default: a warning.
-        worker_timeout: seconds a Dask study waits with no worker left before raising
-            :class:`StudyWorkersLost`.
+    scheduler is reached (:class:`~drillstring.stochastic.execution.SchedulerUnreachable` within about
+    12 s), and the store is locked (:class:`~drillstring.stochastic.locks.StudyLocked` if another study
+    runs on it). :func:`~drillstring.stochastic.execution.run_locked` does the rest.
     """
-    check_workers(workers, scheduler)
     check_study(case, settings)
 
     def pending(store: StudyStore):
         return [(i, i) for i in ([] if store.nominal_done() else [NOMINAL]) + store.pending()]
 
     return run_locked(store_path, partial(StudyStore, Path(store_path), case, settings), pending,
-                      partial(_realization_task, case, settings), workers=workers, scheduler=scheduler,
-                      progress=progress, note=note, worker_timeout=worker_timeout,
-                      lost=partial(_worker_died, case, settings), prepare=partial(compile_kernels, case),
-                      what="study", noun="realizations")
+                      partial(_realization_task, case, settings), engine, lost=partial(_worker_died, case, settings),
+                      prepare=partial(compile_kernels, case), finish=finish, what="study", noun="realizations")
 
 
 def _realization_task(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:
@@ -471,5 +445,8 @@ def _realization_task(case: Case, settings: StudySettings, index: int) -> Realiz
 
 
 def _worker_died(case: Case, settings: StudySettings, index: int, argument, message: str) -> RealizationOutcome:
-    return RealizationOutcome(index, draw_weight_on_hook(case, settings, index), math.nan, FAILED,
-                              message.replace("this task", "this realization"))
+    law = study_uncertainty(case, settings)
+    values = draw_inputs(case, settings, index)
+    woh = float(values[law.paths.index(WEIGHT_ON_HOOK)]) if WEIGHT_ON_HOOK in law.paths else math.nan
+    return RealizationOutcome(index, woh, math.nan, FAILED, message.replace("this task", "this realization"),
+                              inputs=values)

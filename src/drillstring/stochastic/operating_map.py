@@ -32,22 +32,12 @@ import numpy as np
 import xarray as xr
 
 from drillstring.case import Case, Dimension, to_si
-from drillstring.dynamics.indicators import transient_end
-from drillstring.dynamics.simulate import output_grid
-from drillstring.stochastic.execution import (
-    DASK_WORKER_TIMEOUT,
-    DONE,
-    FAILED,
-    ProgressCallback,
-    TaskOutcome,
-    StoreRun,
-    check_workers,
-    run_locked,
-)
+from drillstring.dynamics.simulate import run_window
+from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
 from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, bit_area, compile_kernels, run_outputs
-from drillstring.stochastic.store import ArraySpec, TaskStore
+from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 
 __all__ = [
     "MAP_AXES",
@@ -126,6 +116,8 @@ def _parse_axis_text(text: str, dimension: Dimension, name: str, default_unit: s
             raise ValueError(f"{name} = {text!r}: N = {count_text!r} must be an integer >= 1") from None
         if count < 1:
             raise ValueError(f"{name} = {text!r}: N = {count} must be an integer >= 1")
+        if count > MAX_POINTS:
+            raise ValueError(f"{name} = {text!r}: N = {count} values, above the limit of {MAX_POINTS} grid points")
         unit = unit or default_unit
         start, stop = si(parts[0], unit), si(parts[1], unit)
         if count > 1 and not stop > start:
@@ -165,18 +157,11 @@ class MapSettings:
                 raise ValueError(f"{axis} = {values!r}: must be increasing finite values > 0")
             object.__setattr__(self, axis, values)
         if len(self.top_speed) * len(self.weight_on_bit) > MAX_POINTS:
-            raise ValueError(f"the grid has {len(self.top_speed) * len(self.weight_on_bit)} points, more than "
-                             f"{MAX_POINTS}")
-        if not (isinstance(self.t_end, (int, float)) and math.isfinite(self.t_end) and self.t_end > 0):
-            raise ValueError(f"t_end = {self.t_end!r} s: must be a finite number > 0")
-        if not (isinstance(self.output_step, (int, float)) and 0 < self.output_step <= self.t_end):
-            raise ValueError(f"output_step = {self.output_step!r} s: must be in (0, t_end = {self.t_end:g} s]")
-        transient = transient_end(self.t_end) if self.transient is None else self.transient
-        if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient < self.t_end):
-            raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {self.t_end:g} s)")
-        object.__setattr__(self, "transient", float(transient))
-        object.__setattr__(self, "t_end", float(self.t_end))
-        object.__setattr__(self, "output_step", float(self.output_step))
+            raise ValueError(f"the grid has {len(self.top_speed)} x {len(self.weight_on_bit)} = "
+                             f"{len(self.top_speed) * len(self.weight_on_bit)} points, above the limit of {MAX_POINTS}")
+        window = run_window(self.t_end, self.output_step, self.transient)
+        for name in ("t_end", "output_step", "transient"):
+            object.__setattr__(self, name, getattr(window, name))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -194,13 +179,11 @@ class MapSettings:
 
 def check_map(case: Case, settings: MapSettings) -> None:
     """Refuse (ValueError, one line) a grid whose weights-on-bit reach the string's weight (no such
-    point can run), and a case whose time step does not fit the map's t_end."""
+    point can run); the time window is checked by :class:`MapSettings` itself."""
     heaviest = max(settings.weight_on_bit)
     if case.model.gravity and heaviest >= case.weight:
         raise ValueError(f"weight_on_bit = {heaviest:.6g} N: every weight-on-bit of the map must be less than the "
                          f"string's weight, {case.weight:.6g} N")
-    if len(output_grid(settings.t_end, settings.output_step)) < 2:
-        raise ValueError(f"t_end = {settings.t_end:g} s: must hold at least one output step")
 
 
 # --- the store -----------------------------------------------------------------------------------
@@ -249,30 +232,19 @@ def _point_task(case: Case, settings: MapSettings, item: tuple[int, float, float
 MapRun = StoreRun
 
 
-def run_map(
-    case: Case,
-    settings: MapSettings,
-    store_path: str | Path,
-    *,
-    workers: int | None = None,
-    scheduler=None,
-    progress: ProgressCallback | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float = DASK_WORKER_TIMEOUT,
-) -> MapRun:
-    """Run (or resume) every pending point of a map into its Zarr store (like
-    :func:`~drillstring.stochastic.montecarlo.run_study`: settings checked, scheduler reached and the store
-    locked before anything is created; ``scheduler`` an address or a ``distributed.Client``)."""
+def run_map(case: Case, settings: MapSettings, store_path: str | Path, engine: Engine = Engine(), *,
+            finish: Callable[[StoreRun], Any] | None = None) -> MapRun:
+    """Run (or resume) every pending point of a map into its Zarr store on ``engine``, then ``finish(run)``
+    under the store's lock (like :func:`~drillstring.stochastic.montecarlo.run_study`: settings checked,
+    scheduler reached and the store locked before anything is created)."""
     from drillstring.buckling import case_buckling_margin
 
-    check_workers(workers, scheduler)
     check_map(case, settings)
     critical = case_buckling_margin(case).critical_weight_on_bit
     return run_locked(store_path, partial(MapStore, Path(store_path), case, settings, critical),
                       lambda store: [(i, (i, *settings.point(i))) for i in store.pending()],
-                      partial(_point_task, case, settings), workers=workers, scheduler=scheduler,
-                      progress=progress, note=note, worker_timeout=worker_timeout,
-                      prepare=partial(compile_kernels, case), what="map", noun="grid points")
+                      partial(_point_task, case, settings), engine, prepare=partial(compile_kernels, case),
+                      finish=finish, what="map", noun="grid points")
 
 
 # --- the result ----------------------------------------------------------------------------------

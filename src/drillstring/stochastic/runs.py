@@ -40,7 +40,8 @@ from drillstring.dynamics.indicators import drilling_indicators, transient_end
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.dynamics.stability import STABILITY_FAMILIES, stability
-from drillstring.stochastic.execution import DONE, FAILED, TaskOutcome
+from drillstring.stochastic.execution import TaskOutcome
+from drillstring.stochastic.store import DONE, FAILED
 
 #: Scalar outputs of every run: name -> (unit, description).
 RUN_OUTPUTS: dict[str, tuple[str, str]] = {

@@ -110,10 +110,19 @@ class SaltelliDesign:
         return self.uncertainty.size + 2
 
 
+#: Largest number of base samples N: the design holds N(k + 2) rows of k values (k = 10: 3.1 million rows,
+#: 250 MB), each row one simulation.
+MAX_BASE_SAMPLES = 2**18
+
+
 def _check_power_of_two(n: Any, what: str) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 8 or (int(n) & (int(n) - 1)) != 0:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise TypeError(f"{what} = {n!r}: must be an integer (a power of 2), not {type(n).__name__}")
+    if n < 8 or (int(n) & (int(n) - 1)) != 0:
         raise ValueError(f"{what} = {n!r}: must be a power of 2 and >= 8 (e.g. 256, 1024), for the balance of the "
                          "Sobol' sequence and the convergence check at N/4, N/2, N")
+    if n > MAX_BASE_SAMPLES:
+        raise ValueError(f"{what} = {int(n)}: above the limit of {MAX_BASE_SAMPLES} (2**18) base samples")
     return int(n)
 
 

@@ -19,7 +19,6 @@ parameters would bias the indices.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
@@ -28,16 +27,9 @@ from typing import Any, Callable
 import numpy as np
 
 from drillstring.case import Case, case_from_dict
-from drillstring.dynamics.indicators import transient_end
-from drillstring.stochastic.execution import (
-    DASK_WORKER_TIMEOUT,
-    FAILED,
-    ProgressCallback,
-    TaskOutcome,
-    StoreRun,
-    check_workers,
-    run_locked,
-)
+from drillstring.checks import seed as check_seed
+from drillstring.dynamics.simulate import run_window
+from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
 from drillstring.stochastic.runs import RUN_OUTPUTS, compile_kernels, run_outputs
@@ -48,7 +40,7 @@ from drillstring.stochastic.sensitivity import (
     saltelli_design,
     sobol_indices,
 )
-from drillstring.stochastic.store import ArraySpec, TaskStore
+from drillstring.stochastic.store import FAILED, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
 __all__ = [
@@ -90,18 +82,10 @@ class SensitivitySettings:
         if not self.laws:
             raise ValueError("no uncertain parameter: give at least one law (--param PATH=LAW)")
         object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
-        if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0):
-            raise ValueError(f"seed = {self.seed!r}: must be an integer >= 0")
-        if not (isinstance(self.t_end, (int, float)) and math.isfinite(self.t_end) and self.t_end > 0):
-            raise ValueError(f"t_end = {self.t_end!r} s: must be a finite number > 0")
-        if not (isinstance(self.output_step, (int, float)) and 0 < self.output_step <= self.t_end):
-            raise ValueError(f"output_step = {self.output_step!r} s: must be in (0, t_end = {self.t_end:g} s]")
-        transient = transient_end(self.t_end) if self.transient is None else self.transient
-        if not (isinstance(transient, (int, float)) and math.isfinite(transient) and 0 <= transient < self.t_end):
-            raise ValueError(f"transient = {transient!r} s: must be in [0, t_end = {self.t_end:g} s)")
-        object.__setattr__(self, "transient", float(transient))
-        object.__setattr__(self, "t_end", float(self.t_end))
-        object.__setattr__(self, "output_step", float(self.output_step))
+        object.__setattr__(self, "seed", check_seed(self.seed))
+        window = run_window(self.t_end, self.output_step, self.transient)
+        for name in ("t_end", "output_step", "transient"):
+            object.__setattr__(self, name, getattr(window, name))
 
 
 def sensitivity_design(case: Case, settings: SensitivitySettings) -> SaltelliDesign:
@@ -158,27 +142,16 @@ class SensitivityRun(StoreRun):
     design: SaltelliDesign | None = None
 
 
-def run_sensitivity(
-    case: Case,
-    settings: SensitivitySettings,
-    store_path: str | Path,
-    *,
-    workers: int | None = None,
-    scheduler=None,
-    progress: ProgressCallback | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float = DASK_WORKER_TIMEOUT,
-) -> SensitivityRun:
-    """Run (or resume) every pending row of the design into the Zarr store at ``store_path`` (like
-    :func:`~drillstring.stochastic.montecarlo.run_study`: the laws, the scheduler and the lock are checked
-    before anything is created)."""
-    check_workers(workers, scheduler)
+def run_sensitivity(case: Case, settings: SensitivitySettings, store_path: str | Path, engine: Engine = Engine(), *,
+                    finish: Callable[[StoreRun], Any] | None = None) -> SensitivityRun:
+    """Run (or resume) every pending row of the design into the Zarr store at ``store_path`` on ``engine``,
+    then ``finish(run)`` under the store's lock (like :func:`~drillstring.stochastic.montecarlo.run_study`:
+    the laws, the scheduler and the lock are checked before anything is created)."""
     design = sensitivity_design(case, settings)
     run = run_locked(store_path, partial(SensitivityStore, Path(store_path), case, settings, design),
                      lambda store: [(i, (i, design.values[i])) for i in store.pending()],
-                     partial(_row_task, case, design.uncertainty.paths, settings), workers=workers,
-                     scheduler=scheduler, progress=progress, note=note, worker_timeout=worker_timeout,
-                     lost=_lost, prepare=partial(compile_kernels, case), what="sensitivity run", noun="runs",
+                     partial(_row_task, case, design.uncertainty.paths, settings), engine, lost=_lost,
+                     prepare=partial(compile_kernels, case), finish=finish, what="sensitivity run", noun="runs",
                      lock_name="sensitivity")
     return SensitivityRun(**vars(run), design=design)
 

@@ -33,10 +33,12 @@ from typing import Any, ClassVar, Iterable
 import numpy as np
 import zarr
 
-from drillstring import __version__
-from drillstring.stochastic.execution import DONE, FAILED, PENDING
+from drillstring._version import __version__
 
 __all__ = ["ArraySpec", "StoreError", "TaskStore", "fingerprint", "DONE", "FAILED", "PENDING"]
+
+#: Status of a row in a store: not computed yet, finished, failed (its cause in the ``failures`` attribute).
+PENDING, DONE, FAILED = 0, 1, 2
 
 
 class StoreError(ValueError):

@@ -424,10 +424,24 @@ def _check_range(parameter: CaseParameter, law: ParameterLaw, spec_text: str,
         )
 
 
+#: Case parameters that cannot be random, and why: every run of a study or sensitivity design is kept on
+#: the run's one time grid and probe positions (its settings, not the drawn case), so a drawn value would be
+#: recorded but have no effect.
+NOT_DRAWN = {
+    "simulation.t_end": "every run of a study keeps the study's one time grid (give t_end, --t-end, instead)",
+    "simulation.output_step": "every run of a study keeps the study's one time grid (give output_step instead)",
+    "mesh.probes": "the runs' displacements are stored at the case's probe positions",
+}
+
+
 def _bind(case: Case, path: str, spec: str | Mapping[str, Any],
           tolerance: float = OUT_OF_RANGE_TOLERANCE) -> UncertainParameter:
     parameter = case_parameter(case, path)
     text = spec if isinstance(spec, str) else repr(dict(spec)) if isinstance(spec, Mapping) else repr(spec)
+    fixed = next((why for name, why in NOT_DRAWN.items()
+                  if parameter.path == name or parameter.path.startswith(name + "[")), None)
+    if fixed is not None:
+        raise ParameterError(f"{parameter.path} = {text!r}: cannot be random: {fixed}")
     if parameter.integer:
         raise ParameterError(
             f"{parameter.path} = {text!r}: an integer setting cannot carry a continuous law"
