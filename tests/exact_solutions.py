@@ -71,6 +71,25 @@ def timoshenko_pinned_frequencies(
     return np.array(out)
 
 
+def spinning_timoshenko_whirl(
+    mode: int, length: float, ei: float, rho_a: float, rho_i: float, rho_ip: float, kga: float, spin: float,
+) -> tuple[float, float]:
+    """Forward and backward whirl [rad/s] of a pinned–pinned Timoshenko shaft spinning at ``spin`` [rad/s].
+
+    With r = v + i w = R sin(kx) e^{iωt}, Θ = θz + iψ = P cos(kx) e^{iωt} (ψ = −θy), k = nπ/L, the
+    equations ρA r̈ = k_sGA (r'' − Θ'), ρI Θ̈ − i ρI_p Ω Θ̇ = EI Θ'' + k_sGA (r' − Θ) give
+    (k_sGA k² − ρA ω²)(EI k² + k_sGA − ρI ω² + ρI_p Ω ω) − (k_sGA k)² = 0; the flexural roots are
+    the smallest positive (forward) and negative (backward) ω (Lalanne & Ferraris, *Rotordynamics
+    Prediction in Engineering*, 1998, ch. 2; Timoshenko 1921).
+    """
+    k = mode * np.pi / length
+    poly = np.polymul([-rho_a, 0.0, kga * k * k], [-rho_i, rho_ip * spin, ei * k * k + kga])
+    poly[-1] -= (kga * k) ** 2
+    roots = np.roots(poly)
+    roots = roots[np.abs(roots.imag) < 1e-9 * np.abs(roots).max()].real
+    return roots[roots > 0].min(), -roots[roots < 0].max()
+
+
 def engesser_buckling_load(length: float, ei: float, kga: float) -> float:
     """Critical compressive load [N] of a pinned–pinned column with shear deformation (Engesser):
     P = P_E / (1 + P_E / k_sGA), P_E = π² EI / L²."""

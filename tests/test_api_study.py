@@ -20,7 +20,7 @@ def test_study_files_defaults_and_rerun(small_case, tmp_path):
     assert first.already == 0 and summary["realizations_this_run"] == 3
     assert json.loads((out / "summary.json").read_text()) == summary
     assert set(first.files) == {"store", "summary", "statistics", "report", "envelopes", "dispersion",
-                                "convergence"}
+                                "convergence", "realizations", "interactive"}
     assert all(path.exists() for path in first.files.values())
     stored = read_netcdf(out / "statistics.nc")
     np.testing.assert_array_equal(stored.rate_of_penetration_mean.values,
@@ -126,6 +126,33 @@ def test_study_of_any_parameters_summarises_each_input(small_case, tmp_path):
     html = (tmp_path / "s" / "report.html").read_text()
     assert "random fluid.inlet_velocity, operation.top_speed" in html and "uniform 1.2 1.8 m/s" in html
     assert "mean δ / δ(operation.top_speed)" in html
+
+
+def test_random_top_speed_cycle_metrics_use_each_realizations_speed(torsional_case, tmp_path):
+    """With the top speed random, each realization's stick time (bit below 10 % of *its* top speed), its
+    oscillation (max − min)/2Ω and its MSE use the realized speed, not the case's nominal 100 rpm."""
+    from drillstring.dynamics.indicators import STICK_SPEED_RATIO, bit_area, mechanical_specific_energy
+    from drillstring.stochastic.analysis import load_study
+
+    outcome = api.monte_carlo_study(torsional_case, parameters={"operation.top_speed": "uniform 30 170 rpm"},
+                                    samples=4, t_end=20.0, workers=1, out=tmp_path / "s")
+    stats = outcome.statistics
+    raw = load_study(tmp_path / "s" / "study.zarr")
+    speeds = raw.input_values.values[:, 0]
+    assert np.ptp(speeds) > 3.0  # rad/s: the draws differ from each other and from 100 rpm
+    np.testing.assert_array_equal(stats["realization_top_speed"].values, speeds)
+    after = raw.time.values >= 10.0
+    for j, omega in enumerate(speeds):
+        bit = raw.bit_speed.values[j, after]
+        assert stats["realization_stick_time_fraction"].values[j] == np.mean(bit < STICK_SPEED_RATIO * omega)
+        assert stats["realization_bit_speed_oscillation"].values[j] == pytest.approx(
+            (bit.max() - bit.min()) / (2 * omega), rel=1e-12)
+        mse = mechanical_specific_energy(raw.force_on_bit.values[j, after].mean(),
+                                         raw.torque_on_bit.values[j, after].mean(), omega,
+                                         raw.rate_of_penetration.values[j, after].mean(), bit_area(torsional_case))
+        assert stats["realization_mechanical_specific_energy"].values[j] == pytest.approx(mse, rel=1e-12)
+    assert outcome.summary["realizations"]["stick_slip_realizations"] == int(
+        (stats["realization_stick_time_fraction"].values > 0).sum())
 
 
 def test_case_file_laws_are_the_default_and_options_replace_them(small_case, tmp_path):

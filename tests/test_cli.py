@@ -1,6 +1,7 @@
 """The command line: JSON payloads (SI), human-readable tables (units), user case files, errors."""
 
 import json
+import re
 from importlib import resources
 
 import numpy as np
@@ -37,6 +38,15 @@ def _json(*args: str):
 
 def _reference_toml() -> str:
     return resources.files("drillstring").joinpath("cases", "reference.toml").read_text(encoding="utf-8")
+
+
+def _edited_reference(folder, old: str, new: str, name: str = "bad.toml"):
+    """The reference case file with ``old`` replaced by ``new`` (which must be there), written in ``folder``."""
+    text = _reference_toml()
+    assert old in text
+    path = folder / name
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    return path
 
 
 @pytest.fixture
@@ -241,10 +251,7 @@ def test_invalid_case_file_exit_code_2(tmp_path):
     ('max_element_length = "10 m"', 'max_element_length = "2 km"', "mesh.max_element_length = 2000.0"),
 ])
 def test_cases_that_cannot_be_meshed_or_reduced_exit_2_naming_the_field(tmp_path, old, new, field):
-    text = _reference_toml()
-    assert old in text
-    path = tmp_path / "bad.toml"
-    path.write_text(text.replace(old, new), encoding="utf-8")
+    path = _edited_reference(tmp_path, old, new)
     for command in ("static", "modes", "simulate"):
         result = _invoke(command, str(path), "--json")
         assert result.exit_code == 2, result.output
@@ -382,8 +389,11 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     saved = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert saved == first
     for name in ("study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png",
-                 "envelopes.png", "dispersion.png"):
+                 "envelopes.png", "dispersion.png", "realizations.png"):
         assert (out / name).exists(), name
+    assert {"realizations", "stability", "time_convergence"} <= set(first)
+    assert first["realizations"]["stick_slip_index"]["n"] == 3
+    assert first["stability"]["boundary"]["weight_on_bit"] > 0
     assert first["n_samples"] == 3 and first["n_failed"] == 0 and first["failures"] == {}
     assert first["seed"] == 0 and first["sigma"] == 5000.0  # the defaults
     assert first["workers"] == 1 and first["wall_time"] > 0.0
@@ -413,6 +423,7 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     assert buckling["buckled_realizations"] == 0 and 0 < buckling["probability"] < 1e-2
     assert (buckling["warning"] is None) == (buckling["probability"] <= 1e-3)
     for text in ("rate of penetration", "mean δ [%]", "δ_WOH", f"Figures and report: {out / 'report.html'}",
+                 "Per realization, after t = 0.5 s", "stick-slip index", "steady drilling unstable",
                  "Buckled strings (lowest lateral ω² < 0): 0 of 3 realizations",
                  f"wall time {first['wall_time']:,.1f} s", "this run only recomputed the statistics"):
         assert text in table.stdout, text
@@ -701,8 +712,8 @@ def test_two_studies_on_one_folder(coarse_case, tmp_path):
         assert np.all(np.abs(nominal) > 0), name  # the reported failure: all-zero statistics
         np.testing.assert_allclose(mean, nominal, rtol=0.2, err_msg=name)  # around the nominal run
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["study.zarr", "summary.json", "statistics.nc", "report.html", "convergence.png", "envelopes.png",
-         "dispersion.png"])  # no lock, no temporary file left
+        ["study.zarr", "summary.json", "statistics.nc", "report.html", "interactive.html", "convergence.png",
+         "envelopes.png", "dispersion.png", "realizations.png"])  # no lock, no temporary file left
 
 
 def test_simulate_output_paths_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):
@@ -776,7 +787,7 @@ def test_compare_table_and_failure(coarse_modes_case, tmp_path):
 
 
 #: Modules that only the simulating commands need.
-_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr")
+_HEAVY = ("numba", "xarray", "matplotlib", "dask", "distributed", "scipy.stats", "zarr", "plotly")
 
 
 @pytest.mark.parametrize("argv, unwanted", [
@@ -841,6 +852,22 @@ def test_stability_json_and_table(coarse_case):
     assert result.exit_code == 0, result.output
     for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
         assert text in result.stdout, text
+
+
+def test_stability_boundary_along_the_weight_on_bit(coarse_case):
+    """--boundary: the weight-on-bit where the leading growth rate crosses 0 (checked on both sides)."""
+    from drillstring import api
+
+    data = _json("stability", str(coarse_case), "--boundary", "--json")
+    found = data["boundary"]
+    wob = found["weight_on_bit"]
+    assert found["nominal_weight_on_bit"] == pytest.approx(1e5) and found["nominal_growth_rate"] > 0
+    assert api.stability(coarse_case, weight_on_bit=wob - 50.0).leading.growth_rate < 0 < api.stability(
+        coarse_case, weight_on_bit=wob + 50.0).leading.growth_rate
+    result = _invoke("stability", str(coarse_case), "--boundary")
+    assert result.exit_code == 0, result.output
+    assert (f"Stability boundary at the top speed 100 rpm: weight-on-bit {wob / 1e3:,.2f} kN (steady drilling "
+            f"unstable above it); the case's 100.00 kN is {(1e5 - wob) / 1e3:,.2f} kN above it") in result.stdout
 
 
 def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
@@ -952,3 +979,107 @@ def test_sensitivity_command(torsional_case_file, tmp_path):
     refused = _invoke("sensitivity", str(torsional_case_file), "--out", str(tmp_path / "none"))
     assert refused.exit_code == 2 and "no uncertain parameter" in refused.stderr
     assert not (tmp_path / "none").exists()
+
+
+def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_file, tmp_path):
+    import xarray as xr
+
+    out = tmp_path / "pm"
+    args = ("map", str(torsional_case_file), "--top-speed", "80:160:2", "--weight-on-bit", "60 kN,90 kN",
+            "--t-end", "1", "--workers", "1", "--samples", "3", "--sigma", "4000",
+            "--param", "operation.top_speed=uniform 0 10 rpm", "--out", str(out))
+    refused = _invoke(*args, "--json")  # a law of a grid parameter
+    assert refused.exit_code == 2 and "operation.top_speed: cannot carry a law on a map" in refused.stderr
+    assert not out.exists()
+    args = args[:-4] + ("--param", "fluid.inlet_velocity=uniform 1.2 1.8 m/s", "--out", str(out))
+    result = _invoke(*args, "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["samples"] == 3 and summary["done"] == 12 and summary["sigma"] == 4000.0
+    assert summary["parameters"] == ["weight_on_hook", "fluid.inlet_velocity"]
+    assert set(summary["probabilities"]) == {"stick_slip_probability", "buckling_probability", "impact_probability",
+                                             "instability_probability"}
+    for name in ("map.zarr", "map.nc", "map.json", "probabilities.png", "quantiles.png", "report.html",
+                 "interactive.html"):
+        assert (out / name).exists(), name
+    with xr.open_dataset(out / "map.nc", engine="h5netcdf") as ds:
+        assert ds.stick_slip_probability.dims == ("top_speed", "weight_on_bit")
+        assert ds.rate_of_penetration_q.dims == ("top_speed", "weight_on_bit", "quantile")
+        instability = ds.instability_probability.values
+    page = (out / "interactive.html").read_text(encoding="utf-8")
+    specs = [json.loads(t) for t in re.findall(r'class="figure-spec"[^>]*>(.*?)</script>', page, re.S)]
+    assert [spec["layout"]["title"]["text"] for spec in specs][3] == "probability of unstable steady drilling"
+    np.testing.assert_allclose(np.array(specs[3]["data"][0]["z"], dtype=float), instability.T, atol=1e-6)
+    table = _invoke(*args)
+    assert table.exit_code == 0, table.output
+    assert "resumed: 12 of 12 realizations" in table.stderr
+    for text in ("Probabilistic operating map", "P(buckled)", "3 realizations per point", "probabilities.png"):
+        assert text in table.stdout, text
+    lonely = _invoke("map", str(torsional_case_file), "--sigma", "4000", "--out", str(tmp_path / "none"))
+    assert lonely.exit_code == 2 and "give --samples N" in lonely.stderr
+
+
+@pytest.mark.parametrize("old, new, line", [
+    ('length = "1400 m"', 'length = "1e306 km"',
+     "sections[0].length = inf: must be within [0.001, 100000] m (it overflows to infinity)"),
+    ('young_modulus = "210 GPa"', 'young_modulus = "1e300 GPa"',
+     "materials.steel.young_modulus = inf: must be within [1e+06, 1e+13] Pa (it overflows to infinity)"),
+    ("atol = 1e-9", "atol = 1e-300", "simulation.atol = 1e-300: must be within [1e-20, 1000]"),
+    ("a2 = 5.672e-8", "a2 = 5e-324", "bit_rock.a2 = 5e-324: must be within [1e-15, 0.001] m/(N*s)"),
+])
+def test_values_that_overflow_or_underflow_are_refused_naming_field_value_and_range(tmp_path, old, new, line):
+    path = _edited_reference(tmp_path, old, new)
+    result = _invoke("simulate", str(path), "--out", str(tmp_path / "run.nc"), "--plot", str(tmp_path / "run.png"))
+    assert result.exit_code == 2, result.output
+    assert result.stderr.splitlines() == [f"error: invalid case {path}: {line}"]
+    assert not (tmp_path / "run.nc").exists()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero", "/dev/urandom", "folder", "too_large", "too_deep",
+                                  "long_name"])
+def test_only_sane_case_files_are_read(tmp_path, kind):
+    """A FIFO, a device, a folder, a file over 1 MB, TOML nested deeper than 16 levels and a name over 200
+    characters are refused at once, in one line, exit code 2."""
+    import os
+
+    path = tmp_path / "case.toml"
+    expected = {"fifo": "is not a regular file", "/dev/zero": "is not a regular file",
+                "/dev/urandom": "is not a regular file", "folder": "is not a regular file",
+                "too_large": "more than the 1,000,000 allowed", "too_deep": "nested more than 16 levels deep",
+                "long_name": "name = 'AAAA"}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind.startswith("/dev/"):
+        path = kind
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "too_large":
+        path.write_text(_reference_toml() + "#" * 1_000_000, encoding="utf-8")
+    elif kind == "too_deep":
+        path.write_text('name = "x"\nv = ' + "[" * 3000 + "]" * 3000 + "\n", encoding="utf-8")
+    else:
+        path.write_text(_reference_toml().replace('name = "reference"', f'name = "{"A" * 10_000}"'),
+                        encoding="utf-8")
+    result = _invoke("static", str(path))
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: invalid case {path}: ") and expected in lines[0]
+    if kind == "long_name":
+        assert lines[0].endswith("must be at most 200 characters (it has 10,000)")
+
+
+def test_a_collapsing_step_size_stops_the_run_early_naming_the_stiff_term(tmp_path):
+    """a2 = 1e-12 m/(N·s) (within its range) makes the bit–rock law's axial resistance 1/(a2 Z²) stiff:
+    the run stops after about 20,000 attempts, not at max_steps, exit code 1, one line with t, h and the
+    bit–rock law as the stiff term; the partial run is written."""
+    path = _edited_reference(tmp_path, "a2 = 5.672e-8 ", "a2 = 1e-12 ")
+    coarse = path.read_text(encoding="utf-8").replace('max_element_length = "10 m"', 'max_element_length = "50 m"')
+    path.write_text(coarse.replace("lateral_modes = 20", "lateral_modes = 3"), encoding="utf-8")
+    out = tmp_path / "run.nc"
+    result = _invoke("simulate", str(path), "--t-end", "1", "--out", str(out), "--plot", str(tmp_path / "run.png"))
+    assert result.exit_code == 1, result.output
+    errors = [row for row in result.stderr.splitlines() if row.startswith("error:")]
+    assert len(errors) == 1
+    assert "integration failed at t = " in errors[0] and "(h = " in errors[0]
+    assert "step size collapsed" in errors[0] and "likely stiff term: bit–rock law" in errors[0]
+    assert f"the partial run is in {out}" in errors[0] and out.exists()

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from drillstring.damping import free_free_damping, reduced_structural_damping
+from drillstring.damping import free_free_damping, projected_free_free_damping, reduced_structural_damping
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.fem.assembly import THETA_X, U, dof
 from drillstring.fem.fluid import fluid_coefficients
@@ -176,3 +176,20 @@ def test_unknown_damping_basis_is_refused(uniform_string):
         reduced_structural_damping(system.mass, system.stiffness, modes.shapes, ["torsional"] * 2,
                                    modes.angular_frequencies, damping_ratio=XI, rigid_axial=0.0,
                                    rigid_rotation=0.0, top_speed=1.0, definition="modal")
+
+
+@pytest.mark.parametrize("kind, family, coefficient", [(U, "axial", 2.0e4), (THETA_X, "torsional", 50.0)])
+def test_projection_without_modes_equals_the_dense_one(uniform_string, kind, family, coefficient):
+    """The projection of long families (no mode and no C formed: the quadrature of eq. (2), forced here
+    with dense_limit=0) equals the dense one built from every free–free mode, on the free–free axial
+    basis (rigid mode included) and on the top-held torsional basis."""
+    _, mesh, system = uniform_string
+    dofs = dof(np.arange(mesh.n_nodes), kind)
+    m, k = system.mass[dofs][:, dofs], system.stiffness[dofs][:, dofs]
+    shapes = family_modes(system, family, 6).shapes[dofs]
+    dense, dense_force = projected_free_free_damping(m, k, shapes, XI, coefficient)
+    sparse, sparse_force = projected_free_free_damping(m, k, shapes, XI, coefficient, dense_limit=0)
+    np.testing.assert_allclose(sparse, dense, rtol=0, atol=1e-11 * np.abs(dense).max())
+    np.testing.assert_allclose(sparse_force, dense_force, rtol=0, atol=1e-10 * np.abs(dense_force).max())
+    with pytest.raises(ValueError, match="no rigid mode"):
+        projected_free_free_damping(m[1:, 1:], k[1:, 1:], shapes[1:], XI, coefficient, dense_limit=0)

@@ -142,3 +142,39 @@ def test_record_without_flock_decides_by_pid_and_host(tmp_path, monkeypatch):
     path.write_text(json.dumps({"pid": os.getpid() + 1, "host": "elsewhere", "started": "then"}))
     with pytest.raises(files.LockedError, match=f"another host.*delete {path}"):
         files.FileLock(path).acquire()
+
+
+def test_only_regular_files_are_replaced(tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    assert files.not_regular_problem(fifo) == "is a FIFO, not a regular file; give a file name"
+    assert files.not_regular_problem("/dev/null").startswith("is a character device")
+    assert files.not_regular_problem(tmp_path / "none") is None
+    assert files.output_file_problem(fifo) == "is a FIFO, not a regular file; give a file name"
+    with pytest.raises(files.NotARegularFile, match="is a FIFO"):
+        files.write_text_atomic(fifo, "x")
+    assert fifo.is_fifo() and sorted(p.name for p in tmp_path.iterdir()) == ["fifo"]
+
+
+def test_write_error_message_names_the_file_the_cause_and_what_to_do():
+    full = OSError(28, "No space left on device", "/data/study.zarr")
+    assert files.write_error_message(full, "finished realizations are kept in /data/study.zarr") == (
+        "cannot write /data/study.zarr: No space left on device; finished realizations are kept in "
+        "/data/study.zarr; free some space and run the same command again to resume")
+    assert files.write_error_message(OSError(30, "Read-only file system", "/r/x.nc")) == (
+        "cannot write /r/x.nc: Read-only file system; use a writable location (read-only filesystem) and run "
+        "the command again")
+
+
+def test_lock_in_use_reads_the_record_without_locking(tmp_path):
+    lock = tmp_path / "x.lock"
+    assert not files.lock_in_use(lock)
+    lock.write_text("")
+    assert not files.lock_in_use(lock)  # released cleanly
+    proc = _holder(lock)
+    try:
+        assert files.lock_in_use(lock)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert not files.lock_in_use(lock)  # its holder died: stale

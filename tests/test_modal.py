@@ -266,3 +266,16 @@ def test_linear_modal_equations_grow_when_buckled():
         assert growth > 50
         assert math.log(growth) == pytest.approx(rates[wob] * t_end, abs=1.0)
 
+
+
+def test_the_dense_fallback_refuses_what_would_not_fit_before_allocating():
+    """All 20,000 modes of a 20,000-DOF family would need a dense eigenproblem of 8.9 GiB: refused with that
+    size (three n × n arrays), above the 2 GiB allowed, before anything is allocated."""
+    import scipy.sparse as sp
+
+    from drillstring import modal
+
+    n = 20_000
+    identity = sp.identity(n, format="csr")
+    with pytest.raises(ValueError, match=r"20,000-DOF family .* would need 8\.9 GiB dense, more than the 2 GiB"):
+        modal._eigen(identity, identity, n)

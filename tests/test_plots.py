@@ -180,6 +180,22 @@ def test_plot_dispersion_writes_png(stats_dataset, tmp_path, drawn):
     assert drawn[0]._suptitle.get_text() == "Dispersion of the response, n_s = 8, σ_WOH = 5 kN\nδ_WOB = 5 %"
 
 
+def test_plot_realizations_one_histogram_per_metric(stats_dataset, tmp_path):
+    from drillstring.quantities import METRIC_DISPLAY
+
+    with pytest.raises(ValueError, match="realization_"):
+        plots.plot_realizations(stats_dataset, tmp_path / "none.png")
+    stats = stats_dataset.copy()
+    n_s = 8
+    for name in METRIC_DISPLAY:
+        stats[f"realization_{name}"] = xr.DataArray(np.linspace(1.0, 2.0, n_s), dims="realization",
+                                                     attrs={"nominal": 1.5})
+    stats["realization_period"] = xr.DataArray(np.full(n_s, np.nan), dims="realization")  # never oscillates
+    _assert_png(plots.plot_realizations(stats, tmp_path / "realizations.png"))
+    figures = plots.plot_study(stats, tmp_path / "out", t_transient=1.0)
+    assert set(figures) == {"convergence", "envelopes", "dispersion", "realizations"}
+
+
 def test_plot_study_writes_the_three_figures(stats_dataset, tmp_path):
     figures = plots.plot_study(stats_dataset, tmp_path / "out", t_transient=1.0)
     assert set(figures) == {"convergence", "envelopes", "dispersion"}
@@ -235,3 +251,12 @@ def test_figures_follow_the_unit_system(run_dataset, monkeypatch, tmp_path):
     tob_si = drawn[str(tmp_path / "si.png")].axes[3].lines[0].get_ydata()
     tob_field = drawn[str(tmp_path / "field.png")].axes[3].lines[0].get_ydata()
     np.testing.assert_allclose(tob_field * 1355.8179483314004, tob_si * 1e3, rtol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["Well $A", "Well $A$ and $\\\\frac{1}{$"])
+def test_case_names_are_plain_text_in_figures(run_dataset, tmp_path, name):
+    """A case name is drawn as written: dollar signs never start Matplotlib's mathtext."""
+    ds = run_dataset.assign_attrs(case=f'name = "{name}"\n')
+    assert plots._case_name(ds.attrs["case"]).replace("\\$", "$") == name.replace("\\\\", "\\")
+    _assert_png(plots.plot_run(ds, tmp_path / "run.png"))
+    _assert_png(plots.plot_compare(ds, ds, tmp_path / "compare.png"))

@@ -9,7 +9,7 @@ The notebook API: :func:`load_case`, :func:`static` (the prestressed static stat
 :func:`modes` (natural frequencies), :func:`simulate`, :func:`stability` (steady drilling and its linear
 stability), :func:`compare` (case 1 against case 2), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
 :func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
-(Sobol' indices).
+(Sobol' indices), :func:`campbell` (Campbell diagram and critical speeds).
 """
 
 from drillstring._version import __version__  # noqa: F401  (the package's version)
@@ -28,7 +28,8 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring.api import stability
 
         return stability
-    if name in ("static", "modes", "study", "monte_carlo_study", "operating_map", "sensitivity", "compare"):
+    if name in ("static", "modes", "study", "monte_carlo_study", "operating_map", "sensitivity", "compare",
+                "campbell"):
         from drillstring import api
 
         return getattr(api, name)

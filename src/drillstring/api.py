@@ -147,7 +147,9 @@ _STUDY_CAPTIONS = {
     "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean of every random "
                  "parameter)",
     "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
-    "convergence": "Mean-square convergence conv(n_s), each observable divided by its last value",
+    "convergence": "Convergence: mean-square conv(n_s), each observable divided by its last value (left); maximum "
+                   "and time-mean dispersion over records of growing length after the transient (right)",
+    "realizations": "Per-realization cycle metrics after t = {t_transient:g} s: histograms, mean and nominal run",
 }
 
 
@@ -282,7 +284,7 @@ def monte_carlo_study(
 
     In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
     realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
-    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png`` and
+    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png``, ``realizations.png`` and
     ``report.html``; figures and report in the unit system ``units`` (``"si"`` or ``"field"``; None:
     ``$DRILLSTRING_UNITS``, else si; JSON and NetCDF stay SI). Fewer than 2 finished realizations raise
     :class:`StudyFailed`.
@@ -320,7 +322,7 @@ def _finish_study(case, settings, t_transient, buckling, folder, units, run):
         listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
         raise StudyFailed(f"{error} ({len(failures)} failure(s)"
                           f"{': ' + listing if listing else ''})") from None
-    summary = study_summary(stats, t_transient=t_transient)
+    summary = study_summary(stats, t_transient=t_transient, boundary=_stability_boundary(case))
     sessions = run.store.sessions()
     wall_time, used = computation_time(sessions)
     if not sessions:  # a store written before sessions were recorded
@@ -340,36 +342,51 @@ def _finish_study(case, settings, t_transient, buckling, folder, units, run):
     })
     files: dict[str, Path] = {}
     if folder is not None:
-        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, units)
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units)
     return stats, payload, files
 
 
-def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
-                       units: str) -> dict[str, Path]:
-    """statistics.nc, the figures, summary.json (``payload`` gets ``files``) and report.html (the
-    statistics' ``summary`` and the run information from ``payload``); figures and report in ``units``."""
-    import json
+def _stability_boundary(case: Case) -> dict | None:
+    """:func:`stability_boundary`, None where steady drilling does not exist."""
+    try:
+        return stability_boundary(case)
+    except ValueError:
+        return None
 
-    from drillstring.files import write_text_atomic
-    from drillstring.plots import plot_study
-    from drillstring.report import write_report
+
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
+                       raw=None, units: str | None = None) -> dict[str, Path]:
+    """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
+    statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
+    finished realizations of ``raw``, the study's raw Dataset); figures and report in the unit system ``units``."""
+
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
+    from drillstring.plots import STUDY_PANELS, plot_study
+    from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
+    from drillstring.stochastic.store import DONE
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
-             "statistics": folder / "statistics.nc", "report": folder / "report.html"}
+             "statistics": folder / "statistics.nc", "report": folder / "report.html",
+             "interactive": folder / INTERACTIVE_PAGE}
+    shown = None
+    if raw is not None:
+        finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
+        shown = raw[list(STUDY_PANELS)].isel(realization=finished)
     force = display_unit("force", units)
     write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, folder, t_transient, units=units)
+    figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
-    write_text_atomic(paths["summary"], json.dumps(payload, indent=2) + "\n")
+    write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {
         "realizations requested": settings.samples,
         "failures": payload["failures"],
         "computation wall time [s]": round(payload["wall_time"], 2),
         "buckled realizations (lowest lateral ω² < 0)": (
             f"{payload['buckling']['buckled_realizations']} of {payload['n_samples']}; critical weight-on-bit "
-            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}, probability of a buckled draw "
-            f"{payload['buckling']['probability']:.3g}"),
+            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}, probability of a "
+            f"buckled draw {payload['buckling']['probability']:.3g}"),
         "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
         "workers": payload["workers"],
     }
@@ -387,8 +404,9 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         case_toml=case.to_toml(),
         summary=summary,
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
-                 for k in ("envelopes", "dispersion", "convergence")},
+                 for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
         run_info=run_info,
+        interactive=study_figures(stats, shown),
         units=units,
     )
     return {**paths, **figures}
@@ -447,6 +465,42 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     if weight_on_bit is not None:
         weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
     return case_stability(case, weight_on_bit=weight_on_bit)
+
+
+def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
+             default_unit: str = ""):
+    """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
+    torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
+    the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
+    and ``blades``× (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
+
+    ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
+    in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
+    :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
+    line naming the argument) for a bad grid or a blade count outside [1, :data:`~drillstring.critical_speeds.
+    MAX_BLADES`], TypeError for a blade count that is not an integer."""
+    from drillstring.case import DIMENSIONS
+    from drillstring.checks import integer
+    from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, MAX_BLADES, case_campbell
+    from drillstring.stochastic.operating_map import parse_axis
+
+    the_case = as_case(case)
+    blades = integer("blades", DEFAULT_BLADES if blades is None else blades, low=1, high=MAX_BLADES)
+    dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
+    speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
+                        name="top_speed", default_unit=default_unit)
+    return case_campbell(the_case, speeds, blades)
+
+
+def stability_boundary(case: Case | str | Path = "reference") -> dict:
+    """The stability boundary of steady drilling along the weight-on-bit at the case's top speed (SI):
+    ``weight_on_bit`` [N] where the leading growth rate crosses 0 nearest the case's weight-on-bit (None
+    when it does not between 0 and the string's weight), ``top_speed`` [rad/s], ``nominal_weight_on_bit``
+    [N] and ``nominal_growth_rate`` [1/s] (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`).
+    ValueError when the case itself has no steady drilling."""
+    from drillstring.dynamics.stability import weight_on_bit_boundary
+
+    return weight_on_bit_boundary(as_case(case))
 
 
 def study(
@@ -684,6 +738,11 @@ def operating_map(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    samples: int | None = None,
+    sigma: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
+    seed: int = DEFAULT_SEED,
     units: str | None = None,
 ) -> MapOutcome:
     """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
@@ -700,14 +759,31 @@ def operating_map(
     ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si). Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+
+    With ``samples`` (>= 2) the map is probabilistic (:mod:`drillstring.stochastic.probabilistic_map`):
+    ``samples`` realizations per point of the declared uncertainty — the weight-on-hook Normal around each
+    point's hook load of standard deviation ``sigma`` [N], and ``parameters`` (path -> law) with
+    ``correlation``, else the case's ``[uncertainty]`` table; nothing declared: ``sigma`` =
+    :data:`~drillstring.stochastic.DEFAULT_SIGMA` —, drawn from the streams ``(seed, sample)``; per point the
+    probabilities of stick-slip, buckling, wall impact and unstable steady drilling and quantiles of the ROP and
+    of the stick-slip index; files ``map.nc``, ``map.json``, ``probabilities.png``, ``quantiles.png``,
+    ``report.html`` and ``interactive.html``. Without ``samples``, ``sigma``, ``parameters``, ``correlation`` and ``seed`` are unused
+    (giving one of the first three is refused) and the map is deterministic.
     """
     from drillstring.stochastic.operating_map import run_map
 
     units = unit_system(units, "units")  # a bad unit system is refused before anything runs
-    case = as_case(case).model_copy(update={"uncertainty": None})
+    case = as_case(case)
     settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
                             output_step=output_step, transient=transient)
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    if samples is not None:
+        return _sampled_map(case, settings, engine, out, samples=samples, sigma=sigma, parameters=parameters,
+                            correlation=correlation, seed=seed)
+    if sigma is not None or parameters is not None or correlation is not None:
+        raise ValueError("sigma, parameters and correlation declare the uncertainty of a probabilistic map: give "
+                         "samples (realizations per point) too")
+    case = case.model_copy(update={"uncertainty": None})
     folder = _output_folder(out, "drillstring-map-")
     run = run_map(case, settings, folder / "map.zarr", engine,
                   finish=partial(_finish_map, case, folder if out is not None else None, units))
@@ -716,33 +792,90 @@ def operating_map(
 
 def _finish_map(case, folder, units, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
-    import json
-
-    from drillstring.files import write_text_atomic
+    from drillstring.interactive import map_figures
     from drillstring.plots import plot_map
     from drillstring.report import write_map_report
-    from drillstring.results import write_netcdf
     from drillstring.stochastic.operating_map import map_dataset, map_summary
 
+    figures = {"figure": ("map.png", partial(plot_map, units=units),
+                          "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
+                          "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
+                          "red dashed: lateral buckling limit; dots: simulated points")}
+    return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
+                      partial(write_map_report, units=units),
+                      f"Operating map: case '{case.name}'", map_figures)
+
+
+def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str, interactive):
+    """A map's Dataset (``dataset(store)``), summary (``summarize(ds)`` with the run's record) and, in ``folder``
+    unless None, ``map.nc``, ``map.json``, the ``figures`` (key -> (file name, plot function, caption)) and
+    the ``report`` (``report(path, title=..., case_toml=..., summary=..., figures=..., run_info=...,
+    interactive=...)``) with its ``interactive(ds)`` figures beside it."""
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.report import INTERACTIVE_PAGE
+    from drillstring.results import write_netcdf
+
     store_path = run.store.path
-    ds = map_dataset(store_path)
-    summary = {"case": case.name, **map_summary(ds), **_run_record(run.store, run, "points")}
+    ds = dataset(store_path)
+    summary = {"case": case.name, **summarize(ds), **_run_record(run.store, run, noun)}
     files: dict[str, Path] = {}
     if folder is not None:
         files = {"store": store_path, "map": folder / "map.nc", "summary": folder / "map.json",
-                 "figure": folder / "map.png", "report": folder / "report.html"}
+                 **{key: folder / name for key, (name, _, _) in figures.items()}, "report": folder / "report.html",
+                 "interactive": folder / INTERACTIVE_PAGE}
         write_netcdf(ds, files["map"])
-        plot_map(ds, files["figure"], units=units)
+        for key, (_, plot, _) in figures.items():
+            plot(ds, files[key])
         summary["files"] = {k: str(v) for k, v in files.items()}
-        write_text_atomic(files["summary"], json.dumps(summary, indent=2) + "\n")
-        write_map_report(files["report"], title=f"Operating map: case '{case.name}'",
-                         case_toml=case.to_toml(), summary=summary,
-                         figures={"Mean ROP, bit-speed oscillation, mechanical specific energy and "
-                                  "largest radial displacement over the map; black line: linear "
-                                  "stability boundary of steady drilling (hatched: unstable); red "
-                                  "dashed: lateral buckling limit; dots: simulated points": files["figure"]},
-                         run_info={**_run_table(summary, "points"), "store": str(store_path)}, units=units)
+        write_text_atomic(files["summary"], strict_json(summary) + "\n")  # undefined values: null
+        report(files["report"], title=title, case_toml=case.to_toml(), summary=summary,
+               figures={caption: files[key] for key, (_, _, caption) in figures.items()},
+               run_info={**_run_table(summary, noun), "store": str(store_path)}, interactive=interactive(ds))
     return ds, summary, files
+
+
+def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, seed) -> MapOutcome:
+    """A probabilistic map (:func:`operating_map` with ``samples``)."""
+    from drillstring.stochastic import DEFAULT_SIGMA
+    from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    _mapping("parameters", parameters)
+    _mapping("correlation", correlation)
+    declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
+    if declared is None and sigma is None:
+        sigma = DEFAULT_SIGMA
+    laws, correlated, matrix = (), (), ()
+    if declared is not None:
+        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters)
+        if declared.correlation is not None:
+            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    settings = SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, laws=laws, correlated=correlated,
+                                  correlation=matrix)
+    case = case.model_copy(update={"uncertainty": None})
+    folder = _output_folder(out, "drillstring-map-")
+    run = run_sampled_map(case, settings, folder / "map.zarr", engine,
+                          finish=partial(_finish_sampled_map, case, folder if out is not None else None))
+    return MapOutcome(*run.result, run.already, run.note)
+
+
+def _finish_sampled_map(case, folder, run):
+    """Under the map's lock: the probabilistic map's Dataset, summary and (in ``folder``, unless None) files."""
+    from drillstring.interactive import probability_map_figures
+    from drillstring.plots import plot_probability_map, plot_quantile_map
+    from drillstring.report import write_probability_map_report
+    from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
+
+    figures = {"figure": ("probabilities.png", plot_probability_map,
+                          "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
+                          "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
+                          "buckling limit; dots: the points"),
+               "quantiles": ("quantiles.png", plot_quantile_map,
+                             "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
+                             "point's realizations")}
+    return _map_files(case, folder, run, sampled_map_dataset, sampled_map_summary, "realizations", figures,
+                      write_probability_map_report, f"Probabilistic operating map: case '{case.name}'",
+                      probability_map_figures)
 
 
 @dataclass
@@ -826,8 +959,9 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, units, ru
     import json
 
     from drillstring.files import write_text_atomic
+    from drillstring.interactive import sensitivity_figures
     from drillstring.plots import plot_sobol, plot_sobol_convergence
-    from drillstring.report import write_sensitivity_report
+    from drillstring.report import INTERACTIVE_PAGE, write_sensitivity_report
     from drillstring.stochastic.sensitivity_study import SENSITIVITY_OUTPUTS, load_sensitivity
 
     store_path = run.store.path
@@ -841,7 +975,7 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, units, ru
     if folder is not None:
         files = {"store": store_path, "indices": folder / "sensitivity.json",
                  "figure": folder / "sobol.png", "convergence": folder / "sobol_convergence.png",
-                 "report": folder / "report.html"}
+                 "report": folder / "report.html", "interactive": folder / INTERACTIVE_PAGE}
         plot_sobol(payload, files["figure"])
         plot_sobol_convergence(payload, files["convergence"])
         payload["files"] = {k: str(v) for k, v in files.items()}
@@ -855,5 +989,5 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, units, ru
             run_info={**_run_table(record, "runs"), "runs": result.runs,
                       "simulated time per run [s]": settings.t_end,
                       "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
-            units=units)
+            interactive=sensitivity_figures(payload), units=units)
     return result, payload, files

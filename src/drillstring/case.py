@@ -33,6 +33,8 @@ of numbers shared with the finite-element model: mesh layout, mode-family sizes,
 from __future__ import annotations
 
 import math
+import os
+import stat
 import tomllib
 import typing
 from importlib import resources
@@ -80,7 +82,7 @@ from drillstring.units import (
 __all__ = [
     "DIMENSIONS",
     "MAX_ELEMENTS",
-    "MAX_SETUP_BYTES",
+    "PHYSICAL_BOUNDS",
     "Acceleration",
     "Angle",
     "AngularSpeed",
@@ -154,7 +156,10 @@ class CaseError(ValueError):
         self.problems: list[str] = [_format_entry(e) for e in self.entries]
         self.source: str = source
         n = len(self.problems)
-        head = f"invalid case {source}: {n} problem{'s' if n != 1 else ''}"
+        if n == 1:  # one problem, one line
+            super().__init__(f"invalid case {source}: {self.problems[0]}")
+            return
+        head = f"invalid case {source}: {n} problems"
         super().__init__("\n".join([head, *(f"  {p}" for p in self.problems)]))
 
     def __reduce__(self) -> Any:  # picklable (worker processes)
@@ -295,6 +300,9 @@ def _entries_from_validation_error(exc: ValidationError, root: type[BaseModel], 
             out.append((loc, value, f"unknown key; allowed keys here: {allowed}"))
         elif kind in _OPS:
             out.append((loc, value, f"must be {_OPS[kind]} {_fmt_limit(next(iter(ctx.values())))}"))
+        elif kind == "string_too_long":
+            out.append((loc, value, f"must be at most {ctx['max_length']:,} characters "
+                                    f"(it has {len(err.get('input', '')):,})"))
         elif kind == "too_short" and "min_length" in ctx:
             n = ctx["min_length"]
             out.append((loc, value, f"must have at least {n} item{'s' if n != 1 else ''}"))
@@ -758,16 +766,97 @@ def _inlet_velocity_from_flow(data: dict[str, Any]) -> dict[str, Any]:
     return data
 
 
-#: Most finite elements a case may have (a mesh finer than this is refused at validation: it would take
-#: minutes to build and gigabytes of memory; 10 000 elements is 0.16 m for the 1600 m reference string).
+#: Most finite elements a case may have (a mesh finer than this is refused at validation; 10 000 elements is
+#: 0.16 m for the 1600 m reference string, 1 m for a 10 km string, whose sparse set-up takes about 450 MiB).
 MAX_ELEMENTS = 10_000
-#: Largest memory [bytes] of the model's set-up: the free-free damping of the axial and torsional families
-#: (:func:`drillstring.damping.free_free_damping`) works on dense matrices of one row per node, about
-#: :data:`SETUP_DENSE_MATRICES` of them at once (mass, stiffness, mode shapes, their products, the damping
-#: matrix), 8 bytes per entry. A mesh whose set-up would take more is refused at validation with that size,
-#: before anything is allocated: 2 GiB allows 7,300 nodes (0.22 m elements on the 1600 m reference string).
-MAX_SETUP_BYTES = 2 * 2**30
-SETUP_DENSE_MATRICES = 5
+
+
+#: Plausible physical ranges [SI] of the values whose extremes overflow, underflow or make the integration
+#: degenerate (a product of a length and a modulus beyond 1.8e308, a division by a subnormal a2 or atol):
+#: path (``*``: every item of a list or table), lowest, highest, SI unit. Checked before any other rule.
+PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
+    (("materials", "*", "young_modulus"), 1e6, 1e13, "Pa"),
+    (("materials", "*", "density"), 1.0, 1e5, "kg/m3"),
+    (("sections", "*", "length"), 1e-3, 1e5, "m"),
+    (("sections", "*", "outer_diameter"), 1e-3, 10.0, "m"),
+    (("sections", "*", "inner_diameter"), 0.0, 10.0, "m"),
+    (("borehole", "diameter"), 1e-3, 10.0, "m"),
+    (("stabilizers", "*", "stiffness"), 0.0, 1e15, "N/m"),
+    (("fluid", "density"), 0.0, 1e5, "kg/m3"),
+    (("fluid", "inlet_velocity"), 0.0, 1e3, "m/s"),
+    (("fluid", "friction_coefficient"), 0.0, 10.0, ""),
+    (("fluid", "viscous_coefficient"), 0.0, 1e9, "N*s/m2"),
+    (("bit_rock", "a1"), 0.0, 10.0, "m/s"),
+    (("bit_rock", "a2"), 1e-15, 1e-3, "m/(N*s)"),
+    (("bit_rock", "a3"), 0.0, 1.0, "m/rad"),
+    (("bit_rock", "a4"), 0.0, 1e12, "N*rad"),
+    (("bit_rock", "a5"), 0.0, 1e9, "N*m"),
+    (("bit_rock", "regularization"), 1e-6, 1e3, "rad/s"),
+    (("bit_rock", "stick_stiffening_limit"), 1.0, 1e6, ""),
+    (("contact", "shock_stiffness"), 0.0, 1e15, "N/m2"),
+    (("contact", "friction_coefficient"), 0.0, 10.0, ""),
+    (("contact", "speed_regularization"), 1e-6, 1e3, "rad/s"),
+    (("operation", "top_speed"), 0.0, 1e3, "rad/s"),
+    (("operation", "weight_on_bit"), 0.0, 1e9, "N"),
+    (("damping", "rigid_axial"), 0.0, 1e12, "N*s/m"),
+    (("damping", "rigid_rotation"), 0.0, 1e12, "N*m*s/rad"),
+    (("environment", "gravity"), 0.0, 100.0, "m/s2"),
+    (("simulation", "rtol"), 1e-14, 1.0, ""),
+    (("simulation", "atol"), 1e-20, 1e3, ""),
+    (("simulation", "min_step"), 1e-20, 1.0, "s"),
+)
+
+
+def _bound_problems(case: BaseModel) -> list[tuple[tuple[str | int, ...], Any, str]]:
+    """Every value of ``case`` outside its :data:`PHYSICAL_BOUNDS` range, as cross-field problems."""
+    problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+
+    def visit(node: Any, rest: tuple[str, ...], loc: tuple[str | int, ...], low: float, high: float,
+              unit: str) -> None:
+        if not rest:
+            if isinstance(node, float) and not low <= node <= high:
+                overflow = " (it overflows to infinity)" if math.isinf(node) else ""
+                problems.append((loc, node, f"must be within [{low:g}, {high:g}] {unit}".rstrip() + overflow))
+            return
+        key, rest = rest[0], rest[1:]
+        if key != "*":
+            visit(getattr(node, key), rest, loc + (key,), low, high, unit)
+        elif isinstance(node, Mapping):
+            for name, item in node.items():
+                visit(item, rest, loc + (name,), low, high, unit)
+        else:
+            for i, item in enumerate(node):
+                visit(item, rest, loc + (i,), low, high, unit)
+
+    for path, low, high, unit in PHYSICAL_BOUNDS:
+        visit(case, path, (), low, high, unit)
+    return problems
+
+
+#: Longest case name and description [characters] (they are titles and table cells, not documents).
+MAX_NAME_LENGTH, MAX_DESCRIPTION_LENGTH = 200, 2000
+#: Largest case file read [bytes]: the annotated reference case is 14 kB.
+MAX_CASE_FILE_BYTES = 1_000_000
+#: Deepest nesting of tables and arrays in a case (the format needs 4: uncertainty.correlation.matrix rows).
+MAX_CASE_DEPTH = 16
+
+
+def _depth(data: Any) -> int:
+    """Nesting depth of tables and arrays in ``data`` (iterative: any depth is measured)."""
+    deepest, stack = 0, [(data, 0)]
+    while stack:
+        node, level = stack.pop()
+        if isinstance(node, Mapping):
+            children = node.values()
+        elif isinstance(node, (list, tuple)):
+            children = node
+        else:
+            continue
+        deepest = max(deepest, level + 1)
+        if deepest > MAX_CASE_DEPTH:
+            return deepest
+        stack.extend((child, level + 1) for child in children)
+    return deepest
 
 
 def _default_materials() -> dict[str, Material]:
@@ -777,8 +866,8 @@ def _default_materials() -> dict[str, Material]:
 class Case(_Base):
     """A complete drilling case. Sections are ordered from the top (x = 0) to the bit (x = L)."""
 
-    name: str
-    description: str = ""
+    name: str = Field(max_length=MAX_NAME_LENGTH)
+    description: str = Field("", max_length=MAX_DESCRIPTION_LENGTH)
     materials: dict[str, Material] = Field(default_factory=_default_materials)
     sections: list[Section] = Field(min_length=1)
     borehole: Borehole
@@ -882,7 +971,9 @@ class Case(_Base):
 
     @model_validator(mode="after")
     def _cross_field(self) -> Case:
-        problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        problems = _bound_problems(self)
+        if problems:  # the rules below compute with these values
+            raise _Problems(problems)
         defined = ", ".join(self.materials) or "none"
         for i, s in enumerate(self.sections):
             if s.material not in self.materials:
@@ -978,13 +1069,6 @@ class Case(_Base):
                                f"(about max_element_length >= {length / MAX_ELEMENTS:.3g} m for this "
                                f"{length:g} m string)")]
         nodes = elements + 1
-        setup = SETUP_DENSE_MATRICES * 8 * nodes**2
-        if setup > MAX_SETUP_BYTES:
-            fewest = math.sqrt(MAX_SETUP_BYTES / (8 * SETUP_DENSE_MATRICES))
-            return [(where, h, f"gives {elements:,} elements ({nodes:,} nodes): the model's set-up would take "
-                               f"{setup / 2**30:.3g} GiB ({SETUP_DENSE_MATRICES} dense {nodes:,} x {nodes:,} "
-                               f"matrices), above the limit of {MAX_SETUP_BYTES / 2**30:g} GiB (about "
-                               f"max_element_length >= {length / fewest:.3g} m for this {length:g} m string)")]
         sizes = mode_family_sizes(nodes)
         problems = []
         for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", 0),
@@ -1030,6 +1114,8 @@ def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
     """Validate a (TOML-like) mapping into a :class:`Case`; raises :class:`CaseError` listing every problem."""
     if not isinstance(data, Mapping):
         raise CaseError(f"a case must be a table (mapping), got {type(data).__name__}", source=source)
+    if _depth(data) > MAX_CASE_DEPTH:
+        raise CaseError(f"tables and arrays nested more than {MAX_CASE_DEPTH} levels deep", source=source)
     try:
         return Case.model_validate(dict(data))
     except CaseError as exc:
@@ -1038,6 +1124,32 @@ def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
 
 def _looks_like_path(source: str) -> bool:
     return source.endswith(".toml") or "/" in source or "\\" in source or Path(source).is_file()
+
+
+def _read_case_file(path: Path, label: str) -> bytes:
+    """The bytes of a case file: a regular file of at most :data:`MAX_CASE_FILE_BYTES` (a FIFO, a device
+    such as /dev/zero or a folder is refused at once, without opening it)."""
+    try:
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise CaseError(f"case file {label} is not a regular file (a folder, FIFO, socket or device)",
+                            source=label)
+        if info.st_size > MAX_CASE_FILE_BYTES:
+            raise CaseError(f"case file {label} has {info.st_size:,} bytes, more than the "
+                            f"{MAX_CASE_FILE_BYTES:,} allowed", source=label)
+        # Read no more than the bound even if the file grew since (or its size was not reported).
+        with open(path, "rb", opener=lambda name, flags: os.open(name, flags | os.O_NONBLOCK)) as handle:
+            if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):  # replaced since the check
+                raise CaseError(f"case file {label} is not a regular file", source=label)
+            raw = handle.read(MAX_CASE_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise CaseError(f"case file not found: {label}", source=label) from None
+    except OSError as exc:
+        raise CaseError(f"cannot read case file {label}: {exc.strerror or exc}", source=label) from None
+    if len(raw) > MAX_CASE_FILE_BYTES:
+        raise CaseError(f"case file {label} has more than the {MAX_CASE_FILE_BYTES:,} bytes allowed",
+                        source=label)
+    return raw
 
 
 def load_case(source: str | Path) -> Case:
@@ -1050,12 +1162,7 @@ def load_case(source: str | Path) -> Case:
     if isinstance(source, Path) or _looks_like_path(str(source)):
         path = Path(source)
         label = str(path)
-        try:
-            raw = path.read_bytes()
-        except FileNotFoundError:
-            raise CaseError(f"case file not found: {label}", source=label) from None
-        except OSError as exc:
-            raise CaseError(f"cannot read case file {label}: {exc.strerror or exc}", source=label) from None
+        raw = _read_case_file(path, label)
     else:
         name = str(source)
         resource = _cases_dir().joinpath(f"{name}.toml")
@@ -1073,4 +1180,7 @@ def load_case(source: str | Path) -> Case:
         raise CaseError(f"{label}: not UTF-8 text ({exc.reason} at byte {exc.start})", source=label) from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{label}: TOML syntax error: {exc}", source=label) from None
+    except RecursionError:
+        raise CaseError(f"{label}: tables and arrays nested more than {MAX_CASE_DEPTH} levels deep",
+                        source=label) from None
     return case_from_dict(data, source=label)

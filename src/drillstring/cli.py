@@ -7,6 +7,8 @@ Commands
     weight-on-bit (lateral buckling), axial force.
 ``drillstring modes [CASE] [--count N] [--json]``
     The lowest natural frequencies of the axial, torsional and lateral mode families.
+``drillstring campbell [CASE] [--top-speed A:B:N] [--blades N] [--plot FILE.png] [--json]``
+    Campbell diagram: frequencies of each family against rotary speed, excitation lines, critical speeds.
 ``drillstring cases``
     The built-in cases.
 ``drillstring simulate [CASE] [--t-end S] [--out FILE.nc] [--plot FILE.png] [--json]``
@@ -15,7 +17,9 @@ Commands
     Monte Carlo study of random case parameters (default: the weight-on-hook): Zarr store (resumable),
     statistics, figures, report.
 ``drillstring map [CASE] [--top-speed A:B:N] [--weight-on-bit A:B:N] [--t-end S] [--out DIR] ...``
-    Operating map over top speed × weight-on-bit: performance, vibration, stability, buckling margin.
+    Operating map over top speed × weight-on-bit: performance, vibration, stability, buckling margin;
+    with ``--samples N`` (and ``--sigma``/``--param``), probabilities of stick-slip, buckling, impact and
+    instability at each point.
 ``drillstring sensitivity [CASE] --param PATH=LAW ... [--samples N] [--out DIR] ...``
     Global sensitivity: Sobol' indices of ROP, vibration, TOB, FOB.
 ``drillstring compare [CASE] [--t-end S] [--plot FILE.png] [--json]``
@@ -91,6 +95,8 @@ EXIT_RUN_FAILED = 1
 EXIT_INTERRUPTED = 130
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
+_KN = 1e3  # N per kN (tables not yet in the --units system: stability boundary, probabilistic map)
+_M_PER_H = 3600.0  # (m/h) per (m/s)
 
 app = typer.Typer(
     name="drillstring",
@@ -375,6 +381,103 @@ def modes(
 
 
 # ---------------------------------------------------------------------------------------------------------
+# drillstring campbell
+# ---------------------------------------------------------------------------------------------------------
+
+
+@app.command()
+def campbell(
+    case: CaseArg = "reference",
+    top_speed: Annotated[
+        str | None, typer.Option("--top-speed", help="Rotary speeds: FROM:TO:N, a list a,b,c, or one value; bare "
+                                                     "numbers in rpm, or with units (default 5 rpm:300 rpm:60).")
+    ] = None,
+    blades: Annotated[
+        int | None, typer.Option("--blades", help="Blades (or cones) of the bit: the n× excitation line "
+                                                  "(default 3).")
+    ] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Write the diagram as a PNG figure.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Campbell diagram: natural frequencies of each family against rotary speed (prestress, drilling fluid,
+    gyroscopic forward/backward whirl), the 1× and blade excitation lines, the critical speeds and the
+    case's operating speed."""
+    the_case = _load(case)
+    if plot is not None:
+        _check_output("--plot", plot)
+    from drillstring import api
+
+    try:
+        diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm")
+    except ValueError as error:
+        _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("blades = ", "--blades = "))
+    payload = diagram.to_dict()
+    if plot is not None:
+        from drillstring.plots import plot_campbell
+
+        plot_campbell(payload, plot, f"Campbell diagram: case {the_case.name!r}")
+        payload["figure"] = str(plot)
+    if as_json:
+        _print_json(payload)
+        return
+    _print_campbell(the_case.name, diagram, plot)
+
+
+def _print_campbell(name: str, diagram, plot: Path | None) -> None:
+    from drillstring.critical_speeds import BHA_SHARE
+
+    console = _console()
+    speeds = diagram.speeds * _RPM
+    orders = ", ".join(f"{k}×" for k in diagram.orders)
+    console.print(escape(f"Campbell diagram: case {name!r}, {len(speeds)} speeds {speeds[0]:g}–{speeds[-1]:g} rpm, "
+                         f"lines {orders}, frequencies up to {diagram.max_frequency:.2f} Hz"), soft_wrap=True)
+    rows: dict[tuple, dict] = {}
+    skipped = 0
+    for c in diagram.critical_speeds:
+        if c.family == "lateral" and c.bha_energy_share < BHA_SHARE:
+            skipped += 1
+            continue
+        row = rows.setdefault((c.family, c.mode, c.order), {"share": c.bha_energy_share})
+        row[c.whirl or "speed"] = c.speed * _RPM
+        if c.whirl != "backward":
+            row["frequency"] = c.frequency
+    table = Table(title="Critical speeds (excitation line × natural frequency)", title_justify="left")
+    for title in ("line", "family", "mode", "frequency [Hz]", "critical speed [rpm]", "backward whirl [rpm]",
+                  "BHA energy"):
+        table.add_column(escape(title), justify="left" if title in ("line", "family") else "right")
+    operating = diagram.operating_speed * _RPM if diagram.operating_speed else None
+    ordered = sorted(rows.items(), key=lambda item: min(v for k, v in item[1].items() if k in ("speed", "forward",
+                                                                                           "backward")))
+    for (family, mode, order), row in ordered:
+        main = row.get("speed", row.get("forward"))
+        table.add_row(f"{order}×", family, str(mode), f"{row['frequency']:.3f}",
+                      "" if main is None else f"{main:.1f}" + (" fwd" if family == "lateral" else ""),
+                      f"{row['backward']:.1f}" if "backward" in row else "",
+                      "" if row["share"] is None else f"{row['share']:.0%}")
+    console.print(table)
+    notes = [f"lateral: the BHA modes (at least {BHA_SHARE:.0%} of the kinetic energy below the top section); "
+             f"{skipped} crossings with drill-pipe lateral modes are in --json."]
+    if operating:
+        below = [r for (_, r) in ordered if max(v for k, v in r.items() if k in ("speed", "forward", "backward"))
+                 <= operating]
+        above = [r for (_, r) in ordered if min(v for k, v in r.items() if k in ("speed", "forward", "backward"))
+                 > operating]
+        near = []
+        if below:
+            near.append(f"{max(r.get('speed', r.get('forward', 0.0)) for r in below):.1f} rpm below")
+        if above:
+            near.append(f"{min(r.get('speed', r.get('forward', math.inf)) for r in above):.1f} rpm above")
+        notes.append(f"Operating speed {operating:.1f} rpm; nearest critical speeds: {', '.join(near) or 'none'}.")
+    notes.append("Axial and torsional frequencies do not depend on the rotary speed in the linear model; gyroscopic "
+                 "terms split each lateral pair into forward and backward whirl.")
+    notes.extend(diagram.notes)
+    if plot is not None:
+        notes.append(f"Figure: {plot}")
+    for note in notes:
+        console.print(escape(note), soft_wrap=True)
+
+
+# ---------------------------------------------------------------------------------------------------------
 # drillstring stability
 # ---------------------------------------------------------------------------------------------------------
 
@@ -383,21 +486,32 @@ _STABILITY_LATERAL_ROWS = 4
 
 
 @app.command()
-def stability(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOpt = None) -> None:
+def stability(
+    case: CaseArg = "reference",
+    boundary: Annotated[bool, typer.Option(
+        "--boundary", help="Also find the stability boundary along the weight-on-bit at the case's top speed "
+                           "(the weight-on-bit where the leading growth rate crosses 0).")] = False,
+    as_json: JsonOpt = False,
+    units: UnitsOpt = None,
+) -> None:
     """Steady drilling (closed form) and its linear stability: eigenvalues of the reduced model
     linearised about it, bit–rock law included.
 
     A mode with a positive growth rate grows from any small perturbation of steady drilling: the string
-    then settles into a self-excited vibration (the torsional one, through the bit–rock law).
+    then settles into a self-excited vibration (the torsional one, through the bit–rock law). With
+    --boundary, the weight-on-bit at which that happens (a Hopf bifurcation), everything else fixed.
     """
     the_case = _load(case)
     from drillstring import api
 
     try:
         result = api.stability(the_case)
+        found = api.stability_boundary(the_case) if boundary else None
     except ValueError as error:  # no steady drilling (the law gives no penetration)
         _fail(str(error))
     payload = result.to_dict()
+    if boundary:
+        payload["boundary"] = found
     if as_json:
         _print_json(payload)
         return
@@ -439,6 +553,21 @@ def stability(case: CaseArg = "reference", as_json: JsonOpt = False, units: Unit
             f"Steady drilling is UNSTABLE: the {leading.family} mode at {leading.frequency:.4f} Hz grows at "
             f"{leading.growth_rate:.4g} 1/s (e-folding time {1 / leading.growth_rate:.3g} s); the string "
             f"settles into a self-excited vibration."), soft_wrap=True)
+    if boundary:
+        console.print(escape(_boundary_line(found)), soft_wrap=True)
+
+
+def _boundary_line(found: dict) -> str:
+    """One line on the stability boundary along the weight-on-bit."""
+    at = f"at the top speed {found['top_speed'] * _RPM:.4g} rpm"
+    if found["weight_on_bit"] is None:
+        return (f"Stability boundary {at}: the leading growth rate does not cross 0 between 0 and the string's "
+                f"weight (weight-on-bit {found['nominal_weight_on_bit'] / _KN:,.2f} kN: "
+                f"{found['nominal_growth_rate']:.4g} 1/s)")
+    wob, nominal = found["weight_on_bit"], found["nominal_weight_on_bit"]
+    return (f"Stability boundary {at}: weight-on-bit {wob / _KN:,.2f} kN (steady drilling unstable above it); "
+            f"the case's {nominal / _KN:,.2f} kN is {abs(nominal - wob) / _KN:,.2f} kN "
+            f"{'above' if nominal > wob else 'below'} it (growth rate {found['nominal_growth_rate']:.4g} 1/s)")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -562,6 +691,7 @@ def simulate(
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError
+    from drillstring.files import NotARegularFile
     from drillstring.plots import plot_run
     from drillstring.results import write_netcdf
 
@@ -580,8 +710,15 @@ def simulate(
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
-    netcdf = write_netcdf(ds, out)
-    figure = plot_run(ds, plot, units=units) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+    try:
+        netcdf = write_netcdf(ds, out)
+        figure = plot_run(ds, plot, units=units) if ds.sizes.get("time", 0) else None  # probe nearest 1560 m
+    except OSError as error:  # disk full, no permission: the run is lost, the old files are left as they were
+        from drillstring.files import write_error_message
+
+        _fail(write_error_message(error), EXIT_RUN_FAILED)
+    except NotARegularFile as error:  # an output that became a device or FIFO during the run
+        _fail(str(error), EXIT_RUN_FAILED)
     numbers = _run_numbers(ds, window.transient)
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
@@ -838,16 +975,48 @@ def _buckling_line(summary: dict[str, Any], units: str) -> str:
             f"of a buckled draw {b['probability']:.3g}")
 
 
-def _indicator_line(summary: dict[str, Any]) -> str | None:
-    """One line on the realizations' vibration: bit-speed oscillation and stick-slip."""
-    indicators = summary.get("indicators") or {}
-    oscillation = indicators.get("bit_speed_oscillation")
-    if not oscillation:
+def _realizations_table(summary: dict[str, Any]) -> Table | None:
+    """The distributions of the per-realization cycle metrics: mean, std, dispersion, 2.5/50/97.5 %
+    quantiles and the nominal run's value, in engineering units."""
+    from drillstring.quantities import METRIC_DISPLAY
+
+    section = summary.get("realizations") or {}
+    if not section:
         return None
-    return (f"Bit-speed oscillation (max − min)/2Ω after {indicators['t_transient']:g} s: mean "
-            f"{oscillation['mean']:.3f}, range {oscillation['min']:.3f} – {oscillation['max']:.3f}; "
-            f"stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
-            f"{indicators['stick_slip_realizations']} of {summary['n_samples']} realizations")
+    table = Table(title=escape(f"Per realization, after t = {section['t_transient']:g} s (cycle metrics)"),
+                  title_justify="left", caption="stick-slip index (max − min)/(2 mean) of the bit speed; MSE "
+                  "(Teale) from the time means; stick: bit below 10 % of the top speed; oscillation/2Ω: "
+                  "(max − min)/(2 top speed)", caption_justify="left")
+    for header in ("metric", "unit", "mean", "std", "δ [%]", "2.5 %", "50 %", "97.5 %", "nominal", "n"):
+        table.add_column(escape(header), justify="left" if header in ("metric", "unit") else "right")
+    for name, (factor, unit, label) in METRIC_DISPLAY.items():
+        entry = section.get(name)
+        if not entry:
+            continue
+        cells = [_fmt(entry[key], ".4g", factor) for key in ("mean", "std")]
+        cells.append(_fmt(entry["dispersion"], ".3g", 100.0))
+        cells += [_fmt(entry[key], ".4g", factor) for key in ("q2.5", "q50", "q97.5", "nominal")]
+        table.add_row(escape(label), escape(unit), *cells, str(entry["n"]))
+    return table
+
+
+def _indicator_line(summary: dict[str, Any]) -> str | None:
+    """One line on the realizations' stick-slip and the linear stability of their steady drilling."""
+    section = summary.get("realizations") or {}
+    parts = []
+    if "stick_slip_realizations" in section:
+        parts.append(f"Stick-slip (bit below {STICK_SPEED_RATIO:.0%} of the top speed) in "
+                     f"{section['stick_slip_realizations']} of {summary['n_samples']} realizations")
+    stability = summary.get("stability") or {}
+    if stability.get("unstable_fraction") is not None:
+        text = (f"steady drilling unstable (growth rate > 0) in {stability['unstable_realizations']} of "
+                f"{stability['realizations_with_growth_rate']} ({100 * stability['unstable_fraction']:.3g} %)")
+        boundary = stability.get("boundary") or {}
+        if boundary.get("weight_on_bit") is not None:
+            text += (f"; nominal case's boundary at weight-on-bit {boundary['weight_on_bit'] / _KN:,.2f} kN "
+                     f"(top speed {boundary['top_speed'] * _RPM:.4g} rpm)")
+        parts.append(text)
+    return "; ".join(parts) or None
 
 
 @app.command()
@@ -900,7 +1069,7 @@ def study(
     --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN.
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
-    writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png and
+    writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png, realizations.png and
     dispersion.png, and the self-contained report OUT/report.html. Settings, the output folder and the
     scheduler are checked before anything runs; a second study on the same OUT is refused while one runs.
     """
@@ -936,9 +1105,11 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     """Run ``call(progress, note)`` (an API function of the study engine) for a command writing to ``out``:
     the store's lock is taken before loading the engine (a second run on the folder is refused at once),
     a progress bar and notes go to stderr, and every error ends the command with one line: exit 130 when
-    interrupted (what finished is saved), 1 for a run that started and failed, 2 for refused input (settings,
-    store, scheduler, lock). A folder created here and left empty is removed."""
-    from drillstring.files import LockedError
+    interrupted (what finished is saved), 1 for a run that started and failed (an output write that failed:
+    disk full, no permission), 2 for refused input (settings, store, scheduler, lock, another kind of run in
+    the folder, an output path that is not a regular file). Temporary files left in ``out`` by a killed run
+    are removed. A folder created here and left empty is removed."""
+    from drillstring.files import LockedError, remove_stale_temporaries, write_error_message
     from drillstring.stochastic import execution
     from drillstring.stochastic.locks import StudyLock, StudyLocked
 
@@ -957,6 +1128,7 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
         note(lock.note)
     tracker = _StudyProgress(err, noun)
     try:
+        remove_stale_temporaries(out)
         try:
             return call(tracker, note)
         finally:
@@ -968,6 +1140,8 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
               "resume", EXIT_INTERRUPTED)
     except (execution.WorkersLost, _api().StudyFailed) as error:
         _fail(str(error), EXIT_RUN_FAILED)
+    except OSError as error:  # an output write that failed: disk full, no permission, read-only filesystem
+        _fail(write_error_message(error, f"finished {noun} are kept in {out / store_name}"), EXIT_RUN_FAILED)
     except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
         _fail(str(error))
     finally:
@@ -995,16 +1169,23 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path], uni
                              f"{entry['std']:.4g}{unit}, dispersion {_fmt(entry['dispersion'], '.3g', 100.0)} %)"),
                       soft_wrap=True)
     console.print(_study_table(payload))
+    metrics = _realizations_table(payload)
+    if metrics is not None:
+        console.print(metrics)
     line = _indicator_line(payload)
     if line:
         console.print(escape(line), soft_wrap=True)
+    warning = (payload.get("time_convergence") or {}).get("warning")
+    if warning:
+        console.print(escape(f"warning: {warning}"), soft_wrap=True)
     console.print(escape(_buckling_line(payload, units)), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),
                       soft_wrap=True)
     console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
     console.print(escape(f"Summary: {files['summary']}, statistics: {files['statistics']}"), soft_wrap=True)
-    console.print(escape(f"Figures and report: {files['report']}"), soft_wrap=True)
+    console.print(escape(f"Figures and report: {files['report']}, interactive: {files['interactive']}"),
+                  soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -1048,10 +1229,31 @@ def map_command(
     out: OutOption = Path("map"),
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
+    samples: Annotated[
+        int | None,
+        typer.Option("--samples", "-n", help="Realizations per point (>= 2): a probabilistic map of the declared "
+                                             "uncertainty (default: deterministic, one run per point).")
+    ] = None,
+    sigma: Annotated[
+        float | None,
+        typer.Option("--sigma", help="With --samples: standard deviation [N] of the weight-on-hook, Normal around "
+                                     f"each point's hook load (default {DEFAULT_SIGMA:g} N when nothing else is "
+                                     "declared).")
+    ] = None,
+    param: ParamOption = None,
+    correlation: CorrelationOption = None,
+    seed: Annotated[int, typer.Option("--seed", help="With --samples: root seed of the random draws (>= 0).")
+                    ] = DEFAULT_SEED,
     as_json: JsonOpt = False,
     units: UnitsOpt = None,
 ) -> None:
     """Operating map over top speed × weight-on-bit: one simulation per grid point.
+
+    With --samples N: N realizations per point of the declared uncertainty (--sigma for the weight-on-hook
+    around each point's hook load, --param PATH=LAW and --correlation, else the case file's uncertainty table)
+    and per point the probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady
+    drilling, with the 2.5/50/97.5 % quantiles of the mean ROP and of the stick-slip index; OUT/probabilities.png
+    and OUT/quantiles.png instead of OUT/map.png.
 
     Per point: mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical specific energy,
     largest radial displacement and impacts, the leading growth rate of the linear stability of steady
@@ -1062,6 +1264,9 @@ def map_command(
     the_case = _load(case)
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
+    if samples is None and (sigma is not None or param or correlation):
+        _fail("--sigma, --param and --correlation declare the uncertainty of a probabilistic map: give --samples N")
+    laws, correlated = _declared_laws(param, correlation)
     from drillstring import api
 
     try:  # bare numbers of the options are in rpm and N; the grid is passed on in SI
@@ -1070,26 +1275,73 @@ def map_command(
     except ValueError as error:
         _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("weight_on_bit = ", "--weight-on-bit = "))
     _check_output("--out", out, folder=True)
+    noun = "grid points" if samples is None else "realizations"
     outcome = _engine_command(
-        out, "map.zarr", "map", "grid points",
+        out, "map.zarr", "map", noun,
         lambda progress, note: api.operating_map(
             the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
             transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note,
-            units=units))
-    _note_resumed(outcome.already, settings.points, "grid points", out / "map.zarr")
+            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, seed=seed, units=units))
+    _note_resumed(outcome.already, settings.points * (samples or 1), noun, out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)
         return
-    _print_map(the_case.name, outcome.summary, units)
+    if samples is None:
+        _print_map(the_case.name, outcome.summary, units)
+    else:
+        _print_probability_map(the_case.name, outcome.summary, units)
+
+
+def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> None:
+    console = _console()
+    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
+    console.print(escape(
+        f"Probabilistic operating map: case {name!r}, {_grid_text(summary, units)}, {summary['samples']} "
+        "realizations per "
+        f"point: {summary['done']} done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"),
+        soft_wrap=True)
+    table = Table(title="Probabilities per point and quantiles 50 % (2.5–97.5 %)", title_justify="left",
+                  caption="binomial standard errors of the probabilities in map.json and the report",
+                  caption_justify="left")
+    for header in ("rpm", "WOB [kN]", "n", "P(stick-slip)", "P(buckled)", "P(impact)", "P(unstable)",
+                   "mean ROP [m/h]", "stick-slip index"):
+        table.add_column(escape(header), justify="right")
+    probabilities, quantiles = summary["probabilities"], summary["quantiles"]
+
+    def spread(key: str, i: int, j: int, scale: float) -> str:
+        low, mid, high = (quantiles[key][k][i][j] for k in ("2.5", "50", "97.5"))
+        return f"{_fmt(mid, '.3g', scale)} ({_fmt(low, '.3g', scale)}–{_fmt(high, '.3g', scale)})"
+
+    for i, speed in enumerate(speeds):
+        for j, wob in enumerate(weights):
+            cells = [f"{speed * _RPM:g}", f"{wob / _KN:g}", f"{summary['samples_done'][i][j]}"]
+            for key in ("stick_slip_probability", "buckling_probability", "impact_probability",
+                        "instability_probability"):
+                cells.append(_fmt(probabilities[key]["values"][i][j], ".3f"))
+            cells += [spread("rate_of_penetration_q", i, j, _M_PER_H), spread("stick_slip_index_q", i, j, 1.0)]
+            table.add_row(*cells)
+    console.print(table)
+    console.print(escape(f"critical weight-on-bit (lateral buckling, nominal case): "
+                         f"{summary['critical_weight_on_bit'] / _KN:,.1f} kN"), soft_wrap=True)
+    files = summary.get("files") or {}
+    if files:
+        console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+        console.print(escape(f"Map: {files['map']}, figures: {files['figure']}, {files['quantiles']}, report: "
+                             f"{files['report']}"), soft_wrap=True)
+
+
+def _grid_text(summary: dict[str, Any], units: str) -> str:
+    """'N top speeds (a–b rpm) × M weights-on-bit (c–d kN)' of a map's summary, in the unit system ``units``."""
+    speeds, weights, force = summary["top_speed"], summary["weight_on_bit"], display_unit("force", units)
+    return (f"{len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} rpm) × {len(weights)} "
+            f"weights-on-bit ({force(min(weights)):.4g}–{force(max(weights)):.4g} {force.label})")
 
 
 def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
     console = _console()
     force, rop = display_unit("force", units), display_unit("rate_of_penetration", units)
-    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
     console.print(escape(
-        f"Operating map: case {name!r}, {len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} "
-        f"rpm) × {len(weights)} weights-on-bit ({force(min(weights)):.4g}–{force(max(weights)):.4g} {force.label}), "
+        f"Operating map: case {name!r}, {_grid_text(summary, units)}, "
         f"{summary['done']} points done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"
     ), soft_wrap=True)
     table = Table(title="Highlights", title_justify="left")
@@ -1113,8 +1365,8 @@ def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
     files = summary.get("files") or {}
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
-        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}"),
-                      soft_wrap=True)
+        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}, "
+                             f"interactive: {files['interactive']}"), soft_wrap=True)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -1205,7 +1457,7 @@ def _print_sensitivity(name: str, payload: dict[str, Any]) -> None:
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
         console.print(escape(f"Indices: {files['indices']}, figures: {files['figure']}, report: "
-                             f"{files['report']}"), soft_wrap=True)
+                             f"{files['report']}, interactive: {files['interactive']}"), soft_wrap=True)
 
 
 #: Commands that run in their own process only and never use Dask. With Dask installed, xarray imports

@@ -28,6 +28,19 @@ The reduced model then projects ``C`` on the kinematic basis that the boundary c
   lateral rigid-body motion to which a ``c1``/``c2``-like coefficient could belong; the lateral family
   keeps modal damping ``2 ξ |ω_i|`` on its own (pinned–pinned, prestressed) modes, the ROM's basis.
 
+Long strings and fine meshes: the projection ``ψᵀ C ψ`` needs every free–free mode of (1), a dense
+eigenproblem of the family's size. Above :data:`DENSE_LIMIT` DOFs it is computed without any mode and
+without forming ``C`` (:func:`projected_free_free_damping`): with the rigid part split off, the elastic part
+of (1) is ``2 ξ M S`` with ``S = (M⁻¹K)^{1/2}`` (``M Φ diag(ω) Φᵀ M``), and for ``ψ'`` M-orthogonal to the
+rigid shape
+
+    ψ'ᵀ M S ψ' = (2/π) ∫₀^∞ (K ψ)ᵀ (t² M + K)⁻¹ (M ψ') dt,                                   (2)
+
+(``(2/π) ∫ ω² dt / (t² + ω²) = ω`` on each mode), integrated by the trapezoidal rule in ``s = ln t``,
+where the integrand of each mode is ``(ω/2) sech(s − ln ω)``: the rule converges like ``exp(−π²/Δs)``
+(Trefethen & Weideman, SIAM Rev. 56 (2014) 385, §5), 6e-15 relative at ``Δs = 0.3``. Each node of the rule
+is one sparse solve with the banded ``t² M + K``: memory and time linear in the family's size.
+
 ``constrained`` is the earlier definition: ``2 ξ |ω_i|`` on every elastic basis mode (torsional modes
 top-held), ``c1 / m`` on the rigid axial mode, and ``c2`` unused. It over-damps the first torsional mode
 (ξ = 0.3 instead of ≈ 0.09) and is kept as an option for comparison.
@@ -40,6 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from drillstring.fem.assembly import THETA_X, U, dof
 
@@ -78,12 +92,8 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     """
     m = mass.toarray() if sp.issparse(mass) else np.asarray(mass, dtype=float)
     k = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness, dtype=float)
-    rigid = np.ones(m.shape[0])
-    residual = np.abs(k @ rigid).max()
-    if residual > 1e-9 * np.abs(k).max():
-        raise ValueError(f"the family has no rigid mode: |K r| = {residual:.3g} (K must be unconstrained)")
+    rigid, rigid_mass = _has_rigid_mode(m, k)
     omega2, shapes = sla.eigh(k, m, driver="gvd")
-    rigid_mass = float(rigid @ m @ rigid)
     # Use the exact rigid shape; eigh's other vectors are already M-orthogonal to it to round-off.
     shapes[:, 0] = rigid / np.sqrt(rigid_mass)
     omega = np.sqrt(np.clip(omega2, 0.0, None))
@@ -93,6 +103,94 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     m_phi = (sp.csr_matrix(mass) if sp.issparse(mass) else m) @ shapes  # the family's mass is banded
     matrix = (m_phi * coefficients) @ m_phi.T
     return FreeFreeDamping(0.5 * (matrix + matrix.T), omega, shapes, coefficients, rigid_mass)
+
+
+#: Families of more DOFs than this get the projection of eq. (2) instead of the dense eigenproblem (on 2 001
+#: DOFs: 0.3 s instead of 39 s, agreeing to 8e-12; the reference string's 161 stay dense).
+DENSE_LIMIT = 500
+#: Step of the trapezoidal rule of eq. (2) in ``s = ln t``; relative error about ``exp(−π²/Δs)``.
+_QUADRATURE_STEP = 0.3
+#: The rule of eq. (2) stops on each side once a node adds less than this fraction of the sum so far.
+_QUADRATURE_TAIL = 1e-16
+#: ... or once its nodes decrease geometrically to this relative accuracy (the rest is then summed exactly).
+_GEOMETRIC_TAIL = 1e-9
+
+
+def _has_rigid_mode(mass, stiffness) -> tuple[np.ndarray, float]:
+    """The unit rigid shape ``r = 1`` and its generalised mass ``rᵀ M r``; refuses a constrained family."""
+    rigid = np.ones(mass.shape[0])
+    residual = np.abs(stiffness @ rigid).max()
+    largest = abs(stiffness).max()
+    if residual > 1e-9 * largest:
+        raise ValueError(f"the family has no rigid mode: |K r| = {residual:.3g} (K must be unconstrained)")
+    return rigid, float(rigid @ mass @ rigid)
+
+
+def _elastic_square_root_form(mass: sp.spmatrix, stiffness: sp.spmatrix, shapes: np.ndarray) -> np.ndarray:
+    """``ψᵀ M S ψ`` with ``S = (M⁻¹K)^{1/2}`` by the quadrature of eq. (2) (``ψ`` the columns of
+    ``shapes``; the family has the rigid shape ``r = 1``, on which ``S`` vanishes)."""
+    m, k = sp.csc_matrix(mass), sp.csc_matrix(stiffness)
+    rigid = np.ones(m.shape[0])
+    m_rigid = m @ rigid
+    elastic = shapes - np.outer(rigid, (m_rigid @ shapes) / (rigid @ m_rigid))  # ψ', M-orthogonal to r
+    left, right = k @ shapes, m @ elastic  # K ψ = K ψ' (K r = 0)
+    rayleigh = np.einsum("ij,ij->", elastic, k @ elastic) / max(np.einsum("ij,ij->", elastic, right), 1e-300)
+    centre = 0.5 * np.log(max(rayleigh, 1e-300))
+
+    # (t² M + K) x = M ψ' bordered by the constraint rᵀ M x = 0: regular down to t = 0 (K r = 0), and its
+    # solution is the one of the unbordered system for t > 0 (M ψ' has no rigid component).
+    # The border last and SuperLU in natural order: the banded family matrices fill only their band.
+    border = sp.csc_matrix(m_rigid[:, None])
+    bordered_m = sp.bmat([[m, None], [None, sp.csc_matrix((1, 1))]], format="csc")
+    bordered_k = sp.bmat([[k, border], [border.T, None]], format="csc")
+    rhs = np.vstack([right, np.zeros((1, right.shape[1]))])
+
+    def node(s: float) -> np.ndarray:
+        t = np.exp(s)
+        lu = spla.splu((t * t * bordered_m + bordered_k).tocsc(), permc_spec="NATURAL")
+        return t * (left.T @ lu.solve(rhs)[:-1])
+
+    total = node(centre)
+    scale = np.abs(total).max()
+    ratio = np.exp(-_QUADRATURE_STEP)
+    for direction in (1.0, -1.0):
+        s, previous = centre, total
+        while True:
+            s += direction * _QUADRATURE_STEP
+            term = node(s)
+            total = total + term
+            scale = max(scale, np.abs(total).max())
+            if np.abs(term).max() <= _QUADRATURE_TAIL * scale:
+                break
+            # Far beyond the spectrum each node is the previous one times e^{−Δs} (the integrand goes like
+            # ψᵀKψ'/t above it and t ψ'ᵀMψ' below it, to relative order (ω/t)²): add the geometric rest.
+            if np.abs(term - ratio * previous).max() <= _GEOMETRIC_TAIL * np.abs(term).max():
+                total = total + term * (ratio / (1.0 - ratio))
+                break
+            previous = term
+    form = (2.0 / np.pi) * _QUADRATURE_STEP * total
+    return 0.5 * (form + form.T)
+
+
+def projected_free_free_damping(mass, stiffness, shapes: np.ndarray, damping_ratio: float,
+                                rigid_coefficient: float, *, dense_limit: int = DENSE_LIMIT
+                                ) -> tuple[np.ndarray, np.ndarray]:
+    """``(ψᵀ C ψ, ψᵀ C r)`` of the damping matrix (1) of a family with one rigid mode ``r = 1``, for the
+    columns ``ψ`` of ``shapes`` (n, p): [1/s] on a mass-normalised basis.
+
+    Families of at most ``dense_limit`` DOFs build ``C`` from all their modes
+    (:func:`free_free_damping`); larger ones never form it nor any mode (eq. (2), module docstring):
+    ``ψᵀ C ψ = 2 ξ ψᵀ M S ψ + (c / m_r²) (ψᵀ M r)(rᵀ M ψ)`` and ``C r = (c / m_r) M r``.
+    """
+    n = mass.shape[0]
+    if n <= dense_limit:
+        c = free_free_damping(mass, stiffness, damping_ratio, rigid_coefficient).matrix
+        return shapes.T @ c @ shapes, shapes.T @ (c @ np.ones(n))
+    rigid, m_rigid = _has_rigid_mode(mass, stiffness)
+    rigid_load = shapes.T @ (mass @ rigid)  # ψᵀ M r
+    rigid_part = (rigid_coefficient / m_rigid**2) * np.outer(rigid_load, rigid_load)
+    elastic = 2.0 * damping_ratio * _elastic_square_root_form(mass, stiffness, shapes)
+    return elastic + rigid_part, (rigid_coefficient / m_rigid) * rigid_load
 
 
 @dataclass(frozen=True)
@@ -156,9 +254,9 @@ def reduced_structural_damping(
         if len(columns) == 0:
             continue
         dofs = dof(nodes, kind)
-        ff = free_free_damping(mass[dofs][:, dofs], stiffness[dofs][:, dofs], damping_ratio, coefficient)
-        shapes = basis[dofs][:, columns]
-        matrix[np.ix_(columns, columns)] = shapes.T @ ff.matrix @ shapes
+        block, rigid_force = projected_free_free_damping(
+            mass[dofs][:, dofs], stiffness[dofs][:, dofs], basis[dofs][:, columns], damping_ratio, coefficient)
+        matrix[np.ix_(columns, columns)] = block
         if imposed_speed:
-            force[columns] = -imposed_speed * (shapes.T @ (ff.matrix @ np.ones(len(dofs))))
+            force[columns] = -imposed_speed * rigid_force
     return ReducedDamping(matrix, force)

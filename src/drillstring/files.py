@@ -4,7 +4,13 @@ No physics here and no drillstring imports: any layer that writes files may use 
 
 - :func:`atomic_output` yields a temporary path next to the target and renames it onto the target
   only once it is complete, so a reader never sees a half-written file (rename is atomic on POSIX
-  within one filesystem).
+  within one filesystem); it replaces only a regular file (or nothing): a device, FIFO or socket at the
+  target is refused (:class:`NotARegularFile`), never replaced.
+- :func:`remove_stale_temporaries` removes the temporary files left in a folder by a process that was
+  killed while writing (their names carry the writer's pid).
+- :func:`strict_json` writes JSON without NaN (undefined values are ``null``).
+- :func:`write_error_message` says in one line why an output write failed (disk full, no permission,
+  read-only filesystem) and what to do.
 - :func:`output_file_problem` and :func:`output_folder_problem` say, before any computation, why an
   output path cannot be written (a folder where a file is expected, a file where a folder is expected,
   no permission), or return None.
@@ -20,8 +26,11 @@ from __future__ import annotations
 import datetime as _dt
 import errno
 import json
+import math
 import os
+import re
 import socket
+import stat
 import tempfile
 import threading
 from contextlib import contextmanager
@@ -37,18 +46,57 @@ except ImportError:  # pragma: no cover - Windows
 # --- atomic writes -------------------------------------------------------------------------------
 
 
+class NotARegularFile(ValueError):
+    """An output path names something that is not a regular file (a device, a FIFO, a socket): it is
+    never replaced."""
+
+
+_KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
+          (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a folder"))
+
+
+def not_regular_problem(path: str | Path) -> str | None:
+    """Why ``path`` (followed if a link) must not be replaced by an output file: it exists and is not a
+    regular file (e.g. "is a character device, not a regular file; give a file name"), or None."""
+    try:
+        mode = os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except OSError as error:
+        return f"cannot be examined ({error.strerror or error})"
+    if stat.S_ISREG(mode):
+        return None
+    kind = next((name for test, name in _KINDS if test(mode)), "not a regular file")
+    return f"is {kind}, not a regular file; give a file name"
+
+
+#: Temporary files of :func:`atomic_output`: ``.<name>.<pid>.<thread>.tmp``.
+_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<thread>\d+)\.tmp$")
+
+
 @contextmanager
 def atomic_output(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path in ``path``'s folder; on success rename it onto ``path``, on any error
-    delete it (``path`` is then left as it was). The folder is created if missing."""
+    delete it (``path`` is then left as it was). The folder is created if missing. Only a regular file
+    (or nothing) is replaced: anything else at ``path`` raises :class:`NotARegularFile`, before and
+    after writing."""
     path = Path(path)
+    problem = not_regular_problem(path)
+    if problem:
+        raise NotARegularFile(f"{path} {problem}")
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
     try:
         yield temporary
+        problem = not_regular_problem(path)  # created meanwhile
+        if problem:
+            raise NotARegularFile(f"{path} {problem}")
         os.replace(temporary, path)
-    except BaseException:
+    except BaseException as error:
         temporary.unlink(missing_ok=True)
+        if isinstance(error, OSError) and error.errno is not None and error.filename in (None, str(temporary),
+                                                                                         temporary):
+            error.filename = str(path)  # name the output, not the temporary file (or nothing)
         raise
 
 
@@ -58,6 +106,66 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     with atomic_output(path) as temporary:
         temporary.write_text(text, encoding="utf-8")
     return path
+
+
+def _finite(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
+
+
+def strict_json(payload, indent: int | None = 2) -> str:
+    """JSON text of ``payload`` that any parser reads: every non-finite float (NaN, ±inf: an undefined
+    value) is written as ``null``, never as the non-standard ``NaN`` (``allow_nan=False``)."""
+    return json.dumps(_finite(payload), indent=indent, allow_nan=False)
+
+
+def remove_stale_temporaries(folder: str | Path) -> list[Path]:
+    """Remove the temporary files of :func:`atomic_output` left in ``folder`` by writers that are no
+    longer running (``kill -9`` while a file was being written); returns those removed. Files of a
+    running writer are left alone."""
+    removed = []
+    try:
+        entries = list(Path(folder).iterdir())
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _TEMPORARY.match(entry.name)
+        if match is None or int(match["pid"]) == os.getpid() or _pid_alive(int(match["pid"])):
+            continue
+        try:
+            if entry.is_file() and not entry.is_symlink():
+                entry.unlink()
+                removed.append(entry)
+        except OSError:
+            pass
+    return removed
+
+
+#: What to do after a failed write, by errno.
+_WRITE_ADVICE = {
+    errno.ENOSPC: "free some space",
+    errno.EDQUOT: "free some space (disk quota exceeded)",
+    errno.EACCES: "give write permission",
+    errno.EPERM: "give write permission",
+    errno.EROFS: "use a writable location (read-only filesystem)",
+}
+
+
+def write_error_message(error: OSError, kept: str = "") -> str:
+    """One line for an output write that failed with ``error``: what could not be written, why, and
+    what to do (``kept``: what was saved, e.g. "finished realizations are kept in study.zarr")."""
+    where = error.filename or "an output file"
+    why = error.strerror or str(error)
+    advice = _WRITE_ADVICE.get(error.errno, "fix the problem")
+    text = f"cannot write {where}: {why}"
+    if kept:
+        return f"{text}; {kept}; {advice} and run the same command again to resume"
+    return f"{text}; {advice} and run the command again"
 
 
 # --- output paths checked before computing -------------------------------------------------------
@@ -71,7 +179,7 @@ def _existing_ancestor(path: Path) -> Path:
     return path
 
 
-def _folder_write_problem(folder: Path) -> str | None:
+def folder_write_problem(folder: Path) -> str | None:
     """Why nothing can be created in the existing ``folder``, or None (tried for real: permissions,
     read-only filesystems and the superuser are all accounted for)."""
     try:
@@ -91,20 +199,24 @@ def output_folder_problem(path: str | Path) -> str | None:
     start = _existing_ancestor(path)
     if not start.is_dir():
         return f"{start} is a file, not a folder"
-    return _folder_write_problem(start)
+    return folder_write_problem(start)
 
 
 def output_file_problem(path: str | Path) -> str | None:
-    """Why the file ``path`` cannot be written (its folder is created if missing), or None."""
+    """Why the file ``path`` cannot be written (its folder is created if missing), or None. Only a
+    regular file is overwritten: a device (``/dev/null``), FIFO or socket there is a problem."""
     path = Path(path)
     if path.is_dir():
         return "is a folder; give a file name"
     if path.name in ("", ".", ".."):
         return "is not a file name"
+    problem = not_regular_problem(path)
+    if problem:
+        return problem
     start = _existing_ancestor(path.parent)
     if not start.is_dir():
         return f"{start} is a file, not a folder"
-    return _folder_write_problem(start)
+    return folder_write_problem(start)
 
 
 # --- locks ---------------------------------------------------------------------------------------
@@ -283,6 +395,24 @@ class FileLock:
 
 
 _RETRY = object()
+
+
+def lock_in_use(path: str | Path) -> bool:
+    """Whether the lock file ``path`` records a writer that is still running (on this host, or on
+    another host where it cannot be checked), without taking the lock."""
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="replace").strip()
+        holder = json.loads(text) if text else {}
+    except (OSError, ValueError):
+        return False
+    if not isinstance(holder, dict) or not holder.get("pid"):
+        return False
+    if holder.get("host") != socket.gethostname():
+        return True
+    try:
+        return _pid_alive(int(holder["pid"]))
+    except (TypeError, ValueError):
+        return False
 
 
 def held_by_this_process(path: str | Path) -> bool:

@@ -170,7 +170,17 @@ def count_below(k: sp.spmatrix, m: sp.spmatrix, sigma: float) -> int | None:
     return int(np.count_nonzero(lu.U.diagonal() < 0.0))
 
 
+#: Largest memory [bytes] the dense fallback of :func:`_eigen` may take (three n × n arrays).
+DENSE_FALLBACK_MEMORY = 2 * 2**30
+
+
 def _dense_eigen(k, m, count: int):
+    n = k.shape[0]
+    need = 3 * 8 * n * n
+    if need > DENSE_FALLBACK_MEMORY:
+        raise ValueError(f"the eigenproblem of a {n:,}-DOF family has no sparse solution here and would need "
+                         f"{need / 2**30:.1f} GiB dense, more than the {DENSE_FALLBACK_MEMORY / 2**30:g} GiB "
+                         "allowed: use a larger mesh.max_element_length")
     kd = k.toarray() if sp.issparse(k) else k
     md = m.toarray() if sp.issparse(m) else m
     return sla.eigh(kd, md, subset_by_index=[0, count - 1])

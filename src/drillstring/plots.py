@@ -18,6 +18,8 @@ are safe in scripts, notebooks, worker processes and tests.
 * :func:`plot_study` — the three study figures in one folder.
 * :func:`plot_map` — an operating map: ROP, vibration, MSE, lateral displacement over top speed × WOB, with
   the linear stability boundary, the buckling limit and the simulated points.
+* :func:`plot_campbell` — a Campbell diagram: frequencies of each family vs rotary speed, excitation lines,
+  critical speeds, the operating speed.
 * :func:`plot_sobol` — Sobol' indices (first order and total, with confidence intervals) per output;
   :func:`plot_sobol_convergence` — the indices at N/4, N/2, N.
 """
@@ -25,6 +27,7 @@ are safe in scripts, notebooks, worker processes and tests.
 from __future__ import annotations
 
 import math
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -37,19 +40,33 @@ from drillstring.quantities import DISPLAY_KINDS
 from drillstring.units import DisplayUnit, display_unit
 
 __all__ = [
+    "DISPLAY_UNITS",
     "TITLES",
     "plot_run",
     "plot_compare",
     "plot_convergence",
+    "plot_realizations",
     "plot_envelopes",
     "plot_dispersion",
     "plot_study",
     "plot_map",
     "plot_sobol",
     "plot_sobol_convergence",
+    "plot_campbell",
 ]
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
+
+#: name -> (factor from SI, unit label, short title) in SI display units, for the interactive page
+#: (:mod:`drillstring.interactive`, not yet in the ``--units`` system).
+DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
+    "rate_of_penetration": (3600.0, "m/h", "rate of penetration"),
+    "bit_speed": (_RPM, "rpm", "bit speed"),
+    "torque_on_bit": (1e-3, "kN·m", "torque-on-bit"),
+    "force_on_bit": (1e-3, "kN", "force-on-bit"),
+    "radial_displacement": (1e3, "mm", "radial displacement"),
+    "contact_force": (1e-3, "kN", "contact force"),
+}
 
 #: name -> short title for the axes (units: drillstring.quantities.DISPLAY_KINDS in the chosen system).
 TITLES: dict[str, str] = {
@@ -311,7 +328,17 @@ def _contact_panel(ax, runs, units: str | None) -> None:
 
 
 def _case_name(case_toml: str) -> str:
-    """The ``name = "..."`` of a case's TOML text ('' when absent)."""
+    """The ``name = "..."`` of a case's TOML text ('' when absent), as plain text for a figure: its dollar
+    signs escaped, so that Matplotlib never reads it as mathtext."""
+    try:
+        name = tomllib.loads(str(case_toml)).get("name", "")
+    except (tomllib.TOMLDecodeError, RecursionError):
+        name = _case_name_line(case_toml)
+    return str(name).replace("$", r"\$")
+
+
+def _case_name_line(case_toml: str) -> str:
+    """The ``name = "..."`` line of a TOML text that does not parse ('' when absent)."""
     for line in str(case_toml).splitlines():
         stripped = line.strip()
         if stripped.startswith("name") and "=" in stripped:
@@ -359,10 +386,15 @@ def _input_dispersions(stats: xr.Dataset) -> list[tuple[str, float]]:
     return out
 
 
-def plot_convergence(stats: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
+def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict | None = None, *,
+                     units: str | None = None) -> Path:
     """``conv(n_s)`` of each observable (``<v>_convergence``), divided by its last value so that all
-    observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices."""
-    fig, (ax,) = _figure(1, 1, (8.0, 4.8))
+    observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices. With
+    ``time_convergence`` (the summary's section, :func:`~drillstring.stochastic.analysis.time_convergence`),
+    a second panel: the maximum and time-mean dispersion of each observable over records of growing
+    length after the transient — curves still rising at the right show statistics not converged in time."""
+    fig, axes = _figure(1, 2 if time_convergence else 1, (13.0 if time_convergence else 8.0, 4.8))
+    ax = axes[0]
     names = [str(v)[: -len("_convergence")] for v in stats.data_vars if str(v).endswith("_convergence")]
     if not names:
         raise ValueError("stats has no <observable>_convergence variable")
@@ -377,9 +409,58 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, *, units: str | None =
     ax.axhline(1.0, color="k", lw=0.7, ls=":")
     ax.set_xlabel("number of realizations $n_s$")
     ax.set_ylabel("conv($n_s$) / conv($n_s^{max}$)")
+    ax.set_title("in the number of realizations", fontsize="medium")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    fig.suptitle(_study_title(stats, "Mean-square convergence", units))
+    if time_convergence:
+        ax = axes[1]
+        for k, (name, entry) in enumerate(time_convergence["observables"].items()):
+            ends = [w["t_end"] for w in entry["windows"]]
+            title = TITLES.get(name, name)
+            for key, style, label in (("dispersion_max", "-", "max"), ("dispersion_time_mean", "--", "time mean")):
+                values = [np.nan if w[key] is None else 100.0 * w[key] for w in entry["windows"]]
+                ax.plot(ends, values, style, marker="o", ms=3, color=f"C{k}", lw=1.1, label=f"{title}, {label}")
+        ax.set_xlabel(f"end of the record t: dispersion over [{time_convergence.get('t_start', 0.0):g} s, t] [s]")
+        ax.set_ylabel("dispersion [%]")
+        ax.set_title(f"in time (records growing by {time_convergence['window']:g} s)", fontsize="medium")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize="x-small", ncol=2)
+    fig.suptitle(_study_title(stats, "Convergence", units))
+    return _save(fig, path)
+
+
+def plot_realizations(stats: xr.Dataset, path: str | Path) -> Path:
+    """Histograms of the per-realization cycle metrics (``realization_<name>`` of :data:`~drillstring.
+    quantities.METRIC_DISPLAY`) in engineering units, the mean (solid) and the nominal run's value (dashed);
+    the panel of a metric without finite values says so."""
+    from drillstring.quantities import METRIC_DISPLAY
+
+    names = [name for name in METRIC_DISPLAY if f"realization_{name}" in stats]
+    if not names:
+        raise ValueError("stats has no realization_<metric> variable")
+    rows, cols = _grid(len(names))
+    fig, axes = _figure(rows, cols, (3.6 * cols, 2.8 * rows))
+    for ax, name in zip(axes, names):
+        factor, unit, label = METRIC_DISPLAY[name]
+        values = np.asarray(stats[f"realization_{name}"].values, dtype=float) * factor
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            ax.hist(finite, bins=min(30, max(5, int(np.sqrt(finite.size)))), color="C0", alpha=0.7)
+            ax.axvline(finite.mean(), color="k", lw=1.0, label="mean")
+        else:
+            ax.text(0.5, 0.5, "undefined for every realization", ha="center", va="center", transform=ax.transAxes)
+        nominal = float(stats[f"realization_{name}"].attrs.get("nominal", np.nan)) * factor
+        if np.isfinite(nominal):
+            ax.axvline(nominal, color=_NOMINAL_COLOR, lw=1.0, ls="--", label="nominal")
+        ax.set_xlabel(f"{label} [{unit}]", fontsize="small")
+        ax.set_ylabel("realizations", fontsize="small")
+        ax.grid(True, alpha=0.3)
+    for ax in axes[len(names):]:
+        ax.set_visible(False)
+    axes[0].legend(loc="best", fontsize="x-small")
+    t0 = stats.attrs.get("t_transient")
+    fig.suptitle(_study_title(stats, "Per-realization cycle metrics" + (f" after t = {float(t0):g} s" if t0 is not None
+                                                                         else "")))
     return _save(fig, path)
 
 
@@ -427,31 +508,83 @@ def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float, *,
     return _save(fig, path)
 
 
-def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float, *,
-               units: str | None = None) -> dict[str, Path]:
-    """The three study figures in ``out_dir``: ``convergence.png``, ``envelopes.png``, ``dispersion.png``
-    (returned by those names without the extension), in the units of ``units``."""
+def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float,
+               time_convergence: dict | None = None, *, units: str | None = None) -> dict[str, Path]:
+    """The study figures in ``out_dir``: ``convergence.png`` (in n_s, and in time with ``time_convergence``),
+    ``envelopes.png``, ``dispersion.png`` and, when the statistics hold per-realization cycle metrics,
+    ``realizations.png`` (returned by those names without the extension)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return {
-        "convergence": plot_convergence(stats, out / "convergence.png", units=units),
+    figures = {
+        "convergence": plot_convergence(stats, out / "convergence.png", time_convergence, units=units),
         "envelopes": plot_envelopes(stats, out / "envelopes.png", units=units),
         "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient, units=units),
     }
+    if any(str(v).startswith("realization_") for v in stats.data_vars):
+        figures["realizations"] = plot_realizations(stats, out / "realizations.png")
+    return figures
 
 
 # ---------------------------------------------------------------------------------------------------------
 # An operating map
 # ---------------------------------------------------------------------------------------------------------
 
-#: Panels of :func:`plot_map`: variable, display-unit kind (None: a plain number), title, colour map,
-#: logarithmic scale.
+#: Panels of :func:`plot_map`: variable, factor from SI, label, colour map, logarithmic scale.
+_FAMILY_COLORS = {"axial": "C0", "torsional": "C1", "lateral": "C2"}
+
+
+def plot_campbell(diagram: dict, path: str | Path, title: str = "Campbell diagram") -> Path:
+    """A Campbell diagram from :meth:`drillstring.critical_speeds.CampbellDiagram.to_dict` (SI): frequency [Hz]
+    against rotary speed [rpm]; axial and torsional curves, lateral BHA modes (forward whirl solid,
+    backward dashed; the drill-pipe lateral modes thin grey), the excitation lines, the critical speeds
+    of the BHA modes (dots) and the operating speed."""
+    rpm = np.asarray(diagram["speeds"], dtype=float) * _RPM
+    top = float(diagram["max_frequency"])
+    threshold = diagram["bha_share_threshold"]
+    fig, axes = _figure(1, 1, (10.0, 7.0))
+    ax = axes[0]
+    labelled: set[str] = set()
+    for curve in diagram["curves"]:
+        family, whirl, share = curve["family"], curve["whirl"], curve["bha_energy_share"]
+        f = np.asarray(curve["frequencies"], dtype=float)
+        if family == "lateral" and share < threshold:
+            ax.plot(rpm, f, color="0.8", lw=0.4, zorder=1)
+            continue
+        key = f"{family} {whirl}".strip()
+        ax.plot(rpm, f, color=_FAMILY_COLORS[family], lw=1.1, ls="--" if whirl == "backward" else "-",
+                label=None if key in labelled else (f"lateral BHA, {whirl}" if family == "lateral" else family),
+                zorder=2)
+        labelled.add(key)
+    for k, order in enumerate(diagram["orders"]):
+        ax.plot(rpm, order * rpm / 60.0, color="k", lw=1.2, ls=(":", "-.", "--")[k % 3], label=f"{order}× excitation",
+                zorder=3)
+    shown = [c for c in diagram["critical_speeds"]
+             if c["family"] != "lateral" or c["bha_energy_share"] >= threshold]
+    if shown:
+        ax.plot([c["speed"] * _RPM for c in shown], [c["frequency"] for c in shown], "o", ms=3.5, color="k",
+                mfc="w", zorder=4, label="critical speeds")
+    if diagram.get("operating_speed"):
+        ax.axvline(diagram["operating_speed"] * _RPM, color="C3", lw=1.5, zorder=3,
+                   label=f"operating speed {diagram['operating_speed'] * _RPM:.0f} rpm")
+    ax.set_xlim(rpm[0], rpm[-1])
+    ax.set_ylim(0.0, top)
+    ax.set_xlabel("rotary speed [rpm]")
+    ax.set_ylabel("natural frequency [Hz]")
+    ax.set_title(f"{title} (grey: drill-pipe lateral modes)", fontsize="medium")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small", framealpha=0.9)
+    return _save(fig, path)
+
+
 MAP_PANELS = (
-    ("mean_rate_of_penetration", "rate_of_penetration", "mean rate of penetration", "viridis", False),
-    ("bit_speed_oscillation", None, "bit-speed oscillation (max − min)/2Ω", "magma_r", False),
-    ("mechanical_specific_energy", "pressure", "mechanical specific energy", "cividis_r", True),
-    ("max_radial_displacement", "small_length", "max radial displacement at the probes", "plasma", False),
+    ("mean_rate_of_penetration", 3600.0, "mean rate of penetration [m/h]", "viridis", False),
+    ("bit_speed_oscillation", 1.0, "bit-speed oscillation (max − min)/2Ω [-]", "magma_r", False),
+    ("mechanical_specific_energy", 1e-6, "mechanical specific energy [MPa]", "cividis_r", True),
+    ("max_radial_displacement", 1e3, "max radial displacement at the probes [mm]", "plasma", False),
 )
+#: The display-unit kind of each :data:`MAP_PANELS` variable in :func:`plot_map` (None: a plain number).
+_MAP_KINDS = {"mean_rate_of_penetration": "rate_of_penetration", "bit_speed_oscillation": None,
+              "mechanical_specific_energy": "pressure", "max_radial_displacement": "small_length"}
 
 
 def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str, cmap: str,
@@ -504,9 +637,10 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     fig, axes = _figure(2, 2, (12.0, 9.0))
     xx, yy = np.meshgrid(x, y, indexing="ij")
     contour_ok = x.size >= 2 and y.size >= 2 and np.isfinite(growth).sum() >= 4
-    for ax, (name, kind, title, cmap, log) in zip(axes, MAP_PANELS):
+    for ax, (name, _, si_label, cmap, log) in zip(axes, MAP_PANELS):
+        kind = _MAP_KINDS[name]
         shown = DisplayUnit("-", 1.0) if kind is None else display_unit(kind, units)
-        label = f"{title} [{shown.label}]"
+        label = f"{si_label.split(' [')[0]} [{shown.label}]"
         values = shown(np.asarray(ds[name].values, dtype=float))
         values = np.where(status == 1, values, np.nan)
         _map_panel(ax, fig, x, y, values, label, cmap, log)
@@ -541,6 +675,96 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     if t_end is not None and t_tr is not None:
         title += f" (runs of {float(t_end):g} s, outputs over t ≥ {float(t_tr):g} s)"
     fig.suptitle(title)
+    return _save(fig, path)
+
+
+#: Panels of a probabilistic map: variable, label.
+PROBABILITY_PANELS = (
+    ("stick_slip_probability", "probability of stick-slip"),
+    ("buckling_probability", "probability of a buckled string"),
+    ("impact_probability", "probability of wall impact"),
+    ("instability_probability", "probability of unstable steady drilling"),
+)
+
+
+def _sampled_map_title(ds: xr.Dataset, what: str) -> str:
+    title = what
+    name = _case_name(ds.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    return title + (f" ({int(ds.attrs['samples'])} realizations per point, runs of {float(ds.attrs['t_end']):g} s, "
+                    f"outputs over t ≥ {float(ds.attrs['t_transient']):g} s)")
+
+
+def _points_and_buckling(ax, ds: xr.Dataset, x: np.ndarray, y: np.ndarray) -> None:
+    """The grid points (dots) and the nominal lateral buckling limit (red dashed) on a map panel."""
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    if np.isfinite(critical) and y.min() <= critical <= y.max():
+        ax.axhline(critical, color="C3", ls="--", lw=1.6)
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    ax.plot(xx.ravel(), yy.ravel(), ".", color="k", ms=3, clip_on=False)
+    ax.set_xlabel("top speed [rpm]")
+    ax.set_ylabel("weight-on-bit [kN]")
+
+
+def _map_legend(fig, ds: xr.Dataset) -> None:
+    from matplotlib.lines import Line2D
+
+    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    handles = [Line2D([], [], color="C3", ls="--", lw=1.6,
+                      label=f"lateral buckling of the nominal string, WOB = {critical:.4g} kN"),
+               Line2D([], [], color="k", marker=".", ls="", label="grid point")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize="small")
+
+
+def plot_probability_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
+    sampled_map_dataset`) as four panels over top speed [rpm] × the points' nominal weight-on-bit [kN]: the
+    probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady drilling (colour
+    scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``."""
+    from matplotlib.colors import Normalize
+
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    fig, axes = _figure(2, 2, (12.0, 9.0))
+    levels = np.linspace(0.0, 1.0, 11)
+    for ax, (name, label) in zip(axes, PROBABILITY_PANELS):
+        z = np.asarray(ds[name].values, dtype=float)
+        if x.size >= 2 and y.size >= 2:
+            artist = ax.contourf(x, y, np.nan_to_num(z.T, nan=np.nan), levels=levels, cmap="RdYlGn_r",
+                                 norm=Normalize(0.0, 1.0), extend="neither")
+        else:
+            xx, yy = np.meshgrid(x, y, indexing="ij")
+            artist = ax.scatter(xx.ravel(), yy.ravel(), c=z.ravel(), cmap="RdYlGn_r", vmin=0.0, vmax=1.0, s=80,
+                                zorder=2)
+        fig.colorbar(artist, ax=ax, label=label, ticks=levels[::2])
+        _points_and_buckling(ax, ds, x, y)
+        ax.set_title(label, fontsize="medium")
+    _map_legend(fig, ds)
+    fig.suptitle(_sampled_map_title(ds, "Probabilistic operating map"))
+    return _save(fig, path)
+
+
+def plot_quantile_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """The 2.5, 50 and 97.5 % quantiles of the mean ROP [m/h] (top row) and of the stick-slip index (bottom
+    row) over each point's realizations, over top speed [rpm] × weight-on-bit [kN], each panel on its own colour
+    scale.
+    Written to the PNG ``path``."""
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    levels = [float(q) for q in ds["quantile"].values]
+    fig, axes = _figure(2, len(levels), (5.0 * len(levels), 9.0))
+    rows = (("rate_of_penetration_q", 3600.0, "mean ROP [m/h]", "viridis"),
+            ("stick_slip_index_q", 1.0, "stick-slip index [-]", "magma_r"))
+    for r, (name, factor, label, cmap) in enumerate(rows):
+        values = np.asarray(ds[name].values, dtype=float) * factor
+        for k, q in enumerate(levels):
+            ax = axes[r * len(levels) + k]
+            _map_panel(ax, fig, x, y, values[..., k], label, cmap)
+            _points_and_buckling(ax, ds, x, y)
+            ax.set_title(f"{label.split(' [')[0]}: {100 * q:g} % quantile", fontsize="medium")
+    _map_legend(fig, ds)
+    fig.suptitle(_sampled_map_title(ds, "Quantiles over the realizations"))
     return _save(fig, path)
 
 

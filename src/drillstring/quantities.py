@@ -46,3 +46,17 @@ DISPLAY_KINDS = {
     "weight_on_hook": "force",
     "weight_on_bit": "force",
 }
+
+#: Display of the per-realization cycle metrics in tables and figures: name -> (factor from SI, unit, label).
+METRIC_DISPLAY = {
+    "stick_slip_index": (1.0, "-", "stick-slip index"),
+    "bit_speed_min": (30.0 / 3.141592653589793, "rpm", "bit speed min"),
+    "bit_speed_max": (30.0 / 3.141592653589793, "rpm", "bit speed max"),
+    "period": (1.0, "s", "period"),
+    "rate_of_penetration_mean": (3600.0, "m/h", "ROP mean"),
+    "torque_on_bit_mean": (1e-3, "kN·m", "TOB mean"),
+    "force_on_bit_mean": (1e-3, "kN", "FOB mean"),
+    "mechanical_specific_energy": (1e-6, "MPa", "MSE"),
+    "stick_time_fraction": (100.0, "%", "stick time"),
+    "bit_speed_oscillation": (1.0, "-", "oscillation/2Ω"),
+}

@@ -17,7 +17,7 @@ import datetime as _dt
 import html
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +28,8 @@ from drillstring.units import display_unit
 __all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
 
 _RPM = 60.0 / (2.0 * math.pi)
+#: The interactive page written beside a report when it has interactive figures.
+INTERACTIVE_PAGE = "interactive.html"
 
 #: Display names of the study observables, in table order.
 OBSERVABLE_NAMES = {
@@ -280,21 +282,60 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
 
 
 def _indicators_html(summary: Mapping[str, Any]) -> str:
-    indicators = summary.get("indicators") or {}
-    rows = []
-    labels = {"bit_speed_oscillation": "bit-speed oscillation (max − min)/2Ω",
-              "stick_time_fraction": "stick time fraction (bit below 10 % of the top speed)"}
-    for key, label in labels.items():
-        entry = indicators.get(key)
-        if entry:
-            rows.append((label, f"mean {_num(entry['mean'], 3)}, std {_num(entry['std'], 3)}, "
-                                f"range {_num(entry['min'], 3)} – {_num(entry['max'], 3)}"))
-    if "stick_slip_realizations" in indicators:
-        rows.append(("realizations in stick-slip", _num(indicators["stick_slip_realizations"])))
-    if not rows:
-        return ""
-    return (f"<h3>Vibration of the realizations (after t = {_num(indicators.get('t_transient'))} s)</h3>"
-            + _kv_table(rows))
+    """The per-realization cycle metrics (distribution table), the stability of the draws and the
+    convergence of the dispersions in time."""
+    from drillstring.quantities import METRIC_DISPLAY
+
+    section = summary.get("realizations") or {}
+    out = ""
+    if section:
+        rows = []
+        for name, (factor, unit, label) in METRIC_DISPLAY.items():
+            entry = section.get(name)
+            if not entry:
+                continue
+            cells = [_num(None if entry[k] is None else entry[k] * factor)
+                     for k in ("mean", "std")] + [_percent(entry["dispersion"])]
+            cells += [_num(None if entry[k] is None else entry[k] * factor)
+                      for k in ("q2.5", "q50", "q97.5", "nominal")]
+            rows.append(f"<tr><td>{_esc(label)}</td><td>{_esc(unit)}</td>"
+                        + "".join(f'<td class="num">{c}</td>' for c in cells)
+                        + f'<td class="num">{entry["n"]}</td></tr>')
+        out += (f"<h3>Per realization (after t = {_num(section.get('t_transient'))} s)</h3>"
+                "<p>Cycle metrics of each realization, computed from its own (realized) case; their "
+                "distribution over the realizations. Stick-slip index (max − min)/(2·mean) of the bit speed; "
+                "MSE = WOB/A + Ω·TOB/(A·ROP) (Teale) from the time means, A the borehole cross-section.</p>"
+                "<table><tr><th>metric</th><th>unit</th><th>mean</th><th>std</th><th>δ [%]</th><th>2.5 %</th>"
+                "<th>50 %</th><th>97.5 %</th><th>nominal</th><th>n</th></tr>" + "".join(rows) + "</table>")
+        if "stick_slip_realizations" in section:
+            out += _kv_table([("realizations in stick-slip (bit below 10 % of the top speed)",
+                               _num(section["stick_slip_realizations"]))])
+    stability = summary.get("stability") or {}
+    if stability.get("unstable_fraction") is not None:
+        boundary = stability.get("boundary") or {}
+        rows = [("draws whose steady drilling is unstable (growth rate > 0)",
+                 f"{stability['unstable_realizations']} of {stability['realizations_with_growth_rate']} "
+                 f"({_percent(stability['unstable_fraction'])} %)"),
+                ("growth rate [1/s]: mean, 2.5 – 97.5 %",
+                 f"{_num(stability['growth_rate']['mean'])}, {_num(stability['growth_rate']['q2.5'])} – "
+                 f"{_num(stability['growth_rate']['q97.5'])}"),
+                ("nominal growth rate [1/s]", _num(stability.get("nominal_growth_rate")))]
+        if boundary.get("weight_on_bit") is not None:
+            rows.append(("stability boundary of the nominal case along the weight-on-bit [kN]",
+                         _num(boundary["weight_on_bit"] / 1e3)))
+        out += "<h3>Linear stability of steady drilling at each draw</h3>" + _kv_table(rows)
+    convergence = summary.get("time_convergence") or {}
+    if convergence.get("observables"):
+        rows = []
+        for name, entry in convergence["observables"].items():
+            windows = ", ".join(f"{_num(w['t_end'], 3)} s: {_percent(w['dispersion_max'])}" for w in entry["windows"])
+            rows.append((OBSERVABLE_NAMES.get(name, name), _esc(windows)))
+        note = convergence.get("warning")
+        out += (f"<h3>Convergence in time (records growing by {_num(convergence['window'])} s)</h3>"
+                f"<p>Maximum dispersion [%] over the record from t = {_num(convergence.get('t_start'))} s to each "
+                "end.</p>" + _kv_table(rows)
+                + (f"<p><b>Warning:</b> {_esc(note)}</p>" if note else ""))
+    return out
 
 
 def _value_html(value: Any) -> str:
@@ -330,22 +371,33 @@ def _figure_html(name: str, path: str | Path) -> str:
 
 
 def _page(path: str | Path, title: str, case_toml: str, sections: list[str], figures: Mapping[str, str | Path],
-          run_info: Mapping[str, Any], units: str | None = None) -> Path:
-    """One self-contained page: title, the case, ``sections`` (HTML), the run table and the figures."""
+          run_info: Mapping[str, Any], interactive: Sequence[Mapping[str, Any]] | None = None,
+          units: str | None = None) -> Path:
+    """One self-contained page: title, the case (in the unit system ``units``), ``sections`` (HTML), the run
+    table and the figures. With ``interactive`` figures (:mod:`drillstring.interactive`), the same page with
+    them, zoomable, is written beside it as ``interactive.html``, and this page links to it."""
     path = Path(path)
     stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
+    head = "\n".join([
+        '<meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f"<title>{_esc(title)}</title>",
-        f"<style>{_CSS}</style></head><body>",
+        f"<style>{_CSS}</style>",
+    ])
+    body = [
         f"<h1>{_esc(title)}</h1>",
         f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
         _case_section(case_toml, units),
         *sections,
         _run_section(run_info),
     ]
+    if interactive is not None:
+        from drillstring.interactive import write_interactive_page
+
+        write_interactive_page(path.with_name(INTERACTIVE_PAGE), head, "\n".join(body), interactive)
+        body.insert(2, f'<p>Zoomable figures (values on hover, single realizations on demand): '
+                       f'<a href="{INTERACTIVE_PAGE}">{INTERACTIVE_PAGE}</a>, beside this page.</p>')
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head>', head, "</head><body>", *body]
     if figures:
         parts.append("<h2>Figures</h2>")
         parts.extend(_figure_html(name, fig) for name, fig in figures.items())
@@ -361,6 +413,7 @@ def write_report(
     summary: Mapping[str, Any],
     figures: Mapping[str, str | Path],
     run_info: Mapping[str, Any],
+    interactive: Sequence[Mapping[str, Any]] | None = None,
     units: str | None = None,
 ) -> Path:
     """Write the study report as one self-contained HTML page at ``path``; returns the path.
@@ -373,10 +426,12 @@ def write_report(
         figures: caption -> PNG file, embedded in this order as base64 ``data:`` URIs.
         run_info: label -> value rows of the "Run" table (e.g. wall time, workers, failures); a mapping
             value (such as the failures ``{realization: message}``) is shown as a collapsible list.
+        interactive: figures of :func:`drillstring.interactive.study_figures`: the same page with them is
+            written beside as ``interactive.html`` (see :func:`_page`).
         units: the unit system of the tables, ``"si"`` or ``"field"`` (None: ``$DRILLSTRING_UNITS``, else si).
     """
     return _page(path, title, case_toml, [_study_section(summary, units), _dispersion_table(summary)], figures,
-                 run_info, units)
+                 run_info, interactive, units)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -434,23 +489,26 @@ def _sobol_tables(indices: Mapping[str, Any]) -> str:
 
 def write_sensitivity_report(path: str | Path, *, title: str, case_toml: str, indices: Mapping[str, Any],
                              figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                             interactive: Sequence[Mapping[str, Any]] | None = None,
                              units: str | None = None) -> Path:
     """Write the report of a sensitivity analysis (one self-contained HTML page): the case, the design,
     a table of the Sobol' indices with their intervals and convergence per output (``indices``: the JSON
     form of a :class:`~drillstring.stochastic.sensitivity.SobolResult`), the run table and the figures."""
-    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info, units)
+    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info, interactive, units)
+
+
+def _axis(values: list[float], unit: str) -> str:
+    """A map axis for a table cell: 'first to last unit (n values)'."""
+    if not values:
+        return "–"
+    return f"{_num(min(values))} to {_num(max(values))} {unit} ({len(values)} values)"
 
 
 def _map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
     force, rop, pressure = (display_unit(k, units) for k in ("force", "rate_of_penetration", "pressure"))
     speeds = [v * _RPM for v in summary.get("top_speed", [])]
     weights = [force(v) for v in summary.get("weight_on_bit", [])]
-
-    def axis(values: list[float], unit: str) -> str:
-        if not values:
-            return "–"
-        return f"{_num(min(values))} to {_num(max(values))} {unit} ({len(values)} values)"
-
+    axis = _axis
     rows = [("top speed", axis(speeds, "rpm")), ("weight-on-bit", axis(weights, force.label)),
             ("points (done, failed)", f"{_num(summary.get('points'))} ({_num(summary.get('done'))}, "
                                       f"{_num(summary.get('failed'))})"),
@@ -476,8 +534,68 @@ def _map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
 
 def write_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
                      figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                     interactive: Sequence[Mapping[str, Any]] | None = None,
                      units: str | None = None) -> Path:
     """Write the report of an operating map (one self-contained HTML page): the case, the grid and its
     highlights (``summary``: :func:`drillstring.stochastic.operating_map.map_summary`), the run table and
     the figures, in the unit system ``units``."""
-    return _page(path, title, case_toml, [_map_section(summary, units)], figures, run_info, units)
+    return _page(path, title, case_toml, [_map_section(summary, units)], figures, run_info, interactive, units)
+
+
+#: Columns of the per-point table of a probabilistic map: summary key, header.
+_PROBABILITY_COLUMNS = (("stick_slip_probability", "P(stick-slip)"), ("buckling_probability", "P(buckled)"),
+                        ("impact_probability", "P(impact)"), ("instability_probability", "P(unstable)"))
+
+
+def _probability_map_section(summary: Mapping[str, Any]) -> str:
+    speeds, weights = list(summary.get("top_speed", [])), list(summary.get("weight_on_bit", []))
+    sigma = summary.get("sigma")
+    laws = [f"weight_on_hook: normal around each point's hook load, σ = {_num(sigma / 1e3)} kN"] if sigma else []
+    laws += [str(v) for v in summary.get("laws", [])[1 if sigma else 0:]]
+    rows = [("top speed", _axis([v * _RPM for v in speeds], "rpm")),
+            ("weight-on-bit (nominal at each point)", _axis([v / 1e3 for v in weights], "kN")),
+            ("realizations per point", _num(summary.get("samples"))),
+            ("random parameters", _esc("; ".join(f"{p}" for p in laws)) or "–"),
+            ("realizations (done, failed)", f"{_num(summary.get('realizations'))} ({_num(summary.get('done'))}, "
+                                            f"{_num(summary.get('failed'))})"),
+            ("simulated time per realization", f"{_num(summary.get('t_end'))} s, outputs over t ≥ "
+                                               f"{_num(summary.get('t_transient'))} s"),
+            ("critical weight-on-bit (lateral buckling, nominal case)",
+             f"{_num(float(summary.get('critical_weight_on_bit', math.nan)) / 1e3)} kN")]
+    probabilities = summary.get("probabilities", {})
+    quantiles = summary.get("quantiles", {})
+    head = ("<tr><th>top speed [rpm]</th><th>WOB [kN]</th><th>n</th>"
+            + "".join(f"<th>{_esc(h)}</th>" for _, h in _PROBABILITY_COLUMNS)
+            + "<th>mean ROP [m/h]: 50 % (2.5–97.5 %)</th><th>stick-slip index: 50 % (2.5–97.5 %)</th></tr>")
+
+    def spread(name: str, i: int, j: int, factor: float) -> str:
+        q = quantiles.get(name, {})
+        low, mid, high = (q.get(k, [[None]])[i][j] for k in ("2.5", "50", "97.5"))
+        scale = (lambda v: None if v is None else v * factor)
+        return f"{_num(scale(mid), 3)} ({_num(scale(low), 3)}–{_num(scale(high), 3)})"
+
+    body = []
+    for i, speed in enumerate(speeds):
+        for j, wob in enumerate(weights):
+            cells = [_num(speed * _RPM), _num(wob / 1e3), _num(summary.get("samples_done", [[None]])[i][j])]
+            for key, _ in _PROBABILITY_COLUMNS:
+                value = probabilities.get(key, {}).get("values", [[None]])[i][j]
+                error = probabilities.get(key, {}).get("standard_error", [[None]])[i][j]
+                cells.append(f"{_num(value, 3)} ± {_num(error, 2)}")
+            cells += [spread("rate_of_penetration_q", i, j, 3600.0), spread("stick_slip_index_q", i, j, 1.0)]
+            body.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    return ("<h2>Map</h2><p>At each point, realizations of the declared uncertainty (one random stream per "
+            "realization index, common to the points). Each probability is the share of the point's finished "
+            "realizations with the event (± its binomial standard error): stick-slip, the bit below 10 % of the top "
+            "speed; buckled, the lowest lateral eigenvalue of the realized string below 0; impact, a contact with "
+            "the borehole wall; unstable, a positive growth rate of steady drilling.</p>" + _kv_table(rows)
+            + f"<h2>Points</h2><table>{head}{''.join(body)}</table>")
+
+
+def write_probability_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
+                                 figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                                 interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
+    """Write the report of a probabilistic operating map (one self-contained HTML page): the case, the grid,
+    the random parameters, a table of every point's probabilities and quantiles (``summary``:
+    :func:`drillstring.stochastic.probabilistic_map.sampled_map_summary`), the run table and the figures."""
+    return _page(path, title, case_toml, [_probability_map_section(summary)], figures, run_info, interactive)

@@ -9,6 +9,8 @@ whirl orbit).
 
 from __future__ import annotations
 
+import io
+
 from pathlib import Path
 
 import numpy as np
@@ -58,8 +60,10 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> Path:
     path = Path(path)
     clean = dataset.copy()
     clean.attrs = {k: (int(v) if isinstance(v, (bool, np.bool_)) else v) for k, v in dataset.attrs.items()}
+    buffer = io.BytesIO()  # built in memory, then written by Python: a full disk is one clean OSError,
+    clean.to_netcdf(buffer, engine="h5netcdf")  # never HDF5 errors printed while its objects are freed
     with atomic_output(path) as temporary:
-        clean.to_netcdf(temporary, engine="h5netcdf")
+        temporary.write_bytes(buffer.getvalue())
     return path
 
 

@@ -115,3 +115,36 @@ def test_compiled_failure_message_and_partial_outputs(coarse_case):
     assert np.all(np.isfinite(partial.observables["bit_speed"]))
     with pytest.raises(ValueError, match="engine"):
         simulate_model(rom, t_end=1.0, output_step=0.1, engine="fortran")
+
+
+def test_pausing_the_compiled_loop_changes_nothing(small_case, monkeypatch):
+    """The loop returns to Python every few attempts when each call is given no time (so Ctrl-C is seen
+    between calls); the step sequence and the outputs are bit-identical to the default run."""
+    from drillstring.dynamics import compiled
+
+    rom = case_reduced_model(small_case)
+    calls = []
+    default = simulate_model(rom, t_end=5.0, output_step=0.5, progress=calls.append)
+    default_calls = len(calls)
+    monkeypatch.setattr(compiled, "CALL_SECONDS", 0.0)  # 10 attempts per call
+    monkeypatch.setattr(compiled, "FIRST_CALL_ATTEMPTS", 10)
+    calls.clear()
+    paused = simulate_model(rom, t_end=5.0, output_step=0.5, progress=calls.append)
+    assert len(calls) > default_calls and len(calls) >= paused.stats["n_steps"] // 10
+    np.testing.assert_array_equal(paused.observables["bit_speed"], default.observables["bit_speed"])
+    assert paused.stats["n_steps"] == default.stats["n_steps"]
+
+
+def test_step_size_collapse_stops_early_naming_the_stiff_term(small_case):
+    """A stiff nonsense case (a 1e30 N/m stabilizer) stops after a few tens of thousands of attempts, not
+    at max_steps, with t, h and the likely stiff term; the rows computed are kept."""
+    from drillstring.dynamics.compiled import COLLAPSE_WINDOW
+
+    stabilizer = small_case.stabilizers[0].model_copy(update={"stiffness": 1e30})
+    rom = case_reduced_model(small_case.model_copy(update={"stabilizers": [stabilizer]}))
+    result = simulate_model(rom, t_end=1.0, output_step=0.01, raise_on_failure=False)
+    assert result.status == "failed"
+    assert result.stats["n_steps"] < 3 * COLLAPSE_WINDOW
+    assert "step size collapsed" in result.message and "likely stiff term: " in result.message
+    assert f"(h = " in result.message and "\n" not in result.message
+    assert len(result.time) >= 1 and np.all(np.isfinite(result.observables["bit_speed"]))

@@ -138,3 +138,48 @@ def test_no_steady_drilling_is_refused(coarse_case):
     model = case_reduced_model(small_case(case))
     with pytest.raises(ValueError, match="rate_of_penetration .* <= 0"):
         steady_drilling(model)
+
+
+def test_growth_rate_root_of_known_functions():
+    from drillstring.dynamics.stability import growth_rate_root
+
+    def linear(x):
+        return (x - 96e3) / 1e6
+
+    assert growth_rate_root(linear, 100e3, 1.0, 1e6) == pytest.approx(96e3, abs=1.0)  # searched downwards
+    assert growth_rate_root(linear, 20e3, 1.0, 1e6) == pytest.approx(96e3, abs=1.0)  # upwards
+    # two roots, 60 and 150 kN: searched downwards where the rate is positive, upwards where it is negative
+    def parabola(x):
+        return (x - 60e3) * (x - 150e3)
+
+    assert growth_rate_root(parabola, 140e3, 1.0, 1e6) == pytest.approx(150e3, abs=1.0)
+    assert growth_rate_root(parabola, 160e3, 1.0, 1e6) == pytest.approx(150e3, abs=1.0)
+    assert growth_rate_root(parabola, 50e3, 1.0, 1e6) is None  # positive all the way down
+    assert growth_rate_root(lambda x: 1.0 + x, 100e3, 1.0, 1e6) is None  # never crosses 0
+
+    def undefined_below(x):  # no steady drilling below 90 kN
+        if x < 90e3:
+            raise ValueError("no steady drilling")
+        return 1.0
+
+    assert growth_rate_root(undefined_below, 100e3, 1.0, 1e6) is None
+
+
+def test_weight_on_bit_boundary_of_the_reference_case(reference_case):
+    """The Hopf point of steady drilling at 100 rpm: the torsional growth rate crosses 0 near 96 kN."""
+    from drillstring.dynamics.stability import case_stability, weight_on_bit_boundary
+
+    found = weight_on_bit_boundary(reference_case)
+    wob = found["weight_on_bit"]
+    assert 90e3 < wob < 100e3 and found["nominal_growth_rate"] > 0
+    assert case_stability(reference_case, weight_on_bit=wob - 50.0).leading.growth_rate < 0
+    assert case_stability(reference_case, weight_on_bit=wob + 50.0).leading.growth_rate > 0
+
+
+@pytest.mark.parametrize("weight_on_bit", [90e3, 100e3])
+def test_leading_growth_rate_from_the_eigenvalues_alone(coarse_case, weight_on_bit):
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.stability import leading_growth_rate
+
+    model = case_reduced_model(coarse_case, weight_on_bit=weight_on_bit)
+    assert leading_growth_rate(model) == pytest.approx(stability(model).leading.growth_rate, rel=1e-9, abs=1e-12)

@@ -5,6 +5,7 @@ from drillstring.fem.assembly import (
     THETA_X, U, V, W, Stabilizer, assemble_matrix, dof, stabilizer_stiffness, structural_matrices,
 )
 from drillstring.fem.mesh import build_mesh
+from exact_solutions import spinning_timoshenko_whirl
 
 
 def test_assembly_of_uniform_bar_is_tridiagonal_with_summed_nodes(drill_pipe):
@@ -55,21 +56,10 @@ def _whirl(k, m, g, spin, v_rows, w_rows):
     return lam.imag, direction, np.abs(lam.real).max()
 
 
-def _timoshenko_whirl(mode, length, s, spin):
-    """Forward and backward whirl [rad/s] of a pinned–pinned spinning Timoshenko shaft, exact.
-
-    With r = v + i w = R sin(kx) e^{iωt}, Θ = θz + iψ = P cos(kx) e^{iωt} (ψ = −θy), k = nπ/L, the
-    equations ρA r̈ = k_sGA (r'' − Θ'), ρI Θ̈ − i ρI_p Ω Θ̇ = EI Θ'' + k_sGA (r' − Θ) give
-    (k_sGA k² − ρA ω²)(EI k² + k_sGA − ρI ω² + ρI_p Ω ω) − (k_sGA k)² = 0; the flexural roots are
-    the smallest positive (forward) and negative (backward) ω."""
-    k = mode * np.pi / length
-    kga, ei, rho_a = s.shear_stiffness, s.bending_stiffness, s.mass_per_length
-    rho_i, rho_ip = s.density * s.second_moment, s.density * s.polar_moment
-    poly = np.polymul([-rho_a, 0.0, kga * k * k], [-rho_i, rho_ip * spin, ei * k * k + kga])
-    poly[-1] -= (kga * k) ** 2
-    roots = np.roots(poly)
-    roots = roots[np.abs(roots.imag) < 1e-9 * np.abs(roots).max()].real
-    return roots[roots > 0].min(), -roots[roots < 0].max()
+def _shaft(s):
+    """(EI, ρA, ρI, ρI_p, k_sGA) of a section, the arguments of the exact spinning-shaft solution."""
+    return (s.bending_stiffness, s.mass_per_length, s.density * s.second_moment, s.density * s.polar_moment,
+            s.shear_stiffness)
 
 
 def test_spinning_shaft_whirl_against_closed_form(drill_collar):
@@ -93,7 +83,7 @@ def test_spinning_shaft_whirl_against_closed_form(drill_collar):
         omega, direction, damping = _whirl(kd, md, gd, spin, v_rows, w_rows)
         assert damping < 1e-8 * omega.max()
         for mode in (1, 2):
-            forward, backward = _timoshenko_whirl(mode, length, drill_collar, spin)
+            forward, backward = spinning_timoshenko_whirl(mode, length, *_shaft(drill_collar), spin)
             if spin == 0.0:
                 fem = omega[2 * mode - 2: 2 * mode]  # degenerate pair
                 np.testing.assert_allclose(fem, forward, rtol=1e-4)

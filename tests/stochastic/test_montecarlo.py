@@ -533,3 +533,16 @@ def test_impossible_laws_are_refused_before_running(small_case, tmp_path, laws, 
 def test_settings_need_a_random_parameter():
     with pytest.raises(ValueError, match="no random parameter"):
         mc.StudySettings(samples=2)
+
+
+def test_store_without_the_per_realization_metrics_is_refused(small_case, tmp_path):
+    """A store written before the workers stored their cycle metrics and growth rate is refused with one
+    line (a resumed study would have nowhere to write them)."""
+    path = tmp_path / "old.zarr"
+    store = mc.StudyStore(path, small_case, woh_settings(small_case, 1000.0, samples=2, t_end=0.2))
+    assert "growth_rate" in store.group.attrs["layout"]
+    layout = dict(store.group.attrs["layout"])
+    del layout["growth_rate"]
+    store.group.attrs["layout"] = layout
+    with pytest.raises(StoreError, match="older drillstring version .*no growth_rate"):
+        mc.open_study_group(path)

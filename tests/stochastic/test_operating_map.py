@@ -126,7 +126,7 @@ def test_map_files_and_refusals(torsional_case, tmp_path):
     out = tmp_path / "m"
     outcome = api.operating_map(torsional_case, top_speed=[8.0, 16.0], weight_on_bit="60,90 kN", t_end=2.0,
                                 output_step=0.05, workers=1, out=out)
-    assert set(outcome.files) == {"store", "map", "summary", "figure", "report"}
+    assert set(outcome.files) == {"store", "map", "summary", "figure", "report", "interactive"}
     stored = xr.open_dataset(out / "map.nc", engine="h5netcdf").load()
     assert stored.top_speed.attrs["units"] == "rad/s" and stored.weight_on_bit.attrs["units"] == "N"
     assert stored.mean_rate_of_penetration.attrs["units"] == "m/s"

@@ -7,7 +7,8 @@ import pytest
 
 from drillstring.case import load_case
 from drillstring.dynamics.simulate import SimulationResult
-from drillstring.stochastic.runs import RUN_OUTPUTS, bit_area, mechanical_specific_energy, result_outputs
+from drillstring.dynamics.indicators import bit_area, mechanical_specific_energy
+from drillstring.stochastic.runs import RUN_OUTPUTS, result_outputs
 
 
 def test_mechanical_specific_energy_is_teale():

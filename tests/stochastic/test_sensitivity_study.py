@@ -51,7 +51,7 @@ def test_sensitivity_files(analysed):
     for kind in ("S1", "ST", "S1_ci", "ST_ci"):
         assert set(entry[kind]) == set(LAWS)
     assert set(payload["outputs"]) == set(ss.SENSITIVITY_OUTPUTS)
-    for name in ("sobol.png", "sobol_convergence.png", "report.html", "sensitivity.zarr"):
+    for name in ("sobol.png", "sobol_convergence.png", "report.html", "interactive.html", "sensitivity.zarr"):
         assert (out / name).exists(), name
     assert "Sobol" in (out / "report.html").read_text()
 

@@ -40,6 +40,18 @@ def test_batched_writes_and_counts(tmp_path):
                                                            "workers": 1}]
 
 
+def test_a_row_of_fill_values_is_written_and_not_taken_for_damage(tmp_path):
+    """A finished row whose value is the fill value (NaN: undefined) has its chunk written, so the store is
+    whole, not damaged, when reopened."""
+    from drillstring.stochastic.store import damage
+
+    store = Squares(tmp_path / "s.zarr", 2)
+    store.write_many([TaskOutcome(0, DONE, "", {"y": np.nan, "series": np.full(3, np.nan)}, 0.5),
+                      TaskOutcome(1, DONE, "", {"y": np.nan, "series": np.full(3, np.nan)}, 0.5)])
+    assert damage(zarr.open_group(str(tmp_path / "s.zarr"), mode="r")) == []
+    assert Squares(tmp_path / "s.zarr", 2).pending() == []
+
+
 def test_refusals(tmp_path):
     Squares(tmp_path / "s.zarr", 4)
     with pytest.raises(ValueError, match="holds a different squares"):

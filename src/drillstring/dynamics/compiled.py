@@ -17,6 +17,13 @@ and its duration is reported as ``compile_time``, apart from the solver's ``wall
 
 The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
 step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
+A chunk also pauses after a bounded number of step attempts (about :data:`CALL_SECONDS` of work), so the
+loop returns to Python often: Ctrl-C (``KeyboardInterrupt``) takes effect within a fraction of a second
+even when the step size has collapsed, and the collapse itself is detected early: a run whose mean step
+(over the last :data:`COLLAPSE_WINDOW` attempts, and since the start unless the recent one is below
+:data:`COLLAPSE_RATIO` times the output step) would take more than ``max_steps`` attempts to reach t_end
+stops with the time, the step size and the likely stiff term (:mod:`drillstring.dynamics.stiffness`), keeping
+the rows already computed.
 """
 
 from __future__ import annotations
@@ -38,11 +45,22 @@ from drillstring.dynamics.runge_kutta import (
     error_norm,
     step_factor,
 )
+from drillstring.dynamics.stiffness import stiffness_diagnosis
 
-SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE = 0, 1, 2, 3
-# indices into the integrator's scalar state array
-T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE = range(10)
-N_STATE = 10
+SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE, PAUSED, COLLAPSED = 0, 1, 2, 3, 4, 5
+# indices into the integrator's scalar state array (PAUSE_AT: step attempts after which a chunk pauses)
+T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE, PAUSE_AT = range(11)
+N_STATE = 11
+#: Wall time [s] one call of the compiled loop aims at before it returns to Python (Ctrl-C, progress).
+CALL_SECONDS = 0.1
+#: Step attempts of the first call (then adapted to take about CALL_SECONDS each).
+FIRST_CALL_ATTEMPTS = 200
+#: Step attempts over which the mean step is measured (the window), and the fraction of the output step
+#: below which that mean alone predicts the run's length: a run stops as collapsed when reaching t_end
+#: would take more than max_steps attempts at the window's mean step, if it is below this floor, else at
+#: the larger of the window's and the whole run's mean steps. The contact case's impacts take steps of
+#: about 1e-4 of its output step; a fluid at 1e3 m/s, 2e-6; at 1e4 m/s, 3e-8.
+COLLAPSE_WINDOW, COLLAPSE_RATIO = 20_000, 1e-5
 CAUSES = {0: "", 1: "error estimate not met", 2: "non-finite values in the right-hand side"}
 
 
@@ -138,6 +156,8 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
             return SUCCESS
         if state[N_ACCEPTED] + state[N_REJECTED] >= st.max_steps:
             return MAX_STEPS
+        if state[N_ACCEPTED] + state[N_REJECTED] >= state[PAUSE_AT]:
+            return PAUSED
         h = state[H]
         remaining = t_end - t
         last = False
@@ -354,10 +374,35 @@ def integrate_compiled(
         _observe(work, 0, work.y, case2, observe_data)
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
+    output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])
+    # step attempts per call; (attempts, t) at the start of the window of the collapse check
+    budget, window = float(FIRST_CALL_ATTEMPTS), (0.0, float(state[T]))
     for t_stop in stops:
-        status = _run_chunk(work, float(t_stop), settings, rhs_data, case2, observe_data)
-        if progress is not None:
-            progress(float(state[T]))
+        while True:
+            attempts = state[N_ACCEPTED] + state[N_REJECTED]
+            state[PAUSE_AT] = attempts + budget
+            called = _time.perf_counter()
+            status = _run_chunk(work, float(t_stop), settings, rhs_data, case2, observe_data)
+            elapsed = _time.perf_counter() - called  # Ctrl-C is raised here, between calls
+            if progress is not None:
+                progress(float(state[T]))
+            if status == PAUSED:
+                budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
+            attempts = state[N_ACCEPTED] + state[N_REJECTED]
+            if status in (PAUSED, SUCCESS) and state[T] < grid[-1] and attempts - window[0] >= COLLAPSE_WINDOW:
+                recent = (state[T] - window[1]) / (attempts - window[0])  # mean step of the window [s]
+                average = state[T] / attempts  # mean step of the whole run [s]
+                remaining = grid[-1] - state[T]
+                # the attempts reaching t_end would take: at the recent mean step when it is below the floor,
+                # else at the larger of the recent and the whole run's (both must say it cannot finish)
+                rate = recent if recent < COLLAPSE_RATIO * output_step else max(recent, average)
+                needed = attempts + remaining / max(rate, 1e-300)
+                if needed > max_steps:
+                    status = COLLAPSED
+                    break
+                window = (attempts, float(state[T]))
+            if status != PAUSED:
+                break
         if status != SUCCESS:
             break
     n_written = int(state[N_OUT])
@@ -376,13 +421,20 @@ def integrate_compiled(
     message = ""
     if status != SUCCESS:
         t, h = state[T], state[H]
-        cause = {
-            MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
-            MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
-            NON_FINITE: "non-finite state after an accepted step",
-        }[status]
+        if status == COLLAPSED:
+            cause = (f"step size collapsed: mean step {recent:.3g} s over the last {attempts - window[0]:,.0f} "
+                     f"attempts ({average:.3g} s since t = 0); reaching t_end would take about {needed:.3g} "
+                     f"attempts, more than max_steps = {max_steps:,}")
+        else:
+            cause = {
+                MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
+                MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
+                NON_FINITE: "non-finite state after an accepted step",
+            }[status]
         last = CAUSES.get(int(state[LAST_CAUSE]), "")
         if last and status != NON_FINITE:
             cause += f"; last rejection: {last}"
+        if status != NON_FINITE:
+            cause += "; " + stiffness_diagnosis(model, t, work.y, tab.name)
         message = f"integration failed at t = {t:.10g} s (h = {h:.3g} s): {cause}"
     return work.out[:n_written], stats, message

@@ -185,14 +185,30 @@ def _family_of(model: ReducedOrderModel) -> np.ndarray:
                      for f in model.family])
 
 
+def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:
+    """The state matrix without the rigid axial position (the depth drilled: no equation depends on it),
+    and the mask of the rows kept."""
+    n = model.size
+    keep = np.ones(2 * n, dtype=bool)
+    keep[_rigid_column(model)] = False
+    return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
+
+
+def leading_growth_rate(model: ReducedOrderModel) -> float:
+    """The largest real part [1/s] of the eigenvalues of ``model`` linearised about steady drilling (> 0:
+    steady drilling is unstable): :func:`stability`'s ``leading.growth_rate`` from the eigenvalues alone
+    (no eigenvectors, no families), for a study's every realization. ValueError when there is no steady
+    drilling."""
+    matrix, _ = _informative_matrix(model, steady_drilling(model))
+    return float(np.max(sla.eigvals(matrix).real))
+
+
 def stability(model: ReducedOrderModel) -> StabilityResult:
     """Steady drilling of ``model`` and the eigenvalues of the model linearised about it."""
     steady = steady_drilling(model)
     n = model.size
-    a = linearized_matrix(model, steady)
-    keep = np.ones(2 * n, dtype=bool)
-    keep[_rigid_column(model)] = False  # the depth drilled: no equation depends on it
-    values, vectors = sla.eig(a[np.ix_(keep, keep)])
+    matrix, keep = _informative_matrix(model, steady)
+    values, vectors = sla.eig(matrix)
     full = np.zeros((2 * n, len(values)), dtype=complex)
     full[keep] = vectors
     # modal energy of each coordinate: ½ (|δη̇|² + |ω²| |δη|²)
@@ -220,3 +236,73 @@ def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResu
     from drillstring.dynamics.rom import case_reduced_model
 
     return stability(case_reduced_model(case, weight_on_bit=weight_on_bit))
+
+
+#: Relative step of the bracket search of :func:`growth_rate_root` (multiplied by 1.5 at each step).
+BOUNDARY_FIRST_STEP = 0.02
+#: Tolerance of the boundary [N].
+BOUNDARY_TOLERANCE = 1.0
+
+
+def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_step: float = BOUNDARY_FIRST_STEP,
+                     xtol: float = BOUNDARY_TOLERANCE) -> float | None:
+    """The root nearest ``start`` of a growth rate ``growth(x)`` [1/s] along one parameter x, searched in
+    ``(lower, upper)``: from ``start`` the bracket grows geometrically (steps ``first_step·start``, × 1.5)
+    in the direction in which the sign should change — downwards when ``growth(start) > 0`` (the growth
+    rate of steady drilling rises with the weight-on-bit), upwards otherwise —, then the root is found by
+    Brent's method to ``xtol``. ``growth`` may raise ValueError (no steady state there): the search then
+    stops on that side. None when no sign change is found."""
+    from scipy.optimize import brentq
+
+    def safe(x: float) -> float | None:
+        try:
+            value = float(growth(x))
+        except ValueError:
+            return None
+        return value if math.isfinite(value) else None
+
+    g0 = safe(start)
+    if g0 is None:
+        return None
+    if g0 == 0.0:
+        return float(start)
+    direction = -1.0 if g0 > 0.0 else 1.0
+    step = first_step * abs(start)
+    near, g_near = start, g0
+    while True:
+        far = near + direction * step
+        if not lower < far < upper:
+            far = lower if direction < 0 else upper
+        g_far = safe(far)
+        if g_far is None:
+            return None
+        if g_far == 0.0:
+            return float(far)
+        if (g_far > 0.0) != (g_near > 0.0):
+            return float(brentq(lambda x: growth(x), min(near, far), max(near, far), xtol=xtol))
+        if far in (lower, upper):
+            return None
+        near, g_near = far, g_far
+        step *= 1.5
+
+
+def weight_on_bit_boundary(case) -> dict:
+    """The stability boundary of steady drilling of ``case`` along the weight-on-bit at its top speed (SI):
+    ``weight_on_bit`` [N] where the leading growth rate of :func:`case_stability` crosses 0 nearest the
+    case's weight-on-bit (:func:`growth_rate_root`, searched in (0, string weight)), None when it does not
+    in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
+    ``nominal_growth_rate`` [1/s]. Above the boundary steady drilling is unstable (a Hopf bifurcation: the
+    torsional mode's damping turns negative through the velocity-weakening bit torque)."""
+    from functools import lru_cache
+
+    from drillstring.dynamics.rom import case_reduced_model
+
+    @lru_cache(maxsize=None)
+    def growth(weight_on_bit: float) -> float:
+        return leading_growth_rate(case_reduced_model(case, weight_on_bit=weight_on_bit))
+
+    wob = float(case.operation.weight_on_bit)
+    nominal = growth(wob)
+    root = growth_rate_root(growth, wob, 1e-3 * case.weight, case.weight)
+    return {"weight_on_bit": root, "top_speed": float(case.operation.top_speed),
+            "nominal_weight_on_bit": float(wob), "nominal_growth_rate": float(nominal)}

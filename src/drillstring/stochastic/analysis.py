@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
-import tomllib
+import math
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from drillstring.dynamics.indicators import DEFAULT_TRANSIENT, drilling_indicators, transient_end
+from drillstring.dynamics.indicators import CYCLE_METRICS, DEFAULT_TRANSIENT, cycle_metrics, transient_end
 from drillstring.quantities import LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import STUDY_OBSERVABLES, open_study_group
 from drillstring.stochastic.locks import StudyLock
-from drillstring.stochastic.store import DONE, FAILED
+from drillstring.stochastic.runs import REALIZATION_METRICS
+from drillstring.stochastic.store import DONE, FAILED, StoreError, damage
 from drillstring.stochastic.statistics import (
+    dispersion,
     dispersion_summary,
     mean_square_convergence,
     realization_statistics,
@@ -27,11 +29,19 @@ def load_study(store_path: str | Path) -> xr.Dataset:
 
     Refused while another process runs a study on the store (:class:`~drillstring.stochastic.
     locks.StudyLocked`: statistics are never computed from a store being written), and for a
-    folder that is not a complete study store (:class:`~drillstring.stochastic.store.
-    StoreError`)."""
+    folder that is not a complete study store, or a damaged one (a missing or unreadable chunk, named;
+    :class:`~drillstring.stochastic.store.StoreError`): a damaged store is never read as data."""
     with StudyLock(store_path, shared=True):
-        open_study_group(store_path, mode="r")
-        ds = xr.open_zarr(str(store_path), consolidated=False).load()
+        group = open_study_group(store_path, mode="r")
+        advice = "run the same study command again to recompute the damaged realizations"
+        damaged = damage(group, decode=False)  # a missing chunk would read as NaN
+        if damaged:
+            raise StoreError(f"{store_path} is damaged ({'; '.join(damaged)}); {advice}")
+        try:
+            ds = xr.open_zarr(str(store_path), consolidated=False).load()
+        except Exception as error:  # a chunk that does not decode (checksum, truncated file)
+            found = "; ".join(damage(group)) or f"{type(error).__name__}: {error}"
+            raise StoreError(f"{store_path} is damaged ({found}); {advice}") from None
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in STUDY_OBSERVABLES + ("radial_displacement",):
@@ -41,8 +51,48 @@ def load_study(store_path: str | Path) -> xr.Dataset:
     return ds
 
 
-#: Vibration indicators recorded per realization (:mod:`drillstring.dynamics.indicators`).
-REALIZATION_INDICATORS = ("bit_speed_oscillation", "stick_time_fraction")
+#: Prefix of the per-realization results in the statistics (``realization_stick_slip_index``, ...): apart
+#: from the pointwise statistics of the observables (``rate_of_penetration_mean`` is the mean over the
+#: realizations at each time; ``realization_rate_of_penetration_mean`` each realization's time mean).
+REALIZATION_PREFIX = "realization_"
+#: The per-realization results summarised under ``realizations``: the cycle metrics and the bit-speed
+#: oscillation (max − min)/2Ω of maps and sensitivity runs.
+SUMMARY_METRICS = (*CYCLE_METRICS, "bit_speed_oscillation")
+#: Quantiles [%] of the per-realization distributions in the summary.
+REALIZATION_QUANTILES = (2.5, 50.0, 97.5)
+#: Length [s] by which the windows of the time convergence grow.
+TIME_WINDOW = 10.0
+#: Relative change of an observable's maximum dispersion between the last two records above which the
+#: summary warns that it is not converged in time (2 % per 10 s: a maximum still drifting at that rate would
+#: move by 20 % over 100 s more).
+TIME_CONVERGENCE_THRESHOLD = 0.02
+
+
+def _realization_metrics(raw: xr.Dataset, rows: np.ndarray, t_transient: float, prefix: str = "") -> dict:
+    """The :data:`~drillstring.stochastic.runs.REALIZATION_METRICS` of the realizations ``rows`` (or of the
+    nominal run with ``prefix="nominal_"``) as the workers stored them; the cycle metrics recomputed from the
+    time histories, with each realization's own top speed and bit area, when ``t_transient`` differs from
+    the window the workers used (the store's ``metrics_transient``)."""
+    if "top_speed" not in raw:
+        raise ValueError("the study store holds no per-realization cycle metrics (written by an older "
+                         "drillstring version): rerun the study in a new folder")
+    one = prefix == "nominal_"
+    values = {name: np.atleast_1d(np.asarray(raw[prefix + name].values, dtype=float))[0 if one else rows]
+              for name in REALIZATION_METRICS}
+    stored = raw.attrs.get("metrics_transient")
+    if stored is not None and math.isclose(float(stored), t_transient, rel_tol=1e-12, abs_tol=1e-12):
+        return values
+    time = raw.time.values
+    picked = [None] if one else list(rows)
+    recomputed = [
+        cycle_metrics(time, {name: raw[prefix + name].values if one else raw[name].values[j]
+                             for name in STUDY_OBSERVABLES}, float(top), float(area), t_transient)
+        for j, top, area in zip(picked, np.atleast_1d(values["top_speed"]), np.atleast_1d(values["bit_area"]))]
+    for name in CYCLE_METRICS:
+        values[name] = np.array([row[name] for row in recomputed])
+        if one:
+            values[name] = values[name][0]
+    return values
 
 
 def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | None = None) -> xr.Dataset:
@@ -52,8 +102,11 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     Variables: ``<v>_mean``, ``<v>_std``, ``<v>_lower``, ``<v>_upper`` (the ``level`` quantile envelope),
     ``<v>_dispersion`` (std/|mean|), ``<v>_nominal`` and ``<v>_convergence`` (dimension ``n_samples``),
     for ``v`` in the study observables and ``radial_displacement`` (per probe); and, per finished
-    realization (dimension ``realization``), the vibration indicators ``bit_speed_oscillation`` and
-    ``stick_time_fraction`` after ``t_transient`` [s] (default ``min(10 s, t_end/2)``) and the
+    realization (dimension ``realization``), what its worker computed from its realized case, each named
+    ``realization_<name>`` (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`: the cycle metrics after
+    ``t_transient`` [s] (default ``min(10 s, t_end/2)``), its top speed, bit area and the leading
+    ``growth_rate`` of steady drilling; and ``bit_speed_oscillation`` (max − min)/2Ω with its own Ω; the
+    nominal run's value in each one's attribute ``nominal``) and the
     ``lowest_lateral_eigenvalue`` ω₁² [rad²/s²] of its prestressed string (negative: statically buckled;
     attribute ``buckled_realizations``).
     """
@@ -75,15 +128,21 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
                    "long_name": f"conv(n_s) = (1/n_s) sum_j int ||{name}_j||^2 dt"},
         )
     t_transient = transient_end(float(time[-1])) if t_transient is None else float(t_transient)
-    top_speed = float(tomllib.loads(raw.attrs["case"])["operation"]["top_speed"])
-    rows = [drilling_indicators(time, done.rate_of_penetration.values[j], done.bit_speed.values[j], top_speed,
-                                t_transient) for j in range(n_done)]
-    for name in REALIZATION_INDICATORS:
-        stats[name] = xr.DataArray(
-            np.array([row[name] for row in rows], dtype=float), dims="realization",
-            coords={"realization": done.realization.values},
-            attrs={"units": "1", "long_name": f"{name.replace('_', ' ')} after t = {t_transient:g} s"},
-        )
+    rows = np.nonzero(ok)[0]
+    metrics = _realization_metrics(raw, rows, t_transient)
+    nominal = _realization_metrics(raw, rows, t_transient, prefix="nominal_")
+    coords = {"realization": done.realization.values}
+    for name, (unit, description) in REALIZATION_METRICS.items():
+        window = f" after t = {t_transient:g} s" if name in CYCLE_METRICS else ""
+        stats[REALIZATION_PREFIX + name] = xr.DataArray(
+            metrics[name], dims="realization", coords=coords,
+            attrs={"units": unit, "long_name": description + window, "nominal": float(nominal[name])})
+    oscillation, nominal_oscillation = ((v["bit_speed_max"] - v["bit_speed_min"]) / (2.0 * v["top_speed"])
+                                        for v in (metrics, nominal))
+    stats[REALIZATION_PREFIX + "bit_speed_oscillation"] = xr.DataArray(
+        oscillation, dims="realization", coords=coords,
+        attrs={"units": "1", "nominal": float(nominal_oscillation),
+               "long_name": f"bit-speed oscillation (max - min)/(2 top speed) after t = {t_transient:g} s"})
     lowest = (raw.lowest_lateral_eigenvalue.values[ok] if "lowest_lateral_eigenvalue" in raw
               else np.full(n_done, np.nan))
     stats["lowest_lateral_eigenvalue"] = xr.DataArray(
@@ -117,7 +176,6 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
         "weight_on_bit_sample_std": float(wob.std(ddof=1)),
         "case": raw.attrs.get("case", ""),
         "t_transient": t_transient,
-        "top_speed": top_speed,
         "buckled_realizations": int(np.sum(lowest < 0.0)),
         **{key: list(raw.attrs.get(key, [])) for key in INPUT_ATTRIBUTES},
     })
@@ -172,13 +230,112 @@ def _finite_or_none(value) -> float | None:
     return value if np.isfinite(value) else None
 
 
-def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> dict:
+def distribution_summary(values) -> dict:
+    """Mean, std (n − 1), dispersion std/|mean| (:func:`~drillstring.stochastic.statistics.dispersion`) and the
+    :data:`REALIZATION_QUANTILES` (keys ``q2.5``, ``q50``, ``q97.5``) of the finite ``values``, with their
+    count ``n``; None for what needs more values than there are."""
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    out: dict = {"n": int(x.size), "mean": float(x.mean()) if x.size else None,
+                 "std": float(x.std(ddof=1)) if x.size > 1 else None,
+                 "dispersion": _finite_or_none(dispersion(x)) if x.size > 1 else None}
+    quantiles = np.quantile(x, [q / 100.0 for q in REALIZATION_QUANTILES]) if x.size else [None] * 3
+    out.update({f"q{q:g}": None if v is None else float(v) for q, v in zip(REALIZATION_QUANTILES, quantiles)})
+    return out
+
+
+def realizations_summary(stats: xr.Dataset) -> dict:
+    """Per cycle metric (:data:`SUMMARY_METRICS`, unit SI): its distribution
+    over the realizations (:func:`distribution_summary`), the nominal run's value and unit; plus
+    ``stick_slip_realizations`` (stick time fraction > 0) and ``t_transient`` [s]."""
+    out: dict = {}
+    for name in SUMMARY_METRICS:
+        values = stats.get(REALIZATION_PREFIX + name)
+        if values is not None:
+            out[name] = {**distribution_summary(values.values), "unit": values.attrs.get("units"),
+                         "nominal": _finite_or_none(values.attrs.get("nominal", math.nan))}
+    fraction = stats.get(REALIZATION_PREFIX + "stick_time_fraction")
+    if fraction is not None:
+        out["stick_slip_realizations"] = int((fraction.values > 0).sum())
+    out["t_transient"] = float(stats.attrs.get("t_transient", math.nan))
+    return out
+
+
+def stability_summary(stats: xr.Dataset, boundary: dict | None = None) -> dict:
+    """``unstable_fraction``: the share of the realizations (with a growth rate) whose steady drilling is
+    unstable (leading growth rate > 0), their count, the distribution of the growth rate [1/s]
+    (:func:`distribution_summary`) and the nominal run's; ``boundary``: the nominal case's stability
+    boundary along the weight-on-bit (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`) when
+    given."""
+    rates = stats.get(REALIZATION_PREFIX + "growth_rate")
+    growth = np.asarray(rates.values, dtype=float) if rates is not None else np.zeros(0)
+    finite = growth[np.isfinite(growth)]
+    return {
+        "unstable_fraction": float(np.mean(finite > 0.0)) if finite.size else None,
+        "unstable_realizations": int(np.sum(finite > 0.0)),
+        "realizations_with_growth_rate": int(finite.size),
+        "growth_rate": distribution_summary(finite),
+        "nominal_growth_rate": (_finite_or_none(rates.attrs.get("nominal", math.nan)) if rates is not None
+                                else None),
+        "boundary": boundary,
+    }
+
+
+def time_convergence(stats: xr.Dataset, t_start: float, window: float = TIME_WINDOW,
+                     threshold: float = TIME_CONVERGENCE_THRESHOLD) -> dict:
+    """Convergence in time of the dispersion of each study observable: over growing records from
+    ``t_start`` [s] (the end of the transient) to ``t_start + window``, ``t_start + 2 window``, ... (and the
+    end of the record), the time-mean and the maximum of its dispersion (:func:`~drillstring.stochastic.
+    statistics.dispersion_summary`), and ``change``: the relative change of each between the last two.
+
+    ``warning``: one line when the maximum's change is above ``threshold`` (it still moves with the record
+    length: a longer ``t_end`` is needed to tell where it settles), else None (also when the record holds
+    fewer than two windows). The time mean's change is reported but not judged: over records of a few
+    periods of an oscillating dispersion it moves by a few % with the records' phase alone (4.8 % for the
+    torque-on-bit of the settled σ = 1000 N reference study between 10 and 20 s records), while the
+    maximum of a settled oscillation no longer changes once a record holds a whole period."""
+    time = np.asarray(stats.time.values, dtype=float)
+    tolerance = 1e-9 * window
+    ends = [float(t) for t in np.arange(t_start + window, time[-1] + tolerance, window)]
+    if not ends or ends[-1] < time[-1] - tolerance:
+        ends.append(float(time[-1]))
+    out: dict = {"window": float(window), "threshold": float(threshold), "t_start": float(t_start),
+                 "observables": {}}
+    moving = []
+    for name in STUDY_OBSERVABLES:
+        rows = []
+        for end in ends:
+            part = stats[[f"{name}_dispersion"]].sel(time=slice(None, end + tolerance))
+            entry = dispersion_summary(part, [name], t_transient=t_start)[name]
+            rows.append({"t_end": end, "dispersion_time_mean": entry["dispersion_time_mean"],
+                         "dispersion_max": entry["dispersion_max"], "time_of_max": entry["time_of_max"]})
+        change = {}
+        for key in ("dispersion_time_mean", "dispersion_max"):
+            last = [row[key] for row in rows[-2:]]
+            change[key] = (abs(last[1] - last[0]) / abs(last[1]) if len(last) == 2 and None not in last
+                           and last[1] != 0 else None)
+        worst = change["dispersion_max"]
+        if worst is not None and worst > threshold:
+            moving.append(f"{name} {100 * worst:.3g} %")
+        out["observables"][name] = {"windows": rows, "change": change}
+    out["warning"] = None
+    if moving:
+        out["warning"] = (f"the dispersion is not converged in time: its maximum from t = {t_start:g} s to "
+                          f"{ends[-2]:g} s and to {ends[-1]:g} s changed by more than {100 * threshold:g} % "
+                          f"({', '.join(moving)}); run longer (a larger t_end) to see where it settles")
+    return out
+
+
+def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, boundary: dict | None = None) -> dict:
     """Per observable: time-mean and maximum dispersion after ``t_transient`` [s] and their ratios to
     the dispersion of each random parameter (and of the weight-on-bit when the weight-on-hook is random,
     :func:`input_dispersions`), and the same over the whole record
     (``whole_record``: from :func:`~drillstring.stochastic.statistics.record_start`, the first time the
     mean response is away from 0, as the reference study reports them); plus the study's size and
-    input dispersions."""
+    input dispersions; the convergence of the dispersions with the record length (:func:`time_convergence`,
+    records from ``t_transient``); the distributions of the per-realization cycle metrics
+    (:func:`realizations_summary`) and the linear stability of the draws (:func:`stability_summary`, with
+    the nominal case's ``boundary`` when given)."""
     inputs = input_dispersions(stats.attrs)
     per_variable = dispersion_summary(
         stats, list(STUDY_OBSERVABLES), t_transient=t_transient, input_dispersion=inputs
@@ -197,15 +354,6 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> 
         half = len(conv) // 2
         # Relative change of conv(n_s) over the second half of the realizations.
         convergence[name] = float(abs(conv[-1] - conv[half]) / abs(conv[-1])) if half else None
-    indicators = {}
-    for name in REALIZATION_INDICATORS:
-        if name in stats:
-            values = stats[name].values
-            indicators[name] = {"mean": float(values.mean()), "std": float(values.std(ddof=1)),
-                                "min": float(values.min()), "max": float(values.max())}
-    if "stick_time_fraction" in stats:
-        indicators["stick_slip_realizations"] = int((stats["stick_time_fraction"].values > 0).sum())
-        indicators["t_transient"] = float(stats.attrs.get("t_transient", t_transient))
     lowest = stats["lowest_lateral_eigenvalue"].values if "lowest_lateral_eigenvalue" in stats else np.zeros(0)
     return {
         "buckling": {
@@ -225,5 +373,7 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT) -> 
         "t_transient": float(t_transient),
         "observables": per_variable,
         "convergence_change_second_half": convergence,
-        "indicators": indicators,
+        "time_convergence": time_convergence(stats, t_transient),
+        "realizations": realizations_summary(stats),
+        "stability": stability_summary(stats, boundary),
     }

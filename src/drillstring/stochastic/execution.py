@@ -13,7 +13,11 @@ sensitivity designs (one design row per index) all run through :func:`run_tasks`
   and each rerun alone at the end; the one that kills its worker again is recorded as failed with that
   cause, the others go on in parallel (:func:`_process_loop`);
 - on Dask, records an item whose workers keep dying (``KilledWorker``) as failed, and stops resumably
-  when the cluster has had no worker for ``worker_timeout`` seconds or the scheduler is gone;
+  (:class:`WorkersLost`, one line) when, for ``worker_timeout`` seconds (:data:`DASK_WORKER_TIMEOUT`),
+  the cluster has had no worker, or none of its workers has answered the scheduler (stopped with SIGSTOP,
+  frozen), or the scheduler has not answered (each request bounded by :data:`SCHEDULER_TIMEOUT`); at once
+  when the scheduler is gone (connection closed). While nothing finishes but some worker answers, a
+  note says so every ``worker_timeout`` seconds (:class:`_ClusterWatch`);
 - writes outcomes to the store in batches (at most :data:`FLUSH_INTERVAL` seconds apart; data first,
   then status flags), reports ``progress(done, failed, total)`` after each outcome, and on Ctrl-C
   writes what finished and raises :class:`Interrupted`;
@@ -39,11 +43,19 @@ from typing import Any, Callable, Sequence
 
 from drillstring.stochastic.store import DONE, FAILED
 
-#: Seconds a Dask run waits with no worker in the cluster before stopping (resumably).
+#: Seconds a Dask run waits, once nothing finishes, with no worker in the cluster, with no worker
+#: answering the scheduler (their heartbeats stopped), or with no answer from the scheduler (two requests
+#: of :data:`SCHEDULER_TIMEOUT` in a row at least), before stopping (resumably). The stop comes within
+#: about ``DASK_WORKER_TIMEOUT + SCHEDULER_TIMEOUT + 2`` seconds of the fault (36 s; a lost scheduler
+#: connection at once).
 DASK_WORKER_TIMEOUT = 30.0
+#: Until the first task of a Dask run finishes, workers that do not answer the scheduler get this many
+#: times ``worker_timeout`` (2 min by default): a starting worker imports the program and compiles or
+#: loads its kernels, and its interpreter is held meanwhile.
+STARTUP_FACTOR = 4
 #: Seconds allowed to each step of reaching a Dask scheduler (TCP connection, the server's greeting,
-#: its identity, the client's registration): an address that is no scheduler fails at one of the first
-#: three, so within 12 s.
+#: its identity, the client's registration) and to each later request to it: an address that is no
+#: scheduler fails at one of the first three, so within 12 s.
 SCHEDULER_TIMEOUT = 4.0
 #: Largest delay [s] between an outcome's arrival and its write to the store, unless the store sets its
 #: own ``flush_interval`` (outcomes are written in batches: a kill loses at most this much work; stores of
@@ -231,12 +243,14 @@ def run_locked(
                 notify(engine.note, guard.note)
             address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
             store = open_store()
+            for repair in getattr(store, "repairs", ()):  # damaged chunks found: their rows run again
+                notify(engine.note, repair)
             items = list(pending(store))
             if items and client is None and prepare is not None:
                 prepare()
             report = run_tasks(store, task, items, workers=engine.workers, client=client, address=address,
                                progress=engine.progress, worker_timeout=engine.worker_timeout, lost=lost,
-                               what=what, noun=noun)
+                               what=what, noun=noun, note=engine.note)
             run = StoreRun(store, report.completed, report.failed, report.wall_time, report.workers,
                            report.computed, guard.note)
             if finish is not None:
@@ -244,7 +258,27 @@ def run_locked(
             return run
     finally:
         if isinstance(scheduler, str) and client is not None:
-            client.close()
+            close_client(client)
+
+
+def close_client(client, timeout: float = SCHEDULER_TIMEOUT) -> None:
+    """Close a ``distributed.Client`` within about ``timeout`` seconds, whatever state its scheduler is in
+    (gone, stopped): a client that cannot close cleanly is abandoned without a traceback."""
+    import logging
+
+    quiet = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.comm",
+                                                  "distributed.core", "distributed.batched", "tornado")]
+    levels = [logger.level for logger in quiet]
+    for logger in quiet:  # the client's own complaints about a lost scheduler: the caller said it in one line
+        logger.setLevel(logging.CRITICAL)
+    try:
+        client.close(timeout=timeout)
+    except BaseException as error:  # noqa: BLE001 - a closing client may raise anything, even AllExit
+        if isinstance(error, KeyboardInterrupt):
+            raise
+    finally:
+        for logger, level in zip(quiet, levels):
+            logger.setLevel(level)
 
 
 def run_tasks(
@@ -260,6 +294,7 @@ def run_tasks(
     lost: LostOutcome = bare_failure,
     what: str = "study",
     noun: str = "realizations",
+    note: Callable[[str], None] | None = None,
 ) -> RunReport:
     """Run ``items`` (``(index, argument)``, the store's pending ones) with ``task`` and write each
     outcome to ``store``; the caller holds the store's lock.
@@ -314,7 +349,7 @@ def run_tasks(
     try:
         try:
             execute(task, items, record, workers=used if isinstance(used, int) else None, client=client,
-                    address=address, worker_timeout=worker_timeout, lost=lost, noun=noun)
+                    address=address, worker_timeout=worker_timeout, lost=lost, noun=noun, note=note)
         finally:
             flush()
     except KeyboardInterrupt as error:
@@ -332,13 +367,15 @@ def run_tasks(
 def execute(task: Callable[[Any], Any], items: Sequence[tuple[int, Any]], record: Callable[[Any], None], *,
             workers: int | None = 1, client=None, address: str | None = None,
             worker_timeout: float = DASK_WORKER_TIMEOUT, lost: LostOutcome = bare_failure,
-            noun: str = "realizations") -> None:
+            noun: str = "realizations", note: Callable[[str], None] | None = None) -> None:
     """Compute ``task(argument)`` for each ``(index, argument)`` of ``items`` and pass each outcome to
     ``record`` as it arrives (in completion order): on the Dask cluster of ``client``, in this process
-    (``workers`` 1) or on ``workers`` spawned local processes."""
+    (``workers`` 1) or on ``workers`` spawned local processes. ``note`` receives the Dask run's notes
+    while nothing finishes."""
     items = list(items)
     if client is not None:
-        _run_dask(client, address or "the Dask scheduler", task, items, record, worker_timeout, lost, noun)
+        _run_dask(client, address or "the Dask scheduler", task, items, record, worker_timeout, lost, noun,
+                  note)
     elif (workers or 1) <= 1:
         for _, argument in items:
             record(task(argument))
@@ -456,9 +493,15 @@ def _process_loop(context, task, items, workers, record, parent_pid, lost, noun)
 # --- Dask ----------------------------------------------------------------------------------------
 
 
-def _receive(sock, n: int) -> bytes:
+def _receive(sock, n: int, deadline: float) -> bytes:
+    """``n`` bytes from ``sock`` by ``deadline`` (``time.monotonic()``), however slowly they come: a server
+    that answers one byte at a time still fails by then (TimeoutError)."""
     data = b""
     while len(data) < n:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError("no complete answer in time")
+        sock.settimeout(left)
         chunk = sock.recv(n - len(data))
         if not chunk:
             raise ConnectionError("closed the connection")
@@ -487,13 +530,13 @@ def _probe_tcp_scheduler(address: str, host: str, port: int, timeout: float) -> 
     except OSError as error:
         raise refuse(f"cannot connect ({error.strerror or error})") from None
     with sock:
-        sock.settimeout(timeout)
+        deadline = time.monotonic() + timeout  # for the whole greeting, not each byte of it
         not_dask = "the server there does not speak the Dask protocol (not a Dask scheduler)"
         try:
-            (length,) = struct.unpack("<Q", _receive(sock, 8))
+            (length,) = struct.unpack("<Q", _receive(sock, 8, deadline))
             if not 0 < length <= 1 << 20:
                 raise refuse(not_dask)
-            payload = _receive(sock, length)
+            payload = _receive(sock, length, deadline)
         except TimeoutError:
             raise refuse(f"the server there sent no Dask greeting within {timeout:g} s "
                          "(not a Dask scheduler)") from None
@@ -570,11 +613,90 @@ def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT):
         raise SchedulerUnreachable(f"scheduler = {address!r}: cannot connect ({message})") from None
 
 
+class _ClusterWatch:
+    """What a Dask run knows of its cluster while nothing finishes: asked at most once a second
+    (:meth:`check`), the scheduler's identity, each request bounded by :data:`SCHEDULER_TIMEOUT`, gives its
+    workers and the time each last reported (its heartbeat, every 0.5 s or so on a small cluster). A worker
+    whose report has not changed for ``worker_timeout`` seconds is not answering (stopped, frozen, or gone
+    without the scheduler noticing yet)."""
+
+    def __init__(self, client, scheduler: str, worker_timeout: float, noun: str,
+                 note: Callable[[str], None] | None) -> None:
+        self.client, self.scheduler, self.timeout, self.noun, self.note = client, scheduler, worker_timeout, noun, note
+        self.reports: dict[str, tuple[Any, float]] = {}  # worker -> (last report, when it changed)
+        now = time.monotonic()
+        self.answered = now  # the scheduler's last answer
+        self.alive = now  # the last time the cluster was seen with workers
+        self.finished = now  # the last time an item finished
+        self.noted = self.checked = self.started = now
+        self.unanswered = 0  # scheduler requests unanswered in a row
+
+    def progress(self) -> None:
+        self.finished = self.alive = self.noted = time.monotonic()
+
+    def _identity(self) -> dict | None:
+        try:
+            return self.client.sync(self.client.scheduler.identity, n_workers=-1, callback_timeout=SCHEDULER_TIMEOUT)
+        except (TimeoutError, OSError) as error:
+            if not _is_timeout(error):
+                raise
+            return None
+
+    def check(self) -> str | None:
+        """Why the run must stop now (one phrase), or None; issues the note of a long wait."""
+        now = time.monotonic()
+        if now - self.checked < 1.0:
+            return None
+        self.checked = now
+        try:
+            info = self._identity()
+        except Exception as error:  # the connection to the scheduler is gone
+            return f"lost the Dask scheduler at {self.scheduler} ({type(error).__name__})"
+        now = time.monotonic()
+        if info is None:  # two requests in a row unanswered, the last answer older than the timeout
+            self.unanswered += 1
+            if self.unanswered >= 2 and now - self.answered > self.timeout:
+                return f"the Dask scheduler at {self.scheduler} has not answered for {now - self.answered:.0f} s"
+            return None
+        self.answered, self.unanswered = now, 0
+        workers = dict(info.get("workers") or {})
+        self.reports = {address: (report.get("last_seen"), now if self.reports.get(address, (None,))[0]
+                                  != report.get("last_seen") else self.reports[address][1])
+                        for address, report in workers.items() if isinstance(report, dict)}
+        # Before anything finished, workers may be silent while they start (imports, compiling the kernels
+        # hold their interpreter): they get STARTUP_FACTOR times the timeout then.
+        patience = self.timeout * (1 if self.finished > self.started else STARTUP_FACTOR)
+        answering = [a for a, (_, changed) in self.reports.items() if now - changed <= patience]
+        if self.reports:
+            self.alive = now  # the cluster has workers; whether they answer is their reports' age
+            if not answering:
+                return (f"none of the {len(self.reports)} Dask worker(s) of {self.scheduler} has answered for "
+                        f"{patience:g} s (stopped or frozen)")
+        elif now - self.alive > self.timeout:
+            return f"the Dask cluster at {self.scheduler} has had no worker for {self.timeout:g} s"
+        # A long wait with workers that answer now (within half the timeout, 5 s at least) is said; one
+        # whose workers are going silent ends in the stop instead.
+        lively = [a for a, (_, changed) in self.reports.items()
+                  if now - changed <= min(self.timeout, max(self.timeout / 2, 5.0))]
+        if self.note is not None and lively and now - self.noted >= self.timeout:
+            self.noted = now
+            self.note(f"no {self.noun} finished for {now - self.finished:.0f} s on the Dask cluster at "
+                      f"{self.scheduler}: {len(lively)} of {len(self.reports)} worker(s) answering")
+        return None
+
+
+def _is_timeout(error: BaseException) -> bool:
+    import asyncio
+
+    return isinstance(error, (TimeoutError, asyncio.TimeoutError)) or "timed out" in str(error).lower()
+
+
 def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float, lost: LostOutcome,
-              noun: str) -> None:
+              noun: str, note: Callable[[str], None] | None = None) -> None:
     """Run ``items`` on the cluster of ``client``. An item whose workers keep dying (``KilledWorker``)
-    is recorded as failed with that cause; a cluster left without any worker for ``worker_timeout``
-    seconds, or a lost scheduler, raises :class:`WorkersLost`."""
+    is recorded as failed with that cause; a cluster left without any worker, or without any worker that
+    answers, or a scheduler that does not answer, for ``worker_timeout`` seconds, or a lost scheduler,
+    raises :class:`WorkersLost` (:class:`_ClusterWatch`)."""
     from distributed.scheduler import KilledWorker
 
     if not items:
@@ -582,22 +704,29 @@ def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float
     futures = client.map(task, [argument for _, argument in items], pure=False)
     item_of = {future.key: item for future, item in zip(futures, items)}
     pending = list(futures)
-    alone_since: float | None = None
-    checked = time.monotonic()
+    watch = _ClusterWatch(client, scheduler, worker_timeout, noun, note)
 
     def gone(why: str) -> WorkersLost:
         return WorkersLost(f"{why}; the finished {noun} are saved, rerun the same command (with workers "
                            "available) to resume")
 
+    tries: dict[Any, int] = {}  # finished futures whose result could not be fetched yet: attempts
+
     try:
         while pending:
             finished = []
-            for future in pending:  # statuses are updated by the client's event loop
+            deadline = time.monotonic() + 1.0  # fetching results never delays the watch by more than this
+            for future in sorted(pending, key=lambda f: tries.get(f.key, 0)):  # statuses: the client's loop
                 status = future.status
                 if status == "finished":
-                    try:
-                        outcome = future.result(timeout=worker_timeout)
-                    except TimeoutError:  # its result left with its worker: the scheduler recomputes it
+                    if time.monotonic() >= deadline:
+                        continue
+                    try:  # a result held by a stopped worker does not come: tried again later
+                        outcome = future.result(timeout=max(0.05, deadline - time.monotonic()))
+                    except Exception as error:
+                        if not _is_timeout(error):
+                            raise gone(f"lost the Dask scheduler at {scheduler} ({type(error).__name__})") from None
+                        tries[future.key] = tries.get(future.key, 0) + 1
                         continue
                     finished.append(future)
                     record(outcome)
@@ -616,26 +745,15 @@ def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float
             if finished:
                 done_now = set(map(id, finished))
                 pending = [f for f in pending if id(f) not in done_now]
-                alone_since, checked = None, time.monotonic()
-                continue
-            time.sleep(0.05)
-            if pending and time.monotonic() - checked > 1.0:  # no progress: is any worker left?
-                checked = time.monotonic()
-                try:
-                    n_workers = len(client.nthreads())
-                except Exception as error:
-                    raise gone(f"lost the Dask scheduler at {scheduler} ({type(error).__name__})") from None
-                if n_workers:
-                    alone_since = None
-                elif alone_since is None:
-                    alone_since = time.monotonic()
-                elif time.monotonic() - alone_since > worker_timeout:
-                    raise gone(f"the Dask cluster at {scheduler} has had no worker for "
-                               f"{worker_timeout:g} s")
+                watch.progress()
+            else:
+                time.sleep(0.05)
+            why = watch.check() if pending else None
+            if why:
+                raise gone(why)
     finally:
         if pending:
             try:
-                client.cancel(list(pending))
-            except Exception:  # the scheduler may be gone: nothing left to cancel there
+                client.sync(client._cancel, list(pending), callback_timeout=SCHEDULER_TIMEOUT)
+            except BaseException:  # noqa: BLE001 - the scheduler may be gone: nothing left to cancel there
                 pass
-

@@ -4,13 +4,19 @@ a second study on the same folder is refused at once).
 A study running on ``<folder>/study.zarr`` holds ``<folder>/study.zarr.lock`` exclusively until its
 statistics, figures and report are written; reading a store for statistics takes it shared, so it is
 refused while a study writes the store (see :class:`drillstring.files.FileLock` for stale locks).
+
+One folder holds one kind of run (:data:`STORE_NAMES`): each kind writes its own ``report.html`` there, so
+a writer is refused in a folder that holds the store of another kind, or where another kind is running.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from drillstring.files import FileLock, LockedError
+from drillstring.files import FileLock, LockedError, lock_in_use
+
+#: The store of each kind of run in its output folder (one kind per folder).
+STORE_NAMES = {"study.zarr": "study", "map.zarr": "map", "sensitivity.zarr": "sensitivity run"}
 
 
 class StudyLocked(LockedError):
@@ -40,7 +46,25 @@ class StudyLock:
             if self.shared and self.what == "study":
                 advice = "statistics are computed from a store only when no study is writing it"
             raise StudyLocked(f"{self.what} store {self.store_path} is {error}; {advice}") from None
+        if not self.shared:
+            try:
+                self._check_folder()
+            except BaseException:
+                self._lock.release()
+                raise
         return self
+
+    def _check_folder(self) -> None:
+        """Refuse a folder holding (or being written by) another kind of run: its report.html would be
+        replaced."""
+        folder = self.store_path.parent
+        for name, kind in STORE_NAMES.items():
+            if name == self.store_path.name:
+                continue
+            other = folder / name
+            if other.exists() or lock_in_use(other.with_name(name + ".lock")):
+                raise StudyLocked(f"{folder} holds a {kind} ({other}); one kind of run per folder (each writes "
+                                  f"its own report.html there): use another --out folder for this {self.what}")
 
     def __exit__(self, *exc) -> None:
         self._lock.release()

@@ -40,6 +40,7 @@ from drillstring.case import Case
 from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
 from drillstring.dynamics.rom import case_reduced_model
+from drillstring.dynamics.stability import leading_growth_rate
 from drillstring.dynamics.simulate import (
     SimulationError,
     SimulationResult,
@@ -50,8 +51,14 @@ from drillstring.dynamics.simulate import (
 )
 from drillstring.stochastic.execution import Engine, StoreRun, run_locked
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
-from drillstring.stochastic.runs import compile_kernels, simulation_options
-from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, TaskStore
+from drillstring.stochastic.runs import (
+    REALIZATION_METRICS,
+    compile_kernels,
+    metrics_transient,
+    realization_metrics,
+    simulation_options,
+)
+from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
 #: Observables kept for every realization (each (realization, time)); plus radial_displacement.
@@ -160,6 +167,7 @@ class RealizationOutcome:
     n_rhs: int = 0
     lowest_lateral_eigenvalue: float = math.nan
     inputs: np.ndarray | None = None
+    metrics: dict[str, float] = field(default_factory=dict)
 
 
 def nominal_weight_on_hook(case: Case) -> float:
@@ -307,6 +315,10 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         model = case_reduced_model(realized)
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
         try:
+            outcome.metrics["growth_rate"] = leading_growth_rate(model)
+        except ValueError:  # no steady drilling at these inputs: the bit-rock law gives no penetration
+            outcome.metrics["growth_rate"] = math.nan
+        try:
             result: SimulationResult = simulate_model(
                 model, **simulation_options(realized, settings.t_end, settings.output_step))
             outcome.status = DONE
@@ -322,6 +334,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         radial[:k] = result.radial_displacement
         outcome.radial_displacement = radial
         outcome.n_rhs = int(result.stats.get("n_rhs", 0))
+        outcome.metrics.update(realization_metrics(result, realized, metrics_transient(settings)))
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"
@@ -363,6 +376,10 @@ class StudyStore(TaskStore):
             "weight_on_hook": ArraySpec(("realization",)),
             "weight_on_bit": ArraySpec(("realization",)),
             "lowest_lateral_eigenvalue": ArraySpec(("realization",)),
+            **{name: ArraySpec(("realization",), attributes={"units": unit})
+               for name, (unit, _) in REALIZATION_METRICS.items()},
+            **{f"nominal_{name}": ArraySpec(("one",), attributes={"units": unit})
+               for name, (unit, _) in REALIZATION_METRICS.items()},
             **{name: ArraySpec(("realization", "time"), **per_row) for name in STUDY_OBSERVABLES},
             **{f"nominal_{name}": ArraySpec(("time",)) for name in STUDY_OBSERVABLES},
             "radial_displacement": ArraySpec(("realization", "time", "probe"), **per_row),
@@ -377,9 +394,28 @@ class StudyStore(TaskStore):
         mean = law.mean()
         woh_mean = (float(mean[law.paths.index(WEIGHT_ON_HOOK)]) if WEIGHT_ON_HOOK in law.paths
                     else nominal_weight_on_hook(case))
-        attrs = {"weight_on_hook_mean": woh_mean, "weight": case.weight, **input_attributes(law)}
+        attrs = {"weight_on_hook_mean": woh_mean, "weight": case.weight, **input_attributes(law),
+                 "metrics_transient": metrics_transient(settings)}
         super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
                          attrs=attrs)
+
+    def owner_status(self, name: str) -> str | None:
+        """The nominal run's arrays belong to its status ``nominal_status``."""
+        return "nominal_status" if name.startswith("nominal_") else None
+
+    def owner_label(self, owner: str) -> str:
+        return "the nominal run"
+
+    @classmethod
+    def open_group(cls, path: str | Path, mode: str = "r") -> zarr.Group:
+        """:meth:`TaskStore.open_group`, refusing a store written before the per-realization metrics
+        (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`) were stored."""
+        group = super().open_group(path, mode)
+        missing = [name for name in REALIZATION_METRICS if name not in dict(group.attrs["layout"])]
+        if missing:
+            raise StoreError(f"{path} is a study store of an older drillstring version (no {missing[0]} per "
+                             "realization); delete it (or use another --out folder) to start over")
+        return group
 
     def nominal_done(self) -> bool:
         return int(self.group["nominal_status"][0]) != PENDING
@@ -391,6 +427,8 @@ class StudyStore(TaskStore):
                 for name in STUDY_OBSERVABLES:
                     yield f"nominal_{name}", Ellipsis, outcome.observables[name]
                 yield "nominal_radial_displacement", Ellipsis, outcome.radial_displacement
+            for name, value in outcome.metrics.items():
+                yield f"nominal_{name}", 0, value
             if outcome.inputs is not None:
                 yield "nominal_input_values", Ellipsis, outcome.inputs
             return
@@ -402,6 +440,8 @@ class StudyStore(TaskStore):
             yield "radial_displacement", i, outcome.radial_displacement
         for name in ("weight_on_hook", "weight_on_bit", "wall_time", "lowest_lateral_eigenvalue"):
             yield name, i, getattr(outcome, name)
+        for name, value in outcome.metrics.items():
+            yield name, i, value
 
     def status_entry(self, outcome: RealizationOutcome):
         return ("nominal_status", 0) if outcome.index == NOMINAL else ("status", outcome.index)

@@ -36,7 +36,8 @@ from drillstring.dynamics.simulate import run_window
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
-from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, bit_area, compile_kernels, run_outputs
+from drillstring.dynamics.indicators import bit_area
+from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, compile_kernels, run_outputs
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 
 __all__ = [
@@ -276,21 +277,29 @@ def map_dataset(store_path: str | Path) -> xr.Dataset:
     data["buckling_margin"] = (("top_speed", "weight_on_bit"), np.broadcast_to(critical - wob, shape).copy(),
                                {"units": "N", "long_name": "critical weight on bit (lateral buckling) minus "
                                                             "weight on bit (< 0: buckled)"})
-    settings = dict(attrs["settings"])
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({
-        "case": attrs["case"],
-        "critical_weight_on_bit": critical,
-        "bit_area": float(attrs["bit_area"]),
-        "t_end": float(settings["t_end"]),
-        "output_step": float(settings["output_step"]),
-        "t_transient": float(settings["transient"]),
+        **map_attributes(attrs, dict(attrs["settings"])),
         "n_points": int(top.size * wob.size),
         "n_done": int(np.sum(arrays["status"] == DONE)),
         "n_failed": int(np.sum(arrays["status"] == FAILED)),
         "failures": "; ".join(f"point {k}: {v}" for k, v in dict(attrs.get("failures", {})).items()),
     })
     return ds
+
+
+def map_attributes(attrs: dict, window: dict) -> dict[str, Any]:
+    """The Dataset attributes of every map (deterministic or probabilistic) from its store's ``attrs`` and the
+    run ``window`` of its settings: the case (TOML), ``critical_weight_on_bit`` [N], ``bit_area`` [m²],
+    ``t_end``, ``output_step``, ``t_transient`` [s]."""
+    return {
+        "case": attrs["case"],
+        "critical_weight_on_bit": float(attrs["critical_weight_on_bit"]),
+        "bit_area": float(attrs["bit_area"]),
+        "t_end": float(window["t_end"]),
+        "output_step": float(window["output_step"]),
+        "t_transient": float(window["transient"]),
+    }
 
 
 def map_summary(ds: xr.Dataset) -> dict[str, Any]:

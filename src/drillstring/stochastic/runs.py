@@ -19,9 +19,9 @@ name                           unit    definition
 ``impacts``                    1       impacts on the borehole wall over the whole run (contact zones that appear)
 =============================  ======  ========================================================================
 
-(the first five from :func:`~drillstring.dynamics.indicators.drilling_indicators`). With ``stability``,
-the linear stability of steady drilling (:func:`~drillstring.dynamics.stability.stability`, on the same
-reduced model) adds ``growth_rate`` [1/s] (the leading eigenvalue's real part; > 0: steady drilling is
+(the bit-speed, ROP, TOB, FOB and MSE outputs from :func:`~drillstring.dynamics.indicators.cycle_metrics`).
+With ``stability``, the linear stability of steady drilling (:func:`~drillstring.dynamics.stability.stability`, on
+the same reduced model) adds ``growth_rate`` [1/s] (the leading eigenvalue's real part; > 0: steady drilling is
 unstable), ``leading_frequency`` [Hz], ``leading_family`` (0 axial, 1 torsional, 2 lateral) and the
 closed-form steady state ``steady_rate_of_penetration`` [m/s], ``steady_torque_on_bit`` [N m],
 ``steady_force_on_bit`` [N] (NaN where the bit–rock law gives no penetration).
@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from drillstring.case import Case
-from drillstring.dynamics.indicators import drilling_indicators, transient_end
+from drillstring.dynamics.indicators import CYCLE_METRICS, bit_area, cycle_metrics, steady_window, transient_end
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.dynamics.stability import STABILITY_FAMILIES, stability
@@ -68,6 +68,38 @@ STABILITY_OUTPUTS: dict[str, tuple[str, str]] = {
     "steady_torque_on_bit": ("N m", "torque on bit of steady drilling (closed form)"),
     "steady_force_on_bit": ("N", "force on bit of steady drilling (closed form)"),
 }
+#: Outputs added for a realization of random inputs (the probabilistic operating map).
+REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
+    "lowest_lateral_eigenvalue": ("rad^2/s^2",
+                                  "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
+    "stick_slip_index": CYCLE_METRICS["stick_slip_index"],
+}
+
+
+#: Scalar results of each realization of a Monte Carlo study, computed in the worker from its realized
+#: case (:func:`realization_metrics`; the growth rate from :func:`stability_outputs`): name -> (unit,
+#: description). ``top_speed`` and ``bit_area`` are the realized case's, kept so that the cycle metrics can be
+#: recomputed for another transient.
+REALIZATION_METRICS: dict[str, tuple[str, str]] = {
+    **CYCLE_METRICS,
+    "top_speed": ("rad/s", "top speed of the realized case"),
+    "bit_area": ("m^2", "bit area of the realized case (borehole cross-section)"),
+    "growth_rate": ("1/s", "leading growth rate of steady drilling at the realization's inputs (> 0: unstable)"),
+}
+
+
+def metrics_transient(settings) -> float:
+    """Start [s] of the window of the cycle metrics a study's workers store: ``transient_end(t_end)``."""
+    return transient_end(settings.t_end)
+
+
+def realization_metrics(result, case: Case, t_transient: float) -> dict[str, float]:
+    """The :data:`~drillstring.dynamics.indicators.CYCLE_METRICS` of one run (a :class:`~drillstring.
+    dynamics.simulate.SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s], with the
+    case's ``top_speed`` [rad/s] and ``bit_area`` [m²] that they use."""
+    top_speed, area = float(case.operation.top_speed), bit_area(case)
+    return {**cycle_metrics(result.time, result.observables, top_speed, area, t_transient),
+            "top_speed": top_speed, "bit_area": area}
 
 
 def simulation_options(case: Case, t_end: float, output_step: float) -> dict[str, Any]:
@@ -93,60 +125,34 @@ def compile_kernels(case: Case) -> None:
     prepare_kernels(model, case.simulation.method)
 
 
-def bit_area(case: Case) -> float:
-    """Area drilled by the bit [m²]: ``π D²/4`` with D the borehole diameter (the bit drills the hole)."""
-    return math.pi * case.borehole.diameter**2 / 4.0
-
-
-def mechanical_specific_energy(force_on_bit: float, torque_on_bit: float, top_speed: float,
-                               rate_of_penetration: float, area: float) -> float:
-    """Mechanical specific energy [Pa = J/m³] (Teale 1965): the work spent per volume of rock drilled,
-
-        MSE = WOB/A + Ω·TOB/(A·ROP)      (= WOB/A + 2π N·TOB/(A·ROP) with N in rev/s),
-
-    with the force on bit WOB [N], torque on bit TOB [N m], rotary speed Ω [rad/s] (the top speed, as
-    measured at the surface), rate of penetration ROP [m/s] and bit area A [m²]. NaN when ROP <= 0.
-    R. Teale, "The concept of specific energy in rock drilling", Int. J. Rock Mech. Min. Sci. 2, 57-73
-    (1965)."""
-    values = (force_on_bit, torque_on_bit, top_speed, rate_of_penetration, area)
-    if not all(math.isfinite(v) for v in values) or rate_of_penetration <= 0.0 or area <= 0.0:
-        return math.nan
-    return force_on_bit / area + top_speed * torque_on_bit / (area * rate_of_penetration)
-
-
 def _steady(values: np.ndarray, steady: np.ndarray) -> np.ndarray:
     values = np.asarray(values, dtype=float)[steady]
     return values[np.isfinite(values)]
 
 
-def result_outputs(result, case: Case, t_transient: float) -> dict[str, float]:
+def result_outputs(result, case: Case, t_transient: float, *, cycle: tuple[str, ...] = ()) -> dict[str, float]:
     """The scalar outputs of :data:`RUN_OUTPUTS` of one run (a :class:`~drillstring.dynamics.simulate.
-    SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s]; NaN where undefined."""
+    SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s], and the ``cycle`` metrics named
+    (:data:`~drillstring.dynamics.indicators.CYCLE_METRICS`); NaN where undefined."""
     t = np.asarray(result.time, dtype=float)
     top_speed = case.operation.top_speed
     obs = result.observables
-    row = drilling_indicators(t, obs["rate_of_penetration"], obs["bit_speed"], top_speed, t_transient)
-    steady = t >= t_transient - 1e-9 * max(1.0, abs(t_transient))
-    if not steady.any():
-        steady = np.ones_like(t, dtype=bool)
-    out = {name: math.nan for name in RUN_OUTPUTS}
-    for name in ("mean_rate_of_penetration", "bit_speed_oscillation", "stick_time_fraction", "bit_speed_min",
-                 "bit_speed_max"):
-        out[name] = math.nan if row[name] is None else float(row[name])
+    metrics = cycle_metrics(t, obs, top_speed, bit_area(case), t_transient)
+    steady = steady_window(t, t_transient)
+    out = {name: math.nan for name in RUN_OUTPUTS} | {name: metrics[name] for name in cycle}
+    for name in ("stick_time_fraction", "bit_speed_min", "bit_speed_max", "mechanical_specific_energy"):
+        out[name] = metrics[name]
+    out["bit_speed_oscillation"] = (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * top_speed)
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
+        out[f"mean_{name}"] = metrics[f"{name}_mean"]
         values = _steady(obs[name], steady)
         if values.size:
             out[f"std_{name}"] = float(values.std())
-            if name != "rate_of_penetration":
-                out[f"mean_{name}"] = float(values.mean())
     radial = np.asarray(result.radial_displacement, dtype=float)
     if radial.size:
         values = _steady(radial, steady)
         out["max_radial_displacement"] = float(values.max()) if values.size else math.nan
     out["impacts"] = float(result.impacts)
-    out["mechanical_specific_energy"] = mechanical_specific_energy(
-        out["mean_force_on_bit"], out["mean_torque_on_bit"], top_speed, out["mean_rate_of_penetration"],
-        bit_area(case))
     return out
 
 
@@ -171,27 +177,32 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
 
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,
-                with_stability: bool = False) -> TaskOutcome:
+                with_stability: bool = False, with_realization: bool = False) -> TaskOutcome:
     """Simulate ``case`` for ``t_end`` [s] and return its scalar outputs as the outcome of task ``index``
-    (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability``). Never
+    (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability`` and
+    :data:`REALIZATION_OUTPUTS` when ``with_realization``). Never
     raises: a run that stops early is FAILED with its cause and the outputs of what it computed; a case
     that cannot be built is FAILED with NaN outputs."""
     start = time.perf_counter()
     t_transient = transient_end(t_end) if t_transient is None else t_transient
-    names = list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
+    names = (list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
+             + (list(REALIZATION_OUTPUTS) if with_realization else []))
     outcome = TaskOutcome(index, FAILED, "", {name: math.nan for name in names})
     try:
         model = case_reduced_model(case)
         if with_stability:
             values, _ = stability_outputs(model)
             outcome.values.update(values)
+        if with_realization:
+            outcome.values["lowest_lateral_eigenvalue"] = float(model.lowest_lateral_eigenvalue)
         try:
             result = simulate_model(model, **simulation_options(case, t_end, output_step))
             outcome.status = DONE
         except SimulationError as error:
             result = error.result
             outcome.message = str(error)
-        outcome.values.update(result_outputs(result, case, t_transient))
+        outcome.values.update(result_outputs(result, case, t_transient,
+                                             cycle=("stick_slip_index",) if with_realization else ()))
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"

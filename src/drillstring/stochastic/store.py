@@ -12,6 +12,16 @@ sensitivity design) is a :class:`TaskStore` with its own arrays; the machinery i
   refused with what is missing (:class:`StoreError`), never a traceback from inside Zarr;
 - the *fingerprint* (a hash of the case and the settings) must match: a store is resumed only by the
   run that created it;
+- every chunk is checked when a writer opens the store (:meth:`TaskStore.verify`; chunks carry a
+  checksum, ``zstd`` with ``checksum=True``): a chunk that is missing where a finished row's data should
+  be, or that cannot be decoded, is named in :attr:`TaskStore.repairs` and its rows are set back to
+  pending, so that the run recomputes them; constant arrays (coordinates) are rewritten; a damaged array
+  that belongs to no row is refused (:class:`StoreError`) unless the subclass says which status to reset
+  (:meth:`TaskStore.owner_status`). Readers call :func:`damage` and refuse a damaged store: it is never
+  read as data (a missing chunk would read as NaN);
+- temporary chunk files left by a killed writer (Zarr's ``*.partial``) are removed when a writer opens
+  the store, and a store that cannot be written (read-only) is refused before any run when it has
+  something to write;
 - :meth:`TaskStore.write_many` writes a batch of outcomes: data first, then the failures' causes, then
   the status flags, so a row counts only once its data is in.
 
@@ -24,21 +34,129 @@ import hashlib
 import json
 import math
 import os
+import re
 import shutil
 from collections import defaultdict
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Iterable
+from typing import Any, ClassVar, Iterable, Iterator
 
 import numpy as np
 import zarr
 
 from drillstring._version import __version__
+from drillstring.files import folder_write_problem
 
-__all__ = ["ArraySpec", "StoreError", "TaskStore", "fingerprint", "DONE", "FAILED", "PENDING"]
+__all__ = ["ArraySpec", "StoreError", "TaskStore", "damage", "fingerprint", "DONE", "FAILED", "PENDING"]
 
 #: Status of a row in a store: not computed yet, finished, failed (its cause in the ``failures`` attribute).
 PENDING, DONE, FAILED = 0, 1, 2
+
+#: Temporary files of Zarr's local store (``<key>.<uuid hex>.partial``), left by a killed writer.
+_PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
+
+
+def _codecs() -> dict:
+    """Chunk compression of new stores: Zstandard with its content checksum, so that a damaged chunk
+    fails to decode instead of decoding to wrong numbers."""
+    from zarr.codecs import ZstdCodec
+
+    return {"compressors": [ZstdCodec(level=0, checksum=True)]}
+
+
+@contextmanager
+def _named(path: Path) -> Iterator[None]:
+    """Give an OSError raised inside (a failed write: disk full, permission) the store's ``path`` as
+    its file name when it names none (Zarr's writes do not say which store they write)."""
+    try:
+        yield
+    except OSError as error:
+        if error.filename is None and error.errno is not None:  # a system error, not a bare message
+            error.filename = str(path)
+        raise
+
+
+def _chunk_damage(group: zarr.Group, name: str, decode: bool = True) -> list[tuple[tuple[int, ...], str]]:
+    """The chunks of array ``name`` of ``group`` (a local store) that are missing or (when ``decode``)
+    unreadable: ``(chunk index, "missing" | "unreadable")``, in chunk order."""
+    array = group[name]
+    root = Path(str(group.store.root)) / array.path
+    if decode:
+        try:
+            array[...]  # one read of every chunk (concurrent); chunk by chunk only if one fails
+            decode = False
+        except Exception:
+            pass
+    found = []
+    for index in np.ndindex(*array.cdata_shape):
+        key = array.metadata.encode_chunk_key(index)
+        if not (root / key).is_file():
+            found.append((tuple(index), "missing"))
+            continue
+        if not decode:
+            continue
+        region = tuple(slice(i * c, min((i + 1) * c, n)) for i, c, n in zip(index, array.chunks, array.shape))
+        try:
+            array[region]
+        except Exception:  # a checksum or decompression error, a truncated file, unreadable bytes
+            found.append((tuple(index), "unreadable"))
+    return found
+
+
+def _chunk_file(group: zarr.Group, name: str, index: tuple[int, ...]) -> Path:
+    array = group[name]
+    return Path(str(group.store.root)) / array.path / array.metadata.encode_chunk_key(index)
+
+
+def _describe_rows(rows) -> str:
+    rows = sorted(int(r) for r in rows)
+    return ", ".join(map(str, rows)) if len(rows) <= 10 else f"{', '.join(map(str, rows[:10]))}, ... ({len(rows)} in all)"
+
+
+def _owner_done(group: zarr.Group, name: str, layout: dict) -> bool:
+    """Whether the run owning the non-row array ``name`` has finished: a status array of one element
+    sharing its name's prefix (``nominal_status`` for ``nominal_*``) says DONE; True without one
+    (constant arrays are always written)."""
+    prefix = name.split("_", 1)[0]
+    owner = f"{prefix}_status"
+    if owner == name or owner not in layout:
+        return True
+    try:
+        return int(group[owner][0]) == DONE
+    except Exception:
+        return False
+
+
+def damage(group: zarr.Group, decode: bool = True) -> list[str]:
+    """The damaged chunks of a store opened for reading: for each array of its layout, the chunks that
+    cannot be decoded (when ``decode``), and the missing chunks that hold data of a finished row (its
+    status DONE), of a finished run that owns the array, or constant data; ``"array chunk-key
+    (missing|unreadable)"``, empty when the store is whole."""
+    attrs = dict(group.attrs)
+    layout = dict(attrs.get("layout", {}))
+    sizes = {k: int(v) for k, v in dict(attrs.get("sizes", {})).items()}
+    row_dim = next((dims[0] for name, dims in layout.items() if name == "status"), None)
+    try:
+        status = group["status"][:]
+    except Exception:
+        return ["status (unreadable)"]
+    found = []
+    for name, dims in layout.items():
+        array = group[name]
+        for index, what in _chunk_damage(group, name, decode):
+            key = array.metadata.encode_chunk_key(index)
+            if what == "missing":
+                if name == "status":
+                    continue  # all pending: nothing is read as data
+                if dims and dims[0] == row_dim:
+                    rows = range(index[0] * array.chunks[0], min((index[0] + 1) * array.chunks[0], sizes[row_dim]))
+                    if not np.any(status[list(rows)] == DONE):
+                        continue
+                elif name.endswith("status") or not _owner_done(group, name, layout):
+                    continue
+            found.append(f"{name} {key} ({what})")
+    return found
 
 
 class StoreError(ValueError):
@@ -87,11 +205,19 @@ class TaskStore:
         layout = {"status": ArraySpec((self.row_dim,), "i1", PENDING),
                   "wall_time": ArraySpec((self.row_dim,), attributes={"units": "s"}), **layout}
         code = fingerprint(case_toml, settings)
+        #: One line per repair made when the store was opened (damaged chunks whose rows are recomputed).
+        self.repairs: list[str] = []
         if self.path.exists() and not (self.path.is_dir() and not any(self.path.iterdir())):
             self.group = self.open_group(self.path, mode="a")
             if self.group.attrs.get("fingerprint") != code:
                 raise ValueError(f"{self.path} holds a different {self.kind} ({self.differ}); use another --out "
                                  "folder or delete it to start over")
+            self._remove_partial_chunks()
+            with _named(self.path):
+                self.verify(layout)
+            statuses = {"status"} | {self.owner_status(name) for name in layout} - {None}
+            if any(np.any(self.group[name][...] == PENDING) for name in statuses):
+                self.check_writable()  # something left to write: refused now if it cannot be
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)
         for leftover in self.path.parent.glob(f".{self.path.name}.*.tmp"):  # from a killed creation
@@ -110,7 +236,8 @@ class TaskStore:
             **(attrs or {}),
         }
         try:
-            self._create(temporary, header, layout, sizes)
+            with _named(self.path):
+                self._create(temporary, header, layout, sizes)
             if self.path.exists():  # an empty folder
                 self.path.rmdir()
             os.rename(temporary, self.path)
@@ -127,12 +254,12 @@ class TaskStore:
             shape = tuple(int(sizes[d]) for d in spec.dims)
             if spec.data is not None:
                 g.create_array(name, data=np.asarray(spec.data, dtype=spec.dtype), dimension_names=list(spec.dims),
-                               attributes=dict(spec.attributes))
+                               attributes=dict(spec.attributes), **_codecs())
                 continue
             chunks = shape if spec.chunk_rows is None or not shape else (
                 (max(1, min(spec.chunk_rows, shape[0])),) + shape[1:])
             g.create_array(name, shape=shape, chunks=chunks or None, dtype=spec.dtype, fill_value=spec.fill,
-                           dimension_names=list(spec.dims), attributes=dict(spec.attributes))
+                           dimension_names=list(spec.dims), attributes=dict(spec.attributes), **_codecs())
 
     # -- checking ----------------------------------------------------------------------------------------
 
@@ -184,6 +311,110 @@ class TaskStore:
             raise StoreError(f"{path} is not a consistent drillstring {cls.kind} store ({error}); {advice}") from None
         return group
 
+    # -- damage ------------------------------------------------------------------------------------------
+
+    def _remove_partial_chunks(self) -> None:
+        """Remove the temporary chunk files of a writer that was killed (the caller holds the lock)."""
+        for leftover in self.path.rglob("*.partial"):
+            if _PARTIAL.search(leftover.name) and leftover.is_file():
+                try:
+                    leftover.unlink()
+                except OSError:
+                    pass  # a read-only store: refused below if it has anything to write
+
+    def owner_status(self, name: str) -> str | None:
+        """The status array (of one element) whose run owns array ``name`` when ``name`` is neither a row
+        array nor a constant one (a study's nominal run), or None: its damage is then refused."""
+        return None
+
+    def owner_label(self, owner: str) -> str:
+        """Words for the run whose status is ``owner`` (:meth:`owner_status`), in messages."""
+        return f"the run of {owner}"
+
+    def verify(self, layout: dict[str, ArraySpec]) -> None:
+        """Check every chunk of the store (:func:`_chunk_damage`) and repair what can be recomputed: the
+        rows of a damaged row chunk (missing where a finished row's data should be, or unreadable) are set
+        back to pending, a damaged status chunk reads as all pending, constant arrays are rewritten, the
+        run owning another damaged array (:meth:`owner_status`) is reset. Each repair is one line in
+        :attr:`repairs`; raises :class:`StoreError` when the store cannot be repaired or written."""
+        group = self.group
+        reset: dict[str, set[int]] = defaultdict(set)  # status array -> rows to recompute
+        named: list[str] = []
+        statuses = {"status"} | {self.owner_status(name) for name in layout} - {None}
+        lost: list[str] = []  # status arrays read back as all pending
+        for name in sorted(statuses):  # first: the flags the other checks rely on
+            for index, what in _chunk_damage(group, name):
+                if what == "unreadable":
+                    _chunk_file(group, name, index).unlink()  # reads as pending: every row recomputed
+                    named.append(f"{name} {group[name].metadata.encode_chunk_key(index)} (unreadable)")
+                    lost.append(name)
+                elif name == "status" and self.sessions():
+                    named.append(f"status {group[name].metadata.encode_chunk_key(index)} (missing)")
+                    lost.append(name)
+        status = self.status()
+        for name, spec in layout.items():
+            if name in statuses:
+                continue
+            array = group[name]
+            for index, what in _chunk_damage(group, name):
+                key = array.metadata.encode_chunk_key(index)
+                if spec.data is not None:
+                    array[...] = np.asarray(spec.data, dtype=spec.dtype)
+                    named.append(f"{name} {key} ({what}; rewritten)")
+                    break
+                if spec.dims and spec.dims[0] == self.row_dim:
+                    rows = np.arange(index[0] * array.chunks[0], min((index[0] + 1) * array.chunks[0], self.total))
+                    wanted = status[rows] == DONE if what == "missing" else status[rows] != PENDING
+                    rows = rows[wanted]
+                    if what == "unreadable":
+                        _chunk_file(group, name, index).unlink()
+                    if rows.size:
+                        reset["status"].update(int(r) for r in rows)
+                        named.append(f"{name} {key} ({what})")
+                    continue
+                owner = self.owner_status(name)
+                if owner is None:
+                    raise StoreError(f"{self.path} is damaged: chunk {key} of {name} is {what}; delete the store "
+                                     f"(or use another --out folder) to start over")
+                if what == "unreadable":
+                    _chunk_file(group, name, index).unlink()
+                if what == "unreadable" or int(group[owner][0]) != PENDING:
+                    reset[owner].add(0)
+                    named.append(f"{name} {key} ({what})")
+        if not named:
+            return
+        problem = folder_write_problem(self.path)
+        if problem:
+            raise StoreError(f"{self.path} is damaged ({'; '.join(named)}) and {problem}; make it writable and "
+                             "run the same command again to recompute the damaged rows")
+        for name, rows in reset.items():
+            flags = group[name][...]
+            flags[sorted(rows)] = PENDING
+            group[name][...] = flags
+        status = self.status()  # the failures of rows set back to pending are forgotten: they run again
+        self.group.attrs["failures"] = {k: v for k, v in self.failures().items()
+                                        if not k.isdigit() or status[int(k)] != PENDING}
+        again = sorted(reset.get("status", ()))
+        what = []
+        if "status" in lost or len(again) == self.total:
+            what.append(f"all {self.total} {self.noun} will be recomputed")
+        elif again:
+            noun = self.noun if len(again) > 1 else self.noun.removesuffix("s")
+            what.append(f"{noun} {_describe_rows(again)} will be recomputed")
+        what.extend(f"{self.owner_label(owner)} will be recomputed"
+                    for owner in sorted(set(reset) | set(lost)) if owner != "status")
+        self.repairs.append(f"{self.path} was damaged ({'; '.join(named)}): "
+                            f"{'; '.join(what) or 'repaired'}")
+
+    def check_writable(self) -> None:
+        """Refuse (:class:`StoreError`) a store that cannot be written (read-only folder or
+        filesystem)."""
+        for folder in (self.path, self.path / "status"):
+            problem = folder_write_problem(folder) if folder.is_dir() else None
+            if problem:
+                raise StoreError(f"{self.kind} store {self.path} is read-only ({problem}); make it writable "
+                                 "(or use another --out folder) and run the same command again")
+
     # -- rows --------------------------------------------------------------------------------------------
 
     def status(self) -> np.ndarray:
@@ -227,22 +458,26 @@ class TaskStore:
             flags[name].append((index, outcome.status))
             if outcome.status != DONE:
                 failures[self.failure_key(outcome)] = outcome.message
-        self._assign(data)
-        if failures:
-            self.group.attrs["failures"] = {**self.failures(), **failures}
-        self._assign(flags)
+        with _named(self.path):
+            self._assign(data)
+            if failures:
+                self.group.attrs["failures"] = {**self.failures(), **failures}
+            self._assign(flags)
 
     def _assign(self, writes: dict[str, list]) -> None:
-        for name, rows in writes.items():
-            array = self.group[name]
-            if array.ndim > 1 and array.chunks[0] == 1:  # one chunk per row: write each row
-                for index, value in rows:
-                    array[index] = value
-            else:  # small arrays in one chunk: rewritten whole
-                whole = array[...]
-                for index, value in rows:
-                    whole[index] = value
-                array[...] = whole
+        # Every chunk written is stored, even one equal to the fill value (a finished row whose metric is
+        # undefined, NaN): a missing chunk then always means damage (:func:`damage`).
+        with zarr.config.set({"array.write_empty_chunks": True}):
+            for name, rows in writes.items():
+                array = zarr.open_array(self.group.store, path=self.group[name].path, mode="r+")
+                if array.ndim > 1 and array.chunks[0] == 1:  # one chunk per row: write each row
+                    for index, value in rows:
+                        array[index] = value
+                else:  # small arrays in one chunk: rewritten whole
+                    whole = array[...]
+                    for index, value in rows:
+                        whole[index] = value
+                    array[...] = whole
 
     def failures(self) -> dict[str, str]:
         return dict(self.group.attrs.get("failures", {}))
@@ -253,7 +488,8 @@ class TaskStore:
         sessions = list(self.group.attrs.get("sessions", []))
         sessions.append({"started": started, "wall_time": float(wall_time), self.noun: int(count),
                          "workers": workers})
-        self.group.attrs["sessions"] = sessions
+        with _named(self.path):
+            self.group.attrs["sessions"] = sessions
 
     def sessions(self) -> list[dict]:
         return list(self.group.attrs.get("sessions", []))
