@@ -9,7 +9,9 @@ Measures, each in a fresh interpreter started the way a user starts the ``drills
   total wall time, the solver's own wall time (from ``--json``) and the difference (imports, model
   build, NetCDF, figure);
 - ``warm modes``: ``drillstring modes reference``;
-- ``import``: ``python -c "import drillstring.cli"``.
+- ``import``: ``python -c "import drillstring.cli"``;
+- ``load case``: ``python -c`` importing ``drillstring.case`` and loading the reference case (its unit
+  strings read by pint: the import and registry of the unit library, issue 18).
 
 With ``--baseline REF`` the same measurements are made, in the same run, on the source tree of the git
 revision ``REF`` (extracted with ``git archive`` to a temporary folder), so the two columns are
@@ -60,10 +62,11 @@ def _run(src: Path, args: list[str], cache: Path, cwd: Path) -> tuple[float, flo
     return wall, _children_cpu() - cpu, done
 
 
-def _import_time(src: Path, cache: Path) -> float:
+def _python_time(src: Path, cache: Path, code: str) -> float:
+    """Wall time of ``python -c code`` with the package from ``src`` [s]."""
     env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(cache))
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-c", "import drillstring.cli"], env=env, check=True)
+    subprocess.run([sys.executable, "-c", code], env=env, check=True)
     return time.perf_counter() - start
 
 
@@ -75,7 +78,7 @@ def measure(src: Path, repeat: int) -> dict[str, float | str]:
         out = ["--out", str(work / "run.nc"), "--plot", str(work / "run.png")]
         cold, cold_cpu, done = _run(src, ["simulate", "reference", "--t-end", "1", *out], cache, work)
         message = next((line.strip() for line in done.stderr.splitlines() if "compil" in line.lower()), "")
-        warm, warm_cpu, solver, modes, modes_cpu, imports = [], [], [], [], [], []
+        warm, warm_cpu, solver, modes, modes_cpu, imports, loads = [], [], [], [], [], [], []
         for _ in range(repeat):
             wall, cpu, done = _run(src, ["simulate", "reference", "--json", *out], cache, work)
             warm.append(wall)
@@ -84,7 +87,8 @@ def measure(src: Path, repeat: int) -> dict[str, float | str]:
             wall, cpu, _ = _run(src, ["modes", "reference"], cache, work)
             modes.append(wall)
             modes_cpu.append(cpu)
-            imports.append(_import_time(src, cache))
+            imports.append(_python_time(src, cache, "import drillstring.cli"))
+            loads.append(_python_time(src, cache, "from drillstring.case import load_case; load_case('reference')"))
     median = statistics.median
     return {
         "cold simulate --t-end 1 [s]": cold,
@@ -97,6 +101,7 @@ def measure(src: Path, repeat: int) -> dict[str, float | str]:
         "warm modes reference [s]": median(modes),
         "  CPU [s] ": median(modes_cpu),
         "import drillstring.cli [s]": median(imports),
+        "import + load_case('reference') [s]": median(loads),
     }
 
 

@@ -318,8 +318,8 @@ def test_refuses_wrong_dimension_unit(data):
 
 
 def test_refuses_unknown_unit(data):
-    data["borehole"]["diameter"] = "3 furlongs"
-    assert_problem(refused(data), "borehole.diameter", "'3 furlongs'", "unknown unit 'furlongs'", "in, ft")
+    data["borehole"]["diameter"] = "3 wombats"
+    assert_problem(refused(data), "borehole.diameter", "'3 wombats'", "unknown unit 'wombats'", "in, ft")
 
 
 def test_refuses_unit_on_dimensionless(data):

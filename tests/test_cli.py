@@ -21,7 +21,9 @@ REFERENCE_LENGTH = 1600.0  # m
 
 
 # Plain, wide, uncoloured tables whatever the terminal settings of the machine running the tests.
-_ENV = {"COLUMNS": "120", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "TTY_INTERACTIVE": None}
+# The user's unit system ($DRILLSTRING_UNITS) is unset: tables in SI unless a test asks otherwise.
+_ENV = {"COLUMNS": "120", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "TTY_INTERACTIVE": None,
+        "DRILLSTRING_UNITS": None}
 
 
 def _invoke(*args: str):
@@ -96,6 +98,55 @@ def test_static_human_readable_has_units_and_summary():
     assert len(out.splitlines()) < 40  # a summary, not the full profile
 
 
+KLBF = 4448.2216152605  # N (NIST)
+FT = 0.3048  # m
+
+
+def test_static_in_field_units_shows_klbf_and_ft():
+    data = _json("static", "reference", "--json")
+    result = _invoke("static", "reference", "--units", "field")
+    assert result.exit_code == 0, result.output
+    out = result.stdout
+    for text in ("klbf", "ft", "[ft]", "[klbf]", "above bit [ft]"):
+        assert text in out, text
+    assert " kN" not in out and "[m]" not in out
+    # The numbers are the SI ones over the defining factors: weight, weight-on-bit, neutral point, length.
+    assert f"{data['weight'] / KLBF:,.2f}" in out  # 261.55
+    assert f"{data['weight_on_bit'] / KLBF:,.2f}" in out  # 22.48
+    assert f"{data['neutral_point_height'] / FT:,.2f}" in out  # 116.77
+    assert f"{REFERENCE_LENGTH / FT:,.1f}" in out  # 5,249.3
+    assert f"margin {(data['critical_weight_on_bit'] - data['weight_on_bit']) / KLBF:,.2f} klbf" in out
+
+
+def test_units_setting_from_the_environment_and_the_option_wins():
+    field = _invoke("static", "reference", "--units", "field").stdout
+    env = runner.invoke(app, ["static", "reference"], env={**_ENV, "DRILLSTRING_UNITS": "field"})
+    assert env.exit_code == 0 and env.stdout == field
+    si = runner.invoke(app, ["static", "reference", "--units", "si"], env={**_ENV, "DRILLSTRING_UNITS": "field"})
+    assert si.exit_code == 0 and si.stdout == _invoke("static", "reference").stdout and "kN" in si.stdout
+    # JSON stays SI whatever the unit system.
+    assert _json("static", "reference", "--json", "--units", "field") == _json("static", "reference", "--json")
+
+
+def test_bad_units_are_refused():
+    result = _invoke("static", "reference", "--units", "imperial")
+    assert result.exit_code == 2
+    assert "--units = 'imperial': must be one of si, field" in result.output
+    bad_env = runner.invoke(app, ["modes", "reference"], env={**_ENV, "DRILLSTRING_UNITS": "cubits"})
+    assert bad_env.exit_code == 2 and "DRILLSTRING_UNITS = 'cubits'" in bad_env.output
+
+
+@pytest.mark.parametrize("command", ["static", "modes", "stability", "simulate", "compare", "study", "map",
+                                     "sensitivity"])
+def test_every_table_command_has_the_shared_units_option(command):
+    result = _invoke(command, "--help")
+    assert result.exit_code == 0 and "--units" in result.stdout and "si|field" in result.stdout
+
+
+def test_reference_components_gives_the_reference_static_state():
+    assert _json("static", "reference_components", "--json") == _json("static", "reference", "--json")
+
+
 def test_static_user_case_file(heavier_bit_case):
     reference = _json("static", "reference", "--json")
     data = _json("static", str(heavier_bit_case), "--json")
@@ -163,7 +214,7 @@ def test_cases_lists_reference_contact_and_stick_slip():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
     names = [line.split()[0] for line in result.stdout.splitlines()]
-    assert names == ["contact", "reference", "stick_slip"]
+    assert names == ["contact", "reference", "reference_components", "stick_slip"]
     assert "hits the wall" in result.stdout and "full stick-slip" in result.stdout
 
 

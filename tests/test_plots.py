@@ -232,6 +232,27 @@ def test_plot_compare_writes_png(run_dataset, tmp_path, drawn):
                                    tmp_path / "partial.png"))
 
 
+def test_figures_follow_the_unit_system(run_dataset, monkeypatch, tmp_path):
+    """The axes of a run figure in field units: klbf, kft·lbf, ft/h, in; the plotted numbers are the SI ones
+    times the display factor (the torque over 1 kft·lbf = 1355.8179483314004 N·m)."""
+    drawn = {}
+
+    def keep(fig, path):
+        drawn[str(path)] = fig
+        return path
+
+    monkeypatch.setattr(plots, "_save", keep)
+    plots.plot_run(run_dataset, tmp_path / "si.png", units="si")
+    plots.plot_run(run_dataset, tmp_path / "field.png", units="field")
+    si, field = ([ax.get_ylabel() for ax in drawn[str(tmp_path / f)].axes] for f in ("si.png", "field.png"))
+    assert "rate of penetration [m/h]" in si and "torque-on-bit [kN·m]" in si and "contact force [kN]" in si
+    assert "rate of penetration [ft/h]" in field and "torque-on-bit [kft·lbf]" in field
+    assert "radial displacement [in]" in field and "contact force [klbf]" in field
+    tob_si = drawn[str(tmp_path / "si.png")].axes[3].lines[0].get_ydata()
+    tob_field = drawn[str(tmp_path / "field.png")].axes[3].lines[0].get_ydata()
+    np.testing.assert_allclose(tob_field * 1355.8179483314004, tob_si * 1e3, rtol=1e-12)
+
+
 @pytest.mark.parametrize("name", ["Well $A", "Well $A$ and $\\\\frac{1}{$"])
 def test_case_names_are_plain_text_in_figures(run_dataset, tmp_path, name):
     """A case name is drawn as written: dollar signs never start Matplotlib's mathtext."""

@@ -147,3 +147,17 @@ def test_report_tolerates_missing_pieces(tmp_path):
     text = path.read_text(encoding="utf-8")
     assert "not = [valid toml" in text
     assert "http" not in text
+
+
+def test_report_in_field_units(tmp_path, summary):
+    """The case table and the study rows in field units: the SI numbers over the defining factors."""
+    path = write_report(tmp_path / "report.html", title="field", case_toml=load_case("reference").to_toml(),
+                        summary=summary, figures={}, run_info={}, units="field")
+    text = path.read_text(encoding="utf-8")
+    klbf, ft, inch, ppg = 4448.2216152605, 0.3048, 0.0254, 119.826427
+    assert f"{100e3 / klbf:.4g} klbf" in text  # weight-on-bit, 22.48
+    assert f"{1600 / ft:.6g} ft" in text  # string length, 5249.34
+    assert f"{0.3 / inch:.4g} in" in text  # borehole, 11.81
+    assert f"{1200 / ppg:.4g} ppg" in text  # mud, 10.01
+    assert f"{5000 / klbf:.4g} klbf" in text  # σ of the weight-on-hook, 1.124
+    assert "100 kN</td>" not in text and "1600 m</td>" not in text  # no SI row left

@@ -19,6 +19,7 @@ import numpy as np
 
 from drillstring.case import Case, load_case
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
+from drillstring.units import display_unit, unit_system
 
 if TYPE_CHECKING:  # the simulating modules load with the functions that use them (light static, modes)
     import xarray as xr
@@ -258,6 +259,7 @@ def monte_carlo_study(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    units: str | None = None,
 ) -> StudyOutcome:
     """Monte Carlo study of random case parameters (SPEC §8; by default a random weight-on-hook), with
     its files.
@@ -286,12 +288,15 @@ def monte_carlo_study(
     In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
     realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
     ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png``, ``realizations.png`` and
-    ``report.html``. Fewer than 2 finished realizations raise :class:`StudyFailed`.
+    ``report.html``; figures and report in the unit system ``units`` (``"si"`` or ``"field"``; None:
+    ``$DRILLSTRING_UNITS``, else si; JSON and NetCDF stay SI). Fewer than 2 finished realizations raise
+    :class:`StudyFailed`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     from drillstring.stochastic.execution import notify
     from drillstring.stochastic.montecarlo import run_study, study_buckling_margin
 
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
                                     correlation=correlation, samples=samples, seed=seed, t_end=t_end,
                                     output_step=output_step)
@@ -301,12 +306,13 @@ def monte_carlo_study(
     buckling = study_buckling_margin(case, settings)
     if buckling["warning"]:
         notify(note, buckling["warning"])
-    finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None)
+    finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None,
+                     units)
     run = run_study(case, settings, folder / "study.zarr", engine, finish=finish)
     return StudyOutcome(*run.result, run.already, run.note)
 
 
-def _finish_study(case, settings, t_transient, buckling, folder, run):
+def _finish_study(case, settings, t_transient, buckling, folder, units, run):
     """Under the study's lock: its statistics, summary and (in ``folder``, unless None) files."""
     from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
     from drillstring.stochastic.execution import computation_time
@@ -339,7 +345,7 @@ def _finish_study(case, settings, t_transient, buckling, folder, run):
     })
     files: dict[str, Path] = {}
     if folder is not None:
-        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw)
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units)
     return stats, payload, files
 
 
@@ -352,10 +358,10 @@ def _stability_boundary(case: Case) -> dict | None:
 
 
 def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
-                       raw=None) -> dict[str, Path]:
+                       raw=None, units: str | None = None) -> dict[str, Path]:
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
     statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
-    finished realizations of ``raw``, the study's raw Dataset)."""
+    finished realizations of ``raw``, the study's raw Dataset); figures and report in the unit system ``units``."""
 
     from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
@@ -371,8 +377,9 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     if raw is not None:
         finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
         shown = raw[list(STUDY_PANELS)].isel(realization=finished)
+    force = display_unit("force", units)
     write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"))
+    figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
     write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {
@@ -381,8 +388,8 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         "computation wall time [s]": round(payload["wall_time"], 2),
         "buckled realizations (lowest lateral ω² < 0)": (
             f"{payload['buckling']['buckled_realizations']} of {payload['n_samples']}; critical weight-on-bit "
-            f"{payload['buckling']['critical_weight_on_bit'] / 1e3:.5g} kN, probability of a buckled draw "
-            f"{payload['buckling']['probability']:.3g}"),
+            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}, probability of a "
+            f"buckled draw {payload['buckling']['probability']:.3g}"),
         "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
         "workers": payload["workers"],
     }
@@ -403,6 +410,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
                  for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
         run_info=run_info,
         interactive=study_figures(stats, shown),
+        units=units,
     )
     return {**paths, **figures}
 
@@ -738,6 +746,7 @@ def operating_map(
     parameters: Mapping[str, Any] | None = None,
     correlation: Mapping[str, Any] | None = None,
     seed: int = DEFAULT_SEED,
+    units: str | None = None,
 ) -> MapOutcome:
     """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
     one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
@@ -749,7 +758,8 @@ def operating_map(
     rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
     run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
     resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
-    ``map.json`` (the summary), ``map.png`` and ``report.html``. Checked before anything runs: the grid
+    ``map.json`` (the summary), ``map.png`` and ``report.html`` (figure and report in the unit system ``units``,
+    ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si). Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
 
@@ -765,6 +775,7 @@ def operating_map(
     """
     from drillstring.stochastic.operating_map import run_map
 
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case)
     settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
                             output_step=output_step, transient=transient)
@@ -778,22 +789,23 @@ def operating_map(
     case = case.model_copy(update={"uncertainty": None})
     folder = _output_folder(out, "drillstring-map-")
     run = run_map(case, settings, folder / "map.zarr", engine,
-                  finish=partial(_finish_map, case, folder if out is not None else None))
+                  finish=partial(_finish_map, case, folder if out is not None else None, units))
     return MapOutcome(*run.result, run.already, run.note)
 
 
-def _finish_map(case, folder, run):
+def _finish_map(case, folder, units, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
     from drillstring.interactive import map_figures
     from drillstring.plots import plot_map
     from drillstring.report import write_map_report
     from drillstring.stochastic.operating_map import map_dataset, map_summary
 
-    figures = {"figure": ("map.png", plot_map,
+    figures = {"figure": ("map.png", partial(plot_map, units=units),
                           "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
                           "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
                           "red dashed: lateral buckling limit; dots: simulated points")}
-    return _map_files(case, folder, run, map_dataset, map_summary, "points", figures, write_map_report,
+    return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
+                      partial(write_map_report, units=units),
                       f"Operating map: case '{case.name}'", map_figures)
 
 
@@ -899,6 +911,7 @@ def sensitivity(
     progress: Callable[[int, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
+    units: str | None = None,
 ) -> SensitivityOutcome:
     """Global sensitivity of ``case``: first-order and total Sobol' indices, with bootstrap confidence
     intervals (level ``confidence``) and a convergence check at N/4, N/2, N, of the time-mean ROP,
@@ -909,7 +922,8 @@ def sensitivity(
     table. ``samples`` is the number of base samples N (a power of 2): N(k + 2) runs of ``t_end`` [s]
     on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/sensitivity.zarr is
     resumable. In ``out``: ``sensitivity.json`` (per output: ``S1``, ``ST``, their intervals, per
-    parameter; the convergence; the run), ``sobol.png``, ``sobol_convergence.png`` and ``report.html``.
+    parameter; the convergence; the run), ``sobol.png``, ``sobol_convergence.png`` and ``report.html`` (its
+    case table in the unit system ``units``, ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     from drillstring.checks import integer, real_number
@@ -917,6 +931,7 @@ def sensitivity(
     from drillstring.stochastic.sensitivity_study import SensitivitySettings, run_sensitivity
     from drillstring.stochastic.uncertainty import declared_uncertainty
 
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case)
     _mapping("parameters", parameters)
     confidence = real_number("confidence", confidence, low=0.0, high=1.0, low_open=True, high_open=True,
@@ -938,11 +953,11 @@ def sensitivity(
     folder = _output_folder(out, "drillstring-sensitivity-")
     run = run_sensitivity(case, settings, folder / "sensitivity.zarr", engine,
                           finish=partial(_finish_sensitivity, case, settings, confidence, resamples,
-                                         folder if out is not None else None))
+                                         folder if out is not None else None, units))
     return SensitivityOutcome(*run.result, run.already, run.note)
 
 
-def _finish_sensitivity(case, settings, confidence, resamples, folder, run):
+def _finish_sensitivity(case, settings, confidence, resamples, folder, units, run):
     """Under the sensitivity run's lock: its Sobol' indices, payload and (in ``folder``, unless None) files."""
     import json
 
@@ -977,5 +992,5 @@ def _finish_sensitivity(case, settings, confidence, resamples, folder, run):
             run_info={**_run_table(record, "runs"), "runs": result.runs,
                       "simulated time per run [s]": settings.t_end,
                       "outputs over": f"t ≥ {settings.transient:g} s", "store": str(store_path)},
-            interactive=sensitivity_figures(payload))
+            interactive=sensitivity_figures(payload), units=units)
     return result, payload, files

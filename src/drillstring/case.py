@@ -8,10 +8,12 @@ mesh, reduced-order model, time integration and initial state. It is a tree of i
 Units at the edge
 -----------------
 Every physical field accepts either a plain number, taken in SI units, or a string ``"value unit"``, e.g.
-``"100 rpm"``, ``"100 kN"``, ``"1400 m"``, ``"8.5 in"``, ``"1.5 m/s"``, ``"17.5 MN/m"``. The string is converted
-to SI when the case is validated; a unit of the wrong dimension, or an unknown unit, is refused with the list
-of allowed units. Units are case-sensitive (``mm`` is not ``Mm``); ``*`` and ``.`` both denote a product, and
-spaces inside the unit are ignored. The unit tables are in :data:`DIMENSIONS`.
+``"100 rpm"``, ``"100 kN"``, ``"1400 m"``, ``"8.5 in"``, ``"10 ppg"``, ``"3000 psi"``, ``"17.5 MN/m"``, in any unit of
+the field's dimension. The string is read by pint and converted to SI when the case is validated
+(:mod:`drillstring.units`: writing rules, the oilfield units ppg, gpm and rev); a unit of the wrong dimension, or
+an unknown unit, is refused naming the dimension expected. Two inputs are converted with the rest of the case:
+``fluid.flow_rate`` (a volume flow, e.g. ``"600 gpm"``) gives ``fluid.inlet_velocity`` through the bore of the
+top section, and a ``[[components]]`` list (:mod:`drillstring.components`) gives the sections and stabilizers.
 
 Errors
 ------
@@ -24,18 +26,17 @@ Cross-field rules (which need the whole case) are checked only once every field 
 Entry points: :func:`load_case`, :func:`case_from_dict`, :func:`builtin_cases`, :meth:`Case.to_toml`.
 
 This module imports nothing from the rest of ``drillstring`` but :mod:`drillstring.derived` (pure functions
-of numbers shared with the finite-element model: mesh layout, mode-family sizes, axial loads).
+of numbers shared with the finite-element model: mesh layout, mode-family sizes, axial loads),
+:mod:`drillstring.units` (reading units) and :mod:`drillstring.components` (strings from components).
 """
 
 from __future__ import annotations
 
 import math
 import os
-import re
 import stat
 import tomllib
 import typing
-from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
@@ -50,6 +51,34 @@ from drillstring.derived import (
     mesh_breaks,
     mode_family_sizes,
     string_axial_load,
+)
+from drillstring.units import (
+    ACCELERATION,
+    ANGLE,
+    ANGULAR_SPEED,
+    AXIAL_DAMPING,
+    DENSITY,
+    DIMENSIONLESS,
+    DIMENSIONS,
+    FORCE,
+    FORCE_ANGLE,
+    LENGTH,
+    LENGTH_PER_ANGLE,
+    LINEAR_DAMPING,
+    MASS_PER_LENGTH,
+    MOMENT_OF_INERTIA,
+    PENETRATION_PER_FORCE,
+    PRESSURE,
+    ROTATIONAL_DAMPING,
+    ROTATIONAL_STIFFNESS,
+    STIFFNESS,
+    STIFFNESS_PER_LENGTH,
+    TIME,
+    TORQUE,
+    VELOCITY,
+    VOLUME_FLOW,
+    Dimension,
+    to_si,
 )
 
 __all__ = [
@@ -71,6 +100,7 @@ __all__ = [
     "Bow",
     "Case",
     "CaseError",
+    "Component",
     "Contact",
     "Damping",
     "Density",
@@ -81,6 +111,7 @@ __all__ = [
     "Force",
     "Initial",
     "Length",
+    "MassPerLength",
     "Material",
     "Mesh",
     "Model",
@@ -93,8 +124,10 @@ __all__ = [
     "Stiffness",
     "StiffnessPerLength",
     "Time",
+    "ToolJoint",
     "Torque",
     "Velocity",
+    "VolumeFlow",
     "builtin_cases",
     "case_from_dict",
     "load_case",
@@ -291,105 +324,8 @@ def _entries_from_validation_error(exc: ValidationError, root: type[BaseModel], 
 # ---------------------------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Dimension:
-    """A physical dimension: its name and its units, each with the factor that converts it to SI."""
-
-    name: str
-    units: Mapping[str, float]
-
-    @property
-    def allowed(self) -> str:
-        return ", ".join(self.units) if self.units else "none (a plain number)"
-
-
-_TWO_PI = 2.0 * math.pi
-_LBF = 4.4482216152605  # N
-
-LENGTH = Dimension("length", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "km": 1e3, "in": 0.0254, "ft": 0.3048})
-FORCE = Dimension("force", {"N": 1.0, "kN": 1e3, "MN": 1e6, "lbf": _LBF, "klbf": 1e3 * _LBF})
-ANGULAR_SPEED = Dimension(
-    "angular speed", {"rad/s": 1.0, "rpm": _TWO_PI / 60.0, "rev/min": _TWO_PI / 60.0, "Hz": _TWO_PI, "rev/s": _TWO_PI}
-)
-VELOCITY = Dimension(
-    "velocity", {"m/s": 1.0, "m/min": 1.0 / 60.0, "m/h": 1.0 / 3600.0, "ft/s": 0.3048, "ft/h": 0.3048 / 3600.0}
-)
-STIFFNESS = Dimension("stiffness", {"N/m": 1.0, "kN/m": 1e3, "MN/m": 1e6})
-# A stiffness per metre of string [N/m per m = N/m²]. "N/m" is accepted too, read per metre, because the
-# reference data write the shock stiffness so ("1e8 N/m" for the shocks, per meter of string).
-STIFFNESS_PER_LENGTH = Dimension("stiffness per length",
-                                 {"N/m2": 1.0, "N/m^2": 1.0, "N/m/m": 1.0, "kN/m2": 1e3, "MN/m2": 1e6, "N/m": 1.0})
-PRESSURE = Dimension("pressure", {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9})
-DENSITY = Dimension("density", {"kg/m3": 1.0, "kg/m^3": 1.0, "g/cm3": 1e3, "g/cm^3": 1e3})
-TIME = Dimension("time", {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
-TORQUE = Dimension("torque", {"N*m": 1.0, "N.m": 1.0, "kN*m": 1e3, "kN.m": 1e3})
-ACCELERATION = Dimension("acceleration", {"m/s2": 1.0, "m/s^2": 1.0})
-ANGLE = Dimension("angle", {"rad": 1.0, "deg": math.pi / 180.0})
-DIMENSIONLESS = Dimension("dimensionless number", {})
-# Coefficients that only ever appear in SI; the unit string is still accepted so a file can say what it means.
-AXIAL_DAMPING = Dimension("axial damping coefficient", {"N*s/m": 1.0, "N.s/m": 1.0})
-ROTATIONAL_DAMPING = Dimension("rotational damping coefficient", {"N*m*s/rad": 1.0, "N.m.s/rad": 1.0})
-LINEAR_DAMPING = Dimension("damping per unit length", {"N*s/m2": 1.0, "N*s/m^2": 1.0, "N.s/m2": 1.0})
-PENETRATION_PER_FORCE = Dimension("bit-rock coefficient a2", {"m/(N*s)": 1.0, "m/(N.s)": 1.0})
-LENGTH_PER_ANGLE = Dimension("length per angle", {"m/rad": 1.0})
-FORCE_ANGLE = Dimension("force times angle", {"N*rad": 1.0, "N.rad": 1.0})
-MOMENT_OF_INERTIA = Dimension("moment of inertia", {"kg*m2": 1.0, "kg*m^2": 1.0, "kg.m2": 1.0})
-ROTATIONAL_STIFFNESS = Dimension("rotational stiffness", {"N*m/rad": 1.0, "N.m/rad": 1.0, "kN*m/rad": 1e3})
-
-#: Every dimension, for error messages naming the dimension a misplaced unit belongs to.
-DIMENSIONS: tuple[Dimension, ...] = (
-    LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, STIFFNESS_PER_LENGTH, PRESSURE, DENSITY, TIME, TORQUE, ACCELERATION, ANGLE,
-    DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING, LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE,
-    FORCE_ANGLE, MOMENT_OF_INERTIA, ROTATIONAL_STIFFNESS,
-)  # fmt: skip
-
-_QUANTITY = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
-_UNIT_SUBST = {"·": "*", "⋅": "*", "²": "2", "³": "3"}
-
-
-def _normalise_unit(unit: str) -> str:
-    for old, new in _UNIT_SUBST.items():
-        unit = unit.replace(old, new)
-    return "".join(unit.split())
-
-
-def to_si(value: Any, dim: Dimension) -> float:
-    """Convert a plain number (taken as SI) or a ``"value unit"`` string of dimension ``dim`` to an SI float.
-
-    Raises ``ValueError`` with a one-line explanation (the allowed units) when the value cannot be converted.
-    """
-    if isinstance(value, bool):
-        raise ValueError(f"expected a number, got a boolean; allowed units: {dim.allowed}")
-    if isinstance(value, (int, float)):
-        number = float(value)
-        unit = ""
-    elif isinstance(value, str):
-        match = _QUANTITY.match(value)
-        if match is None:
-            hint = f'a number or a "value unit" string (allowed units: {dim.allowed})'
-            if not dim.units:
-                hint = "a plain number"
-            raise ValueError(f"not {hint}")
-        number = float(match.group(1))
-        unit = _normalise_unit(match.group(2))
-    else:
-        try:  # numpy scalars and the like
-            number = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"expected a number, got {type(value).__name__}") from None
-        unit = ""
-    if not math.isfinite(number):
-        raise ValueError("must be a finite number")
-    if not unit:
-        return number
-    if unit in dim.units:
-        return number * dim.units[unit]
-    if not dim.units:
-        raise ValueError(f"a plain number without unit is expected ({dim.name}), got unit '{unit}'")
-    other = next((d for d in DIMENSIONS if unit in d.units), None)
-    if other is not None:
-        raise ValueError(f"unit '{unit}' is a {other.name} unit, not a {dim.name} unit; allowed units: {dim.allowed}")
-    raise ValueError(f"unknown unit '{unit}', not a {dim.name} unit; allowed units: {dim.allowed}")
+# The dimensions and the conversion live in drillstring.units (pint); case.py names the field types.
+_RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
 
 def _quantity(dim: Dimension) -> Any:
@@ -419,6 +355,8 @@ LinearDamping = _quantity(LINEAR_DAMPING)  #: [N*s/m^2]
 PenetrationPerForce = _quantity(PENETRATION_PER_FORCE)  #: [m/(N*s)]
 LengthPerAngle = _quantity(LENGTH_PER_ANGLE)  #: [m/rad]
 ForceAngle = _quantity(FORCE_ANGLE)  #: [N*rad]
+MassPerLength = _quantity(MASS_PER_LENGTH)  #: [kg/m]
+VolumeFlow = _quantity(VOLUME_FLOW)  #: [m^3/s]
 MomentOfInertia = _quantity(MOMENT_OF_INERTIA)  #: [kg*m^2]
 RotationalStiffness = _quantity(ROTATIONAL_STIFFNESS)  #: [N*m/rad]
 
@@ -585,7 +523,7 @@ class Operation(_Base):
     """Operating point: what the driller controls."""
 
     top_speed: AngularSpeed = Field(
-        to_si("100 rpm", ANGULAR_SPEED), gt=0, description="rotation speed imposed at the top [rad/s]"
+        100.0 * _RPM, gt=0, description="rotation speed imposed at the top [rad/s]"
     )
     weight_on_bit: Force = Field(1e5, gt=0, description="initial (static) weight-on-bit [N]")
 
@@ -712,6 +650,164 @@ class UncertaintyTable(_Base):
     correlation: CorrelationTable | None = None
 
 
+# ---------------------------------------------------------------------------------------------------------
+# Strings from components (expanded into sections and stabilizers by drillstring.components)
+# ---------------------------------------------------------------------------------------------------------
+
+
+class _Missing:
+    """A required field's value in a problem line."""
+
+    def __repr__(self) -> str:
+        return "(missing)"
+
+
+_MISSING = _Missing()
+
+
+class ToolJoint(_Base):
+    """The tool joints of a drill pipe or heavy-weight pipe, smeared as added mass along it
+    (:mod:`drillstring.components`)."""
+
+    outer_diameter: Length = Field(gt=0, description="tool-joint outer diameter [m]")
+    inner_diameter: Length | None = Field(
+        None, ge=0, description="tool-joint bore [m]; the pipe's by default")
+    length: Length = Field(gt=0, description="length of one tool joint (box and pin together) [m]")
+    spacing: Length = Field(9.144, gt=0, description="pipe length per tool joint [m]; 30 ft (range 2) by default")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> ToolJoint:
+        if self.inner_diameter is not None and self.inner_diameter >= self.outer_diameter:
+            raise _Problems([(("inner_diameter",), self.inner_diameter,
+                              f"must be less than outer_diameter ({self.outer_diameter:g} m)")])
+        if self.length >= self.spacing:
+            raise _Problems([(("length",), self.length, f"must be less than spacing ({self.spacing:g} m)")])
+        return self
+
+
+class Component(_Base):
+    """One component of the string, listed from the top to the bit in ``[[components]]``
+    (:mod:`drillstring.components` says how it becomes sections and stabilizers)."""
+
+    type: Literal["drill_pipe", "heavy_weight", "collar", "mwd", "motor", "stabilizer", "bit"]
+    name: str | None = Field(None, description="section name; by default from the type ('drill pipe', ...)")
+    length: Length = Field(0.0, ge=0, description="length [m]; > 0 except for a stabilizer (0: a point)")
+    outer_diameter: Length | None = Field(None, gt=0, description="outer diameter D_o [m]")
+    inner_diameter: Length | None = Field(None, ge=0, description="inner (bore) diameter D_i [m]")
+    weight_per_length: MassPerLength | None = Field(
+        None, gt=0, description="nominal mass per length, e.g. '19.5 lb/ft' [kg/m]: with inner_diameter, the "
+        "section's linear mass; without it, sets the bore of the plain tube of that mass")
+    material: str = Field("steel", description="key into Case.materials")
+    shear_factor: Dimensionless = Field(6.0 / 7.0, gt=0, le=1, description="Timoshenko shear factor k_s [-]")
+    eccentricity: Length = Field(0.0, ge=0, description="mass-centre offset e [m] (see Section)")
+    eccentricity_angle: Angle = Field(0.0, description="direction of the offset [rad] (see Section)")
+    tool_joint: ToolJoint | None = Field(None, description="drill pipe and heavy-weight pipe only")
+    stiffness: Stiffness | None = Field(None, gt=0, description="stabilizer only: lateral stiffness [N/m]")
+    blade_diameter: Length | None = Field(
+        None, gt=0, description="stabilizer only: blade (gauge) diameter [m], at most the borehole's")
+
+    @model_validator(mode="after")
+    def _fields_of_type(self) -> Component:
+        problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        stabilizer = self.type == "stabilizer"
+        for key in ("stiffness", "blade_diameter"):
+            if not stabilizer and getattr(self, key) is not None:
+                problems.append(((key,), getattr(self, key), f"only for a stabilizer, not a {self.type}"))
+        if stabilizer and self.stiffness is None:
+            problems.append((("stiffness",), _MISSING, "required for a stabilizer"))
+        if self.tool_joint is not None and self.type not in ("drill_pipe", "heavy_weight"):
+            problems.append((("tool_joint",), self.tool_joint, "only for drill_pipe and heavy_weight"))
+        tube = not stabilizer or self.length > 0.0
+        if not stabilizer and self.length == 0.0:
+            problems.append((("length",), self.length, f"must be > 0 for a {self.type}"))
+        if tube:
+            if self.outer_diameter is None:
+                problems.append((("outer_diameter",), _MISSING, "required"))
+            if self.inner_diameter is None and self.weight_per_length is None:
+                problems.append((("inner_diameter",), _MISSING, "give inner_diameter or weight_per_length"))
+            if (self.outer_diameter is not None and self.inner_diameter is not None
+                    and self.inner_diameter >= self.outer_diameter):
+                problems.append((("inner_diameter",), self.inner_diameter,
+                                 f"must be less than outer_diameter ({self.outer_diameter:g} m)"))
+            if (stabilizer and self.blade_diameter is not None and self.outer_diameter is not None
+                    and self.blade_diameter < self.outer_diameter):
+                problems.append((("blade_diameter",), self.blade_diameter,
+                                 f"must be at least the body's outer_diameter ({self.outer_diameter:g} m)"))
+            if (self.tool_joint is not None and self.outer_diameter is not None
+                    and self.tool_joint.outer_diameter < self.outer_diameter):
+                problems.append((("tool_joint", "outer_diameter"), self.tool_joint.outer_diameter,
+                                 f"must be at least the pipe's outer_diameter ({self.outer_diameter:g} m)"))
+        if problems:
+            raise _Problems(problems)
+        return self
+
+
+def _from_components(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with its ``components`` list replaced by the sections, stabilizers and materials they make
+    (:func:`drillstring.components.expand`); raises :class:`CaseError` naming the component fields at fault."""
+    from drillstring.components import ComponentProblem, expand
+
+    raw = data.pop("components")
+    if "sections" in data:
+        raise _Problems([(("components",), "[...]", "give either [[components]] or [[sections]], not both")])
+    if not isinstance(raw, list) or not raw:
+        raise _Problems([(("components",), raw, "must be a non-empty list of tables")])
+    entries: list[_Entry] = []
+    components = []
+    for i, item in enumerate(raw):
+        try:
+            components.append(Component.model_validate(item))
+        except CaseError as exc:
+            entries.extend((("components", i) + loc, value, message) for loc, value, message in exc.entries)
+    raw_materials = data.get("materials")
+    materials = _default_materials() if raw_materials is None else {}
+    for name, raw_material in (raw_materials.items() if isinstance(raw_materials, Mapping) else ()):
+        try:
+            materials[name] = Material.model_validate(raw_material)
+        except CaseError as exc:  # needed for the expansion: reported here
+            entries.extend((("materials", name) + loc, value, message) for loc, value, message in exc.entries)
+    try:
+        borehole = to_si(data["borehole"]["diameter"], LENGTH)
+    except (KeyError, TypeError, ValueError):
+        borehole = None
+    if entries:
+        raise CaseError(entries)
+    try:
+        expansion = expand(components, materials, borehole)
+    except ComponentProblem as exc:
+        raise _Problems(exc.problems) from None
+    data["sections"] = expansion.sections
+    data["stabilizers"] = list(data.get("stabilizers", [])) + expansion.stabilizers
+    if expansion.materials:
+        data["materials"] = {**(raw_materials if raw_materials is not None else
+                                {n: m.model_dump() for n, m in materials.items()}), **expansion.materials}
+    return data
+
+
+def _inlet_velocity_from_flow(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with ``fluid.flow_rate`` (a volume flow Q) replaced by ``fluid.inlet_velocity`` = Q / A_i, A_i
+    the bore of the top section; left as it is when that bore cannot be read (reported elsewhere)."""
+    fluid = dict(data["fluid"])
+    flow = fluid.pop("flow_rate")
+    where = ("fluid", "flow_rate")
+    try:
+        rate = to_si(flow, VOLUME_FLOW)
+    except ValueError as exc:
+        raise _Problems([(where, flow, str(exc))]) from None
+    if "inlet_velocity" in fluid:
+        raise _Problems([(where, flow, "give either fluid.flow_rate or fluid.inlet_velocity, not both")])
+    try:
+        bore = to_si(data["sections"][0]["inner_diameter"], LENGTH)
+    except (KeyError, IndexError, TypeError, ValueError):
+        return data
+    if rate < 0.0 or bore <= 0.0:
+        problem = "must be >= 0" if rate < 0.0 else "needs a bore: the top section's inner_diameter is 0"
+        raise _Problems([(where, flow, problem)])
+    fluid["inlet_velocity"] = rate / (math.pi * bore**2 / 4.0)
+    data["fluid"] = fluid
+    return data
+
+
 #: Most finite elements a case may have (a mesh finer than this is refused at validation; 10 000 elements is
 #: 0.16 m for the 1600 m reference string, 1 m for a 10 km string, whose sparse set-up takes about 450 MiB).
 MAX_ELEMENTS = 10_000
@@ -833,6 +929,20 @@ class Case(_Base):
     bow: Bow = Field(default_factory=Bow)
     uncertainty: UncertaintyTable | None = Field(
         None, description="optional [uncertainty] table: the laws of a study's random parameters")
+
+    # -- inputs converted with the whole case: components, flow rate -------------------------------------
+
+    @model_validator(mode="before")
+    @classmethod
+    def _whole_case_inputs(cls, data: Any) -> Any:
+        if not isinstance(data, Mapping):
+            return data
+        data = dict(data)
+        if "components" in data:
+            data = _from_components(data)
+        if isinstance(data.get("fluid"), Mapping) and "flow_rate" in data["fluid"]:
+            data = _inlet_velocity_from_flow(data)
+        return data
 
     # -- derived quantities ------------------------------------------------------------------------------
 

@@ -32,7 +32,10 @@ Conventions for every command (follow them when adding one)
 - Load the case with :func:`_load`: an invalid case prints its message to stderr and exits with code 2.
 - Physics stays out of this module: a command calls the package API and only formats the result.
 - ``--json`` prints ``json.dumps(payload, indent=2)`` of SI values, and nothing else, on stdout.
-- Human-readable output (rich tables) converts units here, at the edge: kN, m, Hz, ...
+- Human-readable output (rich tables) converts units here, at the edge, into the unit system of the shared
+  ``--units`` option (:data:`UnitsOpt`, every command that prints tables or draws figures has it): ``si``
+  (kN, m, m/h, kN·m, mm) or ``field`` (klbf, ft, ft/h, kft·lbf, in); frequencies in Hz and speeds in rpm in
+  both (:mod:`drillstring.units`). JSON stays SI.
 - Progress bars and notes go to stderr, so that stdout holds only the table or the JSON.
 - Exit codes: 0 success, 1 a run that failed, 2 invalid input, 130 interrupted (Ctrl-C).
 - Heavy modules (SciPy, simulation, Monte Carlo, xarray, Matplotlib) are imported inside the commands
@@ -71,6 +74,7 @@ from rich.table import Table  # noqa: E402
 from drillstring._version import __version__  # noqa: E402
 from drillstring.case import Case, CaseError, builtin_cases, load_case  # noqa: E402
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO  # noqa: E402
+from drillstring.units import display_unit, unit_system  # noqa: E402
 from drillstring.stochastic import (  # noqa: E402
     DEFAULT_BASE_SAMPLES,
     DEFAULT_MAP_TOP_SPEED,
@@ -90,9 +94,8 @@ EXIT_RUN_FAILED = 1
 #: Exit code after Ctrl-C (128 + SIGINT, the shell convention).
 EXIT_INTERRUPTED = 130
 
-_KN = 1e3  # N per kN
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
-_MM = 1e3  # mm per m
+_KN = 1e3  # N per kN (tables not yet in the --units system: stability boundary, probabilistic map)
 _M_PER_H = 3600.0  # (m/h) per (m/s)
 
 app = typer.Typer(
@@ -117,6 +120,23 @@ CaseArg = Annotated[
     ),
 ]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON (SI units) on stdout instead of tables.")]
+
+
+def _unit_system_option(value: str | None) -> str:
+    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2)."""
+    try:
+        return unit_system(value)
+    except ValueError as error:
+        raise typer.BadParameter(str(error)) from None
+
+
+#: The output unit system of tables, figures and reports: one definition for every command.
+UnitsOpt = Annotated[
+    str,
+    typer.Option("--units", metavar="si|field", callback=_unit_system_option, show_default=False,
+                 help="Units of tables, figures and reports: si (kN, m, m/h, kN·m, mm) or field (klbf, ft, ft/h, "
+                      "kft·lbf, in); rpm and Hz in both. Default: $DRILLSTRING_UNITS, else si. JSON stays SI."),
+]
 
 
 def _fail(message: str, code: int = EXIT_INVALID_INPUT) -> NoReturn:
@@ -246,7 +266,7 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 
 
 @app.command()
-def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
+def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOpt = None) -> None:
     """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
     weight-on-bit (lateral buckling), axial force."""
     from drillstring import api
@@ -269,42 +289,44 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False) -> None:
         return
 
     console = _console()
+    force, length = display_unit("force", units), display_unit("length", units)
     summary = Table(title=escape(f"Static state: case {the_case.name!r}"), title_justify="left")
     summary.add_column("quantity")
     summary.add_column("value", justify="right")
     summary.add_column("unit")
-    summary.add_row("weight", f"{state.weight / _KN:,.2f}", "kN")
-    summary.add_row("weight-on-hook", f"{state.weight_on_hook / _KN:,.2f}", "kN")
-    summary.add_row("weight-on-bit", f"{state.weight_on_bit / _KN:,.2f}", "kN")
-    summary.add_row("neutral point above the bit", f"{state.neutral_point_height:,.2f}", "m")
+    summary.add_row("weight", f"{force(state.weight):,.2f}", force.label)
+    summary.add_row("weight-on-hook", f"{force(state.weight_on_hook):,.2f}", force.label)
+    summary.add_row("weight-on-bit", f"{force(state.weight_on_bit):,.2f}", force.label)
+    summary.add_row("neutral point above the bit", f"{length(state.neutral_point_height):,.2f}", length.label)
     summary.add_row("critical weight-on-bit (lateral buckling)",
-                    f"{margin.critical_weight_on_bit / _KN:,.2f}", "kN")
-    summary.add_row("string length", f"{state.mesh.length:,.1f}", "m")
+                    f"{force(margin.critical_weight_on_bit):,.2f}", force.label)
+    summary.add_row("string length", f"{length(state.mesh.length):,.1f}", length.label)
     console.print(summary)
-    console.print(escape(_buckling_note(margin)), soft_wrap=True)
+    console.print(escape(_buckling_note(margin, units)), soft_wrap=True)
 
     forces = Table(title="Axial force N (tension > 0)", title_justify="left")
     forces.add_column("where")
-    forces.add_column(escape("x [m]"), justify="right")
-    forces.add_column(escape("above bit [m]"), justify="right")
-    forces.add_column(escape("N [kN]"), justify="right")
+    forces.add_column(escape(f"x [{length.label}]"), justify="right")
+    forces.add_column(escape(f"above bit [{length.label}]"), justify="right")
+    forces.add_column(escape(f"N [{force.label}]"), justify="right")
     for label, position in _axial_force_landmarks(the_case, x):
         # N is continuous and linear inside each element, so interpolation between nodes is exact.
         value = float(np.interp(position, x, n))
         height = state.mesh.length - position
-        forces.add_row(escape(label), f"{position:,.1f}", f"{height:,.1f}", f"{value / _KN:,.2f}")
+        forces.add_row(escape(label), f"{length(position):,.1f}", f"{length(height):,.1f}", f"{force(value):,.2f}")
     console.print(forces)
     console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"), soft_wrap=True)
 
 
-def _buckling_note(margin: BucklingMargin) -> str:
+def _buckling_note(margin: BucklingMargin, units: str) -> str:
     """One line: the lateral buckling margin of the case at its weight-on-bit."""
-    critical, wob = margin.critical_weight_on_bit / _KN, margin.weight_on_bit / _KN
+    force = display_unit("force", units)
+    critical, wob, kn = force(margin.critical_weight_on_bit), force(margin.weight_on_bit), force.label
     if margin.buckled:
-        return (f"BUCKLED: weight-on-bit {wob:,.2f} kN exceeds the critical {critical:,.2f} kN; the straight "
+        return (f"BUCKLED: weight-on-bit {wob:,.2f} {kn} exceeds the critical {critical:,.2f} {kn}; the straight "
                 "string is statically unstable (lowest lateral mode has ω² < 0).")
-    return (f"Lateral buckling at weight-on-bit {critical:,.2f} kN: margin {critical - wob:,.2f} kN "
-            f"({critical / wob:.2f} × the case's {wob:,.2f} kN).")
+    return (f"Lateral buckling at weight-on-bit {critical:,.2f} {kn}: margin {critical - wob:,.2f} {kn} "
+            f"({critical / wob:.2f} × the case's {wob:,.2f} {kn}).")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -319,6 +341,7 @@ def modes(
         int, typer.Option("--count", "-n", min=1, help="Number of modes per family (axial includes the rigid mode).")
     ] = 10,
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
     from drillstring import api
@@ -352,7 +375,7 @@ def modes(
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
         "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
         "mode, -sqrt(|ω²|)/2π.",
-        _buckling_note(margin),
+        _buckling_note(margin, units),
     ):
         console.print(escape(note), soft_wrap=True)
 
@@ -469,6 +492,7 @@ def stability(
         "--boundary", help="Also find the stability boundary along the weight-on-bit at the case's top speed "
                            "(the weight-on-bit where the leading growth rate crosses 0).")] = False,
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Steady drilling (closed form) and its linear stability: eigenvalues of the reduced model
     linearised about it, bit–rock law included.
@@ -497,10 +521,11 @@ def stability(
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_column("unit")
-    table.add_row("rate of penetration", f"{steady['rate_of_penetration'] * _M_PER_H:,.3f}", "m/h")
+    rop, torque, force = (display_unit(k, units) for k in ("rate_of_penetration", "torque", "force"))
+    table.add_row("rate of penetration", f"{rop(steady['rate_of_penetration']):,.3f}", rop.label)
     table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
-    table.add_row("torque on bit", f"{steady['torque_on_bit'] / _KN:,.3f}", "kN·m")
-    table.add_row("force on bit", f"{steady['force_on_bit'] / _KN:,.3f}", "kN")
+    table.add_row("torque on bit", f"{torque(steady['torque_on_bit']):,.3f}", torque.label)
+    table.add_row("force on bit", f"{force(steady['force_on_bit']):,.3f}", force.label)
     drive = payload.get("top_drive")
     if drive:
         tuned = set(drive["tuned"])
@@ -618,8 +643,10 @@ def _fmt(value: float | None, spec: str, scale: float = 1.0) -> str:
     return "–" if value is None else format(value * scale, spec)
 
 
-def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
+def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
     t_tr = numbers["t_transient"]
+    rop, force, small, length = (display_unit(k, units)
+                                 for k in ("rate_of_penetration", "force", "small_length", "length"))
     table = Table(
         title=escape(f"Simulation: case {name!r}, t = 0 to {numbers['t_end']:g} s"), title_justify="left"
     )
@@ -627,7 +654,7 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
     table.add_column("value", justify="right")
     table.add_column("unit")
     table.add_row(escape(f"mean rate of penetration (t ≥ {t_tr:g} s)"),
-                  _fmt(numbers["mean_rate_of_penetration"], ",.3f", _M_PER_H), "m/h")
+                  _fmt(numbers["mean_rate_of_penetration"], ",.3f", rop.scale), rop.label)
     table.add_row(escape(f"bit speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['bit_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['bit_speed_max'], ',.2f', _RPM)}",
                   "rpm")
@@ -644,12 +671,12 @@ def _simulation_table(name: str, numbers: dict[str, Any]) -> Table:
                   f"{_fmt(numbers['surface_torque_min'], ',.2f', 1.0 / _KN)} / "
                   f"{_fmt(numbers['surface_torque_max'], ',.2f', 1.0 / _KN)}", "kN·m")
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
-        table.add_row(escape(f"max radial displacement at x = {x:g} m / gap"),
-                      f"{_fmt(r, ',.3f', _MM)} / {gap * _MM:,.1f}", "mm")
+        table.add_row(escape(f"max radial displacement at x = {length(x):g} {length.label} / gap"),
+                      f"{_fmt(r, ',.3f', small.scale)} / {small(gap):,.1f}", small.label)
     table.add_row("impacts on the borehole", f"{numbers['impacts']:,}", "")
-    table.add_row("largest contact force", _fmt(numbers["max_contact_force"], ",.1f", 1.0 / _KN), "kN")
+    table.add_row("largest contact force", _fmt(numbers["max_contact_force"], ",.1f", force.scale), force.label)
     table.add_row(escape(f"mean contact force / time in contact (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['mean_contact_force'], ',.3f', 1.0 / _KN)} kN / "
+                  f"{_fmt(numbers['mean_contact_force'], ',.3f', force.scale)} {force.label} / "
                   f"{_fmt(numbers['contact_time_fraction'], '.1%')}", "")
     table.add_row("right-hand-side evaluations", f"{numbers['n_rhs']:,}", "")
     table.add_row("steps accepted / rejected", f"{numbers['n_accepted']:,} / {numbers['n_rejected']:,}", "")
@@ -671,6 +698,7 @@ def simulate(
         "simulation.png"
     ),
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """One drilling run: ROP, bit speed, torque- and force-on-bit, radial displacements, whirl, contact.
 
@@ -711,7 +739,7 @@ def simulate(
 
     try:
         netcdf = write_netcdf(ds, out)
-        figure = plot_run(ds, plot) if ds.sizes.get("time", 0) else None  # the probe nearest x = 1560 m
+        figure = plot_run(ds, plot, units=units) if ds.sizes.get("time", 0) else None  # probe nearest 1560 m
     except OSError as error:  # disk full, no permission: the run is lost, the old files are left as they were
         from drillstring.files import write_error_message
 
@@ -727,7 +755,7 @@ def simulate(
         _print_json(numbers)
     else:
         console = _console()
-        console.print(_simulation_table(the_case.name, numbers))
+        console.print(_simulation_table(the_case.name, numbers, units))
         written = f"NetCDF: {netcdf}" + ("" if figure is None else f", figure: {figure}")
         console.print(escape(written), soft_wrap=True)
     if failure is not None:
@@ -738,18 +766,20 @@ def simulate(
 # drillstring compare
 # ---------------------------------------------------------------------------------------------------------
 
-#: Display of each compared observable: (short label, factor from SI, unit).
+#: Short label of each compared observable (its unit: drillstring.quantities.DISPLAY_KINDS).
 _COMPARE_ROWS = {
-    "rate_of_penetration": ("ROP", _M_PER_H, "m/h"),
-    "bit_speed": ("bit speed", _RPM, "rpm"),
-    "torque_on_bit": ("torque-on-bit", 1.0 / _KN, "kN·m"),
-    "force_on_bit": ("force-on-bit", 1.0 / _KN, "kN"),
-    "radial_displacement": ("r", _MM, "mm"),
+    "rate_of_penetration": "ROP",
+    "bit_speed": "bit speed",
+    "torque_on_bit": "torque-on-bit",
+    "force_on_bit": "force-on-bit",
+    "radial_displacement": "r",
 }
 _COMPARE_LABELS = {"full": "case 1 (full)", "bit_and_contact": "case 2 (bit–rock + contact)"}
 
 
-def _compare_table(name: str, differences: dict[str, Any]) -> Table:
+def _compare_table(name: str, differences: dict[str, Any], units: str) -> Table:
+    from drillstring.quantities import DISPLAY_KINDS
+
     table = Table(
         title=escape(f"Case 1 (full) vs case 2 (bit–rock + contact): case {name!r}, "
                      f"t = 0 to {differences['t_end']:g} s"),
@@ -763,11 +793,13 @@ def _compare_table(name: str, differences: dict[str, Any]) -> Table:
         table.add_column(escape(header), justify="right")
     for key, entry in differences["observables"].items():
         base = "radial_displacement" if key.startswith("radial_displacement") else key
-        label, scale, unit = _COMPARE_ROWS[base]
+        label, shown = _COMPARE_ROWS[base], display_unit(DISPLAY_KINDS[base], units)
+        scale = shown.scale
         if "probe_x" in entry:
-            label += f" at x = {entry['probe_x']:g} m"
+            length = display_unit("length", units)
+            label += f" at x = {length(entry['probe_x']):g} {length.label}"
         table.add_row(
-            escape(f"{label} [{unit}]"),
+            escape(f"{label} [{shown.label}]"),
             _fmt(entry["max_abs_difference"], ".3g", scale),
             _fmt(entry["rms_relative_difference"], ".3g"),
             _fmt(entry["mean_difference"], ".3g", scale),
@@ -797,6 +829,7 @@ def compare(
         "compare.png"
     ),
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Case 1 (full nonlinear model) against case 2 (bit–rock and contact forces only) on the same case.
 
@@ -840,12 +873,12 @@ def compare(
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
-    figure = plot_compare(full, reduced, plot)  # the probe nearest x = 1560 m
+    figure = plot_compare(full, reduced, plot, units=units)  # the probe nearest x = 1560 m
     if as_json:
         _print_json({**differences, "figure": str(figure)})
         return
     console = _console()
-    console.print(_compare_table(the_case.name, differences))
+    console.print(_compare_table(the_case.name, differences, units))
     console.print(_compare_times(differences))
     console.print(escape(f"Figure: {figure}"), soft_wrap=True)
 
@@ -963,11 +996,12 @@ def _study_table(summary: dict[str, Any]) -> Table:
     return table
 
 
-def _buckling_line(summary: dict[str, Any]) -> str:
+def _buckling_line(summary: dict[str, Any], units: str) -> str:
     """One line on the realizations' lateral buckling margin."""
-    b = summary["buckling"]
+    b, force = summary["buckling"], display_unit("force", units)
     return (f"Buckled strings (lowest lateral ω² < 0): {b['buckled_realizations']} of {summary['n_samples']} "
-            f"realizations; critical weight-on-bit {b['critical_weight_on_bit'] / _KN:,.2f} kN, probability "
+            f"realizations; critical weight-on-bit {force(b['critical_weight_on_bit']):,.2f} {force.label}, "
+            "probability "
             f"of a buckled draw {b['probability']:.3g}")
 
 
@@ -1056,6 +1090,7 @@ def study(
                                          "(default: min(10 s, t_end/2))."),
     ] = None,
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Monte Carlo study of random case parameters (laws by the Maximum Entropy Principle).
 
@@ -1080,14 +1115,14 @@ def study(
         lambda progress, note: _api().monte_carlo_study(
             the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
             correlation=correlated, samples=samples, seed=seed, workers=workers, scheduler=scheduler,
-            t_end=t_end, transient=transient))
+            t_end=t_end, transient=transient, units=units))
     _note_resumed(outcome.already, samples, "realizations", out / "study.zarr")
 
     payload = outcome.summary
     if as_json:
         _print_json(payload)
         return
-    _print_study(the_case.name, payload, outcome.files)
+    _print_study(the_case.name, payload, outcome.files, units)
 
 
 def _api():
@@ -1145,7 +1180,7 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
             out.rmdir()
 
 
-def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> None:
+def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path], units: str) -> None:
     console = _console()
     used = payload["workers"]
     where = f"Dask cluster at {used}" if isinstance(used, str) else f"{used} worker{'s' if used != 1 else ''}"
@@ -1173,7 +1208,7 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path]) -> 
     warning = (payload.get("time_convergence") or {}).get("warning")
     if warning:
         console.print(escape(f"warning: {warning}"), soft_wrap=True)
-    console.print(escape(_buckling_line(payload)), soft_wrap=True)
+    console.print(escape(_buckling_line(payload, units)), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),
                       soft_wrap=True)
@@ -1240,6 +1275,7 @@ def map_command(
     seed: Annotated[int, typer.Option("--seed", help="With --samples: root seed of the random draws (>= 0).")
                     ] = DEFAULT_SEED,
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Operating map over top speed × weight-on-bit: one simulation per grid point.
 
@@ -1275,22 +1311,23 @@ def map_command(
         lambda progress, note: api.operating_map(
             the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
             transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note,
-            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, seed=seed))
+            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, seed=seed, units=units))
     _note_resumed(outcome.already, settings.points * (samples or 1), noun, out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)
         return
     if samples is None:
-        _print_map(the_case.name, outcome.summary)
+        _print_map(the_case.name, outcome.summary, units)
     else:
-        _print_probability_map(the_case.name, outcome.summary)
+        _print_probability_map(the_case.name, outcome.summary, units)
 
 
-def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
+def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> None:
     console = _console()
     speeds, weights = summary["top_speed"], summary["weight_on_bit"]
     console.print(escape(
-        f"Probabilistic operating map: case {name!r}, {_grid_text(summary)}, {summary['samples']} realizations per "
+        f"Probabilistic operating map: case {name!r}, {_grid_text(summary, units)}, {summary['samples']} "
+        "realizations per "
         f"point: {summary['done']} done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"),
         soft_wrap=True)
     table = Table(title="Probabilities per point and quantiles 50 % (2.5–97.5 %)", title_justify="left",
@@ -1323,17 +1360,18 @@ def _print_probability_map(name: str, summary: dict[str, Any]) -> None:
                              f"{files['report']}"), soft_wrap=True)
 
 
-def _grid_text(summary: dict[str, Any]) -> str:
-    """'N top speeds (a–b rpm) × M weights-on-bit (c–d kN)' of a map's summary."""
-    speeds, weights = summary["top_speed"], summary["weight_on_bit"]
+def _grid_text(summary: dict[str, Any], units: str) -> str:
+    """'N top speeds (a–b rpm) × M weights-on-bit (c–d kN)' of a map's summary, in the unit system ``units``."""
+    speeds, weights, force = summary["top_speed"], summary["weight_on_bit"], display_unit("force", units)
     return (f"{len(speeds)} top speeds ({min(speeds) * _RPM:g}–{max(speeds) * _RPM:g} rpm) × {len(weights)} "
-            f"weights-on-bit ({min(weights) / _KN:g}–{max(weights) / _KN:g} kN)")
+            f"weights-on-bit ({force(min(weights)):.4g}–{force(max(weights)):.4g} {force.label})")
 
 
-def _print_map(name: str, summary: dict[str, Any]) -> None:
+def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
     console = _console()
+    force, rop = display_unit("force", units), display_unit("rate_of_penetration", units)
     console.print(escape(
-        f"Operating map: case {name!r}, {_grid_text(summary)}, "
+        f"Operating map: case {name!r}, {_grid_text(summary, units)}, "
         f"{summary['done']} points done, {summary['failed']} failed; wall time {summary['wall_time']:,.1f} s"
     ), soft_wrap=True)
     table = Table(title="Highlights", title_justify="left")
@@ -1342,13 +1380,17 @@ def _print_map(name: str, summary: dict[str, Any]) -> None:
     table.add_row("points where steady drilling is linearly stable", f"{summary['linearly_stable_points']}")
     table.add_row("points in stick-slip", f"{summary['stick_slip_points']}")
     table.add_row("points without steady drilling (no penetration)", f"{summary['points_without_steady_drilling']}")
-    table.add_row("critical weight-on-bit (lateral buckling)", f"{summary['critical_weight_on_bit'] / _KN:,.1f} kN")
+    table.add_row("critical weight-on-bit (lateral buckling)",
+                  f"{force(summary['critical_weight_on_bit']):,.1f} {force.label}")
     best = summary.get("largest_rate_of_penetration")
     if best:
-        table.add_row("largest mean ROP", f"{best['mean_rate_of_penetration'] * _M_PER_H:.2f} m/h at "
-                                          f"{best['top_speed'] * _RPM:.0f} rpm, {best['weight_on_bit'] / _KN:.0f} kN")
+        pressure = display_unit("pressure", units)
+        table.add_row("largest mean ROP", f"{rop(best['mean_rate_of_penetration']):.2f} {rop.label} at "
+                                          f"{best['top_speed'] * _RPM:.0f} rpm, {force(best['weight_on_bit']):.0f} "
+                                          f"{force.label}")
         table.add_row("  its bit-speed oscillation / MSE", f"{best['bit_speed_oscillation']:.3f} / "
-                                                          f"{best['mechanical_specific_energy'] / 1e6:,.0f} MPa")
+                                                          f"{pressure(best['mechanical_specific_energy']):,.0f} "
+                                                          f"{pressure.label}")
     console.print(table)
     files = summary.get("files") or {}
     if files:
@@ -1377,6 +1419,7 @@ def sensitivity_command(
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Global sensitivity: first-order and total Sobol' indices (Saltelli design, SALib estimators,
     bootstrap confidence intervals) of the time-mean ROP, bit-speed oscillation, mean TOB and FOB and the
@@ -1398,7 +1441,7 @@ def sensitivity_command(
         out, "sensitivity.zarr", "sensitivity", "runs",
         lambda progress, note: api.sensitivity(
             the_case, parameters=laws, samples=samples, seed=seed, t_end=t_end, transient=transient, out=out,
-            workers=workers, scheduler=scheduler, progress=progress, note=note))
+            workers=workers, scheduler=scheduler, progress=progress, note=note, units=units))
     _note_resumed(outcome.already, outcome.payload["runs"], "runs", out / "sensitivity.zarr")
     if as_json:
         _print_json(outcome.payload)

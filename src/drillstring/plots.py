@@ -1,7 +1,9 @@
 """Matplotlib figures of one run and of a Monte Carlo study (no physics here).
 
 Every function takes the Datasets produced by the package (SI units) and converts to engineering units
-only for the axes: ROP in m/h, bit speed in rpm, torque in kN·m, force in kN, displacements in mm.
+only for the axes, in the unit system ``units`` (``"si"``: ROP in m/h, torque in kN·m, force in kN,
+displacements in mm, positions in m; ``"field"``: ft/h, kft·lbf, klbf, in, ft; bit speed in rpm in both;
+None: ``$DRILLSTRING_UNITS``, else si; :mod:`drillstring.units`).
 
 Figures are drawn on :class:`matplotlib.figure.Figure` objects rendered by the Agg canvas, without
 ``pyplot``: nothing here changes the global Matplotlib backend or leaves figures open, so the functions
@@ -34,9 +36,12 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from drillstring.files import atomic_output
+from drillstring.quantities import DISPLAY_KINDS
+from drillstring.units import DisplayUnit, display_unit
 
 __all__ = [
     "DISPLAY_UNITS",
+    "TITLES",
     "plot_run",
     "plot_compare",
     "plot_convergence",
@@ -52,7 +57,8 @@ __all__ = [
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
 
-#: name -> (factor from SI, unit label, short title) for the axes.
+#: name -> (factor from SI, unit label, short title) in SI display units, for the interactive page
+#: (:mod:`drillstring.interactive`, not yet in the ``--units`` system).
 DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
     "rate_of_penetration": (3600.0, "m/h", "rate of penetration"),
     "bit_speed": (_RPM, "rpm", "bit speed"),
@@ -62,6 +68,18 @@ DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
     "force_on_bit": (1e-3, "kN", "force-on-bit"),
     "radial_displacement": (1e3, "mm", "radial displacement"),
     "contact_force": (1e-3, "kN", "contact force"),
+}
+
+#: name -> short title for the axes (units: drillstring.quantities.DISPLAY_KINDS in the chosen system).
+TITLES: dict[str, str] = {
+    "rate_of_penetration": "rate of penetration",
+    "bit_speed": "bit speed",
+    "torque_on_bit": "torque-on-bit",
+    "force_on_bit": "force-on-bit",
+    "radial_displacement": "radial displacement",
+    "contact_force": "contact force",
+    "quill_speed": "quill speed",
+    "surface_torque": "surface torque",
 }
 
 #: The four observables of the study figures, in panel order.
@@ -97,13 +115,12 @@ def _save(fig: Figure, path: str | Path) -> Path:
     return path
 
 
-def _label(name: str) -> str:
-    _, unit, title = DISPLAY_UNITS[name]
-    return f"{title} [{unit}]"
+def _label(name: str, units: str | None) -> str:
+    return f"{TITLES[name]} [{display_unit(DISPLAY_KINDS[name], units).label}]"
 
 
-def _scaled(values, name: str) -> np.ndarray:
-    return np.asarray(values, dtype=float) * DISPLAY_UNITS[name][0]
+def _scaled(values, name: str, units: str | None) -> np.ndarray:
+    return np.asarray(values, dtype=float) * display_unit(DISPLAY_KINDS[name], units).scale
 
 
 def _probe_index(x: np.ndarray, probe_x: float) -> int:
@@ -124,59 +141,61 @@ def _probe_positions(ds: xr.Dataset) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------------------
 
 
-def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
+def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units: str | None = None) -> Path:
     """Six panels of one simulation written to the PNG ``path``: the four of the reference study's figure —
     ROP [m/h], bit speed [rpm] with the top speed (``ds.attrs["top_speed"]`` [rad/s]) dashed, radial
     displacement [mm] at the probe nearest ``probe_x`` [m] with its gap (coordinate ``gap``) dashed, and
     torque-on-bit [kN·m], vs time [s] — and the lateral motion: the whirl orbit at that probe (w against v
     [mm], with the borehole wall as a circle of radius the gap) and the contact force of the wall on the
     string [kN] vs time. A failed (partial) run is plotted as far as it went, with its status in the title.
+    Units of ``units`` (see the module docstring).
     """
+    small, length = display_unit("small_length", units), display_unit("length", units)
     t = np.asarray(ds["time"].values, dtype=float)
     fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
     ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
 
-    ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration"), lw=0.9)
-    ax_rop.set_ylabel(_label("rate_of_penetration"))
+    ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration", units), lw=0.9)
+    ax_rop.set_ylabel(_label("rate_of_penetration", units))
 
-    ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed"), lw=0.9, label="bit")
+    ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed", units), lw=0.9, label="bit")
     top = ds.attrs.get("top_speed")
     imposed = ds.attrs.get("top_drive", "imposed_speed") == "imposed_speed"
     if "quill_speed" in ds and not imposed:
-        ax_speed.plot(t, _scaled(ds["quill_speed"].values, "quill_speed"), lw=0.9, label="quill")
+        ax_speed.plot(t, _scaled(ds["quill_speed"].values, "quill_speed", units), lw=0.9, label="quill")
     if top is not None:
         ax_speed.axhline(float(top) * _RPM, color="k", ls="--", lw=0.9,
                          label="top (imposed)" if imposed else "set point")
-    ax_speed.set_ylabel(_label("bit_speed"))
+    ax_speed.set_ylabel(_label("bit_speed", units))
     ax_speed.legend(loc="best", fontsize="small")
 
     x = _probe_positions(ds)
     if "radial_displacement" in ds and x.size:
         i = _probe_index(x, probe_x)
         r = ds["radial_displacement"].isel(probe=i).values
-        r_mm = _scaled(r, "radial_displacement")
+        r_mm = _scaled(r, "radial_displacement", units)
         ax_radial.plot(t, r_mm, lw=0.9, label="r")
         if np.isfinite(r_mm).any():
             # The gap line can dwarf a small orbit: say how large it is.
-            ax_radial.text(0.02, 0.95, f"max r = {np.nanmax(r_mm):.3g} mm", transform=ax_radial.transAxes,
-                           va="top", fontsize="small")
+            ax_radial.text(0.02, 0.95, f"max r = {np.nanmax(r_mm):.3g} {small.label}",
+                           transform=ax_radial.transAxes, va="top", fontsize="small")
         if "gap" in ds.coords or "gap" in ds:
             gap = float(np.atleast_1d(ds["gap"].values)[i])
-            ax_radial.axhline(gap * 1e3, color="k", ls="--", lw=0.9, label="gap")
-        ax_radial.set_title(f"probe at x = {x[i]:.0f} m", fontsize="medium")
+            ax_radial.axhline(small(gap), color="k", ls="--", lw=0.9, label="gap")
+        ax_radial.set_title(f"probe at x = {length(x[i]):.0f} {length.label}", fontsize="medium")
         ax_radial.legend(loc="best", fontsize="small")
     else:
         ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
-    ax_radial.set_ylabel(_label("radial_displacement"))
+    ax_radial.set_ylabel(_label("radial_displacement", units))
 
-    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), lw=0.9, label="on bit")
+    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit", units), lw=0.9, label="on bit")
     if "surface_torque" in ds:
-        ax_tob.plot(t, _scaled(ds["surface_torque"].values, "surface_torque"), lw=0.9, label="surface")
+        ax_tob.plot(t, _scaled(ds["surface_torque"].values, "surface_torque", units), lw=0.9, label="surface")
         ax_tob.legend(loc="best", fontsize="small")
-    ax_tob.set_ylabel(_label("torque_on_bit").replace("torque-on-bit", "torque"))
+    ax_tob.set_ylabel(_label("torque_on_bit", units).replace("torque-on-bit", "torque"))
 
-    _orbit_panel(ax_orbit, ((ds, "orbit", {"lw": 0.6}),), probe_x)
-    _contact_panel(ax_contact, ((ds, None, {"lw": 0.8}),))
+    _orbit_panel(ax_orbit, ((ds, "orbit", {"lw": 0.6}),), probe_x, units)
+    _contact_panel(ax_contact, ((ds, None, {"lw": 0.8}),), units)
     for ax in axes:
         if ax is not ax_orbit:
             ax.set_xlabel("time [s]")
@@ -198,12 +217,14 @@ _COMPARE_STYLES = (
 )
 
 
-def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_x: float = 1560.0) -> Path:
+def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *,
+                 units: str | None = None) -> Path:
     """Case 1 (``full``: kinetic- and strain-energy forces included, solid) and case 2 (``reduced``: bit–rock
     and contact forces only, dashed) of the same case overlaid, in the six panels of :func:`plot_run`:
     ROP [m/h], bit speed [rpm] with the top speed, radial displacement [mm] at the probe nearest
     ``probe_x`` [m] with its gap, torque-on-bit [kN·m] vs time [s], the whirl orbits at that probe and the
-    contact forces [kN] vs time. Written to the PNG ``path``."""
+    contact forces [kN] vs time. Written to the PNG ``path``, in the units of ``units``."""
+    small, length = display_unit("small_length", units), display_unit("length", units)
     fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
     ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
     runs = ((full, *_COMPARE_STYLES[0]), (reduced, *_COMPARE_STYLES[1]))
@@ -213,17 +234,18 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
     gap = None
     for ds, label, style in runs:
         t = np.asarray(ds["time"].values, dtype=float)
-        ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration"), label=label, **style)
-        ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed"), label=label, **style)
-        ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit"), label=label, **style)
+        ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration", units), label=label,
+                    **style)
+        ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed", units), label=label, **style)
+        ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit", units), label=label, **style)
         x = _probe_positions(ds)
         if "radial_displacement" in ds and x.size:
             i = _probe_index(x, probe_x)
-            r_mm = _scaled(ds["radial_displacement"].isel(probe=i).values, "radial_displacement")
+            r_mm = _scaled(ds["radial_displacement"].isel(probe=i).values, "radial_displacement", units)
             ax_radial.plot(t, r_mm, label=label, **style)
             if np.isfinite(r_mm).any():
-                radial_max.append(f"{label.split(' (')[0]}: max r = {np.nanmax(r_mm):.3g} mm")
-            probe_title = f"probe at x = {x[i]:.0f} m"
+                radial_max.append(f"{label.split(' (')[0]}: max r = {np.nanmax(r_mm):.3g} {small.label}")
+            probe_title = f"probe at x = {length(x[i]):.0f} {length.label}"
             if gap is None and ("gap" in ds.coords or "gap" in ds):
                 gap = float(np.atleast_1d(ds["gap"].values)[i])
 
@@ -234,7 +256,7 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
         ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
     else:
         if gap is not None:
-            ax_radial.axhline(gap * 1e3, color="k", ls=":", lw=0.9, label="gap")
+            ax_radial.axhline(small(gap), color="k", ls=":", lw=0.9, label="gap")
         if radial_max:
             # The gap line can dwarf a small orbit: say how large it is.
             ax_radial.text(0.02, 0.95, "\n".join(radial_max), transform=ax_radial.transAxes, va="top",
@@ -243,12 +265,12 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
 
     for ax, name in ((ax_rop, "rate_of_penetration"), (ax_speed, "bit_speed"),
                      (ax_radial, "radial_displacement"), (ax_tob, "torque_on_bit")):
-        ax.set_ylabel(_label(name))
+        ax.set_ylabel(_label(name, units))
         ax.set_xlabel("time [s]")
         ax.grid(True, alpha=0.3)
     thin = [(ds, label, {**style, "lw": 0.6}) for ds, label, style in runs]
-    _orbit_panel(ax_orbit, thin, probe_x)
-    _contact_panel(ax_contact, thin)
+    _orbit_panel(ax_orbit, thin, probe_x, units)
+    _contact_panel(ax_contact, thin, units)
     ax_contact.set_xlabel("time [s]")
     for ax in (ax_orbit, ax_contact):
         ax.grid(True, alpha=0.3)
@@ -268,9 +290,10 @@ def plot_compare(full: xr.Dataset, reduced: xr.Dataset, path: str | Path, probe_
     return _save(fig, path)
 
 
-def _orbit_panel(ax, runs, probe_x: float) -> None:
+def _orbit_panel(ax, runs, probe_x: float, units: str | None) -> None:
     """The whirl orbit (w against v [mm]) at the probe nearest ``probe_x`` [m] of each ``(ds, label, style)``,
     with the borehole wall (a circle of radius the probe's gap) and equal axes."""
+    small, length = display_unit("small_length", units), display_unit("length", units)
     gap = None
     drawn = False
     for ds, label, style in runs:
@@ -278,25 +301,25 @@ def _orbit_panel(ax, runs, probe_x: float) -> None:
         if "lateral_displacement" not in ds or not x.size:
             continue
         i = _probe_index(x, probe_x)
-        orbit = np.asarray(ds["lateral_displacement"].isel(probe=i).values, dtype=float) * 1e3
+        orbit = small(np.asarray(ds["lateral_displacement"].isel(probe=i).values, dtype=float))
         ax.plot(orbit[:, 0], orbit[:, 1], label=label, **style)
         drawn = True
         if gap is None and ("gap" in ds.coords or "gap" in ds):
             gap = float(np.atleast_1d(ds["gap"].values)[i])
-        ax.set_title(f"whirl orbit at x = {x[i]:.0f} m", fontsize="medium")
+        ax.set_title(f"whirl orbit at x = {length(x[i]):.0f} {length.label}", fontsize="medium")
     if not drawn:
         ax.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax.transAxes)
         return
     if gap is not None:
         angle = np.linspace(0.0, 2.0 * np.pi, 361)
-        ax.plot(gap * 1e3 * np.cos(angle), gap * 1e3 * np.sin(angle), color="k", lw=1.0, label="borehole wall")
+        ax.plot(small(gap) * np.cos(angle), small(gap) * np.sin(angle), color="k", lw=1.0, label="borehole wall")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("v, along y [mm]")
-    ax.set_ylabel("w, along z [mm]")
+    ax.set_xlabel(f"v, along y [{small.label}]")
+    ax.set_ylabel(f"w, along z [{small.label}]")
     ax.legend(loc="upper right", fontsize="small")
 
 
-def _contact_panel(ax, runs) -> None:
+def _contact_panel(ax, runs, units: str | None) -> None:
     """The total contact force of the wall on the string [kN] vs time of each ``(ds, label, style)``, with
     the run's number of impacts."""
     notes = []
@@ -304,13 +327,13 @@ def _contact_panel(ax, runs) -> None:
         if "contact_force" not in ds:
             continue
         t = np.asarray(ds["time"].values, dtype=float)
-        ax.plot(t, _scaled(ds["contact_force"].values, "contact_force"), label=label, **style)
+        ax.plot(t, _scaled(ds["contact_force"].values, "contact_force", units), label=label, **style)
         impacts = ds.attrs.get("impacts")
         if impacts is not None:
             notes.append(f"{label.split(' (')[0] + ': ' if label else ''}{int(impacts)} impacts")
     if notes:
         ax.text(0.02, 0.95, "\n".join(notes), transform=ax.transAxes, va="top", fontsize="small")
-    ax.set_ylabel(_label("contact_force"))
+    ax.set_ylabel(_label("contact_force", units))
     if any(label for _, label, _ in runs):
         ax.legend(loc="upper right", fontsize="small")
 
@@ -343,14 +366,15 @@ def _case_name_line(case_toml: str) -> str:
 # ---------------------------------------------------------------------------------------------------------
 
 
-def _study_title(stats: xr.Dataset, what: str) -> str:
+def _study_title(stats: xr.Dataset, what: str, units: str | None = None) -> str:
+    force = display_unit("force", units)
     parts = [what]
     n = stats.attrs.get("n_samples")
     if n is not None:
         parts.append(f"n_s = {int(n)}")
     sigma = stats.attrs.get("sigma")
     if sigma is not None and np.isfinite(float(sigma)):
-        parts.append(f"σ_WOH = {float(sigma) / 1e3:g} kN")
+        parts.append(f"σ_WOH = {force(float(sigma)):.4g} {force.label}")
     others = [str(p) for p in stats.attrs.get("parameters", []) if str(p) != "weight_on_hook"]
     if others:
         parts.append("random " + ", ".join(others))
@@ -373,7 +397,8 @@ def _input_dispersions(stats: xr.Dataset) -> list[tuple[str, float]]:
     return out
 
 
-def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict | None = None) -> Path:
+def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict | None = None, *,
+                     units: str | None = None) -> Path:
     """``conv(n_s)`` of each observable (``<v>_convergence``), divided by its last value so that all
     observables share one axis; the curves levelling off at 1 show that ``n_s`` suffices. With
     ``time_convergence`` (the summary's section, :func:`~drillstring.stochastic.analysis.time_convergence`),
@@ -390,7 +415,7 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict
         values = np.asarray(conv.values, dtype=float)
         last = values[-1] if values.size else np.nan
         normalised = values / last if np.isfinite(last) and last != 0 else values
-        title = DISPLAY_UNITS[name][2] if name in DISPLAY_UNITS else name
+        title = TITLES.get(name, name)
         ax.plot(n, normalised, marker="." if n.size <= 60 else None, lw=1.1, label=title)
     ax.axhline(1.0, color="k", lw=0.7, ls=":")
     ax.set_xlabel("number of realizations $n_s$")
@@ -402,7 +427,7 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict
         ax = axes[1]
         for k, (name, entry) in enumerate(time_convergence["observables"].items()):
             ends = [w["t_end"] for w in entry["windows"]]
-            title = DISPLAY_UNITS[name][2] if name in DISPLAY_UNITS else name
+            title = TITLES.get(name, name)
             for key, style, label in (("dispersion_max", "-", "max"), ("dispersion_time_mean", "--", "time mean")):
                 values = [np.nan if w[key] is None else 100.0 * w[key] for w in entry["windows"]]
                 ax.plot(ends, values, style, marker="o", ms=3, color=f"C{k}", lw=1.1, label=f"{title}, {label}")
@@ -411,7 +436,7 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict
         ax.set_title(f"in time (records growing by {time_convergence['window']:g} s)", fontsize="medium")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize="x-small", ncol=2)
-    fig.suptitle(_study_title(stats, "Convergence"))
+    fig.suptitle(_study_title(stats, "Convergence", units))
     return _save(fig, path)
 
 
@@ -450,30 +475,31 @@ def plot_realizations(stats: xr.Dataset, path: str | Path) -> Path:
     return _save(fig, path)
 
 
-def plot_envelopes(stats: xr.Dataset, path: str | Path) -> Path:
+def plot_envelopes(stats: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Four panels (ROP, bit speed, TOB, FOB): the envelope between ``<v>_lower`` and ``<v>_upper`` (the
     95 % quantile envelope), the mean and the nominal (deterministic, mean weight-on-hook) response."""
     t = np.asarray(stats["time"].values, dtype=float)
     level = float(stats.attrs.get("level", 0.95))
     fig, axes = _figure(2, 2, (11.0, 7.0))
     for ax, name in zip(axes, STUDY_PANELS):
-        lower = _scaled(stats[f"{name}_lower"].values, name)
-        upper = _scaled(stats[f"{name}_upper"].values, name)
+        lower = _scaled(stats[f"{name}_lower"].values, name, units)
+        upper = _scaled(stats[f"{name}_upper"].values, name, units)
         ax.fill_between(t, lower, upper, color=_ENVELOPE_COLOR, alpha=0.3, lw=0,
                         label=f"{level:.0%} envelope")
-        ax.plot(t, _scaled(stats[f"{name}_mean"].values, name), color=_MEAN_COLOR, lw=1.0, label="mean")
+        ax.plot(t, _scaled(stats[f"{name}_mean"].values, name, units), color=_MEAN_COLOR, lw=1.0, label="mean")
         if f"{name}_nominal" in stats:
-            ax.plot(t, _scaled(stats[f"{name}_nominal"].values, name), color=_NOMINAL_COLOR, lw=0.9,
+            ax.plot(t, _scaled(stats[f"{name}_nominal"].values, name, units), color=_NOMINAL_COLOR, lw=0.9,
                     ls="--", label="nominal")
         ax.set_xlabel("time [s]")
-        ax.set_ylabel(_label(name))
+        ax.set_ylabel(_label(name, units))
         ax.grid(True, alpha=0.3)
     axes[0].legend(loc="best", fontsize="small")
-    fig.suptitle(_study_title(stats, "Envelopes of the response"))
+    fig.suptitle(_study_title(stats, "Envelopes of the response", units))
     return _save(fig, path)
 
 
-def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float) -> Path:
+def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float, *,
+                    units: str | None = None) -> Path:
     """Dispersion ``std/|mean|`` [%] vs time of ROP, bit speed, TOB and FOB (one panel each, shared time
     axis), the transient ``t < t_transient`` [s] shaded."""
     t = np.asarray(stats["time"].values, dtype=float)
@@ -483,27 +509,27 @@ def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float) -> 
         if t.size:
             ax.axvspan(t[0], min(float(t_transient), t[-1]), color="0.85", lw=0,
                        label=f"transient (t < {t_transient:g} s)")
-        ax.set_ylabel(f"{DISPLAY_UNITS[name][2]}\ndispersion [%]")
+        ax.set_ylabel(f"{TITLES[name]}\ndispersion [%]")
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("time [s]")
     axes[0].legend(loc="upper right", fontsize="small")
-    title = _study_title(stats, "Dispersion of the response")
+    title = _study_title(stats, "Dispersion of the response", units)
     extra = ", ".join(f"{label} = {100 * value:.3g} %" for label, value in _input_dispersions(stats))
     fig.suptitle(f"{title}\n{extra}" if extra else title)
     return _save(fig, path)
 
 
 def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float,
-               time_convergence: dict | None = None) -> dict[str, Path]:
+               time_convergence: dict | None = None, *, units: str | None = None) -> dict[str, Path]:
     """The study figures in ``out_dir``: ``convergence.png`` (in n_s, and in time with ``time_convergence``),
     ``envelopes.png``, ``dispersion.png`` and, when the statistics hold per-realization cycle metrics,
     ``realizations.png`` (returned by those names without the extension)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figures = {
-        "convergence": plot_convergence(stats, out / "convergence.png", time_convergence),
-        "envelopes": plot_envelopes(stats, out / "envelopes.png"),
-        "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient),
+        "convergence": plot_convergence(stats, out / "convergence.png", time_convergence, units=units),
+        "envelopes": plot_envelopes(stats, out / "envelopes.png", units=units),
+        "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient, units=units),
     }
     if any(str(v).startswith("realization_") for v in stats.data_vars):
         figures["realizations"] = plot_realizations(stats, out / "realizations.png")
@@ -567,6 +593,9 @@ MAP_PANELS = (
     ("mechanical_specific_energy", 1e-6, "mechanical specific energy [MPa]", "cividis_r", True),
     ("max_radial_displacement", 1e3, "max radial displacement at the probes [mm]", "plasma", False),
 )
+#: The display-unit kind of each :data:`MAP_PANELS` variable in :func:`plot_map` (None: a plain number).
+_MAP_KINDS = {"mean_rate_of_penetration": "rate_of_penetration", "bit_speed_oscillation": None,
+              "mechanical_specific_energy": "pressure", "max_radial_displacement": "small_length"}
 
 
 def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str, cmap: str,
@@ -600,25 +629,30 @@ def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str,
     fig.colorbar(artist, ax=ax, label=label, **ticks)
 
 
-def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
+def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Operating map (a Dataset of :func:`drillstring.stochastic.operating_map.map_dataset`) as four panels
     over top speed [rpm] × weight-on-bit [kN]: mean ROP, bit-speed oscillation, mechanical specific energy
     and the largest radial displacement at the probes, each with the boundary of linear stability of
     steady drilling (growth rate 0; the unstable side hatched), the lateral buckling limit (critical
-    weight-on-bit, dashed) and the simulated points (failed ones as crosses). Written to the PNG ``path``."""
+    weight-on-bit, dashed) and the simulated points (failed ones as crosses). Written to the PNG ``path``, in
+    the units of ``units``."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
-    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    force = display_unit("force", units)
+    y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
     growth = np.asarray(ds["growth_rate"].values, dtype=float)
     status = np.asarray(ds["status"].values)
-    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
     fig, axes = _figure(2, 2, (12.0, 9.0))
     xx, yy = np.meshgrid(x, y, indexing="ij")
     contour_ok = x.size >= 2 and y.size >= 2 and np.isfinite(growth).sum() >= 4
-    for ax, (name, factor, label, cmap, log) in zip(axes, MAP_PANELS):
-        values = np.asarray(ds[name].values, dtype=float) * factor
+    for ax, (name, _, si_label, cmap, log) in zip(axes, MAP_PANELS):
+        kind = _MAP_KINDS[name]
+        shown = DisplayUnit("-", 1.0) if kind is None else display_unit(kind, units)
+        label = f"{si_label.split(' [')[0]} [{shown.label}]"
+        values = shown(np.asarray(ds[name].values, dtype=float))
         values = np.where(status == 1, values, np.nan)
         _map_panel(ax, fig, x, y, values, label, cmap, log)
         if contour_ok and np.nanmax(growth) > 0 > np.nanmin(growth):
@@ -632,10 +666,11 @@ def plot_map(ds: xr.Dataset, path: str | Path) -> Path:
         if (~done).any():
             ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6, clip_on=False)
         ax.set_xlabel("top speed [rpm]")
-        ax.set_ylabel("weight-on-bit [kN]")
+        ax.set_ylabel(f"weight-on-bit [{force.label}]")
         ax.set_title(label.split(" [")[0], fontsize="medium")
-    buckling = (f"lateral buckling, WOB = {critical:.4g} kN" if np.isfinite(critical)
-                and y.min() <= critical <= y.max() else f"lateral buckling at {critical:.4g} kN (off the map)")
+    buckling = (f"lateral buckling, WOB = {critical:.4g} {force.label}" if np.isfinite(critical)
+                and y.min() <= critical <= y.max()
+                else f"lateral buckling at {critical:.4g} {force.label} (off the map)")
     handles = [Line2D([], [], color="k", lw=1.6, label="linear stability boundary (growth rate 0)"),
                Patch(facecolor="none", edgecolor="k", hatch="//", label="steady drilling linearly unstable"),
                Line2D([], [], color="C3", ls="--", lw=1.6, label=buckling),

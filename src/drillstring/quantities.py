@@ -35,6 +35,24 @@ LONG_NAMES = {
     "weight_on_bit": "static weight on bit",
 }
 
+#: The kind of display unit of each observable (:func:`drillstring.units.display_unit`): tables, figures and
+#: reports show it in the unit of this kind in the chosen unit system (si or field).
+DISPLAY_KINDS = {
+    "rate_of_penetration": "rate_of_penetration",
+    "bit_speed": "angular_speed",
+    "torque_on_bit": "torque",
+    "quill_speed": "angular_speed",
+    "surface_torque": "torque",
+    "force_on_bit": "force",
+    "bit_depth": "length",
+    "contact_force": "force",
+    "lateral_displacement": "small_length",
+    "radial_displacement": "small_length",
+    "x": "length",
+    "weight_on_hook": "force",
+    "weight_on_bit": "force",
+}
+
 #: Display of the per-realization cycle metrics in tables and figures: name -> (factor from SI, unit, label).
 METRIC_DISPLAY = {
     "stick_slip_index": (1.0, "-", "stick-slip index"),

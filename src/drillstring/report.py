@@ -23,6 +23,7 @@ from typing import Any
 
 from drillstring._version import __version__
 from drillstring.files import write_text_atomic
+from drillstring.units import display_unit
 
 __all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
 
@@ -102,9 +103,11 @@ def _kv_table(rows: list[tuple[str, str]]) -> str:
 # ---------------------------------------------------------------------------------------------------------
 
 
-def _case_rows(case_toml: str) -> list[tuple[str, str]]:
-    """Key numbers of a case from its TOML (SI numbers, as written by ``Case.to_toml``), in display units.
-    Missing or unparsable entries are left out: the full TOML is shown anyway."""
+def _case_rows(case_toml: str, units: str | None = None) -> list[tuple[str, str]]:
+    """Key numbers of a case from its TOML (SI numbers, as written by ``Case.to_toml``), in the display units
+    of ``units``. Missing or unparsable entries are left out: the full TOML is shown anyway."""
+    length, diameter, force = (display_unit(k, units) for k in ("length", "diameter", "force"))
+    stiffness, density = (display_unit(k, units) for k in ("stiffness", "density"))
     try:
         data = tomllib.loads(case_toml)
     except (tomllib.TOMLDecodeError, TypeError):
@@ -121,36 +124,36 @@ def _case_rows(case_toml: str) -> list[tuple[str, str]]:
     add("description", data.get("description"))
     sections = data.get("sections") or []
     if sections:
-        length = sum(float(s.get("length", 0.0)) for s in sections if isinstance(s, dict))
-        add("string length", length, "m", 6)
+        total = sum(float(s.get("length", 0.0)) for s in sections if isinstance(s, dict))
+        add("string length", length(total), length.label, 6)
         for s in sections:
             if not isinstance(s, dict):
                 continue
             parts = []
             if "length" in s:
-                parts.append(f"{_num(s['length'], 6)} m")
+                parts.append(f"{_num(length(float(s['length'])), 6)} {length.label}")
             if "outer_diameter" in s and "inner_diameter" in s:
-                parts.append(f"OD/ID {_num(1e3 * float(s['outer_diameter']))}/"
-                             f"{_num(1e3 * float(s['inner_diameter']))} mm")
+                parts.append(f"OD/ID {_num(diameter(float(s['outer_diameter'])))}/"
+                             f"{_num(diameter(float(s['inner_diameter'])))} {diameter.label}")
             rows.append((f"section: {s.get('name', '?')}", ", ".join(parts)))
     borehole = data.get("borehole") or {}
     if "diameter" in borehole:
-        add("borehole diameter", 1e3 * float(borehole["diameter"]), "mm")
+        add("borehole diameter", diameter(float(borehole["diameter"])), diameter.label)
     for i, stab in enumerate(data.get("stabilizers") or []):
         if isinstance(stab, dict) and "position" in stab:
-            stiffness = stab.get("stiffness")
-            text = f"x = {_num(stab['position'], 6)} m"
-            if stiffness is not None:
-                text += f", {_num(float(stiffness) / 1e6)} MN/m"
+            k = stab.get("stiffness")
+            text = f"x = {_num(length(float(stab['position'])), 6)} {length.label}"
+            if k is not None:
+                text += f", {_num(stiffness(float(k)))} {stiffness.label}"
             rows.append((f"stabilizer {i + 1}", _esc(text)))
     operation = data.get("operation") or {}
     if "top_speed" in operation:
         add("top speed", float(operation["top_speed"]) * _RPM, "rpm")
     if "weight_on_bit" in operation:
-        add("weight-on-bit (static)", float(operation["weight_on_bit"]) / 1e3, "kN")
+        add("weight-on-bit (static)", force(float(operation["weight_on_bit"])), force.label)
     fluid = data.get("fluid") or {}
     if "density" in fluid:
-        add("mud density", fluid["density"], "kg/m³")
+        add("mud density", density(float(fluid["density"])), density.label)
     damping = data.get("damping") or {}
     if "modal_damping_ratio" in damping:
         add("modal damping ratio ξ", damping["modal_damping_ratio"])
@@ -158,7 +161,7 @@ def _case_rows(case_toml: str) -> list[tuple[str, str]]:
     add("nonlinear forces", model.get("nonlinear"))
     mesh = data.get("mesh") or {}
     if "max_element_length" in mesh:
-        add("max element length", mesh["max_element_length"], "m")
+        add("max element length", length(float(mesh["max_element_length"])), length.label)
     reduced = data.get("reduced_model") or {}
     if reduced:
         rows.append(("modes (axial + rigid, torsional, lateral per plane)",
@@ -170,8 +173,8 @@ def _case_rows(case_toml: str) -> list[tuple[str, str]]:
     return rows
 
 
-def _case_section(case_toml: str) -> str:
-    rows = _case_rows(case_toml)
+def _case_section(case_toml: str, units: str | None = None) -> str:
+    rows = _case_rows(case_toml, units)
     table = _kv_table(rows) if rows else "<p>(no key numbers could be read from the case)</p>"
     return (
         "<h2>Case</h2>"
@@ -181,7 +184,8 @@ def _case_section(case_toml: str) -> str:
     )
 
 
-def _study_section(summary: Mapping[str, Any]) -> str:
+def _study_section(summary: Mapping[str, Any], units: str | None = None) -> str:
+    force = display_unit("force", units)
     rows: list[tuple[str, str]] = []
     if "n_samples" in summary:
         rows.append(("realizations used (n_s)", _num(summary["n_samples"])))
@@ -196,9 +200,10 @@ def _study_section(summary: Mapping[str, Any]) -> str:
                                         f"{_percent(entry.get('dispersion'))} %; sample: mean "
                                         f"{_num(entry.get('sample_mean'))}, std {_num(entry.get('sample_std'))})"))
     if summary.get("sigma") is not None:
-        rows.append(("σ of the weight-on-hook", f"{_num(float(summary['sigma']) / 1e3)} kN"))
+        rows.append(("σ of the weight-on-hook", f"{_num(force(float(summary['sigma'])))} {force.label}"))
     if "weight_on_hook_mean" in summary:
-        rows.append(("mean weight-on-hook", f"{_num(float(summary['weight_on_hook_mean']) / 1e3, 6)} kN"))
+        rows.append(("mean weight-on-hook",
+                     f"{_num(force(float(summary['weight_on_hook_mean'])), 6)} {force.label}"))
     if summary.get("weight_on_hook_dispersion") is not None:
         rows.append(("weight-on-hook dispersion δ_WOH", f"{_percent(summary['weight_on_hook_dispersion'])} %"))
     if summary.get("weight_on_bit_dispersion") is not None:
@@ -366,10 +371,11 @@ def _figure_html(name: str, path: str | Path) -> str:
 
 
 def _page(path: str | Path, title: str, case_toml: str, sections: list[str], figures: Mapping[str, str | Path],
-          run_info: Mapping[str, Any], interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
-    """One self-contained page: title, the case, ``sections`` (HTML), the run table and the figures. With
-    ``interactive`` figures (:mod:`drillstring.interactive`), the same page with them, zoomable, is written
-    beside it as ``interactive.html``, and this page links to it."""
+          run_info: Mapping[str, Any], interactive: Sequence[Mapping[str, Any]] | None = None,
+          units: str | None = None) -> Path:
+    """One self-contained page: title, the case (in the unit system ``units``), ``sections`` (HTML), the run
+    table and the figures. With ``interactive`` figures (:mod:`drillstring.interactive`), the same page with
+    them, zoomable, is written beside it as ``interactive.html``, and this page links to it."""
     path = Path(path)
     stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
     head = "\n".join([
@@ -381,7 +387,7 @@ def _page(path: str | Path, title: str, case_toml: str, sections: list[str], fig
     body = [
         f"<h1>{_esc(title)}</h1>",
         f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
-        _case_section(case_toml),
+        _case_section(case_toml, units),
         *sections,
         _run_section(run_info),
     ]
@@ -408,6 +414,7 @@ def write_report(
     figures: Mapping[str, str | Path],
     run_info: Mapping[str, Any],
     interactive: Sequence[Mapping[str, Any]] | None = None,
+    units: str | None = None,
 ) -> Path:
     """Write the study report as one self-contained HTML page at ``path``; returns the path.
 
@@ -421,9 +428,10 @@ def write_report(
             value (such as the failures ``{realization: message}``) is shown as a collapsible list.
         interactive: figures of :func:`drillstring.interactive.study_figures`: the same page with them is
             written beside as ``interactive.html`` (see :func:`_page`).
+        units: the unit system of the tables, ``"si"`` or ``"field"`` (None: ``$DRILLSTRING_UNITS``, else si).
     """
-    return _page(path, title, case_toml, [_study_section(summary), _dispersion_table(summary)], figures,
-                 run_info, interactive)
+    return _page(path, title, case_toml, [_study_section(summary, units), _dispersion_table(summary)], figures,
+                 run_info, interactive, units)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -481,11 +489,12 @@ def _sobol_tables(indices: Mapping[str, Any]) -> str:
 
 def write_sensitivity_report(path: str | Path, *, title: str, case_toml: str, indices: Mapping[str, Any],
                              figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
-                             interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
+                             interactive: Sequence[Mapping[str, Any]] | None = None,
+                             units: str | None = None) -> Path:
     """Write the report of a sensitivity analysis (one self-contained HTML page): the case, the design,
     a table of the Sobol' indices with their intervals and convergence per output (``indices``: the JSON
     form of a :class:`~drillstring.stochastic.sensitivity.SobolResult`), the run table and the figures."""
-    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info, interactive)
+    return _page(path, title, case_toml, [_sobol_tables(indices)], figures, run_info, interactive, units)
 
 
 def _axis(values: list[float], unit: str) -> str:
@@ -495,17 +504,18 @@ def _axis(values: list[float], unit: str) -> str:
     return f"{_num(min(values))} to {_num(max(values))} {unit} ({len(values)} values)"
 
 
-def _map_section(summary: Mapping[str, Any]) -> str:
+def _map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
+    force, rop, pressure = (display_unit(k, units) for k in ("force", "rate_of_penetration", "pressure"))
     speeds = [v * _RPM for v in summary.get("top_speed", [])]
-    weights = [v / 1e3 for v in summary.get("weight_on_bit", [])]
+    weights = [force(v) for v in summary.get("weight_on_bit", [])]
     axis = _axis
-    rows = [("top speed", axis(speeds, "rpm")), ("weight-on-bit", axis(weights, "kN")),
+    rows = [("top speed", axis(speeds, "rpm")), ("weight-on-bit", axis(weights, force.label)),
             ("points (done, failed)", f"{_num(summary.get('points'))} ({_num(summary.get('done'))}, "
                                       f"{_num(summary.get('failed'))})"),
             ("simulated time per point", f"{_num(summary.get('t_end'))} s, outputs over t ≥ "
                                          f"{_num(summary.get('t_transient'))} s"),
             ("critical weight-on-bit (lateral buckling)",
-             f"{_num(float(summary.get('critical_weight_on_bit', math.nan)) / 1e3)} kN"),
+             f"{_num(force(float(summary.get('critical_weight_on_bit', math.nan))))} {force.label}"),
             ("bit area (borehole cross-section) for the MSE", f"{_num(summary.get('bit_area'))} m²"),
             ("points where steady drilling is linearly stable", _num(summary.get("linearly_stable_points"))),
             ("points without steady drilling (no penetration)", _num(summary.get("points_without_steady_drilling"))),
@@ -513,10 +523,10 @@ def _map_section(summary: Mapping[str, Any]) -> str:
     best = summary.get("largest_rate_of_penetration")
     if best:
         rows.append(("largest mean rate of penetration",
-                     f"{_num(best['mean_rate_of_penetration'] * 3600)} m/h at {_num(best['top_speed'] * _RPM)} rpm, "
-                     f"{_num(best['weight_on_bit'] / 1e3)} kN (bit-speed oscillation "
-                     f"{_num(best['bit_speed_oscillation'], 3)}, MSE {_num(best['mechanical_specific_energy'] / 1e6)} "
-                     f"MPa)"))
+                     f"{_num(rop(best['mean_rate_of_penetration']))} {rop.label} at "
+                     f"{_num(best['top_speed'] * _RPM)} rpm, {_num(force(best['weight_on_bit']))} {force.label} "
+                     f"(bit-speed oscillation {_num(best['bit_speed_oscillation'], 3)}, MSE "
+                     f"{_num(pressure(best['mechanical_specific_energy']))} {pressure.label})"))
     return ("<h2>Map</h2><p>One simulation per point; outputs after the transient. MSE = WOB/A + Ω·TOB/(A·ROP) "
             "(Teale) from the time means. The stability boundary is where the leading growth rate of the model "
             "linearised about steady drilling crosses 0.</p>" + _kv_table(rows))
@@ -524,11 +534,12 @@ def _map_section(summary: Mapping[str, Any]) -> str:
 
 def write_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
                      figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
-                     interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
+                     interactive: Sequence[Mapping[str, Any]] | None = None,
+                     units: str | None = None) -> Path:
     """Write the report of an operating map (one self-contained HTML page): the case, the grid and its
     highlights (``summary``: :func:`drillstring.stochastic.operating_map.map_summary`), the run table and
-    the figures."""
-    return _page(path, title, case_toml, [_map_section(summary)], figures, run_info, interactive)
+    the figures, in the unit system ``units``."""
+    return _page(path, title, case_toml, [_map_section(summary, units)], figures, run_info, interactive, units)
 
 
 #: Columns of the per-point table of a probabilistic map: summary key, header.

@@ -134,10 +134,7 @@ def _bounds_from_metadata(metadata: typing.Iterable[Any]) -> Bounds:
 def si_unit(dimension: Dimension) -> str:
     """The SI unit of ``dimension`` as written in case files (``"rad/s"``, ``"N"``); ``""`` when
     dimensionless."""
-    for unit, factor in dimension.units.items():
-        if factor == 1.0:
-            return unit
-    return ""
+    return dimension.si
 
 
 @dataclass(frozen=True)
