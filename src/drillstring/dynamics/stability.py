@@ -38,8 +38,8 @@ controller has integral action; with ``k_i = 0`` the speed at which ``k_p (Ω �
 found by fixed-point iteration), the motor torque ``τ_m`` balances the torque on bit and the rigid-rotation
 friction ``c2 ω`` (the rigid-rotation equation), the integral state is ``τ_m / k_i`` and the z_torque filter
 holds the surface torque. The linearisation (2) then takes the whole loop: ``δτ_m`` from the controller's
-Jacobian (:func:`~drillstring.forces.top_drive.top_drive_jacobian`) on the quill speed ``qᵀδη̇`` and the
-surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes at the top), and the controller's
+Jacobian (:meth:`~drillstring.forces.top_drive.TopDriveParameters.jacobian`) on the quill speed ``qᵀδη̇``
+and the surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes at the top), and the controller's
 states as extra rows. The rigid rotation's angle, like the depth drilled, enters no equation and is left
 out. **Off bottom** (``bit_rock.law = "off_bottom"``) the steady state is rotation without penetration
 (ROP 0, no bit–rock force) and the bit–rock Jacobian is zero.
@@ -54,7 +54,6 @@ import numpy as np
 import scipy.linalg as sla
 
 from drillstring.dynamics.rom import ReducedOrderModel
-from drillstring.forces.top_drive import top_drive_jacobian
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -217,7 +216,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     drive = model.top_drive
     if drive.n_states:
         q, s = model.quill_shapes, model.surface_torque_shapes
-        law = top_drive_jacobian(drive)  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
+        law = drive.jacobian()  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
         rows = [(slice(n, 2 * n), q, law[0]), (2 * n, 1.0, law[1])]
         if drive.n_states > 1:
             rows.append((2 * n + 1, 1.0, law[2]))
