@@ -36,7 +36,15 @@ from typing import Any
 import numpy as np
 
 from drillstring.case import Case
-from drillstring.dynamics.indicators import CYCLE_METRICS, bit_area, cycle_metrics, steady_window, transient_end
+from drillstring.dynamics.indicators import (
+    CYCLE_METRICS,
+    bit_area,
+    cycle_metrics,
+    has_top_drive,
+    steady_window,
+    top_drive_metrics,
+    transient_end,
+)
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.dynamics.stability import STABILITY_FAMILIES, stability
@@ -79,7 +87,8 @@ REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
 #: Scalar results of each realization of a Monte Carlo study, computed in the worker from its realized
 #: case (:func:`realization_metrics`; the growth rate from :func:`stability_outputs`): name -> (unit,
 #: description). ``top_speed`` and ``bit_area`` are the realized case's, kept so that the cycle metrics can be
-#: recomputed for another transient.
+#: recomputed for another transient. A case with a top drive adds the :data:`~drillstring.dynamics.indicators.
+#: TOP_DRIVE_METRICS`.
 REALIZATION_METRICS: dict[str, tuple[str, str]] = {
     **CYCLE_METRICS,
     "top_speed": ("rad/s", "top speed of the realized case"),
@@ -96,10 +105,12 @@ def metrics_transient(settings) -> float:
 def realization_metrics(result, case: Case, t_transient: float) -> dict[str, float]:
     """The :data:`~drillstring.dynamics.indicators.CYCLE_METRICS` of one run (a :class:`~drillstring.
     dynamics.simulate.SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s], with the
-    case's ``top_speed`` [rad/s] and ``bit_area`` [m²] that they use."""
+    case's ``top_speed`` [rad/s] and ``bit_area`` [m²] that they use; with a top drive (:func:`~drillstring.
+    dynamics.indicators.has_top_drive`) also the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS`."""
     top_speed, area = float(case.operation.top_speed), bit_area(case)
+    extra = top_drive_metrics(result.time, result.observables, t_transient) if has_top_drive(case) else {}
     return {**cycle_metrics(result.time, result.observables, top_speed, area, t_transient),
-            "top_speed": top_speed, "bit_area": area}
+            "top_speed": top_speed, "bit_area": area, **extra}
 
 
 def simulation_options(case: Case, t_end: float, output_step: float) -> dict[str, Any]:
