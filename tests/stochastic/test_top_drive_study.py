@@ -134,3 +134,33 @@ def test_top_drive_rows_in_the_summary_and_figures(top_drive_study, tmp_path):
         path = plot(stats, tmp_path / f"{plot.__name__}.png", **({"t_transient": 1.0}
                                                                   if plot is plot_dispersion else {}))
         assert path.stat().st_size > 0
+
+
+def test_maps_give_the_surface_torque_amplitude_with_a_top_drive(small_case, tmp_path):
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.simulate import simulate_model
+    from drillstring.stochastic import operating_map as om
+    from drillstring.stochastic import probabilistic_map as pm
+    from drillstring.stochastic.parameters import with_parameters
+    from drillstring.stochastic.runs import simulation_options
+
+    grid = om.MapSettings(top_speed=(8.0, 12.0), weight_on_bit=(9e4,), t_end=2.0, output_step=0.02)
+    imposed = om.MapStore(tmp_path / "imposed" / "map.zarr", small_case, grid, 1e5)
+    assert "surface_torque_amplitude" not in dict(imposed.group.attrs["layout"])
+    case = _with_top_drive(small_case, **PI_DRIVE)
+    om.run_map(case, grid, tmp_path / "map.zarr", execution.Engine(workers=1))
+    found = om.map_dataset(tmp_path / "map.zarr")
+    assert found["surface_torque_amplitude"].attrs["units"] == "N m"
+    # the point's amplitude is (max − min)/2 of the surface torque of the same run simulated here
+    point = with_parameters(case, {"operation.top_speed": 12.0, "operation.weight_on_bit": 9e4})
+    result = simulate_model(case_reduced_model(point), **simulation_options(point, grid.t_end, grid.output_step))
+    torque = np.asarray(result.observables["surface_torque"])[steady_window(result.time, grid.transient)]
+    assert float(found["surface_torque_amplitude"].sel(top_speed=12.0, weight_on_bit=9e4)) == pytest.approx(
+        0.5 * (torque.max() - torque.min()), rel=1e-9)
+
+    sampled = pm.SampledMapSettings(grid, samples=2, seed=5, sigma=3000.0)
+    pm.run_sampled_map(case, sampled, tmp_path / "sampled" / "map.zarr", execution.Engine(workers=1))
+    ds = pm.sampled_map_dataset(tmp_path / "sampled" / "map.zarr")
+    per_sample = ds["surface_torque_amplitude"].values
+    assert np.all(np.isfinite(per_sample)) and np.all(per_sample > 0.0)
+    np.testing.assert_allclose(ds["surface_torque_amplitude_mean"].values, per_sample.mean(axis=2), rtol=1e-14)

@@ -38,6 +38,7 @@ import numpy as np
 from drillstring.case import Case
 from drillstring.dynamics.indicators import (
     CYCLE_METRICS,
+    TOP_DRIVE_METRICS,
     bit_area,
     cycle_metrics,
     has_top_drive,
@@ -81,6 +82,11 @@ REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
     "lowest_lateral_eigenvalue": ("rad^2/s^2",
                                   "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
     "stick_slip_index": CYCLE_METRICS["stick_slip_index"],
+}
+#: Outputs added for a case with a top drive (:func:`~drillstring.dynamics.indicators.has_top_drive`) in the
+#: operating maps: the surface-torque amplitude (max − min)/2 after the transient.
+TOP_DRIVE_OUTPUTS: dict[str, tuple[str, str]] = {
+    "surface_torque_amplitude": TOP_DRIVE_METRICS["surface_torque_amplitude"],
 }
 
 
@@ -188,16 +194,19 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
 
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,
-                with_stability: bool = False, with_realization: bool = False) -> TaskOutcome:
+                with_stability: bool = False, with_realization: bool = False,
+                with_top_drive: bool = False) -> TaskOutcome:
     """Simulate ``case`` for ``t_end`` [s] and return its scalar outputs as the outcome of task ``index``
     (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability`` and
-    :data:`REALIZATION_OUTPUTS` when ``with_realization``). Never
+    :data:`REALIZATION_OUTPUTS` when ``with_realization`` and :data:`TOP_DRIVE_OUTPUTS` when
+    ``with_top_drive``: the case has a top drive). Never
     raises: a run that stops early is FAILED with its cause and the outputs of what it computed; a case
     that cannot be built is FAILED with NaN outputs."""
     start = time.perf_counter()
     t_transient = transient_end(t_end) if t_transient is None else t_transient
     names = (list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
-             + (list(REALIZATION_OUTPUTS) if with_realization else []))
+             + (list(REALIZATION_OUTPUTS) if with_realization else [])
+             + (list(TOP_DRIVE_OUTPUTS) if with_top_drive else []))
     outcome = TaskOutcome(index, FAILED, "", {name: math.nan for name in names})
     try:
         model = case_reduced_model(case)
@@ -214,6 +223,9 @@ def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_t
             outcome.message = str(error)
         outcome.values.update(result_outputs(result, case, t_transient,
                                              cycle=("stick_slip_index",) if with_realization else ()))
+        if with_top_drive:
+            metrics = top_drive_metrics(result.time, result.observables, t_transient)
+            outcome.values.update({name: metrics[name] for name in TOP_DRIVE_OUTPUTS})
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"
