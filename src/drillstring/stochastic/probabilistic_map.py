@@ -61,14 +61,8 @@ from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.operating_map import MAP_AXES, MAX_POINTS, MapSettings, check_map, map_attributes
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, with_parameters
-from drillstring.stochastic.runs import (
-    REALIZATION_OUTPUTS,
-    RUN_OUTPUTS,
-    STABILITY_OUTPUTS,
-    TOP_DRIVE_OUTPUTS,
-    compile_kernels,
-    run_outputs,
-)
+from drillstring.stochastic.runs import (REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS, TOP_DRIVE_OUTPUTS,
+                                        compile_kernels, run_outputs, with_top_drive_outputs)
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
@@ -87,14 +81,6 @@ __all__ = [
 #: Outputs of every realization: name -> (unit, description).
 SAMPLE_OUTPUTS = {**RUN_OUTPUTS, **STABILITY_OUTPUTS, **REALIZATION_OUTPUTS,
                   "realized_weight_on_bit": ("N", "weight on bit of the realization")}
-
-
-def sample_outputs(top_drive: bool) -> dict[str, tuple[str, str]]:
-    """The outputs of a realization: :data:`SAMPLE_OUTPUTS`, and :data:`~drillstring.stochastic.runs.
-    TOP_DRIVE_OUTPUTS` (the surface-torque amplitude) when the case has a ``top_drive``."""
-    return {**SAMPLE_OUTPUTS, **(TOP_DRIVE_OUTPUTS if top_drive else {})}
-
-
 #: Per-point probabilities: name -> (output, event, description).
 PROBABILITIES: dict[str, tuple[str, Callable[[np.ndarray], np.ndarray], str]] = {
     "stick_slip_probability": ("stick_time_fraction", lambda v: v > 0.0,
@@ -250,7 +236,7 @@ class SampledMapStore(TaskStore):
             "weight_on_bit": ArraySpec(("weight_on_bit",), data=np.array(grid.weight_on_bit),
                                        attributes={"units": "N"}),
             **{name: ArraySpec(("realization",), attributes={"units": unit, "long_name": text})
-               for name, (unit, text) in sample_outputs(has_top_drive(case)).items()},
+               for name, (unit, text) in with_top_drive_outputs(SAMPLE_OUTPUTS, has_top_drive(case)).items()},
             "input_values": ArraySpec(("realization", "parameter")),
         }
         sizes = {"realization": settings.realizations, "top_speed": grid.shape[0], "weight_on_bit": grid.shape[1],
@@ -328,7 +314,7 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
         wob = np.asarray(group["weight_on_bit"][:], dtype=float)
         samples = int(dict(attrs["settings"])["samples"])
         shape = (top.size, wob.size, samples)
-        outputs = sample_outputs(any(name in dict(attrs["layout"]) for name in TOP_DRIVE_OUTPUTS))
+        outputs = with_top_drive_outputs(SAMPLE_OUTPUTS, any(name in attrs["layout"] for name in TOP_DRIVE_OUTPUTS))
         arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*outputs, "status", "wall_time")}
         inputs = np.asarray(group["input_values"][:], dtype=float).reshape(*shape, -1)
     dims = ("top_speed", "weight_on_bit", "sample")

@@ -90,6 +90,12 @@ TOP_DRIVE_OUTPUTS: dict[str, tuple[str, str]] = {
 }
 
 
+def with_top_drive_outputs(outputs: dict[str, tuple[str, str]], top_drive: bool) -> dict[str, tuple[str, str]]:
+    """``outputs`` (name -> (unit, description)) followed by :data:`TOP_DRIVE_OUTPUTS` when ``top_drive``
+    (the case has a top drive, or the store holds its outputs)."""
+    return {**outputs, **(TOP_DRIVE_OUTPUTS if top_drive else {})}
+
+
 #: Scalar results of each realization of a Monte Carlo study, computed in the worker from its realized
 #: case (:func:`realization_metrics`; the growth rate from :func:`stability_outputs`): name -> (unit,
 #: description). ``top_speed`` and ``bit_area`` are the realized case's, kept so that the cycle metrics can be
