@@ -13,7 +13,8 @@ are safe in scripts, notebooks, worker processes and tests.
   whirl orbit at the probe with the borehole wall, the contact force.
 * :func:`plot_compare` — the same six panels for case 1 (full) and case 2 (bit–rock + contact) overlaid.
 * :func:`plot_convergence` — mean-square convergence ``conv(n_s)`` of each observable.
-* :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB.
+* :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB (and,
+  with a top drive, of the quill speed and the surface torque).
 * :func:`plot_dispersion` — dispersion [%] of the same observables vs time, transient shaded.
 * :func:`plot_study` — the three study figures in one folder.
 * :func:`plot_map` — an operating map: ROP, vibration, MSE, lateral displacement over top speed × WOB, with

@@ -130,6 +130,15 @@ def test_top_drive_rows_in_the_summary_and_figures(top_drive_study, tmp_path):
     assert entry["mean"] == pytest.approx(amplitude.mean(), rel=1e-12) and entry["n"] == amplitude.size
     assert entry["unit"] == "N m"
     json.dumps(summary, allow_nan=True)
+    from rich.console import Console
+
+    from drillstring.cli import _realizations_table, _study_table
+
+    console = Console(width=250, record=True)
+    console.print(_study_table(summary), _realizations_table(summary))
+    text = console.export_text()
+    for label in ("quill speed", "surface torque", "surface torque amplitude", "quill speed min", "quill speed max"):
+        assert label in text
     for plot in (plot_envelopes, plot_dispersion):
         path = plot(stats, tmp_path / f"{plot.__name__}.png", **({"t_transient": 1.0}
                                                                   if plot is plot_dispersion else {}))
