@@ -173,3 +173,5 @@ def test_maps_give_the_surface_torque_amplitude_with_a_top_drive(small_case, tmp
     per_sample = ds["surface_torque_amplitude"].values
     assert np.all(np.isfinite(per_sample)) and np.all(per_sample > 0.0)
     np.testing.assert_allclose(ds["surface_torque_amplitude_mean"].values, per_sample.mean(axis=2), rtol=1e-14)
+    summary = pm.sampled_map_summary(ds)
+    assert summary["surface_torque_amplitude_mean"] == ds["surface_torque_amplitude_mean"].values.tolist()

@@ -386,7 +386,7 @@ def _grid_list(values: np.ndarray) -> list:
 def sampled_map_summary(ds: xr.Dataset) -> dict[str, Any]:
     """JSON-ready summary of a probabilistic map (SI): grid, samples, laws, counts; per point (lists by top
     speed, then weight-on-bit) each probability, its standard error and the quantiles; the largest of each
-    probability and where."""
+    probability and where; with a top drive, ``surface_torque_amplitude_mean`` per point [N m]."""
     summary: dict[str, Any] = {
         "top_speed": [float(v) for v in ds.top_speed.values],
         "weight_on_bit": [float(v) for v in ds.weight_on_bit.values],
@@ -419,4 +419,7 @@ def sampled_map_summary(ds: xr.Dataset) -> dict[str, Any]:
     for name in QUANTILE_OUTPUTS.values():
         summary["quantiles"][name] = {f"{100 * q:g}": _grid_list(ds[name].values[..., k])
                                       for k, q in enumerate(QUANTILES)}
+    for name in TOP_DRIVE_OUTPUTS:
+        if f"{name}_mean" in ds:
+            summary[f"{name}_mean"] = _grid_list(ds[f"{name}_mean"].values)
     return summary
