@@ -53,6 +53,21 @@ DISPLAY_KINDS = {
     "weight_on_bit": "force",
 }
 
+#: Observables kept for every realization (each (realization, time)); plus radial_displacement.
+STUDY_OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+#: Observables kept too when the case has a top drive (:func:`~drillstring.dynamics.indicators.has_top_drive`);
+#: with an imposed speed the quill turns at the set point and they are not stored.
+TOP_DRIVE_OBSERVABLES = ("quill_speed", "surface_torque")
+
+
+def stored_observables(data) -> tuple[str, ...]:
+    """The study observables held by ``data`` (a study's raw Dataset, holding ``<v>``, or its statistics,
+    holding ``<v>_mean``), in order: :data:`STUDY_OBSERVABLES` and those of :data:`TOP_DRIVE_OBSERVABLES` it
+    has."""
+    return STUDY_OBSERVABLES + tuple(name for name in TOP_DRIVE_OBSERVABLES
+                                     if name in data or f"{name}_mean" in data)
+
+
 #: Display of the per-realization cycle metrics in tables and figures: name -> (factor from SI, unit, label).
 METRIC_DISPLAY = {
     "stick_slip_index": (1.0, "-", "stick-slip index"),
@@ -65,4 +80,7 @@ METRIC_DISPLAY = {
     "mechanical_specific_energy": (1e-6, "MPa", "MSE"),
     "stick_time_fraction": (100.0, "%", "stick time"),
     "bit_speed_oscillation": (1.0, "-", "oscillation/2Ω"),
+    "surface_torque_amplitude": (1e-3, "kN·m", "surface torque amplitude"),
+    "quill_speed_min": (30.0 / 3.141592653589793, "rpm", "quill speed min"),
+    "quill_speed_max": (30.0 / 3.141592653589793, "rpm", "quill speed max"),
 }
