@@ -8,7 +8,9 @@ from numba import njit
 
 from drillstring.forces.contact import (
     ContactParameters,
+    case_contact,
     contact_forces,
+    contact_jacobian,
     evaluate_contact,
     radial_gap,
     regularized_sign,
@@ -391,3 +393,57 @@ def reference_mesh(drill_pipe, drill_collar):
     from drillstring.fem.mesh import build_mesh
 
     return build_mesh([1400.0, 200.0], [drill_pipe, drill_collar], 10.0, [1560.0])
+
+
+def _finite_difference_jacobian(params, x, gap, steps):
+    """Central differences of :func:`evaluate_contact` at one station ``x = (v, w, v̇, ẇ, θ̇x)``."""
+    jac = np.zeros((3, 5))
+    for b in range(5):
+        hi, lo = np.array(x, dtype=float), np.array(x, dtype=float)
+        hi[b] += steps[b]
+        lo[b] -= steps[b]
+        f_hi = np.array(evaluate_contact(*hi, gap, D_O, params)[:3]).ravel()
+        f_lo = np.array(evaluate_contact(*lo, gap, D_O, params)[:3]).ravel()
+        jac[:, b] = (f_hi - f_lo) / (2.0 * steps[b])
+    return jac
+
+
+@pytest.mark.parametrize("params", [P, PT, ContactParameters(K_SH, 0.3, 0.5, tangential_friction=True)])
+@pytest.mark.parametrize("state", [
+    (GAP + 3e-4, 1e-3, 0.2, -0.1, 0.004),        # spin inside the regularisation band
+    (-0.6 * GAP, 0.9 * GAP, -0.05, 0.3, -0.02),  # backward slip
+    (0.01, -0.04, 0.0, 0.0, 8.0),                # rotating, no lateral velocity
+])
+def test_jacobian_matches_finite_differences(params, state):
+    """The closed-form Jacobian against central differences of the NumPy reference, every entry."""
+    jac = params.jacobian(*state, GAP, D_O)
+    assert jac.shape == (1, 3, 5)
+    steps = (1e-8, 1e-8, 1e-7, 1e-7, 1e-7)
+    fd = _finite_difference_jacobian(params, state, GAP, steps)
+    scale = np.abs(fd).max(axis=1, keepdims=True) + 1e-300
+    np.testing.assert_allclose(jac[0] / scale, fd / scale, atol=1e-6)
+    # the inputs matter: the normal block is the penalty stiffness along n
+    n = np.array(state[:2]) / math.hypot(*state[:2])
+    assert n @ jac[0, :2, :2] @ n == pytest.approx(-K_SH, rel=1e-12)
+
+
+def test_jacobian_is_zero_inside_the_gap_and_uses_station_stiffness():
+    jac = contact_jacobian([0.5 * GAP, 0.0, GAP], [0.0, 0.0, 0.0], 0.1, 0.2, 10.0, GAP, D_O, PT)
+    assert not jac.any()
+    state = (GAP + 1e-3, 0.0, 0.0, 0.0, 5.0)
+    per_node = P.jacobian(*state, GAP, D_O)
+    station = P.jacobian(*state, GAP, D_O, stiffness=[2.0 * K_SH])
+    np.testing.assert_allclose(station, 2.0 * per_node, rtol=1e-14)
+    f1 = P.evaluate(*state, GAP, D_O, stiffness=[2.0 * K_SH])
+    f2 = evaluate_contact(*state, GAP, D_O, P, stiffness=[2.0 * K_SH])
+    assert all(np.array_equal(a, b) for a, b in zip(f1, f2))
+
+
+def test_case_contact_reads_the_case():
+    from drillstring.case import load_case
+
+    case = load_case("reference")
+    params = case_contact(case)
+    c = case.contact
+    assert params == ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
+                                       c.tangential_friction)

@@ -63,6 +63,7 @@ from drillstring.forces.bit_rock import BitRockParameters, bit_rock_law, case_bi
 from drillstring.forces.contact import (
     ContactParameters,
     ContactStations,
+    case_contact,
     distributed_contact_forces,
     evaluate_contact,
     mesh_contact_stations,
@@ -1195,7 +1196,6 @@ def case_reduced_model(
     top_drive = case_top_drive(
         case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
     r = case.reduced_model
-    c = case.contact
     return reduced_model(
         static,
         system,
@@ -1208,8 +1208,7 @@ def case_reduced_model(
         damping_basis=case.damping.basis,
         top_speed=case.operation.top_speed,
         bit_rock=case_bit_rock(case),
-        contact=ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
-                                  c.tangential_friction),
+        contact=case_contact(case),
         borehole_diameter=case.borehole.diameter,
         probe_positions=case.mesh.probes,
         nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,

@@ -66,6 +66,23 @@ Decision: as written in SPEC §6, the friction torque uses the sign of the spin 
 ``tangential=False`` the model is exactly the SPEC's; with ``tangential=True`` the lateral force is added
 and the torque is unchanged (the two differ only when the whirl velocity is comparable with the surface
 speed ``θ̇x R``, e.g. in backward whirl).
+
+The component (SPEC §11)
+------------------------
+Borehole contact is one component of the reduced model. Its pieces: :class:`ContactParameters` (built from
+the case in one place, :func:`case_contact`), the stations where the wall acts (:class:`ContactStations`,
+:func:`mesh_contact_stations`), the compiled station law :func:`distributed_contact_forces`, the NumPy
+reference :func:`evaluate_contact` (:meth:`ContactParameters.evaluate`) and its Jacobian
+:func:`contact_jacobian` (:meth:`ContactParameters.jacobian`).
+
+Jacobian (closed form). With ``N = k (r − g)``, ``n = (n_v, n_w)``, ``t = (−n_w, n_v)``, ``∂n/∂(v, w) =
+t tᵀ / r`` and ``sgn_ε'(a) = ε² / (a² + ε²)^{3/2}``, the normal force ``−N n`` has the symmetric derivative
+``−(k n nᵀ + (N/r) t tᵀ)`` over ``(v, w)``; the torque ``−μ N R sgn_ε(θ̇x)`` has ``−μ R sgn_ε(θ̇x) k n``
+over ``(v, w)`` and ``−μ N R sgn_ε'(θ̇x)`` over ``θ̇x``; the tangential force ``F_t t`` (``F_t = −μ N
+sgn_{εR}(s)``) has ``t ∇F_t + F_t ∇t`` with ``∇F_t = −μ (sgn_{εR}(s) ∇N + N sgn_{εR}'(s) ∇s)``, ``∇N =
+k n`` over ``(v, w)``, ``∂s/∂(v, w) = −(n·(v̇, ẇ)/r) t``, ``∂s/∂(v̇, ẇ) = t``, ``∂s/∂θ̇x = R`` and ``∂t/∂(v, w)
+= −n tᵀ / r``. Inside the clearance every derivative is zero (at ``r = g`` exactly the normal
+force has a kink: the derivative from outside is returned only for ``r > g``).
 """
 
 from __future__ import annotations
@@ -86,7 +103,17 @@ __all__ = [
     "contact_forces",
     "distributed_contact_forces",
     "evaluate_contact",
+    "contact_jacobian",
+    "case_contact",
+    "JACOBIAN_INPUTS",
+    "JACOBIAN_OUTPUTS",
 ]
+
+#: Columns of :func:`contact_jacobian`: the station's lateral displacements [m] and velocities [m/s], and
+#: its spin speed θ̇x [rad/s].
+JACOBIAN_INPUTS = ("v", "w", "v_dot", "w_dot", "spin_speed")
+#: Rows of :func:`contact_jacobian`: the contact force along y and z [N] and the torque about +x [N·m].
+JACOBIAN_OUTPUTS = ("force_v", "force_w", "torque")
 
 
 @dataclass(frozen=True)
@@ -118,6 +145,14 @@ class ContactParameters:
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0.0:
                 raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
+
+    def evaluate(self, v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, stiffness=None):
+        """:func:`evaluate_contact` of this law: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``."""
+        return evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, self, stiffness=stiffness)
+
+    def jacobian(self, v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, stiffness=None) -> np.ndarray:
+        """:func:`contact_jacobian` of this law: ``(n, 3, 5)``, one 3 × 5 block per node or station."""
+        return contact_jacobian(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, self, stiffness=stiffness)
 
 
 def radial_gap(borehole_diameter, outer_diameter):
@@ -312,3 +347,85 @@ def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
             raise ValueError("stiffness must be finite and >= 0 N/m at every station")
         n_contacts = distributed_contact_forces(v_, w_, vd_, wd_, s_, g_, d_, k_, *common)
     return force_v, force_w, torque, int(n_contacts)
+
+
+def _sign_slope(s, eps):
+    """``d sgn_ε(s)/ds = ε² / (s² + ε²)^{3/2}`` [1/(unit of s)], elementwise; 0 where ``s² + ε² = 0``
+    (there :func:`regularized_sign` is 0 by convention)."""
+    h2 = s * s + eps * eps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = eps * eps / (h2 * np.sqrt(h2))
+    return np.where(h2 > 0.0, slope, 0.0)
+
+
+def contact_jacobian(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params: ContactParameters,
+                     stiffness=None) -> np.ndarray:
+    """Jacobian of the contact law at each node or station (closed form, module docstring).
+
+    Same inputs as :func:`evaluate_contact`. Returns ``J`` of shape ``(n, 3, 5)``: ``J[i, a, b] =
+    ∂out_a/∂in_b`` with ``out`` = (force_v [N], force_w [N], torque [N·m]) (:data:`JACOBIAN_OUTPUTS`) and
+    ``in`` = (v [m], w [m], v̇ [m/s], ẇ [m/s], θ̇x [rad/s]) (:data:`JACOBIAN_INPUTS`). Zero for an entry
+    inside its clearance (``r ≤ g``).
+    """
+    inputs = [v, w, v_dot, w_dot, spin_speed, gap, outer_diameter]
+    if stiffness is not None:
+        inputs.append(stiffness)
+    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, dtype=np.float64)) for a in inputs))
+    if arrays[0].ndim != 1:
+        raise ValueError("contact_jacobian expects 1-D arrays (one entry per node)")
+    v_, w_, vd, wd, spin, g, d_o = arrays[:7]
+    if np.any(g < 0.0):
+        raise ValueError("gap must be >= 0 (the string is wider than the borehole)")
+    k = arrays[7] if stiffness is not None else np.full(v_.shape, float(params.shock_stiffness))
+    mu = float(params.friction_coefficient)
+    eps = float(params.speed_regularization)
+    r = np.hypot(v_, w_)
+    touching = (r > g) & (r > 0.0)
+    r_safe = np.where(touching, r, 1.0)
+    nv = np.where(touching, v_ / r_safe, 0.0)
+    nw = np.where(touching, w_ / r_safe, 0.0)
+    normal = np.where(touching, k * (r - g), 0.0)
+    kc = np.where(touching, k, 0.0)
+    radius = 0.5 * d_o
+    curvature = normal / r_safe  # N / r
+    jac = np.zeros((v_.shape[0], 3, 5))
+    # normal force −N n: −(k n nᵀ + (N/r) t tᵀ), t = (−n_w, n_v)
+    jac[:, 0, 0] = -(kc * nv * nv + curvature * nw * nw)
+    jac[:, 0, 1] = -(kc - curvature) * nv * nw
+    jac[:, 1, 0] = jac[:, 0, 1]
+    jac[:, 1, 1] = -(kc * nw * nw + curvature * nv * nv)
+    # torque −μ N R sgn_ε(θ̇x)
+    sign = spin / np.where(np.hypot(spin, eps) > 0.0, np.hypot(spin, eps), 1.0)
+    jac[:, 2, 0] = -mu * radius * sign * kc * nv
+    jac[:, 2, 1] = -mu * radius * sign * kc * nw
+    jac[:, 2, 4] = -mu * normal * radius * _sign_slope(spin, eps)
+    if params.tangential_friction:
+        # slip s = θ̇x R + n_v ẇ − n_w v̇; F_t = −μ N sgn_{εR}(s); force F_t t
+        slip = spin * radius + nv * wd - nw * vd
+        eps_r = eps * radius
+        slip_sign = slip / np.where(np.hypot(slip, eps_r) > 0.0, np.hypot(slip, eps_r), 1.0)
+        f_t = -mu * normal * slip_sign
+        slope = _sign_slope(slip, eps_r)
+        radial_velocity = (nv * vd + nw * wd) / r_safe  # (n·(v̇, ẇ))/r
+        # ∂s/∂(v, w, v̇, ẇ, θ̇x); ∂n_v/∂(v, w) = n_w (n_w, −n_v)/r, ∂n_w/∂(v, w) = −n_v (n_w, −n_v)/r
+        d_slip = np.stack([nw * radial_velocity, -nv * radial_velocity, -nw, nv, radius], axis=1)
+        d_normal = np.stack([kc * nv, kc * nw, 0.0 * nv, 0.0 * nv, 0.0 * nv], axis=1)
+        d_ft = -mu * (d_normal * slip_sign[:, None] + (normal * slope)[:, None] * d_slip)
+        d_ft = np.where(touching[:, None], d_ft, 0.0)
+        # ∂t/∂(v, w) for t = (−n_w, n_v)
+        dtv = np.stack([nv * nw / r_safe, -nv * nv / r_safe], axis=1)  # ∂(−n_w)/∂(v, w)
+        dtw = np.stack([nw * nw / r_safe, -nv * nw / r_safe], axis=1)  # ∂n_v/∂(v, w)
+        jac[:, 0, :] += -nw[:, None] * d_ft
+        jac[:, 1, :] += nv[:, None] * d_ft
+        jac[:, 0, :2] += f_t[:, None] * dtv
+        jac[:, 1, :2] += f_t[:, None] * dtw
+    return jac
+
+
+def case_contact(case) -> ContactParameters:
+    """The borehole contact law of a :class:`~drillstring.case.Case` (``[contact]``): the wall's distributed
+    stiffness k'_sh [N/m per m], the friction coefficient, the regularisation speed and the tangential
+    friction switch."""
+    c = case.contact
+    return ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
+                             c.tangential_friction)
