@@ -140,7 +140,7 @@ def test_gyroscopic_terms_barely_change_the_imbalance_whirl_of_the_contact_case(
     import scipy.sparse.linalg as spla
 
     from drillstring.case import load_case
-    from drillstring.dynamics.rom import case_turning_loads
+    from drillstring.forces.turning_loads import case_turning_loads
     from drillstring.fem.assembly import gyroscopic_matrix
     from drillstring.modal import case_linear_system, family_dofs
     from drillstring.statics import case_static_state

@@ -68,7 +68,7 @@ from drillstring.forces.contact import (
     evaluate_contact,
     mesh_contact_stations,
 )
-from drillstring.forces.excitation import TurningLoads, bow_loads, imbalance_loads
+from drillstring.forces.excitation import TurningLoads
 from drillstring.forces.nonlinear import (
     NonlinearElements,
     _kinetic_forces_kernel,
@@ -83,6 +83,7 @@ from drillstring.forces.top_drive import (
     evaluate_top_drive,
     top_drive_law,
 )
+from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
 from drillstring.statics import StaticState, case_static_state
 
@@ -184,19 +185,6 @@ class ContactData(NamedTuple):
     regularization: float  # ε [rad/s]
     tangential: bool  # tangential friction force on the lateral DOFs
     work: ContactWork
-
-
-class TurningLoadData(NamedTuple):
-    """Loads turning with the string (:class:`~drillstring.forces.excitation.TurningLoads`) projected on
-    the lateral modes: entry ``k`` adds ``s_k cos α_k load_y[k]`` to the y family and ``s_k sin α_k
-    load_z[k]`` to the z family, ``α_k = Ω t + (Φ η)_θx(node_k) + phase_k``, ``s_k`` the local spin
-    speed squared (imbalance) or 1 (bow)."""
-
-    node: np.ndarray  # (m,) int64
-    phase: np.ndarray  # (m,) [rad]
-    speed_squared: np.ndarray  # (m,) bool
-    load_y: np.ndarray  # (m, n_y) generalized forces on the lateral-y modes
-    load_z: np.ndarray  # (m, n_z)
 
 
 class RhsData(NamedTuple):
@@ -377,7 +365,8 @@ def _surely_clear(d, eta):
 
 @inner_kernel()
 def _turning_loads(d, t, y, acc):
-    """Add the projected loads that turn with the string (:class:`TurningLoadData`) to ``acc``."""
+    """Add the projected loads that turn with the string (:class:`~drillstring.forces.turning_loads.TurningLoadData`)
+    to ``acc``, each at the angle and spin speed of its node."""
     r = d.turning
     n = d.omega2.shape[0]
     t0, t1, y0, y1, z0, z1 = d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], d.blocks[7]
@@ -388,13 +377,7 @@ def _turning_loads(d, t, y, acc):
         for j in range(t0, t1):
             angle += d.phi_tx_t[j - t0, i] * y[j]
             speed += d.phi_tx_t[j - t0, i] * y[n + j]
-        scale = speed * speed if r.speed_squared[k] else 1.0
-        cy = scale * math.cos(angle)
-        cz = scale * math.sin(angle)
-        for j in range(y0, y1):
-            acc[j] += cy * r.load_y[k, j - y0]
-        for j in range(z0, z1):
-            acc[j] += cz * r.load_z[k, j - z0]
+        turning_load(r, k, angle, speed, acc, y0, y1, z0, z1)
 
 
 @inner_kernel()
@@ -843,9 +826,6 @@ class ReducedOrderModel:
         c = self.contact
         st = self.stations
         transposed = np.ascontiguousarray
-        turning = self.turning_loads
-        turning_y = transposed((turning.force_y.T @ phi[:, y0:y1]), dtype=float)
-        turning_z = transposed((turning.force_z.T @ phi[:, z0:z1]), dtype=float)
         self.case2_data = RhsData(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -871,11 +851,7 @@ class ReducedOrderModel:
                 friction=float(c.friction_coefficient), regularization=float(c.speed_regularization),
                 tangential=bool(c.tangential_friction), work=ContactWork.allocate(mesh.n_nodes, len(st)),
             ),
-            turning=TurningLoadData(
-                node=transposed(turning.node, dtype=np.int64), phase=transposed(turning.phase, dtype=float),
-                speed_squared=transposed(turning.speed_squared, dtype=np.bool_),
-                load_y=turning_y.reshape(len(turning), y1 - y0), load_z=turning_z.reshape(len(turning), z1 - z0),
-            ),
+            turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
         )
         self.observe_data = ObserveData(
             probe_nodes=self.probe_nodes, v=np.zeros(mesh.n_nodes), w=np.zeros(mesh.n_nodes),
@@ -1158,21 +1134,6 @@ def _lateral_cutoff(case_value: float, lateral_modes: int | None, lateral_cutoff
     if lateral_cutoff is not None:
         return lateral_cutoff
     return 0.0 if lateral_modes is not None else case_value
-
-
-def case_turning_loads(case, mesh) -> TurningLoads:
-    """The mass imbalance of the case's sections (``sections[i].eccentricity``, ``eccentricity_angle``)
-    and its stress-free bow (``[bow]``) as :class:`~drillstring.forces.excitation.TurningLoads` on
-    ``mesh``; empty when the case has neither."""
-    from drillstring.fem.assembly import structural_matrices
-
-    loads = imbalance_loads(mesh, [s.eccentricity for s in case.sections],
-                            [s.eccentricity_angle for s in case.sections])
-    bow = case.bow
-    if bow.amplitude > 0.0:
-        stiffness, _ = structural_matrices(mesh)
-        loads = loads + bow_loads(mesh, stiffness, bow.amplitude, bow.start, bow.end, bow.angle)
-    return loads
 
 
 def case_reduced_model(
