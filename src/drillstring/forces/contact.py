@@ -315,6 +315,21 @@ def distributed_contact_forces(
     return n_contacts
 
 
+def _station_inputs(caller, v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, stiffness):
+    """The inputs of :func:`evaluate_contact` and :func:`contact_jacobian` broadcast together to contiguous
+    1-D float64 arrays (``stiffness`` None stays None); refuses other shapes and a negative gap."""
+    inputs = [v, w, v_dot, w_dot, spin_speed, gap, outer_diameter]
+    if stiffness is not None:
+        inputs.append(stiffness)
+    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, dtype=np.float64)) for a in inputs))
+    if arrays[0].ndim != 1:
+        raise ValueError(f"{caller} expects 1-D arrays (one entry per node)")
+    arrays = [np.ascontiguousarray(a) for a in arrays]
+    if np.any(arrays[5] < 0.0):
+        raise ValueError("gap must be >= 0 (the string is wider than the borehole)")
+    return (*arrays[:7], arrays[7] if stiffness is not None else None)
+
+
 def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params: ContactParameters,
                      stiffness=None):
     """Contact forces for arrays of nodes or stations: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``.
@@ -324,15 +339,8 @@ def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
     ``params.shock_stiffness`` [N/m] (per-node law); with ``stiffness`` [N/m] (one per entry, e.g.
     :meth:`ContactStations.stiffness`) it replaces it (:func:`distributed_contact_forces`).
     """
-    inputs = [v, w, v_dot, w_dot, spin_speed, gap, outer_diameter]
-    if stiffness is not None:
-        inputs.append(stiffness)
-    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, dtype=np.float64)) for a in inputs))
-    if arrays[0].ndim != 1:
-        raise ValueError("evaluate_contact expects 1-D arrays (one entry per node)")
-    v_, w_, vd_, wd_, s_, g_, d_ = (np.ascontiguousarray(a) for a in arrays[:7])
-    if np.any(g_ < 0.0):
-        raise ValueError("gap must be >= 0 (the string is wider than the borehole)")
+    v_, w_, vd_, wd_, s_, g_, d_, k_ = _station_inputs("evaluate_contact", v, w, v_dot, w_dot, spin_speed, gap,
+                                                       outer_diameter, stiffness)
     n = v_.shape[0]
     force_v = np.zeros(n)
     force_w = np.zeros(n)
@@ -342,7 +350,6 @@ def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
     if stiffness is None:
         n_contacts = contact_forces(v_, w_, vd_, wd_, s_, g_, d_, float(params.shock_stiffness), *common)
     else:
-        k_ = np.ascontiguousarray(arrays[7])
         if not np.all(np.isfinite(k_) & (k_ >= 0.0)):
             raise ValueError("stiffness must be finite and >= 0 N/m at every station")
         n_contacts = distributed_contact_forces(v_, w_, vd_, wd_, s_, g_, d_, k_, *common)
@@ -367,16 +374,10 @@ def contact_jacobian(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
     ``in`` = (v [m], w [m], v̇ [m/s], ẇ [m/s], θ̇x [rad/s]) (:data:`JACOBIAN_INPUTS`). Zero for an entry
     inside its clearance (``r ≤ g``).
     """
-    inputs = [v, w, v_dot, w_dot, spin_speed, gap, outer_diameter]
-    if stiffness is not None:
-        inputs.append(stiffness)
-    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, dtype=np.float64)) for a in inputs))
-    if arrays[0].ndim != 1:
-        raise ValueError("contact_jacobian expects 1-D arrays (one entry per node)")
-    v_, w_, vd, wd, spin, g, d_o = arrays[:7]
-    if np.any(g < 0.0):
-        raise ValueError("gap must be >= 0 (the string is wider than the borehole)")
-    k = arrays[7] if stiffness is not None else np.full(v_.shape, float(params.shock_stiffness))
+    v_, w_, vd, wd, spin, g, d_o, k = _station_inputs("contact_jacobian", v, w, v_dot, w_dot, spin_speed, gap,
+                                                      outer_diameter, stiffness)
+    if k is None:
+        k = np.full(v_.shape, float(params.shock_stiffness))
     mu = float(params.friction_coefficient)
     eps = float(params.speed_regularization)
     r = np.hypot(v_, w_)
