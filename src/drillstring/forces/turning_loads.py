@@ -78,10 +78,12 @@ def turning_load_data(loads: TurningLoads, lateral_y_shapes: np.ndarray, lateral
     )
 
 
-@njit(cache=True, no_cpython_wrapper=True)
+@njit(cache=True, no_cpython_wrapper=True, inline="always")
 def turning_load(r, k, angle, speed, acc, y0, y1, z0, z1):
     """Add entry ``k`` of :class:`TurningLoadData` ``r`` at angle ``α_k`` [rad] and spin speed ``θ̇_k``
-    [rad/s] to the modal accelerations ``acc`` (lateral-y columns ``[y0, y1)``, lateral-z ``[z0, z1)``)."""
+    [rad/s] to the modal accelerations ``acc`` (lateral-y columns ``[y0, y1)``, lateral-z ``[z0, z1)``).
+    Inlined into the caller by Numba: as a separate call the reference realization was 18 % slower
+    (0.22 s against 0.185 s of CPU time), although the reference case has no turning load."""
     scale = speed * speed if r.speed_squared[k] else 1.0
     cy = scale * math.cos(angle)
     cz = scale * math.sin(angle)
