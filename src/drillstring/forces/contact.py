@@ -81,8 +81,8 @@ t tᵀ / r`` and ``sgn_ε'(a) = ε² / (a² + ε²)^{3/2}``, the normal force ``
 over ``(v, w)`` and ``−μ N R sgn_ε'(θ̇x)`` over ``θ̇x``; the tangential force ``F_t t`` (``F_t = −μ N
 sgn_{εR}(s)``) has ``t ∇F_t + F_t ∇t`` with ``∇F_t = −μ (sgn_{εR}(s) ∇N + N sgn_{εR}'(s) ∇s)``, ``∇N =
 k n`` over ``(v, w)``, ``∂s/∂(v, w) = −(n·(v̇, ẇ)/r) t``, ``∂s/∂(v̇, ẇ) = t``, ``∂s/∂θ̇x = R`` and ``∂t/∂(v, w)
-= −n tᵀ / r``. Inside the clearance every derivative is zero (at ``r = g`` exactly the normal
-force has a kink: the derivative from outside is returned only for ``r > g``).
+= −n tᵀ / r``. Inside the clearance every derivative is zero; at ``r = g`` exactly, where the normal
+force has a kink, the derivative from inside (zero) is returned.
 """
 
 from __future__ import annotations
