@@ -211,3 +211,43 @@ def beam_resting_on_a_wall(stiffness, rows, station_stiffness, gaps, initial):
             return v, station_stiffness * np.clip(v[rows] - gaps, 0.0, None)
         active = now
     raise RuntimeError("the active set did not settle")
+
+
+def torsional_rod_top_drive_roots(lengths: tuple[float, float], impedances: tuple[float, float], wave_speed: float,
+                                  top_drive: tuple[float, float, float], max_frequency: float) -> np.ndarray:
+    """Exact closed-loop eigenvalues s (Im s > 0, |Im s| < 2π max_frequency) of a distributed two-section
+    torsional rod (impedances Z_i = I_i √(Gρ), one wave speed c = √(G/ρ)), bit end free, turned at the top by
+    an inertia J under a PI speed controller, ``top_drive = (J, k_p, k_i)``, no damping.
+
+    Each section carries θ(x) = A cosh(γx) + B sinh(γx), γ = s/c, torque T = G I θ' = Z s (A sinh + B cosh),
+    so across a section of length ℓ: θ(ℓ) = ch θ(0) + sh T(0)/(Z s), T(ℓ) = Z s sh θ(0) + ch T(0). The top
+    obeys J θ̈₀ = τ_m + T(0) with the linearised PI law τ_m = −(k_p s + k_i) θ₀ (the integral of the speed
+    error is −θ₀), so T(0) = (J s² + k_p s + k_i) θ₀; the bit is free, T(L) = 0. With θ₀ = 1 the
+    characteristic function is T(L; s). Roots by Newton's method from a grid of starts along the imaginary
+    axis (no finite-element information used), deduplicated."""
+    (l1, l2), (z1, z2) = lengths, impedances
+    inertia, proportional_gain, integral_gain = top_drive
+
+    def f(s):
+        theta, torque = 1.0 + 0j, inertia * s * s + proportional_gain * s + integral_gain
+        for length, z in ((l1, z1), (l2, z2)):
+            g = s * length / wave_speed
+            ch, sh = np.cosh(g), np.sinh(g)
+            theta, torque = ch * theta + sh * torque / (z * s), z * s * sh * theta + ch * torque
+        return torque / (z1 * s)  # scaled: O(1) near the roots
+
+    roots: list[complex] = []
+    w_max = 2 * math.pi * max_frequency
+    for w0 in np.linspace(0.05, 1.2 * w_max, 400):
+        s = complex(-0.01 * w0, w0)
+        for _ in range(100):
+            h = 1e-7 * abs(s)
+            step = f(s) / ((f(s + h) - f(s - h)) / (2 * h))
+            s -= step
+            if abs(step) < 1e-13 * abs(s):
+                break
+        else:
+            continue
+        if 0.0 < s.imag < w_max and abs(f(s)) < 1e-9 and all(abs(s - r) > 1e-6 * abs(s) for r in roots):
+            roots.append(s)
+    return np.array(sorted(roots, key=lambda r: r.imag))

@@ -211,12 +211,12 @@ def test_modes_count_zero_is_refused():
 # ---------------------------------------------------------------------------------------------- cases, errors
 
 
-def test_cases_lists_reference_and_contact():
+def test_cases_lists_reference_contact_and_stick_slip():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
     names = [line.split()[0] for line in result.stdout.splitlines()]
-    assert names == ["contact", "reference", "reference_components"]
-    assert "hits the wall" in result.stdout
+    assert names == ["contact", "reference", "reference_components", "stick_slip"]
+    assert "hits the wall" in result.stdout and "full stick-slip" in result.stdout
 
 
 def test_simulate_contact_hits_the_wall(tmp_path):

@@ -245,8 +245,9 @@ def test_figures_follow_the_unit_system(run_dataset, monkeypatch, tmp_path):
     plots.plot_run(run_dataset, tmp_path / "si.png", units="si")
     plots.plot_run(run_dataset, tmp_path / "field.png", units="field")
     si, field = ([ax.get_ylabel() for ax in drawn[str(tmp_path / f)].axes] for f in ("si.png", "field.png"))
-    assert "rate of penetration [m/h]" in si and "torque-on-bit [kN·m]" in si and "contact force [kN]" in si
-    assert "rate of penetration [ft/h]" in field and "torque-on-bit [kft·lbf]" in field
+    # the torque panel holds the torque-on-bit (its first curve) and the surface torque
+    assert "rate of penetration [m/h]" in si and "torque [kN·m]" in si and "contact force [kN]" in si
+    assert "rate of penetration [ft/h]" in field and "torque [kft·lbf]" in field
     assert "radial displacement [in]" in field and "contact force [klbf]" in field
     tob_si = drawn[str(tmp_path / "si.png")].axes[3].lines[0].get_ydata()
     tob_field = drawn[str(tmp_path / "field.png")].axes[3].lines[0].get_ydata()

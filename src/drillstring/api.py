@@ -88,8 +88,11 @@ def simulate(
         "weight_on_hook": model.static.weight_on_hook,
         "weight_on_bit": model.static.weight_on_bit,
         "top_speed": case.operation.top_speed,
+        "top_drive": case.top_drive.controller,
+        "bit_rock_law": case.bit_rock.law,
         "modes": f"{case.reduced_model.axial_modes} axial + rigid, {case.reduced_model.torsional_modes} "
-                 f"torsional, {model.family.count('lateral_y')} lateral per plane",
+                 f"torsional{'' if model.top_drive.imposed else ' + rigid'}, "
+                 f"{model.family.count('lateral_y')} lateral per plane",
         "elements": model.static.mesh.n_elements,
     }
     kwargs = dict(

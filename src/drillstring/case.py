@@ -66,9 +66,11 @@ from drillstring.units import (
     LENGTH_PER_ANGLE,
     LINEAR_DAMPING,
     MASS_PER_LENGTH,
+    MOMENT_OF_INERTIA,
     PENETRATION_PER_FORCE,
     PRESSURE,
     ROTATIONAL_DAMPING,
+    ROTATIONAL_STIFFNESS,
     STIFFNESS,
     STIFFNESS_PER_LENGTH,
     TIME,
@@ -93,6 +95,7 @@ __all__ = [
     "PenetrationPerForce",
     "RotationalDamping",
     "BitRock",
+    "TopDrive",
     "Borehole",
     "Bow",
     "Case",
@@ -354,6 +357,8 @@ LengthPerAngle = _quantity(LENGTH_PER_ANGLE)  #: [m/rad]
 ForceAngle = _quantity(FORCE_ANGLE)  #: [N*rad]
 MassPerLength = _quantity(MASS_PER_LENGTH)  #: [kg/m]
 VolumeFlow = _quantity(VOLUME_FLOW)  #: [m^3/s]
+MomentOfInertia = _quantity(MOMENT_OF_INERTIA)  #: [kg*m^2]
+RotationalStiffness = _quantity(ROTATIONAL_STIFFNESS)  #: [N*m/rad]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -483,7 +488,11 @@ class Fluid(_Base):
 
 
 class BitRock(_Base):
-    """Bit-rock interaction law (Tucker & Wang), coefficients a1..a5 and regularisation e."""
+    """Bit-rock interaction law: ``law = "tucker_wang"`` (coefficients a1..a5 and regularisation e) or
+    ``"off_bottom"`` (the bit hangs free: no bit-rock force, weight-on-bit 0, the hook carries the whole
+    string; ``operation.weight_on_bit`` is then not used)."""
+
+    law: Literal["tucker_wang", "off_bottom"] = Field("tucker_wang", description="bit-rock law")
 
     a1: Velocity = Field(3.429e-3, ge=0, description="a1 [m/s]")
     a2: PenetrationPerForce = Field(5.672e-8, gt=0, description="a2 [m/(N*s)]")
@@ -517,6 +526,39 @@ class Operation(_Base):
         100.0 * _RPM, gt=0, description="rotation speed imposed at the top [rad/s]"
     )
     weight_on_bit: Force = Field(1e5, gt=0, description="initial (static) weight-on-bit [N]")
+
+
+class TopDrive(_Base):
+    """The top boundary of the torsion (:mod:`drillstring.forces.top_drive`). ``controller =
+    "imposed_speed"``: the top turns at ``operation.top_speed`` exactly (the reference study); ``"pi"``,
+    ``"soft_torque"``, ``"z_torque"``: a top drive of rotary inertia ``inertia`` at the quill, driven by a
+    motor whose torque, saturated at ``max_torque``, a controller sets from the quill speed (and the
+    surface torque for ``z_torque``), with ``operation.top_speed`` as set point, reached after
+    ``ramp_time`` from rest when that is > 0. ``pi`` needs both gains; the tuned controllers compute the
+    gains left out (docs/model.md, "Top drive")."""
+
+    controller: Literal["imposed_speed", "pi", "soft_torque", "z_torque"] = Field(
+        "imposed_speed", description="top boundary of the torsion")
+    inertia: MomentOfInertia = Field(
+        1000.0, gt=0, description="rotary inertia of motor, gearbox and quill at the quill J_td [kg*m^2]")
+    proportional_gain: RotationalDamping | None = Field(
+        None, ge=0, description="k_p of the speed controller [N*m*s/rad]; tuned when left out")
+    integral_gain: RotationalStiffness | None = Field(
+        None, ge=0, description="k_i of the speed controller [N*m/rad]; tuned when left out")
+    max_torque: Torque = Field(60e3, gt=0, description="largest motor torque tau_max [N*m]")
+    ramp_time: Time = Field(0.0, ge=0, description="set point ramped from 0 over this time [s]; 0: none")
+    filter_frequency: AngularSpeed | None = Field(
+        None, gt=0, description="z_torque: corner of the high-pass filter on the surface torque [rad/s];"
+        " tuned when left out")
+
+    @model_validator(mode="after")
+    def _gains_given(self) -> TopDrive:
+        if self.controller == "pi":
+            missing = [k for k in ("proportional_gain", "integral_gain") if getattr(self, k) is None]
+            if missing:
+                raise _Problems([((missing[0],), None, 'must be given for controller = "pi" (in N*m*s/rad'
+                                  ' and N*m/rad; "soft_torque" and "z_torque" tune their gains)')])
+        return self
 
 
 class Damping(_Base):
@@ -560,7 +602,7 @@ class ReducedModel(_Base):
     whose frequency is below ``lateral_cutoff`` times the rotation frequency (all the family's modes at most)."""
 
     axial_modes: int = Field(10, ge=0)
-    torsional_modes: int = Field(10, ge=1)
+    torsional_modes: int = Field(10, ge=1, description="elastic torsional modes (a top drive adds the rigid rotation)")
     lateral_modes: int = Field(20, ge=0)
     lateral_cutoff: Dimensionless = Field(
         1.5, ge=0, description="keep every lateral mode below this multiple of the rotation frequency [-]")
@@ -876,6 +918,7 @@ class Case(_Base):
     bit_rock: BitRock = Field(default_factory=BitRock)
     contact: Contact = Field(default_factory=Contact)
     operation: Operation = Field(default_factory=Operation)
+    top_drive: TopDrive = Field(default_factory=TopDrive)
     damping: Damping = Field(default_factory=Damping)
     environment: Environment = Field(default_factory=Environment)
     model: Model = Field(default_factory=Model)
@@ -1035,6 +1078,14 @@ class Case(_Base):
             raise _Problems(problems)
         return self
 
+    @model_validator(mode="after")
+    def _top_drive_model(self) -> Case:
+        if self.top_drive.controller != "imposed_speed" and self.model.nonlinear == "full":
+            raise _Problems([(("top_drive", "controller"), self.top_drive.controller,
+                              'a top drive needs model.nonlinear = "bit_and_contact" (case 1 with a top drive '
+                              'is not supported yet); use "imposed_speed" for case 1')])
+        return self
+
     def _offset_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
         """A section's mass eccentricity and the bow must be less than the radial gap where they are: a
         larger offset puts the string's unloaded shape (bow) or its imbalance orbit (eccentricity) beyond the
@@ -1069,9 +1120,10 @@ class Case(_Base):
                                f"(about max_element_length >= {length / MAX_ELEMENTS:.3g} m for this "
                                f"{length:g} m string)")]
         nodes = elements + 1
-        sizes = mode_family_sizes(nodes)
+        top_free = self.top_drive.controller != "imposed_speed"
+        sizes = mode_family_sizes(nodes, top_free)
         problems = []
-        for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", 0),
+        for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", int(top_free)),
                                    ("lateral_modes", "lateral", 0)):
             requested = getattr(self.reduced_model, key)
             most = sizes[family] - rigid

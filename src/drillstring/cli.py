@@ -528,6 +528,18 @@ def stability(
     table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
     table.add_row("torque on bit", f"{torque(steady['torque_on_bit']):,.3f}", torque.label)
     table.add_row("force on bit", f"{force(steady['force_on_bit']):,.3f}", force.label)
+    drive = payload.get("top_drive")
+    if drive:
+        tuned = set(drive["tuned"])
+        mark = {name: " (tuned)" if name in tuned else "" for name in ("proportional_gain", "integral_gain")}
+        table.add_row(escape(f"top drive: {drive['controller']}, inertia"), f"{drive['inertia']:,.1f}", "kg·m²")
+        table.add_row("proportional gain" + mark["proportional_gain"], f"{drive['proportional_gain']:,.1f}",
+                      "N·m·s/rad")
+        table.add_row("integral gain" + mark["integral_gain"], f"{drive['integral_gain']:,.1f}", "N·m/rad")
+        table.add_row("pipe impedance Z_p", f"{drive['pipe_impedance']:,.2f}", "N·m·s/rad")
+        if "filter_frequency" in drive:
+            table.add_row("high-pass corner" + (" (tuned)" if "filter_frequency" in tuned else ""),
+                          f"{drive['filter_frequency']:.4f}", "rad/s")
     console.print(table)
     modes_table = Table(title="Eigenvalues of the linearised model (sorted by frequency)", title_justify="left")
     for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):
@@ -588,6 +600,7 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
     t = np.asarray(ds["time"].values, dtype=float)
     top = float(ds.attrs.get("top_speed", np.nan))
     radial = np.asarray(ds["radial_displacement"].values, dtype=float)
+    steady = t >= t_transient - 1e-9 * max(1.0, t_transient)
     x = np.atleast_1d(np.asarray(ds["x"].values, dtype=float))
     gap = np.atleast_1d(np.asarray(ds["gap"].values, dtype=float))
 
@@ -596,12 +609,20 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
         return float(finite.max()) if finite.size else None
 
     radial_max = [largest(radial[:, j]) for j in range(radial.shape[1])] if radial.ndim == 2 else []
+
+    def steady_range(name: str) -> tuple[float | None, float | None]:
+        values = np.asarray(ds[name].values, dtype=float)[steady] if name in ds else np.zeros(0)
+        values = values[np.isfinite(values)]
+        return (float(values.min()), float(values.max())) if values.size else (None, None)
+
     contact = np.asarray(ds["contact_force"].values, dtype=float) if "contact_force" in ds else np.zeros(0)
-    steady = t >= t_transient - 1e-9 * max(1.0, t_transient)
     indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
                                      t_transient)
     return {
         **indicators,
+        "quill_speed_min": steady_range("quill_speed")[0], "quill_speed_max": steady_range("quill_speed")[1],
+        "surface_torque_min": steady_range("surface_torque")[0],
+        "surface_torque_max": steady_range("surface_torque")[1],
         "max_radial_displacement": radial_max,
         "gap": [float(g) for g in gap],
         "probe_x": [float(v) for v in x],
@@ -647,6 +668,12 @@ def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
         escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
         _fmt(numbers["stick_time_fraction"], ".1%"), "",
     )
+    table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
+                  f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
+                  "rpm")
+    table.add_row(escape(f"surface torque min / max (t ≥ {t_tr:g} s)"),
+                  f"{_fmt(numbers['surface_torque_min'], ',.2f', 1.0 / _KN)} / "
+                  f"{_fmt(numbers['surface_torque_max'], ',.2f', 1.0 / _KN)}", "kN·m")
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
         table.add_row(escape(f"max radial displacement at x = {length(x):g} {length.label} / gap"),
                       f"{_fmt(r, ',.3f', small.scale)} / {small(gap):,.1f}", small.label)
@@ -819,6 +846,9 @@ def compare(
     window = _run_window(the_case, t_end)
     t_final = window.t_end
     _check_output("--plot", plot)
+    if the_case.top_drive.controller != "imposed_speed":
+        _fail(f"top_drive.controller = {the_case.top_drive.controller!r}: compare runs case 1, which needs "
+              f"\"imposed_speed\" (case 1 with a top drive is not supported yet)")
 
     from drillstring import api
     from drillstring.dynamics.simulate import SimulationError

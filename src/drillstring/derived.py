@@ -45,12 +45,13 @@ def element_counts(breaks: Sequence[float], max_element_length: float) -> list[i
             for start, end in zip(breaks[:-1], breaks[1:])]
 
 
-def mode_family_sizes(n_nodes: int) -> dict[str, int]:
+def mode_family_sizes(n_nodes: int, top_free: bool = False) -> dict[str, int]:
     """DOFs of each mode family of a mesh of ``n_nodes`` nodes under the dynamic boundary conditions of
     :func:`drillstring.modal.family_dofs` (the most modes a family can have): axial ``u`` at every node
-    (both ends free; one of them the rigid translation), torsional ``θx`` below the top (held), lateral
-    per plane ``v`` at the inner nodes (ends pinned) and ``θz`` at every node."""
-    return {"axial": n_nodes, "torsional": n_nodes - 1, "lateral": 2 * n_nodes - 2}
+    (both ends free; one of them the rigid translation), torsional ``θx`` below the top (held), or at every
+    node with ``top_free`` (a top drive; one of them the rigid rotation), lateral per plane ``v`` at the
+    inner nodes (ends pinned) and ``θz`` at every node."""
+    return {"axial": n_nodes, "torsional": n_nodes if top_free else n_nodes - 1, "lateral": 2 * n_nodes - 2}
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -81,14 +81,16 @@ def build_linear_system(
                         k_g, k_f, c_f)
 
 
-def family_dofs(mesh: Mesh, family: str) -> np.ndarray:
-    """Free DOFs of a mode family under the dynamic boundary conditions (sorted)."""
+def family_dofs(mesh: Mesh, family: str, top_free: bool = False) -> np.ndarray:
+    """Free DOFs of a mode family under the dynamic boundary conditions (sorted); ``top_free``: the top's
+    rotation is free (a top drive) instead of imposed. Their numbers are
+    :func:`drillstring.derived.mode_family_sizes` (tests check both agree)."""
     nodes = np.arange(mesh.n_nodes)
     inner = nodes[1:-1]
     if family == "axial":
         return dof(nodes, U)
     if family == "torsional":
-        return dof(nodes[1:], THETA_X)
+        return dof(nodes if top_free else nodes[1:], THETA_X)
     if family == "lateral_y":
         return np.sort(np.concatenate([dof(inner, V), dof(nodes, THETA_Z)]))
     if family == "lateral_z":
@@ -215,27 +217,37 @@ def _eigen(k: np.ndarray | sp.spmatrix, m: np.ndarray | sp.spmatrix, count: int)
     return values, vectors
 
 
-def family_modes(system: LinearSystem, family: str, count: int) -> ModeFamily:
-    """The ``count`` lowest modes of one family (``count`` may be 0)."""
-    dofs = family_dofs(system.mesh, family)
+def top_inertia_matrix(mesh: Mesh, top_inertia: float) -> sp.csr_matrix:
+    """The top drive's rotary inertia ``J_td`` [kg·m²] lumped at the top node's θx, as a global matrix."""
+    i = int(dof(0, THETA_X))
+    return sp.csr_matrix(([float(top_inertia)], ([i], [i])), shape=(mesh.n_dofs, mesh.n_dofs))
+
+
+def family_modes(system: LinearSystem, family: str, count: int, top_inertia: float | None = None) -> ModeFamily:
+    """The ``count`` lowest modes of one family (``count`` may be 0). ``top_inertia`` [kg·m²] (torsional
+    family only): the top rotation is free, carrying that inertia (a top drive); the first mode is then the
+    rigid rotation and the shapes are normalised with the top-drive inertia included."""
+    top_free = top_inertia is not None and family == "torsional"
+    dofs = family_dofs(system.mesh, family, top_free)
     n_dofs = system.mesh.n_dofs
     if count <= 0:
         return ModeFamily(family, np.zeros(0), np.zeros((n_dofs, 0)))
+    mass = system.mass + top_inertia_matrix(system.mesh, top_inertia) if top_free else system.mass
     k = system.stiffness[dofs][:, dofs]
-    m = system.mass[dofs][:, dofs]
+    m = mass[dofs][:, dofs]
     values, vectors = _eigen(k, m, count)
     shapes = np.zeros((n_dofs, len(values)))
     shapes[dofs] = vectors
-    if family == "axial":
-        # Both ends free: the first mode is the rigid translation. Use it exactly.
+    if family == "axial" or top_free:
+        # Both ends free: the first mode is the rigid translation (rotation). Use it exactly.
         rigid = np.zeros(n_dofs)
         rigid[dofs] = 1.0
-        rigid /= np.sqrt(rigid @ (system.mass @ rigid))
+        rigid /= np.sqrt(rigid @ (mass @ rigid))
         shapes[:, 0] = rigid
         values = values.copy()
         values[0] = 0.0
     # Unit modal mass (eigh already gives it; eigsh may not) and a deterministic sign.
-    mass_norm = np.sqrt(np.einsum("ij,ij->j", shapes, system.mass @ shapes))
+    mass_norm = np.sqrt(np.einsum("ij,ij->j", shapes, mass @ shapes))
     shapes /= mass_norm
     pivot = np.argmax(np.abs(shapes), axis=0)
     shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
@@ -259,14 +271,15 @@ def family_modes_below(system: LinearSystem, family: str, count: int, cutoff: fl
 
 
 def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int,
-                  lateral_cutoff: float = 0.0) -> Modes:
+                  lateral_cutoff: float = 0.0, top_inertia: float | None = None) -> Modes:
     """Modes of every family: ``axial`` counts the rigid mode; ``lateral`` is per plane, at least, with every
     lateral mode below ``lateral_cutoff`` [rad/s] (:func:`family_modes_below`; the z plane takes as many
-    modes as the y plane)."""
+    modes as the y plane); ``top_inertia``: the torsion's top is free with that inertia [kg·m²] (a top drive;
+    ``torsional`` then counts the rigid rotation), None: held (imposed speed)."""
     lateral_y = family_modes_below(system, "lateral_y", lateral, lateral_cutoff)
     return Modes(
         axial=family_modes(system, "axial", axial),
-        torsional=family_modes(system, "torsional", torsional),
+        torsional=family_modes(system, "torsional", torsional, top_inertia),
         lateral_y=lateral_y,
         lateral_z=family_modes(system, "lateral_z", len(lateral_y.angular_frequencies)),
     )

@@ -64,6 +64,8 @@ TITLES: dict[str, str] = {
     "force_on_bit": "force-on-bit",
     "radial_displacement": "radial displacement",
     "contact_force": "contact force",
+    "quill_speed": "quill speed",
+    "surface_torque": "surface torque",
 }
 
 #: The four observables of the study figures, in panel order.
@@ -150,8 +152,12 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
 
     ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed", units), lw=0.9, label="bit")
     top = ds.attrs.get("top_speed")
+    imposed = ds.attrs.get("top_drive", "imposed_speed") == "imposed_speed"
+    if "quill_speed" in ds and not imposed:
+        ax_speed.plot(t, _scaled(ds["quill_speed"].values, "quill_speed", units), lw=0.9, label="quill")
     if top is not None:
-        ax_speed.axhline(float(top) * _RPM, color="k", ls="--", lw=0.9, label="top (imposed)")
+        ax_speed.axhline(float(top) * _RPM, color="k", ls="--", lw=0.9,
+                         label="top (imposed)" if imposed else "set point")
     ax_speed.set_ylabel(_label("bit_speed", units))
     ax_speed.legend(loc="best", fontsize="small")
 
@@ -174,8 +180,11 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
         ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
     ax_radial.set_ylabel(_label("radial_displacement", units))
 
-    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit", units), lw=0.9)
-    ax_tob.set_ylabel(_label("torque_on_bit", units))
+    ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit", units), lw=0.9, label="on bit")
+    if "surface_torque" in ds:
+        ax_tob.plot(t, _scaled(ds["surface_torque"].values, "surface_torque", units), lw=0.9, label="surface")
+        ax_tob.legend(loc="best", fontsize="small")
+    ax_tob.set_ylabel(_label("torque_on_bit", units).replace("torque-on-bit", "torque"))
 
     _orbit_panel(ax_orbit, ((ds, "orbit", {"lw": 0.6}),), probe_x, units)
     _contact_panel(ax_contact, ((ds, None, {"lw": 0.8}),), units)

@@ -108,9 +108,12 @@ def solve_statics(
 
 
 def case_static_state(case, weight_on_bit: float | None = None, mesh: Mesh | None = None) -> StaticState:
-    """Static state of a :class:`~drillstring.case.Case` (``weight_on_bit`` [N] overrides the case's)."""
+    """Static state of a :class:`~drillstring.case.Case` (``weight_on_bit`` [N] overrides the case's; off
+    bottom, ``bit_rock.law = "off_bottom"``, it is 0 whatever is given: the hook carries the whole string)."""
     from drillstring.fem.build import axial_load_per_length, case_mesh
 
     mesh = case_mesh(case) if mesh is None else mesh
     wob = case.operation.weight_on_bit if weight_on_bit is None else weight_on_bit
+    if case.bit_rock.law == "off_bottom":
+        wob = 0.0
     return solve_statics(mesh, axial_load_per_length(case, mesh), wob)

@@ -158,13 +158,15 @@ LINEAR_DAMPING = Dimension("damping per unit length", "N*s/m2")
 PENETRATION_PER_FORCE = Dimension("bit-rock coefficient a2", "m/(N*s)")
 LENGTH_PER_ANGLE = Dimension("length per angle", "m/rad")
 FORCE_ANGLE = Dimension("force times angle", "N*rad")
+MOMENT_OF_INERTIA = Dimension("moment of inertia", "kg*m2")
+ROTATIONAL_STIFFNESS = Dimension("rotational stiffness", "N*m/rad", ("kN*m/rad",))
 
 #: Every dimension, for error messages naming the dimension a misplaced unit belongs to (the first one whose
 #: SI unit matches: a pressure before a stiffness per length, a stiffness before a stiffness per length).
 DIMENSIONS: tuple[Dimension, ...] = (
     LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, PRESSURE, STIFFNESS_PER_LENGTH, DENSITY, TIME, TORQUE,
     ACCELERATION, ANGLE, MASS_PER_LENGTH, VOLUME_FLOW, DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING,
-    LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE, FORCE_ANGLE,
+    LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE, FORCE_ANGLE, MOMENT_OF_INERTIA, ROTATIONAL_STIFFNESS,
 )  # fmt: skip
 
 

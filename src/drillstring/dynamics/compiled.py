@@ -324,7 +324,7 @@ def prepare_kernels(model, tableau: ButcherTableau | str = "dopri5") -> tuple[fl
     Kernels depend on the types of the model's data only (case 1 or case 2), not on its sizes, so one
     call prepares every realization of a study. Returns ``(seconds, compiled)``."""
     tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
-    n = 2 * model.size
+    n = model.state_size
     settings = StepperSettings.create(tab, StepSizeController(), n, min_step=1e-12, max_steps=1)
     work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), observation_width(len(model.probe_nodes)))
     return _compile_kernels(model, work, settings)

@@ -14,7 +14,11 @@ modes, giving a dense torsional block; or ``2 ξ ω_i`` on every basis mode;
 :attr:`ReducedOrderModel.generalized_force`, zero when not given), ``C_f`` the fluid (Coriolis + viscous)
 damping, and ``wob e_bit,u`` removes the static bit reaction that ``q_S`` already balances (the hook force
 stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed:
-``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``.
+``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``; or, with a top drive
+(:mod:`drillstring.forces.top_drive`), the torsional family is free at the top (rigid rotation first, the
+top drive's inertia lumped at the top node), ``θx = (Φ η)_θx`` carries the whole spin, the motor torque
+``τ_m`` adds ``φ_top τ_m`` to the torsional equations and the controller's states follow the modal
+coordinates in the state vector ``[η, η̇, s]``. ``bit_rock.law = "off_bottom"`` removes the bit–rock force.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
 the bit node, the borehole shocks and rubbing at the contact stations
@@ -68,7 +72,14 @@ from drillstring.forces.nonlinear import (
     modal_mass_coupling,
     nonlinear_elements,
 )
-from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs
+from drillstring.forces.top_drive import (
+    Z_TORQUE,
+    TopDriveParameters,
+    case_top_drive,
+    evaluate_top_drive,
+    top_drive_law,
+)
+from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
 from drillstring.statics import StaticState, case_static_state
 
 #: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
@@ -80,6 +91,8 @@ OBSERVABLES = (
     "bit_depth",  # m, bit displacement from the static state (advance of the bit)
     "nodes_in_contact",  # number of nodes touching the borehole
     "contact_force",  # N, total normal force of the wall on the string, Σ k_i (r_i − g_i)₊ over stations
+    "quill_speed",  # rad/s, θ̇x at the top (the set point with an imposed speed)
+    "surface_torque",  # N·m, elastic torque the top element takes from the quill, (K q) at the top's θx
 )
 #: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
 #: kernel writes by these names, so reordering the tuple reorders the output consistently).
@@ -91,6 +104,8 @@ _FOB = OBSERVABLE_COLUMN["force_on_bit"]
 _DEPTH = OBSERVABLE_COLUMN["bit_depth"]
 _CONTACTS = OBSERVABLE_COLUMN["nodes_in_contact"]
 _CONTACT_FORCE = OBSERVABLE_COLUMN["contact_force"]
+_QUILL_SPEED = OBSERVABLE_COLUMN["quill_speed"]
+_SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
 #: First column of the probes' displacements: after the observables, for ``n_p`` probes, ``n_p`` columns of
 #: radial displacement r, then ``n_p`` of v (along y), then ``n_p`` of w (along z) [m]
 #: (:func:`observation_width`).
@@ -101,6 +116,14 @@ def observation_width(n_probes: int) -> int:
     """Columns of one observation row: the observables, then r, v and w at each probe."""
     return PROBE_COLUMN + 3 * n_probes
 
+
+#: Where the boundary laws' numbers sit in ``RhsData.laws``: [0:7] the bit–rock law's (the trailing arguments of
+#: :func:`~drillstring.forces.bit_rock.bit_rock_force_floored`), [7] 1.0 on bottom / 0.0 off bottom, [8:17] the
+#: top drive's (:meth:`~drillstring.forces.top_drive.TopDriveParameters.kernel_args`; code 0: imposed speed).
+#: One array, not a field each: every field of RhsData is an argument of each inner kernel, and four more
+#: fields made the reference realization 30 % slower (measured; LLVM inlines less).
+_ON_BOTTOM = 7
+_TOP_DRIVE = 8
 
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
@@ -175,7 +198,7 @@ class TurningLoadData(NamedTuple):
 class RhsData(NamedTuple):
     """What the case-2 right-hand side reads (SI units). Each physical quantity is read from its own
     mode family only: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
-    lateral z start, end] column ranges; ``bit_u``, ``bit_t`` hold only their family's columns and
+    lateral z start, end] column ranges; ``bit_u``, ``torsion_rows`` hold only their family's columns and
     ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (family columns × nodes) and ``damping_t`` are stored
     transposed so that products run column by column."""
 
@@ -185,15 +208,16 @@ class RhsData(NamedTuple):
     generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
     blocks: np.ndarray  # (8,) int64
     bit_u: np.ndarray  # axial mode shapes at the bit's u
-    bit_t: np.ndarray  # torsional mode shapes at the bit's θx
+    torsion_rows: np.ndarray  # (3, n_t) torsional columns of: θx at the bit, θx at the top (the quill, where
+    #                           the motor torque acts; 0 when held), the surface-torque row (K Φ) at the top's θx
     phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
     phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
     phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
     smallest_gap: float  # min of the stations' gaps [m]
     lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
-    top_speed: float  # Ω [rad/s]
+    top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    bit_rock: np.ndarray  # (7,) arguments of bit_rock_force_floored after the speeds
+    laws: np.ndarray  # (17,) the boundary laws' numbers (_ON_BOTTOM, _TOP_DRIVE)
     contact: ContactData
     turning: TurningLoadData
 
@@ -320,13 +344,15 @@ def _bit_motion(d, y):
         bit_velocity += d.bit_u[j - a0] * y[n + j]
     bit_speed = d.top_speed
     for j in range(t0, t1):
-        bit_speed += d.bit_t[j - t0] * y[n + j]
+        bit_speed += d.torsion_rows[0, j - t0] * y[n + j]
     return bit_velocity, bit_speed
 
 
 @inner_kernel()
 def _bit_rock(d, bit_velocity, bit_speed):
-    b = d.bit_rock
+    b = d.laws
+    if b[_ON_BOTTOM] == 0.0:
+        return 0.0, 0.0
     return bit_rock_force_floored(bit_velocity, bit_speed, b[0], b[1], b[2], b[3], b[4], b[5], b[6])
 
 
@@ -375,6 +401,37 @@ def _turning_loads(d, t, y, acc):
             acc[j] += cz * r.load_z[k, j - z0]
 
 
+@inner_kernel()
+def _top_motion(d, y):
+    """Quill speed θ̇₀ [rad/s] and surface torque T_s [N·m] for the state ``y``."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.blocks[2], d.blocks[3]
+    quill = d.top_speed
+    torque = 0.0
+    for j in range(t0, t1):
+        quill += d.torsion_rows[1, j - t0] * y[n + j]
+        torque += d.torsion_rows[2, j - t0] * y[j]
+    return quill, torque
+
+
+@inner_kernel()
+def _top_drive(d, t, y, out):
+    """The top drive's motor torque on the torsional modes and its controller's state derivatives
+    (``y[2n:]``, ``out[2n:]``; :func:`~drillstring.forces.top_drive.top_drive_law`)."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.blocks[2], d.blocks[3]
+    quill, surface = _top_motion(d, y)
+    args = d.laws[_TOP_DRIVE:]
+    z_torque = args[0] == Z_TORQUE
+    filtered = y[2 * n + 1] if z_torque else 0.0
+    torque, d_integral, d_filtered = top_drive_law(args, t, quill, surface, y[2 * n], filtered)
+    for j in range(t0, t1):
+        out[n + j] += d.torsion_rows[1, j - t0] * torque
+    out[2 * n] = d_integral
+    if z_torque:
+        out[2 * n + 1] = d_filtered
+
+
 @njit(cache=True)
 def _rhs_kernel(d, t, y, out):
     """dy/dt of the case-2 ROM (module docstring) at time ``t`` [s] from :class:`RhsData` ``d``; contact
@@ -390,6 +447,8 @@ def _rhs_kernel(d, t, y, out):
         out[i] = eta_dot[i]
         acc[i] = d.generalized_force[i] - d.omega2[i] * eta[i]
     _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
+    if d.laws[_TOP_DRIVE] != 0.0:
+        _top_drive(d, t, y, out)
     # bit-rock interaction at the bit node
     bit_velocity, bit_speed = _bit_motion(d, y)
     axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
@@ -397,7 +456,7 @@ def _rhs_kernel(d, t, y, out):
     for j in range(a0, a1):
         acc[j] += d.bit_u[j - a0] * axial_force
     for j in range(t0, t1):
-        acc[j] += d.bit_t[j - t0] * bit_torque
+        acc[j] += d.torsion_rows[0, j - t0] * bit_torque
     if y1 == y0 and z1 == z0:
         return
     _turning_loads(d, t, y, acc)
@@ -679,6 +738,7 @@ def _observe_kernel(d, o, y, out):
     out[_DEPTH] = depth
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
+    out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
         j = o.probe_nodes[k]
@@ -705,6 +765,11 @@ class ReducedOrderModel:
             [N/√kg per unit modal mass, i.e. the right-hand side of η̈ = …]; ``None`` means zeros.
         turning_loads: loads turning with the string (:class:`~drillstring.forces.excitation.TurningLoads`:
             mass imbalance, stress-free bow), or ``None``.
+        top_drive: the top boundary (:class:`~drillstring.forces.top_drive.TopDriveParameters`); ``None``
+            is the imposed speed ``top_speed``. With a top drive the torsional family is free at the top
+            (its first column the rigid rotation), ``top_speed`` is the set point, the kernels' base spin
+            speed is 0 (the rigid rotation carries the spin) and the state ``[η, η̇, s]`` holds the
+            controller's states ``s`` after the modal coordinates (:attr:`state_size`).
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
     and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
@@ -727,10 +792,17 @@ class ReducedOrderModel:
     nonlinear: str = "bit_and_contact"
     generalized_force: np.ndarray | None = None
     turning_loads: TurningLoads | None = None
+    top_drive: TopDriveParameters | None = None
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
             raise ValueError(f"nonlinear = {self.nonlinear!r}: must be 'bit_and_contact' or 'full'")
+        if self.top_drive is None:
+            self.top_drive = TopDriveParameters("imposed_speed", float(self.top_speed))
+        #: the kernels' base spin speed [rad/s]: Ω with the top speed imposed, 0 with a top drive
+        self.base_speed = float(self.top_speed) if self.top_drive.imposed else 0.0
+        if not self.top_drive.imposed and self.nonlinear == "full":
+            raise ValueError("nonlinear = 'full' with a top drive is not supported yet: use 'bit_and_contact'")
         mesh = self.static.mesh
         nodes = np.arange(mesh.n_nodes)
         phi = self.basis
@@ -766,6 +838,12 @@ class ReducedOrderModel:
             blocks += [start, end]
         self.blocks = np.array(blocks, dtype=np.int64)
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
+        #: column of the rigid rotation (a top drive), None when the top is held
+        self.rigid_rotation_column = None if self.top_drive.imposed else t0
+        top_dof = dof(0, THETA_X)
+        self.quill_shapes = np.ascontiguousarray(phi[top_dof])
+        self.surface_torque_shapes = np.zeros(n)
+        self.surface_torque_shapes[t0:t1] = self.system.stiffness[top_dof] @ phi[:, t0:t1]
         c = self.contact
         st = self.stations
         transposed = np.ascontiguousarray
@@ -779,16 +857,18 @@ class ReducedOrderModel:
             generalized_force=self.generalized_force,
             blocks=self.blocks,
             bit_u=transposed(self.bit_u[a0:a1]),
-            bit_t=transposed(self.bit_t[t0:t1]),
+            torsion_rows=transposed(np.vstack([self.bit_t[t0:t1], self.quill_shapes[t0:t1],
+                                               self.surface_torque_shapes[t0:t1]])),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
             smallest_gap=float(np.min(st.gap)) if len(st) else np.inf,
             lateral_shape_max=np.concatenate([np.abs(self.phi_v[:, y0:y1]).max(axis=0, initial=0.0),
                                               np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
-            top_speed=float(self.top_speed),
+            top_speed=self.base_speed,
             weight_on_bit=float(self.weight_on_bit),
-            bit_rock=np.array(self.bit_rock.kernel_args(), dtype=float),
+            laws=np.concatenate([self.bit_rock.kernel_args(), [float(self.bit_rock.law != "off_bottom")],
+                                 self.top_drive.kernel_args()]),
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
@@ -850,8 +930,13 @@ class ReducedOrderModel:
 
     @property
     def size(self) -> int:
-        """Number of modal coordinates n (the state has 2n entries)."""
+        """Number of modal coordinates n (the state has 2n entries, plus the top drive's states)."""
         return len(self.angular_frequencies)
+
+    @property
+    def state_size(self) -> int:
+        """Entries of the state ``[η, η̇, s]``: 2n plus the top drive controller's states ``s``."""
+        return 2 * self.size + self.top_drive.n_states
 
     @property
     def observable_names(self) -> tuple[str, ...]:
@@ -876,36 +961,43 @@ class ReducedOrderModel:
         """The straightforward NumPy right-hand side (full basis, every node): the reference
         implementation that the compiled :meth:`rhs` is tested against; same equations."""
         n = self.size
-        eta, eta_dot = y[:n], y[n:]
+        eta, eta_dot = y[:n], y[n:2 * n]
         bit_velocity = self.bit_u @ eta_dot
-        bit_speed = self.top_speed + self.bit_t @ eta_dot
+        bit_speed = self.base_speed + self.bit_t @ eta_dot
         axial_force, bit_torque = evaluate_bit_rock(bit_velocity, bit_speed, self.bit_rock)
         st = self.stations
-        spin = self.top_speed + self.phi_tx @ eta_dot
+        spin = self.base_speed + self.phi_tx @ eta_dot
         force_v, force_w, torque, _ = evaluate_contact(
             st.gather(self.phi_v @ eta), st.gather(self.phi_w @ eta), st.gather(self.phi_v @ eta_dot),
             st.gather(self.phi_w @ eta_dot), st.gather(spin), st.gap, st.outer_diameter, self.contact,
             stiffness=self.station_stiffness,
         )
         n_nodes = self.static.mesh.n_nodes
-        turning = self.basis.T @ self.turning_loads.forces(self.top_speed * t + self.phi_tx @ eta, spin)
+        turning = self.basis.T @ self.turning_loads.forces(self.base_speed * t + self.phi_tx @ eta, spin)
         lateral = np.array([f.startswith("lateral") for f in self.family])
         generalized = (self.phi_v.T @ st.scatter(force_v, n_nodes) + self.phi_w.T @ st.scatter(force_w, n_nodes)
                        + self.phi_tx.T @ st.scatter(torque, n_nodes)
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
                        + self.generalized_force + np.where(lateral, turning, 0.0))
         acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
+        states = np.zeros(self.top_drive.n_states)
+        if states.size:
+            torque, states[0], filtered_rate = evaluate_top_drive(
+                self.top_drive, t, self.base_speed + self.quill_shapes @ eta_dot, self.surface_torque_shapes @ eta,
+                y[2 * n], y[2 * n + 1] if states.size > 1 else 0.0)
+            states[1:] = filtered_rate
+            acceleration = acceleration + self.quill_shapes * torque
         if self.nonlinear == "full":
             q = self.basis @ eta
             qd = self.basis @ eta_dot
-            qd[dof(np.arange(self.static.mesh.n_nodes), THETA_X)] += self.top_speed
+            qd[dof(np.arange(self.static.mesh.n_nodes), THETA_X)] += self.base_speed
             f_se = self.elements.strain_energy_forces(q, np.zeros_like(q))
             f_vel = np.zeros_like(q)
             self.elements.kinetic_forces(q, qd, f_vel)
             mass_nl = self.elements.mass_correction_matrix(q)
             mass = np.eye(self.size) + self.basis.T @ (mass_nl @ self.basis)
             acceleration = np.linalg.solve(mass, acceleration + self.basis.T @ (f_se + f_vel))
-        return np.concatenate([eta_dot, acceleration])
+        return np.concatenate([eta_dot, acceleration, states])
 
     def observe(self, t: float, y: np.ndarray) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
@@ -964,8 +1056,16 @@ class ReducedOrderModel:
         ``b_k``, k = 1…10, ``a_k, b_k`` standard normal from ``numpy.random.default_rng(seed)``, scaled so
         that the largest radial displacement along the string is ``lateral_perturbation`` [m]; it is
         projected on the lateral modes (mass-orthogonal projection ``η0 = Φᵀ(M + M_f) q0``), so it
-        converges to the physical shape as lateral modes are added."""
-        y0 = self.turning_whirl()
+        converges to the physical shape as lateral modes are added. With a top drive the rigid rotation
+        carries Ω (or the string starts at rest when the set point is ramped) and the controller's states
+        start at 0 (the motor torque builds up from 0)."""
+        at_rest = self.top_drive.ramp_time > 0.0  # a ramped set point starts from rest: no spin, no whirl
+        y0 = np.zeros(self.state_size)
+        if not at_rest:
+            y0[:2 * self.size] = self.turning_whirl()
+        if self.rigid_rotation_column is not None and not at_rest:
+            r = self.rigid_rotation_column  # spinning at Ω: the rigid rotation carries it
+            y0[self.size + r] = self.top_speed / self.quill_shapes[r]
         lateral = np.array([f.startswith("lateral") for f in self.family])
         if not (lateral_perturbation > 0 and lateral.any()):
             return y0
@@ -991,7 +1091,7 @@ class ReducedOrderModel:
     def energy(self, y: np.ndarray) -> float:
         """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
         n = self.size
-        return 0.5 * float(y[n:] @ y[n:] + self.omega2 @ (y[:n] ** 2))
+        return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
 
 
 def reduced_model(
@@ -1013,9 +1113,11 @@ def reduced_model(
     nonlinear: str = "bit_and_contact",
     turning_loads: TurningLoads | None = None,
     lateral_cutoff: float = 0.0,
+    top_drive: TopDriveParameters | None = None,
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
-    ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s]).
+    ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
+    ``torsional_modes`` elastic, plus the rigid rotation with a top drive).
 
     Args:
         modal_damping_ratio: ξ [-]; rigid_axial_damping: c1 [N·s/m], viscous resistance to the
@@ -1027,8 +1129,13 @@ def reduced_model(
         borehole_diameter: D_ch [m]; the contact stations follow from it and the mesh
             (:func:`~drillstring.forces.contact.mesh_contact_stations`).
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
+        top_drive: the top boundary; None: the top speed imposed.
     """
-    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff)
+    drive = top_drive is not None and not top_drive.imposed
+    if drive:
+        torsional_modes += 1
+    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
+                          top_inertia=top_drive.inertia if drive else None)
     lateral_modes = len(modes.lateral_y.angular_frequencies)
     families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
     basis = np.hstack([f.shapes for f in families])
@@ -1037,8 +1144,8 @@ def reduced_model(
     family += ["torsional"] * torsional_modes + ["lateral_y"] * lateral_modes + ["lateral_z"] * lateral_modes
     structural = reduced_structural_damping(
         system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
-        rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping, top_speed=top_speed,
-        definition=damping_basis,
+        rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
+        top_speed=0.0 if drive else top_speed, definition=damping_basis,
     )
     damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
     return ReducedOrderModel(
@@ -1048,6 +1155,7 @@ def reduced_model(
         stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
+        top_drive=top_drive,
     )
 
 
@@ -1090,6 +1198,8 @@ def case_reduced_model(
     cut-off)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
+    top_drive = case_top_drive(
+        case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
     r = case.reduced_model
     b = case.bit_rock
     c = case.contact
@@ -1107,6 +1217,7 @@ def case_reduced_model(
         bit_rock=BitRockParameters(
             b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
             stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit),
+            law=b.law,
         ),
         contact=ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
                                   c.tangential_friction),
@@ -1115,4 +1226,5 @@ def case_reduced_model(
         nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,
         turning_loads=case_turning_loads(case, static.mesh),
         lateral_cutoff=_lateral_cutoff(r.lateral_cutoff, lateral_modes, lateral_cutoff) * case.operation.top_speed,
+        top_drive=top_drive,
     )

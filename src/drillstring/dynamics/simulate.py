@@ -92,7 +92,7 @@ def simulate_model(
     Numba) or "reference" (the generic :func:`~drillstring.dynamics.runge_kutta.integrate` calling
     the NumPy right-hand side :meth:`ReducedOrderModel.rhs_reference`). Both use the same method,
     controller and dense output; tests check they agree within the integration tolerance.
-    ``initial_state`` ([η, η̇], 2n) replaces the model's initial state (e.g. steady drilling plus a
+    ``initial_state`` ([η, η̇] and the top drive's states, :attr:`ReducedOrderModel.state_size`) replaces the model's initial state (e.g. steady drilling plus a
     perturbation, :mod:`drillstring.dynamics.stability`).
     """
     if engine not in ("compiled", "reference"):
@@ -101,8 +101,8 @@ def simulate_model(
         y0 = model.initial_state(lateral_perturbation, seed)
     else:
         y0 = np.array(initial_state, dtype=float)
-        if y0.shape != (2 * model.size,):
-            raise ValueError(f"initial_state has shape {y0.shape}: must be ({2 * model.size},)")
+        if y0.shape != (model.state_size,):
+            raise ValueError(f"initial_state has shape {y0.shape}: must be ({model.state_size},)")
     if engine == "compiled":
         return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
                                   atol=atol, method=method, max_steps=max_steps, min_step=min_step,

@@ -30,6 +30,18 @@ them unstable). The kinetic- and strain-energy forces of case 1 are at least qua
 motion and are not linearised here. Loads turning with the string (mass imbalance, bow:
 :mod:`drillstring.forces.excitation`) are left out too: they make the motion periodic, so there is no
 steady state to linearise about; the lateral modes' stability does not depend on them.
+
+**Top drive** (:mod:`drillstring.forces.top_drive`). With a top drive the torsional family is free at the
+top: in steady drilling the whole string turns rigidly at the quill speed (the set point Ω when the
+controller has integral action; with ``k_i = 0`` the speed at which ``k_p (Ω − ω)`` balances the load,
+found by fixed-point iteration), the motor torque ``τ_m`` balances the torque on bit and the rigid-rotation
+friction ``c2 ω`` (the rigid-rotation equation), the integral state is ``τ_m / k_i`` and the z_torque filter
+holds the surface torque. The linearisation (2) then takes the whole loop: ``δτ_m`` from the controller's
+Jacobian (:func:`~drillstring.forces.top_drive.top_drive_jacobian`) on the quill speed ``qᵀδη̇`` and the
+surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes at the top), and the controller's
+states as extra rows. The rigid rotation's angle, like the depth drilled, enters no equation and is left
+out. **Off bottom** (``bit_rock.law = "off_bottom"``) the steady state is rotation without penetration
+(ROP 0, no bit–rock force) and the bit–rock Jacobian is zero.
 """
 
 from __future__ import annotations
@@ -42,6 +54,7 @@ import scipy.linalg as sla
 
 from drillstring.dynamics.rom import ReducedOrderModel
 from drillstring.forces.bit_rock import evaluate_bit_rock
+from drillstring.forces.top_drive import top_drive_jacobian
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -91,6 +104,7 @@ class StabilityResult:
 
     steady_state: SteadyDrilling
     modes: list[ModeStability]
+    top_drive: dict | None = None  # the top drive's controller and gains (TopDriveParameters.describe)
 
     @property
     def stable(self) -> bool:
@@ -103,8 +117,11 @@ class StabilityResult:
 
     def to_dict(self) -> dict:
         """JSON-ready (SI): ``stable``, ``steady_state``, ``modes`` (list sorted by frequency)."""
-        return {"stable": self.stable, "steady_state": self.steady_state.to_dict(),
-                "modes": [asdict(m) for m in self.modes]}
+        out = {"stable": self.stable, "steady_state": self.steady_state.to_dict(),
+               "modes": [asdict(m) for m in self.modes]}
+        if self.top_drive is not None:
+            out["top_drive"] = self.top_drive
+        return out
 
 
 def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params) -> np.ndarray:
@@ -116,8 +133,10 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params) -> np
         f_u = −(1 + e²/θ̇²)/a2,      f_θ = 2 e² u̇/(a2 θ̇³) + a3 θ̇/(a2 h),
         t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
 
-    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term).
+    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero off bottom.
     """
+    if getattr(params, "law", "tucker_wang") == "off_bottom":
+        return np.zeros((2, 2))
     u, w = float(bit_axial_velocity), float(bit_speed)
     a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
     h2 = w * w + e * e
@@ -138,12 +157,11 @@ def _rigid_column(model: ReducedOrderModel) -> int:
     return columns[0]
 
 
-def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
-    """The steady drilling state of ``model``, eq. (1). Raises ValueError when the law gives no
-    penetration (ROP <= 0: the bit would lift off, the drilling regime does not exist)."""
-    r = _rigid_column(model)
+def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float:
+    """Eq. (1) at the bit speed ``omega`` [rad/s]; 0 off bottom."""
+    if model.bit_rock.law == "off_bottom":
+        return 0.0
     b_r = model.bit_u[r]
-    omega = model.top_speed
     f0, _ = evaluate_bit_rock(0.0, omega, model.bit_rock)
     f1 = float(evaluate_bit_rock(1.0, omega, model.bit_rock)[0]) - float(f0)
     d_rr = model.damping[r, r]
@@ -154,29 +172,86 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
             f"no steady drilling at weight_on_bit = {model.weight_on_bit:.6g} N, top_speed = {omega:.6g} rad/s:"
             f" the bit-rock law gives rate_of_penetration = {rop:.3g} m/s <= 0"
         )
+    return float(rop)
+
+
+def _steady_load(model: ReducedOrderModel, omega: float, r: int):
+    """Steady drilling at the bit speed ``omega``: (ROP, bit force, bit torque, modal velocity, generalized
+    load without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
+    rop = _steady_penetration(model, omega, r)
     force, torque = (float(v) for v in evaluate_bit_rock(rop, omega, model.bit_rock))
     n = model.size
     velocity = np.zeros(n)
-    velocity[r] = rop / b_r
-    load = (model.bit_u * (force + model.weight_on_bit) + model.bit_t * torque + g
+    velocity[r] = rop / model.bit_u[r]
+    spin = model.rigid_rotation_column
+    if spin is not None:
+        velocity[spin] = omega / model.quill_shapes[spin]
+    load = (model.bit_u * (force + model.weight_on_bit) + model.bit_t * torque + model.generalized_force
             - model.damping @ velocity)
+    motor = 0.0 if spin is None else float(-load[spin] / model.quill_shapes[spin])
+    return rop, force, torque, velocity, load, motor
+
+
+def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
+    """The steady drilling state of ``model``, eq. (1) (with a top drive: the module docstring). Raises
+    ValueError when the law gives no penetration (ROP <= 0: the bit would lift off, the drilling regime does
+    not exist) or the motor would need more than its maximum torque. Off bottom: steady rotation, ROP 0."""
+    r = _rigid_column(model)
+    drive = model.top_drive
+    omega = model.top_speed
+    rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
+    if not drive.imposed and drive.integral_gain == 0.0:
+        for _ in range(200):  # ω = Ω − τ_m(ω)/k_p: τ_m varies little with ω, a contraction for k_p ≫ |∂τ/∂ω|
+            updated = drive.set_point - motor / drive.proportional_gain if drive.proportional_gain > 0 else -np.inf
+            if not updated > 0.0:
+                raise ValueError(f"no steady rotation: proportional_gain = {drive.proportional_gain:.6g} N*m*s/rad"
+                                 f" cannot carry the load torque {motor:.6g} N*m at a positive speed")
+            if abs(updated - omega) <= 1e-12 * abs(omega):
+                break
+            omega = updated
+            rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
+    if not drive.imposed and abs(motor) > drive.max_torque:
+        raise ValueError(f"no steady drilling: the motor torque needed, {motor:.6g} N*m, exceeds "
+                         f"top_drive.max_torque = {drive.max_torque:.6g} N*m")
+    n = model.size
+    if model.rigid_rotation_column is not None:
+        load = load + model.quill_shapes * motor
     offsets = np.zeros(n)
     elastic = model.omega2 != 0.0
     offsets[elastic] = load[elastic] / model.omega2[elastic]
+    states = np.zeros(drive.n_states)
+    if states.size:
+        states[0] = motor / drive.integral_gain if drive.integral_gain > 0 else 0.0
+    if states.size > 1:
+        states[1] = float(model.surface_torque_shapes @ offsets)
     return SteadyDrilling(rate_of_penetration=float(rop), bit_speed=float(omega), torque_on_bit=-torque,
-                          force_on_bit=-force, state=np.concatenate([offsets, velocity]))
+                          force_on_bit=-force, state=np.concatenate([offsets, velocity, states]))
 
 
 def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
-    """State matrix ``A`` of eq. (2) for ``[δη, δη̇]`` (2n × 2n, rigid axial position included)."""
+    """State matrix ``A`` of eq. (2) for ``[δη, δη̇, δs]`` (:attr:`ReducedOrderModel.state_size` square, rigid
+    positions included; ``s`` the top drive controller's states)."""
     n = model.size
+    size = model.state_size
     jac = bit_rock_jacobian(steady.rate_of_penetration, steady.bit_speed, model.bit_rock)
     bu, bt = model.bit_u, model.bit_t
     coupling = (np.outer(bu, jac[0, 0] * bu + jac[0, 1] * bt) + np.outer(bt, jac[1, 0] * bu + jac[1, 1] * bt))
-    a = np.zeros((2 * n, 2 * n))
-    a[:n, n:] = np.eye(n)
-    a[n:, :n] = -np.diag(model.omega2)
-    a[n:, n:] = coupling - model.damping
+    a = np.zeros((size, size))
+    a[:n, n:2 * n] = np.eye(n)
+    a[n:2 * n, :n] = -np.diag(model.omega2)
+    a[n:2 * n, n:2 * n] = coupling - model.damping
+    drive = model.top_drive
+    if drive.n_states:
+        q, s = model.quill_shapes, model.surface_torque_shapes
+        law = top_drive_jacobian(drive)  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
+        rows = [(slice(n, 2 * n), q, law[0]), (2 * n, 1.0, law[1])]
+        if drive.n_states > 1:
+            rows.append((2 * n + 1, 1.0, law[2]))
+        for row, weight, d in rows:
+            a[row, :n] += np.multiply.outer(weight, d[1] * s)
+            a[row, n:2 * n] += np.multiply.outer(weight, d[0] * q)
+            for k in range(drive.n_states):
+                a[row, 2 * n + k] += weight * d[2 + k]
     return a
 
 
@@ -186,11 +261,12 @@ def _family_of(model: ReducedOrderModel) -> np.ndarray:
 
 
 def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:
-    """The state matrix without the rigid axial position (the depth drilled: no equation depends on it),
-    and the mask of the rows kept."""
-    n = model.size
-    keep = np.ones(2 * n, dtype=bool)
+    """The state matrix without the rigid axial position (the depth drilled: no equation depends on it) and,
+    with a top drive, the rigid rotation's angle (likewise), and the mask of the rows kept."""
+    keep = np.ones(model.state_size, dtype=bool)
     keep[_rigid_column(model)] = False
+    if model.rigid_rotation_column is not None:
+        keep[model.rigid_rotation_column] = False
     return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
 
 
@@ -209,10 +285,10 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
     n = model.size
     matrix, keep = _informative_matrix(model, steady)
     values, vectors = sla.eig(matrix)
-    full = np.zeros((2 * n, len(values)), dtype=complex)
+    full = np.zeros((model.state_size, len(values)), dtype=complex)
     full[keep] = vectors
     # modal energy of each coordinate: ½ (|δη̇|² + |ω²| |δη|²)
-    energy = np.abs(full[n:]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(full[:n]) ** 2
+    energy = np.abs(full[n:2 * n]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(full[:n]) ** 2
     labels = _family_of(model)
     modes = []
     for k, lam in enumerate(values):
@@ -227,7 +303,7 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
             growth_rate=float(lam.real),
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
-    return StabilityResult(steady, modes)
+    return StabilityResult(steady, modes, None if model.top_drive.imposed else model.top_drive.describe())
 
 
 def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResult:

@@ -52,7 +52,8 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
         plus, minus = y.copy(), y.copy()
         plus[j] += step
         minus[j] -= step
-        jacobian[:, j] = (model.rhs(t, plus) - model.rhs(t, minus)) / (2.0 * step)
+        # the modal rows only (a top drive's controller states follow them in the state)
+        jacobian[:, j] = (model.rhs(t, plus)[:2 * n] - model.rhs(t, minus)[:2 * n]) / (2.0 * step)
     linear = np.zeros_like(jacobian)
     linear[:n, n:] = np.eye(n)
     linear[n:, :n] = -np.diag(model.omega2)

@@ -50,6 +50,7 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "BIT_ROCK_LAWS",
     "STICK_SPEED_FLOOR_RATIO",
     "BitRockParameters",
     "regularizer",
@@ -60,6 +61,9 @@ __all__ = [
     "steady_state",
     "stick_speed_floor_ratio",
 ]
+
+#: The bit–rock laws: Tucker & Wang (SPEC §6), or the bit off bottom (no bit–rock force, SPEC §11).
+BIT_ROCK_LAWS = ("tucker_wang", "off_bottom")
 
 #: Default ratio ``θ̇_floor / e`` below which ``1/Z²`` is frozen (see module docstring).
 STICK_SPEED_FLOOR_RATIO = 1.0e-6
@@ -86,6 +90,8 @@ class BitRockParameters:
     stick_speed_floor_ratio : float
         [-] ``θ̇_floor / e``: below ``|θ̇| = θ̇_floor`` the term ``1/Z²`` is frozen so that the law stays
         finite at stick (module docstring). Not part of :meth:`as_array`.
+    law : str
+        "tucker_wang" (the law above) or "off_bottom" (the bit hangs free: no force, no torque).
     """
 
     a1: float
@@ -95,8 +101,11 @@ class BitRockParameters:
     a5: float
     e: float
     stick_speed_floor_ratio: float = STICK_SPEED_FLOOR_RATIO
+    law: str = "tucker_wang"
 
     def __post_init__(self) -> None:
+        if self.law not in BIT_ROCK_LAWS:
+            raise ValueError(f"law = {self.law!r}: must be one of {', '.join(BIT_ROCK_LAWS)}")
         for name in ("a1", "a2", "a3", "a4", "a5", "e", "stick_speed_floor_ratio"):
             value = getattr(self, name)
             if not math.isfinite(value):
@@ -247,7 +256,11 @@ def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
     w_flat = np.ascontiguousarray(w).reshape(-1)
     force = np.empty_like(u_flat)
     torque = np.empty_like(u_flat)
-    bit_rock_force_array(u_flat, w_flat, *params.kernel_args(), force, torque)
+    if params.law == "off_bottom":
+        force[:] = 0.0
+        torque[:] = 0.0
+    else:
+        bit_rock_force_array(u_flat, w_flat, *params.kernel_args(), force, torque)
     return force.reshape(shape), torque.reshape(shape)
 
 

@@ -183,6 +183,9 @@ class CaseParameter:
         node: Any = case
         for item in self.location:
             node = getattr(node, item) if isinstance(item, str) and isinstance(node, BaseModel) else node[item]
+        if node is None:  # an optional field left out (e.g. a gain the controller tunes)
+            raise ParameterError(f"{self.path} is not set in case {case.name!r} (left out: computed when the "
+                                 f"model is built); give it in the case to vary it around a value")
         return float(node)
 
     def to_si(self, value: Any) -> float:
@@ -400,7 +403,8 @@ def parameter_value(case: Case, path: str) -> float:
 
 def numeric_parameter_paths(case: Case, *, integers: bool = True) -> list[str]:
     """Every numeric parameter path of ``case`` (in case-file order), plus ``weight_on_hook`` after
-    ``operation.weight_on_bit``; ``integers=False`` leaves out the integer settings."""
+    ``operation.weight_on_bit``; ``integers=False`` leaves out the integer settings; optional fields left
+    out (None) are not listed."""
     out: list[str] = []
 
     def walk(node: Any, location: tuple[str | int, ...]) -> None:
@@ -410,6 +414,8 @@ def numeric_parameter_paths(case: Case, *, integers: bool = True) -> list[str]:
                     continue
                 tp, _ = _unwrap(info.annotation)
                 value = getattr(node, name)
+                if value is None:  # an optional field left out (a gain the controller tunes)
+                    continue
                 if tp is float or (tp is int and integers):
                     out.append(_format_path((*location, name)))
                     if (*location, name) == ("operation", "weight_on_bit"):
