@@ -351,6 +351,15 @@ def test_simulate_table_has_units(coarse_case, tmp_path):
                  "impacts", "steps accepted",
                  str(tmp_path / "a.nc")):
         assert text in result.stdout, text
+    # In field units: the surface torque in kft·lbf (1 kft·lbf = 1355.8179483314004 N·m).
+    args = ("simulate", str(coarse_case), "--t-end", "0.5", "--out", str(tmp_path / "b.nc"), "--plot",
+            str(tmp_path / "b.png"))
+    data = _json(*args, "--json")
+    field = _invoke(*args, "--units", "field")
+    assert field.exit_code == 0, field.output
+    row = next(line for line in field.stdout.splitlines() if "surface torque min / max" in line)
+    low, high = (data[f"surface_torque_{k}"] / 1355.8179483314004 for k in ("min", "max"))
+    assert f"{low:,.2f} / {high:,.2f}" in row and "kft·lbf" in row
 
 
 def test_simulate_failure_keeps_the_partial_run(coarse_case, tmp_path):

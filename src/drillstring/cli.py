@@ -671,9 +671,10 @@ def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
     table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
                   "rpm")
+    torque = display_unit("torque", units)
     table.add_row(escape(f"surface torque min / max (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['surface_torque_min'], ',.2f', 1.0 / _KN)} / "
-                  f"{_fmt(numbers['surface_torque_max'], ',.2f', 1.0 / _KN)}", "kN·m")
+                  f"{_fmt(numbers['surface_torque_min'], ',.2f', torque.scale)} / "
+                  f"{_fmt(numbers['surface_torque_max'], ',.2f', torque.scale)}", torque.label)
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
         table.add_row(escape(f"max radial displacement at x = {length(x):g} {length.label} / gap"),
                       f"{_fmt(r, ',.3f', small.scale)} / {small(gap):,.1f}", small.label)
