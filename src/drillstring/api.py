@@ -365,7 +365,8 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
 
     from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
-    from drillstring.plots import STUDY_PANELS, plot_study
+    from drillstring.plots import plot_study
+    from drillstring.quantities import stored_observables
     from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
     from drillstring.stochastic.store import DONE
@@ -376,7 +377,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     shown = None
     if raw is not None:
         finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
-        shown = raw[list(STUDY_PANELS)].isel(realization=finished)
+        shown = raw[list(stored_observables(raw))].isel(realization=finished)
     force = display_unit("force", units)
     write_netcdf(stats, paths["statistics"])
     figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)

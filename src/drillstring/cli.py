@@ -1018,10 +1018,12 @@ def _realizations_table(summary: dict[str, Any], units: str) -> Table | None:
     section = summary.get("realizations") or {}
     if not section:
         return None
+    caption = ("stick-slip index (max − min)/(2 mean) of the bit speed; MSE (Teale) from the time means; stick: "
+               "bit below 10 % of the top speed; oscillation/2Ω: (max − min)/(2 top speed)")
+    if "surface_torque_amplitude" in section:
+        caption += "; surface torque amplitude: (max − min)/2 of the top drive's surface torque"
     table = Table(title=escape(f"Per realization, after t = {section['t_transient']:g} s (cycle metrics)"),
-                  title_justify="left", caption="stick-slip index (max − min)/(2 mean) of the bit speed; MSE "
-                  "(Teale) from the time means; stick: bit below 10 % of the top speed; oscillation/2Ω: "
-                  "(max − min)/(2 top speed)", caption_justify="left")
+                  title_justify="left", caption=escape(caption), caption_justify="left")
     for header in ("metric", "unit", "mean", "std", "δ [%]", "2.5 %", "50 %", "97.5 %", "nominal", "n"):
         table.add_column(escape(header), justify="left" if header in ("metric", "unit") else "right")
     for name, (_, label) in METRIC_DISPLAY.items():

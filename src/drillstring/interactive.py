@@ -73,7 +73,8 @@ def study_figures(stats, realizations=None, *, units: str | None = None) -> list
     used, each hidden until clicked in the legend); the dispersion [%] against time with the transient
     shaded; the convergence ``conv(n_s)``; the stick-slip index of each realization against its drawn
     inputs. ``stats``: :func:`drillstring.stochastic.analysis.study_statistics`; values in ``units``."""
-    from drillstring.plots import STUDY_PANELS, TITLES
+    from drillstring.plots import TITLES
+    from drillstring.quantities import stored_observables
 
     time = _values(stats["time"].values)
     t_transient = float(stats.attrs.get("t_transient", 0.0))
@@ -81,7 +82,8 @@ def study_figures(stats, realizations=None, *, units: str | None = None) -> list
     shown = None
     if realizations is not None and "realization" in realizations.dims:
         shown = realizations.isel(realization=slice(0, REALIZATIONS_SHOWN))
-    for name in STUDY_PANELS:
+    panels = stored_observables(stats)
+    for name in panels:
         unit, title = display_unit(DISPLAY_KINDS[name], units), TITLES[name]
         factor, label = unit.scale, f"{title} [{unit.label}]"
         data = [
@@ -106,7 +108,7 @@ def study_figures(stats, realizations=None, *, units: str | None = None) -> list
         figures.append(_figure(f"{title}: envelope, mean, nominal", f"{label} against time; the single "
                                "realizations are in the legend, hidden until clicked.", data, "time [s]", label))
     dispersion = []
-    for name in STUDY_PANELS:
+    for name in panels:
         key = f"{name}_dispersion"
         if key in stats:
             dispersion.append({"type": "scatter", "mode": "lines", "x": time, "y": _values(stats[key].values, 100.0),
@@ -116,7 +118,7 @@ def study_figures(stats, realizations=None, *, units: str | None = None) -> list
     figures.append(_figure("Dispersion std/|mean|", f"Dispersion [%] against time; shaded: the transient "
                            f"(t < {t_transient:g} s).", dispersion, "time [s]", "dispersion [%]", shapes=shapes))
     convergence = []
-    for name in list(STUDY_PANELS) + ["radial_displacement"]:
+    for name in list(panels) + ["radial_displacement"]:
         key = f"{name}_convergence"
         if key in stats:
             values = np.asarray(stats[key].values, dtype=float)

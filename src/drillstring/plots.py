@@ -13,7 +13,8 @@ are safe in scripts, notebooks, worker processes and tests.
   whirl orbit at the probe with the borehole wall, the contact force.
 * :func:`plot_compare` — the same six panels for case 1 (full) and case 2 (bit–rock + contact) overlaid.
 * :func:`plot_convergence` — mean-square convergence ``conv(n_s)`` of each observable.
-* :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB.
+* :func:`plot_envelopes` — 95 % envelope, mean and nominal response of ROP, bit speed, TOB and FOB (and,
+  with a top drive, of the quill speed and the surface torque).
 * :func:`plot_dispersion` — dispersion [%] of the same observables vs time, transient shaded.
 * :func:`plot_study` — the three study figures in one folder.
 * :func:`plot_map` — an operating map: ROP, vibration, MSE, lateral displacement over top speed × WOB, with
@@ -36,7 +37,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from drillstring.files import atomic_output
-from drillstring.quantities import DISPLAY_KINDS
+from drillstring.quantities import DISPLAY_KINDS, STUDY_OBSERVABLES, stored_observables
 from drillstring.units import DisplayUnit, display_unit
 
 __all__ = [
@@ -68,8 +69,9 @@ TITLES: dict[str, str] = {
     "surface_torque": "surface torque",
 }
 
-#: The four observables of the study figures, in panel order.
-STUDY_PANELS = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+#: The four observables of the study figures, in panel order (a study of a case with a top drive adds the
+#: quill speed and the surface torque: :func:`~drillstring.quantities.stored_observables`).
+STUDY_PANELS = STUDY_OBSERVABLES
 
 _DPI = 120
 _MEAN_COLOR = "C0"
@@ -468,12 +470,15 @@ def plot_realizations(stats: xr.Dataset, path: str | Path, *, units: str | None 
 
 
 def plot_envelopes(stats: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
-    """Four panels (ROP, bit speed, TOB, FOB): the envelope between ``<v>_lower`` and ``<v>_upper`` (the
-    95 % quantile envelope), the mean and the nominal (deterministic, mean weight-on-hook) response."""
+    """Four panels (ROP, bit speed, TOB, FOB; six with a top drive: also the quill speed and the surface
+    torque): the envelope between ``<v>_lower`` and ``<v>_upper`` (the 95 % quantile envelope), the mean
+    and the nominal (deterministic, mean weight-on-hook) response."""
     t = np.asarray(stats["time"].values, dtype=float)
     level = float(stats.attrs.get("level", 0.95))
-    fig, axes = _figure(2, 2, (11.0, 7.0))
-    for ax, name in zip(axes, STUDY_PANELS):
+    panels = stored_observables(stats)
+    rows = (len(panels) + 1) // 2
+    fig, axes = _figure(rows, 2, (11.0, 3.5 * rows))
+    for ax, name in zip(axes, panels):
         lower = _scaled(stats[f"{name}_lower"].values, name, units)
         upper = _scaled(stats[f"{name}_upper"].values, name, units)
         ax.fill_between(t, lower, upper, color=_ENVELOPE_COLOR, alpha=0.3, lw=0,
@@ -492,11 +497,13 @@ def plot_envelopes(stats: xr.Dataset, path: str | Path, *, units: str | None = N
 
 def plot_dispersion(stats: xr.Dataset, path: str | Path, t_transient: float, *,
                     units: str | None = None) -> Path:
-    """Dispersion ``std/|mean|`` [%] vs time of ROP, bit speed, TOB and FOB (one panel each, shared time
-    axis), the transient ``t < t_transient`` [s] shaded."""
+    """Dispersion ``std/|mean|`` [%] vs time of ROP, bit speed, TOB and FOB (and, with a top drive, the
+    quill speed and the surface torque; one panel each, shared time axis), the transient ``t < t_transient``
+    [s] shaded."""
     t = np.asarray(stats["time"].values, dtype=float)
-    fig, axes = _figure(len(STUDY_PANELS), 1, (9.0, 8.5), sharex=True)
-    for ax, name in zip(axes, STUDY_PANELS):
+    panels = stored_observables(stats)
+    fig, axes = _figure(len(panels), 1, (9.0, 2.125 * len(panels)), sharex=True)
+    for ax, name in zip(axes, panels):
         ax.plot(t, 100.0 * np.asarray(stats[f"{name}_dispersion"].values, dtype=float), lw=0.9)
         if t.size:
             ax.axvspan(t[0], min(float(t_transient), t[-1]), color="0.85", lw=0,

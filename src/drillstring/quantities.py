@@ -55,6 +55,21 @@ DISPLAY_KINDS = {
     "weight_on_bit": "force",
 }
 
+#: Observables kept for every realization (each (realization, time)); plus radial_displacement.
+STUDY_OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+#: Observables kept too when the case has a top drive (:func:`~drillstring.dynamics.indicators.has_top_drive`);
+#: with an imposed speed the quill turns at the set point and they are not stored.
+TOP_DRIVE_OBSERVABLES = ("quill_speed", "surface_torque")
+
+
+def stored_observables(data) -> tuple[str, ...]:
+    """The study observables held by ``data`` (a study's raw Dataset, holding ``<v>``, or its statistics,
+    holding ``<v>_mean``), in order: :data:`STUDY_OBSERVABLES` and those of :data:`TOP_DRIVE_OBSERVABLES` it
+    has."""
+    return STUDY_OBSERVABLES + tuple(name for name in TOP_DRIVE_OBSERVABLES
+                                     if name in data or f"{name}_mean" in data)
+
+
 #: The per-realization cycle metrics in tables and figures: name -> (unit, label). The unit is a kind of
 #: :func:`drillstring.units.display_unit` (shown in the chosen unit system) or a fixed
 #: :class:`~drillstring.units.DisplayUnit` (a plain number, a time, a percentage): :func:`metric_unit`.
@@ -69,6 +84,9 @@ METRIC_DISPLAY: dict[str, tuple[str | DisplayUnit, str]] = {
     "mechanical_specific_energy": ("pressure", "MSE"),
     "stick_time_fraction": (DisplayUnit("%", 100.0), "stick time"),
     "bit_speed_oscillation": (DisplayUnit("-", 1.0), "oscillation/2Ω"),
+    "surface_torque_amplitude": ("torque", "surface torque amplitude"),
+    "quill_speed_min": ("angular_speed", "quill speed min"),
+    "quill_speed_max": ("angular_speed", "quill speed max"),
 }
 
 

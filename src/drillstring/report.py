@@ -37,6 +37,8 @@ OBSERVABLE_NAMES = {
     "bit_speed": "bit speed",
     "torque_on_bit": "torque-on-bit",
     "force_on_bit": "force-on-bit",
+    "quill_speed": "quill speed",
+    "surface_torque": "surface torque",
     "radial_displacement": "radial displacement",
 }
 

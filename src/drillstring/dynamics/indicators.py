@@ -40,6 +40,12 @@ def bit_area(case) -> float:
     return math.pi * case.borehole.diameter**2 / 4.0
 
 
+def has_top_drive(case) -> bool:
+    """Whether ``case`` turns its string with a top drive (``top_drive.controller`` other than
+    ``"imposed_speed"``): its quill speed and surface torque then vary and are recorded in studies."""
+    return case.top_drive.controller != "imposed_speed"
+
+
 def mechanical_specific_energy(force_on_bit: float, torque_on_bit: float, top_speed: float,
                                rate_of_penetration: float, area: float) -> float:
     """Mechanical specific energy [Pa = J/m³] (Teale 1965): the work spent per volume of rock drilled,
@@ -175,4 +181,30 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
         })
     out["mechanical_specific_energy"] = mechanical_specific_energy(
         out["force_on_bit_mean"], out["torque_on_bit_mean"], top_speed, out["rate_of_penetration_mean"], area)
+    return out
+
+
+#: Per-run top-drive metrics (SI) after the transient, for a case with a top drive (:func:`has_top_drive`):
+#: name -> (unit, description); :func:`top_drive_metrics`.
+TOP_DRIVE_METRICS: dict[str, tuple[str, str]] = {
+    "surface_torque_amplitude": ("N m", "surface-torque amplitude (max - min)/2"),
+    "quill_speed_min": ("rad/s", "smallest quill speed"),
+    "quill_speed_max": ("rad/s", "largest quill speed"),
+}
+
+
+def top_drive_metrics(time, observables, t_transient: float) -> dict[str, float]:
+    """The :data:`TOP_DRIVE_METRICS` of one run (SI) over ``time >= t_transient`` (the whole run if it ended
+    before), from its ``observables`` ``quill_speed`` [rad/s] and ``surface_torque`` [N m] on the output
+    times: the surface-torque amplitude ``(max − min)/2`` (the swing of the motor's load that a driller reads
+    on the torque gauge; 0 in steady drilling) and the extremes of the quill speed. NaN where a failed run
+    left no finite value."""
+    steady = steady_window(np.asarray(time, dtype=float), t_transient)
+    out = {name: math.nan for name in TOP_DRIVE_METRICS}
+    torque = _finite(np.asarray(observables["surface_torque"], dtype=float)[steady])
+    if torque.size:
+        out["surface_torque_amplitude"] = 0.5 * float(torque.max() - torque.min())
+    speed = _finite(np.asarray(observables["quill_speed"], dtype=float)[steady])
+    if speed.size:
+        out["quill_speed_min"], out["quill_speed_max"] = float(speed.min()), float(speed.max())
     return out

@@ -8,9 +8,16 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from drillstring.dynamics.indicators import CYCLE_METRICS, DEFAULT_TRANSIENT, cycle_metrics, transient_end
+from drillstring.dynamics.indicators import (
+    CYCLE_METRICS,
+    DEFAULT_TRANSIENT,
+    TOP_DRIVE_METRICS,
+    cycle_metrics,
+    top_drive_metrics,
+    transient_end,
+)
 from drillstring.quantities import LONG_NAMES, UNITS
-from drillstring.stochastic.montecarlo import STUDY_OBSERVABLES, open_study_group
+from drillstring.stochastic.montecarlo import open_study_group, stored_observables
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.runs import REALIZATION_METRICS
 from drillstring.stochastic.store import DONE, FAILED, StoreError, damage
@@ -44,7 +51,7 @@ def load_study(store_path: str | Path) -> xr.Dataset:
             raise StoreError(f"{store_path} is damaged ({found}); {advice}") from None
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
-    for name in STUDY_OBSERVABLES + ("radial_displacement",):
+    for name in stored_observables(ds) + ("radial_displacement",):
         attrs = {"units": UNITS[name], "long_name": LONG_NAMES[name]}
         ds[name].attrs.update(attrs)
         ds[f"nominal_{name}"].attrs.update(attrs)
@@ -56,8 +63,9 @@ def load_study(store_path: str | Path) -> xr.Dataset:
 #: realizations at each time; ``realization_rate_of_penetration_mean`` each realization's time mean).
 REALIZATION_PREFIX = "realization_"
 #: The per-realization results summarised under ``realizations``: the cycle metrics and the bit-speed
-#: oscillation (max − min)/2Ω of maps and sensitivity runs.
-SUMMARY_METRICS = (*CYCLE_METRICS, "bit_speed_oscillation")
+#: oscillation (max − min)/2Ω of maps and sensitivity runs; with a top drive also the
+#: :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS`.
+SUMMARY_METRICS = (*CYCLE_METRICS, "bit_speed_oscillation", *TOP_DRIVE_METRICS)
 #: Quantiles [%] of the per-realization distributions in the summary.
 REALIZATION_QUANTILES = (2.5, 50.0, 97.5)
 #: Length [s] by which the windows of the time convergence grow.
@@ -68,27 +76,40 @@ TIME_WINDOW = 10.0
 TIME_CONVERGENCE_THRESHOLD = 0.02
 
 
+def _metric_names(raw: xr.Dataset) -> list[str]:
+    """The per-realization metrics a study store holds: :data:`~drillstring.stochastic.runs.
+    REALIZATION_METRICS`, and the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS` of a case with
+    a top drive."""
+    return list(REALIZATION_METRICS) + [name for name in TOP_DRIVE_METRICS if name in raw]
+
+
 def _realization_metrics(raw: xr.Dataset, rows: np.ndarray, t_transient: float, prefix: str = "") -> dict:
-    """The :data:`~drillstring.stochastic.runs.REALIZATION_METRICS` of the realizations ``rows`` (or of the
-    nominal run with ``prefix="nominal_"``) as the workers stored them; the cycle metrics recomputed from the
-    time histories, with each realization's own top speed and bit area, when ``t_transient`` differs from
-    the window the workers used (the store's ``metrics_transient``)."""
+    """The per-realization metrics (:func:`_metric_names`) of the realizations ``rows`` (or of the
+    nominal run with ``prefix="nominal_"``) as the workers stored them; the cycle (and top-drive) metrics
+    recomputed from the time histories, with each realization's own top speed and bit area, when
+    ``t_transient`` differs from the window the workers used (the store's ``metrics_transient``)."""
     if "top_speed" not in raw:
         raise ValueError("the study store holds no per-realization cycle metrics (written by an older "
                          "drillstring version): rerun the study in a new folder")
     one = prefix == "nominal_"
+    names = _metric_names(raw)
     values = {name: np.atleast_1d(np.asarray(raw[prefix + name].values, dtype=float))[0 if one else rows]
-              for name in REALIZATION_METRICS}
+              for name in names}
     stored = raw.attrs.get("metrics_transient")
     if stored is not None and math.isclose(float(stored), t_transient, rel_tol=1e-12, abs_tol=1e-12):
         return values
     time = raw.time.values
     picked = [None] if one else list(rows)
-    recomputed = [
-        cycle_metrics(time, {name: raw[prefix + name].values if one else raw[name].values[j]
-                             for name in STUDY_OBSERVABLES}, float(top), float(area), t_transient)
-        for j, top, area in zip(picked, np.atleast_1d(values["top_speed"]), np.atleast_1d(values["bit_area"]))]
-    for name in CYCLE_METRICS:
+    observables = stored_observables(raw)
+    top_drive = any(name in TOP_DRIVE_METRICS for name in names)
+    recomputed = []
+    for j, top, area in zip(picked, np.atleast_1d(values["top_speed"]), np.atleast_1d(values["bit_area"])):
+        histories = {name: raw[prefix + name].values if one else raw[name].values[j] for name in observables}
+        row = cycle_metrics(time, histories, float(top), float(area), t_transient)
+        if top_drive:
+            row.update(top_drive_metrics(time, histories, t_transient))
+        recomputed.append(row)
+    for name in [name for name in names if name in CYCLE_METRICS or name in TOP_DRIVE_METRICS]:
         values[name] = np.array([row[name] for row in recomputed])
         if one:
             values[name] = values[name][0]
@@ -108,10 +129,12 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     ``growth_rate`` of steady drilling; and ``bit_speed_oscillation`` (max − min)/2Ω with its own Ω; the
     nominal run's value in each one's attribute ``nominal``) and the
     ``lowest_lateral_eigenvalue`` ω₁² [rad²/s²] of its prestressed string (negative: statically buckled;
-    attribute ``buckled_realizations``).
+    attribute ``buckled_realizations``). A study of a case with a top drive adds the observables
+    ``quill_speed`` and ``surface_torque`` and the per-realization :data:`~drillstring.dynamics.indicators.
+    TOP_DRIVE_METRICS`.
     """
     ok = raw.status.values == DONE
-    names = list(STUDY_OBSERVABLES) + ["radial_displacement"]
+    names = list(stored_observables(raw)) + ["radial_displacement"]
     done = raw[names].isel(realization=np.nonzero(ok)[0])
     n_done = int(ok.sum())
     if n_done < 2:
@@ -132,8 +155,10 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     metrics = _realization_metrics(raw, rows, t_transient)
     nominal = _realization_metrics(raw, rows, t_transient, prefix="nominal_")
     coords = {"realization": done.realization.values}
-    for name, (unit, description) in REALIZATION_METRICS.items():
-        window = f" after t = {t_transient:g} s" if name in CYCLE_METRICS else ""
+    for name, (unit, description) in {**REALIZATION_METRICS, **TOP_DRIVE_METRICS}.items():
+        if name not in metrics:
+            continue
+        window = f" after t = {t_transient:g} s" if name in CYCLE_METRICS or name in TOP_DRIVE_METRICS else ""
         stats[REALIZATION_PREFIX + name] = xr.DataArray(
             metrics[name], dims="realization", coords=coords,
             attrs={"units": unit, "long_name": description + window, "nominal": float(nominal[name])})
@@ -302,7 +327,7 @@ def time_convergence(stats: xr.Dataset, t_start: float, window: float = TIME_WIN
     out: dict = {"window": float(window), "threshold": float(threshold), "t_start": float(t_start),
                  "observables": {}}
     moving = []
-    for name in STUDY_OBSERVABLES:
+    for name in stored_observables(stats):
         rows = []
         for end in ends:
             part = stats[[f"{name}_dispersion"]].sel(time=slice(None, end + tolerance))
@@ -337,11 +362,12 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, bou
     (:func:`realizations_summary`) and the linear stability of the draws (:func:`stability_summary`, with
     the nominal case's ``boundary`` when given)."""
     inputs = input_dispersions(stats.attrs)
+    observables = list(stored_observables(stats))
     per_variable = dispersion_summary(
-        stats, list(STUDY_OBSERVABLES), t_transient=t_transient, input_dispersion=inputs
+        stats, observables, t_transient=t_transient, input_dispersion=inputs
     )
     time = stats.time.values
-    for name in STUDY_OBSERVABLES:
+    for name in observables:
         start = record_start(time, stats[f"{name}_mean"].values, t_transient)
         whole = dispersion_summary(stats, [name], t_transient=start, input_dispersion=inputs)[name]
         per_variable[name]["whole_record"] = {
@@ -349,7 +375,7 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, bou
                                         "ratio_time_mean", "ratio_max")
         }
     convergence = {}
-    for name in STUDY_OBSERVABLES:
+    for name in observables:
         conv = stats[f"{name}_convergence"].values
         half = len(conv) // 2
         # Relative change of conv(n_s) over the second half of the realizations.

@@ -39,6 +39,7 @@ import zarr
 from drillstring.case import Case
 from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
+from drillstring.dynamics.indicators import TOP_DRIVE_METRICS, has_top_drive
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.stability import leading_growth_rate
 from drillstring.dynamics.simulate import (
@@ -49,6 +50,7 @@ from drillstring.dynamics.simulate import (
     run_window,
     simulate_model,
 )
+from drillstring.quantities import STUDY_OBSERVABLES, TOP_DRIVE_OBSERVABLES, stored_observables  # noqa: F401
 from drillstring.stochastic.execution import Engine, StoreRun, run_locked
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
 from drillstring.stochastic.runs import (
@@ -61,8 +63,13 @@ from drillstring.stochastic.runs import (
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
-#: Observables kept for every realization (each (realization, time)); plus radial_displacement.
-STUDY_OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+
+
+def study_observables(case: Case) -> tuple[str, ...]:
+    """The observables a study of ``case`` stores per realization: :data:`STUDY_OBSERVABLES`, and
+    :data:`TOP_DRIVE_OBSERVABLES` when the case has a top drive."""
+    return STUDY_OBSERVABLES + (TOP_DRIVE_OBSERVABLES if has_top_drive(case) else ())
+
 NOMINAL = -1  # index of the deterministic run at the mean of every uncertain parameter
 #: Fewest realizations of a study: the statistics (standard deviation, envelopes) need two.
 MIN_SAMPLES = 2
@@ -135,9 +142,10 @@ class StudySettings:
 
 def check_study_size(case: Case, settings: StudySettings) -> None:
     """Refuse (ValueError, one line with the numbers) a study whose time histories would take more than
-    :data:`MAX_STUDY_BYTES`: samples × output times × (4 observables + probes) × 8 bytes."""
+    :data:`MAX_STUDY_BYTES`: samples × output times × (observables (4, 6 with a top drive) + probes) × 8
+    bytes."""
     points = output_points(settings.t_end, settings.output_step)
-    size = settings.samples * points * (len(STUDY_OBSERVABLES) + len(case.mesh.probes)) * 8
+    size = settings.samples * points * (len(study_observables(case)) + len(case.mesh.probes)) * 8
     if size > MAX_STUDY_BYTES:
         raise ValueError(f"samples = {settings.samples} realizations of {points} output times: their time histories "
                          f"take {size / 2**30:.3g} GiB, above the limit of {MAX_STUDY_BYTES / 2**30:g} GiB (fewer "
@@ -326,7 +334,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
             result = error.result
             outcome.message = str(error)
         k = len(result.time)
-        for name in STUDY_OBSERVABLES:
+        for name in study_observables(case):
             series = np.full(n_t, np.nan)
             series[:k] = result.observables[name]
             outcome.observables[name] = series
@@ -370,6 +378,8 @@ class StudyStore(TaskStore):
         self.settings = settings
         n_t = len(settings.time)
         per_row = dict(chunk_rows=1)
+        observables = study_observables(case)
+        metrics = {**REALIZATION_METRICS, **(TOP_DRIVE_METRICS if has_top_drive(case) else {})}
         layout = {
             "time": ArraySpec(("time",), data=settings.time, attributes={"units": "s"}),
             "x": ArraySpec(("probe",), data=np.asarray(case.mesh.probes, dtype=float), attributes={"units": "m"}),
@@ -377,11 +387,11 @@ class StudyStore(TaskStore):
             "weight_on_bit": ArraySpec(("realization",)),
             "lowest_lateral_eigenvalue": ArraySpec(("realization",)),
             **{name: ArraySpec(("realization",), attributes={"units": unit})
-               for name, (unit, _) in REALIZATION_METRICS.items()},
+               for name, (unit, _) in metrics.items()},
             **{f"nominal_{name}": ArraySpec(("one",), attributes={"units": unit})
-               for name, (unit, _) in REALIZATION_METRICS.items()},
-            **{name: ArraySpec(("realization", "time"), **per_row) for name in STUDY_OBSERVABLES},
-            **{f"nominal_{name}": ArraySpec(("time",)) for name in STUDY_OBSERVABLES},
+               for name, (unit, _) in metrics.items()},
+            **{name: ArraySpec(("realization", "time"), **per_row) for name in observables},
+            **{f"nominal_{name}": ArraySpec(("time",)) for name in observables},
             "radial_displacement": ArraySpec(("realization", "time", "probe"), **per_row),
             "nominal_radial_displacement": ArraySpec(("time", "probe")),
             "nominal_status": ArraySpec(("one",), "i1", PENDING),
@@ -424,8 +434,8 @@ class StudyStore(TaskStore):
         i = outcome.index
         if i == NOMINAL:
             if outcome.radial_displacement is not None:
-                for name in STUDY_OBSERVABLES:
-                    yield f"nominal_{name}", Ellipsis, outcome.observables[name]
+                for name, series in outcome.observables.items():
+                    yield f"nominal_{name}", Ellipsis, series
                 yield "nominal_radial_displacement", Ellipsis, outcome.radial_displacement
             for name, value in outcome.metrics.items():
                 yield f"nominal_{name}", 0, value
@@ -435,8 +445,8 @@ class StudyStore(TaskStore):
         if outcome.inputs is not None:
             yield "input_values", i, outcome.inputs
         if outcome.radial_displacement is not None:
-            for name in STUDY_OBSERVABLES:
-                yield name, i, outcome.observables[name]
+            for name, series in outcome.observables.items():
+                yield name, i, series
             yield "radial_displacement", i, outcome.radial_displacement
         for name in ("weight_on_hook", "weight_on_bit", "wall_time", "lowest_lateral_eigenvalue"):
             yield name, i, getattr(outcome, name)

@@ -36,8 +36,9 @@ from drillstring.dynamics.simulate import run_window
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
-from drillstring.dynamics.indicators import bit_area
-from drillstring.stochastic.runs import RUN_OUTPUTS, STABILITY_OUTPUTS, compile_kernels, run_outputs
+from drillstring.dynamics.indicators import bit_area, has_top_drive
+from drillstring.stochastic.runs import (RUN_OUTPUTS, STABILITY_OUTPUTS, TOP_DRIVE_OUTPUTS, compile_kernels,
+                                        run_outputs, with_top_drive_outputs)
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 
 __all__ = [
@@ -55,6 +56,7 @@ __all__ = [
 MAP_AXES = {"top_speed": "operation.top_speed", "weight_on_bit": "operation.weight_on_bit"}
 #: Every output of a grid point: name -> (unit, description).
 MAP_OUTPUTS = {**RUN_OUTPUTS, **STABILITY_OUTPUTS}
+
 #: Largest number of grid points of one map.
 MAX_POINTS = 100_000
 
@@ -191,7 +193,8 @@ def check_map(case: Case, settings: MapSettings) -> None:
 
 
 class MapStore(TaskStore):
-    """A map's Zarr store: one row per grid point (top speed major), each output of :data:`MAP_OUTPUTS`."""
+    """A map's Zarr store: one row per grid point (top speed major), each output of :data:`MAP_OUTPUTS` (and
+    the surface-torque amplitude with a top drive: :func:`~drillstring.stochastic.runs.with_top_drive_outputs`)."""
 
     kind = "map"
     row_dim = "point"
@@ -204,7 +207,7 @@ class MapStore(TaskStore):
             "weight_on_bit": ArraySpec(("weight_on_bit",), data=np.array(settings.weight_on_bit),
                                        attributes={"units": "N"}),
             **{name: ArraySpec(("point",), attributes={"units": unit, "long_name": text})
-               for name, (unit, text) in MAP_OUTPUTS.items()},
+               for name, (unit, text) in with_top_drive_outputs(MAP_OUTPUTS, has_top_drive(case)).items()},
         }
         sizes = {"point": settings.points, "top_speed": settings.shape[0], "weight_on_bit": settings.shape[1]}
         attrs = {"critical_weight_on_bit": float(critical_weight_on_bit), "bit_area": bit_area(case),
@@ -225,7 +228,7 @@ def _point_task(case: Case, settings: MapSettings, item: tuple[int, float, float
     except ValueError as error:
         return TaskOutcome(index, FAILED, str(error))
     return run_outputs(point_case, index, t_end=settings.t_end, output_step=settings.output_step,
-                       t_transient=settings.transient, with_stability=True)
+                       t_transient=settings.transient, with_stability=True, with_top_drive=has_top_drive(case))
 
 
 #: What :func:`run_map` did (:class:`~drillstring.stochastic.execution.StoreRun`: the store, points finished
@@ -253,7 +256,8 @@ def run_map(case: Case, settings: MapSettings, store_path: str | Path, engine: E
 
 def map_dataset(store_path: str | Path) -> xr.Dataset:
     """The map as a Dataset of dimensions ``top_speed`` [rad/s] × ``weight_on_bit`` [N]: every output of
-    :data:`MAP_OUTPUTS` (units in attributes), ``status`` (1 done, 2 failed), ``wall_time`` [s] and
+    :data:`MAP_OUTPUTS` (units in attributes; with a top drive also ``surface_torque_amplitude`` [N m]:
+    :data:`~drillstring.stochastic.runs.TOP_DRIVE_OUTPUTS`), ``status`` (1 done, 2 failed), ``wall_time`` [s] and
     ``buckling_margin`` = critical weight-on-bit − weight-on-bit [N]; attributes: the case (TOML), the
     settings, ``critical_weight_on_bit`` [N], ``bit_area`` [m²], the failures' causes. Refused while a map
     runs on the store (shared lock)."""
@@ -263,13 +267,14 @@ def map_dataset(store_path: str | Path) -> xr.Dataset:
         top = np.asarray(group["top_speed"][:], dtype=float)
         wob = np.asarray(group["weight_on_bit"][:], dtype=float)
         shape = (top.size, wob.size)
-        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*MAP_OUTPUTS, "status", "wall_time")}
+        outputs = with_top_drive_outputs(MAP_OUTPUTS, any(name in attrs["layout"] for name in TOP_DRIVE_OUTPUTS))
+        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*outputs, "status", "wall_time")}
     coords = {
         "top_speed": ("top_speed", top, {"units": "rad/s", "long_name": "top (rotary) speed"}),
         "weight_on_bit": ("weight_on_bit", wob, {"units": "N", "long_name": "static weight on bit"}),
     }
     data = {name: (("top_speed", "weight_on_bit"), arrays[name], {"units": unit, "long_name": text})
-            for name, (unit, text) in MAP_OUTPUTS.items()}
+            for name, (unit, text) in outputs.items()}
     data["status"] = (("top_speed", "weight_on_bit"), arrays["status"].astype("i1"),
                       {"long_name": "0 pending, 1 done, 2 failed"})
     data["wall_time"] = (("top_speed", "weight_on_bit"), arrays["wall_time"], {"units": "s"})

@@ -31,6 +31,8 @@ realizations (n of them; failed ones are excluded and listed):
 ``*_standard_error``           the binomial standard error ``sqrt(P̂(1 − P̂)/n)`` of each
 ``rate_of_penetration_q``      2.5, 50 and 97.5 % quantiles of the time-mean ROP [m/s] (dimension ``quantile``)
 ``stick_slip_index_q``         the same quantiles of the stick-slip index
+``surface_torque_amplitude``   with a top drive: the mean over the point's realizations of their
+``_mean``                      surface-torque amplitude (max − min)/2 after the transient [N m]
 =============================  =========================================================================
 
 **Closed form of the buckling probability** (what the tests check): with only ``sigma`` declared, a
@@ -52,14 +54,15 @@ import numpy as np
 import xarray as xr
 
 from drillstring.case import Case
-from drillstring.dynamics.indicators import bit_area
+from drillstring.dynamics.indicators import bit_area, has_top_drive
 from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.operating_map import MAP_AXES, MAX_POINTS, MapSettings, check_map, map_attributes
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, with_parameters
-from drillstring.stochastic.runs import REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS, compile_kernels, run_outputs
+from drillstring.stochastic.runs import (REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS, TOP_DRIVE_OUTPUTS,
+                                        compile_kernels, run_outputs, with_top_drive_outputs)
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
@@ -233,7 +236,7 @@ class SampledMapStore(TaskStore):
             "weight_on_bit": ArraySpec(("weight_on_bit",), data=np.array(grid.weight_on_bit),
                                        attributes={"units": "N"}),
             **{name: ArraySpec(("realization",), attributes={"units": unit, "long_name": text})
-               for name, (unit, text) in SAMPLE_OUTPUTS.items()},
+               for name, (unit, text) in with_top_drive_outputs(SAMPLE_OUTPUTS, has_top_drive(case)).items()},
             "input_values": ArraySpec(("realization", "parameter")),
         }
         sizes = {"realization": settings.realizations, "top_speed": grid.shape[0], "weight_on_bit": grid.shape[1],
@@ -263,7 +266,8 @@ def run_realization(case: Case, settings: SampledMapSettings, index: int) -> Tas
             outcome.values["input_values"] = values
         return outcome
     outcome = run_outputs(realized, index, t_end=grid.t_end, output_step=grid.output_step,
-                          t_transient=grid.transient, with_stability=True, with_realization=True)
+                          t_transient=grid.transient, with_stability=True, with_realization=True,
+                          with_top_drive=has_top_drive(case))
     outcome.values["realized_weight_on_bit"] = realized.operation.weight_on_bit
     outcome.values["input_values"] = values
     return outcome
@@ -310,7 +314,8 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
         wob = np.asarray(group["weight_on_bit"][:], dtype=float)
         samples = int(dict(attrs["settings"])["samples"])
         shape = (top.size, wob.size, samples)
-        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*SAMPLE_OUTPUTS, "status", "wall_time")}
+        outputs = with_top_drive_outputs(SAMPLE_OUTPUTS, any(name in attrs["layout"] for name in TOP_DRIVE_OUTPUTS))
+        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*outputs, "status", "wall_time")}
         inputs = np.asarray(group["input_values"][:], dtype=float).reshape(*shape, -1)
     dims = ("top_speed", "weight_on_bit", "sample")
     coords = {
@@ -321,7 +326,7 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
         "parameter": ("parameter", [str(p) for p in attrs.get("parameters", [])]),
     }
     data: dict[str, Any] = {name: (dims, arrays[name], {"units": unit, "long_name": text})
-                            for name, (unit, text) in SAMPLE_OUTPUTS.items()}
+                            for name, (unit, text) in outputs.items()}
     data["status"] = (dims, arrays["status"].astype("i1"), {"long_name": "0 pending, 1 done, 2 failed"})
     data["wall_time"] = (dims, arrays["wall_time"], {"units": "s"})
     data["input_values"] = ((*dims, "parameter"), inputs, {"long_name": "drawn values [SI]"})
@@ -343,6 +348,15 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
         unit, text = SAMPLE_OUTPUTS[output]
         data[name] = ((*dims[:2], "quantile"), np.moveaxis(q, 0, -1),
                       {"units": unit, "long_name": f"quantiles of the {text} over the point's realizations"})
+    for output in TOP_DRIVE_OUTPUTS:
+        if output in arrays:
+            values = np.where(done, arrays[output], np.nan)
+            with warnings.catch_warnings():  # a point without finished realization: NaN
+                warnings.simplefilter("ignore", RuntimeWarning)
+                mean = np.nanmean(values, axis=2)
+            unit, text = outputs[output]
+            data[f"{output}_mean"] = (dims[:2], mean, {"units": unit,
+                                                       "long_name": f"mean {text} over the point's realizations"})
     critical = float(attrs["critical_weight_on_bit"])
     data["buckling_margin"] = (dims[:2], np.broadcast_to(critical - wob, shape[:2]).copy(),
                                {"units": "N", "long_name": "critical weight on bit (lateral buckling) minus the "
@@ -372,7 +386,7 @@ def _grid_list(values: np.ndarray) -> list:
 def sampled_map_summary(ds: xr.Dataset) -> dict[str, Any]:
     """JSON-ready summary of a probabilistic map (SI): grid, samples, laws, counts; per point (lists by top
     speed, then weight-on-bit) each probability, its standard error and the quantiles; the largest of each
-    probability and where."""
+    probability and where; with a top drive, ``surface_torque_amplitude_mean`` per point [N m]."""
     summary: dict[str, Any] = {
         "top_speed": [float(v) for v in ds.top_speed.values],
         "weight_on_bit": [float(v) for v in ds.weight_on_bit.values],
@@ -405,4 +419,7 @@ def sampled_map_summary(ds: xr.Dataset) -> dict[str, Any]:
     for name in QUANTILE_OUTPUTS.values():
         summary["quantiles"][name] = {f"{100 * q:g}": _grid_list(ds[name].values[..., k])
                                       for k, q in enumerate(QUANTILES)}
+    for name in TOP_DRIVE_OUTPUTS:
+        if f"{name}_mean" in ds:
+            summary[f"{name}_mean"] = _grid_list(ds[f"{name}_mean"].values)
     return summary

@@ -36,7 +36,16 @@ from typing import Any
 import numpy as np
 
 from drillstring.case import Case
-from drillstring.dynamics.indicators import CYCLE_METRICS, bit_area, cycle_metrics, steady_window, transient_end
+from drillstring.dynamics.indicators import (
+    CYCLE_METRICS,
+    TOP_DRIVE_METRICS,
+    bit_area,
+    cycle_metrics,
+    has_top_drive,
+    steady_window,
+    top_drive_metrics,
+    transient_end,
+)
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import SimulationError, simulate_model
 from drillstring.dynamics.stability import STABILITY_FAMILIES, stability
@@ -74,12 +83,24 @@ REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
                                   "lowest lateral eigenvalue ω² of the prestressed string (< 0: buckled)"),
     "stick_slip_index": CYCLE_METRICS["stick_slip_index"],
 }
+#: Outputs added for a case with a top drive (:func:`~drillstring.dynamics.indicators.has_top_drive`) in the
+#: operating maps: the surface-torque amplitude (max − min)/2 after the transient.
+TOP_DRIVE_OUTPUTS: dict[str, tuple[str, str]] = {
+    "surface_torque_amplitude": TOP_DRIVE_METRICS["surface_torque_amplitude"],
+}
+
+
+def with_top_drive_outputs(outputs: dict[str, tuple[str, str]], top_drive: bool) -> dict[str, tuple[str, str]]:
+    """``outputs`` (name -> (unit, description)) followed by :data:`TOP_DRIVE_OUTPUTS` when ``top_drive``
+    (the case has a top drive, or the store holds its outputs)."""
+    return {**outputs, **(TOP_DRIVE_OUTPUTS if top_drive else {})}
 
 
 #: Scalar results of each realization of a Monte Carlo study, computed in the worker from its realized
 #: case (:func:`realization_metrics`; the growth rate from :func:`stability_outputs`): name -> (unit,
 #: description). ``top_speed`` and ``bit_area`` are the realized case's, kept so that the cycle metrics can be
-#: recomputed for another transient.
+#: recomputed for another transient. A case with a top drive adds the :data:`~drillstring.dynamics.indicators.
+#: TOP_DRIVE_METRICS`.
 REALIZATION_METRICS: dict[str, tuple[str, str]] = {
     **CYCLE_METRICS,
     "top_speed": ("rad/s", "top speed of the realized case"),
@@ -96,10 +117,12 @@ def metrics_transient(settings) -> float:
 def realization_metrics(result, case: Case, t_transient: float) -> dict[str, float]:
     """The :data:`~drillstring.dynamics.indicators.CYCLE_METRICS` of one run (a :class:`~drillstring.
     dynamics.simulate.SimulationResult`, possibly partial) of ``case`` after ``t_transient`` [s], with the
-    case's ``top_speed`` [rad/s] and ``bit_area`` [m²] that they use."""
+    case's ``top_speed`` [rad/s] and ``bit_area`` [m²] that they use; with a top drive (:func:`~drillstring.
+    dynamics.indicators.has_top_drive`) also the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS`."""
     top_speed, area = float(case.operation.top_speed), bit_area(case)
+    extra = top_drive_metrics(result.time, result.observables, t_transient) if has_top_drive(case) else {}
     return {**cycle_metrics(result.time, result.observables, top_speed, area, t_transient),
-            "top_speed": top_speed, "bit_area": area}
+            "top_speed": top_speed, "bit_area": area, **extra}
 
 
 def simulation_options(case: Case, t_end: float, output_step: float) -> dict[str, Any]:
@@ -177,16 +200,19 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
 
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,
-                with_stability: bool = False, with_realization: bool = False) -> TaskOutcome:
+                with_stability: bool = False, with_realization: bool = False,
+                with_top_drive: bool = False) -> TaskOutcome:
     """Simulate ``case`` for ``t_end`` [s] and return its scalar outputs as the outcome of task ``index``
     (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability`` and
-    :data:`REALIZATION_OUTPUTS` when ``with_realization``). Never
+    :data:`REALIZATION_OUTPUTS` when ``with_realization`` and :data:`TOP_DRIVE_OUTPUTS` when
+    ``with_top_drive``: the case has a top drive). Never
     raises: a run that stops early is FAILED with its cause and the outputs of what it computed; a case
     that cannot be built is FAILED with NaN outputs."""
     start = time.perf_counter()
     t_transient = transient_end(t_end) if t_transient is None else t_transient
     names = (list(RUN_OUTPUTS) + (list(STABILITY_OUTPUTS) if with_stability else [])
-             + (list(REALIZATION_OUTPUTS) if with_realization else []))
+             + (list(REALIZATION_OUTPUTS) if with_realization else [])
+             + (list(TOP_DRIVE_OUTPUTS) if with_top_drive else []))
     outcome = TaskOutcome(index, FAILED, "", {name: math.nan for name in names})
     try:
         model = case_reduced_model(case)
@@ -203,6 +229,9 @@ def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_t
             outcome.message = str(error)
         outcome.values.update(result_outputs(result, case, t_transient,
                                              cycle=("stick_slip_index",) if with_realization else ()))
+        if with_top_drive:
+            metrics = top_drive_metrics(result.time, result.observables, t_transient)
+            outcome.values.update({name: metrics[name] for name in TOP_DRIVE_OUTPUTS})
     except Exception as error:  # any failure is recorded with its cause, never dropped
         outcome.status = FAILED
         outcome.message = f"{type(error).__name__}: {error}"
