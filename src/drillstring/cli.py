@@ -571,7 +571,7 @@ def stability(
         console.print(escape(_boundary_line(found, units)), soft_wrap=True)
 
 
-def _boundary_line(found: dict, units: str) -> str:
+def _boundary_line(found: dict, units: str | None = None) -> str:
     """One line on the stability boundary along the weight-on-bit, forces in the unit system ``units``."""
     at = f"at the top speed {found['top_speed'] * _RPM:.4g} rpm"
     force = display_unit("force", units)
@@ -1010,7 +1010,7 @@ def _buckling_line(summary: dict[str, Any], units: str) -> str:
             f"of a buckled draw {b['probability']:.3g}")
 
 
-def _realizations_table(summary: dict[str, Any], units: str) -> Table | None:
+def _realizations_table(summary: dict[str, Any], units: str | None = None) -> Table | None:
     """The distributions of the per-realization cycle metrics: mean, std, dispersion, 2.5/50/97.5 %
     quantiles and the nominal run's value, in the unit system ``units``."""
     from drillstring.quantities import METRIC_DISPLAY, metric_unit
@@ -1038,7 +1038,7 @@ def _realizations_table(summary: dict[str, Any], units: str) -> Table | None:
     return table
 
 
-def _indicator_line(summary: dict[str, Any], units: str) -> str | None:
+def _indicator_line(summary: dict[str, Any], units: str | None = None) -> str | None:
     """One line on the realizations' stick-slip and the linear stability of their steady drilling (forces in
     the unit system ``units``)."""
     section = summary.get("realizations") or {}
