@@ -36,13 +36,28 @@ def test_mesh_layout_is_the_one_the_mesh_uses(drill_pipe, drill_collar, lengths,
     assert breaks[0] == 0.0 and breaks[-1] == sum(lengths)
 
 
+@pytest.mark.parametrize("top_free", [False, True])
 @pytest.mark.parametrize("n_elements", [1, 2, 7, 40])
-def test_mode_family_sizes_are_the_modal_dofs(drill_pipe, n_elements):
+def test_mode_family_sizes_are_the_modal_dofs(drill_pipe, n_elements, top_free):
     mesh = build_mesh([100.0], [drill_pipe], 100.0 / n_elements)
-    sizes = mode_family_sizes(mesh.n_nodes)
-    assert sizes["axial"] == len(family_dofs(mesh, "axial"))
-    assert sizes["torsional"] == len(family_dofs(mesh, "torsional"))
+    sizes = mode_family_sizes(mesh.n_nodes, top_free)
+    assert sizes["axial"] == len(family_dofs(mesh, "axial", top_free))
+    assert sizes["torsional"] == len(family_dofs(mesh, "torsional", top_free))
     assert sizes["lateral"] == len(family_dofs(mesh, "lateral_y")) == len(family_dofs(mesh, "lateral_z"))
+
+
+@pytest.mark.parametrize("top_free", [False, True])
+def test_family_dofs_are_the_boundary_conditions_written_out(drill_pipe, top_free):
+    """Nodes 0..3 (6 DOFs each: u v w θx θy θz): the family DOFs numbered by hand."""
+    mesh = build_mesh([100.0], [drill_pipe], 100.0 / 3)
+    assert mesh.n_nodes == 4
+    assert family_dofs(mesh, "axial", top_free).tolist() == [0, 6, 12, 18]
+    assert family_dofs(mesh, "torsional", top_free).tolist() == ([3] if top_free else []) + [9, 15, 21]
+    assert family_dofs(mesh, "lateral_y", top_free).tolist() == [5, 7, 11, 13, 17, 23]  # θz everywhere, v inside
+    assert family_dofs(mesh, "lateral_z", top_free).tolist() == [4, 8, 10, 14, 16, 22]  # θy everywhere, w inside
+    assert family_dofs(mesh, "axial").dtype == np.int64
+    with pytest.raises(ValueError, match="family = 'bending'"):
+        family_dofs(mesh, "bending")
 
 
 def test_fluid_loads_by_continuity_and_skin_friction():

@@ -45,13 +45,28 @@ def element_counts(breaks: Sequence[float], max_element_length: float) -> list[i
             for start, end in zip(breaks[:-1], breaks[1:])]
 
 
+def family_nodes(n_nodes: int, top_free: bool = False) -> dict[str, tuple[tuple[str, range], ...]]:
+    """The dynamic boundary conditions of the mode families of a mesh of ``n_nodes`` nodes (0 at the top),
+    written once: for each family (``axial``, ``torsional``, ``lateral_y``, ``lateral_z``), the nodal DOF
+    kinds it holds (``u``, ``v``, ``w``, ``theta_x``, ``theta_y``, ``theta_z``) and the nodes where each is
+    free. Axial ``u`` at every node (both ends free; one of them the rigid translation); torsional ``θx``
+    below the top (held), or at every node with ``top_free`` (a top drive; one of them the rigid rotation);
+    lateral per plane ``v`` (``w``) at the inner nodes (ends pinned) and ``θz`` (``θy``) at every node.
+    :func:`drillstring.modal.family_dofs` numbers these DOFs; :func:`mode_family_sizes` counts them."""
+    every = range(n_nodes)
+    inner = range(1, n_nodes - 1)
+    return {"axial": (("u", every),),
+            "torsional": (("theta_x", every if top_free else range(1, n_nodes)),),
+            "lateral_y": (("v", inner), ("theta_z", every)),
+            "lateral_z": (("w", inner), ("theta_y", every))}
+
+
 def mode_family_sizes(n_nodes: int, top_free: bool = False) -> dict[str, int]:
-    """DOFs of each mode family of a mesh of ``n_nodes`` nodes under the dynamic boundary conditions of
-    :func:`drillstring.modal.family_dofs` (the most modes a family can have): axial ``u`` at every node
-    (both ends free; one of them the rigid translation), torsional ``θx`` below the top (held), or at every
-    node with ``top_free`` (a top drive; one of them the rigid rotation), lateral per plane ``v`` at the
-    inner nodes (ends pinned) and ``θz`` at every node."""
-    return {"axial": n_nodes, "torsional": n_nodes if top_free else n_nodes - 1, "lateral": 2 * n_nodes - 2}
+    """DOFs of each mode family of a mesh of ``n_nodes`` nodes (the most modes a family can have), counted
+    from :func:`family_nodes`: ``axial``, ``torsional`` and ``lateral`` (per plane)."""
+    counts = {family: sum(len(nodes) for _, nodes in kinds)
+              for family, kinds in family_nodes(n_nodes, top_free).items()}
+    return {"axial": counts["axial"], "torsional": counts["torsional"], "lateral": counts["lateral_y"]}
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -34,11 +34,14 @@ from drillstring.fem.assembly import (
     stabilizer_stiffness,
     structural_matrices,
 )
+from drillstring.derived import family_nodes
 from drillstring.fem.fluid import FluidCoefficients
 from drillstring.fem.mesh import Mesh
 from drillstring.statics import StaticState
 
 FAMILIES = ("axial", "torsional", "lateral_y", "lateral_z")
+#: The nodal DOF kinds named by :func:`drillstring.derived.family_nodes`.
+_DOF_KIND = {"u": U, "v": V, "w": W, "theta_x": THETA_X, "theta_y": THETA_Y, "theta_z": THETA_Z}
 #: Above this many DOFs in a family, use sparse shift-invert Lanczos (eigsh) instead of dense eigh.
 DENSE_LIMIT = 2500
 
@@ -83,19 +86,13 @@ def build_linear_system(
 
 def family_dofs(mesh: Mesh, family: str, top_free: bool = False) -> np.ndarray:
     """Free DOFs of a mode family under the dynamic boundary conditions (sorted); ``top_free``: the top's
-    rotation is free (a top drive) instead of imposed. Their numbers are
-    :func:`drillstring.derived.mode_family_sizes` (tests check both agree)."""
-    nodes = np.arange(mesh.n_nodes)
-    inner = nodes[1:-1]
-    if family == "axial":
-        return dof(nodes, U)
-    if family == "torsional":
-        return dof(nodes if top_free else nodes[1:], THETA_X)
-    if family == "lateral_y":
-        return np.sort(np.concatenate([dof(inner, V), dof(nodes, THETA_Z)]))
-    if family == "lateral_z":
-        return np.sort(np.concatenate([dof(inner, W), dof(nodes, THETA_Y)]))
-    raise ValueError(f"family = {family!r}: must be one of {', '.join(FAMILIES)}")
+    rotation is free (a top drive) instead of imposed. The boundary conditions are those of
+    :func:`drillstring.derived.family_nodes` (which :func:`drillstring.derived.mode_family_sizes` counts)."""
+    if family not in FAMILIES:
+        raise ValueError(f"family = {family!r}: must be one of {', '.join(FAMILIES)}")
+    kinds = family_nodes(mesh.n_nodes, top_free)[family]
+    return np.sort(np.concatenate([dof(np.asarray(nodes, dtype=np.int64), _DOF_KIND[kind])
+                                   for kind, nodes in kinds]))
 
 
 def family_coupling(system: LinearSystem) -> float:

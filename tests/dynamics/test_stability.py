@@ -11,7 +11,6 @@ from scipy.signal import find_peaks
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import simulate_model
 from drillstring.dynamics.stability import (
-    bit_rock_jacobian,
     linearized_matrix,
     stability,
     steady_drilling,
@@ -51,17 +50,6 @@ def test_steady_drilling_closed_form_and_equilibrium(coarse_case, weight_on_bit,
     assert np.abs(rhs[n:]).max() < 1e-10 * scale
     np.testing.assert_allclose(rhs[:n], steady.state[n:], rtol=0, atol=0)
     assert model.bit_u @ steady.state[n:] == pytest.approx(rop, rel=1e-12)
-
-
-def test_bit_rock_jacobian_against_finite_differences():
-    params = BitRockParameters.reference()
-    for u, w in [(3.6e-3, 10.47), (1e-3, 1.5), (5e-3, 30.0), (2e-3, -4.0)]:
-        jac = bit_rock_jacobian(u, w, params)
-        for j, (du, dw) in enumerate([(1e-9, 0.0), (0.0, 1e-6)]):
-            plus = np.array(evaluate_bit_rock(u + du, w + dw, params), dtype=float)
-            minus = np.array(evaluate_bit_rock(u - du, w - dw, params), dtype=float)
-            fd = (plus - minus) / (2 * (du + dw))
-            np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-9 * np.abs(jac).max())
 
 
 def test_linearized_matrix_against_finite_differences_of_the_rhs(coarse_case):

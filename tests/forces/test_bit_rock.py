@@ -6,10 +6,15 @@ import numpy as np
 import pytest
 
 from drillstring.forces.bit_rock import (
+    KERNEL_SIZE,
+    ON_BOTTOM,
     STICK_SPEED_FLOOR_RATIO,
     BitRockParameters,
     bit_rock_force,
     bit_rock_force_floored,
+    bit_rock_jacobian,
+    bit_rock_law,
+    case_bit_rock,
     evaluate_bit_rock,
     regularizer,
     steady_state,
@@ -193,3 +198,47 @@ def test_stick_floor_from_stiffening_limit():
     assert resistance(2 * params.stick_speed_floor) < limit * at_top
     with pytest.raises(ValueError, match="must be > 1"):
         stick_speed_floor_ratio(P.e, omega, 1.0)
+
+
+def test_bit_rock_jacobian_against_finite_differences():
+    params = BitRockParameters.reference()
+    for u, w in [(3.6e-3, 10.47), (1e-3, 1.5), (5e-3, 30.0), (2e-3, -4.0)]:
+        jac = bit_rock_jacobian(u, w, params)
+        np.testing.assert_array_equal(params.jacobian(u, w), jac)
+        for j, (du, dw) in enumerate([(1e-9, 0.0), (0.0, 1e-6)]):
+            plus = np.array(evaluate_bit_rock(u + du, w + dw, params), dtype=float)
+            minus = np.array(evaluate_bit_rock(u - du, w - dw, params), dtype=float)
+            fd = (plus - minus) / (2 * (du + dw))
+            np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-9 * np.abs(jac).max())
+
+
+@pytest.mark.parametrize("law", ["tucker_wang", "off_bottom"])
+def test_component_kernel_is_the_reference_law(law):
+    """The compiled kernel reading the packed numbers gives exactly the NumPy reference (zero off bottom),
+    also with other components' numbers after its own; the Jacobian is zero off bottom."""
+    params = BitRockParameters(*P.as_array(), stick_speed_floor_ratio=1e-3, law=law)
+    packed = params.kernel_array()
+    assert packed.shape == (KERNEL_SIZE,) and packed.dtype == np.float64
+    assert packed[ON_BOTTOM] == (1.0 if law == "tucker_wang" else 0.0)
+    shared = np.concatenate([packed, [7.0, -3.0, 1e9]])
+    for u, w in [(3.6e-3, 10.47), (0.0, 0.0), (1e-3, 1e-4), (-2e-3, -4.0)]:
+        expected = tuple(float(v) for v in params.evaluate(u, w))
+        assert bit_rock_law(shared, u, w) == expected
+        if law == "off_bottom":
+            assert expected == (0.0, 0.0)
+            np.testing.assert_array_equal(params.jacobian(u, w), np.zeros((2, 2)))
+        else:
+            assert expected == bit_rock_force_floored(u, w, *params.kernel_args())
+
+
+def test_case_bit_rock_is_built_from_the_case(coarse_case):
+    b = coarse_case.bit_rock
+    params = case_bit_rock(coarse_case)
+    assert (params.a1, params.a2, params.a3, params.a4, params.a5, params.e) == (b.a1, b.a2, b.a3, b.a4, b.a5,
+                                                                                  b.regularization)
+    assert params.law == b.law
+    # 1 + (e/θ̇_floor)² = K (1 + (e/Ω)²), K the case's stiffening limit
+    omega = coarse_case.operation.top_speed
+    k = b.stick_stiffening_limit
+    assert 1 + (b.regularization / params.stick_speed_floor) ** 2 == pytest.approx(
+        k * (1 + (b.regularization / omega) ** 2), rel=1e-12)

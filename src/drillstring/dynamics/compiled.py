@@ -4,8 +4,10 @@ The same method data (:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`)
 controller — the compiled functions :func:`~drillstring.dynamics.runge_kutta.error_norm` and
 :func:`~drillstring.dynamics.runge_kutta.step_factor`, shared with the reference integrator
 :func:`~drillstring.dynamics.runge_kutta.integrate` — and the same dense output, with the ROM's
-right-hand side (:func:`~drillstring.dynamics.rom.evaluate_rhs`) and observation kernels called directly
-from compiled code, so that no Python runs inside the step loop. Tests check that both paths agree to
+right-hand side (:func:`~drillstring.dynamics.rom.evaluate_rhs`) and observation kernels
+(:func:`~drillstring.dynamics.rom.observe_kernel`, :func:`~drillstring.dynamics.rom.impacts_kernel`: the
+model's public interface to the loop, see :mod:`drillstring.dynamics.rom`) called directly from compiled
+code, so that no Python runs inside the step loop; the loop is generic over the model's components. Tests check that both paths agree to
 within the integration tolerance.
 
 The compiled loop takes four structured arguments built in one place each: :class:`Workspace` (state
@@ -37,7 +39,7 @@ import numpy as np
 from numba import njit, typeof
 from numba.core import event
 
-from drillstring.dynamics.rom import _observe_kernel, _track_impacts, evaluate_rhs, observation_width
+from drillstring.dynamics.rom import evaluate_rhs, impacts_kernel, observation_width, observe_kernel
 from drillstring.dynamics.runge_kutta import (
     TABLEAUS,
     ButcherTableau,
@@ -133,7 +135,7 @@ class Workspace(NamedTuple):
 @njit(cache=True)
 def _observe(work, row, y, case2, observe_data):
     """Observe ``y`` into output row ``row``."""
-    _observe_kernel(case2, observe_data, y, work.out[row])
+    observe_kernel(case2, observe_data, y, work.out[row])
 
 
 @njit(cache=True)
@@ -227,7 +229,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
         if not st.fsal:
             evaluate_rhs(rhs_data, t_new, y, f)
             state[N_RHS] += 1
-        state[IMPACTS] += _track_impacts(case2, observe_data, y)
+        state[IMPACTS] += impacts_kernel(case2, observe_data, y)
         state[T] = t_new
         state[H] = min(h * factor, st.max_step)
         state[N_ACCEPTED] += 1
@@ -313,7 +315,7 @@ def _compile_kernels(model, work: Workspace, settings: StepperSettings) -> tuple
     with event.install_listener("numba:compile", monitor):
         _prepare(_run_chunk, work, 0.0, settings, model.rhs_data, model.case2_data, model.observe_data)
         _prepare(_observe, work, 0, work.y, model.case2_data, model.observe_data)
-        _prepare(_track_impacts, model.case2_data, model.observe_data, work.y)
+        _prepare(impacts_kernel, model.case2_data, model.observe_data, work.y)
         model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
     return _time.perf_counter() - start, monitor.compiled
 

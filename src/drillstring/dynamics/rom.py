@@ -33,6 +33,13 @@ one structured argument (:class:`RhsData`, :class:`FullModelData`, :class:`Obser
 built once by :class:`ReducedOrderModel`), and :func:`evaluate_rhs` picks the case-1 or case-2 kernel by
 the type of that argument when it is compiled.
 
+**The model's interface to the compiled step loop** (:mod:`drillstring.dynamics.compiled`, which names
+nothing else of this module): the model's data ``rhs_data``, ``case2_data`` and ``observe_data`` and four
+public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel` (one observation row),
+:func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
+The components (bit–rock law, top boundary, contact, turning loads) are called inside these kernels, so
+the loop never names a law.
+
 Impacts: a *contact zone* is a run of consecutive nodes in contact; an impact is a zone that appears
 with no node in contact within one node of it at the previous accepted step
 (:func:`new_contact_zones`). Counted zone by zone, not node by node, the number of impacts does not
@@ -51,12 +58,8 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
-from drillstring.forces.bit_rock import (
-    BitRockParameters,
-    bit_rock_force_floored,
-    evaluate_bit_rock,
-    stick_speed_floor_ratio,
-)
+from drillstring.forces.bit_rock import KERNEL_SIZE as BIT_ROCK_SIZE
+from drillstring.forces.bit_rock import BitRockParameters, bit_rock_law, case_bit_rock
 from drillstring.forces.contact import (
     ContactParameters,
     ContactStations,
@@ -117,13 +120,13 @@ def observation_width(n_probes: int) -> int:
     return PROBE_COLUMN + 3 * n_probes
 
 
-#: Where the boundary laws' numbers sit in ``RhsData.laws``: [0:7] the bit–rock law's (the trailing arguments of
-#: :func:`~drillstring.forces.bit_rock.bit_rock_force_floored`), [7] 1.0 on bottom / 0.0 off bottom, [8:17] the
-#: top drive's (:meth:`~drillstring.forces.top_drive.TopDriveParameters.kernel_args`; code 0: imposed speed).
+#: Where the boundary components' numbers sit in ``RhsData.laws``: first the bit–rock law's
+#: (:meth:`~drillstring.forces.bit_rock.BitRockParameters.kernel_array`, ``BIT_ROCK_SIZE`` entries, read by
+#: :func:`~drillstring.forces.bit_rock.bit_rock_law`), then the top drive's from ``_TOP_DRIVE``
+#: (:meth:`~drillstring.forces.top_drive.TopDriveParameters.kernel_args`; code 0: imposed speed).
 #: One array, not a field each: every field of RhsData is an argument of each inner kernel, and four more
 #: fields made the reference realization 30 % slower (measured; LLVM inlines less).
-_ON_BOTTOM = 7
-_TOP_DRIVE = 8
+_TOP_DRIVE = BIT_ROCK_SIZE
 
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
@@ -217,7 +220,7 @@ class RhsData(NamedTuple):
     lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # (17,) the boundary laws' numbers (_ON_BOTTOM, _TOP_DRIVE)
+    laws: np.ndarray  # the boundary components' numbers: the bit–rock law's, then from _TOP_DRIVE the top drive's
     contact: ContactData
     turning: TurningLoadData
 
@@ -349,14 +352,6 @@ def _bit_motion(d, y):
 
 
 @inner_kernel()
-def _bit_rock(d, bit_velocity, bit_speed):
-    b = d.laws
-    if b[_ON_BOTTOM] == 0.0:
-        return 0.0, 0.0
-    return bit_rock_force_floored(bit_velocity, bit_speed, b[0], b[1], b[2], b[3], b[4], b[5], b[6])
-
-
-@inner_kernel()
 def _lateral_displacements(d, y, v, w):
     """v and w [m] at every node for the state ``y``."""
     v[:] = 0.0
@@ -451,7 +446,7 @@ def _rhs_kernel(d, t, y, out):
         _top_drive(d, t, y, out)
     # bit-rock interaction at the bit node
     bit_velocity, bit_speed = _bit_motion(d, y)
-    axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
+    axial_force, bit_torque = bit_rock_law(d.laws, bit_velocity, bit_speed)
     axial_force += d.weight_on_bit
     for j in range(a0, a1):
         acc[j] += d.bit_u[j - a0] * axial_force
@@ -704,7 +699,7 @@ def new_contact_zones(in_contact, previous):
 
 
 @njit(cache=True)
-def _track_impacts(d, o, y):
+def impacts_kernel(d, o, y):
     """Impacts at the accepted state ``y`` since the previous call (:func:`new_contact_zones`); keeps
     the nodes in contact in ``o.previous`` for the next call."""
     if d.blocks[5] == d.blocks[4] and d.blocks[7] == d.blocks[6]:
@@ -717,12 +712,12 @@ def _track_impacts(d, o, y):
 
 
 @njit(cache=True)
-def _observe_kernel(d, o, y, out):
+def observe_kernel(d, o, y, out):
     """Observables (:data:`OBSERVABLES`, by their columns) and the radial displacement at the probes for
     the state ``y``, from the case-2 data ``d`` (:class:`RhsData`) and ``o`` (:class:`ObserveData`, whose
     contact mask it fills). Returns the number of nodes in contact."""
     bit_velocity, bit_speed = _bit_motion(d, y)
-    axial_force, bit_torque = _bit_rock(d, bit_velocity, bit_speed)
+    axial_force, bit_torque = bit_rock_law(d.laws, bit_velocity, bit_speed)
     force = _contact_state(d, y, o.v, o.w, o.in_contact)
     count = 0
     for i in range(o.in_contact.shape[0]):
@@ -867,8 +862,7 @@ class ReducedOrderModel:
                                               np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
             top_speed=self.base_speed,
             weight_on_bit=float(self.weight_on_bit),
-            laws=np.concatenate([self.bit_rock.kernel_args(), [float(self.bit_rock.law != "off_bottom")],
-                                 self.top_drive.kernel_args()]),
+            laws=np.concatenate([self.bit_rock.kernel_array(), self.top_drive.kernel_args()]),
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
@@ -964,7 +958,7 @@ class ReducedOrderModel:
         eta, eta_dot = y[:n], y[n:2 * n]
         bit_velocity = self.bit_u @ eta_dot
         bit_speed = self.base_speed + self.bit_t @ eta_dot
-        axial_force, bit_torque = evaluate_bit_rock(bit_velocity, bit_speed, self.bit_rock)
+        axial_force, bit_torque = self.bit_rock.evaluate(bit_velocity, bit_speed)
         st = self.stations
         spin = self.base_speed + self.phi_tx @ eta_dot
         force_v, force_w, torque, _ = evaluate_contact(
@@ -1003,7 +997,7 @@ class ReducedOrderModel:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
         its v and w [m] (:func:`observation_width` columns)."""
         out = np.empty(observation_width(len(self.probe_nodes)))
-        _observe_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float), out)
+        observe_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float), out)
         return out
 
     def contact_mask(self) -> np.ndarray:
@@ -1020,7 +1014,7 @@ class ReducedOrderModel:
         """Impacts at the accepted state ``y`` since the previous call (or :meth:`start_impacts`): the
         contact zones that appeared (:func:`new_contact_zones`). Both integrators call it after every
         accepted step."""
-        return int(_track_impacts(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
+        return int(impacts_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
 
     def turning_whirl(self) -> np.ndarray:
         """The steady lateral whirl [η, η̇] at t = 0 of the linear model spinning at Ω under the turning
@@ -1201,7 +1195,6 @@ def case_reduced_model(
     top_drive = case_top_drive(
         case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
     r = case.reduced_model
-    b = case.bit_rock
     c = case.contact
     return reduced_model(
         static,
@@ -1214,11 +1207,7 @@ def case_reduced_model(
         rigid_rotation_damping=case.damping.rigid_rotation,
         damping_basis=case.damping.basis,
         top_speed=case.operation.top_speed,
-        bit_rock=BitRockParameters(
-            b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
-            stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit),
-            law=b.law,
-        ),
+        bit_rock=case_bit_rock(case),
         contact=ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
                                   c.tangential_friction),
         borehole_diameter=case.borehole.diameter,

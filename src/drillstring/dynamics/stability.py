@@ -20,10 +20,11 @@ included::
     J = b_u (f_u b_uᵀ + f_θ b_tᵀ) + b_t (t_u b_uᵀ + t_θ b_tᵀ)                                  (2)
 
 with ``b_u``, ``b_t`` the basis rows of the bit's axial and torsional DOFs and ``f_u = ∂f/∂u̇``,
-``f_θ = ∂f/∂θ̇``, ``t_u``, ``t_θ`` the partial derivatives of the law at ``(ROP, Ω)`` (closed forms in
-:func:`bit_rock_jacobian`). ``t_θ > 0`` is the velocity-weakening torque that acts as a negative
-damping on the torsional modes. The rigid axial position does not enter any equation (the depth drilled
-is indifferent) and is left out, so every eigenvalue is informative. Steady drilling is stable when
+``f_θ = ∂f/∂θ̇``, ``t_u``, ``t_θ`` the partial derivatives of the law at ``(ROP, Ω)`` (the law's own
+Jacobian, :meth:`~drillstring.forces.bit_rock.BitRockParameters.jacobian`). ``t_θ > 0`` is the
+velocity-weakening torque that acts as a negative damping on the torsional modes. The rigid axial
+position does not enter any equation (the depth drilled is indifferent) and is left out, so every
+eigenvalue is informative. Steady drilling is stable when
 every eigenvalue has a negative real part. Lateral modes are decoupled from the bit–rock law at the
 centred state; they enter with their own damping and stiffness (a negative ω², a buckled string, makes
 them unstable). The kinetic- and strain-energy forces of case 1 are at least quadratic in the lateral
@@ -37,8 +38,8 @@ controller has integral action; with ``k_i = 0`` the speed at which ``k_p (Ω �
 found by fixed-point iteration), the motor torque ``τ_m`` balances the torque on bit and the rigid-rotation
 friction ``c2 ω`` (the rigid-rotation equation), the integral state is ``τ_m / k_i`` and the z_torque filter
 holds the surface torque. The linearisation (2) then takes the whole loop: ``δτ_m`` from the controller's
-Jacobian (:func:`~drillstring.forces.top_drive.top_drive_jacobian`) on the quill speed ``qᵀδη̇`` and the
-surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes at the top), and the controller's
+Jacobian (:meth:`~drillstring.forces.top_drive.TopDriveParameters.jacobian`) on the quill speed ``qᵀδη̇``
+and the surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes at the top), and the controller's
 states as extra rows. The rigid rotation's angle, like the depth drilled, enters no equation and is left
 out. **Off bottom** (``bit_rock.law = "off_bottom"``) the steady state is rotation without penetration
 (ROP 0, no bit–rock force) and the bit–rock Jacobian is zero.
@@ -53,8 +54,6 @@ import numpy as np
 import scipy.linalg as sla
 
 from drillstring.dynamics.rom import ReducedOrderModel
-from drillstring.forces.bit_rock import evaluate_bit_rock
-from drillstring.forces.top_drive import top_drive_jacobian
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -124,32 +123,6 @@ class StabilityResult:
         return out
 
 
-def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params) -> np.ndarray:
-    """``[[f_u, f_θ], [t_u, t_θ]]``: partial derivatives of the bit–rock force f [N] and torque t [N·m]
-    on the string (SPEC §6) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
-
-    With ``h = √(θ̇² + e²)``: ``f = −u̇ (1 + e²/θ̇²)/a2 + (a3 h − a1)/a2``, ``t = −a4 u̇ θ̇/h² − a5 θ̇/h``::
-
-        f_u = −(1 + e²/θ̇²)/a2,      f_θ = 2 e² u̇/(a2 θ̇³) + a3 θ̇/(a2 h),
-        t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
-
-    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero off bottom.
-    """
-    if getattr(params, "law", "tucker_wang") == "off_bottom":
-        return np.zeros((2, 2))
-    u, w = float(bit_axial_velocity), float(bit_speed)
-    a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
-    h2 = w * w + e * e
-    h = math.sqrt(h2)
-    floored = abs(w) < params.stick_speed_floor
-    speed = max(abs(w), params.stick_speed_floor)
-    f_u = -(1.0 + (e / speed) ** 2) / a2
-    f_theta = (0.0 if floored else 2.0 * e * e * u / (a2 * w**3)) + a3 * w / (a2 * h)
-    t_u = -a4 * w / h2
-    t_theta = -a4 * u * (e * e - w * w) / h2**2 - a5 * e * e / h**3
-    return np.array([[f_u, f_theta], [t_u, t_theta]])
-
-
 def _rigid_column(model: ReducedOrderModel) -> int:
     columns = [i for i, f in enumerate(model.family) if f == "rigid_axial"]
     if len(columns) != 1:
@@ -159,11 +132,11 @@ def _rigid_column(model: ReducedOrderModel) -> int:
 
 def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float:
     """Eq. (1) at the bit speed ``omega`` [rad/s]; 0 off bottom."""
-    if model.bit_rock.law == "off_bottom":
+    if not model.bit_rock.on_bottom:
         return 0.0
     b_r = model.bit_u[r]
-    f0, _ = evaluate_bit_rock(0.0, omega, model.bit_rock)
-    f1 = float(evaluate_bit_rock(1.0, omega, model.bit_rock)[0]) - float(f0)
+    f0, _ = model.bit_rock.evaluate(0.0, omega)
+    f1 = float(model.bit_rock.evaluate(1.0, omega)[0]) - float(f0)
     d_rr = model.damping[r, r]
     g = model.generalized_force
     rop = (b_r * (float(f0) + model.weight_on_bit) + g[r]) / (d_rr / b_r - b_r * f1)
@@ -179,7 +152,7 @@ def _steady_load(model: ReducedOrderModel, omega: float, r: int):
     """Steady drilling at the bit speed ``omega``: (ROP, bit force, bit torque, modal velocity, generalized
     load without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
     rop = _steady_penetration(model, omega, r)
-    force, torque = (float(v) for v in evaluate_bit_rock(rop, omega, model.bit_rock))
+    force, torque = (float(v) for v in model.bit_rock.evaluate(rop, omega))
     n = model.size
     velocity = np.zeros(n)
     velocity[r] = rop / model.bit_u[r]
@@ -233,7 +206,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     positions included; ``s`` the top drive controller's states)."""
     n = model.size
     size = model.state_size
-    jac = bit_rock_jacobian(steady.rate_of_penetration, steady.bit_speed, model.bit_rock)
+    jac = model.bit_rock.jacobian(steady.rate_of_penetration, steady.bit_speed)
     bu, bt = model.bit_u, model.bit_t
     coupling = (np.outer(bu, jac[0, 0] * bu + jac[0, 1] * bt) + np.outer(bt, jac[1, 0] * bu + jac[1, 1] * bt))
     a = np.zeros((size, size))
@@ -243,7 +216,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     drive = model.top_drive
     if drive.n_states:
         q, s = model.quill_shapes, model.surface_torque_shapes
-        law = top_drive_jacobian(drive)  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
+        law = drive.jacobian()  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
         rows = [(slice(n, 2 * n), q, law[0]), (2 * n, 1.0, law[1])]
         if drive.n_states > 1:
             rows.append((2 * n + 1, 1.0, law[2]))

@@ -39,6 +39,15 @@ the axial time scale ``m a2 Z²``, which collapses at stick) use :func:`bit_rock
 ``BitRockParameters.stick_speed_floor_ratio``.
 
 If ``e = 0`` (unregularised law, ``Z = sgn θ̇``) the kernels return ``Z = 0`` and ``1/Z² = 1`` at ``θ̇ = 0``.
+
+The component (SPEC §11)
+------------------------
+The law is one component of the reduced model. Its pieces: :class:`BitRockParameters` (built from the case
+in one place, :func:`case_bit_rock`), the numbers the compiled kernel reads packed in one float array
+(:meth:`BitRockParameters.kernel_array`, :data:`KERNEL_SIZE` entries, the on-bottom flag at
+:data:`ON_BOTTOM`), the compiled kernel :func:`bit_rock_law`, the NumPy reference :func:`evaluate_bit_rock`
+and the Jacobian :func:`bit_rock_jacobian` (used by the stability analysis). ``law = "off_bottom"`` makes
+every piece return zero.
 """
 
 from __future__ import annotations
@@ -51,12 +60,17 @@ from numba import njit
 
 __all__ = [
     "BIT_ROCK_LAWS",
+    "KERNEL_SIZE",
+    "ON_BOTTOM",
     "STICK_SPEED_FLOOR_RATIO",
     "BitRockParameters",
     "regularizer",
     "bit_rock_force",
     "bit_rock_force_floored",
     "bit_rock_force_array",
+    "bit_rock_jacobian",
+    "bit_rock_law",
+    "case_bit_rock",
     "evaluate_bit_rock",
     "steady_state",
     "stick_speed_floor_ratio",
@@ -64,6 +78,11 @@ __all__ = [
 
 #: The bit–rock laws: Tucker & Wang (SPEC §6), or the bit off bottom (no bit–rock force, SPEC §11).
 BIT_ROCK_LAWS = ("tucker_wang", "off_bottom")
+
+#: Entries of :meth:`BitRockParameters.kernel_array`: ``[a1, a2, a3, a4, a5, e, θ̇_floor, on_bottom]``.
+KERNEL_SIZE = 8
+#: Index of the on-bottom flag in :meth:`BitRockParameters.kernel_array` (1.0 on bottom, 0.0 off bottom).
+ON_BOTTOM = 7
 
 #: Default ratio ``θ̇_floor / e`` below which ``1/Z²`` is frozen (see module docstring).
 STICK_SPEED_FLOOR_RATIO = 1.0e-6
@@ -134,6 +153,24 @@ class BitRockParameters:
     def kernel_args(self) -> tuple[float, ...]:
         """``(a1, a2, a3, a4, a5, e, θ̇_floor)``, the trailing arguments of :func:`bit_rock_force_floored`."""
         return (self.a1, self.a2, self.a3, self.a4, self.a5, self.e, self.stick_speed_floor)
+
+    @property
+    def on_bottom(self) -> bool:
+        """True when the bit touches the rock (every law but ``off_bottom``)."""
+        return self.law != "off_bottom"
+
+    def kernel_array(self) -> np.ndarray:
+        """The numbers :func:`bit_rock_law` reads, as float64: ``[a1, a2, a3, a4, a5, e, θ̇_floor,
+        on_bottom]`` (:data:`KERNEL_SIZE` entries; ``on_bottom`` 1.0 or 0.0, at :data:`ON_BOTTOM`)."""
+        return np.array([*self.kernel_args(), float(self.on_bottom)], dtype=np.float64)
+
+    def evaluate(self, bit_axial_velocity, bit_speed):
+        """:func:`evaluate_bit_rock` of this law: ``(axial_force [N], torque [N·m])`` on the string."""
+        return evaluate_bit_rock(bit_axial_velocity, bit_speed, self)
+
+    def jacobian(self, bit_axial_velocity: float, bit_speed: float) -> np.ndarray:
+        """:func:`bit_rock_jacobian` of this law."""
+        return bit_rock_jacobian(bit_axial_velocity, bit_speed, self)
 
 
 def stick_speed_floor_ratio(regularization: float, top_speed: float, stiffening_limit: float) -> float:
@@ -237,6 +274,17 @@ def bit_rock_force_array(
         torque[i] = t
 
 
+@njit(cache=True)
+def bit_rock_law(args, bit_axial_velocity, bit_speed):
+    """The component's compiled kernel: bit–rock ``(axial_force [N], torque [N·m])`` on the string for the
+    numbers ``args`` of :meth:`BitRockParameters.kernel_array` (only its first :data:`KERNEL_SIZE` entries
+    are read, so the array may carry other components' numbers after them); ``(0, 0)`` off bottom."""
+    if args[ON_BOTTOM] == 0.0:
+        return 0.0, 0.0
+    return bit_rock_force_floored(bit_axial_velocity, bit_speed, args[0], args[1], args[2], args[3], args[4],
+                                  args[5], args[6])
+
+
 # --------------------------------------------------------------------------------------------------------
 # Python wrappers
 # --------------------------------------------------------------------------------------------------------
@@ -256,7 +304,7 @@ def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
     w_flat = np.ascontiguousarray(w).reshape(-1)
     force = np.empty_like(u_flat)
     torque = np.empty_like(u_flat)
-    if params.law == "off_bottom":
+    if not params.on_bottom:
         force[:] = 0.0
         torque[:] = 0.0
     else:
@@ -296,3 +344,40 @@ def steady_state(weight_on_bit, bit_speed, params: BitRockParameters, allow_nega
     if rop.ndim == 0:
         return float(rop), float(tob)
     return rop, tob
+
+
+def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRockParameters) -> np.ndarray:
+    """``[[f_u, f_θ], [t_u, t_θ]]``: partial derivatives of the bit–rock force f [N] and torque t [N·m]
+    on the string (SPEC §6) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
+
+    With ``h = √(θ̇² + e²)``: ``f = −u̇ (1 + e²/θ̇²)/a2 + (a3 h − a1)/a2``, ``t = −a4 u̇ θ̇/h² − a5 θ̇/h``::
+
+        f_u = −(1 + e²/θ̇²)/a2,      f_θ = 2 e² u̇/(a2 θ̇³) + a3 θ̇/(a2 h),
+        t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
+
+    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero off bottom.
+    """
+    if not params.on_bottom:
+        return np.zeros((2, 2))
+    u, w = float(bit_axial_velocity), float(bit_speed)
+    a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
+    h2 = w * w + e * e
+    h = math.sqrt(h2)
+    floored = abs(w) < params.stick_speed_floor
+    speed = max(abs(w), params.stick_speed_floor)
+    f_u = -(1.0 + (e / speed) ** 2) / a2
+    f_theta = (0.0 if floored else 2.0 * e * e * u / (a2 * w**3)) + a3 * w / (a2 * h)
+    t_u = -a4 * w / h2
+    t_theta = -a4 * u * (e * e - w * w) / h2**2 - a5 * e * e / h**3
+    return np.array([[f_u, f_theta], [t_u, t_theta]])
+
+
+def case_bit_rock(case) -> BitRockParameters:
+    """The bit–rock law of a :class:`~drillstring.case.Case` (``[bit_rock]``): its coefficients, its law and
+    the stick floor from ``stick_stiffening_limit`` at the case's top speed (:func:`stick_speed_floor_ratio`)."""
+    b = case.bit_rock
+    return BitRockParameters(
+        b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
+        stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit),
+        law=b.law,
+    )

@@ -122,6 +122,10 @@ class TopDriveParameters:
                          self.set_point, self.ramp_time, self.pipe_impedance, self.filter_frequency],
                         dtype=np.float64)
 
+    def jacobian(self) -> np.ndarray:
+        """:func:`top_drive_jacobian` of this top boundary."""
+        return top_drive_jacobian(self)
+
     def impedance(self, omega) -> np.ndarray:
         """``Z_td(iω) = iωJ_td + k_p + k_i/(iω)`` [N·m·s/rad] (ω [rad/s] > 0), the linear top drive seen
         from the string; for z_torque with an ideal inner loop the same holds with the corrections of the
