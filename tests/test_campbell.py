@@ -204,6 +204,11 @@ def test_cli_campbell_json_table_plot_and_errors(tmp_path):
     table = runner.invoke(app, ["campbell", "reference", "--top-speed", "10:20:5", "--blades", "1"])
     assert table.exit_code == 0, table.output
     assert "Critical speeds" in table.stdout and "Operating speed 100.0 rpm" in table.stdout
+    # rpm and Hz in both unit systems: --units field is accepted and changes nothing; a bad system is refused.
+    field = runner.invoke(app, ["campbell", "reference", "--top-speed", "10:20:5", "--blades", "1", "--units", "field"])
+    assert field.exit_code == 0 and field.stdout == table.stdout
+    bad = runner.invoke(app, ["campbell", "reference", "--units", "imperial"])
+    assert bad.exit_code == 2 and "--units = 'imperial': must be one of si, field" in bad.output
 
     bad = runner.invoke(app, ["campbell", "reference", "--blades", "0"])
     assert bad.exit_code == 2 and "--blades = 0: must be an integer in [1, 24]" in bad.output

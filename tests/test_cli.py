@@ -100,6 +100,7 @@ def test_static_human_readable_has_units_and_summary():
 
 KLBF = 4448.2216152605  # N (NIST)
 FT = 0.3048  # m
+PSI = 6894.757293168361  # Pa (NIST: lbf/in²)
 
 
 def test_static_in_field_units_shows_klbf_and_ft():
@@ -136,8 +137,8 @@ def test_bad_units_are_refused():
     assert bad_env.exit_code == 2 and "DRILLSTRING_UNITS = 'cubits'" in bad_env.output
 
 
-@pytest.mark.parametrize("command", ["static", "modes", "stability", "simulate", "compare", "study", "map",
-                                     "sensitivity"])
+@pytest.mark.parametrize("command", ["static", "modes", "campbell", "stability", "simulate", "compare", "study",
+                                     "map", "sensitivity"])
 def test_every_table_command_has_the_shared_units_option(command):
     result = _invoke(command, "--help")
     assert result.exit_code == 0 and "--units" in result.stdout and "si|field" in result.stdout
@@ -350,6 +351,15 @@ def test_simulate_table_has_units(coarse_case, tmp_path):
                  "impacts", "steps accepted",
                  str(tmp_path / "a.nc")):
         assert text in result.stdout, text
+    # In field units: the surface torque in kft·lbf (1 kft·lbf = 1355.8179483314004 N·m).
+    args = ("simulate", str(coarse_case), "--t-end", "0.5", "--out", str(tmp_path / "b.nc"), "--plot",
+            str(tmp_path / "b.png"))
+    data = _json(*args, "--json")
+    field = _invoke(*args, "--units", "field")
+    assert field.exit_code == 0, field.output
+    row = next(line for line in field.stdout.splitlines() if "surface torque min / max" in line)
+    low, high = (data[f"surface_torque_{k}"] / 1355.8179483314004 for k in ("min", "max"))
+    assert f"{low:,.2f} / {high:,.2f}" in row and "kft·lbf" in row
 
 
 def test_simulate_failure_keeps_the_partial_run(coarse_case, tmp_path):
@@ -427,6 +437,30 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
                  "Buckled strings (lowest lateral ω² < 0): 0 of 3 realizations",
                  f"wall time {first['wall_time']:,.1f} s", "this run only recomputed the statistics"):
         assert text in table.stdout, text
+
+    # Field units: the cycle-metric table, the report, the histograms and the interactive page (JSON stays SI).
+    field = _study(coarse_case, out, "--units", "field")
+    assert field.exit_code == 0, field.output
+    rop, fob = first["realizations"]["rate_of_penetration_mean"], first["realizations"]["force_on_bit_mean"]
+    tob, mse = first["realizations"]["torque_on_bit_mean"], first["realizations"]["mechanical_specific_energy"]
+    rows = {line.split("│")[1].strip(): [c.strip() for c in line.split("│")[2:]]
+            for line in field.stdout.splitlines() if line.count("│") > 8}
+    assert rows["ROP mean"][:2] == ["ft/h", f"{rop['mean'] * 3600 / FT:.4g}"]
+    assert rows["FOB mean"][:2] == ["klbf", f"{fob['mean'] / KLBF:.4g}"]
+    assert rows["TOB mean"][:2] == ["kft·lbf", f"{tob['mean'] / (KLBF * FT):.4g}"]
+    assert rows["MSE"][:2] == ["psi", f"{mse['mean'] / PSI:.4g}"]
+    assert rows["bit speed min"][0] == "rpm"
+    boundary = first["stability"]["boundary"]["weight_on_bit"]
+    assert f"boundary at weight-on-bit {boundary / KLBF:,.2f} klbf" in field.stdout
+    report = (out / "report.html").read_text(encoding="utf-8")
+    assert f"<td>ROP mean</td><td>ft/h</td><td class=\"num\">{rop['mean'] * 3600 / FT:.4g}</td>" in report
+    assert "along the weight-on-bit [klbf]" in report
+    page = (out / "interactive.html").read_text(encoding="utf-8")
+    specs = [json.loads(t) for t in re.findall(r'class="figure-spec"[^>]*>(.*?)</script>', page, re.S)]
+    assert specs[0]["layout"]["yaxis"]["title"]["text"] == "rate of penetration [ft/h]"
+    assert specs[3]["layout"]["yaxis"]["title"]["text"] == "force-on-bit [klbf]"
+    assert json.loads(_study(coarse_case, out, "--json", "--units", "field").stdout)["realizations"] == \
+        first["realizations"]
 
 
 def test_study_refuses_other_settings_on_the_same_store(coarse_case, tmp_path):
@@ -868,6 +902,11 @@ def test_stability_boundary_along_the_weight_on_bit(coarse_case):
     assert result.exit_code == 0, result.output
     assert (f"Stability boundary at the top speed 100 rpm: weight-on-bit {wob / 1e3:,.2f} kN (steady drilling "
             f"unstable above it); the case's 100.00 kN is {(1e5 - wob) / 1e3:,.2f} kN above it") in result.stdout
+    field = _invoke("stability", str(coarse_case), "--boundary", "--units", "field")
+    assert field.exit_code == 0, field.output
+    assert (f"weight-on-bit {wob / KLBF:,.2f} klbf (steady drilling unstable above it); the case's "
+            f"{1e5 / KLBF:,.2f} klbf is {(1e5 - wob) / KLBF:,.2f} klbf above it") in field.stdout
+    assert " kN" not in field.stdout
 
 
 def test_stability_without_steady_drilling_is_one_line(tmp_path, coarse_case):
@@ -1015,6 +1054,23 @@ def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_f
     assert "resumed: 12 of 12 realizations" in table.stderr
     for text in ("Probabilistic operating map", "P(buckled)", "3 realizations per point", "probabilities.png"):
         assert text in table.stdout, text
+    # Field units: the table, the report and the interactive page (figures: tests/test_plots.py).
+    field = _invoke(*args, "--units", "field")
+    assert field.exit_code == 0, field.output
+    rop = summary["quantiles"]["rate_of_penetration_q"]["50"][0][0] * 3600 / FT
+    first_row = next([c.strip() for c in line.split("│")[1:-1]] for line in field.stdout.splitlines()
+                     if line.startswith("│") and line.split("│")[1].strip() == "80")
+    assert first_row[1] == f"{6e4 / KLBF:g}" and first_row[7].startswith(f"{rop:.3g} (")
+    for text in ("WOB [klbf]", "mean ROP [ft/h]", f"{summary['critical_weight_on_bit'] / KLBF:,.1f} klbf",
+                 "(13.49–20.23 klbf)"):
+        assert text in field.stdout, text
+    assert " kN" not in field.stdout and "m/h" not in field.stdout
+    report = (out / "report.html").read_text(encoding="utf-8")
+    assert "<th>WOB [klbf]</th>" in report and "mean ROP [ft/h]" in report and "σ = 0.8992 klbf" in report
+    page = (out / "interactive.html").read_text(encoding="utf-8")
+    specs = [json.loads(t) for t in re.findall(r'class="figure-spec"[^>]*>(.*?)</script>', page, re.S)]
+    assert specs[0]["layout"]["yaxis"]["title"]["text"] == "weight-on-bit [klbf]"
+    assert specs[0]["data"][0]["y"] == pytest.approx([6e4 / KLBF, 9e4 / KLBF], rel=1e-5)  # 6 digits in the page
     lonely = _invoke("map", str(torsional_case_file), "--sigma", "4000", "--out", str(tmp_path / "none"))
     assert lonely.exit_code == 2 and "give --samples N" in lonely.stderr
 

@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 from drillstring import api
-from drillstring.interactive import REALIZATIONS_SHOWN, map_figures, sensitivity_figures
+from drillstring.interactive import REALIZATIONS_SHOWN, map_figures, sensitivity_figures, study_figures
 from drillstring.report import INTERACTIVE_PAGE, write_map_report, write_sensitivity_report
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome")
@@ -162,6 +162,39 @@ def test_map_figures_carry_the_values_with_gaps(map_dataset):
     assert heat["z"][1][0] == pytest.approx((1.0 + 1.0) * 3600.0)  # z[weight][speed]
     assert any(t["type"] == "contour" for t in figures[0]["data"])
     assert figures[0]["layout"]["shapes"][0]["y0"] == pytest.approx(114.13)
+
+
+def test_map_figures_follow_the_unit_system(map_dataset):
+    """In field units: weights-on-bit and the buckling limit in klbf, ROP in ft/h, MSE in psi, displacements in
+    in (the SI values over the defining factors: 1 klbf = 4448.2216152605 N, 1 ft = 0.3048 m, 1 psi =
+    6894.757293168361 Pa)."""
+    klbf, ft, psi = 4448.2216152605, 0.3048, 6894.757293168361
+    rop, oscillation, mse, radial = map_figures(map_dataset, units="field")
+    heat = rop["data"][0]
+    assert heat["y"] == pytest.approx([60e3 / klbf, 100e3 / klbf, 140e3 / klbf], rel=1e-5)  # 6 digits kept
+    assert heat["z"][1][0] == pytest.approx(2.0 * 3600.0 / ft, rel=1e-5)
+    assert "klbf" in heat["hovertemplate"] and rop["layout"]["yaxis"]["title"]["text"] == "weight-on-bit [klbf]"
+    assert heat["colorbar"]["title"]["text"] == "mean rate of penetration [ft/h]"
+    assert rop["layout"]["shapes"][0]["y0"] == pytest.approx(114.13e3 / klbf)
+    assert "(25.66 klbf)" in rop["caption"]
+    assert oscillation["data"][0]["z"][1][0] == pytest.approx(2.0)  # a plain number
+    assert mse["data"][0]["colorbar"]["title"]["text"] == "mechanical specific energy [psi]"
+    assert mse["data"][0]["z"][1][0] == pytest.approx(2.0 / psi, rel=1e-5)
+    assert radial["data"][0]["z"][1][0] == pytest.approx(2.0 / 0.0254, rel=1e-5)
+
+
+def test_study_figures_follow_the_unit_system():
+    time = np.linspace(0.0, 1.0, 5)
+    names = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
+    stats = xr.Dataset({f"{n}_{k}": ("time", np.full(5, 2.0)) for n in names for k in
+                        ("mean", "lower", "upper", "nominal", "dispersion")}, coords={"time": time})
+    figures = study_figures(stats, units="field")
+    expected = {"rate of penetration [ft/h]": 2.0 * 3600 / 0.3048, "bit speed [rpm]": 2.0 * 30 / math.pi,
+                "torque-on-bit [kft·lbf]": 2.0 / 1355.8179483314004, "force-on-bit [klbf]": 2.0 / 4448.2216152605}
+    for fig, (label, value) in zip(figures, expected.items()):
+        assert fig["layout"]["yaxis"]["title"]["text"] == label
+        mean = next(t for t in fig["data"] if t["name"] == "mean")
+        assert mean["y"] == pytest.approx([value] * 5, rel=1e-5)
 
 
 @pytest.fixture

@@ -261,3 +261,63 @@ def test_case_names_are_plain_text_in_figures(run_dataset, tmp_path, name):
     assert plots._case_name(ds.attrs["case"]).replace("\\$", "$") == name.replace("\\\\", "\\")
     _assert_png(plots.plot_run(ds, tmp_path / "run.png"))
     _assert_png(plots.plot_compare(ds, ds, tmp_path / "compare.png"))
+
+
+KLBF, FT, PSI = 4448.2216152605, 0.3048, 6894.757293168361  # N, m, Pa (NIST)
+
+
+def test_realization_histograms_follow_the_unit_system(stats_dataset, tmp_path, drawn):
+    """realizations.png in field units: ROP in ft/h, TOB in kft·lbf, FOB in klbf, MSE in psi, bit speed in rpm;
+    each histogram's mean line is the SI mean over the defining factor."""
+    stats = stats_dataset.copy()
+    si_values = {"rate_of_penetration_mean": 3.5e-3, "torque_on_bit_mean": 4.5e3, "force_on_bit_mean": 1e5,
+                 "mechanical_specific_energy": 2e8, "bit_speed_min": 5.0}
+    for name, value in si_values.items():
+        stats[f"realization_{name}"] = xr.DataArray(value * np.linspace(0.9, 1.1, 8), dims="realization",
+                                                     attrs={"nominal": value})
+    plots.plot_realizations(stats, tmp_path / "field.png", units="field")
+    axes = {ax.get_xlabel(): ax for ax in drawn[0].axes if ax.get_visible()}
+    expected = {"ROP mean [ft/h]": 3.5e-3 * 3600 / FT, "TOB mean [kft·lbf]": 4.5e3 / (KLBF * FT),
+                "FOB mean [klbf]": 1e5 / KLBF, "MSE [psi]": 2e8 / PSI, "bit speed min [rpm]": 5.0 * 30 / math.pi}
+    assert set(axes) == set(expected)
+    for label, value in expected.items():
+        mean, nominal = (x[0] for x, _ in _lines(axes[label]))
+        assert mean == pytest.approx(value) and nominal == pytest.approx(value)
+    assert "σ_WOH = 1.124 klbf" in drawn[0]._suptitle.get_text()  # 5 kN
+
+
+@pytest.fixture
+def sampled_map():
+    """A probabilistic map in the layout of drillstring.stochastic.probabilistic_map.sampled_map_dataset."""
+    speeds, weights = np.array([80.0, 160.0]) * math.pi / 30, np.array([6e4, 9e4])
+    quantiles = np.array([0.025, 0.5, 0.975])
+    grid = np.array([[0.1, 0.4], [0.2, 0.9]])
+    data = {name: (("top_speed", "weight_on_bit"), grid) for name, _ in plots.PROBABILITY_PANELS}
+    rop = 1e-3 * np.arange(1.0, 13.0).reshape(2, 2, 3)
+    data["rate_of_penetration_q"] = (("top_speed", "weight_on_bit", "quantile"), rop)
+    data["stick_slip_index_q"] = (("top_speed", "weight_on_bit", "quantile"), rop * 100)
+    return xr.Dataset(data, coords={"top_speed": speeds, "weight_on_bit": weights, "quantile": quantiles},
+                      attrs={"samples": 3, "t_end": 1.0, "t_transient": 0.5, "critical_weight_on_bit": 8e4})
+
+
+@pytest.mark.parametrize("units, force, rop", [("si", (1e3, "kN"), (1 / 3600, "m/h")),
+                                               ("field", (KLBF, "klbf"), (FT / 3600, "ft/h"))])
+def test_probability_and_quantile_maps_follow_the_unit_system(sampled_map, tmp_path, drawn, units, force, rop):
+    """probabilities.png and quantiles.png: weights-on-bit, the buckling limit and the ROP quantiles in the unit
+    system's units (the SI values over the defining factors)."""
+    _assert_png(plots.plot_probability_map(sampled_map, tmp_path / "p.png", units=units))
+    _assert_png(plots.plot_quantile_map(sampled_map, tmp_path / "q.png", units=units))
+    (factor, label), (rop_factor, rop_label) = force, rop
+    for fig in drawn:
+        ax = fig.axes[0]
+        assert ax.get_ylabel() == f"weight-on-bit [{label}]"
+        (x, y), = [line for line in _lines(ax) if len(line[0]) == 2 and line[1][0] == line[1][1]]  # buckling
+        assert y[0] == pytest.approx(8e4 / factor)
+        assert ax.get_ylim() == pytest.approx((6e4 / factor, 9e4 / factor))  # the filled contours span the grid
+        legend = fig.legends[0].get_texts()[0].get_text()
+        assert legend == f"lateral buckling of the nominal string, WOB = {8e4 / factor:.4g} {label}"
+    colorbars = [ax.get_ylabel() for ax in drawn[1].axes if ax.get_label() == "<colorbar>"]
+    assert colorbars[0] == f"mean ROP [{rop_label}]"
+    levels = drawn[1].axes[0].collections[0].levels  # the 2.5 % ROP quantile panel: its first and last band
+    low, high = 1e-3 / rop_factor, 10e-3 / rop_factor  # hold the smallest and largest values
+    assert levels[0] <= low <= levels[1] and levels[-2] <= high <= levels[-1]

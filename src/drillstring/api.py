@@ -410,7 +410,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
                  for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
         run_info=run_info,
-        interactive=study_figures(stats, shown),
+        interactive=study_figures(stats, shown, units=units),
         units=units,
     )
     return {**paths, **figures}
@@ -783,7 +783,7 @@ def operating_map(
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
     if samples is not None:
         return _sampled_map(case, settings, engine, out, samples=samples, sigma=sigma, parameters=parameters,
-                            correlation=correlation, seed=seed)
+                            correlation=correlation, seed=seed, units=units)
     if sigma is not None or parameters is not None or correlation is not None:
         raise ValueError("sigma, parameters and correlation declare the uncertainty of a probabilistic map: give "
                          "samples (realizations per point) too")
@@ -807,7 +807,7 @@ def _finish_map(case, folder, units, run):
                           "red dashed: lateral buckling limit; dots: simulated points")}
     return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
                       partial(write_map_report, units=units),
-                      f"Operating map: case '{case.name}'", map_figures)
+                      f"Operating map: case '{case.name}'", partial(map_figures, units=units))
 
 
 def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str, interactive):
@@ -838,8 +838,8 @@ def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, 
     return ds, summary, files
 
 
-def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, seed) -> MapOutcome:
-    """A probabilistic map (:func:`operating_map` with ``samples``)."""
+def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, seed, units) -> MapOutcome:
+    """A probabilistic map (:func:`operating_map` with ``samples``), its figures and report in ``units``."""
     from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
     from drillstring.stochastic.uncertainty import declared_uncertainty
@@ -859,27 +859,28 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
     case = case.model_copy(update={"uncertainty": None})
     folder = _output_folder(out, "drillstring-map-")
     run = run_sampled_map(case, settings, folder / "map.zarr", engine,
-                          finish=partial(_finish_sampled_map, case, folder if out is not None else None))
+                          finish=partial(_finish_sampled_map, case, folder if out is not None else None, units))
     return MapOutcome(*run.result, run.already, run.note)
 
 
-def _finish_sampled_map(case, folder, run):
-    """Under the map's lock: the probabilistic map's Dataset, summary and (in ``folder``, unless None) files."""
+def _finish_sampled_map(case, folder, units, run):
+    """Under the map's lock: the probabilistic map's Dataset, summary and (in ``folder``, unless None) files, in
+    the unit system ``units``."""
     from drillstring.interactive import probability_map_figures
     from drillstring.plots import plot_probability_map, plot_quantile_map
     from drillstring.report import write_probability_map_report
     from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
 
-    figures = {"figure": ("probabilities.png", plot_probability_map,
+    figures = {"figure": ("probabilities.png", partial(plot_probability_map, units=units),
                           "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
                           "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
                           "buckling limit; dots: the points"),
-               "quantiles": ("quantiles.png", plot_quantile_map,
+               "quantiles": ("quantiles.png", partial(plot_quantile_map, units=units),
                              "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
                              "point's realizations")}
     return _map_files(case, folder, run, sampled_map_dataset, sampled_map_summary, "realizations", figures,
-                      write_probability_map_report, f"Probabilistic operating map: case '{case.name}'",
-                      probability_map_figures)
+                      partial(write_probability_map_report, units=units),
+                      f"Probabilistic operating map: case '{case.name}'", partial(probability_map_figures, units=units))
 
 
 @dataclass

@@ -95,8 +95,6 @@ EXIT_RUN_FAILED = 1
 EXIT_INTERRUPTED = 130
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
-_KN = 1e3  # N per kN (tables not yet in the --units system: stability boundary, probabilistic map)
-_M_PER_H = 3600.0  # (m/h) per (m/s)
 
 app = typer.Typer(
     name="drillstring",
@@ -398,10 +396,14 @@ def campbell(
     ] = None,
     plot: Annotated[Path | None, typer.Option("--plot", help="Write the diagram as a PNG figure.")] = None,
     as_json: JsonOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Campbell diagram: natural frequencies of each family against rotary speed (prestress, drilling fluid,
     gyroscopic forward/backward whirl), the 1× and blade excitation lines, the critical speeds and the
-    case's operating speed."""
+    case's operating speed.
+
+    Its table and figure are in rpm and Hz, the same in both unit systems: --units is accepted (and checked,
+    as $DRILLSTRING_UNITS is) like on every command, and changes nothing here."""
     the_case = _load(case)
     if plot is not None:
         _check_output("--plot", plot)
@@ -566,20 +568,22 @@ def stability(
             f"{leading.growth_rate:.4g} 1/s (e-folding time {1 / leading.growth_rate:.3g} s); the string "
             f"settles into a self-excited vibration."), soft_wrap=True)
     if boundary:
-        console.print(escape(_boundary_line(found)), soft_wrap=True)
+        console.print(escape(_boundary_line(found, units)), soft_wrap=True)
 
 
-def _boundary_line(found: dict) -> str:
-    """One line on the stability boundary along the weight-on-bit."""
+def _boundary_line(found: dict, units: str | None = None) -> str:
+    """One line on the stability boundary along the weight-on-bit, forces in the unit system ``units``."""
     at = f"at the top speed {found['top_speed'] * _RPM:.4g} rpm"
+    force = display_unit("force", units)
     if found["weight_on_bit"] is None:
         return (f"Stability boundary {at}: the leading growth rate does not cross 0 between 0 and the string's "
-                f"weight (weight-on-bit {found['nominal_weight_on_bit'] / _KN:,.2f} kN: "
+                f"weight (weight-on-bit {force(found['nominal_weight_on_bit']):,.2f} {force.label}: "
                 f"{found['nominal_growth_rate']:.4g} 1/s)")
     wob, nominal = found["weight_on_bit"], found["nominal_weight_on_bit"]
-    return (f"Stability boundary {at}: weight-on-bit {wob / _KN:,.2f} kN (steady drilling unstable above it); "
-            f"the case's {nominal / _KN:,.2f} kN is {abs(nominal - wob) / _KN:,.2f} kN "
-            f"{'above' if nominal > wob else 'below'} it (growth rate {found['nominal_growth_rate']:.4g} 1/s)")
+    return (f"Stability boundary {at}: weight-on-bit {force(wob):,.2f} {force.label} (steady drilling unstable "
+            f"above it); the case's {force(nominal):,.2f} {force.label} is {force(abs(nominal - wob)):,.2f} "
+            f"{force.label} {'above' if nominal > wob else 'below'} it (growth rate "
+            f"{found['nominal_growth_rate']:.4g} 1/s)")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -667,9 +671,10 @@ def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
     table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
                   "rpm")
+    torque = display_unit("torque", units)
     table.add_row(escape(f"surface torque min / max (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['surface_torque_min'], ',.2f', 1.0 / _KN)} / "
-                  f"{_fmt(numbers['surface_torque_max'], ',.2f', 1.0 / _KN)}", "kN·m")
+                  f"{_fmt(numbers['surface_torque_min'], ',.2f', torque.scale)} / "
+                  f"{_fmt(numbers['surface_torque_max'], ',.2f', torque.scale)}", torque.label)
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
         table.add_row(escape(f"max radial displacement at x = {length(x):g} {length.label} / gap"),
                       f"{_fmt(r, ',.3f', small.scale)} / {small(gap):,.1f}", small.label)
@@ -1005,10 +1010,10 @@ def _buckling_line(summary: dict[str, Any], units: str) -> str:
             f"of a buckled draw {b['probability']:.3g}")
 
 
-def _realizations_table(summary: dict[str, Any]) -> Table | None:
+def _realizations_table(summary: dict[str, Any], units: str | None = None) -> Table | None:
     """The distributions of the per-realization cycle metrics: mean, std, dispersion, 2.5/50/97.5 %
-    quantiles and the nominal run's value, in engineering units."""
-    from drillstring.quantities import METRIC_DISPLAY
+    quantiles and the nominal run's value, in the unit system ``units``."""
+    from drillstring.quantities import METRIC_DISPLAY, metric_unit
 
     section = summary.get("realizations") or {}
     if not section:
@@ -1021,19 +1026,21 @@ def _realizations_table(summary: dict[str, Any]) -> Table | None:
                   title_justify="left", caption=escape(caption), caption_justify="left")
     for header in ("metric", "unit", "mean", "std", "δ [%]", "2.5 %", "50 %", "97.5 %", "nominal", "n"):
         table.add_column(escape(header), justify="left" if header in ("metric", "unit") else "right")
-    for name, (factor, unit, label) in METRIC_DISPLAY.items():
+    for name, (_, label) in METRIC_DISPLAY.items():
         entry = section.get(name)
         if not entry:
             continue
-        cells = [_fmt(entry[key], ".4g", factor) for key in ("mean", "std")]
+        unit = metric_unit(name, units)
+        cells = [_fmt(entry[key], ".4g", unit.scale) for key in ("mean", "std")]
         cells.append(_fmt(entry["dispersion"], ".3g", 100.0))
-        cells += [_fmt(entry[key], ".4g", factor) for key in ("q2.5", "q50", "q97.5", "nominal")]
-        table.add_row(escape(label), escape(unit), *cells, str(entry["n"]))
+        cells += [_fmt(entry[key], ".4g", unit.scale) for key in ("q2.5", "q50", "q97.5", "nominal")]
+        table.add_row(escape(label), escape(unit.label), *cells, str(entry["n"]))
     return table
 
 
-def _indicator_line(summary: dict[str, Any]) -> str | None:
-    """One line on the realizations' stick-slip and the linear stability of their steady drilling."""
+def _indicator_line(summary: dict[str, Any], units: str | None = None) -> str | None:
+    """One line on the realizations' stick-slip and the linear stability of their steady drilling (forces in
+    the unit system ``units``)."""
     section = summary.get("realizations") or {}
     parts = []
     if "stick_slip_realizations" in section:
@@ -1045,7 +1052,9 @@ def _indicator_line(summary: dict[str, Any]) -> str | None:
                 f"{stability['realizations_with_growth_rate']} ({100 * stability['unstable_fraction']:.3g} %)")
         boundary = stability.get("boundary") or {}
         if boundary.get("weight_on_bit") is not None:
-            text += (f"; nominal case's boundary at weight-on-bit {boundary['weight_on_bit'] / _KN:,.2f} kN "
+            force = display_unit("force", units)
+            text += (f"; nominal case's boundary at weight-on-bit {force(boundary['weight_on_bit']):,.2f} "
+                     f"{force.label} "
                      f"(top speed {boundary['top_speed'] * _RPM:.4g} rpm)")
         parts.append(text)
     return "; ".join(parts) or None
@@ -1201,10 +1210,10 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path], uni
                              f"{entry['std']:.4g}{unit}, dispersion {_fmt(entry['dispersion'], '.3g', 100.0)} %)"),
                       soft_wrap=True)
     console.print(_study_table(payload))
-    metrics = _realizations_table(payload)
+    metrics = _realizations_table(payload, units)
     if metrics is not None:
         console.print(metrics)
-    line = _indicator_line(payload)
+    line = _indicator_line(payload, units)
     if line:
         console.print(escape(line), soft_wrap=True)
     warning = (payload.get("time_convergence") or {}).get("warning")
@@ -1335,8 +1344,9 @@ def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> No
     table = Table(title="Probabilities per point and quantiles 50 % (2.5–97.5 %)", title_justify="left",
                   caption="binomial standard errors of the probabilities in map.json and the report",
                   caption_justify="left")
-    for header in ("rpm", "WOB [kN]", "n", "P(stick-slip)", "P(buckled)", "P(impact)", "P(unstable)",
-                   "mean ROP [m/h]", "stick-slip index"):
+    force, rop = display_unit("force", units), display_unit("rate_of_penetration", units)
+    for header in ("rpm", f"WOB [{force.label}]", "n", "P(stick-slip)", "P(buckled)", "P(impact)", "P(unstable)",
+                   f"mean ROP [{rop.label}]", "stick-slip index"):
         table.add_column(escape(header), justify="right")
     probabilities, quantiles = summary["probabilities"], summary["quantiles"]
 
@@ -1346,15 +1356,15 @@ def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> No
 
     for i, speed in enumerate(speeds):
         for j, wob in enumerate(weights):
-            cells = [f"{speed * _RPM:g}", f"{wob / _KN:g}", f"{summary['samples_done'][i][j]}"]
+            cells = [f"{speed * _RPM:g}", f"{force(wob):g}", f"{summary['samples_done'][i][j]}"]
             for key in ("stick_slip_probability", "buckling_probability", "impact_probability",
                         "instability_probability"):
                 cells.append(_fmt(probabilities[key]["values"][i][j], ".3f"))
-            cells += [spread("rate_of_penetration_q", i, j, _M_PER_H), spread("stick_slip_index_q", i, j, 1.0)]
+            cells += [spread("rate_of_penetration_q", i, j, rop.scale), spread("stick_slip_index_q", i, j, 1.0)]
             table.add_row(*cells)
     console.print(table)
     console.print(escape(f"critical weight-on-bit (lateral buckling, nominal case): "
-                         f"{summary['critical_weight_on_bit'] / _KN:,.1f} kN"), soft_wrap=True)
+                         f"{force(summary['critical_weight_on_bit']):,.1f} {force.label}"), soft_wrap=True)
     files = summary.get("files") or {}
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)

@@ -8,9 +8,11 @@ a page is written), so the page works offline, alone: no network, no other file.
 stay beside it.
 
 A figure is a plain mapping ``{"title", "caption", "data", "layout"}`` (plotly.js traces and layout, values
-already in display units): :func:`study_figures`, :func:`map_figures` and :func:`sensitivity_figures` build
-them from the package's results (SI). The page sets ``data-plots-rendered`` on ``<body>`` to the number of
-figures drawn once plotly.js has drawn them all, and ``data-plot-error`` if drawing one failed.
+already in display units): :func:`study_figures`, :func:`map_figures`, :func:`probability_map_figures` and
+:func:`sensitivity_figures` build them from the package's results (SI), axes and values in the unit system
+``units`` (``"si"``, ``"field"``; None: ``$DRILLSTRING_UNITS``, else si; :func:`drillstring.units.display_unit`).
+The page sets ``data-plots-rendered`` on ``<body>`` to the number of figures drawn once plotly.js has drawn them
+all, and ``data-plot-error`` if drawing one failed.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from typing import Any
 import numpy as np
 
 from drillstring.files import write_text_atomic
+from drillstring.quantities import DISPLAY_KINDS
+from drillstring.units import display_unit
 
 __all__ = ["REALIZATIONS_SHOWN", "map_figures", "sensitivity_figures", "study_figures", "write_interactive_page"]
 
@@ -63,13 +67,13 @@ def _figure(title: str, caption: str, data: list[dict], xlabel: str, ylabel: str
 # ---------------------------------------------------------------------------------------------------------
 
 
-def study_figures(stats, realizations=None) -> list[dict]:
+def study_figures(stats, realizations=None, *, units: str | None = None) -> list[dict]:
     """Figures of a Monte Carlo study: per observable the 95 % envelope, mean and nominal response with the
     single ``realizations`` (a Dataset with dimension ``realization``, at most :data:`REALIZATIONS_SHOWN`
     used, each hidden until clicked in the legend); the dispersion [%] against time with the transient
     shaded; the convergence ``conv(n_s)``; the stick-slip index of each realization against its drawn
-    inputs. ``stats``: :func:`drillstring.stochastic.analysis.study_statistics`."""
-    from drillstring.plots import DISPLAY_UNITS
+    inputs. ``stats``: :func:`drillstring.stochastic.analysis.study_statistics`; values in ``units``."""
+    from drillstring.plots import TITLES
     from drillstring.quantities import stored_observables
 
     time = _values(stats["time"].values)
@@ -80,8 +84,8 @@ def study_figures(stats, realizations=None) -> list[dict]:
         shown = realizations.isel(realization=slice(0, REALIZATIONS_SHOWN))
     panels = stored_observables(stats)
     for name in panels:
-        factor, unit, title = DISPLAY_UNITS[name]
-        label = f"{title} [{unit}]"
+        unit, title = display_unit(DISPLAY_KINDS[name], units), TITLES[name]
+        factor, label = unit.scale, f"{title} [{unit.label}]"
         data = [
             {"type": "scatter", "mode": "lines", "x": time, "y": _values(stats[f"{name}_upper"].values, factor),
              "line": {"width": 0}, "name": "95 % envelope", "legendgroup": "envelope", "showlegend": False,
@@ -108,7 +112,7 @@ def study_figures(stats, realizations=None) -> list[dict]:
         key = f"{name}_dispersion"
         if key in stats:
             dispersion.append({"type": "scatter", "mode": "lines", "x": time, "y": _values(stats[key].values, 100.0),
-                               "name": DISPLAY_UNITS[name][2]})
+                               "name": TITLES[name]})
     shapes = [{"type": "rect", "xref": "x", "yref": "paper", "x0": float(stats["time"].values[0]), "x1": t_transient,
                "y0": 0, "y1": 1, "fillcolor": "rgba(128,128,128,0.15)", "line": {"width": 0}}]
     figures.append(_figure("Dispersion std/|mean|", f"Dispersion [%] against time; shaded: the transient "
@@ -121,7 +125,7 @@ def study_figures(stats, realizations=None) -> list[dict]:
             last = values[-1] if values.size and np.isfinite(values[-1]) and values[-1] != 0 else 1.0
             convergence.append({"type": "scatter", "mode": "lines+markers", "marker": {"size": 4},
                                 "x": _values(stats[key]["n_samples"].values), "y": _values(values / last),
-                                "name": DISPLAY_UNITS.get(name, (1, "", name))[2]})
+                                "name": TITLES.get(name, name)})
     figures.append(_figure("Mean-square convergence", "conv(n_s) / conv(n_s max): levelling off at 1 shows that "
                            "the number of realizations suffices.", convergence, "number of realizations n_s",
                            "conv(n_s) / conv(n_s max)"))
@@ -142,70 +146,80 @@ def study_figures(stats, realizations=None) -> list[dict]:
     return figures
 
 
-def map_figures(ds) -> list[dict]:
+def map_figures(ds, *, units: str | None = None) -> list[dict]:
     """Figures of an operating map (:func:`drillstring.stochastic.operating_map.map_dataset`): one heat map per
-    panel of the static figure over top speed [rpm] × weight-on-bit [kN], with the stability boundary of steady
-    drilling (growth rate 0) and the lateral buckling limit; failed points are gaps."""
-    from drillstring.plots import MAP_PANELS
+    panel of the static figure over top speed [rpm] × weight-on-bit (kN or klbf, by ``units``), with the
+    stability boundary of steady drilling (growth rate 0) and the lateral buckling limit; failed points are
+    gaps."""
+    from drillstring.plots import MAP_PANELS, axis_unit
 
+    force = display_unit("force", units)
     speeds = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
-    weights = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    weights = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
     done = np.asarray(ds["status"].values) == 1
     growth = np.asarray(ds["growth_rate"].values, dtype=float)
-    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
     figures = []
-    for name, factor, label, _, _ in MAP_PANELS:
-        values = np.where(done, np.asarray(ds[name].values, dtype=float) * factor, np.nan)
-        title = label.split(" [")[0]
-        data = [_heatmap(speeds, weights, values, label, title)]
+    for name, kind, title, _, _ in MAP_PANELS:
+        unit = axis_unit(kind, units)
+        label = f"{title} [{unit.label}]"
+        values = np.where(done, unit(np.asarray(ds[name].values, dtype=float)), np.nan)
+        data = [_heatmap(speeds, weights, values, label, title, force.label)]
         if speeds.size >= 2 and weights.size >= 2 and np.nanmax(growth) > 0 > np.nanmin(growth):
             data.append({"type": "contour", "x": _values(speeds), "y": _values(weights), "z": _grid(growth.T),
                          "contours": {"start": 0, "end": 0, "size": 1, "coloring": "none"}, "showscale": False,
                          "line": {"color": "black", "width": 2}, "name": "stability boundary (growth rate 0)",
                          "showlegend": True, "hoverinfo": "skip"})
         figures.append(_figure(title, f"{label} over the map; black: linear stability boundary of steady drilling; "
-                               f"red dashed: lateral buckling limit ({critical:.4g} kN).", data, "top speed [rpm]",
-                               "weight-on-bit [kN]", shapes=_buckling_line(critical, weights),
+                               f"red dashed: lateral buckling limit ({critical:.4g} {force.label}).", data,
+                               "top speed [rpm]", f"weight-on-bit [{force.label}]",
+                               shapes=_buckling_line(critical, weights),
                                legend={"orientation": "h", "y": -0.2}))
     return figures
 
 
-def _heatmap(speeds, weights, values, label: str, title: str, **extra: Any) -> dict:
-    """A heat map of ``values`` (top speed × weight-on-bit) over ``speeds`` [rpm] × ``weights`` [kN]."""
+def _heatmap(speeds, weights, values, label: str, title: str, force: str, **extra: Any) -> dict:
+    """A heat map of ``values`` (top speed × weight-on-bit) over ``speeds`` [rpm] × ``weights`` [``force``, the
+    force unit's label]."""
     return {"type": "heatmap", "x": _values(speeds), "y": _values(weights), "z": _grid(np.asarray(values).T),
             "colorscale": "Viridis", "colorbar": {"title": {"text": label, "side": "right"}}, "name": title,
-            "hovertemplate": "%{x:.4g} rpm, %{y:.4g} kN<br>" + html.escape(title) + " %{z:.4g}<extra></extra>",
+            "hovertemplate": f"%{{x:.4g}} rpm, %{{y:.4g}} {html.escape(force)}<br>" + html.escape(title)
+                             + " %{z:.4g}<extra></extra>",
             **extra}
 
 
 def _buckling_line(critical: float, weights) -> list[dict]:
-    """The lateral buckling limit ``critical`` [kN] as a dashed line, when it lies on the map."""
+    """The lateral buckling limit ``critical`` as a dashed line, when it lies on the map (both in one force
+    unit)."""
     if np.isfinite(critical) and np.min(weights) <= critical <= np.max(weights):
         return [{"type": "line", "xref": "paper", "x0": 0, "x1": 1, "yref": "y", "y0": critical, "y1": critical,
                  "line": {"color": "#d62728", "dash": "dash", "width": 2}}]
     return []
 
 
-def probability_map_figures(ds) -> list[dict]:
+def probability_map_figures(ds, *, units: str | None = None) -> list[dict]:
     """Figures of a probabilistic operating map (:func:`drillstring.stochastic.probabilistic_map.
-    sampled_map_dataset`): one heat map per probability (scale 0–1) over top speed [rpm] × weight-on-bit [kN],
-    the hover showing each point's value and binomial standard error, with the nominal lateral buckling limit."""
+    sampled_map_dataset`): one heat map per probability (scale 0–1) over top speed [rpm] × weight-on-bit (kN or
+    klbf, by ``units``), the hover showing each point's value and binomial standard error, with the nominal
+    lateral buckling limit."""
     from drillstring.plots import PROBABILITY_PANELS
 
+    force = display_unit("force", units)
     speeds = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
-    weights = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
-    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    weights = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
     figures = []
     for name, label in PROBABILITY_PANELS:
         error = _grid(np.asarray(ds[f"{name}_standard_error"].values, dtype=float).T)
-        data = [_heatmap(speeds, weights, ds[name].values, label, label, zmin=0.0, zmax=1.0, colorscale="RdYlGn",
-                         reversescale=True, customdata=error,
-                         hovertemplate="%{x:.4g} rpm, %{y:.4g} kN<br>" + html.escape(label)
-                         + " %{z:.3f} ± %{customdata:.3f}<extra></extra>")]
+        data = [_heatmap(speeds, weights, ds[name].values, label, label, force.label, zmin=0.0, zmax=1.0,
+                         colorscale="RdYlGn", reversescale=True, customdata=error,
+                         hovertemplate=f"%{{x:.4g}} rpm, %{{y:.4g}} {html.escape(force.label)}<br>"
+                         + html.escape(label) + " %{z:.3f} ± %{customdata:.3f}<extra></extra>")]
         figures.append(_figure(label, f"{label.capitalize()} over the map, from {int(ds.attrs['samples'])} "
                                "realizations per point (± binomial standard error); red dashed: lateral buckling "
-                               f"limit of the nominal string ({critical:.4g} kN).", data, "top speed [rpm]",
-                               "weight-on-bit [kN]", shapes=_buckling_line(critical, weights)))
+                               f"limit of the nominal string ({critical:.4g} {force.label}).", data,
+                               "top speed [rpm]", f"weight-on-bit [{force.label}]",
+                               shapes=_buckling_line(critical, weights)))
     return figures
 
 

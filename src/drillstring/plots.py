@@ -41,7 +41,6 @@ from drillstring.quantities import DISPLAY_KINDS, STUDY_OBSERVABLES, stored_obse
 from drillstring.units import DisplayUnit, display_unit
 
 __all__ = [
-    "DISPLAY_UNITS",
     "TITLES",
     "plot_run",
     "plot_compare",
@@ -57,19 +56,6 @@ __all__ = [
 ]
 
 _RPM = 60.0 / (2.0 * math.pi)  # rpm per rad/s
-
-#: name -> (factor from SI, unit label, short title) in SI display units, for the interactive page
-#: (:mod:`drillstring.interactive`, not yet in the ``--units`` system).
-DISPLAY_UNITS: dict[str, tuple[float, str, str]] = {
-    "rate_of_penetration": (3600.0, "m/h", "rate of penetration"),
-    "bit_speed": (_RPM, "rpm", "bit speed"),
-    "torque_on_bit": (1e-3, "kN·m", "torque-on-bit"),
-    "quill_speed": (_RPM, "rpm", "quill speed"),
-    "surface_torque": (1e-3, "kN·m", "surface torque"),
-    "force_on_bit": (1e-3, "kN", "force-on-bit"),
-    "radial_displacement": (1e3, "mm", "radial displacement"),
-    "contact_force": (1e-3, "kN", "contact force"),
-}
 
 #: name -> short title for the axes (units: drillstring.quantities.DISPLAY_KINDS in the chosen system).
 TITLES: dict[str, str] = {
@@ -119,6 +105,12 @@ def _save(fig: Figure, path: str | Path) -> Path:
 
 def _label(name: str, units: str | None) -> str:
     return f"{TITLES[name]} [{display_unit(DISPLAY_KINDS[name], units).label}]"
+
+
+def axis_unit(kind: str | None, units: str | None = None) -> DisplayUnit:
+    """The display unit of a plotted quantity of display kind ``kind`` (:func:`drillstring.units.display_unit`)
+    in the unit system ``units``; None: a plain number (``"-"``)."""
+    return DisplayUnit("-", 1.0) if kind is None else display_unit(kind, units)
 
 
 def _scaled(values, name: str, units: str | None) -> np.ndarray:
@@ -442,11 +434,11 @@ def plot_convergence(stats: xr.Dataset, path: str | Path, time_convergence: dict
     return _save(fig, path)
 
 
-def plot_realizations(stats: xr.Dataset, path: str | Path) -> Path:
+def plot_realizations(stats: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Histograms of the per-realization cycle metrics (``realization_<name>`` of :data:`~drillstring.
-    quantities.METRIC_DISPLAY`) in engineering units, the mean (solid) and the nominal run's value (dashed);
-    the panel of a metric without finite values says so."""
-    from drillstring.quantities import METRIC_DISPLAY
+    quantities.METRIC_DISPLAY`) in the unit system ``units`` (:func:`~drillstring.quantities.metric_unit`), the
+    mean (solid) and the nominal run's value (dashed); the panel of a metric without finite values says so."""
+    from drillstring.quantities import METRIC_DISPLAY, metric_unit
 
     names = [name for name in METRIC_DISPLAY if f"realization_{name}" in stats]
     if not names:
@@ -454,18 +446,18 @@ def plot_realizations(stats: xr.Dataset, path: str | Path) -> Path:
     rows, cols = _grid(len(names))
     fig, axes = _figure(rows, cols, (3.6 * cols, 2.8 * rows))
     for ax, name in zip(axes, names):
-        factor, unit, label = METRIC_DISPLAY[name]
-        values = np.asarray(stats[f"realization_{name}"].values, dtype=float) * factor
+        unit, label = metric_unit(name, units), METRIC_DISPLAY[name][1]
+        values = unit(np.asarray(stats[f"realization_{name}"].values, dtype=float))
         finite = values[np.isfinite(values)]
         if finite.size:
             ax.hist(finite, bins=min(30, max(5, int(np.sqrt(finite.size)))), color="C0", alpha=0.7)
             ax.axvline(finite.mean(), color="k", lw=1.0, label="mean")
         else:
             ax.text(0.5, 0.5, "undefined for every realization", ha="center", va="center", transform=ax.transAxes)
-        nominal = float(stats[f"realization_{name}"].attrs.get("nominal", np.nan)) * factor
+        nominal = unit(float(stats[f"realization_{name}"].attrs.get("nominal", np.nan)))
         if np.isfinite(nominal):
             ax.axvline(nominal, color=_NOMINAL_COLOR, lw=1.0, ls="--", label="nominal")
-        ax.set_xlabel(f"{label} [{unit}]", fontsize="small")
+        ax.set_xlabel(f"{label} [{unit.label}]", fontsize="small")
         ax.set_ylabel("realizations", fontsize="small")
         ax.grid(True, alpha=0.3)
     for ax in axes[len(names):]:
@@ -473,7 +465,7 @@ def plot_realizations(stats: xr.Dataset, path: str | Path) -> Path:
     axes[0].legend(loc="best", fontsize="x-small")
     t0 = stats.attrs.get("t_transient")
     fig.suptitle(_study_title(stats, "Per-realization cycle metrics" + (f" after t = {float(t0):g} s" if t0 is not None
-                                                                         else "")))
+                                                                         else ""), units))
     return _save(fig, path)
 
 
@@ -539,7 +531,7 @@ def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float,
         "dispersion": plot_dispersion(stats, out / "dispersion.png", t_transient, units=units),
     }
     if any(str(v).startswith("realization_") for v in stats.data_vars):
-        figures["realizations"] = plot_realizations(stats, out / "realizations.png")
+        figures["realizations"] = plot_realizations(stats, out / "realizations.png", units=units)
     return figures
 
 
@@ -547,7 +539,6 @@ def plot_study(stats: xr.Dataset, out_dir: str | Path, t_transient: float,
 # An operating map
 # ---------------------------------------------------------------------------------------------------------
 
-#: Panels of :func:`plot_map`: variable, factor from SI, label, colour map, logarithmic scale.
 _FAMILY_COLORS = {"axial": "C0", "torsional": "C1", "lateral": "C2"}
 
 
@@ -594,15 +585,14 @@ def plot_campbell(diagram: dict, path: str | Path, title: str = "Campbell diagra
     return _save(fig, path)
 
 
+#: Panels of :func:`plot_map`: variable, display kind (:func:`axis_unit`; None: a plain number), title,
+#: colour map, logarithmic scale.
 MAP_PANELS = (
-    ("mean_rate_of_penetration", 3600.0, "mean rate of penetration [m/h]", "viridis", False),
-    ("bit_speed_oscillation", 1.0, "bit-speed oscillation (max − min)/2Ω [-]", "magma_r", False),
-    ("mechanical_specific_energy", 1e-6, "mechanical specific energy [MPa]", "cividis_r", True),
-    ("max_radial_displacement", 1e3, "max radial displacement at the probes [mm]", "plasma", False),
+    ("mean_rate_of_penetration", "rate_of_penetration", "mean rate of penetration", "viridis", False),
+    ("bit_speed_oscillation", None, "bit-speed oscillation (max − min)/2Ω", "magma_r", False),
+    ("mechanical_specific_energy", "pressure", "mechanical specific energy", "cividis_r", True),
+    ("max_radial_displacement", "small_length", "max radial displacement at the probes", "plasma", False),
 )
-#: The display-unit kind of each :data:`MAP_PANELS` variable in :func:`plot_map` (None: a plain number).
-_MAP_KINDS = {"mean_rate_of_penetration": "rate_of_penetration", "bit_speed_oscillation": None,
-              "mechanical_specific_energy": "pressure", "max_radial_displacement": "small_length"}
 
 
 def _map_panel(ax, fig, x: np.ndarray, y: np.ndarray, z: np.ndarray, label: str, cmap: str,
@@ -655,10 +645,9 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     fig, axes = _figure(2, 2, (12.0, 9.0))
     xx, yy = np.meshgrid(x, y, indexing="ij")
     contour_ok = x.size >= 2 and y.size >= 2 and np.isfinite(growth).sum() >= 4
-    for ax, (name, _, si_label, cmap, log) in zip(axes, MAP_PANELS):
-        kind = _MAP_KINDS[name]
-        shown = DisplayUnit("-", 1.0) if kind is None else display_unit(kind, units)
-        label = f"{si_label.split(' [')[0]} [{shown.label}]"
+    for ax, (name, kind, title, cmap, log) in zip(axes, MAP_PANELS):
+        shown = axis_unit(kind, units)
+        label = f"{title} [{shown.label}]"
         values = shown(np.asarray(ds[name].values, dtype=float))
         values = np.where(status == 1, values, np.nan)
         _map_panel(ax, fig, x, y, values, label, cmap, log)
@@ -674,7 +663,7 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
             ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6, clip_on=False)
         ax.set_xlabel("top speed [rpm]")
         ax.set_ylabel(f"weight-on-bit [{force.label}]")
-        ax.set_title(label.split(" [")[0], fontsize="medium")
+        ax.set_title(title, fontsize="medium")
     buckling = (f"lateral buckling, WOB = {critical:.4g} {force.label}" if np.isfinite(critical)
                 and y.min() <= critical <= y.max()
                 else f"lateral buckling at {critical:.4g} {force.label} (off the map)")
@@ -714,36 +703,39 @@ def _sampled_map_title(ds: xr.Dataset, what: str) -> str:
                     f"outputs over t ≥ {float(ds.attrs['t_transient']):g} s)")
 
 
-def _points_and_buckling(ax, ds: xr.Dataset, x: np.ndarray, y: np.ndarray) -> None:
-    """The grid points (dots) and the nominal lateral buckling limit (red dashed) on a map panel."""
-    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+def _points_and_buckling(ax, ds: xr.Dataset, x: np.ndarray, y: np.ndarray, force: DisplayUnit) -> None:
+    """The grid points (dots) and the nominal lateral buckling limit (red dashed) on a map panel whose
+    weights-on-bit ``y`` are in the unit ``force``."""
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
     if np.isfinite(critical) and y.min() <= critical <= y.max():
         ax.axhline(critical, color="C3", ls="--", lw=1.6)
     xx, yy = np.meshgrid(x, y, indexing="ij")
     ax.plot(xx.ravel(), yy.ravel(), ".", color="k", ms=3, clip_on=False)
     ax.set_xlabel("top speed [rpm]")
-    ax.set_ylabel("weight-on-bit [kN]")
+    ax.set_ylabel(f"weight-on-bit [{force.label}]")
 
 
-def _map_legend(fig, ds: xr.Dataset) -> None:
+def _map_legend(fig, ds: xr.Dataset, force: DisplayUnit) -> None:
     from matplotlib.lines import Line2D
 
-    critical = float(ds.attrs.get("critical_weight_on_bit", np.nan)) / 1e3
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
     handles = [Line2D([], [], color="C3", ls="--", lw=1.6,
-                      label=f"lateral buckling of the nominal string, WOB = {critical:.4g} kN"),
+                      label=f"lateral buckling of the nominal string, WOB = {critical:.4g} {force.label}"),
                Line2D([], [], color="k", marker=".", ls="", label="grid point")]
     fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize="small")
 
 
-def plot_probability_map(ds: xr.Dataset, path: str | Path) -> Path:
+def plot_probability_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
-    sampled_map_dataset`) as four panels over top speed [rpm] × the points' nominal weight-on-bit [kN]: the
-    probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady drilling (colour
-    scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``."""
+    sampled_map_dataset`) as four panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
+    the probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady drilling (colour
+    scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
+    the units of ``units``."""
     from matplotlib.colors import Normalize
 
+    force = display_unit("force", units)
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
-    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
     fig, axes = _figure(2, 2, (12.0, 9.0))
     levels = np.linspace(0.0, 1.0, 11)
     for ax, (name, label) in zip(axes, PROBABILITY_PANELS):
@@ -756,32 +748,33 @@ def plot_probability_map(ds: xr.Dataset, path: str | Path) -> Path:
             artist = ax.scatter(xx.ravel(), yy.ravel(), c=z.ravel(), cmap="RdYlGn_r", vmin=0.0, vmax=1.0, s=80,
                                 zorder=2)
         fig.colorbar(artist, ax=ax, label=label, ticks=levels[::2])
-        _points_and_buckling(ax, ds, x, y)
+        _points_and_buckling(ax, ds, x, y, force)
         ax.set_title(label, fontsize="medium")
-    _map_legend(fig, ds)
+    _map_legend(fig, ds, force)
     fig.suptitle(_sampled_map_title(ds, "Probabilistic operating map"))
     return _save(fig, path)
 
 
-def plot_quantile_map(ds: xr.Dataset, path: str | Path) -> Path:
-    """The 2.5, 50 and 97.5 % quantiles of the mean ROP [m/h] (top row) and of the stick-slip index (bottom
-    row) over each point's realizations, over top speed [rpm] × weight-on-bit [kN], each panel on its own colour
-    scale.
-    Written to the PNG ``path``."""
+def plot_quantile_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
+    """The 2.5, 50 and 97.5 % quantiles of the mean ROP (m/h or ft/h; top row) and of the stick-slip index
+    (bottom row) over each point's realizations, over top speed [rpm] × weight-on-bit (kN or klbf), each panel
+    on its own colour scale. Written to the PNG ``path``, in the units of ``units``."""
+    force = display_unit("force", units)
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
-    y = np.asarray(ds["weight_on_bit"].values, dtype=float) / 1e3
+    y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
     levels = [float(q) for q in ds["quantile"].values]
     fig, axes = _figure(2, len(levels), (5.0 * len(levels), 9.0))
-    rows = (("rate_of_penetration_q", 3600.0, "mean ROP [m/h]", "viridis"),
-            ("stick_slip_index_q", 1.0, "stick-slip index [-]", "magma_r"))
-    for r, (name, factor, label, cmap) in enumerate(rows):
-        values = np.asarray(ds[name].values, dtype=float) * factor
+    rows = (("rate_of_penetration_q", "rate_of_penetration", "mean ROP", "viridis"),
+            ("stick_slip_index_q", None, "stick-slip index", "magma_r"))
+    for r, (name, kind, title, cmap) in enumerate(rows):
+        unit = axis_unit(kind, units)
+        values = unit(np.asarray(ds[name].values, dtype=float))
         for k, q in enumerate(levels):
             ax = axes[r * len(levels) + k]
-            _map_panel(ax, fig, x, y, values[..., k], label, cmap)
-            _points_and_buckling(ax, ds, x, y)
-            ax.set_title(f"{label.split(' [')[0]}: {100 * q:g} % quantile", fontsize="medium")
-    _map_legend(fig, ds)
+            _map_panel(ax, fig, x, y, values[..., k], f"{title} [{unit.label}]", cmap)
+            _points_and_buckling(ax, ds, x, y, force)
+            ax.set_title(f"{title}: {100 * q:g} % quantile", fontsize="medium")
+    _map_legend(fig, ds, force)
     fig.suptitle(_sampled_map_title(ds, "Quantiles over the realizations"))
     return _save(fig, path)
 

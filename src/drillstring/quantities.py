@@ -1,6 +1,8 @@
 """One name, one unit and one description per output quantity, shared by every layer (results,
 statistics, figures, reports). Units are SI; conversions for display happen in plots and tables."""
 
+from drillstring.units import DisplayUnit, display_unit
+
 UNITS = {
     "time": "s",
     "rate_of_penetration": "m/s",
@@ -68,19 +70,29 @@ def stored_observables(data) -> tuple[str, ...]:
                                      if name in data or f"{name}_mean" in data)
 
 
-#: Display of the per-realization cycle metrics in tables and figures: name -> (factor from SI, unit, label).
-METRIC_DISPLAY = {
-    "stick_slip_index": (1.0, "-", "stick-slip index"),
-    "bit_speed_min": (30.0 / 3.141592653589793, "rpm", "bit speed min"),
-    "bit_speed_max": (30.0 / 3.141592653589793, "rpm", "bit speed max"),
-    "period": (1.0, "s", "period"),
-    "rate_of_penetration_mean": (3600.0, "m/h", "ROP mean"),
-    "torque_on_bit_mean": (1e-3, "kN·m", "TOB mean"),
-    "force_on_bit_mean": (1e-3, "kN", "FOB mean"),
-    "mechanical_specific_energy": (1e-6, "MPa", "MSE"),
-    "stick_time_fraction": (100.0, "%", "stick time"),
-    "bit_speed_oscillation": (1.0, "-", "oscillation/2Ω"),
-    "surface_torque_amplitude": (1e-3, "kN·m", "surface torque amplitude"),
-    "quill_speed_min": (30.0 / 3.141592653589793, "rpm", "quill speed min"),
-    "quill_speed_max": (30.0 / 3.141592653589793, "rpm", "quill speed max"),
+#: The per-realization cycle metrics in tables and figures: name -> (unit, label). The unit is a kind of
+#: :func:`drillstring.units.display_unit` (shown in the chosen unit system) or a fixed
+#: :class:`~drillstring.units.DisplayUnit` (a plain number, a time, a percentage): :func:`metric_unit`.
+METRIC_DISPLAY: dict[str, tuple[str | DisplayUnit, str]] = {
+    "stick_slip_index": (DisplayUnit("-", 1.0), "stick-slip index"),
+    "bit_speed_min": ("angular_speed", "bit speed min"),
+    "bit_speed_max": ("angular_speed", "bit speed max"),
+    "period": (DisplayUnit("s", 1.0), "period"),
+    "rate_of_penetration_mean": ("rate_of_penetration", "ROP mean"),
+    "torque_on_bit_mean": ("torque", "TOB mean"),
+    "force_on_bit_mean": ("force", "FOB mean"),
+    "mechanical_specific_energy": ("pressure", "MSE"),
+    "stick_time_fraction": (DisplayUnit("%", 100.0), "stick time"),
+    "bit_speed_oscillation": (DisplayUnit("-", 1.0), "oscillation/2Ω"),
+    "surface_torque_amplitude": ("torque", "surface torque amplitude"),
+    "quill_speed_min": ("angular_speed", "quill speed min"),
+    "quill_speed_max": ("angular_speed", "quill speed max"),
 }
+
+
+def metric_unit(name: str, units: str | None = None) -> DisplayUnit:
+    """The display unit of the cycle metric ``name`` (:data:`METRIC_DISPLAY`) in the unit system ``units``
+    (``"si"``, ``"field"``; None: ``$DRILLSTRING_UNITS``, else si): ROP in m/h or ft/h, TOB in kN·m or
+    kft·lbf, FOB in kN or klbf, MSE in MPa or psi, bit speeds in rpm in both."""
+    unit = METRIC_DISPLAY[name][0]
+    return unit if isinstance(unit, DisplayUnit) else display_unit(unit, units)

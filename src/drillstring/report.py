@@ -255,7 +255,7 @@ def _dispersion_rows(observables: Mapping[str, Any], window: str | None, conv: M
     return "".join(body)
 
 
-def _dispersion_table(summary: Mapping[str, Any]) -> str:
+def _dispersion_table(summary: Mapping[str, Any], units: str | None = None) -> str:
     observables = summary.get("observables") or {}
     if not observables:
         return ""
@@ -279,28 +279,29 @@ def _dispersion_table(summary: Mapping[str, Any]) -> str:
         "<p>Dispersion δ = std / |mean| over the realizations at each time, summarised over time (mean and "
         "maximum), and its ratio to the dispersion of each random input; ratios above 1 mean that the input "
         "uncertainty is amplified.</p>"
-        + steady + whole + _indicators_html(summary)
+        + steady + whole + _indicators_html(summary, units)
     )
 
 
-def _indicators_html(summary: Mapping[str, Any]) -> str:
+def _indicators_html(summary: Mapping[str, Any], units: str | None = None) -> str:
     """The per-realization cycle metrics (distribution table), the stability of the draws and the
-    convergence of the dispersions in time."""
-    from drillstring.quantities import METRIC_DISPLAY
+    convergence of the dispersions in time, in the unit system ``units``."""
+    from drillstring.quantities import METRIC_DISPLAY, metric_unit
 
     section = summary.get("realizations") or {}
     out = ""
     if section:
         rows = []
-        for name, (factor, unit, label) in METRIC_DISPLAY.items():
+        for name, (_, label) in METRIC_DISPLAY.items():
             entry = section.get(name)
             if not entry:
                 continue
-            cells = [_num(None if entry[k] is None else entry[k] * factor)
+            unit = metric_unit(name, units)
+            cells = [_num(None if entry[k] is None else unit(entry[k]))
                      for k in ("mean", "std")] + [_percent(entry["dispersion"])]
-            cells += [_num(None if entry[k] is None else entry[k] * factor)
+            cells += [_num(None if entry[k] is None else unit(entry[k]))
                       for k in ("q2.5", "q50", "q97.5", "nominal")]
-            rows.append(f"<tr><td>{_esc(label)}</td><td>{_esc(unit)}</td>"
+            rows.append(f"<tr><td>{_esc(label)}</td><td>{_esc(unit.label)}</td>"
                         + "".join(f'<td class="num">{c}</td>' for c in cells)
                         + f'<td class="num">{entry["n"]}</td></tr>')
         out += (f"<h3>Per realization (after t = {_num(section.get('t_transient'))} s)</h3>"
@@ -323,8 +324,9 @@ def _indicators_html(summary: Mapping[str, Any]) -> str:
                  f"{_num(stability['growth_rate']['q97.5'])}"),
                 ("nominal growth rate [1/s]", _num(stability.get("nominal_growth_rate")))]
         if boundary.get("weight_on_bit") is not None:
-            rows.append(("stability boundary of the nominal case along the weight-on-bit [kN]",
-                         _num(boundary["weight_on_bit"] / 1e3)))
+            force = display_unit("force", units)
+            rows.append((f"stability boundary of the nominal case along the weight-on-bit [{force.label}]",
+                         _num(force(boundary["weight_on_bit"]))))
         out += "<h3>Linear stability of steady drilling at each draw</h3>" + _kv_table(rows)
     convergence = summary.get("time_convergence") or {}
     if convergence.get("observables"):
@@ -432,7 +434,7 @@ def write_report(
             written beside as ``interactive.html`` (see :func:`_page`).
         units: the unit system of the tables, ``"si"`` or ``"field"`` (None: ``$DRILLSTRING_UNITS``, else si).
     """
-    return _page(path, title, case_toml, [_study_section(summary, units), _dispersion_table(summary)], figures,
+    return _page(path, title, case_toml, [_study_section(summary, units), _dispersion_table(summary, units)], figures,
                  run_info, interactive, units)
 
 
@@ -549,13 +551,15 @@ _PROBABILITY_COLUMNS = (("stick_slip_probability", "P(stick-slip)"), ("buckling_
                         ("impact_probability", "P(impact)"), ("instability_probability", "P(unstable)"))
 
 
-def _probability_map_section(summary: Mapping[str, Any]) -> str:
+def _probability_map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
+    force, rop = display_unit("force", units), display_unit("rate_of_penetration", units)
     speeds, weights = list(summary.get("top_speed", [])), list(summary.get("weight_on_bit", []))
     sigma = summary.get("sigma")
-    laws = [f"weight_on_hook: normal around each point's hook load, σ = {_num(sigma / 1e3)} kN"] if sigma else []
+    laws = ([f"weight_on_hook: normal around each point's hook load, σ = {_num(force(sigma))} {force.label}"]
+            if sigma else [])
     laws += [str(v) for v in summary.get("laws", [])[1 if sigma else 0:]]
     rows = [("top speed", _axis([v * _RPM for v in speeds], "rpm")),
-            ("weight-on-bit (nominal at each point)", _axis([v / 1e3 for v in weights], "kN")),
+            ("weight-on-bit (nominal at each point)", _axis([force(v) for v in weights], force.label)),
             ("realizations per point", _num(summary.get("samples"))),
             ("random parameters", _esc("; ".join(f"{p}" for p in laws)) or "–"),
             ("realizations (done, failed)", f"{_num(summary.get('realizations'))} ({_num(summary.get('done'))}, "
@@ -563,12 +567,13 @@ def _probability_map_section(summary: Mapping[str, Any]) -> str:
             ("simulated time per realization", f"{_num(summary.get('t_end'))} s, outputs over t ≥ "
                                                f"{_num(summary.get('t_transient'))} s"),
             ("critical weight-on-bit (lateral buckling, nominal case)",
-             f"{_num(float(summary.get('critical_weight_on_bit', math.nan)) / 1e3)} kN")]
+             f"{_num(force(float(summary.get('critical_weight_on_bit', math.nan))))} {force.label}")]
     probabilities = summary.get("probabilities", {})
     quantiles = summary.get("quantiles", {})
-    head = ("<tr><th>top speed [rpm]</th><th>WOB [kN]</th><th>n</th>"
+    head = (f"<tr><th>top speed [rpm]</th><th>WOB [{_esc(force.label)}]</th><th>n</th>"
             + "".join(f"<th>{_esc(h)}</th>" for _, h in _PROBABILITY_COLUMNS)
-            + "<th>mean ROP [m/h]: 50 % (2.5–97.5 %)</th><th>stick-slip index: 50 % (2.5–97.5 %)</th></tr>")
+            + f"<th>mean ROP [{_esc(rop.label)}]: 50 % (2.5–97.5 %)</th>"
+            + "<th>stick-slip index: 50 % (2.5–97.5 %)</th></tr>")
 
     def spread(name: str, i: int, j: int, factor: float) -> str:
         q = quantiles.get(name, {})
@@ -579,12 +584,12 @@ def _probability_map_section(summary: Mapping[str, Any]) -> str:
     body = []
     for i, speed in enumerate(speeds):
         for j, wob in enumerate(weights):
-            cells = [_num(speed * _RPM), _num(wob / 1e3), _num(summary.get("samples_done", [[None]])[i][j])]
+            cells = [_num(speed * _RPM), _num(force(wob)), _num(summary.get("samples_done", [[None]])[i][j])]
             for key, _ in _PROBABILITY_COLUMNS:
                 value = probabilities.get(key, {}).get("values", [[None]])[i][j]
                 error = probabilities.get(key, {}).get("standard_error", [[None]])[i][j]
                 cells.append(f"{_num(value, 3)} ± {_num(error, 2)}")
-            cells += [spread("rate_of_penetration_q", i, j, 3600.0), spread("stick_slip_index_q", i, j, 1.0)]
+            cells += [spread("rate_of_penetration_q", i, j, rop.scale), spread("stick_slip_index_q", i, j, 1.0)]
             body.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     return ("<h2>Map</h2><p>At each point, realizations of the declared uncertainty (one random stream per "
             "realization index, common to the points). Each probability is the share of the point's finished "
@@ -596,8 +601,11 @@ def _probability_map_section(summary: Mapping[str, Any]) -> str:
 
 def write_probability_map_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
                                  figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
-                                 interactive: Sequence[Mapping[str, Any]] | None = None) -> Path:
+                                 interactive: Sequence[Mapping[str, Any]] | None = None,
+                                 units: str | None = None) -> Path:
     """Write the report of a probabilistic operating map (one self-contained HTML page): the case, the grid,
     the random parameters, a table of every point's probabilities and quantiles (``summary``:
-    :func:`drillstring.stochastic.probabilistic_map.sampled_map_summary`), the run table and the figures."""
-    return _page(path, title, case_toml, [_probability_map_section(summary)], figures, run_info, interactive)
+    :func:`drillstring.stochastic.probabilistic_map.sampled_map_summary`), the run table and the figures, in
+    the unit system ``units``."""
+    return _page(path, title, case_toml, [_probability_map_section(summary, units)], figures, run_info, interactive,
+                 units)
