@@ -635,8 +635,9 @@ class _ClusterWatch:
         self.finished = self.alive = self.noted = time.monotonic()
 
     def _identity(self) -> dict | None:
+        # identity() lists every worker: later versions take ``n_workers`` (default -1, all), 2024.1 takes none.
         try:
-            return self.client.sync(self.client.scheduler.identity, n_workers=-1, callback_timeout=SCHEDULER_TIMEOUT)
+            return self.client.sync(self.client.scheduler.identity, callback_timeout=SCHEDULER_TIMEOUT)
         except (TimeoutError, OSError) as error:
             if not _is_timeout(error):
                 raise
