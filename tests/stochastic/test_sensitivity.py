@@ -137,8 +137,10 @@ def test_convergence_levels_are_prefixes_of_the_design(uniform3, ishigami):
     assert np.array_equal(ishigami.S1_convergence[-1], ishigami.S1)
     assert np.array_equal(ishigami.ST_convergence[-1], ishigami.ST)
     half = sobol_analysis(uniform3, analytic_model, 2048, seed=1, resamples=500)
-    assert np.array_equal(half.S1, ishigami.S1_convergence[1])
-    assert np.array_equal(half.ST, ishigami.ST_convergence[1])
+    # same design prefix, same estimator: equal to round-off (NumPy's SIMD sin differs by an ulp between
+    # the vector body and the tail of an array, so the two model evaluations need not agree bit for bit)
+    np.testing.assert_allclose(half.S1, ishigami.S1_convergence[1], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(half.ST, ishigami.ST_convergence[1], rtol=1e-12, atol=1e-14)
     change = ishigami.convergence_change("ishigami")
     assert change.shape == (2,)
     o = ishigami.outputs.index("ishigami")
