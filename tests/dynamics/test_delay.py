@@ -166,6 +166,8 @@ def test_exact_bins_and_interpolation_order_four():
         errors.append(err)
         steps.append(d)
     orders = np.diff(np.log(errors)) / np.diff(np.log(steps))
+    print(f"sin(3φ), midpoint errors at 16, 32, 64, 128 bins per lag: {', '.join(f'{e:.2e}' for e in errors)};"
+          f" observed orders {', '.join(f'{o:.3f}' for o in orders)}")
     assert np.all((orders > 3.8) & (orders < 4.2)), orders
 
 
