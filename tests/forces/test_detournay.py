@@ -27,6 +27,16 @@ def _random_parameters(rng) -> DetournayParameters:
         contact_velocity=10.0 ** rng.uniform(-6, -4), friction_speed=10.0 ** rng.uniform(-4, -2))
 
 
+def _random_steady_states(seed: int, count: int):
+    """``(law, V, Ω, steady state)`` of random bits and rocks at random operating points (1–100 m/h,
+    20–200 rpm)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        law = _random_parameters(rng)
+        rop, omega = rng.uniform(1.0, 100.0) * M_PER_H, rng.uniform(20.0, 200.0) * RPM
+        yield law, rop, omega, law.steady_state(rop, omega)
+
+
 def _kernel(law: DetournayParameters, depth, velocity, speed):
     return detournay_force(law.kernel_array(), float(depth), float(velocity), float(speed))
 
@@ -86,10 +96,7 @@ def test_published_law_constants():
 def test_every_steady_state_in_contact_lies_on_the_friction_line():
     """E = E₀ + μγS with E = 2T/(a²d), S = W/(ad), E₀ = (1 − μγζ)ε, over random bits, rocks and
     operating points; the cutting point (no flats) would lie at (ζε, ε), off the line when σl > 0."""
-    rng = np.random.default_rng(17)
-    for _ in range(300):
-        law = _random_parameters(rng)
-        s = law.steady_state(rng.uniform(1.0, 100.0) * M_PER_H, rng.uniform(20.0, 200.0) * RPM)
+    for law, _, _, s in _random_steady_states(17, 300):
         a, d = law.radius, s.depth_per_revolution
         energy, strength = 2.0 * s.torque_on_bit / (a * a * d), s.weight_on_bit / (a * d)
         assert law.specific_energy(s) == pytest.approx(energy, rel=1e-13)
@@ -103,11 +110,7 @@ def test_every_steady_state_in_contact_lies_on_the_friction_line():
 
 
 def test_rate_of_penetration_inverts_the_steady_state():
-    rng = np.random.default_rng(1992)
-    for _ in range(200):
-        law = _random_parameters(rng)
-        rop, omega = rng.uniform(1.0, 100.0) * M_PER_H, rng.uniform(20.0, 200.0) * RPM
-        s = law.steady_state(rop, omega)
+    for law, rop, omega, s in _random_steady_states(1992, 200):
         assert law.rate_of_penetration(s.weight_on_bit, omega) == pytest.approx(rop, rel=1e-12)
         f0, f1 = law.axial_force_affine(omega)
         assert f0 + f1 * rop == pytest.approx(-s.weight_on_bit, rel=1e-12)
@@ -127,11 +130,7 @@ def test_no_penetration_while_the_flats_carry_the_weight():
 
 
 def test_kernel_is_minus_the_steady_state_while_drilling():
-    rng = np.random.default_rng(2004)
-    for _ in range(100):
-        law = _random_parameters(rng)
-        rop, omega = rng.uniform(1.0, 100.0) * M_PER_H, rng.uniform(20.0, 200.0) * RPM
-        s = law.steady_state(rop, omega)
+    for law, rop, omega, s in _random_steady_states(2004, 100):
         assert rop > law.contact_velocity and omega > law.friction_speed  # outside both saturations
         force, torque = _kernel(law, s.depth_per_blade, rop, omega)
         assert force == pytest.approx(-s.weight_on_bit, rel=1e-13)
