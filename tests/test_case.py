@@ -618,9 +618,11 @@ def test_unknown_bit_rock_law_lists_the_laws(data):
     assert_problem(err, "bit_rock.law", "'detourney'", "'tucker_wang'", "'off_bottom'", "'detournay'")
 
 
-def test_aarsnes2019_has_the_published_numbers():
+def test_aarsnes2019_has_the_published_numbers(tmp_path):
     case = load_case("aarsnes2019")
     assert "aarsnes2019" in builtin_cases()
+    (tmp_path / "a.toml").write_text(case.to_toml(), encoding="utf-8")
+    assert load_case(tmp_path / "a.toml") == case
     steel = case.materials["steel"]
     assert (steel.young_modulus, steel.density) == (200e9, 8000.0)
     assert steel.shear_modulus == pytest.approx(77e9, rel=1e-12)
