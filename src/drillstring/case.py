@@ -659,10 +659,18 @@ class Simulation(_Base):
 
 
 class Initial(_Base):
-    """Initial state: the static state spinning at the top speed, plus a seeded lateral perturbation."""
+    """Initial state and start. ``start = "ramp"`` (the default for new cases): the string turns off bottom,
+    the bit ``clearance`` above the rock, the hook carrying the whole string; the hook load is then slacked off
+    so that the weight on bit grows linearly from 0 to ``operation.weight_on_bit`` over ``weight_ramp_time``
+    (:mod:`drillstring.forces.hook_load`). ``"on_bottom"`` (the reference study's start): the static state
+    spinning at the top speed, the bit-rock law switched on at t = 0. Both add a seeded lateral perturbation."""
 
     lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
     seed: int = Field(0, ge=0)
+    start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
+    clearance: Length = Field(0.005, ge=0, le=1.0, description="ramp: bit height above the rock at t = 0 [m]")
+    weight_ramp_time: Time = Field(
+        10.0, gt=0, le=1e4, description="ramp: time over which the weight on bit reaches its value [s]")
 
 
 class CorrelationTable(_Base):

@@ -617,7 +617,7 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
 
     contact = np.asarray(ds["contact_force"].values, dtype=float) if "contact_force" in ds else np.zeros(0)
     indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
-                                     t_transient)
+                                     t_transient, ds["force_on_bit"].values)
     return {
         **indicators,
         "quill_speed_min": steady_range("quill_speed")[0], "quill_speed_max": steady_range("quill_speed")[1],
@@ -668,6 +668,8 @@ def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
         escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
         _fmt(numbers["stick_time_fraction"], ".1%"), "",
     )
+    table.add_row(escape(f"bit bounce fraction (off the rock, t ≥ {t_tr:g} s)"),
+                  _fmt(numbers["bit_bounce_fraction"], ".1%"), "")
     table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
                   "rpm")

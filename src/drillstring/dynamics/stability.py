@@ -53,7 +53,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from drillstring.dynamics.rom import ReducedOrderModel
+from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -123,13 +123,6 @@ class StabilityResult:
         return out
 
 
-def _rigid_column(model: ReducedOrderModel) -> int:
-    columns = [i for i, f in enumerate(model.family) if f == "rigid_axial"]
-    if len(columns) != 1:
-        raise ValueError("the reduced model must hold exactly one rigid axial mode")
-    return columns[0]
-
-
 def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float:
     """Eq. (1) at the bit speed ``omega`` [rad/s]; 0 off bottom."""
     if not model.bit_rock.on_bottom:
@@ -169,7 +162,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     """The steady drilling state of ``model``, eq. (1) (with a top drive: the module docstring). Raises
     ValueError when the law gives no penetration (ROP <= 0: the bit would lift off, the drilling regime does
     not exist) or the motor would need more than its maximum torque. Off bottom: steady rotation, ROP 0."""
-    r = _rigid_column(model)
+    r = rigid_axial_column(model)
     drive = model.top_drive
     omega = model.top_speed
     rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
@@ -237,7 +230,7 @@ def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tup
     """The state matrix without the rigid axial position (the depth drilled: no equation depends on it) and,
     with a top drive, the rigid rotation's angle (likewise), and the mask of the rows kept."""
     keep = np.ones(model.state_size, dtype=bool)
-    keep[_rigid_column(model)] = False
+    keep[rigid_axial_column(model)] = False
     if model.rigid_rotation_column is not None:
         keep[model.rigid_rotation_column] = False
     return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
