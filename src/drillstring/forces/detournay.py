@@ -146,6 +146,52 @@ class DetournayParameters:
                          self.friction_arm, self.contact_velocity, self.friction_speed, self.sector],
                         dtype=np.float64)
 
+    # -- the law at one state: NumPy reference and Jacobian ------------------------------------------------
+    def evaluate(self, depth_of_cut, bit_axial_velocity, bit_speed):
+        """NumPy reference of :func:`detournay_force`: ``(axial_force [N], torque [N·m])`` on the string for
+        the depth of cut per blade ``d_n`` [m], the bit's axial velocity u̇ [m/s] and spin speed ω [rad/s],
+        array-likes broadcast together (scalars in, 0-d arrays out); ``(0, 0)`` where ``d_n ≤ 0``."""
+        d, u, w = np.broadcast_arrays(np.asarray(depth_of_cut, dtype=np.float64),
+                                      np.asarray(bit_axial_velocity, dtype=np.float64),
+                                      np.asarray(bit_speed, dtype=np.float64))
+        on_rock = d > 0.0
+        advance = np.clip(u / self.contact_velocity, 0.0, 1.0)
+        turn = np.clip(w / self.friction_speed, -1.0, 1.0)
+        contact = self.contact_force * advance
+        with np.errstate(invalid="ignore"):  # an infinite depth off the rock times a zero speed: masked below
+            weight = self.cutting_stiffness * d + contact
+            torque = (self.cutting_torque_rate * d + self.friction_arm * contact) * turn
+        return np.where(on_rock, -weight, 0.0), np.where(on_rock, -torque, 0.0)
+
+    def jacobian(self, depth_of_cut: float, bit_axial_velocity: float, bit_speed: float) -> np.ndarray:
+        """``[[f_d, f_u, f_ω], [t_d, t_u, t_ω]]``: partial derivatives of the force f [N] and torque t [N·m]
+        of :func:`detournay_force` with respect to the depth of cut per blade ``d_n`` [m], the bit's axial
+        velocity u̇ [m/s] and spin speed ω [rad/s], in closed form. With ``s_u = clip(u̇/v_r, 0, 1)`` and
+        ``s_ω = clip(ω/ω_r, −1, 1)``, ``f = −(a ζ ε n d_n + aσl s_u)``, ``t = −(½a²εn d_n + ½μγa aσl s_u) s_ω``::
+
+            f_d = −a ζ ε n,       f_u = −aσl s_u',                       f_ω = 0,
+            t_d = −½ a² ε n s_ω,  t_u = −½ μ γ a aσl s_u' s_ω,           t_ω = −(½a²εn d_n + ½μγa aσl s_u) s_ω',
+
+        ``s_u' = 1/v_r`` for ``0 < u̇ < v_r`` (0 outside), ``s_ω' = 1/ω_r`` for ``|ω| < ω_r`` (0 outside).
+        Valid away from the kinks ``u̇ ∈ {0, v_r}``, ``|ω| = ω_r`` and ``d_n = 0``; zero for ``d_n ≤ 0``
+        (off the rock)."""
+        d, u, w = float(depth_of_cut), float(bit_axial_velocity), float(bit_speed)
+        if not d > 0.0:
+            return np.zeros((2, 3))
+        v_r, w_r = self.contact_velocity, self.friction_speed
+        advance = min(max(u / v_r, 0.0), 1.0)
+        turn = min(max(w / w_r, -1.0), 1.0)
+        advance_slope = 1.0 / v_r if 0.0 < u < v_r else 0.0
+        turn_slope = 1.0 / w_r if abs(w) < w_r else 0.0
+        contact = self.contact_force * advance
+        full_torque = self.cutting_torque_rate * d + self.friction_arm * contact
+        return np.array([
+            [-self.cutting_stiffness, -self.contact_force * advance_slope, 0.0],
+            [-self.cutting_torque_rate * turn,
+             -self.friction_arm * self.contact_force * advance_slope * turn,
+             -full_torque * turn_slope],
+        ])
+
     # -- steady drilling, closed form --------------------------------------------------------------------
     def steady_state(self, rate_of_penetration: float, bit_speed: float) -> DetournaySteadyState:
         """Steady drilling at ``rate_of_penetration`` V [m/s] (> 0) and ``bit_speed`` Ω [rad/s] (> 0):
