@@ -117,11 +117,14 @@ def test_weight_switches(reference):
 
 def test_reference_tables_equal_defaults(reference):
     """Every optional table in reference.toml is written with its default values (the file documents them),
-    except the lateral cut-off, which the reference case switches off (its string never reaches the wall)."""
+    except the lateral cut-off, which the reference case switches off (its string never reaches the wall), and
+    the start: new cases start with the weight ramped onto the bit, the reference study on the static state."""
     minimal = Case(name="m", sections=reference.sections, borehole=reference.borehole)
     for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "environment", "model",
-                  "mesh", "simulation", "initial"):  # fmt: skip
+                  "mesh", "simulation"):  # fmt: skip
         assert getattr(minimal, table) == getattr(reference, table), table
+    assert minimal.initial.start == "ramp" and reference.initial.start == "on_bottom"
+    assert minimal.initial.model_copy(update={"start": "on_bottom"}) == reference.initial
     assert minimal.reduced_model.model_copy(update={"lateral_cutoff": 0.0}) == reference.reduced_model
     assert minimal.reduced_model.lateral_cutoff == 1.5
 
