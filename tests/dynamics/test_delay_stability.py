@@ -12,7 +12,9 @@ from scipy.special import lambertw
 from drillstring.dynamics.delay_stability import (
     append_states,
     characteristic_roots,
+    chebyshev_differentiation,
     chebyshev_generator,
+    delayed_factors,
     second_order_delay_matrices,
 )
 
@@ -208,11 +210,40 @@ def test_append_states_adds_an_integral_controller():
 
 
 def test_chebyshev_generator_differentiates_polynomials_exactly():
-    """Block rows j ≥ 1 apply d/dθ on the nodes θ_j = (τ/2)(cos(jπ/M) − 1): exact for θ³."""
+    """Block rows j ≥ 1 apply d/dθ on the nodes θ_j = (τ/2)(cos(jπ/M) − 1) to the delayed signal
+    w = Vᵀx, with w(θ_0) = Vᵀx(0): exact for a cubic."""
     tau, M = 0.7, 6
-    G = chebyshev_generator(np.zeros((1, 1)), np.zeros((1, 1)), tau, M)
-    theta = tau / 2 * (np.cos(np.pi * np.arange(M + 1) / M) - 1)
-    np.testing.assert_allclose(G[1:] @ theta**3, 3 * theta[1:] ** 2, atol=1e-12)
+    G = chebyshev_generator(np.zeros((1, 1)), np.array([[-2.0]]), tau, M)
+    theta, _ = chebyshev_differentiation(tau, M)
+    U, V = delayed_factors(np.array([[-2.0]]))
+    assert (U @ V.T).item() == pytest.approx(-2.0)
+    f, df = (theta + 0.3) ** 3, 3 * (theta + 0.3) ** 2
+    z = np.concatenate([[f[0]], V.item() * f[1:]])
+    np.testing.assert_allclose(G[1:] @ z, V.item() * df[1:], atol=1e-12)
+    np.testing.assert_allclose(G[0], np.r_[0.0, np.zeros(M - 1), U.item()])
+
+
+def test_low_rank_generator_against_full_collocation_matrix():
+    """For the rank-one delay of a bit law the N + M generator has the eigenvalues of the N(M+1) matrix
+    [A0, 0, …, A1; D_{≥1,·} ⊗ I_N] built here, less N − 1 copies of the eigenvalues of D_{≥1,≥1}."""
+    p, tau, M = TWO_DOF, math.pi / 2 / TWO_DOF["Omega"], 12
+    A0, A1 = two_dof_matrices(p)
+    N = A0.shape[0]
+    _, D = chebyshev_differentiation(tau, M)
+    full = np.zeros((N * (M + 1), N * (M + 1)))
+    full[:N, :N], full[:N, N * M:] = A0, A1
+    full[N:] = np.kron(D[1:], np.eye(N))
+    small = chebyshev_generator(A0, A1, tau, M)
+    assert small.shape == (N + M, N + M)
+    lam_full = np.linalg.eigvals(full)
+    lam_small = np.linalg.eigvals(small)
+    spurious = np.linalg.eigvals(D[1:, 1:])
+    expected = list(lam_small) + list(spurious) * (N - 1)
+    assert len(expected) == lam_full.size
+    for z in lam_small:
+        assert np.min(np.abs(lam_full - z)) <= 1e-6 * max(abs(z), 1)
+    for z in spurious:  # N − 1 copies each in the full matrix
+        assert np.sum(np.abs(lam_full - z) <= 1e-3 * abs(z)) >= N - 1
 
 
 @pytest.mark.parametrize("bad, message", [

@@ -13,14 +13,17 @@ two steps:
    differentiation matrix scaled by ``2/τ``). Its eigenvalues approximate the roots with spectral accuracy
    in ``M``; as a rule, roots with ``|s| τ ≲ M`` are resolved (the polynomial of degree ``M`` must follow
    ``e^{sθ}`` over ``[−τ, 0]``), so ``M ≥ 2π f_max τ`` for the frequencies ``f_max`` [Hz] of interest.
+   When ``A1`` has rank ``p < N`` (a bit law: ``p = 1``) only the history of the ``p`` delayed signals is
+   collocated (:func:`chebyshev_generator`), a matrix of size ``N + pM``.
 2. **Newton's method on det Δ** from each of the rightmost eigenvalues (Im ≥ 0; the conjugates follow):
    ``s ← s − 1/tr(Δ(s)⁻¹ Δ'(s))``, ``Δ'(s) = I + τ e^{−sτ} A1`` (Jacobi's formula). A root counts as
    converged when its relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖ + ‖A1‖ e^{−Re(s) τ})`` is at most
    ``residual_tol``; the starting values that did not converge are reported, not used.
 
 **Convergence in M.** With ``verify`` the leading root is recomputed with ``2M`` (and ``M`` doubled again,
-up to ``M_max``, until two successive leading roots agree to ``1e-8`` relative); the result keeps the last
-``M`` and the change it saw.
+while ``M ≤ M_max`` and the matrix's size ``≤ max_size``, until two successive leading roots agree to
+``1e-8`` relative); the result keeps the last ``M`` and the change it saw (``leading_change``: the caller
+decides whether to trust a larger one).
 
 **Neutral roots.** An invariance (the rigid axial translation ``u → u + c`` leaves the depth of cut
 ``u(t) − u(t − τ)`` unchanged; so does a rigid rotation) puts a root at ``s = 0`` for every parameter.
@@ -79,59 +82,89 @@ class DelayRoots:
 
     @property
     def stable(self) -> bool:
-        """Every non-neutral root found has a negative real part."""
-        return bool(self.roots.size) and self.growth_rate < 0
+        """Every non-neutral root found has a negative real part, and no starting value from which Newton's
+        method failed lies in the closed right half-plane (then the answer is not trusted: False)."""
+        return bool(self.roots.size) and self.growth_rate < 0 and bool(np.all(self.unconverged.real < 0))
+
+
+def chebyshev_differentiation(tau: float, M: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes ``θ_j = (τ/2)(cos(jπ/M) − 1)`` [s], ``j = 0…M`` (``θ_0 = 0``, ``θ_M = −τ``), and the
+    differentiation matrix on them [1/s] (Trefethen, Spectral Methods in MATLAB, SIAM 2000, ``cheb``)."""
+    j = np.arange(M + 1)
+    x = np.cos(np.pi * j / M)
+    c = np.where((j == 0) | (j == M), 2.0, 1.0) * (-1.0) ** j
+    D = np.outer(c, 1 / c) / (x[:, None] - x[None, :] + np.eye(M + 1))
+    D -= np.diag(D.sum(axis=1))
+    return tau / 2 * (x - 1), D * (2 / tau)
+
+
+def delayed_factors(A1: np.ndarray, rtol: float = 1e-13) -> tuple[np.ndarray, np.ndarray]:
+    """``A1 = U Vᵀ`` with ``U`` ``N×p``, ``V`` ``N×p``, ``p`` the numerical rank of ``A1`` (SVD)."""
+    W, sigma, Vt = np.linalg.svd(A1)
+    p = int(np.sum(sigma > rtol * max(sigma[0] if sigma.size else 0.0, np.finfo(float).tiny)))
+    return W[:, :p] * sigma[:p], Vt[:p].T
 
 
 def chebyshev_generator(A0: np.ndarray, A1: np.ndarray, tau: float, M: int) -> np.ndarray:
-    """The ``N(M+1)`` square collocation matrix of the infinitesimal generator (Breda, Maset & Vermiglio
-    2005): block row 0 ``[A0, 0, …, A1]``, block rows ``j ≥ 1`` ``D_{j·} ⊗ I_N`` (Trefethen, Spectral Methods
-    in MATLAB, 2000, ``cheb``; nodes ``θ_j = (τ/2)(cos(jπ/M) − 1)`` [s])."""
-    N = A0.shape[0]
-    x = np.cos(np.pi * np.arange(M + 1) / M)
-    c = np.where((np.arange(M + 1) == 0) | (np.arange(M + 1) == M), 2.0, 1.0) * (-1.0) ** np.arange(M + 1)
-    dx = x[:, None] - x[None, :] + np.eye(M + 1)
-    D = np.outer(c, 1 / c) / dx
-    D -= np.diag(D.sum(axis=1))
-    D *= 2 / tau
-    G = np.zeros((N * (M + 1), N * (M + 1)))
+    """Collocation matrix of the infinitesimal generator (Breda, Maset & Vermiglio 2005) of the equivalent
+    system ``x' = A0 x + U w(t − τ)``, ``w = Vᵀx`` (``A1 = U Vᵀ``, :func:`delayed_factors`): only the
+    history of the ``p`` delayed signals ``w`` is collocated, on the nodes ``θ_1…θ_M``
+    (``w(θ_0) = Vᵀx``). State ``[x, w(θ_1), …, w(θ_M)]``, size ``N + pM``: block row 0
+    ``[A0, 0, …, U]``, block row ``j ≥ 1`` ``[D_j0 Vᵀ, D_j1 I_p, …, D_jM I_p]``. For ``p = N`` it is the
+    ``N(M+1)`` matrix of the reference; for ``p < N`` it lacks only the eigenvalues of the history of the
+    components the delay never reads (``D_{≥1,≥1}``'s, ``N − p`` times), which are not roots."""
+    U, V = delayed_factors(A1)
+    N, p = A0.shape[0], U.shape[1]
+    _, D = chebyshev_differentiation(tau, M)
+    G = np.zeros((N + p * M, N + p * M))
     G[:N, :N] = A0
-    G[:N, N * M:] = A1
-    G[N:] = np.kron(D[1:], np.eye(N))
+    G[:N, N + p * (M - 1):] = U
+    G[N:, :N] = np.kron(D[1:, :1], V.T)
+    G[N:, N:] = np.kron(D[1:, 1:], np.eye(p))
     return G
 
 
 def _newton(A0, A1, tau, s, maxiter=40, rtol=1e-13):
     """Newton on det Δ from the starting values ``s`` (vectorised); returns the iterates."""
-    N = A0.shape[0]
-    eye = np.eye(N)
+    eye = np.eye(A0.shape[0])
     s = np.array(s, dtype=complex)
     active = np.ones(s.size, dtype=bool)
     for _ in range(maxiter):
+        lost = active & ~(np.isfinite(s) & (s.real * tau > -600))  # diverged to the far left (e^{−sτ} overflows)
+        s[lost], active[lost] = complex(math.nan, math.nan), False
         if not active.any():
             break
         sa = s[active]
         e = np.exp(-sa * tau)[:, None, None]
-        delta = sa[:, None, None] * eye - A0 - e * A1
+        delta, rhs = sa[:, None, None] * eye - A0 - e * A1, eye + tau * e * A1
         with np.errstate(all="ignore"):
             try:
-                X = np.linalg.solve(delta, eye + tau * e * A1)
-            except np.linalg.LinAlgError:  # an exactly singular Δ: the root itself
-                X = np.stack([np.linalg.lstsq(d, eye + tau * ei * A1, rcond=None)[0] for d, ei in zip(delta, e)])
-            step = 1 / np.trace(X, axis1=1, axis2=2)
+                trace = np.trace(np.linalg.solve(delta, rhs), axis1=1, axis2=2)
+            except np.linalg.LinAlgError:  # one Δ exactly singular: that iterate is a root (step 0)
+                trace = np.array([_trace_solve(d, r) for d, r in zip(delta, rhs)])
+            step = 1 / trace
         step = np.where(np.isfinite(step), step, 0)
         s[active] = sa - step
         active[np.flatnonzero(active)[np.abs(step) <= rtol * np.maximum(np.abs(sa), 1 / tau)]] = False
     return s
 
 
+def _trace_solve(delta, rhs):
+    try:
+        return np.trace(np.linalg.solve(delta, rhs))
+    except np.linalg.LinAlgError:
+        return complex(math.inf)
+
+
 def _residuals(A0, A1, tau, s):
-    """Relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖₂ + ‖A1‖₂ e^{−Re(s)τ})`` of each root."""
-    e = np.exp(-s * tau)
-    with np.errstate(all="ignore"):
-        delta = s[:, None, None] * np.eye(A0.shape[0]) - A0 - e[:, None, None] * A1
-        smin = np.linalg.svd(delta, compute_uv=False)[:, -1]
-        return smin / (np.abs(s) + np.linalg.norm(A0, 2) + np.linalg.norm(A1, 2) * np.abs(e))
+    """Relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖₂ + ‖A1‖₂ e^{−Re(s)τ})`` of each root (∞ for a lost one)."""
+    out = np.full(s.size, math.inf)
+    ok = np.isfinite(s) & (s.real * tau > -600)
+    e = np.exp(-s[ok] * tau)
+    delta = s[ok, None, None] * np.eye(A0.shape[0]) - A0 - e[:, None, None] * A1
+    smin = np.linalg.svd(delta, compute_uv=False)[:, -1]
+    out[ok] = smin / (np.abs(s[ok]) + np.linalg.norm(A0, 2) + np.linalg.norm(A1, 2) * np.abs(e))
+    return out
 
 
 def _roots_at(A0, A1, tau, M, n_refine, residual_tol):
@@ -156,13 +189,14 @@ def _roots_at(A0, A1, tau, M, n_refine, residual_tol):
 
 
 def characteristic_roots(A0, A1, tau: float, *, M: int | None = None, verify: bool = True,
-                         M_max: int = 128, n_refine: int | None = None, neutral_tol: float | None = None,
+                         M_max: int = 128, max_size: int = 2000, n_refine: int | None = None, neutral_tol: float | None = None,
                          residual_tol: float = 1e-10) -> DelayRoots:
     """The rightmost roots of ``det(s I − A0 − A1 e^{−sτ}) = 0`` (module docstring).
 
     ``A0``, ``A1``: real ``N×N`` [1/s]; ``tau`` [s] > 0; ``M``: Chebyshev degree (default
-    ``max(16, ⌈2 τ ‖A0‖₂⌉)`` capped at 32: resolves ``|s|τ ≲ M``); ``verify``: double ``M`` until the leading
-    root agrees (up to ``M_max``); ``n_refine``: starting values refined (default ``max(2N, 20)``, the
+    ``⌈τ ρ(A0)⌉`` (``ρ`` the spectral radius: the delay-free frequencies) within ``[16, 48]``, lowered so
+    that the check at ``2M`` keeps the matrix within ``max_size``, at least 8); ``verify``: double ``M``
+    until the leading root agrees (while ``M ≤ M_max`` and the size ``N + pM ≤ max_size``); ``n_refine``: starting values refined (default ``max(2N, 20)``, the
     rightmost, one per conjugate pair); ``neutral_tol`` [1/s]; ``residual_tol``: convergence of a root."""
     A0 = np.atleast_2d(np.asarray(A0, dtype=float))
     A1 = np.atleast_2d(np.asarray(A1, dtype=float))
@@ -171,8 +205,10 @@ def characteristic_roots(A0, A1, tau: float, *, M: int | None = None, verify: bo
         raise ValueError(f"A0 and A1: square matrices of one size expected, got {A0.shape} and {A1.shape}")
     if not (math.isfinite(tau) and tau > 0):
         raise ValueError(f"tau = {tau}: a delay > 0 s expected")
+    p = delayed_factors(A1)[0].shape[1]
     if M is None:
-        M = int(min(32, max(16, math.ceil(2 * tau * np.linalg.norm(A0, 2)))))
+        rho = float(np.max(np.abs(np.linalg.eigvals(A0)))) if N else 0.0
+        M = int(max(8, min(max(16, math.ceil(tau * rho)), 48, (max_size - N) // max(2 * p, 1))))
     if M < 2:
         raise ValueError(f"M = {M}: a Chebyshev degree >= 2 expected")
     n_refine = max(2 * N, 20) if n_refine is None else n_refine
@@ -191,7 +227,7 @@ def characteristic_roots(A0, A1, tau: float, *, M: int | None = None, verify: bo
         a, b = leading(s), leading(s2)
         change = abs(a - b) / max(abs(b), 1 / tau)
         s, res, bad, M = s2, res2, bad2, M2
-        if change <= LEADING_ROOT_RTOL or 2 * M > M_max:
+        if change <= LEADING_ROOT_RTOL or 2 * M > M_max or N + 2 * p * M > max_size:
             break
     is_neutral = np.abs(s) <= neutral_tol
     both = lambda z: np.concatenate([z, np.conj(z[z.imag > 0])])  # noqa: E731
