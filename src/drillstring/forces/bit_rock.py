@@ -202,6 +202,22 @@ class BitRockParameters:
         """:func:`evaluate_bit_rock` of this law: ``(axial_force [N], torque [N·m])`` on the string."""
         return evaluate_bit_rock(bit_axial_velocity, bit_speed, self, depth_of_cut)
 
+    def steady_depth_of_cut(self, rate_of_penetration: float, bit_speed: float) -> float:
+        """The depth of cut per blade [m] of steady drilling at ``rate_of_penetration`` V [m/s] and
+        ``bit_speed`` Ω [rad/s] for a delayed law, ``V · 2π/(nΩ)`` (the advance over one blade passage);
+        0 for the other laws (they read none)."""
+        if not self.delayed:
+            return 0.0
+        return rate_of_penetration * self.detournay.sector / bit_speed
+
+    def steady_forces(self, rate_of_penetration: float, bit_speed: float) -> tuple[float, float]:
+        """``(axial_force [N], torque [N·m])`` on the string in steady drilling at ``rate_of_penetration`` V
+        [m/s] and ``bit_speed`` Ω [rad/s]: the law at ``u̇ = V``, ``θ̇ = Ω`` and the steady depth of cut
+        (:meth:`steady_depth_of_cut`)."""
+        force, torque = self.evaluate(rate_of_penetration, bit_speed,
+                                      self.steady_depth_of_cut(rate_of_penetration, bit_speed))
+        return float(force), float(torque)
+
     def jacobian(self, bit_axial_velocity: float, bit_speed: float, depth_of_cut: float = 0.0) -> np.ndarray:
         """:func:`bit_rock_jacobian` of this law."""
         return bit_rock_jacobian(bit_axial_velocity, bit_speed, self, depth_of_cut)
