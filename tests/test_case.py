@@ -117,14 +117,14 @@ def test_weight_switches(reference):
 
 def test_reference_tables_equal_defaults(reference):
     """Every optional table in reference.toml is written with its default values (the file documents them),
-    except the lateral cut-off, which the reference case switches off (its string never reaches the wall), and
-    the start: new cases start with the weight ramped onto the bit, the reference study on the static state."""
+    except the lateral cut-off, which the reference case switches off (its string never reaches the wall),
+    and the start, which the reference study makes on bottom (new cases ramp the weight on bit up)."""
     minimal = Case(name="m", sections=reference.sections, borehole=reference.borehole)
     for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "environment", "model",
                   "mesh", "simulation"):  # fmt: skip
         assert getattr(minimal, table) == getattr(reference, table), table
-    assert minimal.initial.start == "ramp" and reference.initial.start == "on_bottom"
     assert minimal.initial.model_copy(update={"start": "on_bottom"}) == reference.initial
+    assert minimal.initial.start == "ramp"
     assert minimal.reduced_model.model_copy(update={"lateral_cutoff": 0.0}) == reference.reduced_model
     assert minimal.reduced_model.lateral_cutoff == 1.5
 
@@ -561,14 +561,9 @@ DETOURNAY_KEYS = ("blades", "bit_radius", "intrinsic_specific_energy", "cutting_
 
 
 def _detournay_law(case: Case):
-    from drillstring.forces.detournay import DetournayParameters
+    from drillstring.forces.bit_rock import case_bit_rock
 
-    b = case.bit_rock
-    return DetournayParameters(
-        blades=b.blades, radius=b.bit_radius, intrinsic_specific_energy=b.intrinsic_specific_energy,
-        cutting_inclination=b.cutting_inclination, contact_stress=b.contact_stress,
-        wear_flat_length=b.wear_flat_length, friction_coefficient=b.friction_coefficient,
-        geometry=b.bit_geometry, contact_velocity=b.contact_velocity, friction_speed=b.friction_speed)
+    return case_bit_rock(case).detournay
 
 
 def test_detournay_keys_with_units(data):
@@ -590,7 +585,7 @@ def test_detournay_keys_with_units(data):
 def test_detournay_defaults_are_the_published_bit():
     b = load_case("reference").bit_rock
     assert b.law == "tucker_wang"
-    assert [getattr(b, k) for k in DETOURNAY_KEYS] == [4, 0.108, 60e6, 0.6, 60e6, 0.011, 0.6, 1.0, 1e-5, 1e-3]
+    assert [getattr(b, k) for k in DETOURNAY_KEYS] == [4, 0.108, 60e6, 0.6, 60e6, 0.011, 0.6, 1.0, 5e-4, 1e-2]
     for key in DETOURNAY_KEYS:  # every key documented with its unit
         description = type(b).model_fields[key].description
         assert description.startswith("detournay: ") and description.endswith("]"), key
@@ -641,7 +636,8 @@ def test_aarsnes2019_has_the_published_numbers(tmp_path):
     assert case.top_drive.controller == "imposed_speed"
     assert case.stabilizers == []
     assert (case.reduced_model.lateral_modes, case.reduced_model.lateral_cutoff) == (0, 0.0)
-    assert (case.simulation.t_end, case.simulation.output_step) == (20.0, 0.01)
+    assert (case.simulation.t_end, case.simulation.output_step) == (30.0, 0.01)
+    assert (case.initial.start, case.initial.weight_ramp_time) == ("ramp", 10.0)
 
 
 def test_aarsnes2019_weight_on_bit_is_the_steady_state_of_30_m_per_h_at_30_rpm():
