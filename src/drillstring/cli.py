@@ -528,6 +528,9 @@ def stability(
     table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
     table.add_row("torque on bit", f"{torque(steady['torque_on_bit']):,.3f}", torque.label)
     table.add_row("force on bit", f"{force(steady['force_on_bit']):,.3f}", force.label)
+    if "delay" in steady:
+        table.add_row("depth of cut per blade", f"{steady['depth_of_cut'] * 1e3:,.3f}", "mm")
+        table.add_row("delay (one blade passage)", f"{steady['delay']:,.4f}", "s")
     drive = payload.get("top_drive")
     if drive:
         tuned = set(drive["tuned"])
@@ -541,7 +544,9 @@ def stability(
             table.add_row("high-pass corner" + (" (tuned)" if "filter_frequency" in tuned else ""),
                           f"{drive['filter_frequency']:.4f}", "rad/s")
     console.print(table)
-    modes_table = Table(title="Eigenvalues of the linearised model (sorted by frequency)", title_justify="left")
+    title = ("Characteristic roots of the linearised delay system (sorted by frequency)" if result.delay
+             else "Eigenvalues of the linearised model (sorted by frequency)")
+    modes_table = Table(title=title, title_justify="left")
     for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):
         modes_table.add_column(column, justify="left" if column in ("family", "note") else "right")
     lateral_shown = 0
