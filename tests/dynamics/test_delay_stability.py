@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.linalg import block_diag
 from scipy.special import lambertw
 
 from drillstring.dynamics.delay_stability import (
@@ -100,8 +101,10 @@ def test_delayed_oscillator_against_independent_roots(k, unstable_pairs):
     relative; the count in the right half-plane agrees with the argument principle."""
     omega, zeta, tau = 2 * math.pi, 0.02, 0.8
     A0, A1, p, dp = oscillator(omega, zeta, k, tau)
-    result = characteristic_roots(A0, A1, tau)
     re_min, re_max, im_max = -8.0, 3.0, 40.0
+    # the box reaches |s| τ ≈ 33: M = 48 resolves it (the default M only covers Re s ≥ 0)
+    result = characteristic_roots(A0, A1, tau, M=48)
+    assert result.resolved
     reference = independent_roots(p, dp, re_min, re_max, im_max)
     n_box = argument_principle_count(p, dp, re_min, re_max, im_max)
     assert n_box == 2 * np.sum(reference.imag > 1e-9) + np.sum(reference.imag <= 1e-9) >= 5
@@ -252,3 +255,27 @@ def test_bad_input(bad, message):
     args = dict(A0=np.zeros((1, 1)), A1=np.ones((1, 1)), tau=1.0) | bad
     with pytest.raises(ValueError, match=message):
         characteristic_roots(args.pop("A0"), args.pop("A1"), **args)
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_default_degree_covers_the_right_half_plane(seed):
+    """N = 8, full-rank A1 with ‖A1‖ = 40 1/s, τ = 0.5 s: the rightmost root lies at |s|τ ≈ 30–40, missed
+    with M = 8 (seed 0) or M = 16 (seed 2). The default M = ⌈τR⌉ finds the rightmost root of a reference
+    with M = 160; every root in the right half-plane has |s| ≤ R (R: balanced norm bound)."""
+    rng = np.random.default_rng(seed)
+    N, tau = 8, 0.5
+    Q = np.linalg.qr(rng.standard_normal((N, N)))[0]
+    blocks = [np.array([[-a, w], [-w, -a]]) for a, w in zip(rng.uniform(0.1, 5, N // 2), rng.uniform(0, 100, N // 2))]
+    A0 = Q @ block_diag(*blocks) @ Q.T
+    A1 = rng.standard_normal((N, N))
+    A1 *= 40 / np.linalg.norm(A1, 2)
+    reference = characteristic_roots(A0, A1, tau, M=160, verify=False)
+    right = reference.roots[reference.roots.real >= 0]
+    assert right.size >= 4 and np.max(np.abs(right)) <= reference.radius
+    result = characteristic_roots(A0, A1, tau)
+    assert result.resolved and result.leading_change <= 1e-8
+    assert abs(result.leading - reference.leading) <= 1e-10 * abs(reference.leading)
+    assert int(np.sum(result.roots.real >= 0)) == right.size
+    missed_at = {0: 8, 2: 16}[seed]
+    coarse = characteristic_roots(A0, A1, tau, M=missed_at, verify=False)
+    assert coarse.leading.real < reference.leading.real - 0.1
