@@ -97,6 +97,7 @@ def report(name, A0, A1, tau, M, repeat):
           f"leading change {default.leading_change:.1e})")
     print(f"  leading root {plain.leading:.6f} 1/s ({plain.frequency:.4f} Hz), stable {plain.stable}, "
           f"neutral {plain.neutral.size}, unconverged starts {plain.unconverged.size}")
+    print(f"  R = {default.radius:.1f} 1/s, τR = {default.radius * tau:.1f}: defaults resolved {default.resolved}")
     print(f"  rightmost 20 roots at M = 80 found at M = {M}: {agree}/20")
 
 

@@ -20,10 +20,12 @@ two steps:
    converged when its relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖ + ‖A1‖ e^{−Re(s) τ})`` is at most
    ``residual_tol``; the starting values that did not converge are reported, not used.
 
-**Convergence in M.** With ``verify`` the leading root is recomputed with ``2M`` (and ``M`` doubled again,
-while ``M ≤ M_max`` and the matrix's size ``≤ max_size``, until two successive leading roots agree to
-``1e-8`` relative); the result keeps the last ``M`` and the change it saw (``leading_change``: the caller
-decides whether to trust a larger one).
+**Choice of M.** Every root with ``Re s ≥ 0`` has ``|s| ≤ R`` (:func:`right_half_plane_radius`, a balanced
+norm bound), so the default ``M = max(16, ⌈τR⌉)`` puts all of them in the resolved region (``resolved`` in
+the result; a size cap ``max_size`` on ``N + pM`` may lower ``M``, and then ``resolved`` is False). With
+``verify`` the leading root is computed with ``⌈M/2⌉`` and with twice that, and ``M`` doubled again (while
+``M ≤ M_max`` and the size ``≤ max_size``) until two successive leading roots agree to ``1e-8`` relative;
+the result keeps the last ``M`` and the change it saw (``leading_change``).
 
 **Neutral roots.** An invariance (the rigid axial translation ``u → u + c`` leaves the depth of cut
 ``u(t) − u(t − τ)`` unchanged; so does a rigid rotation) puts a root at ``s = 0`` for every parameter.
