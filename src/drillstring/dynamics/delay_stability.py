@@ -167,7 +167,8 @@ def _trace_solve(delta, rhs):
 
 
 def _residuals(A0, A1, tau, s):
-    """Relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖₂ + ‖A1‖₂ e^{−Re(s)τ})`` of each root (∞ for a lost one)."""
+    """Relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖₂ + ‖A1‖₂ e^{−Re(s)τ})`` of each root (∞ for a lost
+    one)."""
     out = np.full(s.size, math.inf)
     ok = np.isfinite(s) & (s.real * tau > -600)
     e = np.exp(-s[ok] * tau)
@@ -179,9 +180,9 @@ def _residuals(A0, A1, tau, s):
 
 def right_half_plane_radius(A0: np.ndarray, A1: np.ndarray) -> float:
     """``R`` [1/s] with ``|s| ≤ R`` for every root with ``Re s ≥ 0``: at a root ``s`` is an eigenvalue of
-    ``A0 + A1 e^{−sτ}``, so ``|s| ≤ ‖T⁻¹A0T‖₂ + ‖T⁻¹A1T‖₂ e^{−Re(s)τ}`` for any invertible ``T``; ``T`` is the
-    diagonal balancing of ``|A0| + |A1|`` (LAPACK ``gebal``), which brings modal equations' ``[[0, I], [−K, ·]]``
-    from ``‖K‖`` down to about the highest frequency."""
+    ``A0 + A1 e^{−sτ}``, so ``|s| ≤ ‖T⁻¹A0T‖₂ + ‖T⁻¹A1T‖₂ e^{−Re(s)τ}`` for any invertible ``T``; ``T`` is
+    the diagonal balancing of ``|A0| + |A1|`` (LAPACK ``gebal``), which brings modal equations'
+    ``[[0, I], [−K, ·]]`` from ``‖K‖`` down to about the highest frequency."""
     if not A0.size:
         return 0.0
     _, (scale, _) = sla.matrix_balance(np.abs(A0) + np.abs(A1), permute=False, separate=True)
@@ -284,14 +285,17 @@ def second_order_delay_matrices(K, C, b_u, b_t, *, f_du: float, f_dtheta: float,
         δf = f_du δu' + f_dtheta δθ' + f_d δd,   δt = t_du δu' + t_dtheta δθ' + t_d δd
 
     (``f_du`` [N·s/m], ``f_dtheta`` [N·s/rad], ``f_d`` [N/m], ``t_du`` [N·s], ``t_dtheta`` [N·m·s/rad],
-    ``t_d`` [N]). The depth of cut ``d = u(t) − u(t − τ)`` has the state-dependent delay ``θ(t) − θ(t − τ) = Δ``
-    (``Δ = 2π/n`` for ``n`` blades; Richard, Germay & Detournay, J. Sound Vib. 305, 2007). With
-    ``u = Vt + δu``, ``θ = Ωt + δθ``, ``τ = τ0 + δτ``, ``Ω τ0 = Δ``, to first order the delay condition gives
-    ``Ω δτ = −(δθ(t) − δθ(t − τ0))`` and ``d = V τ + δu(t) − δu(t − τ0)``, so
+    ``t_d`` [N]). The depth of cut ``d = u(t) − u(t − τ)`` has the state-dependent delay
+    ``θ(t) − θ(t − τ) = Δ`` (``Δ = 2π/n`` for ``n`` blades; Richard, Germay & Detournay, J. Sound Vib. 305,
+    2007). With ``u = Vt + δu``, ``θ = Ωt + δθ``, ``τ = τ0 + δτ``, ``Ω τ0 = Δ``, to first order the delay
+    condition gives ``Ω δτ = −(δθ(t) − δθ(t − τ0))`` and ``d = V τ + δu(t) − δu(t − τ0)`` (so
+    ``d0 = V τ0 = VΔ/Ω``, the steady depth of cut), hence
 
-        δd = [δu(t) − δu(t − τ0)] − (V/Ω) [δθ(t) − δθ(t − τ0)] = gᵀ (δη(t) − δη(t − τ0)),  g = b_u − (V/Ω) b_t.
+        δd = [δu(t) − δu(t − τ0)] − (V/Ω) [δθ(t) − δθ(t − τ0)] = gᵀ (δη(t) − δη(t − τ0)),
+        g = b_u − (V/Ω) b_t.
 
-    Hence, with ``h = f_d b_u + t_d b_t`` and ``P = b_u (f_du b_uᵀ + f_dtheta b_tᵀ) + b_t (t_du b_uᵀ + t_dtheta b_tᵀ)``::
+    With ``h = f_d b_u + t_d b_t`` and
+    ``P = b_u (f_du b_uᵀ + f_dtheta b_tᵀ) + b_t (t_du b_uᵀ + t_dtheta b_tᵀ)``::
 
         A0 = [[0, I], [−K + h gᵀ, −C + P]],   A1 = [[0, 0], [−h gᵀ, 0]].
 
