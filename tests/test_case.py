@@ -117,11 +117,14 @@ def test_weight_switches(reference):
 
 def test_reference_tables_equal_defaults(reference):
     """Every optional table in reference.toml is written with its default values (the file documents them),
-    except the lateral cut-off, which the reference case switches off (its string never reaches the wall)."""
+    except the lateral cut-off, which the reference case switches off (its string never reaches the wall),
+    and the start, which the reference study makes on bottom (new cases ramp the weight on bit up)."""
     minimal = Case(name="m", sections=reference.sections, borehole=reference.borehole)
     for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "environment", "model",
-                  "mesh", "simulation", "initial"):  # fmt: skip
+                  "mesh", "simulation"):  # fmt: skip
         assert getattr(minimal, table) == getattr(reference, table), table
+    assert minimal.initial.model_copy(update={"start": "on_bottom"}) == reference.initial
+    assert minimal.initial.start == "ramp"
     assert minimal.reduced_model.model_copy(update={"lateral_cutoff": 0.0}) == reference.reduced_model
     assert minimal.reduced_model.lateral_cutoff == 1.5
 
@@ -548,3 +551,140 @@ def test_refuses_an_eccentricity_or_a_bow_beyond_the_radial_gap(data):
                    "(0.0357 m, section 'drill collar')")
     data["bow"]["amplitude"] = "30 mm"
     case_from_dict(data)
+
+
+# ------------------------------------------------------------------------- Detournay law keys, aarsnes2019
+
+
+DETOURNAY_KEYS = ("blades", "bit_radius", "intrinsic_specific_energy", "cutting_inclination", "contact_stress",
+                  "wear_flat_length", "friction_coefficient", "bit_geometry", "contact_velocity", "friction_speed")
+
+
+def _detournay_law(case: Case):
+    from drillstring.forces.bit_rock import case_bit_rock
+
+    return case_bit_rock(case).detournay
+
+
+def test_detournay_keys_with_units(data):
+    data["bit_rock"] = {"law": "detournay", "blades": 6, "bit_radius": "4.25 in",
+                        "intrinsic_specific_energy": "8702 psi", "cutting_inclination": 0.8,
+                        "contact_stress": "0.05 GPa", "wear_flat_length": "1.2 cm", "friction_coefficient": 0.5,
+                        "bit_geometry": 1.2, "contact_velocity": "0.036 m/h", "friction_speed": "0.01 rpm"}
+    b = case_from_dict(data).bit_rock
+    assert b.law == "detournay" and b.blades == 6
+    assert b.bit_radius == pytest.approx(0.10795, rel=1e-12)
+    assert b.intrinsic_specific_energy == pytest.approx(8702 * 6894.757293168361, rel=1e-12)
+    assert b.contact_stress == pytest.approx(50e6, rel=1e-12)
+    assert b.wear_flat_length == pytest.approx(0.012, rel=1e-12)
+    assert b.contact_velocity == pytest.approx(1e-5, rel=1e-12)
+    assert b.friction_speed == pytest.approx(0.01 * RPM, rel=1e-12)
+    assert (b.cutting_inclination, b.friction_coefficient, b.bit_geometry) == (0.8, 0.5, 1.2)
+
+
+def test_detournay_defaults_are_the_published_bit():
+    b = load_case("reference").bit_rock
+    assert b.law == "tucker_wang"
+    assert [getattr(b, k) for k in DETOURNAY_KEYS] == [4, 0.108, 60e6, 0.6, 60e6, 0.011, 0.6, 1.0, 5e-4, 1e-2]
+    for key in DETOURNAY_KEYS:  # every key documented with its unit
+        description = type(b).model_fields[key].description
+        assert description.startswith("detournay: ") and description.endswith("]"), key
+
+
+@pytest.mark.parametrize(("key", "value", "shown", "fragment"), [
+    ("blades", 0, "0", "must be >= 1"),
+    ("blades", 2.5, "2.5", "integer"),
+    ("bit_radius", "-1 m", "'-1 m'", "must be > 0"),
+    ("bit_radius", "20 m", "20.0", "must be within [0.001, 10] m"),
+    ("intrinsic_specific_energy", 0, "0", "must be > 0"),
+    ("intrinsic_specific_energy", "1e15 Pa", "1000000000000000.0", "must be within [1000, 1e+12] Pa"),
+    ("contact_stress", "60 mm", "'60 mm'", "pressure"),
+    ("wear_flat_length", "-11 mm", "'-11 mm'", "must be >= 0"),
+    ("friction_coefficient", 20.0, "20.0", "must be within [0, 10]"),
+    ("cutting_inclination", -0.6, "-0.6", "must be >= 0"),
+    ("contact_velocity", 0, "0", "must be > 0"),
+    ("friction_speed", "1 N", "'1 N'", "angular speed"),
+])
+def test_detournay_keys_refused_with_the_field(data, key, value, shown, fragment):
+    data["bit_rock"] = {"law": "detournay", key: value}
+    assert_problem(refused(data), f"bit_rock.{key}", shown, fragment)
+
+
+def test_unknown_bit_rock_law_lists_the_laws(data):
+    data["bit_rock"]["law"] = "detourney"
+    err = refused(data)
+    assert_problem(err, "bit_rock.law", "'detourney'", "'tucker_wang'", "'off_bottom'", "'detournay'")
+
+
+def test_aarsnes2019_has_the_published_numbers(tmp_path):
+    case = load_case("aarsnes2019")
+    assert "aarsnes2019" in builtin_cases()
+    (tmp_path / "a.toml").write_text(case.to_toml(), encoding="utf-8")
+    assert load_case(tmp_path / "a.toml") == case
+    steel = case.materials["steel"]
+    assert (steel.young_modulus, steel.density) == (200e9, 8000.0)
+    assert steel.shear_modulus == pytest.approx(77e9, rel=1e-12)
+    pipe, bha = case.sections
+    assert (pipe.length, pipe.outer_diameter, pipe.inner_diameter) == (2000.0, 0.127, 0.108)
+    polar_inertia = steel.density * math.pi / 32.0 * (bha.outer_diameter**4 - bha.inner_diameter**4) * bha.length
+    assert polar_inertia == pytest.approx(41.0, rel=1e-4)
+    assert case.borehole.diameter == pytest.approx(2 * 0.108)
+    b = case.bit_rock
+    assert b.law == "detournay"
+    assert [getattr(b, k) for k in DETOURNAY_KEYS[:8]] == [4, 0.108, 60e6, 0.6, 60e6, 0.011, 0.6, 1.0]
+    assert case.operation.top_speed == pytest.approx(30.0 * RPM, rel=1e-12)
+    assert case.top_drive.controller == "imposed_speed"
+    assert case.stabilizers == []
+    assert (case.reduced_model.lateral_modes, case.reduced_model.lateral_cutoff) == (0, 0.0)
+    assert (case.simulation.t_end, case.simulation.output_step) == (30.0, 0.01)
+    assert (case.initial.start, case.initial.weight_ramp_time) == ("ramp", 10.0)
+
+
+def test_aarsnes2019_weight_on_bit_is_the_steady_state_of_30_m_per_h_at_30_rpm():
+    case = load_case("aarsnes2019")
+    steady = _detournay_law(case).steady_state(30.0 / 3600.0, case.operation.top_speed)
+    assert steady.weight_on_bit == pytest.approx(136_080.0, rel=1e-12)
+    assert case.operation.weight_on_bit == pytest.approx(steady.weight_on_bit, rel=1e-3)
+    assert case.operation.weight_on_bit < case.weight  # the hook carries the rest
+
+
+def test_aarsnes2019_statics_and_modes_build():
+    from drillstring.api import static, modes
+
+    case = load_case("aarsnes2019")
+    state, margin = static(case)
+    assert state.weight_on_bit == pytest.approx(case.operation.weight_on_bit, rel=1e-9)
+    assert state.weight_on_hook == pytest.approx(case.weight - case.operation.weight_on_bit, rel=1e-9)
+    # Without stabilizers the straight string is laterally buckled at 136 kN (critical ~31 kN); the case
+    # keeps no lateral modes, so this does not enter its torsional-axial dynamics.
+    assert margin.buckled
+    found, _ = modes(case, count=3)
+    assert found.axial.frequencies[0] == pytest.approx(0.0, abs=1e-6)  # free rigid translation
+    # The torsional fundamental of a pipe held at the top with the BHA at the bit lies below the pipe's
+    # quarter-wave frequency c / (4 L) (the BHA adds inertia): about 0.32 Hz here, 0.39 Hz for the bare pipe.
+    bare = math.sqrt(77e9 / 8000.0) / (4.0 * 2000.0)
+    assert 0.5 * bare < found.torsional.frequencies[0] < bare
+
+
+def test_rock_and_bit_parameters_are_study_parameters():
+    """Studies, maps and sensitivity runs draw the Detournay keys like any case field: the paths bind with
+    their dimension and range, a drawn row makes a valid case, a law outside the range is refused."""
+    from drillstring.stochastic.parameters import ParameterError
+    from drillstring.stochastic.uncertainty import declared_uncertainty, uncertainty
+
+    case = load_case("aarsnes2019")
+    declared = declared_uncertainty(case)
+    assert declared.paths == ("bit_rock.intrinsic_specific_energy", "bit_rock.contact_stress")
+    assert declared.units == ("Pa", "Pa")
+    law = uncertainty(case, {"bit_rock.friction_coefficient": "uniform 0.4 0.8",
+                             "bit_rock.wear_flat_length": "uniform 5 15 mm",
+                             "bit_rock.intrinsic_specific_energy": "uniform 45 75 MPa"})
+    drawn = law.apply(case, [0.7, 0.012, 50e6])
+    assert (drawn.bit_rock.friction_coefficient, drawn.bit_rock.wear_flat_length,
+            drawn.bit_rock.intrinsic_specific_energy) == (0.7, 0.012, 50e6)
+    with pytest.raises(ParameterError, match=r"^bit_rock\.friction_coefficient = 'normal 0\.1 0\.2'"):
+        uncertainty(case, {"bit_rock.friction_coefficient": "normal 0.1 0.2"})
+    with pytest.raises(ParameterError, match="unit 'mm' is a length unit"):
+        uncertainty(case, {"bit_rock.contact_stress": "uniform 45 75 mm"})
+    with pytest.raises(ParameterError, match="integer"):
+        uncertainty(case, {"bit_rock.blades": "uniform 3 6"})

@@ -215,8 +215,9 @@ def test_cases_lists_reference_contact_and_stick_slip():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
     names = [line.split()[0] for line in result.stdout.splitlines()]
-    assert names == ["contact", "reference", "reference_components", "stick_slip"]
+    assert names == ["aarsnes2019", "contact", "reference", "reference_components", "stick_slip"]
     assert "hits the wall" in result.stdout and "full stick-slip" in result.stdout
+    assert "Aarsnes & van de Wouw (2019)" in result.stdout
 
 
 def test_simulate_contact_hits_the_wall(tmp_path):
@@ -885,6 +886,29 @@ def test_stability_json_and_table(coarse_case):
     result = _invoke("stability", str(coarse_case))
     assert result.exit_code == 0, result.output
     for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
+        assert text in result.stdout, text
+
+
+def test_stability_with_the_delayed_law(tmp_path):
+    """The published Detournay case (on a coarse basis): the same JSON with the steady state's depth of cut
+    and delay and the delay system's facts; the table names the characteristic roots."""
+    from drillstring.case import load_case
+
+    case = load_case("aarsnes2019")
+    case = case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(update={"axial_modes": 3, "torsional_modes": 3})})
+    path = tmp_path / "published.toml"
+    path.write_text(case.to_toml(), encoding="utf-8")
+    data = _json("stability", str(path), "--json")
+    assert set(data) == {"stable", "steady_state", "modes", "delay"}
+    steady = data["steady_state"]
+    assert steady["rate_of_penetration"] == pytest.approx(30 / 3600, rel=1e-6)
+    assert steady["delay"] == pytest.approx(0.5) and steady["depth_of_cut"] == pytest.approx(30 / 3600 * 0.5, rel=1e-6)
+    assert data["delay"]["delay"] == pytest.approx(0.5) and len(data["delay"]["neutral_roots"]) == 1
+    result = _invoke("stability", str(path))
+    assert result.exit_code == 0, result.output
+    for text in ("Characteristic roots", "depth of cut per blade", "delay (one blade passage)", "UNSTABLE"):
         assert text in result.stdout, text
 
 

@@ -488,11 +488,22 @@ class Fluid(_Base):
 
 
 class BitRock(_Base):
-    """Bit-rock interaction law: ``law = "tucker_wang"`` (coefficients a1..a5 and regularisation e) or
-    ``"off_bottom"`` (the bit hangs free: no bit-rock force, weight-on-bit 0, the hook carries the whole
-    string; ``operation.weight_on_bit`` is then not used)."""
+    """Bit-rock interaction law (docs/model.md, §5 and "Bit–rock law: Detournay"):
 
-    law: Literal["tucker_wang", "off_bottom"] = Field("tucker_wang", description="bit-rock law")
+    - ``law = "tucker_wang"`` (the default): Tucker & Wang's law, coefficients ``a1`` .. ``a5`` and the
+      regularisation ``e`` (``regularization``, ``stick_stiffening_limit``);
+    - ``"off_bottom"``: the bit hangs free: no bit-rock force, weight-on-bit 0, the hook carries the whole
+      string (``operation.weight_on_bit`` is then not used);
+    - ``"detournay"``: the Detournay law of drag (PDC) bits, cutting plus wear-flat friction with the depth of
+      cut set by the bit's own motion one blade passage earlier (:mod:`drillstring.forces.detournay`):
+      ``blades`` n, ``bit_radius`` a, ``intrinsic_specific_energy`` ε, ``cutting_inclination`` ζ,
+      ``contact_stress`` σ, ``wear_flat_length`` l, ``friction_coefficient`` μ, ``bit_geometry`` γ
+      (``W = a ζ ε n d_n + a σ l``, ``T = ½ a² ε n d_n + ½ μ γ a · a σ l``), and the regularisations of its
+      set-valued parts, ``contact_velocity`` v_r and ``friction_speed`` ω_r.
+
+    Each law reads its own keys only; the others keep their defaults and are not used."""
+
+    law: Literal["tucker_wang", "off_bottom", "detournay"] = Field("tucker_wang", description="bit-rock law")
 
     a1: Velocity = Field(3.429e-3, ge=0, description="a1 [m/s]")
     a2: PenetrationPerForce = Field(5.672e-8, gt=0, description="a2 [m/(N*s)]")
@@ -504,6 +515,27 @@ class BitRock(_Base):
         100.0, gt=1, description="largest ratio of the axial resistance 1/(a2 Z^2) to its value at the top speed;"
         " 1/Z^2 is frozen below the bit speed where it is reached (integrable stick) [-]"
     )
+
+    # -- law = "detournay" (Detournay & Defourny 1992; Richard, Germay & Detournay 2007) --------------------
+    blades: int = Field(4, ge=1, description="detournay: number of blades n [-]")
+    bit_radius: Length = Field(0.108, gt=0, description="detournay: bit radius a [m]")
+    intrinsic_specific_energy: Pressure = Field(
+        60e6, gt=0, description="detournay: intrinsic specific energy of the rock eps [Pa]")
+    cutting_inclination: Dimensionless = Field(
+        0.6, ge=0, description="detournay: inclination zeta of the cutting force, W_c = zeta T_c 2/a [-]")
+    contact_stress: Pressure = Field(
+        60e6, ge=0, description="detournay: contact stress sigma under the wear flats [Pa]")
+    wear_flat_length: Length = Field(0.011, ge=0, description="detournay: wear-flat length l, W_f = a sigma l [m]")
+    friction_coefficient: Dimensionless = Field(
+        0.6, ge=0, description="detournay: friction coefficient mu of the wear flats on the rock [-]")
+    bit_geometry: Dimensionless = Field(
+        1.0, ge=0, description="detournay: bit geometry factor gamma, T_f = mu gamma a W_f / 2 [-]")
+    contact_velocity: Velocity = Field(
+        5e-4, gt=0, description="detournay: v_r, the wear-flat force ramps from 0 to a sigma l as the bit's "
+        "axial velocity goes from 0 to v_r (a bit at rest creeps down at most v_r) [m/s]")
+    friction_speed: AngularSpeed = Field(
+        1e-2, gt=0, description="detournay: omega_r, the torque ramps from 0 to its full value as the bit "
+        "speed goes from 0 to omega_r (a stuck bit turns at most omega_r) [rad/s]")
 
 
 class Contact(_Base):
@@ -627,10 +659,18 @@ class Simulation(_Base):
 
 
 class Initial(_Base):
-    """Initial state: the static state spinning at the top speed, plus a seeded lateral perturbation."""
+    """Initial state and start. ``start = "ramp"`` (the default for new cases): the string turns off bottom,
+    the bit ``clearance`` above the rock, the hook carrying the whole string; the hook load is then slacked off
+    so that the weight on bit grows linearly from 0 to ``operation.weight_on_bit`` over ``weight_ramp_time``
+    (:mod:`drillstring.forces.hook_load`). ``"on_bottom"`` (the reference study's start): the static state
+    spinning at the top speed, the bit-rock law switched on at t = 0. Both add a seeded lateral perturbation."""
 
     lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
     seed: int = Field(0, ge=0)
+    start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
+    clearance: Length = Field(0.005, ge=0, le=1.0, description="ramp: bit height above the rock at t = 0 [m]")
+    weight_ramp_time: Time = Field(
+        10.0, gt=0, le=1e4, description="ramp: time over which the weight on bit reaches its value [s]")
 
 
 class CorrelationTable(_Base):
@@ -835,6 +875,15 @@ PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
     (("bit_rock", "a5"), 0.0, 1e9, "N*m"),
     (("bit_rock", "regularization"), 1e-6, 1e3, "rad/s"),
     (("bit_rock", "stick_stiffening_limit"), 1.0, 1e6, ""),
+    (("bit_rock", "bit_radius"), 1e-3, 10.0, "m"),
+    (("bit_rock", "intrinsic_specific_energy"), 1e3, 1e12, "Pa"),
+    (("bit_rock", "cutting_inclination"), 0.0, 10.0, ""),
+    (("bit_rock", "contact_stress"), 0.0, 1e12, "Pa"),
+    (("bit_rock", "wear_flat_length"), 0.0, 10.0, "m"),
+    (("bit_rock", "friction_coefficient"), 0.0, 10.0, ""),
+    (("bit_rock", "bit_geometry"), 0.0, 10.0, ""),
+    (("bit_rock", "contact_velocity"), 1e-9, 1e3, "m/s"),
+    (("bit_rock", "friction_speed"), 1e-9, 1e3, "rad/s"),
     (("contact", "shock_stiffness"), 0.0, 1e15, "N/m2"),
     (("contact", "friction_coefficient"), 0.0, 10.0, ""),
     (("contact", "speed_regularization"), 1e-6, 1e3, "rad/s"),

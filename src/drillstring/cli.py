@@ -528,6 +528,9 @@ def stability(
     table.add_row("bit speed", f"{steady['bit_speed'] * _RPM:,.2f}", "rpm")
     table.add_row("torque on bit", f"{torque(steady['torque_on_bit']):,.3f}", torque.label)
     table.add_row("force on bit", f"{force(steady['force_on_bit']):,.3f}", force.label)
+    if "delay" in steady:
+        table.add_row("depth of cut per blade", f"{steady['depth_of_cut'] * 1e3:,.3f}", "mm")
+        table.add_row("delay (one blade passage)", f"{steady['delay']:,.4f}", "s")
     drive = payload.get("top_drive")
     if drive:
         tuned = set(drive["tuned"])
@@ -541,7 +544,9 @@ def stability(
             table.add_row("high-pass corner" + (" (tuned)" if "filter_frequency" in tuned else ""),
                           f"{drive['filter_frequency']:.4f}", "rad/s")
     console.print(table)
-    modes_table = Table(title="Eigenvalues of the linearised model (sorted by frequency)", title_justify="left")
+    title = ("Characteristic roots of the linearised delay system (sorted by frequency)" if result.delay
+             else "Eigenvalues of the linearised model (sorted by frequency)")
+    modes_table = Table(title=title, title_justify="left")
     for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):
         modes_table.add_column(column, justify="left" if column in ("family", "note") else "right")
     lateral_shown = 0
@@ -617,7 +622,7 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
 
     contact = np.asarray(ds["contact_force"].values, dtype=float) if "contact_force" in ds else np.zeros(0)
     indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
-                                     t_transient)
+                                     t_transient, ds["force_on_bit"].values)
     return {
         **indicators,
         "quill_speed_min": steady_range("quill_speed")[0], "quill_speed_max": steady_range("quill_speed")[1],
@@ -668,6 +673,8 @@ def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
         escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
         _fmt(numbers["stick_time_fraction"], ".1%"), "",
     )
+    table.add_row(escape(f"bit bounce fraction (off the rock, t ≥ {t_tr:g} s)"),
+                  _fmt(numbers["bit_bounce_fraction"], ".1%"), "")
     table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
                   f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
                   "rpm")

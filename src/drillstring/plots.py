@@ -793,6 +793,7 @@ OUTPUT_TITLES = {
     "std_torque_on_bit": "TOB std in time",
     "std_force_on_bit": "FOB std in time",
     "stick_time_fraction": "stick time fraction",
+    "bit_bounce_fraction": "bit bounce fraction",
 }
 
 

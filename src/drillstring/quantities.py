@@ -83,6 +83,7 @@ METRIC_DISPLAY: dict[str, tuple[str | DisplayUnit, str]] = {
     "force_on_bit_mean": ("force", "FOB mean"),
     "mechanical_specific_energy": ("pressure", "MSE"),
     "stick_time_fraction": (DisplayUnit("%", 100.0), "stick time"),
+    "bit_bounce_fraction": (DisplayUnit("%", 100.0), "bit bounce"),
     "bit_speed_oscillation": (DisplayUnit("-", 1.0), "oscillation/2Ω"),
     "surface_torque_amplitude": ("torque", "surface torque amplitude"),
     "quill_speed_min": ("angular_speed", "quill speed min"),

@@ -452,6 +452,7 @@ OUTPUT_NAMES = {
     "std_torque_on_bit": "torque-on-bit, std in time",
     "std_force_on_bit": "force-on-bit, std in time",
     "stick_time_fraction": "stick time fraction",
+    "bit_bounce_fraction": "bit bounce fraction",
 }
 
 

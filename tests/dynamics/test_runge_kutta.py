@@ -552,3 +552,44 @@ def test_overflowing_problem_fails_cleanly():
     np.testing.assert_allclose(sol.y[:-1, 0], 1.0 / (1.0 - sol.t[:-1]), rtol=1e-5)
     m = re.search(r"t = ([0-9.eE+-]+) s", str(info.value))
     assert m and float(m.group(1)) == pytest.approx(1.0, abs=1e-2)
+
+
+@pytest.mark.parametrize("tab", [DORMAND_PRINCE_54, BOGACKI_SHAMPINE_32], ids=lambda t: t.name)
+def test_dense_polynomial_equals_interpolate(tab):
+    ctrl = StepSizeController(rtol=1e-6, atol=1e-9)
+    stepper = RungeKuttaStepper(van_der_pol, 0.0, [2.0, 0.0], tab, ctrl, h0=0.05)
+    with pytest.raises(RuntimeError, match="no accepted step"):
+        stepper.dense_polynomial()
+    while stepper.n_accepted < 5:
+        stepper.step()
+    t_old, h, y_old, coef = stepper.dense_polynomial()
+    assert coef.shape == (tab.dense.shape[1], 2)
+    assert t_old == stepper.t_old and t_old + h == pytest.approx(stepper.t, abs=1e-15)
+    s = np.linspace(0.0, 1.0, 7)
+    poly = y_old + (s[:, None] ** np.arange(1, coef.shape[0] + 1)) @ coef
+    np.testing.assert_allclose(poly, stepper.interpolate(t_old + s * h), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(poly[-1], stepper.y, rtol=0, atol=1e-14)
+
+
+def test_dense_polynomial_needs_dense_coefficients():
+    tab = BOGACKI_SHAMPINE_32
+    hermite = ButcherTableau("bs32-hermite", tab.c, tab.a, tab.b, tab.b_hat, 3, 2, fsal=True, dense=None)
+    stepper = RungeKuttaStepper(decay, 0.0, [1.0], hermite, None, h0=0.1)
+    stepper.step()
+    with pytest.raises(ValueError, match="bs32-hermite has no dense-output coefficients"):
+        stepper.dense_polynomial()
+    with pytest.raises(ValueError, match="on_dense_step needs a tableau with dense output"):
+        integrate(decay, (0.0, 1.0), [1.0], tableau=hermite, on_dense_step=lambda *a: None)
+
+
+def test_on_dense_step_sees_accepted_steps_only():
+    steps = []
+    sol = integrate(van_der_pol, (0.0, 2.0), [2.0, 0.0], rtol=1e-8, first_step=1.0,
+                    on_dense_step=lambda t_old, h, y_old, coef: steps.append((t_old, h, y_old, coef)))
+    assert sol.n_rejected > 0 and len(steps) == sol.n_accepted
+    ends = [t_old + h for t_old, h, _, _ in steps]
+    assert steps[0][0] == 0.0 and ends[-1] == pytest.approx(2.0, abs=1e-14)
+    np.testing.assert_allclose([t for t, *_ in steps[1:]], ends[:-1], rtol=0, atol=1e-14)  # contiguous
+    # each polynomial ends where the next begins: accepted states only
+    for (_, _, y0, c0), (_, _, y1, _) in zip(steps[:-1], steps[1:]):
+        np.testing.assert_allclose(y0 + c0.sum(axis=0), y1, rtol=0, atol=1e-13)

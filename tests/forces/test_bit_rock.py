@@ -162,15 +162,23 @@ def test_negative_speed_symmetry():
 
 
 def test_vectorised_wrapper_matches_kernel():
+    """The wrapper is the law with unilateral contact: the law's force where it pushes the bit up (f ≤ 0),
+    no force and no torque where the law would pull the bit down (it has left the rock)."""
     rng = np.random.default_rng(0)
     u = rng.normal(2e-3, 3e-3, size=(4, 5))
     w = rng.normal(5.0, 8.0, size=(4, 5))
     w[0, 0] = 0.0
     f, t = evaluate_bit_rock(u, w, P)
     assert f.shape == t.shape == (4, 5)
+    lifted = 0
     for idx in np.ndindex(u.shape):
         fk, tk = bit_rock_force(u[idx], w[idx], *ARGS)
-        assert f[idx] == fk and t[idx] == tk
+        if fk > 0.0:
+            lifted += 1
+            assert f[idx] == 0.0 and t[idx] == 0.0
+        else:
+            assert f[idx] == fk and t[idx] == tk
+    assert 0 < lifted < u.size  # both regimes are exercised
     fb, tb = evaluate_bit_rock(1e-3, np.array([0.0, 1.0, 10.0]), P)  # broadcasting
     assert fb.shape == (3,)
     assert tb[2] == bit_rock_force(1e-3, 10.0, *ARGS)[1]
@@ -223,12 +231,13 @@ def test_component_kernel_is_the_reference_law(law):
     shared = np.concatenate([packed, [7.0, -3.0, 1e9]])
     for u, w in [(3.6e-3, 10.47), (0.0, 0.0), (1e-3, 1e-4), (-2e-3, -4.0)]:
         expected = tuple(float(v) for v in params.evaluate(u, w))
-        assert bit_rock_law(shared, u, w) == expected
+        assert bit_rock_law(shared, 0.0, u, w) == expected
         if law == "off_bottom":
             assert expected == (0.0, 0.0)
             np.testing.assert_array_equal(params.jacobian(u, w), np.zeros((2, 2)))
         else:
-            assert expected == bit_rock_force_floored(u, w, *params.kernel_args())
+            raw = bit_rock_force_floored(u, w, *params.kernel_args())
+            assert expected == (raw if raw[0] <= 0.0 else (0.0, 0.0))
 
 
 def test_case_bit_rock_is_built_from_the_case(coarse_case):

@@ -39,7 +39,13 @@ import numpy as np
 from numba import njit, typeof
 from numba.core import event
 
-from drillstring.dynamics.rom import evaluate_rhs, impacts_kernel, observation_width, observe_kernel
+from drillstring.dynamics.rom import (
+    accepted_step_kernel,
+    evaluate_rhs,
+    impacts_kernel,
+    observation_width,
+    observe_kernel,
+)
 from drillstring.dynamics.runge_kutta import (
     TABLEAUS,
     ButcherTableau,
@@ -133,9 +139,9 @@ class Workspace(NamedTuple):
 
 
 @njit(cache=True)
-def _observe(work, row, y, case2, observe_data):
-    """Observe ``y`` into output row ``row``."""
-    observe_kernel(case2, observe_data, y, work.out[row])
+def _observe(work, row, t, y, case2, observe_data):
+    """Observe ``y`` at time ``t`` [s] into output row ``row``."""
+    observe_kernel(case2, observe_data, t, y, work.out[row])
 
 
 @njit(cache=True)
@@ -229,7 +235,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
         if not st.fsal:
             evaluate_rhs(rhs_data, t_new, y, f)
             state[N_RHS] += 1
-        state[IMPACTS] += impacts_kernel(case2, observe_data, y)
+        state[IMPACTS] += accepted_step_kernel(case2, observe_data, t, h, y_old, k_old, st.dense, y)
         state[T] = t_new
         state[H] = min(h * factor, st.max_step)
         state[N_ACCEPTED] += 1
@@ -237,7 +243,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
         while row < n_grid and grid[row] <= t_new:
             tg = grid[row]
             if tg == t_new:
-                _observe(work, row, y, case2, observe_data)
+                _observe(work, row, tg, y, case2, observe_data)
             else:
                 theta = (tg - t) / h
                 for j in range(n):
@@ -250,7 +256,7 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
                             power *= theta
                         acc += bm * k_old[m, j]
                     y_new[j] = y_old[j] + h * acc
-                _observe(work, row, y_new, case2, observe_data)
+                _observe(work, row, tg, y_new, case2, observe_data)
             row += 1
             state[N_OUT] = row
         if last:
@@ -314,7 +320,7 @@ def _compile_kernels(model, work: Workspace, settings: StepperSettings) -> tuple
     monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
     with event.install_listener("numba:compile", monitor):
         _prepare(_run_chunk, work, 0.0, settings, model.rhs_data, model.case2_data, model.observe_data)
-        _prepare(_observe, work, 0, work.y, model.case2_data, model.observe_data)
+        _prepare(_observe, work, 0, 0.0, work.y, model.case2_data, model.observe_data)
         _prepare(impacts_kernel, model.case2_data, model.observe_data, work.y)
         model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
     return _time.perf_counter() - start, monitor.compiled
@@ -373,7 +379,7 @@ def integrate_compiled(
     status = SUCCESS
     state[IMPACTS] = model.start_impacts(work.y)
     if grid[0] == 0.0:
-        _observe(work, 0, work.y, case2, observe_data)
+        _observe(work, 0, 0.0, work.y, case2, observe_data)
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
     output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])

@@ -308,16 +308,26 @@ def second_order_delay_matrices(K, C, b_u, b_t, *, f_du: float, f_dtheta: float,
             raise ValueError(f"{name}: shape {value.shape} does not match K {K.shape}")
     if not (math.isfinite(bit_speed) and bit_speed != 0):
         raise ValueError(f"bit_speed = {bit_speed}: a nonzero steady bit speed [rad/s] expected")
-    g = b_u - (rate_of_penetration / bit_speed) * b_t
-    h = f_d * b_u + t_d * b_t
+    coupling = regenerative_coupling(b_u, b_t, f_d=f_d, t_d=t_d, rate_of_penetration=rate_of_penetration,
+                                     bit_speed=bit_speed)
     P = np.outer(b_u, f_du * b_u + f_dtheta * b_t) + np.outer(b_t, t_du * b_u + t_dtheta * b_t)
     A0 = np.zeros((2 * n, 2 * n))
     A1 = np.zeros((2 * n, 2 * n))
     A0[:n, n:] = np.eye(n)
-    A0[n:, :n] = -K + np.outer(h, g)
+    A0[n:, :n] = -K + coupling
     A0[n:, n:] = -C + P
-    A1[n:, :n] = -np.outer(h, g)
+    A1[n:, :n] = -coupling
     return A0, A1
+
+
+def regenerative_coupling(b_u, b_t, *, f_d: float, t_d: float, rate_of_penetration: float,
+                          bit_speed: float) -> np.ndarray:
+    """``h gᵀ`` (n×n): the modal force of the depth of cut's perturbation, ``h (gᵀδη(t) − gᵀδη(t − τ0))``,
+    with ``h = f_d b_u + t_d b_t`` and ``g = b_u − (V/Ω) b_t`` (:func:`second_order_delay_matrices`); it
+    enters ``A0`` with ``+`` and ``A1`` with ``−`` in the accelerations' rows, the positions' columns."""
+    b_u, b_t = np.asarray(b_u, float).ravel(), np.asarray(b_t, float).ravel()
+    g = b_u - (rate_of_penetration / bit_speed) * b_t
+    return np.outer(f_d * b_u + t_d * b_t, g)
 
 
 def append_states(A0, A1, A_xz, A_zx, A_zz) -> tuple[np.ndarray, np.ndarray]:

@@ -10,7 +10,9 @@ operating maps):
   drilling, 1 when the bit speed swings between 0 and 2Ω (a full stick-slip cycle);
 - ``stick_time_fraction``: the fraction of the time after the transient during which the bit turns
   slower than ``STICK_SPEED_RATIO`` Ω (the regularised bit–rock law has no exact stick, so "stuck" means
-  nearly stopped); ``stick_slip`` is True when that fraction is positive.
+  nearly stopped); ``stick_slip`` is True when that fraction is positive;
+- ``bit_bounce_fraction``: the fraction of that time during which the bit is off the rock (the force on bit
+  is zero: every bit–rock law is a unilateral contact, :mod:`drillstring.forces.bit_rock`).
 
 The **cycle metrics** of one run (:func:`cycle_metrics`, :data:`CYCLE_METRICS`) are what a drilling
 engineer reads per well and per realization: the stick-slip index, the extremes and the period of the bit
@@ -75,18 +77,21 @@ def _finite(values: np.ndarray) -> np.ndarray:
     return values[np.isfinite(values)]
 
 
-def drilling_indicators(time, rate_of_penetration, bit_speed, top_speed: float, t_transient: float) -> dict:
+def drilling_indicators(time, rate_of_penetration, bit_speed, top_speed: float, t_transient: float,
+                        force_on_bit=None) -> dict:
     """Indicators of one run (SI) over ``time >= t_transient`` (the whole run if it ended before):
     ``mean_rate_of_penetration`` [m/s], ``bit_speed_min``, ``bit_speed_max`` [rad/s],
-    ``bit_speed_oscillation`` [-], ``stick_time_fraction`` [-], ``stick_slip`` (bool); None where a
-    failed run left no finite value."""
+    ``bit_speed_oscillation`` [-], ``stick_time_fraction`` [-], ``stick_slip`` (bool) and, given the
+    ``force_on_bit`` [N], ``bit_bounce_fraction`` [-] (:func:`bounce_fraction`); None where a failed run
+    left no finite value."""
     steady = steady_window(time, t_transient)
+    bounce = None if force_on_bit is None else bounce_fraction(np.asarray(force_on_bit)[steady])
     rop = _finite(np.asarray(rate_of_penetration)[steady])
     speed = _finite(np.asarray(bit_speed)[steady])
     if speed.size == 0:
         return {"mean_rate_of_penetration": float(rop.mean()) if rop.size else None, "bit_speed_min": None,
                 "bit_speed_max": None, "bit_speed_oscillation": None, "stick_time_fraction": None,
-                "stick_slip": None}
+                "stick_slip": None, "bit_bounce_fraction": bounce}
     fraction = float(np.mean(speed < STICK_SPEED_RATIO * top_speed))
     return {
         "mean_rate_of_penetration": float(rop.mean()) if rop.size else None,
@@ -95,7 +100,15 @@ def drilling_indicators(time, rate_of_penetration, bit_speed, top_speed: float, 
         "bit_speed_oscillation": float((speed.max() - speed.min()) / (2.0 * top_speed)),
         "stick_time_fraction": fraction,
         "stick_slip": fraction > 0.0,
+        "bit_bounce_fraction": bounce,
     }
+
+
+def bounce_fraction(force_on_bit) -> float | None:
+    """Fraction [-] of the samples of ``force_on_bit`` [N] (finite ones) at which the bit is off the rock:
+    the force is not positive (the laws return exactly 0 then). None without a finite sample."""
+    values = _finite(force_on_bit)
+    return float(np.mean(values <= 0.0)) if values.size else None
 
 
 #: Per-run cycle metrics (SI) after the transient: name -> (unit, description); :func:`cycle_metrics`.
@@ -109,6 +122,7 @@ CYCLE_METRICS: dict[str, tuple[str, str]] = {
     "force_on_bit_mean": ("N", "time-mean force on bit"),
     "mechanical_specific_energy": ("Pa", "mechanical specific energy (Teale) from the time means"),
     "stick_time_fraction": ("1", "fraction of the time with the bit below 10 % of the top speed"),
+    "bit_bounce_fraction": ("1", "fraction of the time with the bit off the rock (zero force on bit)"),
 }
 #: Hysteresis of the period's level crossings, as a fraction of the bit-speed range (max - min).
 PERIOD_HYSTERESIS = 0.25
@@ -158,7 +172,8 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
       time-mean bit speed, not by Ω; NaN when the mean is not positive); ``bit_speed_min``, ``_max``;
     - ``period``: :func:`oscillation_period` of the bit speed;
     - time means of ROP, TOB and FOB (``*_mean``), and :func:`mechanical_specific_energy` from them with Ω;
-    - ``stick_time_fraction``: fraction of the samples with the bit below ``STICK_SPEED_RATIO·Ω``.
+    - ``stick_time_fraction``: fraction of the samples with the bit below ``STICK_SPEED_RATIO·Ω``;
+    - ``bit_bounce_fraction``: fraction of the samples with the bit off the rock (:func:`bounce_fraction`).
 
     NaN where a failed run left no finite value."""
     t = np.asarray(time, dtype=float)
@@ -179,6 +194,8 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
             "period": oscillation_period(t[steady], speed_all),
             "stick_time_fraction": float(np.mean(speed < STICK_SPEED_RATIO * top_speed)),
         })
+    bounce = bounce_fraction(np.asarray(observables["force_on_bit"], dtype=float)[steady])
+    out["bit_bounce_fraction"] = math.nan if bounce is None else bounce
     out["mechanical_specific_energy"] = mechanical_specific_energy(
         out["force_on_bit_mean"], out["torque_on_bit_mean"], top_speed, out["rate_of_penetration_mean"], area)
     return out

@@ -58,8 +58,10 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
+from drillstring.dynamics.delay import AngleHistory, lookup, record_step
+from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import KERNEL_SIZE as BIT_ROCK_SIZE
-from drillstring.forces.bit_rock import BitRockParameters, bit_rock_law, case_bit_rock
+from drillstring.forces.bit_rock import LAW_CODE, ON_BOTTOM, BitRockParameters, bit_rock_law, case_bit_rock
 from drillstring.forces.contact import (
     ContactParameters,
     ContactStations,
@@ -76,6 +78,8 @@ from drillstring.forces.nonlinear import (
     modal_mass_coupling,
     nonlinear_elements,
 )
+from drillstring.forces.hook_load import HookLoadRamp, hook_load_change
+from drillstring.forces.top_drive import KERNEL_SIZE as TOP_DRIVE_SIZE
 from drillstring.forces.top_drive import (
     Z_TORQUE,
     TopDriveParameters,
@@ -129,6 +133,12 @@ def observation_width(n_probes: int) -> int:
 #: One array, not a field each: every field of RhsData is an argument of each inner kernel, and four more
 #: fields made the reference realization 30 % slower (measured; LLVM inlines less).
 _TOP_DRIVE = BIT_ROCK_SIZE
+#: Where the hook load's numbers (:meth:`~drillstring.forces.hook_load.HookLoadRamp.kernel_array`) start.
+_HOOK_LOAD = _TOP_DRIVE + TOP_DRIVE_SIZE
+#: The Detournay law's code at ``laws[ON_BOTTOM]``: the law that reads the bit's history.
+_DELAYED_LAW = LAW_CODE["detournay"]
+#: Coefficients of a dense-output polynomial the scratch of :class:`ObserveData` holds (dopri5: 4).
+_DENSE_ORDER_MAX = 8
 
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
@@ -199,7 +209,7 @@ class RhsData(NamedTuple):
     damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
     generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
     blocks: np.ndarray  # (8,) int64
-    bit_u: np.ndarray  # axial mode shapes at the bit's u
+    axial_rows: np.ndarray  # (2, n_a) axial columns of: u at the bit, u at the top (where the hook pulls)
     torsion_rows: np.ndarray  # (3, n_t) torsional columns of: θx at the bit, θx at the top (the quill, where
     #                           the motor torque acts; 0 when held), the surface-torque row (K Φ) at the top's θx
     phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
@@ -209,7 +219,9 @@ class RhsData(NamedTuple):
     lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # the boundary components' numbers: the bit–rock law's, then from _TOP_DRIVE the top drive's
+    laws: np.ndarray  # the boundary components' numbers: the bit–rock law's, from _TOP_DRIVE the top drive's,
+    #                   from _HOOK_LOAD the hook load's
+    history: AngleHistory  # the bit's axial position by angle (the hole bottom), read by a delayed law
     contact: ContactData
     turning: TurningLoadData
 
@@ -264,6 +276,7 @@ class ObserveData(NamedTuple):
     in_contact: np.ndarray  # (n_nodes,) bool: which nodes touch the borehole (filled)
     current: np.ndarray  # (n_nodes,) bool: nodes in contact at the accepted step being counted (impacts)
     previous: np.ndarray  # (n_nodes,) bool: nodes in contact at the previous accepted step (impacts)
+    dense: np.ndarray  # (2, _DENSE_ORDER_MAX) scratch: the bit's angle and position polynomials of a step
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -327,17 +340,36 @@ def _columns_matvec(matrix_t, vector, offset, out, sign):
 
 
 @inner_kernel()
-def _bit_motion(d, y):
-    """Axial velocity [m/s] and spin speed [rad/s] of the bit for the state ``y`` = [η, η̇]."""
+def _bit_state(d, t, y):
+    """Axial position u [m] (from the static state, down), angle θ [rad], axial velocity u̇ [m/s] and spin
+    speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇]."""
     n = d.omega2.shape[0]
     a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
-    bit_velocity = 0.0
+    position = 0.0
+    velocity = 0.0
     for j in range(a0, a1):
-        bit_velocity += d.bit_u[j - a0] * y[n + j]
-    bit_speed = d.top_speed
+        position += d.axial_rows[0, j - a0] * y[j]
+        velocity += d.axial_rows[0, j - a0] * y[n + j]
+    angle = d.top_speed * t
+    speed = d.top_speed
     for j in range(t0, t1):
-        bit_speed += d.torsion_rows[0, j - t0] * y[n + j]
-    return bit_velocity, bit_speed
+        angle += d.torsion_rows[0, j - t0] * y[j]
+        speed += d.torsion_rows[0, j - t0] * y[n + j]
+    return position, angle, velocity, speed
+
+
+@inner_kernel()
+def _bit_rock(d, t, y):
+    """The bit–rock law at the bit (:func:`~drillstring.forces.bit_rock.bit_rock_law`): ``(axial force [N],
+    torque [N·m], depth of cut per blade [m], bit position u [m], axial velocity [m/s], spin speed
+    [rad/s])``. A delayed law's depth of cut is ``u(t)`` minus the hole bottom one blade sector behind
+    (:func:`~drillstring.dynamics.delay.lookup`); the other laws read none (0)."""
+    position, angle, velocity, speed = _bit_state(d, t, y)
+    depth = 0.0
+    if d.laws[ON_BOTTOM] == _DELAYED_LAW:
+        depth = position - lookup(d.history, angle - d.history.meta[1])
+    force, torque = bit_rock_law(d.laws, depth, velocity, speed)
+    return force, torque, depth, position, velocity, speed
 
 
 @inner_kernel()
@@ -428,12 +460,12 @@ def _rhs_kernel(d, t, y, out):
     _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
     if d.laws[_TOP_DRIVE] != 0.0:
         _top_drive(d, t, y, out)
-    # bit-rock interaction at the bit node
-    bit_velocity, bit_speed = _bit_motion(d, y)
-    axial_force, bit_torque = bit_rock_law(d.laws, bit_velocity, bit_speed)
+    # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
+    axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
+    hook = hook_load_change(d.laws[_HOOK_LOAD:], t)
     for j in range(a0, a1):
-        acc[j] += d.bit_u[j - a0] * axial_force
+        acc[j] += d.axial_rows[0, j - a0] * axial_force + d.axial_rows[1, j - a0] * hook
     for j in range(t0, t1):
         acc[j] += d.torsion_rows[0, j - t0] * bit_torque
     if y1 == y0 and z1 == z0:
@@ -696,20 +728,15 @@ def impacts_kernel(d, o, y):
 
 
 @njit(cache=True)
-def observe_kernel(d, o, y, out):
+def observe_kernel(d, o, t, y, out):
     """Observables (:data:`OBSERVABLES`, by their columns) and the radial displacement at the probes for
-    the state ``y``, from the case-2 data ``d`` (:class:`RhsData`) and ``o`` (:class:`ObserveData`, whose
-    contact mask it fills). Returns the number of nodes in contact."""
-    bit_velocity, bit_speed = _bit_motion(d, y)
-    axial_force, bit_torque = bit_rock_law(d.laws, bit_velocity, bit_speed)
+    the state ``y`` at time ``t`` [s], from the case-2 data ``d`` (:class:`RhsData`) and ``o``
+    (:class:`ObserveData`, whose contact mask it fills). Returns the number of nodes in contact."""
+    axial_force, bit_torque, _, depth, bit_velocity, bit_speed = _bit_rock(d, t, y)
     force = _contact_state(d, y, o.v, o.w, o.in_contact)
     count = 0
     for i in range(o.in_contact.shape[0]):
         count += o.in_contact[i]
-    depth = 0.0
-    a0, a1 = d.blocks[0], d.blocks[1]
-    for j in range(a0, a1):
-        depth += d.bit_u[j - a0] * y[j]
     out[_ROP] = bit_velocity
     out[_BIT_SPEED] = bit_speed
     out[_TOB] = -bit_torque
@@ -725,6 +752,37 @@ def observe_kernel(d, o, y, out):
         out[PROBE_COLUMN + n_p + k] = o.v[j]
         out[PROBE_COLUMN + 2 * n_p + k] = o.w[j]
     return count
+
+
+@njit(cache=True)
+def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
+    """What the model does after each accepted step ``[t_old, t_old + h]`` of the integrator (never after a
+    rejected one): count the impacts at the new state ``y`` (:func:`impacts_kernel`, returned) and, for a
+    delayed bit–rock law, record the bit's position by angle over the step
+    (:func:`~drillstring.dynamics.delay.record_step`) from the step's continuous extension: the stages
+    ``k_old`` (s, len(y)) and the tableau's ``dense`` (s, p) coefficients, ``y(t_old + σh) = y_old +
+    h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
+    if d.laws[ON_BOTTOM] == _DELAYED_LAW:
+        a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+        order = dense.shape[1]
+        angle_coef = o.dense[0, :order]
+        position_coef = o.dense[1, :order]
+        angle_coef[:] = 0.0
+        position_coef[:] = 0.0
+        for i in range(k_old.shape[0]):
+            rate = 0.0  # the bit's axial velocity at stage i (k holds dη/dt = η̇ first)
+            for j in range(a0, a1):
+                rate += d.axial_rows[0, j - a0] * k_old[i, j]
+            spin = 0.0
+            for j in range(t0, t1):
+                spin += d.torsion_rows[0, j - t0] * k_old[i, j]
+            for p in range(order):
+                position_coef[p] += h * dense[i, p] * rate
+                angle_coef[p] += h * dense[i, p] * spin
+        angle_coef[0] += d.top_speed * h
+        position, angle, _, _ = _bit_state(d, t_old, y_old)
+        record_step(d.history, angle, angle_coef, position, position_coef)
+    return impacts_kernel(d, o, y)
 
 
 @dataclass
@@ -749,6 +807,11 @@ class ReducedOrderModel:
             (its first column the rigid rotation), ``top_speed`` is the set point, the kernels' base spin
             speed is 0 (the rigid rotation carries the spin) and the state ``[η, η̇, s]`` holds the
             controller's states ``s`` after the modal coordinates (:attr:`state_size`).
+        hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`): ``None`` or a zero ramp
+            time is the reference start (on the static state at t = 0); a ramp starts off bottom, the bit
+            its ``clearance`` above the rock, and transfers the weight-on-bit over the ramp time.
+        history_bins: bins per blade sector of the bit's history (:mod:`drillstring.dynamics.delay`) for a
+            delayed bit–rock law.
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
     and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
@@ -772,6 +835,8 @@ class ReducedOrderModel:
     generalized_force: np.ndarray | None = None
     turning_loads: TurningLoads | None = None
     top_drive: TopDriveParameters | None = None
+    hook_load: HookLoadRamp | None = None
+    history_bins: int = 2048
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -795,8 +860,11 @@ class ReducedOrderModel:
         self.generalized_force = force
         if self.turning_loads is None:
             self.turning_loads = TurningLoads.empty(mesh.n_dofs)
+        if self.hook_load is None:
+            self.hook_load = HookLoadRamp()
         self.omega2 = np.ascontiguousarray(np.sign(self.angular_frequencies) * self.angular_frequencies**2)
         self.bit_u = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, U)])
+        self.top_u = np.ascontiguousarray(phi[dof(0, U)])
         self.bit_t = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, THETA_X)])
         self.phi_v = np.ascontiguousarray(phi[dof(nodes, V)])
         self.phi_w = np.ascontiguousarray(phi[dof(nodes, W)])
@@ -832,7 +900,7 @@ class ReducedOrderModel:
             damping_blocks=diagonal_blocks(self.damping),
             generalized_force=self.generalized_force,
             blocks=self.blocks,
-            bit_u=transposed(self.bit_u[a0:a1]),
+            axial_rows=transposed(np.vstack([self.bit_u[a0:a1], self.top_u[a0:a1]])),
             torsion_rows=transposed(np.vstack([self.bit_t[t0:t1], self.quill_shapes[t0:t1],
                                                self.surface_torque_shapes[t0:t1]])),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
@@ -843,7 +911,10 @@ class ReducedOrderModel:
                                               np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
             top_speed=self.base_speed,
             weight_on_bit=float(self.weight_on_bit),
-            laws=np.concatenate([self.bit_rock.kernel_array(), self.top_drive.kernel_args()]),
+            laws=np.concatenate([self.bit_rock.kernel_array(), self.top_drive.kernel_args(),
+                                 self.hook_load.kernel_array()]),
+            history=(AngleHistory.allocate(self.bit_rock.detournay.sector, self.history_bins)
+                     if self.bit_rock.delayed else AngleHistory.allocate(1.0, 4)),
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
@@ -857,6 +928,7 @@ class ReducedOrderModel:
             probe_nodes=self.probe_nodes, v=np.zeros(mesh.n_nodes), w=np.zeros(mesh.n_nodes),
             in_contact=np.zeros(mesh.n_nodes, dtype=np.bool_),
             current=np.zeros(mesh.n_nodes, dtype=np.bool_), previous=np.zeros(mesh.n_nodes, dtype=np.bool_),
+            dense=np.zeros((2, _DENSE_ORDER_MAX)),
         )
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | FullModelData = (
@@ -935,7 +1007,11 @@ class ReducedOrderModel:
         eta, eta_dot = y[:n], y[n:2 * n]
         bit_velocity = self.bit_u @ eta_dot
         bit_speed = self.base_speed + self.bit_t @ eta_dot
-        axial_force, bit_torque = self.bit_rock.evaluate(bit_velocity, bit_speed)
+        depth = 0.0
+        if self.bit_rock.delayed:  # the hole bottom one blade sector behind the bit
+            history = self.case2_data.history
+            depth = self.bit_u @ eta - lookup(history, self.base_speed * t + self.bit_t @ eta - history.lag)
+        axial_force, bit_torque = self.bit_rock.evaluate(bit_velocity, bit_speed, depth)
         st = self.stations
         spin = self.base_speed + self.phi_tx @ eta_dot
         force_v, force_w, torque, _ = evaluate_contact(
@@ -949,6 +1025,7 @@ class ReducedOrderModel:
         generalized = (self.phi_v.T @ st.scatter(force_v, n_nodes) + self.phi_w.T @ st.scatter(force_w, n_nodes)
                        + self.phi_tx.T @ st.scatter(torque, n_nodes)
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
+                       + self.top_u * float(self.hook_load.force(t))
                        + self.generalized_force + np.where(lateral, turning, 0.0))
         acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
         states = np.zeros(self.top_drive.n_states)
@@ -974,7 +1051,7 @@ class ReducedOrderModel:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
         its v and w [m] (:func:`observation_width` columns)."""
         out = np.empty(observation_width(len(self.probe_nodes)))
-        observe_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float), out)
+        observe_kernel(self.case2_data, self.observe_data, float(t), np.ascontiguousarray(y, dtype=float), out)
         return out
 
     def contact_mask(self) -> np.ndarray:
@@ -992,6 +1069,45 @@ class ReducedOrderModel:
         contact zones that appeared (:func:`new_contact_zones`). Both integrators call it after every
         accepted step."""
         return int(impacts_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
+
+    def bit_position(self, t: float, y: np.ndarray) -> tuple[float, float]:
+        """The bit's axial position u [m] (from the static state, down) and angle θ [rad] at time ``t``
+        [s] for the state ``y``."""
+        n = self.size
+        return float(self.bit_u @ y[:n]), float(self.base_speed * t + self.bit_t @ y[:n])
+
+    def start_history(self, y: np.ndarray, depth_of_cut: float | None = None) -> None:
+        """Set the hole bottom under the bit at the start of a run from the state ``y`` at t = 0 (a delayed
+        bit–rock law only; nothing otherwise): with a ramped start (:attr:`hook_load`) a flat bottom
+        ``clearance`` below the bit; else the helical bottom of steady drilling with the depth of cut
+        ``depth_of_cut`` [m] per blade under the bit — by default that of the closed-form steady state
+        at the static weight-on-bit (:meth:`~drillstring.forces.detournay.DetournayParameters.rate_of_penetration`;
+        0 when that weight does not exceed the wear flats' contact force)."""
+        if not self.bit_rock.delayed:
+            return
+        position, angle = self.bit_position(0.0, y)
+        law = self.bit_rock.detournay
+        if self.hook_load.active:
+            start_history(self.case2_data.history, angle, position + self.hook_load.clearance, 0.0)
+            return
+        if depth_of_cut is None:
+            depth_of_cut = max(self.weight_on_bit - law.contact_force, 0.0) / law.cutting_stiffness \
+                if law.cutting_stiffness > 0 else 0.0
+        start_history(self.case2_data.history, angle, position, depth_of_cut / law.sector)
+
+    def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:
+        """Record the bit's position by angle over an accepted step from its dense-output polynomial
+        ``y(t_old + σh) = y_old + Σ_p coef[p] σ^(p+1)`` (``coef`` (p, len(y)): what
+        :meth:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper.dense_polynomial` gives): the NumPy
+        path's counterpart of :func:`accepted_step_kernel`. Nothing for a law without history."""
+        if not self.bit_rock.delayed:
+            return
+        n = self.size
+        position, angle = self.bit_position(t_old, y_old)
+        angle_coef = coef[:, :n] @ self.bit_t
+        angle_coef[0] += self.base_speed * h
+        record_step(self.case2_data.history, angle, np.ascontiguousarray(angle_coef), position,
+                    np.ascontiguousarray(coef[:, :n] @ self.bit_u))
 
     def turning_whirl(self) -> np.ndarray:
         """The steady lateral whirl [η, η̇] at t = 0 of the linear model spinning at Ω under the turning
@@ -1034,6 +1150,8 @@ class ReducedOrderModel:
         y0 = np.zeros(self.state_size)
         if not at_rest:
             y0[:2 * self.size] = self.turning_whirl()
+        if self.hook_load.active:
+            y0[:self.size] += self.off_bottom_offsets()
         if self.rigid_rotation_column is not None and not at_rest:
             r = self.rigid_rotation_column  # spinning at Ω: the rigid rotation carries it
             y0[self.size + r] = self.top_speed / self.quill_shapes[r]
@@ -1059,10 +1177,34 @@ class ReducedOrderModel:
         y0[: self.size] += np.where(lateral, eta0, 0.0)
         return y0
 
+    def off_bottom_offsets(self) -> np.ndarray:
+        """Modal coordinates η [√kg·m] of the string hanging off bottom at the start of a ramped start
+        (:class:`~drillstring.forces.hook_load.HookLoadRamp`): relative to the static state the bit no longer
+        carries the weight-on-bit W and the hook carries it instead, so the elastic axial modes take the
+        static offsets of a force W down at the bit and W up at the top, ``ω_j² η_j = W (φ_bit − φ_top)_j``;
+        the rigid axial coordinate puts the bit ``clearance`` above its static position (the rock)."""
+        eta = np.zeros(self.size)
+        a0, a1 = int(self.blocks[0]), int(self.blocks[1])
+        load = self.weight_on_bit * (self.bit_u - self.top_u)
+        rigid = rigid_axial_column(self)
+        for j in range(a0, a1):
+            if j != rigid:
+                eta[j] = load[j] / self.omega2[j]
+        eta[rigid] = (-self.hook_load.clearance - self.bit_u @ eta) / self.bit_u[rigid]
+        return eta
+
     def energy(self, y: np.ndarray) -> float:
         """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
         n = self.size
         return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
+
+
+def rigid_axial_column(model: ReducedOrderModel) -> int:
+    """The column of the rigid axial translation in the model's basis."""
+    columns = [i for i, f in enumerate(model.family) if f == "rigid_axial"]
+    if len(columns) != 1:
+        raise ValueError("the reduced model must hold exactly one rigid axial mode")
+    return columns[0]
 
 
 def reduced_model(
@@ -1085,6 +1227,7 @@ def reduced_model(
     turning_loads: TurningLoads | None = None,
     lateral_cutoff: float = 0.0,
     top_drive: TopDriveParameters | None = None,
+    hook_load: HookLoadRamp | None = None,
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -1101,6 +1244,7 @@ def reduced_model(
             (:func:`~drillstring.forces.contact.mesh_contact_stations`).
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
         top_drive: the top boundary; None: the top speed imposed.
+        hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
     """
     drive = top_drive is not None and not top_drive.imposed
     if drive:
@@ -1126,7 +1270,7 @@ def reduced_model(
         stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
-        top_drive=top_drive,
+        top_drive=top_drive, hook_load=hook_load,
     )
 
 
@@ -1176,4 +1320,15 @@ def case_reduced_model(
         turning_loads=case_turning_loads(case, static.mesh),
         lateral_cutoff=_lateral_cutoff(r.lateral_cutoff, lateral_modes, lateral_cutoff) * case.operation.top_speed,
         top_drive=top_drive,
+        hook_load=case_hook_load(case, static.weight_on_bit),
     )
+
+
+def case_hook_load(case, weight_on_bit: float) -> HookLoadRamp:
+    """The start of a :class:`~drillstring.case.Case` (``[initial]``): the ramp of ``weight_on_bit`` [N] (the
+    static one) over ``weight_ramp_time`` with the bit ``clearance`` off bottom for ``start = "ramp"``; the
+    reference start (no ramp) for ``"on_bottom"``."""
+    i = case.initial
+    if i.start == "on_bottom":
+        return HookLoadRamp()
+    return HookLoadRamp(ramp_time=i.weight_ramp_time, weight_on_bit=float(weight_on_bit), clearance=i.clearance)

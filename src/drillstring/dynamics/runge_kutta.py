@@ -676,6 +676,20 @@ class RungeKuttaStepper:
         return True
 
     # -- dense output --------------------------------------------------------------------------------------
+    def dense_polynomial(self) -> tuple[float, float, np.ndarray, np.ndarray]:
+        """The last accepted step's continuous extension as a polynomial in ``s ∈ [0, 1]``: returns
+        ``(t_old, h, y_old, coef)`` with ``y(t_old + s·h) = y_old + Σ_p coef[p] s^(p+1)``, ``coef`` of
+        shape ``(p, n)``, ``coef[p] = h Σ_i dense[i, p] k_i`` (the same values :meth:`interpolate`
+        gives). For a caller that records the solution's history (e.g. :mod:`.delay`). Valid until the
+        next accepted step; raises ``ValueError`` when the tableau has no continuous extension."""
+        if self.tableau.dense is None:
+            raise ValueError(f"{self.tableau.name} has no dense-output coefficients: no dense polynomial")
+        if self._y_old is None:
+            raise RuntimeError("no accepted step yet: no dense polynomial")
+        h = self.h_last
+        coef = h * (self.tableau.dense.T @ self._k_last)
+        return self.t_old, h, self._y_old.copy(), coef
+
     def interpolate(self, t: float | np.ndarray) -> np.ndarray:
         """State at time(s) ``t`` inside the last accepted step ``[t_old, t]``: shape ``(n,)`` for a
         scalar, ``(m, n)`` for ``m`` times. Uses the tableau's continuous extension, or cubic Hermite
@@ -789,6 +803,7 @@ def integrate(
     raise_on_failure: bool = True,
     controller: StepSizeController | None = None,
     on_step: Callable[[float, np.ndarray], None] | None = None,
+    on_dense_step: Callable[[float, float, np.ndarray, np.ndarray], None] | None = None,
 ) -> Solution:
     """Integrate ``y' = rhs(t, y)`` over ``t_span = (t0, t_end)`` (``t_end < t0`` integrates backwards).
 
@@ -796,7 +811,10 @@ def integrate(
     ``t_end`` itself always included exactly (appended when the span is not a multiple of the step); with
     neither, every accepted step is output. Values between steps come from the stepper's dense output.
     ``observe(t, y)`` maps the state to what is stored (1-D; a scalar is stored as one column).
-    ``on_step(t, y)`` is called after every accepted step with its end time and state.
+    ``on_step(t, y)`` is called after every accepted step with its end time and state;
+    ``on_dense_step(t_old, h, y_old, coef)`` after every accepted step (never a rejected one) with its
+    dense-output polynomial (:meth:`RungeKuttaStepper.dense_polynomial`), before ``on_step`` — to record
+    the solution's history for a delayed right-hand side.
 
     Step control: ``rtol``, ``atol`` (scalar or per-component), ``max_step``, ``first_step``; a fully
     configured ``controller`` overrides those four. ``fixed_step`` switches control off (every step of
@@ -814,6 +832,8 @@ def integrate(
             tableau = TABLEAUS[tableau]
         except KeyError:
             raise ValueError(f"unknown tableau {tableau!r}; known: {sorted(TABLEAUS)}") from None
+    if on_dense_step is not None and tableau.dense is None:
+        raise ValueError(f"on_dense_step needs a tableau with dense output; {tableau.name} has none")
     t0, t_end = float(t_span[0]), float(t_span[1])
     if not (math.isfinite(t0) and math.isfinite(t_end)):
         raise ValueError("t_span must be finite")
@@ -884,6 +904,8 @@ def integrate(
             if not stepper.step():
                 continue
             t_new = stepper.t
+            if on_dense_step is not None:
+                on_dense_step(*stepper.dense_polynomial())
             if on_step is not None:
                 on_step(t_new, stepper.y)
             if grid is None:

@@ -83,6 +83,7 @@ def simulate_model(
     raise_on_failure: bool = True,
     engine: str = "compiled",
     initial_state: np.ndarray | None = None,
+    initial_depth_of_cut: float | None = None,
 ) -> SimulationResult:
     """Integrate ``model`` from its initial state (:meth:`ReducedOrderModel.initial_state`) to ``t_end``
     [s], storing observables every ``output_step`` [s]. A failed integration raises
@@ -93,7 +94,9 @@ def simulate_model(
     the NumPy right-hand side :meth:`ReducedOrderModel.rhs_reference`). Both use the same method,
     controller and dense output; tests check they agree within the integration tolerance.
     ``initial_state`` ([η, η̇] and the top drive's states, :attr:`ReducedOrderModel.state_size`) replaces the model's initial state (e.g. steady drilling plus a
-    perturbation, :mod:`drillstring.dynamics.stability`).
+    perturbation, :mod:`drillstring.dynamics.stability`). A delayed bit–rock law starts from the hole
+    bottom of :meth:`ReducedOrderModel.start_history` (``initial_depth_of_cut`` [m] per blade under the bit
+    for the reference start; default that of steady drilling at the static weight-on-bit).
     """
     if engine not in ("compiled", "reference"):
         raise ValueError(f"engine = {engine!r}: must be 'compiled' or 'reference'")
@@ -103,6 +106,7 @@ def simulate_model(
         y0 = np.array(initial_state, dtype=float)
         if y0.shape != (model.state_size,):
             raise ValueError(f"initial_state has shape {y0.shape}: must be ({model.state_size},)")
+    model.start_history(y0, initial_depth_of_cut)
     if engine == "compiled":
         return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
                                   atol=atol, method=method, max_steps=max_steps, min_step=min_step,
@@ -119,7 +123,7 @@ def simulate_model(
         solution = integrate(
             model.rhs_reference, (0.0, t_end), y0, output_step=output_step, tableau=method, rtol=rtol,
             atol=atol, max_steps=max_steps, min_step=min_step, progress=progress, observe=model.observe,
-            on_step=count_impacts,
+            on_step=count_impacts, on_dense_step=model.record_history if model.bit_rock.delayed else None,
         )
     except IntegrationError as error:
         failure = error

@@ -43,6 +43,21 @@ and the surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes 
 states as extra rows. The rigid rotation's angle, like the depth drilled, enters no equation and is left
 out. **Off bottom** (``bit_rock.law = "off_bottom"``) the steady state is rotation without penetration
 (ROP 0, no bit–rock force) and the bit–rock Jacobian is zero.
+
+**The Detournay law** (:mod:`drillstring.forces.detournay`) is affine in the rate of penetration too in
+steady drilling (the depth of cut per blade is ``d = V·2π/(nΩ)``, so ``f = −aσl − a ζ ε n d``), and eq. (1)
+holds as written. Its linearisation is a **delay** system: the depth of cut ``d = u(t) − u(t − τ)`` with
+``θ(t) − θ(t − τ) = 2π/n`` perturbs as ``δd = gᵀ(δη(t) − δη(t − τ0))``, ``g = b_u − (V/Ω) b_t``,
+``τ0 = 2π/(nΩ)`` (:func:`~drillstring.dynamics.delay_stability.second_order_delay_matrices`), so that
+
+    δẋ = A0 δx(t) + A1 δx(t − τ0),   A0 = A + [h gᵀ in the accelerations' rows],   A1 = −[h gᵀ there]   (3)
+
+with ``A`` the matrix of eq. (2) (the law's partials in ``u̇`` and ``θ̇``, zero in steady drilling: neither
+regularised set-valued part is active there) and ``h = f_d b_u + t_d b_t`` its partials in the depth of cut.
+The roots of ``det(sI − A0 − A1 e^{−sτ0}) = 0`` (:func:`~drillstring.dynamics.delay_stability.characteristic_roots`:
+Chebyshev collocation of the infinitesimal generator, refined by Newton's method) replace the eigenvalues;
+the rigid positions now enter (through differences), so they are kept and their invariance shows as a
+neutral root at 0, reported apart (``neutral_roots``), never as a mode.
 """
 
 from __future__ import annotations
@@ -53,7 +68,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from drillstring.dynamics.rom import ReducedOrderModel
+from drillstring.dynamics.delay_stability import DelayRoots, characteristic_roots, regenerative_coupling
+from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -63,17 +79,22 @@ STABILITY_FAMILIES = ("axial", "torsional", "lateral")
 class SteadyDrilling:
     """Steady drilling (SI): ``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit``
     [N·m], ``force_on_bit`` [N]; ``state`` is the reduced state ``[η, η̇]`` at t = 0 (rigid axial
-    coordinate 0)."""
+    coordinate 0); ``depth_of_cut`` [m] per blade and ``delay`` [s] of a delayed law (0 otherwise)."""
 
     rate_of_penetration: float
     bit_speed: float
     torque_on_bit: float
     force_on_bit: float
     state: np.ndarray
+    depth_of_cut: float = 0.0
+    delay: float = 0.0
 
     def to_dict(self) -> dict[str, float]:
-        return {"rate_of_penetration": self.rate_of_penetration, "bit_speed": self.bit_speed,
-                "torque_on_bit": self.torque_on_bit, "force_on_bit": self.force_on_bit}
+        out = {"rate_of_penetration": self.rate_of_penetration, "bit_speed": self.bit_speed,
+               "torque_on_bit": self.torque_on_bit, "force_on_bit": self.force_on_bit}
+        if self.delay > 0.0:
+            out.update(depth_of_cut=self.depth_of_cut, delay=self.delay)
+        return out
 
 
 @dataclass(frozen=True)
@@ -104,6 +125,7 @@ class StabilityResult:
     steady_state: SteadyDrilling
     modes: list[ModeStability]
     top_drive: dict | None = None  # the top drive's controller and gains (TopDriveParameters.describe)
+    delay: dict | None = None  # a delayed law: the delay system's roots (:func:`delay_roots_summary`)
 
     @property
     def stable(self) -> bool:
@@ -120,14 +142,9 @@ class StabilityResult:
                "modes": [asdict(m) for m in self.modes]}
         if self.top_drive is not None:
             out["top_drive"] = self.top_drive
+        if self.delay is not None:
+            out["delay"] = self.delay
         return out
-
-
-def _rigid_column(model: ReducedOrderModel) -> int:
-    columns = [i for i, f in enumerate(model.family) if f == "rigid_axial"]
-    if len(columns) != 1:
-        raise ValueError("the reduced model must hold exactly one rigid axial mode")
-    return columns[0]
 
 
 def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float:
@@ -135,8 +152,10 @@ def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float
     if not model.bit_rock.on_bottom:
         return 0.0
     b_r = model.bit_u[r]
-    f0, _ = model.bit_rock.evaluate(0.0, omega)
-    f1 = float(model.bit_rock.evaluate(1.0, omega)[0]) - float(f0)
+    # the steady axial force is affine in V: sampled at 1 and 2 m/s, where every law is in contact
+    f_one = model.bit_rock.steady_forces(1.0, omega)[0]
+    f1 = model.bit_rock.steady_forces(2.0, omega)[0] - f_one
+    f0 = f_one - f1
     d_rr = model.damping[r, r]
     g = model.generalized_force
     rop = (b_r * (float(f0) + model.weight_on_bit) + g[r]) / (d_rr / b_r - b_r * f1)
@@ -152,7 +171,7 @@ def _steady_load(model: ReducedOrderModel, omega: float, r: int):
     """Steady drilling at the bit speed ``omega``: (ROP, bit force, bit torque, modal velocity, generalized
     load without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
     rop = _steady_penetration(model, omega, r)
-    force, torque = (float(v) for v in model.bit_rock.evaluate(rop, omega))
+    force, torque = model.bit_rock.steady_forces(rop, omega)
     n = model.size
     velocity = np.zeros(n)
     velocity[r] = rop / model.bit_u[r]
@@ -169,7 +188,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     """The steady drilling state of ``model``, eq. (1) (with a top drive: the module docstring). Raises
     ValueError when the law gives no penetration (ROP <= 0: the bit would lift off, the drilling regime does
     not exist) or the motor would need more than its maximum torque. Off bottom: steady rotation, ROP 0."""
-    r = _rigid_column(model)
+    r = rigid_axial_column(model)
     drive = model.top_drive
     omega = model.top_speed
     rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
@@ -197,8 +216,11 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
         states[0] = motor / drive.integral_gain if drive.integral_gain > 0 else 0.0
     if states.size > 1:
         states[1] = float(model.surface_torque_shapes @ offsets)
+    law = model.bit_rock
     return SteadyDrilling(rate_of_penetration=float(rop), bit_speed=float(omega), torque_on_bit=-torque,
-                          force_on_bit=-force, state=np.concatenate([offsets, velocity, states]))
+                          force_on_bit=-force, state=np.concatenate([offsets, velocity, states]),
+                          depth_of_cut=law.steady_depth_of_cut(rop, omega),
+                          delay=law.detournay.sector / omega if law.delayed else 0.0)
 
 
 def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
@@ -206,7 +228,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     positions included; ``s`` the top drive controller's states)."""
     n = model.size
     size = model.state_size
-    jac = model.bit_rock.jacobian(steady.rate_of_penetration, steady.bit_speed)
+    jac = model.bit_rock.jacobian(steady.rate_of_penetration, steady.bit_speed, steady.depth_of_cut)
     bu, bt = model.bit_u, model.bit_t
     coupling = (np.outer(bu, jac[0, 0] * bu + jac[0, 1] * bt) + np.outer(bt, jac[1, 0] * bu + jac[1, 1] * bt))
     a = np.zeros((size, size))
@@ -237,29 +259,75 @@ def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tup
     """The state matrix without the rigid axial position (the depth drilled: no equation depends on it) and,
     with a top drive, the rigid rotation's angle (likewise), and the mask of the rows kept."""
     keep = np.ones(model.state_size, dtype=bool)
-    keep[_rigid_column(model)] = False
+    keep[rigid_axial_column(model)] = False
     if model.rigid_rotation_column is not None:
         keep[model.rigid_rotation_column] = False
     return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
 
 
+def delay_matrices(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:
+    """``A0``, ``A1`` of eq. (3) for a delayed law, on the whole state ``[δη, δη̇, δs]`` (rigid positions
+    included), with the delay ``steady.delay``."""
+    n = model.size
+    a0 = linearized_matrix(model, steady)
+    law = model.bit_rock
+    partials = law.detournay.jacobian(steady.depth_of_cut, steady.rate_of_penetration, steady.bit_speed)
+    coupling = regenerative_coupling(model.bit_u, model.bit_t, f_d=partials[0, 0], t_d=partials[1, 0],
+                                     rate_of_penetration=steady.rate_of_penetration, bit_speed=steady.bit_speed)
+    a1 = np.zeros_like(a0)
+    a0[n:2 * n, :n] += coupling
+    a1[n:2 * n, :n] = -coupling
+    return a0, a1
+
+
+def delay_roots(model: ReducedOrderModel, steady: SteadyDrilling | None = None, **options) -> DelayRoots:
+    """The characteristic roots of eq. (3) about steady drilling (:func:`~drillstring.dynamics.delay_stability.
+    characteristic_roots`, ``options`` passed on) for a model with a delayed bit–rock law."""
+    steady = steady_drilling(model) if steady is None else steady
+    a0, a1 = delay_matrices(model, steady)
+    return characteristic_roots(a0, a1, steady.delay, **options)
+
+
+def delay_roots_summary(roots: DelayRoots) -> dict:
+    """JSON-ready facts of a delay system's roots: the delay [s], the Chebyshev degree used and the leading
+    root's relative change at the last doubling of it, the neutral roots [1/s] (invariances) and how many
+    starting values did not converge."""
+    return {"delay": roots.tau, "chebyshev_degree": int(roots.M), "leading_change": roots.leading_change,
+            "neutral_roots": [float(v) for v in roots.neutral], "unconverged": int(len(roots.unconverged))}
+
+
 def leading_growth_rate(model: ReducedOrderModel) -> float:
     """The largest real part [1/s] of the eigenvalues of ``model`` linearised about steady drilling (> 0:
     steady drilling is unstable): :func:`stability`'s ``leading.growth_rate`` from the eigenvalues alone
-    (no eigenvectors, no families), for a study's every realization. ValueError when there is no steady
-    drilling."""
-    matrix, _ = _informative_matrix(model, steady_drilling(model))
+    (no eigenvectors, no families), for a study's every realization; for a delayed law the leading
+    characteristic root's (:func:`delay_roots`). ValueError when there is no steady drilling."""
+    steady = steady_drilling(model)
+    if model.bit_rock.delayed:
+        return float(delay_roots(model, steady).growth_rate)
+    matrix, _ = _informative_matrix(model, steady)
     return float(np.max(sla.eigvals(matrix).real))
 
 
 def stability(model: ReducedOrderModel) -> StabilityResult:
-    """Steady drilling of ``model`` and the eigenvalues of the model linearised about it."""
+    """Steady drilling of ``model`` and the eigenvalues of the model linearised about it (for a delayed law
+    the characteristic roots of eq. (3) and, for each, the null vector of ``sI − A0 − A1 e^{−sτ0}``)."""
     steady = steady_drilling(model)
     n = model.size
-    matrix, keep = _informative_matrix(model, steady)
-    values, vectors = sla.eig(matrix)
-    full = np.zeros((model.state_size, len(values)), dtype=complex)
-    full[keep] = vectors
+    delay = None
+    if model.bit_rock.delayed:
+        a0, a1 = delay_matrices(model, steady)
+        roots = characteristic_roots(a0, a1, steady.delay)
+        values = roots.roots
+        full = np.zeros((model.state_size, len(values)), dtype=complex)
+        identity = np.eye(model.state_size)
+        for k, s in enumerate(values):  # the mode shape: the null vector of the characteristic matrix
+            full[:, k] = np.linalg.svd(s * identity - a0 - a1 * np.exp(-s * steady.delay))[2][-1].conj()
+        delay = delay_roots_summary(roots)
+    else:
+        matrix, keep = _informative_matrix(model, steady)
+        values, vectors = sla.eig(matrix)
+        full = np.zeros((model.state_size, len(values)), dtype=complex)
+        full[keep] = vectors
     # modal energy of each coordinate: ½ (|δη̇|² + |ω²| |δη|²)
     energy = np.abs(full[n:2 * n]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(full[:n]) ** 2
     labels = _family_of(model)
@@ -276,7 +344,7 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
             growth_rate=float(lam.real),
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
-    return StabilityResult(steady, modes, None if model.top_drive.imposed else model.top_drive.describe())
+    return StabilityResult(steady, modes, None if model.top_drive.imposed else model.top_drive.describe(), delay)
 
 
 def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResult:

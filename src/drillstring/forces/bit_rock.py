@@ -47,7 +47,16 @@ in one place, :func:`case_bit_rock`), the numbers the compiled kernel reads pack
 (:meth:`BitRockParameters.kernel_array`, :data:`KERNEL_SIZE` entries, the on-bottom flag at
 :data:`ON_BOTTOM`), the compiled kernel :func:`bit_rock_law`, the NumPy reference :func:`evaluate_bit_rock`
 and the Jacobian :func:`bit_rock_jacobian` (used by the stability analysis). ``law = "off_bottom"`` makes
-every piece return zero.
+every piece return zero. ``law = "detournay"`` is the law of drag bits with a regenerative depth of cut
+(:mod:`drillstring.forces.detournay`, its numbers after the Tucker–Wang ones in the same array, from
+:data:`DETOURNAY`): the kernel then reads the depth of cut per blade, which the reduced model computes from
+the bit's history.
+
+**Unilateral contact (every law).** The rock pushes the bit, never pulls it: when a law gives an axial
+force on the string pointing down (``f > 0``: the Tucker–Wang law does so when the bit moves up faster than
+``a3 h − a1`` over ``1/Z²``, about 1.9 mm/s at the reference point), the bit has left the rock and the
+component returns no force and no torque. The Detournay law loses contact by itself when the depth of cut
+is not positive. The time the force on bit is zero is the bit's bounce.
 """
 
 from __future__ import annotations
@@ -58,16 +67,21 @@ from dataclasses import astuple, dataclass
 import numpy as np
 from numba import njit
 
+from drillstring.forces.detournay import KERNEL_SIZE as DETOURNAY_SIZE
+from drillstring.forces.detournay import DetournayParameters, detournay_force
+
 __all__ = [
     "BIT_ROCK_LAWS",
+    "DETOURNAY",
     "KERNEL_SIZE",
+    "LAW_CODE",
     "ON_BOTTOM",
     "STICK_SPEED_FLOOR_RATIO",
     "BitRockParameters",
     "regularizer",
     "bit_rock_force",
     "bit_rock_force_floored",
-    "bit_rock_force_array",
+    "bit_rock_law_array",
     "bit_rock_jacobian",
     "bit_rock_law",
     "case_bit_rock",
@@ -76,13 +90,19 @@ __all__ = [
     "stick_speed_floor_ratio",
 ]
 
-#: The bit–rock laws: Tucker & Wang (SPEC §6), or the bit off bottom (no bit–rock force, SPEC §11).
-BIT_ROCK_LAWS = ("tucker_wang", "off_bottom")
+#: The bit–rock laws: Tucker & Wang (SPEC §6), the bit off bottom (no bit–rock force, SPEC §11), and the
+#: Detournay law of drag bits (:mod:`drillstring.forces.detournay`).
+BIT_ROCK_LAWS = ("tucker_wang", "off_bottom", "detournay")
+#: The code of each law in the kernel array (at :data:`ON_BOTTOM`; 0 is off bottom).
+LAW_CODE = {"off_bottom": 0.0, "tucker_wang": 1.0, "detournay": 2.0}
 
-#: Entries of :meth:`BitRockParameters.kernel_array`: ``[a1, a2, a3, a4, a5, e, θ̇_floor, on_bottom]``.
-KERNEL_SIZE = 8
-#: Index of the on-bottom flag in :meth:`BitRockParameters.kernel_array` (1.0 on bottom, 0.0 off bottom).
+#: Index of the law code in :meth:`BitRockParameters.kernel_array` (:data:`LAW_CODE`; 0.0 off bottom).
 ON_BOTTOM = 7
+#: First index of the Detournay law's numbers (:meth:`~drillstring.forces.detournay.DetournayParameters.kernel_array`).
+DETOURNAY = 8
+#: Entries of :meth:`BitRockParameters.kernel_array`: ``[a1, a2, a3, a4, a5, e, θ̇_floor, law code]``, then
+#: the Detournay law's numbers (zeros for the other laws).
+KERNEL_SIZE = DETOURNAY + DETOURNAY_SIZE
 
 #: Default ratio ``θ̇_floor / e`` below which ``1/Z²`` is frozen (see module docstring).
 STICK_SPEED_FLOOR_RATIO = 1.0e-6
@@ -110,7 +130,10 @@ class BitRockParameters:
         [-] ``θ̇_floor / e``: below ``|θ̇| = θ̇_floor`` the term ``1/Z²`` is frozen so that the law stays
         finite at stick (module docstring). Not part of :meth:`as_array`.
     law : str
-        "tucker_wang" (the law above) or "off_bottom" (the bit hangs free: no force, no torque).
+        "tucker_wang" (the law above), "off_bottom" (the bit hangs free: no force, no torque) or
+        "detournay" (:mod:`drillstring.forces.detournay`, its parameters in ``detournay``).
+    detournay : DetournayParameters or None
+        The bit and rock of the Detournay law (required with ``law = "detournay"``).
     """
 
     a1: float
@@ -121,10 +144,13 @@ class BitRockParameters:
     e: float
     stick_speed_floor_ratio: float = STICK_SPEED_FLOOR_RATIO
     law: str = "tucker_wang"
+    detournay: DetournayParameters | None = None
 
     def __post_init__(self) -> None:
         if self.law not in BIT_ROCK_LAWS:
             raise ValueError(f"law = {self.law!r}: must be one of {', '.join(BIT_ROCK_LAWS)}")
+        if self.law == "detournay" and self.detournay is None:
+            raise ValueError('law = "detournay" needs its parameters (detournay = DetournayParameters(...))')
         for name in ("a1", "a2", "a3", "a4", "a5", "e", "stick_speed_floor_ratio"):
             value = getattr(self, name)
             if not math.isfinite(value):
@@ -159,18 +185,42 @@ class BitRockParameters:
         """True when the bit touches the rock (every law but ``off_bottom``)."""
         return self.law != "off_bottom"
 
+    @property
+    def delayed(self) -> bool:
+        """True when the law reads the depth of cut (the bit's history): the Detournay law."""
+        return self.law == "detournay"
+
     def kernel_array(self) -> np.ndarray:
         """The numbers :func:`bit_rock_law` reads, as float64: ``[a1, a2, a3, a4, a5, e, θ̇_floor,
-        on_bottom]`` (:data:`KERNEL_SIZE` entries; ``on_bottom`` 1.0 or 0.0, at :data:`ON_BOTTOM`)."""
-        return np.array([*self.kernel_args(), float(self.on_bottom)], dtype=np.float64)
+        law code]`` (law code at :data:`ON_BOTTOM`, :data:`LAW_CODE`), then from :data:`DETOURNAY` the
+        Detournay law's numbers (zeros for the other laws); :data:`KERNEL_SIZE` entries."""
+        detournay = (self.detournay.kernel_array() if self.detournay is not None
+                     else np.zeros(DETOURNAY_SIZE))
+        return np.array([*self.kernel_args(), LAW_CODE[self.law], *detournay], dtype=np.float64)
 
-    def evaluate(self, bit_axial_velocity, bit_speed):
+    def evaluate(self, bit_axial_velocity, bit_speed, depth_of_cut=0.0):
         """:func:`evaluate_bit_rock` of this law: ``(axial_force [N], torque [N·m])`` on the string."""
-        return evaluate_bit_rock(bit_axial_velocity, bit_speed, self)
+        return evaluate_bit_rock(bit_axial_velocity, bit_speed, self, depth_of_cut)
 
-    def jacobian(self, bit_axial_velocity: float, bit_speed: float) -> np.ndarray:
+    def steady_depth_of_cut(self, rate_of_penetration: float, bit_speed: float) -> float:
+        """The depth of cut per blade [m] of steady drilling at ``rate_of_penetration`` V [m/s] and
+        ``bit_speed`` Ω [rad/s] for a delayed law, ``V · 2π/(nΩ)`` (the advance over one blade passage);
+        0 for the other laws (they read none)."""
+        if not self.delayed:
+            return 0.0
+        return rate_of_penetration * self.detournay.sector / bit_speed
+
+    def steady_forces(self, rate_of_penetration: float, bit_speed: float) -> tuple[float, float]:
+        """``(axial_force [N], torque [N·m])`` on the string in steady drilling at ``rate_of_penetration`` V
+        [m/s] and ``bit_speed`` Ω [rad/s]: the law at ``u̇ = V``, ``θ̇ = Ω`` and the steady depth of cut
+        (:meth:`steady_depth_of_cut`)."""
+        force, torque = self.evaluate(rate_of_penetration, bit_speed,
+                                      self.steady_depth_of_cut(rate_of_penetration, bit_speed))
+        return float(force), float(torque)
+
+    def jacobian(self, bit_axial_velocity: float, bit_speed: float, depth_of_cut: float = 0.0) -> np.ndarray:
         """:func:`bit_rock_jacobian` of this law."""
-        return bit_rock_jacobian(bit_axial_velocity, bit_speed, self)
+        return bit_rock_jacobian(bit_axial_velocity, bit_speed, self, depth_of_cut)
 
 
 def stick_speed_floor_ratio(regularization: float, top_speed: float, stiffening_limit: float) -> float:
@@ -262,27 +312,29 @@ def bit_rock_force(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e):
 
 
 @njit(cache=True)
-def bit_rock_force_array(
-    bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e, speed_floor, axial_force, torque
-):
-    """Loop of :func:`bit_rock_force_floored` over 1-D arrays; fills ``axial_force``/``torque`` in place."""
-    for i in range(bit_axial_velocity.shape[0]):
-        f, t = bit_rock_force_floored(
-            bit_axial_velocity[i], bit_speed[i], a1, a2, a3, a4, a5, e, speed_floor
-        )
-        axial_force[i] = f
-        torque[i] = t
+def bit_rock_law(args, depth_of_cut, bit_axial_velocity, bit_speed):
+    """The component's compiled kernel: bit–rock ``(axial_force [N], torque [N·m])`` on the string for the
+    numbers ``args`` of :meth:`BitRockParameters.kernel_array` (only its first :data:`KERNEL_SIZE` entries
+    are read, so the array may carry other components' numbers after them); ``(0, 0)`` off bottom and
+    whenever the law would pull the bit down (unilateral contact, module docstring). ``depth_of_cut`` [m]
+    per blade is read by the Detournay law only."""
+    code = args[ON_BOTTOM]
+    if code == 0.0:
+        return 0.0, 0.0
+    if code == 2.0:
+        return detournay_force(args[DETOURNAY:], depth_of_cut, bit_axial_velocity, bit_speed)
+    force, torque = bit_rock_force_floored(bit_axial_velocity, bit_speed, args[0], args[1], args[2], args[3],
+                                           args[4], args[5], args[6])
+    if force > 0.0:  # the rock would pull the bit: it has left the rock
+        return 0.0, 0.0
+    return force, torque
 
 
 @njit(cache=True)
-def bit_rock_law(args, bit_axial_velocity, bit_speed):
-    """The component's compiled kernel: bit–rock ``(axial_force [N], torque [N·m])`` on the string for the
-    numbers ``args`` of :meth:`BitRockParameters.kernel_array` (only its first :data:`KERNEL_SIZE` entries
-    are read, so the array may carry other components' numbers after them); ``(0, 0)`` off bottom."""
-    if args[ON_BOTTOM] == 0.0:
-        return 0.0, 0.0
-    return bit_rock_force_floored(bit_axial_velocity, bit_speed, args[0], args[1], args[2], args[3], args[4],
-                                  args[5], args[6])
+def bit_rock_law_array(args, depth_of_cut, bit_axial_velocity, bit_speed, axial_force, torque):
+    """Loop of :func:`bit_rock_law` over 1-D arrays; fills ``axial_force``/``torque`` in place."""
+    for i in range(bit_axial_velocity.shape[0]):
+        axial_force[i], torque[i] = bit_rock_law(args, depth_of_cut[i], bit_axial_velocity[i], bit_speed[i])
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -290,25 +342,22 @@ def bit_rock_law(args, bit_axial_velocity, bit_speed):
 # --------------------------------------------------------------------------------------------------------
 
 
-def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
+def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters, depth_of_cut=0.0):
     """Vectorised bit–rock law: ``(axial_force [N], torque [N·m])`` on the string, broadcast over inputs.
 
-    ``bit_axial_velocity`` [m/s] and ``bit_speed`` [rad/s] are array-likes (broadcast together). Scalars in,
-    0-d arrays out. Same law and stick handling as :func:`bit_rock_force` with the floor of ``params``.
+    ``bit_axial_velocity`` [m/s], ``bit_speed`` [rad/s] and ``depth_of_cut`` [m] per blade (read by the
+    Detournay law only) are array-likes (broadcast together). Scalars in, 0-d arrays out. The component's
+    kernel :func:`bit_rock_law` (the law, its stick handling, unilateral contact) applied elementwise.
     """
-    u, w = np.broadcast_arrays(
-        np.asarray(bit_axial_velocity, dtype=np.float64), np.asarray(bit_speed, dtype=np.float64)
+    u, w, d = np.broadcast_arrays(
+        np.asarray(bit_axial_velocity, dtype=np.float64), np.asarray(bit_speed, dtype=np.float64),
+        np.asarray(depth_of_cut, dtype=np.float64),
     )
     shape = u.shape
-    u_flat = np.ascontiguousarray(u).reshape(-1)
-    w_flat = np.ascontiguousarray(w).reshape(-1)
-    force = np.empty_like(u_flat)
-    torque = np.empty_like(u_flat)
-    if not params.on_bottom:
-        force[:] = 0.0
-        torque[:] = 0.0
-    else:
-        bit_rock_force_array(u_flat, w_flat, *params.kernel_args(), force, torque)
+    force = np.empty(u.size)
+    torque = np.empty(u.size)
+    bit_rock_law_array(params.kernel_array(), np.ascontiguousarray(d).reshape(-1),
+                       np.ascontiguousarray(u).reshape(-1), np.ascontiguousarray(w).reshape(-1), force, torque)
     return force.reshape(shape), torque.reshape(shape)
 
 
@@ -346,7 +395,8 @@ def steady_state(weight_on_bit, bit_speed, params: BitRockParameters, allow_nega
     return rop, tob
 
 
-def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRockParameters) -> np.ndarray:
+def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRockParameters,
+                      depth_of_cut: float = 0.0) -> np.ndarray:
     """``[[f_u, f_θ], [t_u, t_θ]]``: partial derivatives of the bit–rock force f [N] and torque t [N·m]
     on the string (SPEC §6) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
 
@@ -355,9 +405,16 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRo
         f_u = −(1 + e²/θ̇²)/a2,      f_θ = 2 e² u̇/(a2 θ̇³) + a3 θ̇/(a2 h),
         t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
 
-    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero off bottom.
+    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero off bottom
+    and where the law would pull the bit (unilateral contact). For the Detournay law the partials with
+    respect to ``u̇`` and ``θ̇`` at the depth of cut ``depth_of_cut`` [m] per blade (those with respect to
+    the depth of cut: :meth:`~drillstring.forces.detournay.DetournayParameters.jacobian`).
     """
     if not params.on_bottom:
+        return np.zeros((2, 2))
+    if params.delayed:
+        return params.detournay.jacobian(depth_of_cut, bit_axial_velocity, bit_speed)[:, 1:]
+    if bit_rock_law(params.kernel_array(), 0.0, bit_axial_velocity, bit_speed)[0] == 0.0:
         return np.zeros((2, 2))
     u, w = float(bit_axial_velocity), float(bit_speed)
     a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
@@ -373,11 +430,18 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRo
 
 
 def case_bit_rock(case) -> BitRockParameters:
-    """The bit–rock law of a :class:`~drillstring.case.Case` (``[bit_rock]``): its coefficients, its law and
-    the stick floor from ``stick_stiffening_limit`` at the case's top speed (:func:`stick_speed_floor_ratio`)."""
+    """The bit–rock law of a :class:`~drillstring.case.Case` (``[bit_rock]``): its coefficients, its law (with
+    the Detournay law's bit and rock) and the stick floor from ``stick_stiffening_limit`` at the case's top speed (:func:`stick_speed_floor_ratio`)."""
     b = case.bit_rock
+    detournay = None
+    if b.law == "detournay":
+        detournay = DetournayParameters(
+            blades=b.blades, radius=b.bit_radius, intrinsic_specific_energy=b.intrinsic_specific_energy,
+            cutting_inclination=b.cutting_inclination, contact_stress=b.contact_stress,
+            wear_flat_length=b.wear_flat_length, friction_coefficient=b.friction_coefficient,
+            geometry=b.bit_geometry, contact_velocity=b.contact_velocity, friction_speed=b.friction_speed)
     return BitRockParameters(
         b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
         stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit),
-        law=b.law,
+        law=b.law, detournay=detournay,
     )

@@ -53,6 +53,8 @@ from numba import njit
 
 #: The top boundaries, ``top_drive.controller`` in a case; code = index (the kernels read the code).
 CONTROLLERS = ("imposed_speed", "pi", "soft_torque", "z_torque")
+#: Entries of :meth:`TopDriveParameters.kernel_args`.
+KERNEL_SIZE = 9
 IMPOSED_SPEED, PI, SOFT_TORQUE, Z_TORQUE = range(4)
 #: z_torque's inner speed loop: k_p = this × Z_p when not given.
 Z_TORQUE_STIFFNESS = 10.0

@@ -11,6 +11,7 @@ name                           unit    definition
 ``std_rate_of_penetration``    m/s     its standard deviation in time (0 in steady drilling)
 ``bit_speed_oscillation``      1       ``(max − min)/(2Ω)`` of the bit speed after the transient
 ``stick_time_fraction``        1       fraction of that time with the bit below 10 % of the top speed
+``bit_bounce_fraction``        1       fraction of that time with the bit off the rock (zero force on bit)
 ``bit_speed_min``, ``_max``    rad/s   extremes of the bit speed after the transient
 ``mean_torque_on_bit``         N m     time mean of the TOB; ``std_torque_on_bit`` its std in time
 ``mean_force_on_bit``          N       time mean of the FOB; ``std_force_on_bit`` its std in time
@@ -58,6 +59,7 @@ RUN_OUTPUTS: dict[str, tuple[str, str]] = {
     "std_rate_of_penetration": ("m/s", "standard deviation in time of the rate of penetration"),
     "bit_speed_oscillation": ("1", "bit-speed oscillation (max - min)/(2 top speed)"),
     "stick_time_fraction": ("1", "fraction of the time with the bit below 10 % of the top speed"),
+    "bit_bounce_fraction": ("1", "fraction of the time with the bit off the rock (zero force on bit)"),
     "bit_speed_min": ("rad/s", "smallest bit speed"),
     "bit_speed_max": ("rad/s", "largest bit speed"),
     "mean_torque_on_bit": ("N m", "time-mean torque on bit"),
@@ -163,7 +165,8 @@ def result_outputs(result, case: Case, t_transient: float, *, cycle: tuple[str, 
     metrics = cycle_metrics(t, obs, top_speed, bit_area(case), t_transient)
     steady = steady_window(t, t_transient)
     out = {name: math.nan for name in RUN_OUTPUTS} | {name: metrics[name] for name in cycle}
-    for name in ("stick_time_fraction", "bit_speed_min", "bit_speed_max", "mechanical_specific_energy"):
+    for name in ("stick_time_fraction", "bit_bounce_fraction", "bit_speed_min", "bit_speed_max",
+                 "mechanical_specific_energy"):
         out[name] = metrics[name]
     out["bit_speed_oscillation"] = (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * top_speed)
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):

@@ -1,0 +1,80 @@
+"""The hook load during a realistic start: the bit lowered to the rock and the weight-on-bit ramped up.
+
+The reduced model is written about the static state in which the rock carries the weight-on-bit ``W``
+and the hook the rest of the string's weight (SPEC §7). In the reference start the bit sits on that
+state from t = 0 and the bit–rock law is switched on at once. The **realistic start** (a case option,
+``initial.start = "ramp"``) instead begins as a driller does: the string turning off bottom, the hook
+carrying the whole string (the bit carries nothing), then the hook load slacked off linearly so that the
+weight transferred to the bit grows from 0 to ``W`` over ``ramp_time``::
+
+    hook load = static hook load + W (1 − min(t / ramp_time, 1))
+
+i.e. relative to the static state an extra upward force ``W (1 − r(t))`` at the top, ``r = min(t/T, 1)``.
+The string, free axially, moves down under the growing imbalance until the bit meets the rock
+(:attr:`HookLoadRamp.clearance` below it at t = 0), then the rock takes the weight as it is transferred.
+After ``ramp_time`` the hook load is the static one.
+
+The component: :class:`HookLoadRamp` (its data), :meth:`HookLoadRamp.kernel_array` (the numbers the
+compiled kernel reads), the compiled kernel :func:`hook_load_change` and its NumPy reference
+:meth:`HookLoadRamp.force`. A ramp time of 0 is the reference start (no extra force).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+__all__ = ["HookLoadRamp", "KERNEL_SIZE", "START_KINDS", "hook_load_change"]
+
+#: The starts of a run: the reference's (on the static state, the law switched on at t = 0) and the ramp.
+START_KINDS = ("on_bottom", "ramp")
+#: Entries of :meth:`HookLoadRamp.kernel_array`: ``[ramp_time, weight_on_bit]``.
+KERNEL_SIZE = 2
+
+
+@dataclass(frozen=True)
+class HookLoadRamp:
+    """The realistic start (module docstring): ``weight_on_bit`` W [N] transferred to the bit over
+    ``ramp_time`` [s] (0: the reference start, nothing transferred, W on the bit from t = 0), the bit
+    ``clearance`` [m] above the rock at t = 0."""
+
+    ramp_time: float = 0.0
+    weight_on_bit: float = 0.0
+    clearance: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("ramp_time", "weight_on_bit", "clearance"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"{name} = {value!r}: must be finite and >= 0")
+
+    @property
+    def active(self) -> bool:
+        """True for a ramped start."""
+        return self.ramp_time > 0.0
+
+    def kernel_array(self) -> np.ndarray:
+        """``[ramp_time, W]`` (float64), what :func:`hook_load_change` reads."""
+        return np.array([self.ramp_time, self.weight_on_bit], dtype=np.float64)
+
+    def force(self, t):
+        """NumPy reference of :func:`hook_load_change`: the extra axial force on the top [N] along +x
+        (down) at time(s) ``t`` [s]: ``−W (1 − min(t/T, 1))``, 0 without a ramp."""
+        t = np.asarray(t, dtype=float)
+        if not self.active:
+            return np.zeros_like(t)
+        return -self.weight_on_bit * (1.0 - np.minimum(t / self.ramp_time, 1.0))
+
+
+@njit(cache=True)
+def hook_load_change(args, t):
+    """The extra axial force [N] on the string's top along +x (down) at time ``t`` [s] for the numbers
+    ``args`` of :meth:`HookLoadRamp.kernel_array`: ``−W (1 − min(t/T, 1))`` (the hook holds back the
+    weight not yet transferred to the bit); 0 when ``T = 0``."""
+    ramp_time = args[0]
+    if ramp_time <= 0.0 or t >= ramp_time:
+        return 0.0
+    return -args[1] * (1.0 - t / ramp_time)

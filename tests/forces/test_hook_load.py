@@ -1,0 +1,34 @@
+"""The hook load of a ramped start (drillstring.forces.hook_load): the compiled kernel against its NumPy
+reference and the ramp's closed form; bad input refused."""
+
+import numpy as np
+import pytest
+
+from drillstring.forces.hook_load import KERNEL_SIZE, HookLoadRamp, hook_load_change
+
+
+def test_kernel_is_the_reference_and_the_ramp():
+    ramp = HookLoadRamp(ramp_time=8.0, weight_on_bit=1.2e5, clearance=0.01)
+    args = ramp.kernel_array()
+    assert args.shape == (KERNEL_SIZE,) and ramp.active
+    times = np.array([0.0, 1.0, 4.0, 7.999, 8.0, 20.0])
+    reference = ramp.force(times)
+    for t, expected in zip(times, reference):
+        assert hook_load_change(args, t) == pytest.approx(expected, rel=1e-15, abs=1e-9)
+    # the hook holds back W at t = 0 (an upward force on the top: negative along +x), half of it halfway,
+    # nothing once the weight is on the bit
+    np.testing.assert_allclose(reference, [-1.2e5, -1.05e5, -0.6e5, -15.0, 0.0, 0.0], atol=1e-6)
+
+
+def test_no_ramp_is_no_force():
+    ramp = HookLoadRamp()
+    assert not ramp.active
+    assert hook_load_change(ramp.kernel_array(), 0.0) == 0.0
+    assert np.all(ramp.force([0.0, 3.0]) == 0.0)
+
+
+@pytest.mark.parametrize("field, value", [("ramp_time", -1.0), ("weight_on_bit", float("nan")),
+                                          ("clearance", -0.1)])
+def test_bad_input_names_the_field(field, value):
+    with pytest.raises(ValueError, match=field):
+        HookLoadRamp(**{field: value})
