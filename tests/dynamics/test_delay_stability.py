@@ -280,3 +280,19 @@ def test_default_degree_covers_the_right_half_plane(seed):
     missed_at = {0: 8, 2: 16}[seed]
     coarse = characteristic_roots(A0, A1, tau, M=missed_at, verify=False)
     assert coarse.leading.real < reference.leading.real - 0.1
+
+
+def test_a_small_genuine_root_is_not_neutral():
+    """m u'' + c u' + k u + k_c(u − u(t − τ)) = 0 with a stiff regenerative term (‖A0‖ ≈ 1e6 1/s²) and a
+    weak spring: the slow root s ≈ −k/(c + k_c τ) ≈ −1e-3 1/s is a root, not an invariance (k = 0: neutral)."""
+    m, c, k, k_c, tau = 1.0, 10.0, 10.0, 1e6, 0.01
+    h = lambda s: m * s**2 + c * s + k + k_c * (1 - np.exp(-s * tau))  # noqa: E731
+    A0 = np.array([[0.0, 1.0], [-(k + k_c) / m, -c / m]])
+    A1 = np.array([[0.0, 0.0], [k_c / m, 0.0]])
+    result = characteristic_roots(A0, A1, tau)
+    slow = result.roots[np.argmin(np.abs(result.roots))]
+    assert result.neutral.size == 0
+    assert slow.imag == 0 and slow.real == pytest.approx(-k / (c + k_c * tau), rel=1e-2)
+    assert abs(h(slow)) <= 1e-12 * k_c * abs(slow) * tau
+    A0[1, 0] = -k_c / m
+    assert characteristic_roots(A0, A1, tau).neutral.size == 1

@@ -30,8 +30,10 @@ the result keeps the last ``M`` and the change it saw (``leading_change``).
 **Neutral roots.** An invariance (the rigid axial translation ``u → u + c`` leaves the depth of cut
 ``u(t) − u(t − τ)`` unchanged; so does a rigid rotation) puts a root at ``s = 0`` for every parameter.
 Roots with ``|s| ≤ neutral_tol`` [1/s] are reported apart, in ``neutral``, and never decide stability;
-the default tolerance is ``1e-8 (‖A0‖ + ‖A1‖ + 1/τ)``, and ``neutral_tol=0`` turns this off. The caller
-who knows the number of invariances checks ``len(neutral)``.
+the default tolerance is ``1e-8 (R + 1/τ)`` (``R`` above: the roots' scale, free of the units of the
+states; a computed neutral root sits within about ``1e-15 R`` of 0), and ``neutral_tol=0`` turns this off.
+A genuine root closer to 0 than the tolerance would be called neutral; the caller who knows the number of
+invariances checks ``len(neutral)``.
 
 :func:`second_order_delay_matrices` builds ``A0``, ``A1`` for modal equations with a bit force and torque
 that depend on the regenerative depth of cut; :func:`append_states` borders them with first-order states.
@@ -245,7 +247,7 @@ def characteristic_roots(A0, A1, tau: float, *, M: int | None = None, verify: bo
         M = int(max(8, min(M, (max_size - N) // p)))
     n_refine = max(2 * N, 20) if n_refine is None else n_refine
     if neutral_tol is None:
-        neutral_tol = 1e-8 * (np.linalg.norm(A0, 2) + np.linalg.norm(A1, 2) + 1 / tau)
+        neutral_tol = 1e-8 * (radius + 1 / tau)
 
     def leading(s):
         s = s[np.abs(s) > neutral_tol]
