@@ -296,3 +296,12 @@ def test_a_small_genuine_root_is_not_neutral():
     assert abs(h(slow)) <= 1e-12 * k_c * abs(slow) * tau
     A0[1, 0] = -k_c / m
     assert characteristic_roots(A0, A1, tau).neutral.size == 1
+
+
+def test_double_roots_keep_their_multiplicity():
+    """Two identical uncoupled scalar equations: every Lambert W root twice, none more often."""
+    a, b, tau = -1.0, -2.0, 1.0
+    result = characteristic_roots(a * np.eye(2), b * np.eye(2), tau)
+    for k in range(-2, 3):
+        s = a + complex(lambertw(b * tau * math.exp(-a * tau), k)) / tau
+        assert int(np.sum(np.abs(result.roots - s) <= 1e-9 * abs(s))) == 2
