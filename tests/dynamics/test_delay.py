@@ -45,7 +45,7 @@ def record_polynomials(history, theta: Polynomial, value: Polynomial, times: np.
 def test_allocate_and_validation():
     h = AngleHistory.allocate(0.5, bins_per_lag=100)
     assert h.values.shape == h.bins.shape == (512,)  # power of two >= 400
-    assert h.bins.dtype == np.int64 and np.all(h.bins == UNWRITTEN)
+    assert h.bins.dtype == np.float64 and np.all(h.bins == UNWRITTEN)
     assert h.lag == 0.5 and h.bin_angle == pytest.approx(0.005, rel=1e-15)
     assert AngleHistory.allocate(1.0).values.shape == (8192,)
     with pytest.raises(ValueError, match=r"lag = -1\.0 rad: must be finite and > 0"):

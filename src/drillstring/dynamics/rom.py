@@ -58,7 +58,7 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
-from drillstring.dynamics.delay import AngleHistory, lookup, record_step
+from drillstring.dynamics.delay import allocate_storage, lookup, record_step, view
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import KERNEL_SIZE as BIT_ROCK_SIZE
 from drillstring.forces.bit_rock import LAW_CODE, ON_BOTTOM, BitRockParameters, bit_rock_law, case_bit_rock
@@ -78,6 +78,7 @@ from drillstring.forces.nonlinear import (
     modal_mass_coupling,
     nonlinear_elements,
 )
+from drillstring.forces.hook_load import KERNEL_SIZE as HOOK_LOAD_SIZE
 from drillstring.forces.hook_load import HookLoadRamp, hook_load_change
 from drillstring.forces.top_drive import KERNEL_SIZE as TOP_DRIVE_SIZE
 from drillstring.forces.top_drive import (
@@ -135,6 +136,9 @@ def observation_width(n_probes: int) -> int:
 _TOP_DRIVE = BIT_ROCK_SIZE
 #: Where the hook load's numbers (:meth:`~drillstring.forces.hook_load.HookLoadRamp.kernel_array`) start.
 _HOOK_LOAD = _TOP_DRIVE + TOP_DRIVE_SIZE
+#: Where the bit's history (the hole bottom by angle, :func:`~drillstring.dynamics.delay.allocate_storage`)
+#: starts: the rest of ``laws`` (a few numbers for a law that reads none).
+_HISTORY = _HOOK_LOAD + HOOK_LOAD_SIZE
 #: The Detournay law's code at ``laws[ON_BOTTOM]``: the law that reads the bit's history.
 _DELAYED_LAW = LAW_CODE["detournay"]
 #: Coefficients of a dense-output polynomial the scratch of :class:`ObserveData` holds (dopri5: 4).
@@ -220,8 +224,7 @@ class RhsData(NamedTuple):
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
     laws: np.ndarray  # the boundary components' numbers: the bit–rock law's, from _TOP_DRIVE the top drive's,
-    #                   from _HOOK_LOAD the hook load's
-    history: AngleHistory  # the bit's axial position by angle (the hole bottom), read by a delayed law
+    #                   from _HOOK_LOAD the hook load's, from _HISTORY the bit's history (the hole bottom)
     contact: ContactData
     turning: TurningLoadData
 
@@ -367,7 +370,8 @@ def _bit_rock(d, t, y):
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = 0.0
     if d.laws[ON_BOTTOM] == _DELAYED_LAW:
-        depth = position - lookup(d.history, angle - d.history.meta[1])
+        history = view(d.laws[_HISTORY:])
+        depth = position - lookup(history, angle - history.meta[1])
     force, torque = bit_rock_law(d.laws, depth, velocity, speed)
     return force, torque, depth, position, velocity, speed
 
@@ -781,7 +785,7 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
                 angle_coef[p] += h * dense[i, p] * spin
         angle_coef[0] += d.top_speed * h
         position, angle, _, _ = _bit_state(d, t_old, y_old)
-        record_step(d.history, angle, angle_coef, position, position_coef)
+        record_step(view(d.laws[_HISTORY:]), angle, angle_coef, position, position_coef)
     return impacts_kernel(d, o, y)
 
 
@@ -912,9 +916,9 @@ class ReducedOrderModel:
             top_speed=self.base_speed,
             weight_on_bit=float(self.weight_on_bit),
             laws=np.concatenate([self.bit_rock.kernel_array(), self.top_drive.kernel_args(),
-                                 self.hook_load.kernel_array()]),
-            history=(AngleHistory.allocate(self.bit_rock.detournay.sector, self.history_bins)
-                     if self.bit_rock.delayed else AngleHistory.allocate(1.0, 4)),
+                                 self.hook_load.kernel_array(),
+                                 allocate_storage(self.bit_rock.detournay.sector, self.history_bins)
+                                 if self.bit_rock.delayed else allocate_storage(1.0, 4)]),
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
@@ -930,6 +934,8 @@ class ReducedOrderModel:
             current=np.zeros(mesh.n_nodes, dtype=np.bool_), previous=np.zeros(mesh.n_nodes, dtype=np.bool_),
             dense=np.zeros((2, _DENSE_ORDER_MAX)),
         )
+        #: the bit's history (:class:`~drillstring.dynamics.delay.AngleHistory`): views into ``laws``
+        self.history = view(self.case2_data.laws[_HISTORY:])
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | FullModelData = (
             self._full_model_data(self.case2_data) if self.full else self.case2_data)
@@ -1009,7 +1015,7 @@ class ReducedOrderModel:
         bit_speed = self.base_speed + self.bit_t @ eta_dot
         depth = 0.0
         if self.bit_rock.delayed:  # the hole bottom one blade sector behind the bit
-            history = self.case2_data.history
+            history = self.history
             depth = self.bit_u @ eta - lookup(history, self.base_speed * t + self.bit_t @ eta - history.lag)
         axial_force, bit_torque = self.bit_rock.evaluate(bit_velocity, bit_speed, depth)
         st = self.stations
@@ -1088,12 +1094,12 @@ class ReducedOrderModel:
         position, angle = self.bit_position(0.0, y)
         law = self.bit_rock.detournay
         if self.hook_load.active:
-            start_history(self.case2_data.history, angle, position + self.hook_load.clearance, 0.0)
+            start_history(self.history, angle, position + self.hook_load.clearance, 0.0)
             return
         if depth_of_cut is None:
             depth_of_cut = max(self.weight_on_bit - law.contact_force, 0.0) / law.cutting_stiffness \
                 if law.cutting_stiffness > 0 else 0.0
-        start_history(self.case2_data.history, angle, position, depth_of_cut / law.sector)
+        start_history(self.history, angle, position, depth_of_cut / law.sector)
 
     def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:
         """Record the bit's position by angle over an accepted step from its dense-output polynomial
@@ -1106,7 +1112,7 @@ class ReducedOrderModel:
         position, angle = self.bit_position(t_old, y_old)
         angle_coef = coef[:, :n] @ self.bit_t
         angle_coef[0] += self.base_speed * h
-        record_step(self.case2_data.history, angle, np.ascontiguousarray(angle_coef), position,
+        record_step(self.history, angle, np.ascontiguousarray(angle_coef), position,
                     np.ascontiguousarray(coef[:, :n] @ self.bit_u))
 
     def turning_whirl(self) -> np.ndarray:
