@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.linalg import block_diag
 from scipy.special import lambertw
 
 from drillstring.dynamics.delay_stability import (
@@ -100,8 +101,10 @@ def test_delayed_oscillator_against_independent_roots(k, unstable_pairs):
     relative; the count in the right half-plane agrees with the argument principle."""
     omega, zeta, tau = 2 * math.pi, 0.02, 0.8
     A0, A1, p, dp = oscillator(omega, zeta, k, tau)
-    result = characteristic_roots(A0, A1, tau)
     re_min, re_max, im_max = -8.0, 3.0, 40.0
+    # the box reaches |s| τ ≈ 33: M = 48 resolves it (the default M only covers Re s ≥ 0)
+    result = characteristic_roots(A0, A1, tau, M=48)
+    assert result.resolved
     reference = independent_roots(p, dp, re_min, re_max, im_max)
     n_box = argument_principle_count(p, dp, re_min, re_max, im_max)
     assert n_box == 2 * np.sum(reference.imag > 1e-9) + np.sum(reference.imag <= 1e-9) >= 5
@@ -132,11 +135,11 @@ def test_one_dof_builder_against_hand_equation():
     h = lambda s: m * s**2 + c * s + k_c * (1 - np.exp(-s * tau))  # noqa: E731
     for s in result.roots[:10]:
         assert abs(h(s)) <= 1e-9 * (m * abs(s) ** 2 + c * abs(s) + 2 * k_c)
-    # the regenerative stiffness destabilises this undamped-enough axial mass: the hand equation says so
-    # when c < k_c τ sin(ωτ)/ω at the crossing; here, check against the independent scalar roots
+    # the leading root (unstable here: the regenerative stiffness against little damping) against the
+    # scalar equation's roots found independently
     reference = independent_roots(h, lambda s: 2 * m * s + c + k_c * tau * np.exp(-s * tau), -2.0, 2.0, 40.0)
     reference = reference[np.abs(reference) > 1e-6]
-    assert result.leading.real == pytest.approx(reference[0].real, rel=1e-9)
+    assert result.leading.real == pytest.approx(reference[0].real, rel=1e-9) and not result.stable
 
 
 def two_dof_hand_det(s, p, tau):
@@ -252,3 +255,53 @@ def test_bad_input(bad, message):
     args = dict(A0=np.zeros((1, 1)), A1=np.ones((1, 1)), tau=1.0) | bad
     with pytest.raises(ValueError, match=message):
         characteristic_roots(args.pop("A0"), args.pop("A1"), **args)
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_default_degree_covers_the_right_half_plane(seed):
+    """N = 8, full-rank A1 with ‖A1‖ = 40 1/s, τ = 0.5 s: the rightmost root lies at |s|τ ≈ 30–40, missed
+    with M = 8 (seed 0) or M = 16 (seed 2). The default M = ⌈τR⌉ finds the rightmost root of a reference
+    with M = 100; every root in the right half-plane has |s| ≤ R (R: balanced norm bound)."""
+    rng = np.random.default_rng(seed)
+    N, tau = 8, 0.5
+    Q = np.linalg.qr(rng.standard_normal((N, N)))[0]
+    blocks = [np.array([[-a, w], [-w, -a]]) for a, w in zip(rng.uniform(0.1, 5, N // 2), rng.uniform(0, 100, N // 2))]
+    A0 = Q @ block_diag(*blocks) @ Q.T
+    A1 = rng.standard_normal((N, N))
+    A1 *= 40 / np.linalg.norm(A1, 2)
+    reference = characteristic_roots(A0, A1, tau, M=100, verify=False)
+    assert reference.resolved
+    right = reference.roots[reference.roots.real >= 0]
+    assert right.size >= 4 and np.max(np.abs(right)) <= reference.radius
+    result = characteristic_roots(A0, A1, tau)
+    assert result.resolved and result.leading_change <= 1e-8
+    assert abs(result.leading - reference.leading) <= 1e-10 * abs(reference.leading)
+    assert int(np.sum(result.roots.real >= 0)) == right.size
+    missed_at = {0: 8, 2: 16}[seed]
+    coarse = characteristic_roots(A0, A1, tau, M=missed_at, verify=False)
+    assert coarse.leading.real < reference.leading.real - 0.1
+
+
+def test_a_small_genuine_root_is_not_neutral():
+    """m u'' + c u' + k u + k_c(u − u(t − τ)) = 0 with a stiff regenerative term (‖A0‖ ≈ 1e6 1/s²) and a
+    weak spring: the slow root s ≈ −k/(c + k_c τ) ≈ −1e-3 1/s is a root, not an invariance (k = 0: neutral)."""
+    m, c, k, k_c, tau = 1.0, 10.0, 10.0, 1e6, 0.01
+    h = lambda s: m * s**2 + c * s + k + k_c * (1 - np.exp(-s * tau))  # noqa: E731
+    A0 = np.array([[0.0, 1.0], [-(k + k_c) / m, -c / m]])
+    A1 = np.array([[0.0, 0.0], [k_c / m, 0.0]])
+    result = characteristic_roots(A0, A1, tau)
+    slow = result.roots[np.argmin(np.abs(result.roots))]
+    assert result.neutral.size == 0
+    assert slow.imag == 0 and slow.real == pytest.approx(-k / (c + k_c * tau), rel=1e-2)
+    assert abs(h(slow)) <= 1e-12 * k_c * abs(slow) * tau
+    A0[1, 0] = -k_c / m
+    assert characteristic_roots(A0, A1, tau).neutral.size == 1
+
+
+def test_double_roots_keep_their_multiplicity():
+    """Two identical uncoupled scalar equations: every Lambert W root twice, none more often."""
+    a, b, tau = -1.0, -2.0, 1.0
+    result = characteristic_roots(a * np.eye(2), b * np.eye(2), tau)
+    for k in range(-2, 3):
+        s = a + complex(lambertw(b * tau * math.exp(-a * tau), k)) / tau
+        assert int(np.sum(np.abs(result.roots - s) <= 1e-9 * abs(s))) == 2

@@ -20,16 +20,20 @@ two steps:
    converged when its relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖ + ‖A1‖ e^{−Re(s) τ})`` is at most
    ``residual_tol``; the starting values that did not converge are reported, not used.
 
-**Convergence in M.** With ``verify`` the leading root is recomputed with ``2M`` (and ``M`` doubled again,
-while ``M ≤ M_max`` and the matrix's size ``≤ max_size``, until two successive leading roots agree to
-``1e-8`` relative); the result keeps the last ``M`` and the change it saw (``leading_change``: the caller
-decides whether to trust a larger one).
+**Choice of M.** Every root with ``Re s ≥ 0`` has ``|s| ≤ R`` (:func:`right_half_plane_radius`, a balanced
+norm bound), so the default ``M = max(16, ⌈τR⌉)`` puts all of them in the resolved region (``resolved`` in
+the result; a size cap ``max_size`` on ``N + pM`` may lower ``M``, and then ``resolved`` is False). With
+``verify`` the leading root is computed with ``⌈M/2⌉`` and with twice that, and ``M`` doubled again (while
+``M ≤ M_max`` and the size ``≤ max_size``) until two successive leading roots agree to ``1e-8`` relative;
+the result keeps the last ``M`` and the change it saw (``leading_change``).
 
 **Neutral roots.** An invariance (the rigid axial translation ``u → u + c`` leaves the depth of cut
 ``u(t) − u(t − τ)`` unchanged; so does a rigid rotation) puts a root at ``s = 0`` for every parameter.
 Roots with ``|s| ≤ neutral_tol`` [1/s] are reported apart, in ``neutral``, and never decide stability;
-the default tolerance is ``1e-8 (‖A0‖ + ‖A1‖ + 1/τ)``, and ``neutral_tol=0`` turns this off. The caller
-who knows the number of invariances checks ``len(neutral)``.
+the default tolerance is ``1e-8 (R + 1/τ)`` (``R`` above: the roots' scale, free of the units of the
+states; a computed neutral root sits within about ``1e-15 R`` of 0), and ``neutral_tol=0`` turns this off.
+A genuine root closer to 0 than the tolerance would be called neutral; the caller who knows the number of
+invariances checks ``len(neutral)``.
 
 :func:`second_order_delay_matrices` builds ``A0``, ``A1`` for modal equations with a bit force and torque
 that depend on the regenerative depth of cut; :func:`append_states` borders them with first-order states.
@@ -55,7 +59,8 @@ class DelayRoots:
     pairs both listed); ``residuals``: their relative residuals; ``neutral`` [1/s]: roots within
     ``neutral_tol`` of 0; ``unconverged`` [1/s]: eigenvalues of the discretisation from which Newton's
     method did not converge; ``M``: Chebyshev degree used; ``tau`` [s]; ``leading_change``: relative change
-    of the leading root in the last doubling of ``M`` (NaN without ``verify``)."""
+    of the leading root in the last doubling of ``M`` (NaN without ``verify``); ``radius`` [1/s]: every root
+    with ``Re s ≥ 0`` has ``|s| ≤ radius``."""
 
     roots: np.ndarray
     residuals: np.ndarray
@@ -64,6 +69,13 @@ class DelayRoots:
     M: int
     tau: float
     leading_change: float
+    radius: float
+
+    @property
+    def resolved(self) -> bool:
+        """Every root with ``Re s ≥ 0`` lies in the resolved region ``|s| τ ≤ M`` (``radius`` ``R`` [1/s]:
+        :func:`right_half_plane_radius`), so none can have been missed for want of ``M``."""
+        return self.radius * self.tau <= self.M
 
     @property
     def leading(self) -> complex:
@@ -157,7 +169,8 @@ def _trace_solve(delta, rhs):
 
 
 def _residuals(A0, A1, tau, s):
-    """Relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖₂ + ‖A1‖₂ e^{−Re(s)τ})`` of each root (∞ for a lost one)."""
+    """Relative residual ``σ_min(Δ(s)) / (|s| + ‖A0‖₂ + ‖A1‖₂ e^{−Re(s)τ})`` of each root (∞ for a lost
+    one)."""
     out = np.full(s.size, math.inf)
     ok = np.isfinite(s) & (s.real * tau > -600)
     e = np.exp(-s[ok] * tau)
@@ -167,11 +180,27 @@ def _residuals(A0, A1, tau, s):
     return out
 
 
-def _roots_at(A0, A1, tau, M, n_refine, residual_tol):
-    """Refined roots (Im ≥ 0) from the discretisation of degree ``M``, the starting values that failed."""
+def right_half_plane_radius(A0: np.ndarray, A1: np.ndarray) -> float:
+    """``R`` [1/s] with ``|s| ≤ R`` for every root with ``Re s ≥ 0``: at a root ``s`` is an eigenvalue of
+    ``A0 + A1 e^{−sτ}``, so ``|s| ≤ ‖T⁻¹A0T‖₂ + ‖T⁻¹A1T‖₂ e^{−Re(s)τ}`` for any invertible ``T``; ``T`` is
+    the diagonal balancing of ``|A0| + |A1|`` (LAPACK ``gebal``), which brings modal equations'
+    ``[[0, I], [−K, ·]]`` from ``‖K‖`` down to about the highest frequency."""
+    if not A0.size:
+        return 0.0
+    _, (scale, _) = sla.matrix_balance(np.abs(A0) + np.abs(A1), permute=False, separate=True)
+    return float(sum(np.linalg.norm(A / scale[:, None] * scale[None, :], 2) for A in (A0, A1)))
+
+
+def _roots_at(A0, A1, tau, M, n_refine, radius, residual_tol):
+    """Refined roots (Im ≥ 0) from the discretisation of degree ``M``, the starting values that failed.
+    Starting values: the ``n_refine`` rightmost eigenvalues, and every one with ``|λ| ≤ 1.1 R`` and
+    ``Re λ > −1/τ`` (the approximations of the roots in the right half-plane)."""
     lam = sla.eigvals(chebyshev_generator(A0, A1, tau, M), overwrite_a=True, check_finite=False)
     lam = lam[lam.imag >= -1e-12 * np.maximum(np.abs(lam), 1 / tau)]
-    lam = lam[np.argsort(-lam.real)][:n_refine]
+    lam = lam[np.argsort(-lam.real)]
+    pick = np.arange(lam.size) < n_refine
+    pick |= (np.abs(lam) <= 1.1 * radius) & (lam.real > -1 / tau)
+    lam = lam[pick]
     s = _newton(A0, A1, tau, lam)
     res = _residuals(A0, A1, tau, s)
     ok = np.isfinite(s) & (res <= residual_tol)
@@ -189,52 +218,60 @@ def _roots_at(A0, A1, tau, M, n_refine, residual_tol):
 
 
 def characteristic_roots(A0, A1, tau: float, *, M: int | None = None, verify: bool = True,
-                         M_max: int = 128, max_size: int = 2000, n_refine: int | None = None, neutral_tol: float | None = None,
-                         residual_tol: float = 1e-10) -> DelayRoots:
+                         M_max: int = 512, max_size: int = 2000, n_refine: int | None = None,
+                         neutral_tol: float | None = None, residual_tol: float = 1e-10) -> DelayRoots:
     """The rightmost roots of ``det(s I − A0 − A1 e^{−sτ}) = 0`` (module docstring).
 
-    ``A0``, ``A1``: real ``N×N`` [1/s]; ``tau`` [s] > 0; ``M``: Chebyshev degree (default
-    ``⌈τ ρ(A0)⌉`` (``ρ`` the spectral radius: the delay-free frequencies) within ``[16, 48]``, lowered so
-    that the check at ``2M`` keeps the matrix within ``max_size``, at least 8); ``verify``: double ``M``
-    until the leading root agrees (while ``M ≤ M_max`` and the size ``N + pM ≤ max_size``); ``n_refine``: starting values refined (default ``max(2N, 20)``, the
-    rightmost, one per conjugate pair); ``neutral_tol`` [1/s]; ``residual_tol``: convergence of a root."""
+    ``A0``, ``A1``: real ``N×N`` [1/s]; ``tau`` [s] > 0; ``M``: the (final) Chebyshev degree, default
+    ``max(16, ⌈τR⌉)`` (:func:`right_half_plane_radius`: then every root with ``Re s ≥ 0`` is in the resolved
+    region ``|s|τ ≤ M``), lowered to keep the matrix's size ``N + pM`` within ``max_size``; ``verify``:
+    compare the leading root at ``⌈M/2⌉`` and ``2⌈M/2⌉`` and double again until they agree (while
+    ``M ≤ M_max`` and the size ``≤ max_size``); ``n_refine``: the rightmost starting values always refined
+    (default ``max(2N, 20)``, one per conjugate pair); ``neutral_tol`` [1/s]; ``residual_tol``: the largest
+    relative residual of a converged root."""
     A0 = np.atleast_2d(np.asarray(A0, dtype=float))
     A1 = np.atleast_2d(np.asarray(A1, dtype=float))
     N = A0.shape[0]
     if A0.shape != (N, N) or A1.shape != (N, N):
         raise ValueError(f"A0 and A1: square matrices of one size expected, got {A0.shape} and {A1.shape}")
+    if not np.all(np.isfinite(A0)) or not np.all(np.isfinite(A1)):
+        raise ValueError("A0 and A1: finite entries expected")
     if not (math.isfinite(tau) and tau > 0):
         raise ValueError(f"tau = {tau}: a delay > 0 s expected")
-    p = delayed_factors(A1)[0].shape[1]
-    if M is None:
-        rho = float(np.max(np.abs(np.linalg.eigvals(A0)))) if N else 0.0
-        M = int(max(8, min(max(16, math.ceil(tau * rho)), 48, (max_size - N) // max(2 * p, 1))))
-    if M < 2:
+    if M is not None and M < 2:
         raise ValueError(f"M = {M}: a Chebyshev degree >= 2 expected")
+    p = max(delayed_factors(A1)[0].shape[1], 1)
+    radius = right_half_plane_radius(A0, A1)
+    if M is None:
+        M = max(16, math.ceil(tau * radius))
+        M = int(max(8, min(M, (max_size - N) // p)))
     n_refine = max(2 * N, 20) if n_refine is None else n_refine
     if neutral_tol is None:
-        neutral_tol = 1e-8 * (np.linalg.norm(A0, 2) + np.linalg.norm(A1, 2) + 1 / tau)
+        neutral_tol = 1e-8 * (radius + 1 / tau)
 
     def leading(s):
         s = s[np.abs(s) > neutral_tol]
         return s[np.argmax(s.real)] if s.size else complex(math.nan)
 
-    s, res, bad = _roots_at(A0, A1, tau, M, n_refine, residual_tol)
     change = math.nan
-    while verify:
-        M2 = 2 * M
-        s2, res2, bad2 = _roots_at(A0, A1, tau, M2, n_refine, residual_tol)
+    if verify:
+        M = max(2, math.ceil(M / 2))
+    s, res, bad = _roots_at(A0, A1, tau, M, n_refine, radius, residual_tol)
+    first = True
+    while verify and (first or (2 * M <= M_max and N + 2 * p * M <= max_size)):
+        s2, res2, bad2 = _roots_at(A0, A1, tau, 2 * M, n_refine, radius, residual_tol)
         a, b = leading(s), leading(s2)
         change = abs(a - b) / max(abs(b), 1 / tau)
-        s, res, bad, M = s2, res2, bad2, M2
-        if change <= LEADING_ROOT_RTOL or 2 * M > M_max or N + 2 * p * M > max_size:
+        s, res, bad, M, first = s2, res2, bad2, 2 * M, False
+        if change <= LEADING_ROOT_RTOL:
             break
     is_neutral = np.abs(s) <= neutral_tol
     both = lambda z: np.concatenate([z, np.conj(z[z.imag > 0])])  # noqa: E731
-    roots, residuals = both(s[~is_neutral]), np.concatenate([res[~is_neutral], res[~is_neutral][s[~is_neutral].imag > 0]])
+    neutral, s, res = s[is_neutral].real, s[~is_neutral], res[~is_neutral]
+    roots, residuals = both(s), np.concatenate([res, res[s.imag > 0]])
     order = np.lexsort((-roots.imag, -roots.real))
-    return DelayRoots(roots=roots[order], residuals=residuals[order], neutral=s[is_neutral].real,
-                      unconverged=both(bad), M=M, tau=float(tau), leading_change=float(change))
+    return DelayRoots(roots=roots[order], residuals=residuals[order], neutral=neutral, unconverged=both(bad),
+                      M=M, tau=float(tau), leading_change=float(change), radius=radius)
 
 
 def second_order_delay_matrices(K, C, b_u, b_t, *, f_du: float, f_dtheta: float, f_d: float,
@@ -250,14 +287,17 @@ def second_order_delay_matrices(K, C, b_u, b_t, *, f_du: float, f_dtheta: float,
         δf = f_du δu' + f_dtheta δθ' + f_d δd,   δt = t_du δu' + t_dtheta δθ' + t_d δd
 
     (``f_du`` [N·s/m], ``f_dtheta`` [N·s/rad], ``f_d`` [N/m], ``t_du`` [N·s], ``t_dtheta`` [N·m·s/rad],
-    ``t_d`` [N]). The depth of cut ``d = u(t) − u(t − τ)`` has the state-dependent delay ``θ(t) − θ(t − τ) = Δ``
-    (``Δ = 2π/n`` for ``n`` blades; Richard, Germay & Detournay, J. Sound Vib. 305, 2007). With
-    ``u = Vt + δu``, ``θ = Ωt + δθ``, ``τ = τ0 + δτ``, ``Ω τ0 = Δ``, to first order the delay condition gives
-    ``Ω δτ = −(δθ(t) − δθ(t − τ0))`` and ``d = V τ + δu(t) − δu(t − τ0)``, so
+    ``t_d`` [N]). The depth of cut ``d = u(t) − u(t − τ)`` has the state-dependent delay
+    ``θ(t) − θ(t − τ) = Δ`` (``Δ = 2π/n`` for ``n`` blades; Richard, Germay & Detournay, J. Sound Vib. 305,
+    2007). With ``u = Vt + δu``, ``θ = Ωt + δθ``, ``τ = τ0 + δτ``, ``Ω τ0 = Δ``, to first order the delay
+    condition gives ``Ω δτ = −(δθ(t) − δθ(t − τ0))`` and ``d = V τ + δu(t) − δu(t − τ0)`` (so
+    ``d0 = V τ0 = VΔ/Ω``, the steady depth of cut), hence
 
-        δd = [δu(t) − δu(t − τ0)] − (V/Ω) [δθ(t) − δθ(t − τ0)] = gᵀ (δη(t) − δη(t − τ0)),  g = b_u − (V/Ω) b_t.
+        δd = [δu(t) − δu(t − τ0)] − (V/Ω) [δθ(t) − δθ(t − τ0)] = gᵀ (δη(t) − δη(t − τ0)),
+        g = b_u − (V/Ω) b_t.
 
-    Hence, with ``h = f_d b_u + t_d b_t`` and ``P = b_u (f_du b_uᵀ + f_dtheta b_tᵀ) + b_t (t_du b_uᵀ + t_dtheta b_tᵀ)``::
+    With ``h = f_d b_u + t_d b_t`` and
+    ``P = b_u (f_du b_uᵀ + f_dtheta b_tᵀ) + b_t (t_du b_uᵀ + t_dtheta b_tᵀ)``::
 
         A0 = [[0, I], [−K + h gᵀ, −C + P]],   A1 = [[0, 0], [−h gᵀ, 0]].
 
