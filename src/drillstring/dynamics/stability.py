@@ -290,9 +290,11 @@ def delay_roots(model: ReducedOrderModel, steady: SteadyDrilling | None = None, 
 
 def delay_roots_summary(roots: DelayRoots) -> dict:
     """JSON-ready facts of a delay system's roots: the delay [s], the Chebyshev degree used and the leading
-    root's relative change at the last doubling of it, the neutral roots [1/s] (invariances) and how many
-    starting values did not converge."""
+    root's relative change at the last doubling of it, whether every root of the right half-plane is within
+    the range the degree resolves (``resolved``; ``radius`` [1/s] bounds their moduli), the neutral roots
+    [1/s] (invariances) and how many starting values did not converge."""
     return {"delay": roots.tau, "chebyshev_degree": int(roots.M), "leading_change": roots.leading_change,
+            "resolved": bool(roots.resolved), "radius": float(roots.radius),
             "neutral_roots": [float(v) for v in roots.neutral], "unconverged": int(len(roots.unconverged))}
 
 
