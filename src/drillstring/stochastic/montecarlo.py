@@ -273,9 +273,13 @@ def study_buckling_margin(case: Case, settings: StudySettings) -> dict:
         probability, what = float(case.operation.weight_on_bit > critical), "the case's weight-on-bit"
     warning = None
     if probability > BUCKLING_WARNING_PROBABILITY:
+        # without lateral modes the model has no lateral motion: a buckled string stays on the axis
+        lateral = case.reduced_model.lateral_modes > 0 or case.reduced_model.lateral_cutoff > 0
+        consequence = ("bowed to the wall" if lateral
+                       else "the model has no lateral modes, so they stay on the hole's axis")
         warning = (f"{what} puts the weight-on-bit above the critical {critical / 1e3:.5g} kN (lateral "
                    f"buckling) with probability {probability:.3g}: about {probability * settings.samples:.3g} "
-                   f"of the {settings.samples} realizations will be buckled strings (bowed to the wall); "
+                   f"of the {settings.samples} realizations will be buckled strings ({consequence}); "
                    f"their count is in the summary")
     return {"critical_weight_on_bit": float(critical), "probability": float(probability),
             "expected": float(probability * settings.samples), "warning": warning}
