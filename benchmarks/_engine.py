@@ -23,6 +23,23 @@ from typing import Any, Callable  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def run_in_tree(script: str, tree: Path, arguments: list[str]) -> dict:
+    """Run ``python script *arguments`` with the package of the source tree ``tree`` (``tree/src`` first on
+    the path), an empty Numba cache (cold compile) and one thread per library; returns the JSON object its
+    last line of output prints. A failed worker stops the benchmark with its error output."""
+    import json
+    import subprocess
+    import sys
+
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=cache, OMP_NUM_THREADS="1",
+                   OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", NUMBA_NUM_THREADS="1")
+        done = subprocess.run([sys.executable, script, *arguments], env=env, capture_output=True, text=True)
+    if done.returncode:
+        raise SystemExit(f"the worker in {tree} failed:\n{done.stderr}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def timed_in_folder(prefix: str, run: Callable[[Path], Any], keep: Path | None = None,
                     files: tuple[str, ...] = ()) -> tuple[float, Any]:
     """Run ``run(folder)`` in a new temporary folder, deleted afterwards; returns (wall time [s], its
