@@ -20,11 +20,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
-import sys
-import tempfile
 import time
 from pathlib import Path
+
+from _engine import run_in_tree  # sets one thread per library, as in the workers
 
 RUNS = {
     "reference/tucker_wang": ("reference", {}),
@@ -63,14 +62,7 @@ def worker(names: list[str], repeat: int) -> dict:
 
 
 def run_tree(tree: Path, names: list[str], repeat: int) -> dict:
-    with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=cache, OMP_NUM_THREADS="1",
-                   OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", NUMBA_NUM_THREADS="1")
-        done = subprocess.run([sys.executable, __file__, "--worker", ",".join(names), "--repeat", str(repeat)],
-                              env=env, capture_output=True, text=True)
-    if done.returncode:
-        raise SystemExit(f"the worker in {tree} failed:\n{done.stderr}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return run_in_tree(__file__, tree, ["--worker", ",".join(names), "--repeat", str(repeat)])
 
 
 def main() -> None:
