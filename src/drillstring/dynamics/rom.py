@@ -956,8 +956,6 @@ class ReducedOrderModel:
             current=np.zeros(mesh.n_nodes, dtype=np.bool_), previous=np.zeros(mesh.n_nodes, dtype=np.bool_),
             dense=np.zeros((2, _DENSE_ORDER_MAX)),
         )
-        #: the bit's history (:class:`~drillstring.dynamics.delay.AngleHistory`): views into ``laws``
-        self.history = view(self.case2_data.laws[_HISTORY:])
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | DelayedRhsData | FullModelData = (
             self._full_model_data(self.case2_data) if self.full else self.case2_data)
@@ -1097,6 +1095,12 @@ class ReducedOrderModel:
         contact zones that appeared (:func:`new_contact_zones`). Both integrators call it after every
         accepted step."""
         return int(impacts_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
+
+    @property
+    def history(self):
+        """The bit's history (:class:`~drillstring.dynamics.delay.AngleHistory`): views into the kernels' law
+        numbers, so what is set or recorded here is what the compiled kernels read."""
+        return view(self.case2_data.laws[_HISTORY:])
 
     def bit_position(self, t: float, y: np.ndarray) -> tuple[float, float]:
         """The bit's axial position u [m] (from the static state, down) and angle θ [rad] at time ``t``
