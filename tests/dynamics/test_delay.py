@@ -18,6 +18,7 @@ from drillstring.dynamics.delay import (
     AngleHistory,
     delayed_difference,
     lookup,
+    record_bottom,
     record_step,
     start,
 )
@@ -345,3 +346,31 @@ def test_integrate_on_dense_step_records_the_history():
                     [1.0, 0.0], rtol=1e-9, atol=1e-9, max_step=0.5, on_dense_step=record)
     assert sol.n_rejected > 0 and len(calls) == sol.n_accepted
     assert abs(sol.y[-1, 0] - x_ref) < 1e-7
+
+
+def test_the_hole_bottom_keeps_the_rock_where_the_bit_passes_above_it():
+    """record_bottom: a bit passing above the bottom the previous blade left (smaller u: x points down) leaves
+    that bottom in place — the flat prehistory while it is lowered, the last cut after a bounce —, and a bit
+    cutting below it records its own position (then the law's d_n = u(t) − u(t − t_n)). record_step keeps
+    the bit's path whatever it is."""
+    lag = 1.0
+    bottom, path = AngleHistory.allocate(lag, 64), AngleHistory.allocate(lag, 64)
+    for h in (bottom, path):
+        start(h, 0.0, 1.0, 0.0)  # the rock's flat surface at u = 1
+
+    def advance(history, record, theta0, u0, du):  # the angle up by 0.5, u linear from u0 by du
+        record(history, theta0, np.array([0.5, 0.0, 0.0, 0.0]), u0, np.array([du, 0.0, 0.0, 0.0]))
+
+    advance(bottom, record_bottom, 0.0, 0.5, 0.0)  # lowered, 0.5 above the rock, over half a sector
+    advance(path, record_step, 0.0, 0.5, 0.0)
+    probe = [0.1, 0.3, 0.45]
+    np.testing.assert_allclose([lookup(bottom, x) for x in probe], 1.0, atol=1e-14)  # the rock is still there
+    np.testing.assert_allclose([lookup(path, x) for x in probe], 0.5, atol=1e-14)  # the path is where it went
+    advance(bottom, record_bottom, 0.5, 0.5, 1.5)  # lands at θ = 2/3 (u = 1) and cuts down to u = 2 at θ = 1
+    theta = np.array([0.55, 0.6, 0.75, 0.9, 0.98])
+    expected = np.maximum(0.5 + 3.0 * (theta - 0.5), 1.0)  # above the rock: the rock; below it: the cut
+    np.testing.assert_allclose([lookup(bottom, x) for x in theta], expected, atol=1e-12)
+    advance(bottom, record_bottom, 1.0, 2.0, -1.5)  # bounces up over the next half sector (u from 2 to 0.5)
+    theta = np.array([1.1, 1.25, 1.4, 1.48])  # one lag back (θ − 1 in [0, 0.5]) the rock was untouched, at 1
+    np.testing.assert_allclose([lookup(bottom, x) for x in theta], np.maximum(2.0 - 3.0 * (theta - 1.0), 1.0),
+                               atol=1e-12)

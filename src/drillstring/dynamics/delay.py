@@ -21,6 +21,13 @@ Design
   and ``u(s)`` stored. The latest crossing wins: a bin the bit passes again (backward rotation, then
   forward again) holds the value of its last passage. Within one step ``θ(s)`` is taken as monotone
   (the step resolves the motion).
+- **The hole bottom** (:func:`record_bottom`): for the bit, what a blade leaves behind is the rock, not
+  the bit's path: where the bit passes *above* the bottom the previous blade left (it has bounced off the
+  rock: ``d_n ≤ 0``, nothing is cut) the bottom stays where it was. :func:`record_bottom` therefore
+  stores ``max(u(s), bottom one lag back)`` (``x`` and ``u`` point down: deeper is larger), so that after a
+  bounce, or while the bit is lowered towards a flat bottom, the next blade meets the rock and not the air
+  the bit passed through. While the bit cuts (``d_n > 0``) this is ``u(s)``, the law's
+  ``d_n = u(t) − u(t − t_n)``.
 - **Prehistory.** A bin never written takes the line ``value(φ) = reference_value + slope·(φ −
   reference_angle)`` set by :func:`start`: slope 0 is a flat hole bottom; ``slope = d_blade/Δ`` the
   helical bottom of steady drilling at depth of cut ``d_blade`` per blade.
@@ -57,8 +64,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-__all__ = ["AngleHistory", "allocate_storage", "view", "start", "record_step", "lookup", "delayed_difference",
-           "UNWRITTEN", "META_SIZE"]
+__all__ = ["AngleHistory", "allocate_storage", "view", "start", "record_step", "record_bottom", "lookup",
+           "delayed_difference", "UNWRITTEN", "META_SIZE"]
 
 #: Bin index marking a slot nobody wrote (no bin index is infinite).
 UNWRITTEN = -np.inf
@@ -147,8 +154,9 @@ def _rise(coef, s):
 
 
 @njit(cache=True)
-def _write(history, j, theta_old, theta_coef, value_old, value_coef, s_linear):
-    """Store the value where ``θ(s)`` crosses the bin angle ``φ_j`` (Newton from ``s_linear``)."""
+def _write(history, j, theta_old, theta_coef, value_old, value_coef, s_linear, deepest):
+    """Store the value where ``θ(s)`` crosses the bin angle ``φ_j`` (Newton from ``s_linear``); with
+    ``deepest``, the larger of it and the value of the bin one lag back (:func:`record_bottom`)."""
     target = j * history.meta[_STEP] - theta_old
     s = min(max(s_linear, 0.0), 1.0)
     for _ in range(_NEWTON_ITERATIONS):
@@ -161,8 +169,11 @@ def _write(history, j, theta_old, theta_coef, value_old, value_coef, s_linear):
             s = s_next
             break
         s = s_next
+    value = value_old + _rise(value_coef, s)[0]
+    if deepest:
+        value = max(value, _bin_value(history, j - int(round(history.meta[_LAG] / history.meta[_STEP]))))
     slot = j & (history.bins.shape[0] - 1)
-    history.values[slot] = value_old + _rise(value_coef, s)[0]
+    history.values[slot] = value
     history.bins[slot] = float(j)
 
 
@@ -171,6 +182,19 @@ def record_step(history, theta_old, theta_coef, value_old, value_coef):
     """Record one accepted step given by its dense output ``θ(s) = theta_old + Σ_p theta_coef[p]
     s^(p+1)`` [rad] and ``value(s) = value_old + Σ_p value_coef[p] s^(p+1)``, ``s ∈ [0, 1]``: every bin
     angle crossed between the step's ends gets the value at its crossing (module docstring)."""
+    _record(history, theta_old, theta_coef, value_old, value_coef, False)
+
+
+@njit(cache=True)
+def record_bottom(history, theta_old, theta_coef, value_old, value_coef):
+    """:func:`record_step` for the hole bottom under a bit (``value`` its axial position [m], down):
+    every bin crossed gets the deeper of the bit's position and the bottom one lag back (module
+    docstring: where the bit passes above the rock, the rock stays)."""
+    _record(history, theta_old, theta_coef, value_old, value_coef, True)
+
+
+@njit(cache=True)
+def _record(history, theta_old, theta_coef, value_old, value_coef, deepest):
     step = history.meta[_STEP]
     capacity = history.bins.shape[0]
     theta_new = theta_old + _rise(theta_coef, 1.0)[0]
@@ -180,13 +204,15 @@ def record_step(history, theta_old, theta_coef, value_old, value_coef):
         j_last = int(math.floor(theta_new / step))
         j_first = max(j_first, j_last - capacity + 1)
         for j in range(j_first, j_last + 1):
-            _write(history, j, theta_old, theta_coef, value_old, value_coef, (j * step - theta_old) / span)
+            _write(history, j, theta_old, theta_coef, value_old, value_coef, (j * step - theta_old) / span,
+                   deepest)
     elif span < 0.0:  # θ_new ≤ φ_j < θ_old, crossed from the top down
         j_first = int(math.ceil(theta_old / step)) - 1
         j_last = int(math.ceil(theta_new / step))
         j_last = max(j_last, j_first - capacity + 1)
         for j in range(j_first, j_last - 1, -1):
-            _write(history, j, theta_old, theta_coef, value_old, value_coef, (j * step - theta_old) / span)
+            _write(history, j, theta_old, theta_coef, value_old, value_coef, (j * step - theta_old) / span,
+                   deepest)
 
 
 @njit(cache=True)

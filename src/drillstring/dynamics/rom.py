@@ -58,7 +58,7 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
-from drillstring.dynamics.delay import allocate_storage, lookup, record_step, view
+from drillstring.dynamics.delay import allocate_storage, lookup, record_bottom, view
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import KERNEL_SIZE as BIT_ROCK_SIZE
 from drillstring.forces.bit_rock import LAW_CODE, ON_BOTTOM, BitRockParameters, bit_rock_law, case_bit_rock
@@ -785,7 +785,7 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     """What the model does after each accepted step ``[t_old, t_old + h]`` of the integrator (never after a
     rejected one): count the impacts at the new state ``y`` (:func:`impacts_kernel`, returned) and, for a
     delayed bit–rock law, record the bit's position by angle over the step
-    (:func:`~drillstring.dynamics.delay.record_step`) from the step's continuous extension: the stages
+    (:func:`~drillstring.dynamics.delay.record_bottom`) from the step's continuous extension: the stages
     ``k_old`` (s, len(y)) and the tableau's ``dense`` (s, p) coefficients, ``y(t_old + σh) = y_old +
     h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
     if d.laws[ON_BOTTOM] == _DELAYED_LAW:
@@ -807,7 +807,7 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
                 angle_coef[p] += h * dense[i, p] * spin
         angle_coef[0] += d.top_speed * h
         position, angle, _, _ = _bit_state(d, t_old, y_old)
-        record_step(view(d.laws[_HISTORY:]), angle, angle_coef, position, position_coef)
+        record_bottom(view(d.laws[_HISTORY:]), angle, angle_coef, position, position_coef)
     return impacts_kernel(d, o, y)
 
 
@@ -1138,7 +1138,7 @@ class ReducedOrderModel:
         position, angle = self.bit_position(t_old, y_old)
         angle_coef = coef[:, :n] @ self.bit_t
         angle_coef[0] += self.base_speed * h
-        record_step(self.history, angle, np.ascontiguousarray(angle_coef), position,
+        record_bottom(self.history, angle, np.ascontiguousarray(angle_coef), position,
                     np.ascontiguousarray(coef[:, :n] @ self.bit_u))
 
     def turning_whirl(self) -> np.ndarray:
