@@ -13,6 +13,9 @@ stability), :func:`compare` (case 1 against case 2), :func:`study` / :func:`mont
 """
 
 from drillstring._version import __version__  # noqa: F401  (the package's version)
+from drillstring.kernel_cache import configure as _configure_kernel_cache
+
+_configure_kernel_cache()  # before any kernel is compiled or loaded: a cache per version of their sources
 
 
 def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the command line
