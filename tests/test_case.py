@@ -585,7 +585,7 @@ def test_detournay_keys_with_units(data):
 def test_detournay_defaults_are_the_published_bit():
     b = load_case("reference").bit_rock
     assert b.law == "tucker_wang"
-    assert [getattr(b, k) for k in DETOURNAY_KEYS] == [4, 0.108, 60e6, 0.6, 60e6, 0.011, 0.6, 1.0, 5e-4, 1e-2]
+    assert [getattr(b, k) for k in DETOURNAY_KEYS] == [4, 0.108, 60e6, 0.6, 60e6, 0.011, 0.6, 1.0, 2.5e-4, 5e-3]
     for key in DETOURNAY_KEYS:  # every key documented with its unit
         description = type(b).model_fields[key].description
         assert description.startswith("detournay: ") and description.endswith("]"), key

@@ -531,10 +531,10 @@ class BitRock(_Base):
     bit_geometry: Dimensionless = Field(
         1.0, ge=0, description="detournay: bit geometry factor gamma, T_f = mu gamma a W_f / 2 [-]")
     contact_velocity: Velocity = Field(
-        5e-4, gt=0, description="detournay: v_r, the wear-flat force ramps from 0 to a sigma l as the bit's "
+        2.5e-4, gt=0, description="detournay: v_r, the wear-flat force ramps from 0 to a sigma l as the bit's "
         "axial velocity goes from 0 to v_r (a bit at rest creeps down at most v_r) [m/s]")
     friction_speed: AngularSpeed = Field(
-        1e-2, gt=0, description="detournay: omega_r, the torque ramps from 0 to its full value as the bit "
+        5e-3, gt=0, description="detournay: omega_r, the torque ramps from 0 to its full value as the bit "
         "speed goes from 0 to omega_r (a stuck bit turns at most omega_r) [rad/s]")
 
 
