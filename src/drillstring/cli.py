@@ -1353,7 +1353,7 @@ def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> No
                   caption_justify="left")
     force, rop = display_unit("force", units), display_unit("rate_of_penetration", units)
     for header in ("rpm", f"WOB [{force.label}]", "n", "P(stick-slip)", "P(buckled)", "P(impact)", "P(unstable)",
-                   f"mean ROP [{rop.label}]", "stick-slip index"):
+                   "P(bounce)", f"mean ROP [{rop.label}]", "stick-slip index"):
         table.add_column(escape(header), justify="right")
     probabilities, quantiles = summary["probabilities"], summary["quantiles"]
 
@@ -1365,7 +1365,7 @@ def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> No
         for j, wob in enumerate(weights):
             cells = [f"{speed * _RPM:g}", f"{force(wob):g}", f"{summary['samples_done'][i][j]}"]
             for key in ("stick_slip_probability", "buckling_probability", "impact_probability",
-                        "instability_probability"):
+                        "instability_probability", "bounce_probability"):
                 cells.append(_fmt(probabilities[key]["values"][i][j], ".3f"))
             cells += [spread("rate_of_penetration_q", i, j, rop.scale), spread("stick_slip_index_q", i, j, 1.0)]
             table.add_row(*cells)

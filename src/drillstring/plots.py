@@ -691,6 +691,7 @@ PROBABILITY_PANELS = (
     ("buckling_probability", "probability of a buckled string"),
     ("impact_probability", "probability of wall impact"),
     ("instability_probability", "probability of unstable steady drilling"),
+    ("bounce_probability", "probability of bit bounce"),
 )
 
 
@@ -727,16 +728,18 @@ def _map_legend(fig, ds: xr.Dataset, force: DisplayUnit) -> None:
 
 def plot_probability_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
-    sampled_map_dataset`) as four panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
-    the probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady drilling (colour
-    scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
+    sampled_map_dataset`) as five panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
+    the probabilities of stick-slip, of a buckled string, of wall impact, of unstable steady drilling and of
+    bit bounce (colour scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
     the units of ``units``."""
     from matplotlib.colors import Normalize
 
     force = display_unit("force", units)
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
     y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
-    fig, axes = _figure(2, 2, (12.0, 9.0))
+    fig, axes = _figure(2, 3, (18.0, 9.0))
+    for ax in axes[len(PROBABILITY_PANELS):]:
+        ax.set_axis_off()
     levels = np.linspace(0.0, 1.0, 11)
     for ax, (name, label) in zip(axes, PROBABILITY_PANELS):
         z = np.asarray(ds[name].values, dtype=float)

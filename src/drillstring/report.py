@@ -549,7 +549,8 @@ def write_map_report(path: str | Path, *, title: str, case_toml: str, summary: M
 
 #: Columns of the per-point table of a probabilistic map: summary key, header.
 _PROBABILITY_COLUMNS = (("stick_slip_probability", "P(stick-slip)"), ("buckling_probability", "P(buckled)"),
-                        ("impact_probability", "P(impact)"), ("instability_probability", "P(unstable)"))
+                        ("impact_probability", "P(impact)"), ("instability_probability", "P(unstable)"),
+                        ("bounce_probability", "P(bounce)"))
 
 
 def _probability_map_section(summary: Mapping[str, Any], units: str | None = None) -> str:

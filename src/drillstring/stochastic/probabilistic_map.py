@@ -28,6 +28,8 @@ realizations (n of them; failed ones are excluded and listed):
 ``impact_probability``         share with ``impacts > 0`` (a node entered contact with the borehole wall)
 ``instability_probability``    share with ``growth_rate > 0`` (steady drilling linearly unstable; a draw
                                without steady drilling, growth rate NaN, counts as not unstable)
+``bounce_probability``         share with ``bit_bounce_fraction > 0`` (the bit left the rock, zero force on
+                               bit, some of the time after the transient)
 ``*_standard_error``           the binomial standard error ``sqrt(P̂(1 − P̂)/n)`` of each
 ``rate_of_penetration_q``      2.5, 50 and 97.5 % quantiles of the time-mean ROP [m/s] (dimension ``quantile``)
 ``stick_slip_index_q``         the same quantiles of the stick-slip index
@@ -90,6 +92,8 @@ PROBABILITIES: dict[str, tuple[str, Callable[[np.ndarray], np.ndarray], str]] = 
     "impact_probability": ("impacts", lambda v: v > 0.0, "probability of wall impact"),
     "instability_probability": ("growth_rate", lambda v: v > 0.0,
                                 "probability of unstable steady drilling (growth rate > 0)"),
+    "bounce_probability": ("bit_bounce_fraction", lambda v: v > 0.0,
+                           "probability of bit bounce (the bit off the rock some of the time)"),
 }
 #: Quantile levels of the per-point distributions of the ROP and of the stick-slip index.
 QUANTILES = (0.025, 0.5, 0.975)
