@@ -58,10 +58,10 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
-from drillstring.dynamics.delay import allocate_storage, lookup, record_bottom, view
+from drillstring.dynamics.delay import allocate_storage, delayed_difference, record_bottom, view
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import KERNEL_SIZE as BIT_ROCK_SIZE
-from drillstring.forces.bit_rock import LAW_CODE, ON_BOTTOM, BitRockParameters, bit_rock_law, case_bit_rock
+from drillstring.forces.bit_rock import DELAYED_LAW, ON_BOTTOM, BitRockParameters, bit_rock_law, case_bit_rock
 from drillstring.forces.contact import (
     ContactParameters,
     ContactStations,
@@ -139,8 +139,6 @@ _HOOK_LOAD = _TOP_DRIVE + TOP_DRIVE_SIZE
 #: Where the bit's history (the hole bottom by angle, :func:`~drillstring.dynamics.delay.allocate_storage`)
 #: starts: the rest of ``laws`` (a few numbers for a law that reads none).
 _HISTORY = _HOOK_LOAD + HOOK_LOAD_SIZE
-#: The Detournay law's code at ``laws[ON_BOTTOM]``: the law that reads the bit's history.
-_DELAYED_LAW = LAW_CODE["detournay"]
 #: Coefficients of a dense-output polynomial the scratch of :class:`ObserveData` holds (dopri5: 4).
 _DENSE_ORDER_MAX = 8
 
@@ -374,7 +372,7 @@ def _bit_rock(d, t, y):
     """The bit–rock law at the bit (:func:`~drillstring.forces.bit_rock.bit_rock_law`): ``(axial force [N],
     torque [N·m], depth of cut per blade [m], bit position u [m], axial velocity [m/s], spin speed
     [rad/s])``. A delayed law's depth of cut is ``u(t)`` minus the hole bottom one blade sector behind
-    (:func:`~drillstring.dynamics.delay.lookup`); the other laws read none (0)."""
+    (:func:`~drillstring.dynamics.delay.delayed_difference`); the other laws read none (0)."""
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = _depth_of_cut(d, position, angle)
     force, torque = bit_rock_law(d.laws, depth, velocity, speed)
@@ -383,7 +381,7 @@ def _bit_rock(d, t, y):
 
 def _depth_of_cut(d, position, angle):
     """The depth of cut per blade [m] of the bit at ``position`` u [m] and ``angle`` θ [rad]: ``u`` minus the
-    hole bottom one blade sector behind (:func:`~drillstring.dynamics.delay.lookup`) for
+    hole bottom one blade sector behind (:func:`~drillstring.dynamics.delay.delayed_difference`) for
     :class:`DelayedRhsData`, 0 for :class:`RhsData` (resolved by type when compiled)."""
     raise NotImplementedError("compiled code only")
 
@@ -391,10 +389,7 @@ def _depth_of_cut(d, position, angle):
 @overload(_depth_of_cut)
 def _depth_of_cut_compiled(d, position, angle):
     if _is(d, DelayedRhsData):
-        def delayed(d, position, angle):
-            history = view(d.laws[_HISTORY:])
-            return position - lookup(history, angle - history.meta[1])
-        return delayed
+        return lambda d, position, angle: delayed_difference(view(d.laws[_HISTORY:]), angle, position)
     return lambda d, position, angle: 0.0
 
 
@@ -788,7 +783,7 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     (:func:`~drillstring.dynamics.delay.record_bottom`) from the step's continuous extension: the stages
     ``k_old`` (s, len(y)) and the tableau's ``dense`` (s, p) coefficients, ``y(t_old + σh) = y_old +
     h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
-    if d.laws[ON_BOTTOM] == _DELAYED_LAW:
+    if d.laws[ON_BOTTOM] == DELAYED_LAW:
         a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
         order = dense.shape[1]
         angle_coef = o.dense[0, :order]
@@ -1034,9 +1029,9 @@ class ReducedOrderModel:
         bit_velocity = self.bit_u @ eta_dot
         bit_speed = self.base_speed + self.bit_t @ eta_dot
         depth = 0.0
-        if self.bit_rock.delayed:  # the hole bottom one blade sector behind the bit
-            history = self.history
-            depth = self.bit_u @ eta - lookup(history, self.base_speed * t + self.bit_t @ eta - history.lag)
+        if self.bit_rock.delayed:  # u minus the hole bottom one blade sector behind the bit
+            position, angle = self.bit_position(t, y)
+            depth = delayed_difference(self.history, angle, position)
         axial_force, bit_torque = self.bit_rock.evaluate(bit_velocity, bit_speed, depth)
         st = self.stations
         spin = self.base_speed + self.phi_tx @ eta_dot
@@ -1123,8 +1118,9 @@ class ReducedOrderModel:
             start_history(self.history, angle, position + self.hook_load.clearance, 0.0)
             return
         if depth_of_cut is None:
-            depth_of_cut = max(self.weight_on_bit - law.contact_force, 0.0) / law.cutting_stiffness \
-                if law.cutting_stiffness > 0 else 0.0
+            speed = self.top_speed
+            depth_of_cut = self.bit_rock.steady_depth_of_cut(law.rate_of_penetration(self.weight_on_bit, speed),
+                                                             speed)
         start_history(self.history, angle, position, depth_of_cut / law.sector)
 
     def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:

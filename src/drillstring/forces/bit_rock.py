@@ -72,6 +72,7 @@ from drillstring.forces.detournay import DetournayParameters, detournay_force
 
 __all__ = [
     "BIT_ROCK_LAWS",
+    "DELAYED_LAW",
     "DETOURNAY",
     "KERNEL_SIZE",
     "LAW_CODE",
@@ -95,6 +96,8 @@ __all__ = [
 BIT_ROCK_LAWS = ("tucker_wang", "off_bottom", "detournay")
 #: The code of each law in the kernel array (at :data:`ON_BOTTOM`; 0 is off bottom).
 LAW_CODE = {"off_bottom": 0.0, "tucker_wang": 1.0, "detournay": 2.0}
+#: The code of the law that reads the depth of cut (the bit's history): the Detournay law.
+DELAYED_LAW = LAW_CODE["detournay"]
 
 #: Index of the law code in :meth:`BitRockParameters.kernel_array` (:data:`LAW_CODE`; 0.0 off bottom).
 ON_BOTTOM = 7
@@ -321,7 +324,7 @@ def bit_rock_law(args, depth_of_cut, bit_axial_velocity, bit_speed):
     code = args[ON_BOTTOM]
     if code == 0.0:
         return 0.0, 0.0
-    if code == 2.0:
+    if code == DELAYED_LAW:
         return detournay_force(args[DETOURNAY:], depth_of_cut, bit_axial_velocity, bit_speed)
     force, torque = bit_rock_force_floored(bit_axial_velocity, bit_speed, args[0], args[1], args[2], args[3],
                                            args[4], args[5], args[6])
