@@ -28,29 +28,37 @@ __all__ = ["configure", "kernel_cache_dir", "kernel_sources"]
 PREFIX = "kernels-"
 
 
-def kernel_sources(package: Path | None = None) -> list[Path]:
-    """The package's source files that use Numba (they import it), sorted."""
-    root = Path(__file__).resolve().parent if package is None else Path(package)
-    sources = []
+def _package_root(package: Path | None) -> Path:
+    return Path(__file__).resolve().parent if package is None else Path(package)
+
+
+def _kernel_files(root: Path) -> list[tuple[Path, bytes]]:
+    """``(path, contents)`` of the source files under ``root`` that import Numba, sorted, each read once."""
+    files = []
     for path in sorted(root.rglob("*.py")):
         try:
-            text = path.read_text(encoding="utf-8")
+            data = path.read_bytes()
         except OSError:
             continue
-        if "from numba" in text or "import numba" in text:
-            sources.append(path)
-    return sources
+        if b"from numba" in data or b"import numba" in data:
+            files.append((path, data))
+    return files
+
+
+def kernel_sources(package: Path | None = None) -> list[Path]:
+    """The package's source files that use Numba (they import it), sorted."""
+    return [path for path, _ in _kernel_files(_package_root(package))]
 
 
 def kernel_cache_dir(base: Path, package: Path | None = None) -> Path:
     """``base / "kernels-<hash>"``, the hash (16 hex digits of SHA-256) over the relative paths and the bytes
     of :func:`kernel_sources`."""
-    root = Path(__file__).resolve().parent if package is None else Path(package)
+    root = _package_root(package)
     digest = hashlib.sha256()
-    for path in kernel_sources(root):
+    for path, data in _kernel_files(root):
         digest.update(path.relative_to(root).as_posix().encode())
         digest.update(b"\0")
-        digest.update(path.read_bytes())
+        digest.update(data)
         digest.update(b"\0")
     return Path(base) / f"{PREFIX}{digest.hexdigest()[:16]}"
 
