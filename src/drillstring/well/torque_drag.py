@@ -44,7 +44,7 @@ import numpy as np
 from drillstring.fem.sections import hollow_circle
 from drillstring.well.survey import Trajectory, trajectory
 
-__all__ = ["OPERATIONS", "StringInWell", "TorqueDragResult", "case_trajectory", "string_in_well",
+__all__ = ["LOCKED", "OPERATIONS", "StringInWell", "TorqueDragResult", "case_trajectory", "string_in_well",
            "torque_drag", "case_torque_drag"]
 
 #: Operations: (axial friction direction sigma, rotating, on bottom).
@@ -55,6 +55,8 @@ OPERATIONS: dict[str, tuple[int, bool, bool]] = {
     "sliding": (-1, False, True),
     "drilling": (0, True, True),
 }
+#: A compression [N] taken as infinite: the string is locked up (helical buckling, eq. (1) diverges).
+LOCKED = 1e15
 #: Largest element of the soft-string integration [m].
 MAX_STEP = 1.0
 
@@ -223,7 +225,8 @@ class TorqueDragResult:
     ``axial_force`` is the effective tension (tension > 0) [N], ``true_axial_force`` the steel's [N],
     ``torque`` [N*m], ``side_force`` the wall's normal force per length [N/m] (at each node, from the element
     above it); ``hook_load`` = axial_force at the surface, ``surface_torque`` = torque there. ``friction`` is
-    the friction factors used, one value or one per draw (then every array has a trailing axis of draws)."""
+    the friction factors used, one value or one per draw (then every array has a trailing axis of draws).
+    ``extras["locked_up"]``: the compression diverged (helical lock-up): the hook load is then -LOCKED."""
 
     operation: str
     measured_depth: np.ndarray
@@ -309,6 +312,7 @@ def torque_drag(string: StringInWell, operation: str, *, cased_friction, open_ho
         guess = f_bottom - h[e] * slope_bottom
         n_top = wall(e, 0, guess)
         f_top = f_bottom - 0.5 * h[e] * (slope_bottom - axial[e, 0] - drag[e] * n_top)
+        f_top = maximum(f_top, -LOCKED)  # helical lock-up: compression diverging (Mitchell's F^2 wall force)
         n_top = wall(e, 0, f_top)
         torque[e] = torque[e + 1] + 0.5 * h[e] * twist[e] * (n_bottom + n_top)
         side[e + 1] = n_bottom
@@ -322,7 +326,7 @@ def torque_drag(string: StringInWell, operation: str, *, cased_friction, open_ho
     squeeze = (lambda x: x[:, 0]) if g == 1 and np.ndim(cased_friction) == 0 and np.ndim(open_hole_friction) == 0 \
         else (lambda x: x)
     return TorqueDragResult(operation, md, squeeze(force), squeeze(true), squeeze(torque), squeeze(side),
-                            float(wob), float(tob))
+                            float(wob), float(tob), {"locked_up": squeeze(np.any(force <= -LOCKED, axis=0)[None, :])})
 
 
 def case_torque_drag(case, operations=tuple(OPERATIONS), *, string: StringInWell | None = None,
