@@ -40,7 +40,7 @@ import numpy as np
 from drillstring.units import FORCE, LENGTH, to_si
 from drillstring.well.torque_drag import OPERATIONS, case_trajectory, string_in_well, torque_drag
 
-__all__ = ["FrictionPosterior", "HookLoadMeasurements", "calibrate", "posterior_bands", "predicted_hook_loads",
+__all__ = ["FrictionPosterior", "HookLoadMeasurements", "broomstick", "calibrate", "posterior_bands", "predicted_hook_loads",
            "read_measurements", "torque_drag_draws"]
 
 
@@ -243,4 +243,20 @@ def torque_drag_draws(case, law, count: int, seed: int = 0, operations=("trip_ou
         results = case_torque_drag(law.apply(case, row), operations, with_buckling=False)
         for op, r in results.items():
             out[op][k] = (float(r.hook_load), float(r.surface_torque))
+    return out
+
+
+def broomstick(case, bit_depths, frictions, *, operations=("trip_out", "rotating_off_bottom", "trip_in"),
+               max_step: float = 10.0) -> dict[str, np.ndarray]:
+    """The broomstick chart: hook loads [N] of each operation at each bit depth [m] for each friction factor
+    of ``frictions`` (the same in cased and open hole): ``{op: array (len(bit_depths), len(frictions))}``."""
+    path = case_trajectory(case)
+    mu = np.asarray(frictions, float)
+    tob = 0.0 if case.well is None else case.well.torque_on_bit
+    out = {op: np.empty((len(bit_depths), mu.size)) for op in operations}
+    for k, depth in enumerate(bit_depths):
+        string = string_in_well(case, path, bit_depth=float(depth), max_step=max_step)
+        for op in operations:
+            out[op][k] = torque_drag(string, op, cased_friction=mu, open_hole_friction=mu,
+                                     weight_on_bit=case.operation.weight_on_bit, torque_on_bit=tob).hook_load
     return out
