@@ -1543,15 +1543,17 @@ def torque_drag_command(
     from drillstring.well.calibration import read_measurements
 
     noise = None
-    try:
-        if sigma is not None:
+    if sigma is not None:
+        try:
             noise = to_si(sigma, FORCE)
-            if not (math.isfinite(noise) and noise > 0.0):
-                raise ValueError("must be > 0")
+        except ValueError as error:
+            _fail(f"--sigma = {sigma}: {error}")
+        if not (math.isfinite(noise) and noise > 0.0):
+            _fail(f"--sigma = {sigma}: must be a force > 0 (e.g. '20 kN')")
+    try:
         data = read_measurements(measurements) if measurements is not None else None
     except (OSError, ValueError) as error:
-        _fail(f"--sigma = {sigma}: {error}" if sigma is not None and noise is None or
-              (noise is not None and not noise > 0) else f"--measurements = {measurements}: {error}")
+        _fail(f"--measurements = {measurements}: {error}")
     try:
         analysis = analyse(the_case, measurements=data, sigma=noise)
     except ValueError as error:

@@ -74,3 +74,12 @@ def test_bad_measurements_file(tmp_path):
     result = runner.invoke(app, ["torque-drag", str(_case_file(tmp_path, _WELL)), "--measurements", str(bad)],
                            env=_ENV)
     assert result.exit_code == 2 and "operation = 'jarring'" in result.output
+
+
+@pytest.mark.parametrize("sigma", ["-5 kN", "5 m"])
+def test_bad_sigma(tmp_path, sigma):
+    measured = tmp_path / "m.csv"
+    measured.write_text("bit_depth [m],operation,hook_load [kN]\n800,trip_out,560\n")
+    result = runner.invoke(app, ["torque-drag", str(_case_file(tmp_path, _WELL)), "--measurements", str(measured),
+                                 "--sigma", sigma], env=_ENV)
+    assert result.exit_code == 2 and "--sigma" in result.output and "Traceback" not in result.output
