@@ -1587,8 +1587,8 @@ def torque_drag_command(
     console = _console()
     console.print(table)
     well = payload["well"]
-    console.print(escape(f"Well: {length(well['depth']):,.1f} {length.label} MD, {length(well['true_vertical_depth']):,.1f}"
-                         f" {length.label} TVD, {well['stations']} stations; friction factors cased "
+    console.print(escape(f"Well: {length(well['depth']):,.1f} {length.label} MD, "
+                         f"{length(well['true_vertical_depth']):,.1f} {length.label} TVD, {well['stations']} stations; friction factors cased "
                          f"{well['cased_hole_friction']:g}, open hole {well['open_hole_friction']:g}; lock-up when "
                          "sliding: " + ("none" if payload["lockup_depth"] is None else
                                          f"bit at {length(payload['lockup_depth']):,.0f} {length.label}")),

@@ -40,8 +40,8 @@ import numpy as np
 from drillstring.units import FORCE, LENGTH, to_si
 from drillstring.well.torque_drag import OPERATIONS, case_trajectory, string_in_well, torque_drag
 
-__all__ = ["FrictionPosterior", "HookLoadMeasurements", "broomstick", "calibrate", "posterior_bands", "predicted_hook_loads",
-           "read_measurements", "torque_drag_draws"]
+__all__ = ["FrictionPosterior", "HookLoadMeasurements", "broomstick", "calibrate", "posterior_bands",
+           "posterior_from_predictions", "predicted_hook_loads", "read_measurements", "torque_drag_draws"]
 
 
 @dataclass(frozen=True)
@@ -152,7 +152,8 @@ class FrictionPosterior:
         grid = self.cased if which == "cased" else self.open_hole
         cdf = np.cumsum(self.marginal(which))
         tail = (1.0 - level) / 2.0
-        return float(grid[np.searchsorted(cdf, tail)]), float(grid[min(np.searchsorted(cdf, 1.0 - tail), len(grid) - 1)])
+        upper = min(int(np.searchsorted(cdf, 1.0 - tail)), len(grid) - 1)
+        return float(grid[np.searchsorted(cdf, tail)]), float(grid[upper])
 
     def in_region(self, i: int, j: int, level: float) -> bool:
         """Whether grid point (i, j) lies in the highest-posterior-density region of probability ``level``:

@@ -171,8 +171,8 @@ class Trajectory:
 
 def trajectory(measured_depth, inclination, azimuth) -> Trajectory:
     """The minimum-curvature :class:`Trajectory` of a survey [m, rad, rad] (assumed valid: increasing
-    depths from 0, inclinations in [0, pi], finite values; :mod:`drillstring.well.checks` says why one is
-    not). Positions by eq. (3), summed with ``math.fsum``-grade care (cumulative sums of float64)."""
+    depths from 0, inclinations in [0, pi], finite values; :func:`drillstring.well.survey_input.survey_problems`
+    says why one is not). Positions by eq. (3), accumulated course by course."""
     md = np.asarray(measured_depth, dtype=float)
     inc = np.asarray(inclination, dtype=float)
     azi = np.remainder(np.asarray(azimuth, dtype=float), 2.0 * math.pi)

@@ -266,7 +266,8 @@ def torque_drag(string: StringInWell, operation: str, *, cased_friction, open_ho
     ``open_hole_friction`` may be arrays of G draws (broadcast together): every result then has a trailing
     axis of G. ``weight_on_bit`` [N] and ``torque_on_bit`` [N*m] act only on bottom (sliding: no TOB reaches
     the string, a motor turns the bit). ``bit_force`` [N, tension > 0] replaces -WOB as the effective axial
-    force at the bit (an overpull on a stuck bit; the closed-form checks). ``helical``: the helical critical compression per node [N]
+    force at the bit (an overpull on a stuck bit; the closed-form checks). ``helical``: the helical critical
+    compression per node [N]
     (:func:`drillstring.well.buckling.critical_loads`); beyond it the wall force gains r_c F^2/(4 E I)."""
     if operation not in OPERATIONS:
         raise ValueError(f"operation = {operation!r}: must be one of {', '.join(OPERATIONS)}")
