@@ -163,6 +163,8 @@ def test_stations_in_feet_and_in_metres_agree(reference_case, tmp_path):
      "well.survey[1] = [500, 0]: must be three values"),
     ([[100, 0, 0], [1700, 10, 0]],
      "well.survey[0] = [100, 0, 0]: measured depth 100 m: the survey must start at the surface"),
+    ([[0, 0, 0], [100, 0, 0], [200, 180, 0], [1700, 180, 0]],
+     "well.survey[2] = [200, 180, 0]: turns the hole through 180 deg from the previous row"),
     ([[0, 0, 0], [1500, 10, 0]],
      "well.survey[1] = [1500.0, 10.0, 0.0]: the last station (1500 m) is above the bit: the string is 1600 m"),
 ])

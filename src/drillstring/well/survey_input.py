@@ -153,4 +153,10 @@ def survey_problems(measured_depth: Sequence[float], inclination: Sequence[float
                 problems.append((i, f"measured depth {s:g} m is less than the previous row's ({previous:g} m): "
                                     "stations must be in order of increasing depth"))
         previous = s if previous is None or s > previous else previous
+    if not problems:  # a course turning the hole right round has no minimum-curvature arc
+        from drillstring.well.survey import dogleg
+
+        beta = dogleg(inclination[:-1], azimuth[:-1], inclination[1:], azimuth[1:])
+        for i in map(int, (beta > math.pi - 1e-9).nonzero()[0]):
+            problems.append((i + 1, "turns the hole through 180 deg from the previous row: the arc is undefined"))
     return problems
