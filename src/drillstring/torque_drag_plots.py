@@ -1,0 +1,161 @@
+"""Figures of the well and its torque and drag (no physics here): the vertical section and plan view, the
+loads along the string, the broomstick chart with measured hook loads and posterior bands (Matplotlib), and
+the interactive 3-D well path (plotly figure specs for :func:`drillstring.interactive.write_interactive_page`).
+
+Inputs are the SI results of :mod:`drillstring.well`; axes are in the unit system ``units`` (``"si"``,
+``"field"``; None: ``$DRILLSTRING_UNITS``, else si).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from drillstring.plots import _figure, _save
+from drillstring.units import display_unit
+
+__all__ = ["plot_broomstick", "plot_torque_drag", "plot_well_path", "well_figures"]
+
+_LABELS = {"trip_out": "trip out", "trip_in": "trip in", "rotating_off_bottom": "rotating off bottom",
+           "sliding": "sliding", "drilling": "drilling"}
+_COLORS = {"trip_out": "C3", "trip_in": "C0", "rotating_off_bottom": "C2", "sliding": "C4", "drilling": "C1"}
+
+
+def plot_well_path(trajectory, path: str | Path, *, casing_shoe: float = 0.0, title: str = "Well path",
+                   units: str | None = None) -> Path:
+    """Vertical section (along the direction of the bottom hole) and plan view of a trajectory."""
+    length = display_unit("length", units)
+    fig, (section, plan) = _figure(1, 2, (11.0, 5.0))
+    vs = trajectory.vertical_section() * length.scale
+    tvd = trajectory.true_vertical_depth * length.scale
+    section.plot(vs, tvd, "-", color="C0", lw=2)
+    section.plot(vs, tvd, ".", color="C0", ms=3, label="survey stations")
+    if casing_shoe > 0.0:
+        shoe = trajectory.locate([casing_shoe])[0][0]
+        direction = np.arctan2(trajectory.position[-1, 1], trajectory.position[-1, 0])
+        shoe_vs = (shoe[0] * np.cos(direction) + shoe[1] * np.sin(direction)) * length.scale
+        section.plot([shoe_vs], [shoe[2] * length.scale], "k^", ms=8, label="casing shoe")
+    section.invert_yaxis()
+    section.set_xlabel(f"vertical section [{length.label}]")
+    section.set_ylabel(f"true vertical depth [{length.label}]")
+    section.set_title("Vertical section")
+    section.set_aspect("equal", adjustable="datalim")
+    section.legend(loc="upper right")
+    plan.plot(trajectory.position[:, 1] * length.scale, trajectory.position[:, 0] * length.scale, "-", color="C0",
+              lw=2)
+    plan.plot([0], [0], "ko", ms=5, label="wellhead")
+    plan.set_xlabel(f"east [{length.label}]")
+    plan.set_ylabel(f"north [{length.label}]")
+    plan.set_title("Plan view")
+    plan.set_aspect("equal", adjustable="datalim")
+    plan.legend(loc="best")
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+def plot_torque_drag(results: Mapping[str, Any], path: str | Path, *, critical: Mapping[str, np.ndarray] | None = None,
+                     title: str = "Torque and drag", units: str | None = None) -> Path:
+    """Effective axial force, torque and side force per length against measured depth for each operation;
+    the critical compressions of sinusoidal and helical buckling drawn on the axial force."""
+    force, length, torque = (display_unit(k, units) for k in ("force", "length", "torque"))
+    fig, (axial, twist, side) = _figure(1, 3, (14.0, 6.0))
+    for op, r in results.items():
+        depth = r.measured_depth * length.scale
+        axial.plot(r.axial_force * force.scale, depth, color=_COLORS.get(op), label=_LABELS.get(op, op))
+        if np.any(r.torque):
+            twist.plot(r.torque * torque.scale, depth, color=_COLORS.get(op), label=_LABELS.get(op, op))
+        side.plot(r.side_force * force.scale / length.scale, depth, color=_COLORS.get(op), lw=1)
+    if critical is not None:
+        depth = next(iter(results.values())).measured_depth * length.scale
+        axial.plot(-critical["sinusoidal"] * force.scale, depth, "k--", lw=1, label="sinusoidal buckling")
+        axial.plot(-critical["helical"] * force.scale, depth, "k:", lw=1, label="helical buckling")
+        low = min(float(np.min(r.axial_force)) for r in results.values())
+        axial.set_xlim(left=min(low * 1.3, -0.05 * max(float(r.axial_force[0]) for r in results.values()))
+                       * force.scale)
+    axial.axvline(0.0, color="0.6", lw=0.8)
+    for ax, label in ((axial, f"effective axial force [{force.label}] (tension > 0)"),
+                      (twist, f"torque [{torque.label}]"), (side, f"side force [{force.label}/{length.label}]")):
+        ax.set_xlabel(label)
+        ax.invert_yaxis()
+        ax.set_ylabel(f"measured depth [{length.label}]")
+        ax.grid(alpha=0.3)
+    axial.legend(loc="upper left", fontsize=8)
+    twist.legend(loc="lower left", fontsize=8)
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+def plot_broomstick(bit_depths, chart: Mapping[str, np.ndarray], frictions: Sequence[float], path: str | Path, *,
+                    measurements=None, bands: Mapping[str, np.ndarray] | None = None,
+                    title: str = "Broomstick chart", units: str | None = None) -> Path:
+    """Hook load against bit depth for each operation and friction factor (:func:`drillstring.well.calibration.
+    broomstick`), the measured hook loads as points, and posterior bands (5-95 %) if given."""
+    force, length = display_unit("force", units), display_unit("length", units)
+    fig, (ax,) = _figure(1, 1, (8.0, 8.0))
+    depth = np.asarray(bit_depths) * length.scale
+    styles = ["-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1))]
+    for op, loads in chart.items():
+        for j, mu in enumerate(frictions):
+            label = f"{_LABELS.get(op, op)}, μ = {mu:g}" if op != "rotating_off_bottom" or j == 0 else None
+            if op == "rotating_off_bottom":
+                label = _LABELS[op] if j == 0 else None
+            ax.plot(loads[:, j] * force.scale, depth, color=_COLORS.get(op), ls=styles[j % len(styles)], lw=1.2,
+                    label=label)
+    if bands is not None:
+        for op in chart:
+            if op in bands:
+                q = bands[op] * force.scale
+                ax.fill_betweenx(depth, q[:, 0], q[:, -1], color=_COLORS.get(op), alpha=0.25,
+                                 label=f"{_LABELS.get(op, op)}: posterior 5-95 %")
+    if measurements is not None:
+        for op in sorted(set(measurements.operation)):
+            pick = np.array([o == op for o in measurements.operation])
+            ax.plot(measurements.hook_load[pick] * force.scale, measurements.bit_depth[pick] * length.scale, "o",
+                    mfc="white", color=_COLORS.get(op, "k"), ms=6, label=f"measured, {_LABELS.get(op, op)}")
+    ax.invert_yaxis()
+    ax.set_xlabel(f"hook load [{force.label}]")
+    ax.set_ylabel(f"bit measured depth [{length.label}]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower left", fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)
+
+
+def well_figures(trajectory, results: Mapping[str, Any] | None = None, *, units: str | None = None) -> list[dict]:
+    """Interactive figures (plotly specs): the 3-D well path (north, east, TVD down), coloured by the side
+    force of rotating off bottom when ``results`` are given, and the hook-load profiles."""
+    length, force = display_unit("length", units), display_unit("force", units)
+    s = np.linspace(0.0, trajectory.depth, max(200, len(trajectory.measured_depth) * 5))
+    points = trajectory.locate(s)[0] * length.scale
+    trace: dict[str, Any] = {"type": "scatter3d", "mode": "lines", "x": points[:, 1].tolist(),
+                             "y": points[:, 0].tolist(), "z": points[:, 2].tolist(), "name": "well path",
+                             "line": {"width": 6, "color": "#1f77b4"},
+                             "text": [f"MD {v:.1f} {length.label}" for v in s * length.scale]}
+    if results is not None and "rotating_off_bottom" in results:
+        r = results["rotating_off_bottom"]
+        side = np.interp(s, r.measured_depth, r.side_force, right=np.nan) * force.scale / length.scale
+        trace["line"] = {"width": 6, "color": np.nan_to_num(side).tolist(), "colorscale": "Viridis",
+                         "colorbar": {"title": {"text": f"side force [{force.label}/{length.label}]"}}}
+    stations = trajectory.position * length.scale
+    figures = [{"title": "Well path (3-D)",
+                "caption": "Minimum-curvature path; drag to rotate. Colour: side force rotating off bottom.",
+                "data": [trace, {"type": "scatter3d", "mode": "markers", "x": stations[:, 1].tolist(),
+                                 "y": stations[:, 0].tolist(), "z": stations[:, 2].tolist(),
+                                 "marker": {"size": 2, "color": "black"}, "name": "survey stations"}],
+                "layout": {"title": {"text": "Well path"}, "height": 600, "scene": {
+                    "xaxis": {"title": {"text": f"east [{length.label}]"}},
+                    "yaxis": {"title": {"text": f"north [{length.label}]"}},
+                    "zaxis": {"title": {"text": f"TVD [{length.label}]"}, "autorange": "reversed"},
+                    "aspectmode": "data"}}}]
+    if results:
+        data = [{"type": "scatter", "mode": "lines", "name": _LABELS.get(op, op),
+                 "x": (r.axial_force * force.scale).tolist(), "y": (r.measured_depth * length.scale).tolist()}
+                for op, r in results.items()]
+        figures.append({"title": "Axial force", "caption": "Effective axial force along the string.", "data": data,
+                        "layout": {"title": {"text": "Effective axial force"},
+                                   "xaxis": {"title": {"text": f"axial force [{force.label}]"}},
+                                   "yaxis": {"title": {"text": f"measured depth [{length.label}]"},
+                                             "autorange": "reversed"}}})
+    return figures

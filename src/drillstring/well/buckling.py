@@ -1,0 +1,110 @@
+"""Buckling of the string in inclined and curved holes: critical compressions along the string, where each
+operation exceeds them, and the lock-up depth when sliding.
+
+The wall holds a compressed pipe in the hole with the lateral load per length ``n`` of the soft-string model
+(:mod:`drillstring.well.torque_drag`, eq. (1)), which for a compression C = -F is
+
+    n(C) = | -C kappa + w (z - (z.t) t) |.
+
+The critical compressions are those of a pipe of bending stiffness EI in a hole of radial clearance r_c held
+by that load:
+
+    sinusoidal:   C_s^2 = 4 E I n(C_s) / r_c      (Dawson & Paslay 1984, SPE 11167),                 (1)
+    helical:      C_h^2 = 8 E I n(C_h) / r_c      (Chen, Lin & Cheatham 1990, SPE 19176: 2 sqrt 2).     (2)
+
+In a straight inclined hole n = w sin I and (1)-(2) are the classical ``C_s = 2 sqrt(E I w sin I / r_c)`` and
+``C_h = 2 sqrt(2) sqrt(E I w sin I / r_c)``. In a curved hole the compression itself presses the pipe against
+the outer wall of the bend, ``n = w sin I + C kappa`` in a build section, and (1) becomes the curved-hole
+criterion of Wu & Juvkam-Wold (1995, J. Energy Resour. Technol. 117, 214-218; the same construction as
+He & Kyllingstad 1995, SPE Drilling & Completion 10(1), 10-15):
+
+    C_s = (2 E I kappa / r_c) [1 + sqrt(1 + r_c w sin I / (E I kappa^2))],
+
+much larger than in a straight hole; in a drop section the bend lifts the pipe off the low side and the
+critical load is smaller. (1)-(2) are solved at each node by bisection on the exact n(C) (vector geometry:
+build, drop, turn alike). In a vertical hole n = 0 and both are 0: any compression buckles a long vertical
+string (its length-dependent critical load is :mod:`drillstring.buckling`'s finite-element one).
+
+Lock-up when sliding: the string slides down only while the surface still holds it, hook load > 0; the
+lock-up depth is the shallowest bit depth at which the sliding hook load, with the helical wall force of
+Mitchell (1986) included, reaches 0 at the case's weight on bit (:func:`lockup_depth`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["buckled_intervals", "critical_loads", "lockup_depth"]
+
+#: Bisection steps of (1)-(2): the bracket shrinks 2^-80 times, below float precision.
+_BISECTIONS = 80
+
+
+def _node_geometry(string) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """a, b, c of n^2 = a F^2 + 2 b F + c at the nodes (from the element above; the top from element 0)."""
+    a = np.concatenate([string.curvature_sq[:1, 0], string.curvature_sq[:, 1]])
+    b = np.concatenate([string.coupling[:1, 0], string.coupling[:, 1]])
+    c = np.concatenate([string.lateral_sq[:1, 0], string.lateral_sq[:, 1]])
+    return a, b, c
+
+
+def _node_values(per_element: np.ndarray) -> np.ndarray:
+    return np.concatenate([per_element[:1], per_element])
+
+
+def critical_loads(string) -> dict[str, np.ndarray]:
+    """Sinusoidal and helical critical compressions [N] (> 0) at each node of ``string``, eqs. (1)-(2)."""
+    a, b, c = _node_geometry(string)
+    stiffness = _node_values(string.bending_stiffness)
+    clearance = _node_values(string.clearance)
+    out = {}
+    for name, factor in (("sinusoidal", 4.0), ("helical", 8.0)):
+        k = factor * stiffness / clearance
+        # n(C) <= |kappa| C + sqrt(c): C^2 <= k (|kappa| C + sqrt(c)) bounds the root
+        kappa = np.sqrt(a)
+        high = k * kappa / 2.0 + np.sqrt((k * kappa / 2.0) ** 2 + k * np.sqrt(c)) + 1e-12
+        low = np.zeros_like(high)
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (low + high)
+            n = np.sqrt(np.maximum(a * mid * mid - 2.0 * b * mid + c, 0.0))
+            above = mid * mid > k * n
+            high = np.where(above, mid, high)
+            low = np.where(above, low, mid)
+        out[name] = 0.5 * (low + high)
+    return out
+
+
+def buckled_intervals(measured_depth, axial_force, critical) -> list[tuple[float, float]]:
+    """Measured-depth intervals [m] where the compression -axial_force exceeds ``critical`` (node arrays),
+    as (top, bottom) pairs of node depths."""
+    md = np.asarray(measured_depth, float)
+    over = -np.asarray(axial_force, float) > np.asarray(critical, float)
+    intervals, start = [], None
+    for i, flag in enumerate(over):
+        if flag and start is None:
+            start = i
+        if not flag and start is not None:
+            intervals.append((float(md[start]), float(md[i - 1])))
+            start = None
+    if start is not None:
+        intervals.append((float(md[start]), float(md[-1])))
+    return intervals
+
+
+def lockup_depth(case, bit_depths, *, max_step: float = 10.0) -> float | None:
+    """Shallowest of ``bit_depths`` [m] at which sliding at the case's weight on bit locks up (hook load
+    <= 0 with the helical wall force); None if none does."""
+    from drillstring.well.torque_drag import case_trajectory, string_in_well, torque_drag
+
+    path = case_trajectory(case)
+    well = case.well
+    mu_c = 0.0 if well is None else well.cased_hole_friction
+    mu_o = 0.0 if well is None else well.open_hole_friction
+    for depth in sorted(bit_depths):
+        string = string_in_well(case, path, bit_depth=depth, max_step=max_step)
+        result = torque_drag(string, "sliding", cased_friction=mu_c, open_hole_friction=mu_o,
+                             weight_on_bit=case.operation.weight_on_bit,
+                             helical=critical_loads(string)["helical"])
+        if result.hook_load <= 0.0:
+            return float(depth)
+    return None
