@@ -476,13 +476,13 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
     torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
     the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
-    and ``blades``× (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
+    and ``blades`` × (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
 
     ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
     in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
     :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
-    line naming the argument) for a bad grid or a blade count outside [1, :data:`~drillstring.critical_speeds.
-    MAX_BLADES`], TypeError for a blade count that is not an integer."""
+    line naming the argument) for a bad grid or a blade count outside [1,
+    :data:`~drillstring.critical_speeds.MAX_BLADES`], TypeError for a blade count that is not an integer."""
     from drillstring.case import DIMENSIONS
     from drillstring.checks import integer
     from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, MAX_BLADES, case_campbell

@@ -292,7 +292,7 @@ def campbell_diagram(system: LinearSystem, speeds, orders=(1, DEFAULT_BLADES), *
 
 def case_campbell(case, speeds, blades: int = DEFAULT_BLADES) -> CampbellDiagram:
     """The Campbell diagram of a :class:`~drillstring.case.Case` prestressed at its weight-on-bit, over
-    ``speeds`` [rad/s], with the lines 1× and ``blades``× and the case's top speed marked."""
+    ``speeds`` [rad/s], with the lines 1× and ``blades`` × and the case's top speed marked."""
     from drillstring.modal import case_linear_system
     from drillstring.statics import case_static_state
 
