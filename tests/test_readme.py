@@ -46,3 +46,19 @@ def test_example_prints_what_the_readme_shows(tmp_path, index):
     done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == shown.split()
+
+
+def test_first_case_of_ones_own_loads_and_is_not_buckled(tmp_path):
+    """The README's "first case of your own" is a valid case file in field units whose three stabilizers keep the
+    bottom-hole assembly straight at its 25 klbf (the tutorial shows one stabilizer is not enough)."""
+    from drillstring.buckling import case_buckling_margin
+    from drillstring.case import load_case
+
+    (code,) = [code for _, code in _blocks("toml")]
+    path = tmp_path / "my_case.toml"
+    path.write_text(code, encoding="utf-8")
+    case = load_case(path)
+    assert len(case.stabilizers) == 3
+    assert case.operation.weight_on_bit == pytest.approx(25e3 * 4.4482216152605)
+    margin = case_buckling_margin(case)
+    assert not margin.buckled and margin.critical_weight_on_bit > case.operation.weight_on_bit
