@@ -62,3 +62,25 @@ def test_first_case_of_ones_own_loads_and_is_not_buckled(tmp_path):
     assert case.operation.weight_on_bit == pytest.approx(25e3 * 4.4482216152605)
     margin = case_buckling_margin(case)
     assert not margin.buckled and margin.critical_weight_on_bit > case.operation.weight_on_bit
+
+
+def _slug(heading: str) -> str:
+    """The anchor a Markdown renderer (and the docs site, MyST's GitHub-style slugs) gives a heading."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def test_relative_links_point_to_files_and_headings_that_exist():
+    """Every relative link of the README leads to a file of the repository and, with a #fragment into a
+    Markdown page, to one of its headings (the docs site checks its own pages' links when it is built)."""
+    text = README.read_text(encoding="utf-8")
+    links = re.findall(r"\]\(([^)\s]+)\)", text)
+    assert len(links) > 20
+    for link in links:
+        if re.match(r"[a-z]+://", link):
+            continue
+        target, _, fragment = link.partition("#")
+        path = README.parent / target
+        assert path.exists(), link
+        if fragment and path.suffix == ".md":
+            headings = re.findall(r"^#+ (.*)$", path.read_text(encoding="utf-8"), re.M)
+            assert fragment in {_slug(h) for h in headings}, link
