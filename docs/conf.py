@@ -53,6 +53,7 @@ autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_default_options = {"members": True, "show-inheritance": False}
 
+smartquotes = False  # help texts and code-like prose keep their "--" and quotes
 html_theme = "furo"
 html_title = "drillstring"
 html_static_path: list[str] = []
