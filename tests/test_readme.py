@@ -84,3 +84,13 @@ def test_relative_links_point_to_files_and_headings_that_exist():
         if fragment and path.suffix == ".md":
             headings = re.findall(r"^#+ (.*)$", path.read_text(encoding="utf-8"), re.M)
             assert fragment in {_slug(h) for h in headings}, link
+
+
+def test_the_guide_shows_the_readme_examples_unchanged():
+    """docs/guide/python-api.md repeats the README's two checked examples with their output: the same text,
+    so that what the tests above run is what the site shows."""
+    guide = (README.parent / "docs" / "guide" / "python-api.md").read_text(encoding="utf-8")
+    for language in ("python", "text"):
+        shown = [code for _, code in _blocks(language)][:2]
+        in_guide = re.findall(rf"```{language}\n(.*?)```", guide, re.S)[:2]
+        assert in_guide == shown
