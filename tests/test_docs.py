@@ -61,13 +61,19 @@ def test_a_site_with_sound_links_and_a_sound_notebook_builds(tmp_path):
     assert "42" in (tmp_path / "html" / "notebook.html").read_text(encoding="utf-8")  # executed, output shown
 
 
-@pytest.mark.parametrize("link", ["[gone](missing.md)", "[gone](#no-such-heading)", "[gone](index.md#no-such-heading)",
-                                  "[gone](missing.csv)"])
-def test_a_broken_internal_link_fails_the_build(tmp_path, link):
-    code, log = _run(tmp_path, GOOD_PAGE + "\n" + link + "\n")
+BROKEN = {"missing.md": "[a page]", "#no-such-heading": "[a heading here]",
+          "index.md#no-such-other-heading": "[a heading there]", "missing.csv": "[a file]"}
+
+
+def test_each_broken_internal_link_fails_the_build(tmp_path):
+    """One build (``--keep-going`` reports every warning) of a page with four broken links: each is named."""
+    links = "\n".join(f"{text}({target})" for target, text in BROKEN.items())
+    code, log = _run(tmp_path, GOOD_PAGE + "\n" + links + "\n")
     assert code != 0, log
-    target = link[link.index("(") + 1:-1].split("#")[-1]  # the missing page, file or heading
-    assert any("WARNING" in line and target in line for line in log.splitlines()), log
+    warnings = [line for line in log.splitlines() if "WARNING" in line]
+    for target in BROKEN:
+        named = target.split("#")[-1]  # the missing page, file or heading
+        assert any(named in line for line in warnings), (target, warnings)
 
 
 def test_a_notebook_cell_that_raises_fails_the_build(tmp_path):
