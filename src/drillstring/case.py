@@ -1253,6 +1253,59 @@ def _read_case_file(path: Path, label: str) -> bytes:
     return raw
 
 
+#: Longest key of a case file, dotted parts together [characters], and most parts of a dotted key (a case
+#: needs 3: ``[uncertainty.correlation]``; tomllib's time grows with the square of the parts: 20,000 took 25 s).
+MAX_KEY_LENGTH, MAX_KEY_PARTS = 400, MAX_CASE_DEPTH
+
+
+def _toml_key_problem(text: str) -> str | None:
+    """Why the keys of the TOML ``text`` are too long or too deeply dotted for a case, or None; a linear scan
+    before ``tomllib`` parses it (the parser takes minutes, or runs out of memory, on a key of 100,000 parts).
+
+    Each line's key (a ``[table]``/``[[array]]`` header, or what comes before ``=``) is scanned outside quotes
+    and outside multi-line strings; a ``"."`` inside a quoted key is not a separator."""
+    delimiter = None  # the closing quotes of the multi-line string the scan is in, if any
+    for number, line in enumerate(text.splitlines(), start=1):
+        if delimiter is not None:  # inside a multi-line string: find its end, keys start on a later line
+            if line.count(delimiter) % 2 == 1:
+                delimiter = None
+            continue
+        stripped = line.lstrip()
+        if not stripped or stripped[0] == "#":
+            continue
+        header = stripped[0] == "["
+        parts, length, quote = 1, 0, None
+        i = (2 if stripped.startswith("[[") else 1) if header else 0
+        while i < len(stripped):
+            char = stripped[i]
+            if quote is not None:
+                if char == "\\" and quote == '"':
+                    i += 1
+                elif char == quote:
+                    quote = None
+            elif char in "\"'":
+                quote = char
+            elif char == "." :
+                parts += 1
+            elif (char == "]" and header) or (char == "=" and not header):
+                break
+            elif not (char.isascii() and (char.isalnum() or char in "_- \t")):
+                break  # not a key (a value line of a multi-line array): nothing to check
+            i += 1
+            length += 1
+            if length > MAX_KEY_LENGTH:
+                return f"line {number}: a key longer than {MAX_KEY_LENGTH} characters"
+            if parts > MAX_KEY_PARTS:
+                return f"line {number}: a dotted key of more than {MAX_KEY_PARTS} parts"
+        if not header:
+            value = stripped[i + 1:]
+            for opening in ('"""', "'''"):
+                if value.count(opening) % 2 == 1:
+                    delimiter = opening
+                    break
+    return None
+
+
 def load_case(source: str | Path) -> Case:
     """Load a case: a built-in name (see :func:`builtin_cases`, e.g. ``"reference"``) or a path to a TOML file.
 
@@ -1276,9 +1329,14 @@ def load_case(source: str | Path) -> Case:
             )
         raw = resource.read_bytes()
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise CaseError(f"{label}: not UTF-8 text ({exc.reason} at byte {exc.start})", source=label) from None
+    problem = _toml_key_problem(text)
+    if problem:
+        raise CaseError(f"{label}: {problem}", source=label)
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{label}: TOML syntax error: {exc}", source=label) from None
     except RecursionError:

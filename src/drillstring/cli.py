@@ -120,11 +120,16 @@ CaseArg = Annotated[
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON (SI units) on stdout instead of tables.")]
 
 
-def _unit_system_option(value: str | None) -> str:
-    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2)."""
+def _unit_system_option(ctx: typer.Context, value: str | None) -> str:
+    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2),
+    except an unusable ``$DRILLSTRING_UNITS`` under ``--json`` (SI whatever the unit system): then a note on
+    stderr and ``si`` for any figure or report the command also writes."""
     try:
         return unit_system(value)
     except ValueError as error:
+        if value is None and ctx.params.get("as_json"):
+            typer.echo(f"note: {error}; ignored, --json output is SI", err=True)
+            return "si"
         raise typer.BadParameter(str(error)) from None
 
 
