@@ -517,7 +517,7 @@ class BitRock(_Base):
     )
 
     # -- law = "detournay" (Detournay & Defourny 1992; Richard, Germay & Detournay 2007) --------------------
-    blades: int = Field(4, ge=1, description="detournay: number of blades n [-]")
+    blades: int = Field(4, ge=1, le=100, description="detournay: number of blades n [-]")
     bit_radius: Length = Field(0.108, gt=0, description="detournay: bit radius a [m]")
     intrinsic_specific_energy: Pressure = Field(
         60e6, gt=0, description="detournay: intrinsic specific energy of the rock eps [Pa]")
@@ -647,7 +647,7 @@ class Simulation(_Base):
     output_step: Time = Field(0.01, gt=0, description="output sampling step [s]; <= t_end")
     rtol: Dimensionless = Field(1e-6, gt=0, lt=1)
     atol: Dimensionless = Field(1e-9, gt=0)
-    max_steps: int = Field(2_000_000, gt=0)
+    max_steps: int = Field(2_000_000, gt=0, le=10**12)
     min_step: Time = Field(1e-12, gt=0, description="smallest step before giving up [s]")
     method: Literal["dopri5", "bs32"] = "dopri5"
 
@@ -666,7 +666,7 @@ class Initial(_Base):
     spinning at the top speed, the bit-rock law switched on at t = 0. Both add a seeded lateral perturbation."""
 
     lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
-    seed: int = Field(0, ge=0)
+    seed: int = Field(0, ge=0, le=2**64 - 1)
     start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
     clearance: Length = Field(0.005, ge=0, le=1.0, description="ramp: bit height above the rock at t = 0 [m]")
     weight_ramp_time: Time = Field(
@@ -876,8 +876,11 @@ PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
     (("bit_rock", "regularization"), 1e-6, 1e3, "rad/s"),
     (("bit_rock", "stick_stiffening_limit"), 1.0, 1e6, ""),
     (("bit_rock", "bit_radius"), 1e-3, 10.0, "m"),
-    (("bit_rock", "intrinsic_specific_energy"), 1e3, 1e12, "Pa"),
-    (("bit_rock", "cutting_inclination"), 0.0, 10.0, ""),
+    # Detournay: rocks from chalk to granite have eps of 10-400 MPa and zeta of 0.4-1 (Detournay, Richard &
+    # Shepherd 2008); zeta -> 0 or eps -> 0 makes the depth of cut per turn (W - a sigma l)/(a zeta eps n)
+    # unbounded (a steady ROP of 4.7e9 m/h at zeta = 0).
+    (("bit_rock", "intrinsic_specific_energy"), 1e6, 1e12, "Pa"),
+    (("bit_rock", "cutting_inclination"), 0.1, 10.0, ""),
     (("bit_rock", "contact_stress"), 0.0, 1e12, "Pa"),
     (("bit_rock", "wear_flat_length"), 0.0, 10.0, "m"),
     (("bit_rock", "friction_coefficient"), 0.0, 10.0, ""),
@@ -887,11 +890,20 @@ PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
     (("contact", "shock_stiffness"), 0.0, 1e15, "N/m2"),
     (("contact", "friction_coefficient"), 0.0, 10.0, ""),
     (("contact", "speed_regularization"), 1e-6, 1e3, "rad/s"),
-    (("operation", "top_speed"), 0.0, 1e3, "rad/s"),
+    (("operation", "top_speed"), 1e-3, 1e3, "rad/s"),  # 0.01 rpm at least (1/Z² of the bit law grows as 1/speed²)
     (("operation", "weight_on_bit"), 0.0, 1e9, "N"),
     (("damping", "rigid_axial"), 0.0, 1e12, "N*s/m"),
     (("damping", "rigid_rotation"), 0.0, 1e12, "N*m*s/rad"),
     (("environment", "gravity"), 0.0, 100.0, "m/s2"),
+    (("sections", "*", "eccentricity_angle"), -1e4, 1e4, "rad"),
+    (("bow", "angle"), -1e4, 1e4, "rad"),
+    (("top_drive", "inertia"), 1e-3, 1e9, "kg*m2"),
+    (("top_drive", "proportional_gain"), 0.0, 1e12, "N*m*s/rad"),
+    (("top_drive", "integral_gain"), 0.0, 1e12, "N*m/rad"),
+    (("top_drive", "max_torque"), 1.0, 1e9, "N*m"),
+    (("top_drive", "ramp_time"), 0.0, 1e5, "s"),
+    (("top_drive", "filter_frequency"), 1e-6, 1e6, "rad/s"),
+    (("simulation", "t_end"), 1e-9, 1e7, "s"),
     (("simulation", "rtol"), 1e-14, 1.0, ""),
     (("simulation", "atol"), 1e-20, 1e3, ""),
     (("simulation", "min_step"), 1e-20, 1.0, "s"),
@@ -1078,6 +1090,10 @@ class Case(_Base):
                         f"must be less than the borehole diameter ({self.borehole.diameter:g} m)",
                     )
                 )
+        if self.bit_rock.law == "detournay" and self.bit_rock.bit_radius > self.borehole.diameter / 2.0:
+            problems.append((("bit_rock", "bit_radius"), self.bit_rock.bit_radius,
+                             f"must be at most the borehole radius ({self.borehole.diameter / 2.0:g} m): the bit "
+                             f"cuts the hole"))
         L = self.length
         for i, st in enumerate(self.stabilizers):
             if not 0.0 < st.position <= L:

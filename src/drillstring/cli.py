@@ -275,7 +275,10 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
     from drillstring import api
 
     the_case = _load(case)
-    state, margin = api.static(the_case)
+    try:
+        state, margin = api.static(the_case)
+    except ValueError as error:  # a model too large to solve (modal.DENSE_FALLBACK_MEMORY), as `modes` says
+        _fail(str(error))
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -751,6 +754,8 @@ def simulate(
             except SimulationError as error:
                 failure = error
                 ds = error.dataset
+    except ValueError as error:  # refused before the run (a model too large to build), as `modes` says
+        _fail(str(error))
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
