@@ -48,6 +48,18 @@ def _tolerance(name: str, value) -> float | None:
                                                    allowed="a number in (0, 1), e.g. 1e-6")
 
 
+def _weight_on_bit(case: Case, value) -> float:
+    """The ``weight_on_bit`` argument [N] overriding the case's, checked as the case's own (> 0, at most
+    1e9 N, less than the string's weight with gravity on): TypeError or ValueError naming the argument."""
+    from drillstring.checks import real_number
+
+    value = real_number("weight_on_bit", value, unit="N", low=0.0, low_open=True)
+    problem = case.weight_on_bit_problem(value)
+    if problem:
+        raise ValueError(f"weight_on_bit = {value!r} N: {problem}")
+    return value
+
+
 def _callable(name: str, value) -> None:
     if value is not None and not callable(value):
         raise TypeError(f"{name} = {value!r}: must be a callable or None")
@@ -71,7 +83,6 @@ def simulate(
     ``.dataset`` holds what was computed (or, with ``raise_on_failure=False``, that Dataset is
     returned with ``attrs["status"] == "failed"``).
     """
-    from drillstring.checks import real_number
     from drillstring.dynamics.rom import case_reduced_model
     from drillstring.dynamics.simulate import SimulationError, simulate_model
     from drillstring.results import run_dataset
@@ -81,7 +92,7 @@ def simulate(
     window = _window(case, t_end, output_step)
     rtol, atol = _tolerance("rtol", rtol), _tolerance("atol", atol)
     if weight_on_bit is not None:
-        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+        weight_on_bit = _weight_on_bit(case, weight_on_bit)
     _callable("progress", progress)
     model = case_reduced_model(case, weight_on_bit=weight_on_bit)
     extra = {
@@ -462,12 +473,11 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
     overrides the case's.
     """
-    from drillstring.checks import real_number
     from drillstring.dynamics.stability import case_stability
 
     case = as_case(case)
     if weight_on_bit is not None:
-        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+        weight_on_bit = _weight_on_bit(case, weight_on_bit)
     return case_stability(case, weight_on_bit=weight_on_bit)
 
 

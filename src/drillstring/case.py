@@ -382,6 +382,18 @@ class _Base(BaseModel):
             entries = _entries_from_validation_error(exc, type(self), data)
             raise CaseError(entries, source=f"<{type(self).__name__}>") from None
 
+    def model_copy(self, *, update: Mapping[str, Any] | None = None, deep: bool = False) -> Any:
+        """A copy; with ``update`` (field name -> new value), validated like a new model: every field rule and
+        cross-field rule applies to the new values and a bad one raises :class:`CaseError` naming it
+        (pydantic's own ``model_copy`` does not validate an update). ``deep`` is pydantic's."""
+        if not update:
+            return super().model_copy(deep=deep)
+        if not isinstance(update, Mapping):
+            raise TypeError(f"update = {update!r}: must be a mapping of field names to values")
+        data = {name: getattr(self, name) for name in type(self).model_fields}
+        data.update(update)
+        return type(self).model_validate(data)
+
     @classmethod
     def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Any:  # type: ignore[override]
         try:
@@ -1071,6 +1083,20 @@ class Case(_Base):
         breaks = mesh_breaks([s.length for s in self.sections], points)
         return sum(element_counts(breaks, self.mesh.max_element_length))
 
+    def weight_on_bit_problem(self, weight_on_bit: float) -> str | None:
+        """Why ``weight_on_bit`` [N] cannot be this case's (the rule of ``operation.weight_on_bit``, also
+        applied to the API's overrides), or None: at most its :data:`PHYSICAL_BOUNDS` ceiling, and, with
+        gravity on, less than the string's weight (the hook cannot push; with gravity off the string weighs
+        nothing and the hook pushes)."""
+        high = next(h for path, _, h, _ in PHYSICAL_BOUNDS if path == ("operation", "weight_on_bit"))
+        if not weight_on_bit <= high:
+            return f"must be within [0, {high:g}] N"
+        w = self.weight
+        if self.model.gravity and weight_on_bit >= w:
+            return (f"must be less than the string's weight: weight_on_bit {weight_on_bit / 1e3:.4g} kN"
+                    f" >= weight {w / 1e3:.6g} kN")
+        return None
+
     # -- cross-field validation --------------------------------------------------------------------------
 
     @model_validator(mode="after")
@@ -1115,18 +1141,9 @@ class Case(_Base):
 
         problems.extend(self._mesh_problems())
 
-        # With gravity off the string weighs nothing and the hook pushes; the rule only applies with gravity.
-        if self.model.gravity:
-            w, wob = self.weight, self.operation.weight_on_bit
-            if wob >= w:
-                problems.append(
-                    (
-                        ("operation", "weight_on_bit"),
-                        wob,
-                        f"must be less than the string's weight: weight_on_bit {wob / 1e3:.4g} kN"
-                        f" >= weight {w / 1e3:.6g} kN",
-                    )
-                )
+        wob_problem = self.weight_on_bit_problem(self.operation.weight_on_bit)
+        if wob_problem:
+            problems.append((("operation", "weight_on_bit"), self.operation.weight_on_bit, wob_problem))
         gaps = [(self.borehole.diameter - s.outer_diameter) / 2.0 for s in self.sections]
         i_min = min(range(len(gaps)), key=gaps.__getitem__)
         amp = self.initial.lateral_perturbation
