@@ -544,5 +544,8 @@ def test_store_without_the_per_realization_metrics_is_refused(small_case, tmp_pa
     layout = dict(store.group.attrs["layout"])
     del layout["growth_rate"]
     store.group.attrs["layout"] = layout
+    from drillstring.stochastic.store import metadata_checksum  # an old store, consistent with itself
+
+    store.group.attrs["metadata_checksum"] = metadata_checksum(dict(store.group.attrs))
     with pytest.raises(StoreError, match="older drillstring version .*no growth_rate"):
         mc.open_study_group(path)
