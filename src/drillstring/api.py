@@ -1,6 +1,7 @@
 """The Python API for notebooks: load a case, run one drilling simulation, a Monte Carlo study, a
 comparison of the two nonlinear models. The command line calls these functions (one set of defaults,
-one set of checks) and only parses and formats.
+one set of checks) and only parses and formats. Each public function runs its dense linear algebra
+single-threaded (:mod:`drillstring.blas_threads`), whatever the caller's BLAS settings.
 
 >>> import drillstring
 >>> ds = drillstring.simulate("reference", t_end=5.0)        # doctest: +SKIP
@@ -17,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
+from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case, load_case
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
 from drillstring.units import display_unit, unit_system
@@ -65,6 +67,7 @@ def _callable(name: str, value) -> None:
         raise TypeError(f"{name} = {value!r}: must be a callable or None")
 
 
+@single_threaded_blas()
 def simulate(
     case: Case | str | Path = "reference",
     *,
@@ -252,6 +255,7 @@ def _engine(workers, scheduler, progress, note, worker_timeout):
                   worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
 
 
+@single_threaded_blas()
 def monte_carlo_study(
     case: Case | str | Path = "reference",
     *,
@@ -427,6 +431,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     return {**paths, **figures}
 
 
+@single_threaded_blas()
 def static(case: Case | str | Path = "reference"):
     """The prestressed static state of ``case`` and its lateral buckling margin.
 
@@ -446,6 +451,7 @@ def static(case: Case | str | Path = "reference"):
 MAX_MODES = 1000
 
 
+@single_threaded_blas()
 def modes(case: Case | str | Path = "reference", *, count: int = 10):
     """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
     of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
@@ -463,6 +469,7 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
 
 
+@single_threaded_blas()
 def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
     """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
     about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
@@ -481,6 +488,7 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     return case_stability(case, weight_on_bit=weight_on_bit)
 
 
+@single_threaded_blas()
 def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
              default_unit: str = ""):
     """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
@@ -506,6 +514,7 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     return case_campbell(the_case, speeds, blades)
 
 
+@single_threaded_blas()
 def stability_boundary(case: Case | str | Path = "reference") -> dict:
     """The stability boundary of steady drilling along the weight-on-bit at the case's top speed (SI):
     ``weight_on_bit`` [N] where the leading growth rate crosses 0 nearest the case's weight-on-bit (None
@@ -517,6 +526,7 @@ def stability_boundary(case: Case | str | Path = "reference") -> dict:
     return weight_on_bit_boundary(as_case(case))
 
 
+@single_threaded_blas()
 def study(
     case: Case | str | Path = "reference",
     *,
@@ -589,6 +599,7 @@ def _difference_numbers(full, reduced, steady) -> dict[str, float | None]:
     }
 
 
+@single_threaded_blas()
 def compare(
     case: Case | str | Path = "reference",
     *,
@@ -738,6 +749,7 @@ def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, 
     return settings
 
 
+@single_threaded_blas()
 def operating_map(
     case: Case | str | Path = "reference",
     *,
@@ -906,6 +918,7 @@ class SensitivityOutcome:
     note: str | None = None
 
 
+@single_threaded_blas()
 def sensitivity(
     case: Case | str | Path = "reference",
     *,
