@@ -490,7 +490,7 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
 
 @single_threaded_blas()
 def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
-             default_unit: str = ""):
+             default_unit: str = "", progress: Callable[[int, int], None] | None = None):
     """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
     torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
     the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
@@ -499,19 +499,29 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
     in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
     :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
-    line naming the argument) for a bad grid or a blade count outside [1, :data:`~drillstring.critical_speeds.
-    MAX_BLADES`], TypeError for a blade count that is not an integer."""
+    line naming the argument) for a bad grid, more than :data:`~drillstring.critical_speeds.MAX_CAMPBELL_SPEEDS`
+    speeds or a blade count outside [1, :data:`~drillstring.critical_speeds.MAX_BLADES`] (before any work),
+    TypeError for a blade count that is not an integer. ``progress(done, total)`` is called after each exact
+    solution of the lateral whirl (``total``: an upper bound; a diagram of 3,000 speeds needs about 20)."""
     from drillstring.case import DIMENSIONS
     from drillstring.checks import integer
-    from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, MAX_BLADES, case_campbell
+    from drillstring.critical_speeds import (
+        DEFAULT_BLADES,
+        DEFAULT_CAMPBELL_TOP_SPEED,
+        MAX_BLADES,
+        case_campbell,
+        check_speed_count,
+    )
     from drillstring.stochastic.operating_map import parse_axis
 
     the_case = as_case(case)
     blades = integer("blades", DEFAULT_BLADES if blades is None else blades, low=1, high=MAX_BLADES)
+    _callable("progress", progress)
     dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
     speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
                         name="top_speed", default_unit=default_unit)
-    return case_campbell(the_case, speeds, blades)
+    check_speed_count(len(speeds), name=f"top_speed = {top_speed!r}")
+    return case_campbell(the_case, speeds, blades, progress=progress)
 
 
 @single_threaded_blas()

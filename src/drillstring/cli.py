@@ -417,8 +417,15 @@ def campbell(
         _check_output("--plot", plot)
     from drillstring import api
 
+    columns = (TextColumn("Campbell diagram: lateral whirl solved exactly at {task.completed} speeds, "
+                          "interpolated between them"), TimeElapsedColumn())
     try:
-        diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm")
+        with Progress(*columns, console=_err_console(), transient=True) as bar:
+            task = bar.add_task("campbell", total=None)
+            diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm",
+                                   progress=lambda done, total: bar.update(task, completed=done))
+    except KeyboardInterrupt:
+        _fail("interrupted", EXIT_INTERRUPTED)
     except ValueError as error:
         _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("blades = ", "--blades = "))
     payload = diagram.to_dict()
