@@ -370,8 +370,8 @@ def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_
     (steps ``first_step·start``, × 1.5 each), the side where the sign should change first — downwards when
     ``growth(start) > 0`` (the growth rate of steady drilling rises with the weight-on-bit) —, then the
     root is found by Brent's method to ``xtol``. ``growth`` may raise ValueError (no steady state there):
-    a step that lands there is halved back to the edge of the defined range (within ``xtol``), which ends
-    the search on that side. None when no sign change is found on either side."""
+    past a step that lands there, the edge of the defined range is found by bisection (within
+    1e-4·``start``), every defined piece checked for a sign change, and the search ends on that side. None when no sign change is found on either side."""
     from scipy.optimize import brentq
 
     def safe(x: float) -> float | None:
@@ -387,6 +387,7 @@ def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_
     if g0 == 0.0:
         return float(start)
     expected = -1.0 if g0 > 0.0 else 1.0
+    edge_tolerance = max(xtol, 1e-4 * abs(start))  # how close to the edge of the defined range a side ends
     # per side: [last defined x, its growth rate, next step, still searching]
     sides = {d: [float(start), g0, first_step * abs(start), True] for d in (expected, -expected)}
     while any(side[3] for side in sides.values()):
@@ -398,18 +399,25 @@ def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_
             if not lower < far < upper:
                 far = lower if direction < 0 else upper
             g_far = safe(far)
-            edge = g_far is None
-            while g_far is None and abs(far - near) > xtol:  # back to the edge of the defined range
-                far = 0.5 * (near + far)
-                g_far = safe(far)
-            if g_far is None:
-                side[3] = False
-                continue
+            if g_far is None:  # past the edge of the defined range: bisect towards it, checking each piece
+                while abs(far - near) > edge_tolerance:
+                    middle = 0.5 * (near + far)
+                    g_middle = safe(middle)
+                    if g_middle is None:
+                        far = middle
+                        continue
+                    if g_middle == 0.0 or (g_middle > 0.0) != (g_near > 0.0):
+                        far, g_far = middle, g_middle
+                        break
+                    near, g_near = middle, g_middle
+                if g_far is None:
+                    side[3] = False  # the edge is reached without a sign change
+                    continue
             if g_far == 0.0:
                 return float(far)
             if (g_far > 0.0) != (g_near > 0.0):
                 return float(brentq(lambda x: growth(x), min(near, far), max(near, far), xtol=xtol))
-            side[:] = [far, g_far, step * 1.5, not edge and far not in (lower, upper)]
+            side[:] = [far, g_far, step * 1.5, far not in (lower, upper)]
     return None
 
 
