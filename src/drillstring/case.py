@@ -33,6 +33,7 @@ of numbers shared with the finite-element model: mesh layout, mode-family sizes,
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import stat
 import tomllib
@@ -383,11 +384,45 @@ class _Base(BaseModel):
             raise CaseError(entries, source=f"<{type(self).__name__}>") from None
 
     def model_copy(self, *, update: Mapping[str, Any] | None = None, deep: bool = False) -> Any:
-        """A copy; with ``update`` (field name -> new value), validated like a new model: every field rule and
-        cross-field rule applies to the new values and a bad one raises :class:`CaseError` naming it
-        (pydantic's own ``model_copy`` does not validate an update). ``deep`` is pydantic's."""
+        """pydantic's copy, ``update`` (field name -> new value) checked for its *kind*: an unknown field, or a
+        value that is not of the field's kind (``{"simulation": 5}``: a number where a table is expected),
+        raises :class:`CaseError` naming the field; a mapping given for a table is validated into it. The
+        *values* are not validated: the model copies values already checked, and tests build deliberately
+        extreme models this way. :meth:`copy_with` is the validated path (every rule, cross-field too)."""
         if not update:
             return super().model_copy(deep=deep)
+        if not isinstance(update, Mapping):
+            raise TypeError(f"update = {update!r}: must be a mapping of field names to values")
+        fields = type(self).model_fields
+        checked = {}
+        problems: list[_Entry] = []
+        for name, value in update.items():
+            if name not in fields:
+                problems.append(((name,), _fmt_value(value), f"unknown key; allowed keys here: {', '.join(fields)}"))
+                continue
+            kind = _unwrap(fields[name].annotation)
+            if value is None:
+                if type(None) not in typing.get_args(fields[name].annotation):
+                    problems.append(((name,), "None", "required: cannot be None"))
+            elif isinstance(kind, type) and issubclass(kind, BaseModel):
+                if isinstance(value, Mapping):
+                    value = kind.model_validate(dict(value))
+                elif not isinstance(value, kind):
+                    problems.append(((name,), _fmt_value(value), f"must be a {kind.__name__} (or a table of its "
+                                                                 f"keys), not {type(value).__name__}"))
+            elif kind is float and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+                problems.append(((name,), _fmt_value(value), f"must be a number, not {type(value).__name__}"))
+            elif typing.get_origin(kind) in (list, dict) and not isinstance(value, typing.get_origin(kind)):
+                problems.append(((name,), _fmt_value(value), f"must be a {typing.get_origin(kind).__name__}, not "
+                                                             f"{type(value).__name__}"))
+            checked[name] = value
+        if problems:
+            raise CaseError(problems, source=f"<{type(self).__name__}.model_copy>")
+        return super().model_copy(update=checked, deep=deep)
+
+    def copy_with(self, update: Mapping[str, Any]) -> Any:
+        """A copy with ``update`` (field name -> new value) validated like a new model: every field rule and
+        cross-field rule applies, and a bad value raises :class:`CaseError` naming it."""
         if not isinstance(update, Mapping):
             raise TypeError(f"update = {update!r}: must be a mapping of field names to values")
         data = {name: getattr(self, name) for name in type(self).model_fields}
