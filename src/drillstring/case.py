@@ -217,6 +217,8 @@ def _fmt_value(value: Any) -> str:
 
 
 def _fmt_limit(value: Any) -> str:
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**6:
+        return str(value)  # an integer limit exactly (a seed's 2**64 - 1, not 1.84467e+19)
     return f"{value:g}" if isinstance(value, (int, float)) and not isinstance(value, bool) else repr(value)
 
 
