@@ -14,6 +14,12 @@ customary and imperial units with every SI prefix), so any unit of the right dim
 
 Writing rules: units are case-sensitive (``mm`` is not ``Mm``); ``*``, ``·``, ``.`` and a space denote a product;
 ``^`` or ``**`` a power, and a digit right after a unit's name is its power (``m2``, ``kg/m3``, ``m/s2``).
+One number, then one unit: pint evaluates a unit as an arithmetic expression, so the unit is tokenised
+first (:func:`check_unit_text`) and a number inside it (a digit group: ``"1 200 m"`` would read 200 m), a
+comma (a decimal comma: ``"22,5 klbf"`` would read 5 klbf times 22), a power above 4, a power of a power
+(``"kN*9**9**9"``: pint would compute 9**387420489), more than 8 unit names, parentheses deeper than 2, a
+unit over 40 characters or a value over 80 are refused before pint sees them. A value that overflows or
+underflows in SI (``"1e308 kg*km2"``), or an integer beyond a float (``10**400``), is refused too.
 
 Angles are kept apart from plain numbers: pint treats the radian as dimensionless, but a unit is accepted here
 only when its power of angle matches the field's (``"N*m*s/rad"`` for a rotational damping, not ``"N*m*s"``;
