@@ -518,7 +518,8 @@ def test_correlated_normal_draws(small_case):
 
 
 @pytest.mark.parametrize("laws, message", [
-    ((("operation.top_speed", "normal 10 5 rpm"),), r"probability 0\.0228 outside .*at most 0\.001"),
+    # below the top speed's floor, 1e-3 rad/s (0.0095 rpm): P = Φ((0.0095 - 10)/5) = 0.0229
+    ((("operation.top_speed", "normal 10 5 rpm"),), r"probability 0\.0229 outside .*at most 0\.001"),
     ((("operation.top_sped", "normal 100 5 rpm"),), "did you mean 'top_speed'"),
     ((("fluid.inlet_velocity", "uniform 1.8 1.2 m/s"),), "fluid.inlet_velocity"),
     ((("weight_on_hook", "normal 1063 300 kN"),), r"^sigma = 300000 N: .* at most 32\.\d+ kN"),
