@@ -270,3 +270,17 @@ def test_boundary_found_from_far_above_it(reference_case):
 
 def test_reference_case_still_loads():
     assert load_case("reference").operation.weight_on_bit == 1e5
+
+
+@pytest.mark.parametrize(("text", "dimension", "si"), [
+    ("60 1/min", units.ANGULAR_SPEED, 2.0 * 3.141592653589793),  # a frequency: revolutions per minute
+    ("2 °", units.ANGLE, 2.0 * 3.141592653589793 / 180.0),
+    ("3 kg*m²", units.MOMENT_OF_INERTIA, 3.0),
+    ("1 m^-1*m**2", units.LENGTH, 1.0),
+    ("5.672e-8 m/(N*s)", units.PENETRATION_PER_FORCE, 5.672e-8),
+    ("2 µm", units.LENGTH, 2e-6),
+    ("1e-3 kN*m*s/rad", units.ROTATIONAL_DAMPING, 1.0),
+])
+def test_units_a_person_writes_still_read(text, dimension, si):
+    """The tokeniser refuses expressions, not units: every unit form of the docs still reads."""
+    assert units.to_si(text, dimension) == pytest.approx(si, rel=1e-12)

@@ -520,7 +520,7 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
     speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
                         name="top_speed", default_unit=default_unit)
-    check_speed_count(len(speeds), name=f"top_speed = {top_speed!r}")
+    check_speed_count(len(speeds), name=f"top_speed = {top_speed!r}" if isinstance(top_speed, str) else "top_speed")
     return case_campbell(the_case, speeds, blades, progress=progress)
 
 

@@ -199,7 +199,7 @@ MAX_UNIT_NAMES, MAX_UNIT_POWER = 8, 4
 #: Deepest parentheses in a unit.
 MAX_UNIT_PARENTHESES = 2
 
-_UNIT_TOKEN = re.compile(r"\s*(?:(?P<name>[^\W\d]+)|(?P<power>\*\*)|(?P<op>[*/()])|(?P<number>\d+(?:\.\d+)?))")
+_UNIT_TOKEN = re.compile(r"\s*(?:(?P<name>[^\W\d]+|°)|(?P<power>\*\*)|(?P<op>[*/()])|(?P<number>\d+(?:\.\d+)?))")
 
 
 def check_unit_text(unit: str) -> None:
