@@ -13,7 +13,8 @@ sensitivity design) is a :class:`TaskStore` with its own arrays; the machinery i
 - the *fingerprint* (a hash of the case and the settings) must match: a store is resumed only by the
   run that created it; the *metadata checksum* (:func:`metadata_checksum`, a hash of every attribute
   fixed at creation: case, settings, the random parameters' laws, means and standard deviations) is
-  checked whenever the store is opened, by readers too: edited metadata is refused (:class:`StoreError`);
+  checked whenever the store is opened, by readers too: edited metadata is refused (:class:`StoreError`;
+  a store written before it had none and is read as before);
 - every chunk is checked when a writer opens the store (:meth:`TaskStore.verify`; chunks carry a
   checksum, ``zstd`` with ``checksum=True``): a chunk that is missing where a finished row's data should
   be, or that cannot be decoded, is named in :attr:`TaskStore.repairs` and its rows are set back to
@@ -250,8 +251,6 @@ class TaskStore:
             "sessions": [],
             **(attrs or {}),
         }
-        # Through JSON as Zarr stores it (tuples become lists), so that the check on opening sees the same.
-        header["metadata_checksum"] = metadata_checksum(json.loads(json.dumps(header, default=str)))
         try:
             with _named(self.path):
                 self._create(temporary, header, layout, sizes)
@@ -267,6 +266,9 @@ class TaskStore:
     def _create(path: Path, header: dict, layout: dict[str, ArraySpec], sizes: dict[str, int]) -> None:
         g = zarr.open_group(str(path), mode="w")
         g.attrs.update(header)
+        # The checksum of the attributes as they read back from disk (JSON: tuples become lists), as the
+        # check on opening sees them.
+        g.attrs["metadata_checksum"] = metadata_checksum(dict(zarr.open_group(str(path), mode="r").attrs))
         for name, spec in layout.items():
             shape = tuple(int(sizes[d]) for d in spec.dims)
             if spec.data is not None:
