@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import time
+import tomllib
 from importlib import resources
 
 import pytest
@@ -130,7 +131,7 @@ def test_deeply_dotted_key_refused_before_parsing(tmp_path, parts):
     start = time.perf_counter()
     line = _refused("static", str(path))
     assert time.perf_counter() - start < 1.0
-    assert f"a dotted key of more than 16 parts" in line and "line " in line, line
+    assert "a dotted key of more than 16 parts" in line and "line " in line, line
 
 
 def test_long_key_and_dotted_header_refused(tmp_path):
@@ -167,7 +168,7 @@ def test_detournay_parameters_and_bit_radius_refused(tmp_path):
 def test_tool_joints_and_bodies_wider_than_the_hole_refused():
     """0.5 m tool joints in a 0.3 m hole doubled the string's weight, silently."""
     text = resources.files("drillstring").joinpath("cases", "reference_components.toml").read_text()
-    data = __import__("tomllib").loads(text)
+    data = tomllib.loads(text)
     from drillstring.case import case_from_dict
 
     pipe = next(i for i, c in enumerate(data["components"]) if c["type"] == "drill_pipe")
@@ -175,7 +176,7 @@ def test_tool_joints_and_bodies_wider_than_the_hole_refused():
     with pytest.raises(CaseError, match=rf"components\[{pipe}\]\.tool_joint\.outer_diameter = 0\.5: must be "
                                         r"less than the borehole diameter"):
         case_from_dict(data)
-    data = __import__("tomllib").loads(text)
+    data = tomllib.loads(text)
     data["components"][-1]["outer_diameter"] = "0.4 m"
     with pytest.raises(CaseError, match=r"outer_diameter = 0\.4: must be less than the borehole diameter"):
         case_from_dict(data)
