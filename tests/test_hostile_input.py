@@ -285,3 +285,20 @@ def test_reference_case_still_loads():
 def test_units_a_person_writes_still_read(text, dimension, si):
     """The tokeniser refuses expressions, not units: every unit form of the docs still reads."""
     assert units.to_si(text, dimension) == pytest.approx(si, rel=1e-12)
+
+
+@pytest.mark.parametrize(("laws", "fragment"), [
+    ({"sections[1].outer_diameter": "uniform 0.2 0.31 m"},
+     "the case refuses the law's 0.999999 quantile, 0.31 m (must be less than the borehole diameter (0.3 m))"),
+    ({"initial.lateral_perturbation": "uniform 0 0.1 m"}, "must be less than the smallest radial gap"),
+])
+def test_laws_the_case_refuses_at_their_extremes(reference_case, laws, fragment):
+    """A law within its field's own range whose draws the case's cross-field rules refuse (a collar as wide as
+    the hole) is refused at declaration, not realization after realization."""
+    from drillstring.stochastic.parameters import ParameterError
+    from drillstring.stochastic.uncertainty import uncertainty
+
+    with pytest.raises(ParameterError) as info:
+        uncertainty(reference_case, laws)
+    assert fragment in str(info.value) and "\n" not in str(info.value)
+    assert uncertainty(reference_case, {"sections[1].outer_diameter": "uniform 0.2 0.25 m"}).size == 1
