@@ -46,9 +46,12 @@ mean ``M`` and standard deviation ``S``. A mean and a standard deviation *alone*
 (``maxent min=0 mean=M std=S``) give another law, the normal truncated to ``[0, ∞)`` (which exists only for
 ``S < M``).
 
-A law must respect the parameter's range (:class:`~drillstring.stochastic.parameters.Bounds`): a law whose
-probability outside the range exceeds :data:`OUT_OF_RANGE_TOLERANCE` is refused (e.g. a normal top speed
-whose standard deviation is comparable with its mean); use a law on a bounded or positive support instead.
+A law must respect the parameter's range (:class:`~drillstring.stochastic.parameters.Bounds`: the field's own
+range within its plausible range, ``drillstring.case.PHYSICAL_BOUNDS``): a law whose probability outside the
+range exceeds :data:`OUT_OF_RANGE_TOLERANCE` is refused (e.g. a normal top speed whose standard deviation is
+comparable with its mean); use a law on a bounded or positive support instead. The case itself must accept
+the law's quantiles at that tolerance (its cross-field rules: a collar diameter below the borehole's), all
+checked when the law is declared, before any realization.
 Integer settings cannot carry a continuous law.
 
 Joint laws
