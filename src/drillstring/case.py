@@ -1290,7 +1290,19 @@ def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
     try:
         return Case.model_validate(dict(data))
     except CaseError as exc:
-        raise CaseError(exc.entries, source=source) from None
+        raise CaseError([_with_range(entry) for entry in exc.entries], source=source) from None
+
+
+def _with_range(entry: _Entry) -> _Entry:
+    """``entry`` with the field's plausible range (:data:`PHYSICAL_BOUNDS`) added when its value overflowed or
+    underflowed while its unit was read (the range is otherwise checked after every field is read)."""
+    loc, value, message = entry
+    if not message.startswith(("overflows", "underflows")):
+        return entry
+    for path, low, high, unit in PHYSICAL_BOUNDS:
+        if len(path) == len(loc) and all(p == "*" or p == item for p, item in zip(path, loc)):
+            return loc, value, f"{message}; must be within [{low:g}, {high:g}] {unit}".rstrip()
+    return entry
 
 
 def _looks_like_path(source: str) -> bool:
