@@ -1100,10 +1100,12 @@ def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_f
 
 
 @pytest.mark.parametrize("old, new, line", [
+    # an overflow is refused while the unit is read, for every field (issue 26), then a range (next two)
     ('length = "1400 m"', 'length = "1e306 km"',
-     "sections[0].length = inf: must be within [0.001, 100000] m (it overflows to infinity)"),
-    ('young_modulus = "210 GPa"', 'young_modulus = "1e300 GPa"',
-     "materials.steel.young_modulus = inf: must be within [1e+06, 1e+13] Pa (it overflows to infinity)"),
+     "sections[0].length = '1e306 km': overflows to infinity in SI units (m); the largest number is about 1.8e308; "
+     "must be within [0.001, 100000] m"),
+    ('young_modulus = "210 GPa"', 'young_modulus = "1e300 GPa"', "materials.steel.young_modulus = '1e300 GPa': "
+     "overflows to infinity in SI units (Pa); the largest number is about 1.8e308; must be within [1e+06, 1e+13] Pa"),
     ("atol = 1e-9", "atol = 1e-300", "simulation.atol = 1e-300: must be within [1e-20, 1000]"),
     ("a2 = 5.672e-8", "a2 = 5e-324", "bit_rock.a2 = 5e-324: must be within [1e-15, 0.001] m/(N*s)"),
 ])

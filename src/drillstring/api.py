@@ -1,6 +1,7 @@
 """The Python API for notebooks: load a case, run one drilling simulation, a Monte Carlo study, a
 comparison of the two nonlinear models. The command line calls these functions (one set of defaults,
-one set of checks) and only parses and formats.
+one set of checks) and only parses and formats. Each public function runs its dense linear algebra
+single-threaded (:mod:`drillstring.blas_threads`), whatever the caller's BLAS settings.
 
 >>> import drillstring
 >>> ds = drillstring.simulate("reference", t_end=5.0)        # doctest: +SKIP
@@ -17,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
+from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case, load_case
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
 from drillstring.units import display_unit, unit_system
@@ -48,11 +50,24 @@ def _tolerance(name: str, value) -> float | None:
                                                    allowed="a number in (0, 1), e.g. 1e-6")
 
 
+def _weight_on_bit(case: Case, value) -> float:
+    """The ``weight_on_bit`` argument [N] overriding the case's, checked as the case's own (> 0, at most
+    1e9 N, less than the string's weight with gravity on): TypeError or ValueError naming the argument."""
+    from drillstring.checks import real_number
+
+    value = real_number("weight_on_bit", value, unit="N", low=0.0, low_open=True)
+    problem = case.weight_on_bit_problem(value)
+    if problem:
+        raise ValueError(f"weight_on_bit = {value!r} N: {problem}")
+    return value
+
+
 def _callable(name: str, value) -> None:
     if value is not None and not callable(value):
         raise TypeError(f"{name} = {value!r}: must be a callable or None")
 
 
+@single_threaded_blas()
 def simulate(
     case: Case | str | Path = "reference",
     *,
@@ -71,7 +86,6 @@ def simulate(
     ``.dataset`` holds what was computed (or, with ``raise_on_failure=False``, that Dataset is
     returned with ``attrs["status"] == "failed"``).
     """
-    from drillstring.checks import real_number
     from drillstring.dynamics.rom import case_reduced_model
     from drillstring.dynamics.simulate import SimulationError, simulate_model
     from drillstring.results import run_dataset
@@ -81,7 +95,7 @@ def simulate(
     window = _window(case, t_end, output_step)
     rtol, atol = _tolerance("rtol", rtol), _tolerance("atol", atol)
     if weight_on_bit is not None:
-        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+        weight_on_bit = _weight_on_bit(case, weight_on_bit)
     _callable("progress", progress)
     model = case_reduced_model(case, weight_on_bit=weight_on_bit)
     extra = {
@@ -241,6 +255,7 @@ def _engine(workers, scheduler, progress, note, worker_timeout):
                   worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
 
 
+@single_threaded_blas()
 def monte_carlo_study(
     case: Case | str | Path = "reference",
     *,
@@ -416,6 +431,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     return {**paths, **figures}
 
 
+@single_threaded_blas()
 def static(case: Case | str | Path = "reference"):
     """The prestressed static state of ``case`` and its lateral buckling margin.
 
@@ -435,6 +451,7 @@ def static(case: Case | str | Path = "reference"):
 MAX_MODES = 1000
 
 
+@single_threaded_blas()
 def modes(case: Case | str | Path = "reference", *, count: int = 10):
     """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
     of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
@@ -452,6 +469,7 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
 
 
+@single_threaded_blas()
 def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
     """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
     about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
@@ -462,17 +480,17 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
     overrides the case's.
     """
-    from drillstring.checks import real_number
     from drillstring.dynamics.stability import case_stability
 
     case = as_case(case)
     if weight_on_bit is not None:
-        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+        weight_on_bit = _weight_on_bit(case, weight_on_bit)
     return case_stability(case, weight_on_bit=weight_on_bit)
 
 
+@single_threaded_blas()
 def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
-             default_unit: str = ""):
+             default_unit: str = "", progress: Callable[[int, int], None] | None = None):
     """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
     torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
     the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
@@ -481,21 +499,32 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
     in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
     :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
-    line naming the argument) for a bad grid or a blade count outside [1, :data:`~drillstring.critical_speeds.
-    MAX_BLADES`], TypeError for a blade count that is not an integer."""
+    line naming the argument) for a bad grid, more than :data:`~drillstring.critical_speeds.MAX_CAMPBELL_SPEEDS`
+    speeds or a blade count outside [1, :data:`~drillstring.critical_speeds.MAX_BLADES`] (before any work),
+    TypeError for a blade count that is not an integer. ``progress(done, total)`` is called after each exact
+    solution of the lateral whirl (``total``: an upper bound; a diagram of 3,000 speeds needs about 20)."""
     from drillstring.case import DIMENSIONS
     from drillstring.checks import integer
-    from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, MAX_BLADES, case_campbell
+    from drillstring.critical_speeds import (
+        DEFAULT_BLADES,
+        DEFAULT_CAMPBELL_TOP_SPEED,
+        MAX_BLADES,
+        case_campbell,
+        check_speed_count,
+    )
     from drillstring.stochastic.operating_map import parse_axis
 
     the_case = as_case(case)
     blades = integer("blades", DEFAULT_BLADES if blades is None else blades, low=1, high=MAX_BLADES)
+    _callable("progress", progress)
     dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
     speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
                         name="top_speed", default_unit=default_unit)
-    return case_campbell(the_case, speeds, blades)
+    check_speed_count(len(speeds), name=f"top_speed = {top_speed!r}" if isinstance(top_speed, str) else "top_speed")
+    return case_campbell(the_case, speeds, blades, progress=progress)
 
 
+@single_threaded_blas()
 def stability_boundary(case: Case | str | Path = "reference") -> dict:
     """The stability boundary of steady drilling along the weight-on-bit at the case's top speed (SI):
     ``weight_on_bit`` [N] where the leading growth rate crosses 0 nearest the case's weight-on-bit (None
@@ -507,6 +536,7 @@ def stability_boundary(case: Case | str | Path = "reference") -> dict:
     return weight_on_bit_boundary(as_case(case))
 
 
+@single_threaded_blas()
 def study(
     case: Case | str | Path = "reference",
     *,
@@ -579,6 +609,7 @@ def _difference_numbers(full, reduced, steady) -> dict[str, float | None]:
     }
 
 
+@single_threaded_blas()
 def compare(
     case: Case | str | Path = "reference",
     *,
@@ -728,6 +759,7 @@ def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, 
     return settings
 
 
+@single_threaded_blas()
 def operating_map(
     case: Case | str | Path = "reference",
     *,
@@ -896,6 +928,7 @@ class SensitivityOutcome:
     note: str | None = None
 
 
+@single_threaded_blas()
 def sensitivity(
     case: Case | str | Path = "reference",
     *,

@@ -123,11 +123,16 @@ CaseArg = Annotated[
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON (SI units) on stdout instead of tables.")]
 
 
-def _unit_system_option(value: str | None) -> str:
-    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2)."""
+def _unit_system_option(ctx: typer.Context, value: str | None) -> str:
+    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2),
+    except an unusable ``$DRILLSTRING_UNITS`` under ``--json`` (SI whatever the unit system): then a note on
+    stderr and ``si`` for any figure or report the command also writes."""
     try:
         return unit_system(value)
     except ValueError as error:
+        if value is None and ctx.params.get("as_json"):
+            typer.echo(f"note: {error}; ignored, --json output is SI", err=True)
+            return "si"
         raise typer.BadParameter(str(error)) from None
 
 
@@ -273,7 +278,10 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
     from drillstring import api
 
     the_case = _load(case)
-    state, margin = api.static(the_case)
+    try:
+        state, margin = api.static(the_case)
+    except ValueError as error:  # a model too large to solve (modal.DENSE_FALLBACK_MEMORY), as `modes` says
+        _fail(str(error))
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -412,8 +420,15 @@ def campbell(
         _check_output("--plot", plot)
     from drillstring import api
 
+    columns = (TextColumn("Campbell diagram: lateral whirl solved exactly at {task.completed} speeds, "
+                          "interpolated between them"), TimeElapsedColumn())
     try:
-        diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm")
+        with Progress(*columns, console=_err_console(), transient=True) as bar:
+            task = bar.add_task("campbell", total=None)
+            diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm",
+                                   progress=lambda done, total: bar.update(task, completed=done))
+    except KeyboardInterrupt:
+        _fail("interrupted", EXIT_INTERRUPTED)
     except ValueError as error:
         _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("blades = ", "--blades = "))
     payload = diagram.to_dict()
@@ -749,6 +764,8 @@ def simulate(
             except SimulationError as error:
                 failure = error
                 ds = error.dataset
+    except ValueError as error:  # refused before the run (a model too large to build), as `modes` says
+        _fail(str(error))
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 

@@ -365,12 +365,13 @@ BOUNDARY_TOLERANCE = 1.0
 
 def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_step: float = BOUNDARY_FIRST_STEP,
                      xtol: float = BOUNDARY_TOLERANCE) -> float | None:
-    """The root nearest ``start`` of a growth rate ``growth(x)`` [1/s] along one parameter x, searched in
-    ``(lower, upper)``: from ``start`` the bracket grows geometrically (steps ``first_step·start``, × 1.5)
-    in the direction in which the sign should change — downwards when ``growth(start) > 0`` (the growth
-    rate of steady drilling rises with the weight-on-bit), upwards otherwise —, then the root is found by
-    Brent's method to ``xtol``. ``growth`` may raise ValueError (no steady state there): the search then
-    stops on that side. None when no sign change is found."""
+    """The root nearest ``start`` of a growth rate ``growth(x)`` [1/s] along one parameter x, searched over
+    the whole range ``(lower, upper)``: brackets grow from ``start`` outward on both sides in turn
+    (steps ``first_step·start``, × 1.5 each), the side where the sign should change first — downwards when
+    ``growth(start) > 0`` (the growth rate of steady drilling rises with the weight-on-bit) —, then the
+    root is found by Brent's method to ``xtol``. ``growth`` may raise ValueError (no steady state there):
+    past a step that lands there, the edge of the defined range is found by bisection (within
+    1e-4·``start``), every defined piece checked for a sign change, and the search ends on that side. None when no sign change is found on either side."""
     from scipy.optimize import brentq
 
     def safe(x: float) -> float | None:
@@ -385,31 +386,46 @@ def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_
         return None
     if g0 == 0.0:
         return float(start)
-    direction = -1.0 if g0 > 0.0 else 1.0
-    step = first_step * abs(start)
-    near, g_near = start, g0
-    while True:
-        far = near + direction * step
-        if not lower < far < upper:
-            far = lower if direction < 0 else upper
-        g_far = safe(far)
-        if g_far is None:
-            return None
-        if g_far == 0.0:
-            return float(far)
-        if (g_far > 0.0) != (g_near > 0.0):
-            return float(brentq(lambda x: growth(x), min(near, far), max(near, far), xtol=xtol))
-        if far in (lower, upper):
-            return None
-        near, g_near = far, g_far
-        step *= 1.5
+    expected = -1.0 if g0 > 0.0 else 1.0
+    edge_tolerance = max(xtol, 1e-4 * abs(start))  # how close to the edge of the defined range a side ends
+    # per side: [last defined x, its growth rate, next step, still searching]
+    sides = {d: [float(start), g0, first_step * abs(start), True] for d in (expected, -expected)}
+    while any(side[3] for side in sides.values()):
+        for direction, side in sides.items():
+            near, g_near, step, searching = side
+            if not searching:
+                continue
+            far = near + direction * step
+            if not lower < far < upper:
+                far = lower if direction < 0 else upper
+            g_far = safe(far)
+            if g_far is None:  # past the edge of the defined range: bisect towards it, checking each piece
+                while abs(far - near) > edge_tolerance:
+                    middle = 0.5 * (near + far)
+                    g_middle = safe(middle)
+                    if g_middle is None:
+                        far = middle
+                        continue
+                    if g_middle == 0.0 or (g_middle > 0.0) != (g_near > 0.0):
+                        far, g_far = middle, g_middle
+                        break
+                    near, g_near = middle, g_middle
+                if g_far is None:
+                    side[3] = False  # the edge is reached without a sign change
+                    continue
+            if g_far == 0.0:
+                return float(far)
+            if (g_far > 0.0) != (g_near > 0.0):
+                return float(brentq(lambda x: growth(x), min(near, far), max(near, far), xtol=xtol))
+            side[:] = [far, g_far, step * 1.5, far not in (lower, upper)]
+    return None
 
 
 def weight_on_bit_boundary(case) -> dict:
     """The stability boundary of steady drilling of ``case`` along the weight-on-bit at its top speed (SI):
     ``weight_on_bit`` [N] where the leading growth rate of :func:`case_stability` crosses 0 nearest the
-    case's weight-on-bit (:func:`growth_rate_root`, searched in (0, string weight)), None when it does not
-    in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
+    case's weight-on-bit (:func:`growth_rate_root`, searched on both sides over (0, string weight), to the
+    edge of steady drilling), None when it does not in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
     ``nominal_growth_rate`` [1/s]. Above the boundary steady drilling is unstable (a Hopf bifurcation: the
     torsional mode's damping turns negative through the velocity-weakening bit torque)."""
     from functools import lru_cache

@@ -181,12 +181,23 @@ class MapSettings:
 
 
 def check_map(case: Case, settings: MapSettings) -> None:
-    """Refuse (ValueError, one line) a grid whose weights-on-bit reach the string's weight (no such
-    point can run); the time window is checked by :class:`MapSettings` itself."""
+    """Refuse (ValueError, one line, before any point runs) a grid whose weights-on-bit reach the string's
+    weight, or any value of either axis that the case's field refuses (its range,
+    :data:`drillstring.case.PHYSICAL_BOUNDS`: a top speed above 1e3 rad/s): no such point could run. The
+    time window is checked by :class:`MapSettings` itself."""
     heaviest = max(settings.weight_on_bit)
     if case.model.gravity and heaviest >= case.weight:
         raise ValueError(f"weight_on_bit = {heaviest:.6g} N: every weight-on-bit of the map must be less than the "
                          f"string's weight, {case.weight:.6g} N")
+    for axis, values, unit in (("top_speed", settings.top_speed, "rad/s"),
+                               ("weight_on_bit", settings.weight_on_bit, "N")):
+        for value in values:
+            try:
+                with_parameters(case, {MAP_AXES[axis]: value})
+            except ValueError as error:
+                reason = str(error).split(": ", 1)[-1]
+                raise ValueError(f"{axis} = {value:.6g} {unit}: {reason} (a value of the map's grid; no point "
+                                 "was run)") from None
 
 
 # --- the store -----------------------------------------------------------------------------------
