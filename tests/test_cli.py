@@ -876,7 +876,7 @@ def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
 
 def test_stability_json_and_table(coarse_case):
     data = _json("stability", str(coarse_case), "--json")
-    assert set(data) == {"stable", "steady_state", "modes"}
+    assert set(data) == {"stable", "steady_state", "modes", "leading_by_family", "mixed_roots"}
     assert data["stable"] is False  # free–free damping: the first torsional mode grows
     steady = data["steady_state"]
     assert steady["bit_speed"] == pytest.approx(100 * 3.141592653589793 / 30)
@@ -885,8 +885,11 @@ def test_stability_json_and_table(coarse_case):
     assert leading["family"] == "torsional" and leading["growth_rate"] > 0
     result = _invoke("stability", str(coarse_case))
     assert result.exit_code == 0, result.output
-    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
+    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate", "Leading root of each family",
+                 "energy a/t/l [%]"):
         assert text in result.stdout, text
+    assert data["leading_by_family"]["torsional"]["growth_rate"] == leading["growth_rate"]
+    assert data["leading_by_family"]["torsional"]["stable"] is False
 
 
 def test_stability_with_the_delayed_law(tmp_path):
@@ -901,7 +904,7 @@ def test_stability_with_the_delayed_law(tmp_path):
     path = tmp_path / "published.toml"
     path.write_text(case.to_toml(), encoding="utf-8")
     data = _json("stability", str(path), "--json")
-    assert set(data) == {"stable", "steady_state", "modes", "delay"}
+    assert set(data) == {"stable", "steady_state", "modes", "delay", "leading_by_family", "mixed_roots"}
     steady = data["steady_state"]
     assert steady["rate_of_penetration"] == pytest.approx(30 / 3600, rel=1e-6)
     assert steady["delay"] == pytest.approx(0.5) and steady["depth_of_cut"] == pytest.approx(30 / 3600 * 0.5, rel=1e-6)
@@ -1061,7 +1064,9 @@ def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_f
     assert summary["samples"] == 3 and summary["done"] == 12 and summary["sigma"] == 4000.0
     assert summary["parameters"] == ["weight_on_hook", "fluid.inlet_velocity"]
     assert set(summary["probabilities"]) == {"stick_slip_probability", "buckling_probability", "impact_probability",
-                                             "instability_probability", "bounce_probability"}
+                                             "instability_probability", "bounce_probability",
+                                             "torsional_instability_probability", "axial_instability_probability",
+                                             "coexistence_probability"}
     for name in ("map.zarr", "map.nc", "map.json", "probabilities.png", "quantiles.png", "report.html",
                  "interactive.html"):
         assert (out / name).exists(), name

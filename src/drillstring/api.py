@@ -759,7 +759,8 @@ def operating_map(
     rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
     run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
     resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
-    ``map.json`` (the summary), ``map.png`` and ``report.html`` (figure and report in the unit system ``units``,
+    ``map.json`` (the summary), ``map.png``, ``stability.png`` (per-family growth rates) and ``report.html``
+    (figures and report in the unit system ``units``,
     ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si). Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
@@ -797,14 +798,19 @@ def operating_map(
 def _finish_map(case, folder, units, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
     from drillstring.interactive import map_figures
-    from drillstring.plots import plot_map
+    from drillstring.plots import plot_map, plot_map_stability
     from drillstring.report import write_map_report
     from drillstring.stochastic.operating_map import map_dataset, map_summary
 
     figures = {"figure": ("map.png", partial(plot_map, units=units),
                           "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
                           "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
-                          "red dashed: lateral buckling limit; dots: simulated points")}
+                          "red dashed: lateral buckling limit; dots: simulated points; open orange circles: "
+                          "stick-slip although steady drilling is linearly stable (coexisting cycles)"),
+               "stability": ("stability.png", partial(plot_map_stability, units=units),
+                             "Growth rate of the leading torsional, axial and lateral root of steady drilling over "
+                             "the map (blue decays, red grows; black: the family's boundary): the torsional and axial "
+                             "windows are not hidden by a buckled string's lateral root")}
     return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
                       partial(write_map_report, units=units),
                       f"Operating map: case '{case.name}'", partial(map_figures, units=units))
@@ -872,9 +878,10 @@ def _finish_sampled_map(case, folder, units, run):
     from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
 
     figures = {"figure": ("probabilities.png", partial(plot_probability_map, units=units),
-                          "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
-                          "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
-                          "buckling limit; dots: the points"),
+                          "Probabilities of stick-slip, of a buckled string, of wall impact, of unstable steady "
+                          "drilling (any root, a torsional root, an axial root), of stick-slip although steady "
+                          "drilling is linearly stable (coexisting cycles) and of bit bounce over the map, each from "
+                          "the point's realizations; red dashed: the nominal lateral buckling limit; dots: the points"),
                "quantiles": ("quantiles.png", partial(plot_quantile_map, units=units),
                              "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
                              "point's realizations")}

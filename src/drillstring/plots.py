@@ -661,6 +661,7 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
         ax.plot(xx[done], yy[done], ".", color="k", ms=3, clip_on=False)
         if (~done).any():
             ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6, clip_on=False)
+        _mark_coexisting(ax, ds, xx, yy)
         ax.set_xlabel("top speed [rpm]")
         ax.set_ylabel(f"weight-on-bit [{force.label}]")
         ax.set_title(title, fontsize="medium")
@@ -673,6 +674,8 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
                Line2D([], [], color="k", marker=".", ls="", label="simulated point")]
     if (status != 1).any():
         handles.append(Line2D([], [], color="C3", marker="x", ls="", label="failed point"))
+    if _coexisting(ds).any():
+        handles.append(COEXISTING_HANDLE())
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
     title = "Operating map"
     name = _case_name(ds.attrs.get("case", ""))
@@ -685,12 +688,105 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     return _save(fig, path)
 
 
+def _coexisting(ds: xr.Dataset) -> np.ndarray:
+    """Mask of the map's points where a stick-slip cycle coexists with stable steady drilling."""
+    if "coexisting_cycles" not in ds:
+        return np.zeros(ds["status"].shape, dtype=bool)
+    return np.nan_to_num(np.asarray(ds["coexisting_cycles"].values, dtype=float)) > 0.0
+
+
+def COEXISTING_HANDLE():  # noqa: N802 - a legend entry, built when drawn
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], color="C1", marker="o", mfc="none", ms=9, mew=1.6, ls="",
+                  label="stick-slip although steady drilling is linearly stable (coexisting cycles)")
+
+
+def _mark_coexisting(ax, ds: xr.Dataset, xx: np.ndarray, yy: np.ndarray) -> None:
+    mask = _coexisting(ds)
+    if mask.any():
+        ax.plot(xx[mask], yy[mask], "o", mfc="none", color="C1", ms=9, mew=1.6, clip_on=False, zorder=3)
+
+
+#: Families drawn by :func:`plot_map_stability`: family, title.
+STABILITY_PANELS = (
+    ("torsional", "torsional roots"),
+    ("axial", "axial roots"),
+    ("lateral", "lateral roots"),
+)
+
+
+def plot_map_stability(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
+    """The linear stability of steady drilling per family over a map (a Dataset of :func:`drillstring.
+    stochastic.operating_map.map_dataset`): one panel per family of :data:`STABILITY_PANELS`, the growth rate
+    of the family's leading root [1/s] on a diverging scale centred on 0 (blue: decays, red: grows), its
+    zero contour (black) and unstable side hatched, so that the torsional and axial stability windows stay
+    visible where a buckled string's lateral root leads the map's overall growth rate; the lateral buckling
+    limit (red dashed), the points, and the points where a stick-slip cycle coexists with stable steady
+    drilling (open orange circles). A family without roots on the map is left blank. Written to the PNG
+    ``path``, weights-on-bit in the unit system ``units``."""
+    from matplotlib.colors import TwoSlopeNorm
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    force = display_unit("force", units)
+    y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
+    status = np.asarray(ds["status"].values)
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    fig, axes = _figure(1, len(STABILITY_PANELS), (6.0 * len(STABILITY_PANELS), 5.6))
+    for ax, (family, title) in zip(axes, STABILITY_PANELS):
+        name = f"{family}_growth_rate"
+        growth = np.asarray(ds[name].values, dtype=float) if name in ds else np.full(xx.shape, np.nan)
+        finite = np.isfinite(growth)
+        ax.set_title(title, fontsize="medium")
+        _points_and_buckling(ax, ds, x, y, force)
+        _mark_coexisting(ax, ds, xx, yy)
+        if not finite.any():
+            ax.text(0.5, 0.5, "no root of this family", ha="center", va="center", transform=ax.transAxes)
+            continue
+        bound = max(float(np.max(np.abs(growth[finite]))), 1e-12)
+        norm = TwoSlopeNorm(vcenter=0.0, vmin=-bound, vmax=bound)
+        if x.size >= 2 and y.size >= 2:
+            artist = ax.contourf(x, y, growth.T, levels=np.linspace(-bound, bound, 21), cmap="RdBu_r", norm=norm)
+            if finite.sum() >= 4 and np.nanmax(growth) > 0 > np.nanmin(growth):
+                ax.contour(x, y, growth.T, levels=[0.0], colors="k", linewidths=1.6)
+            if finite.sum() >= 4 and np.nanmax(growth) > 0:
+                ax.contourf(x, y, growth.T, levels=[0.0, np.inf], colors="none", hatches=["//"])
+        else:
+            artist = ax.scatter(xx.ravel(), yy.ravel(), c=growth.ravel(), cmap="RdBu_r", norm=norm, s=80, zorder=2)
+        stable = int(np.sum(growth[finite] < 0.0))
+        ax.set_title(f"{title}: {stable} of {int(finite.sum())} points stable", fontsize="medium")
+        fig.colorbar(artist, ax=ax, label=f"growth rate of the leading {family} root [1/s]")
+    if (status != 1).any():
+        for ax in axes:
+            ax.plot(xx[status != 1], yy[status != 1], "x", color="C3", ms=6, clip_on=False)
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
+    handles = [Line2D([], [], color="k", lw=1.6, label="family's stability boundary (growth rate 0)"),
+               Patch(facecolor="none", edgecolor="k", hatch="//", label="a root of the family grows"),
+               Line2D([], [], color="C3", ls="--", lw=1.6,
+                      label=f"lateral buckling, WOB = {critical:.4g} {force.label}"),
+               Line2D([], [], color="k", marker=".", ls="", label="point")]
+    if _coexisting(ds).any():
+        handles.append(COEXISTING_HANDLE())
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
+    title = "Linear stability of steady drilling per family"
+    name = _case_name(ds.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
 #: Panels of a probabilistic map: variable, label.
 PROBABILITY_PANELS = (
     ("stick_slip_probability", "probability of stick-slip"),
     ("buckling_probability", "probability of a buckled string"),
     ("impact_probability", "probability of wall impact"),
     ("instability_probability", "probability of unstable steady drilling"),
+    ("torsional_instability_probability", "probability of a growing torsional root"),
+    ("axial_instability_probability", "probability of a growing axial root"),
+    ("coexistence_probability", "probability of stick-slip with stable steady drilling"),
     ("bounce_probability", "probability of bit bounce"),
 )
 
@@ -728,16 +824,17 @@ def _map_legend(fig, ds: xr.Dataset, force: DisplayUnit) -> None:
 
 def plot_probability_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
-    sampled_map_dataset`) as five panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
-    the probabilities of stick-slip, of a buckled string, of wall impact, of unstable steady drilling and of
-    bit bounce (colour scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
+    sampled_map_dataset`) as eight panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
+    the probabilities of :data:`PROBABILITY_PANELS` — stick-slip, a buckled string, wall impact, unstable steady
+    drilling (any root, then a torsional and an axial root), stick-slip with stable steady drilling
+    (coexisting cycles) and bit bounce (colour scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
     the units of ``units``."""
     from matplotlib.colors import Normalize
 
     force = display_unit("force", units)
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
     y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
-    fig, axes = _figure(2, 3, (18.0, 9.0))
+    fig, axes = _figure(2, 4, (24.0, 9.0))
     for ax in axes[len(PROBABILITY_PANELS):]:
         ax.set_axis_off()
     levels = np.linspace(0.0, 1.0, 11)

@@ -323,6 +323,11 @@ def _indicators_html(summary: Mapping[str, Any], units: str | None = None) -> st
                  f"{_num(stability['growth_rate']['mean'])}, {_num(stability['growth_rate']['q2.5'])} – "
                  f"{_num(stability['growth_rate']['q97.5'])}"),
                 ("nominal growth rate [1/s]", _num(stability.get("nominal_growth_rate")))]
+        for family, entry in (stability.get("by_family") or {}).items():
+            if entry["realizations_with_roots"]:
+                rows.append((f"draws with a growing {family} root; its growth rate [1/s]: mean (nominal)",
+                             f"{entry['unstable_realizations']} of {entry['realizations_with_roots']}; "
+                             f"{_num(entry['growth_rate']['mean'])} ({_num(entry['nominal_growth_rate'])})"))
         if boundary.get("weight_on_bit") is not None:
             force = display_unit("force", units)
             rows.append((f"stability boundary of the nominal case along the weight-on-bit [{force.label}]",

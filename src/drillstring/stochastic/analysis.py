@@ -19,7 +19,7 @@ from drillstring.dynamics.indicators import (
 from drillstring.quantities import LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import open_study_group, stored_observables
 from drillstring.stochastic.locks import StudyLock
-from drillstring.stochastic.runs import REALIZATION_METRICS
+from drillstring.stochastic.runs import FAMILY_GROWTH_METRICS, REALIZATION_METRICS
 from drillstring.stochastic.store import DONE, FAILED, StoreError, damage
 from drillstring.stochastic.statistics import (
     dispersion,
@@ -78,9 +78,10 @@ TIME_CONVERGENCE_THRESHOLD = 0.02
 
 def _metric_names(raw: xr.Dataset) -> list[str]:
     """The per-realization metrics a study store holds: :data:`~drillstring.stochastic.runs.
-    REALIZATION_METRICS`, and the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS` of a case with
-    a top drive."""
-    return list(REALIZATION_METRICS) + [name for name in TOP_DRIVE_METRICS if name in raw]
+    REALIZATION_METRICS`, the per-family growth rates (:data:`~drillstring.stochastic.runs.FAMILY_GROWTH_METRICS`,
+    in stores written since they exist) and the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS` of a
+    case with a top drive."""
+    return list(REALIZATION_METRICS) + [name for name in (*FAMILY_GROWTH_METRICS, *TOP_DRIVE_METRICS) if name in raw]
 
 
 def _realization_metrics(raw: xr.Dataset, rows: np.ndarray, t_transient: float, prefix: str = "") -> dict:
@@ -155,7 +156,7 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     metrics = _realization_metrics(raw, rows, t_transient)
     nominal = _realization_metrics(raw, rows, t_transient, prefix="nominal_")
     coords = {"realization": done.realization.values}
-    for name, (unit, description) in {**REALIZATION_METRICS, **TOP_DRIVE_METRICS}.items():
+    for name, (unit, description) in {**REALIZATION_METRICS, **FAMILY_GROWTH_METRICS, **TOP_DRIVE_METRICS}.items():
         if name not in metrics:
             continue
         window = f" after t = {t_transient:g} s" if name in CYCLE_METRICS or name in TOP_DRIVE_METRICS else ""
@@ -289,12 +290,25 @@ def realizations_summary(stats: xr.Dataset) -> dict:
 def stability_summary(stats: xr.Dataset, boundary: dict | None = None) -> dict:
     """``unstable_fraction``: the share of the realizations (with a growth rate) whose steady drilling is
     unstable (leading growth rate > 0), their count, the distribution of the growth rate [1/s]
-    (:func:`distribution_summary`) and the nominal run's; ``boundary``: the nominal case's stability
+    (:func:`distribution_summary`) and the nominal run's; ``by_family``: the same per family of roots (axial,
+    torsional, lateral: a buckled string's lateral divergence does not hide the torsional roots; absent in
+    stores written before); ``boundary``: the nominal case's stability
     boundary along the weight-on-bit (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`) when
     given."""
     rates = stats.get(REALIZATION_PREFIX + "growth_rate")
     growth = np.asarray(rates.values, dtype=float) if rates is not None else np.zeros(0)
     finite = growth[np.isfinite(growth)]
+    by_family = {}
+    for name in FAMILY_GROWTH_METRICS:
+        values = stats.get(REALIZATION_PREFIX + name)
+        if values is None:  # a store written before the families were told apart
+            continue
+        own = np.asarray(values.values, dtype=float)
+        own = own[np.isfinite(own)]
+        by_family[name.removesuffix("_growth_rate")] = {
+            "unstable_realizations": int(np.sum(own > 0.0)), "realizations_with_roots": int(own.size),
+            "growth_rate": distribution_summary(own),
+            "nominal_growth_rate": _finite_or_none(values.attrs.get("nominal", math.nan))}
     return {
         "unstable_fraction": float(np.mean(finite > 0.0)) if finite.size else None,
         "unstable_realizations": int(np.sum(finite > 0.0)),
@@ -302,6 +316,7 @@ def stability_summary(stats: xr.Dataset, boundary: dict | None = None) -> dict:
         "growth_rate": distribution_summary(finite),
         "nominal_growth_rate": (_finite_or_none(rates.attrs.get("nominal", math.nan)) if rates is not None
                                 else None),
+        "by_family": by_family,
         "boundary": boundary,
     }
 
