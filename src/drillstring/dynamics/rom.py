@@ -1256,6 +1256,7 @@ def reduced_model(
     lateral_cutoff: float = 0.0,
     top_drive: TopDriveParameters | None = None,
     hook_load: HookLoadRamp | None = None,
+    rayleigh: tuple[float, float] = (0.0, 0.0),
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -1273,6 +1274,7 @@ def reduced_model(
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
         top_drive: the top boundary; None: the top speed imposed.
         hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
+        rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
     """
     drive = top_drive is not None and not top_drive.imposed
     if drive:
@@ -1288,7 +1290,7 @@ def reduced_model(
     structural = reduced_structural_damping(
         system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
         rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
-        top_speed=0.0 if drive else top_speed, definition=damping_basis,
+        top_speed=0.0 if drive else top_speed, definition=damping_basis, rayleigh=rayleigh,
     )
     damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
     return ReducedOrderModel(
@@ -1338,6 +1340,7 @@ def case_reduced_model(
         modal_damping_ratio=case.damping.modal_damping_ratio,
         rigid_axial_damping=case.damping.rigid_axial,
         rigid_rotation_damping=case.damping.rigid_rotation,
+        rayleigh=(case.damping.mass_proportional, case.damping.stiffness_proportional),
         damping_basis=case.damping.basis,
         top_speed=case.operation.top_speed,
         bit_rock=case_bit_rock(case),
