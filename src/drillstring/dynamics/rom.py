@@ -102,7 +102,8 @@ OBSERVABLES = (
     "nodes_in_contact",  # number of nodes touching the borehole
     "contact_force",  # N, total normal force of the wall on the string, Σ k_i (r_i − g_i)₊ over stations
     "quill_speed",  # rad/s, θ̇x at the top (the set point with an imposed speed)
-    "surface_torque",  # N·m, elastic torque the top element takes from the quill, (K q) at the top's θx
+    "surface_torque",  # N·m, torque the string takes from the quill: τ_m − J_td θ̈₀ with a top drive (the quill's
+                       # equation of motion); the elastic torque of the top element, (K q) at θx, with the speed imposed
 )
 #: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
 #: kernel writes by these names, so reordering the tuple reorders the output consistently).
@@ -545,6 +546,27 @@ def _rhs_kernel(d, t, y, out):
 
 
 @inner_kernel()
+def _surface_torque(d, t, y):
+    """The surface torque T_s [N·m] of a top drive from the quill's equation of motion, ``J_td θ̈₀ = τ_m −
+    T_s``: the motor torque (:func:`~drillstring.forces.top_drive.top_drive_law`) minus the quill's inertial
+    torque, with ``θ̈₀ = qᵀη̈`` from the model's right-hand side at ``(t, y)``. For the same quill and bit
+    motion it does not depend on ``J_td`` (the elastic torque of the top element, read from a truncated
+    basis, does: the basis's shapes depend on ``J_td``)."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.blocks[2], d.blocks[3]
+    rate = np.empty(y.shape[0])
+    _rhs_kernel(d, t, y, rate)
+    quill, elastic = _top_motion(d, y)
+    args = d.laws[_TOP_DRIVE:]
+    filtered = y[2 * n + 1] if args[0] == Z_TORQUE else 0.0
+    torque, _, _ = top_drive_law(args, t, quill, elastic, y[2 * n], filtered)
+    acceleration = 0.0
+    for j in range(t0, t1):
+        acceleration += d.torsion_rows[1, j - t0] * rate[n + j]
+    return torque - args[1] * acceleration
+
+
+@inner_kernel()
 def _expand(shapes_t, dofs, y, offset, out):
     """out[dofs] += shapesᵀ-columns · y[offset:offset + n_f] (one family's part of Φη)."""
     for j in range(shapes_t.shape[0]):
@@ -766,6 +788,8 @@ def observe_kernel(d, o, t, y, out):
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
     out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
+    if d.laws[_TOP_DRIVE] != 0.0:  # a top drive: the torque from the quill's equation of motion
+        out[_SURFACE_TORQUE] = _surface_torque(d, t, y)
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
         j = o.probe_nodes[k]
