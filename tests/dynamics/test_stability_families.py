@@ -137,3 +137,22 @@ def test_proportional_speed_takes_the_branch_of_the_set_point():
     with pytest.raises(ValueError, match="cannot carry the load torque 20 N\\*m"):
         proportional_speed(lambda w: 20.0, set_point, k_p)
     assert abs(proportional_speed(lambda w: 1e-6, set_point, 1e4) - set_point) < SET_POINT_TOLERANCE * set_point
+
+
+def test_stick_slip_coexists_with_stable_steady_drilling():
+    """``stick_slip`` with SoftTorque retuned to the loaded string's frequency (k_p = Z_p = 443.4 N*m*s/rad,
+    k_i = J_td ω² = 419 N*m/rad at 0.103 Hz): every root of steady drilling decays, yet the 90 s run from the
+    case's start lands on a stick-slip cycle (the bit stuck about 45 % of the time after 30 s): the map's
+    ``coexisting_cycles`` flag is 1 there."""
+    from drillstring.case import load_case
+    from drillstring.stochastic.runs import run_outputs
+
+    case = load_case("stick_slip")
+    case = case.model_copy(update={"top_drive": case.top_drive.model_copy(
+        update={"controller": "soft_torque", "proportional_gain": 443.4, "integral_gain": 419.0})})
+    outcome = run_outputs(case, 0, t_end=90.0, output_step=0.05, t_transient=30.0, with_stability=True)
+    values = outcome.values
+    assert outcome.status == 1, outcome.message
+    assert values["growth_rate"] < 0 and values["torsional_growth_rate"] < 0 and values["axial_growth_rate"] < 0
+    assert values["stick_time_fraction"] > 0.3
+    assert coexisting_cycles({k: np.array([v]) for k, v in values.items()})[0] == 1.0
