@@ -94,6 +94,7 @@ def simulate(
                  f"torsional{'' if model.top_drive.imposed else ' + rigid'}, "
                  f"{model.family.count('lateral_y')} lateral per plane",
         "elements": model.static.mesh.n_elements,
+        "lateral_modes": int(model.family.count("lateral_y")),
     }
     kwargs = dict(
         t_end=window.t_end,
@@ -110,12 +111,35 @@ def simulate(
     try:
         result = simulate_model(model, **kwargs)
     except SimulationError as error:
-        dataset = run_dataset(error.result, case_toml=case.to_toml(), extra_attrs=extra)
+        dataset = _with_derived(run_dataset(error.result, case_toml=case.to_toml(), extra_attrs=extra), model)
         if raise_on_failure:
             error.dataset = dataset
             raise
         return dataset
-    return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
+    return _with_derived(run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra), model)
+
+
+def _with_derived(dataset, model):
+    """A run's Dataset with what its figure shows besides the observables: the ``hook_load`` [N] during a
+    ramped start (:class:`~drillstring.forces.hook_load.HookLoadRamp`: the static hook load plus the weight
+    not yet transferred) and, for a Detournay bit, the ``wear_flat_force`` [N] (the force on bit less the
+    cutting force, :meth:`~drillstring.forces.detournay.DetournayParameters.cutting_force`); the
+    ``depth_of_cut`` observable is dropped for the laws without one."""
+    from drillstring.quantities import LONG_NAMES, UNITS
+
+    t = dataset["time"].values
+    if model.hook_load.active:
+        values = model.static.weight_on_hook - model.hook_load.force(t)
+        dataset["hook_load"] = ("time", values, {"units": UNITS["hook_load"], "long_name": LONG_NAMES["hook_load"]})
+    if model.bit_rock.delayed:
+        force = dataset["force_on_bit"].values
+        wear = np.where(force > 0.0, force - model.bit_rock.detournay.cutting_force(dataset["depth_of_cut"].values),
+                        0.0)
+        dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
+                                                     "long_name": LONG_NAMES["wear_flat_force"]})
+    elif "depth_of_cut" in dataset:
+        dataset = dataset.drop_vars("depth_of_cut")
+    return dataset
 
 
 class StudyFailed(RuntimeError):

@@ -104,6 +104,7 @@ OBSERVABLES = (
     "quill_speed",  # rad/s, θ̇x at the top (the set point with an imposed speed)
     "surface_torque",  # N·m, torque the string takes from the quill: τ_m − J_td θ̈₀ with a top drive (the quill's
                        # equation of motion); the elastic torque of the top element, (K q) at θx, with the speed imposed
+    "depth_of_cut",  # m, depth of cut per blade of a delayed (Detournay) law; 0 for the other laws
 )
 #: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
 #: kernel writes by these names, so reordering the tuple reorders the output consistently).
@@ -117,6 +118,7 @@ _CONTACTS = OBSERVABLE_COLUMN["nodes_in_contact"]
 _CONTACT_FORCE = OBSERVABLE_COLUMN["contact_force"]
 _QUILL_SPEED = OBSERVABLE_COLUMN["quill_speed"]
 _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
+_DEPTH_OF_CUT = OBSERVABLE_COLUMN["depth_of_cut"]
 #: First column of the probes' displacements: after the observables, for ``n_p`` probes, ``n_p`` columns of
 #: radial displacement r, then ``n_p`` of v (along y), then ``n_p`` of w (along z) [m]
 #: (:func:`observation_width`).
@@ -775,7 +777,7 @@ def observe_kernel(d, o, t, y, out):
     """Observables (:data:`OBSERVABLES`, by their columns) and the radial displacement at the probes for
     the state ``y`` at time ``t`` [s], from the case-2 data ``d`` (:class:`RhsData`) and ``o``
     (:class:`ObserveData`, whose contact mask it fills). Returns the number of nodes in contact."""
-    axial_force, bit_torque, _, depth, bit_velocity, bit_speed = _bit_rock(d, t, y)
+    axial_force, bit_torque, depth_of_cut, depth, bit_velocity, bit_speed = _bit_rock(d, t, y)
     force = _contact_state(d, y, o.v, o.w, o.in_contact)
     count = 0
     for i in range(o.in_contact.shape[0]):
@@ -785,6 +787,7 @@ def observe_kernel(d, o, t, y, out):
     out[_TOB] = -bit_torque
     out[_FOB] = -axial_force
     out[_DEPTH] = depth
+    out[_DEPTH_OF_CUT] = depth_of_cut
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
     out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
