@@ -442,8 +442,8 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     # Field units: the cycle-metric table, the report, the histograms and the interactive page (JSON stays SI).
     field = _study(coarse_case, out, "--units", "field")
     assert field.exit_code == 0, field.output
-    rop, fob = first["realizations"]["rate_of_penetration_mean"], first["realizations"]["force_on_bit_mean"]
-    tob, mse = first["realizations"]["torque_on_bit_mean"], first["realizations"]["mechanical_specific_energy"]
+    rop, fob = first["realizations"]["mean_rate_of_penetration"], first["realizations"]["mean_force_on_bit"]
+    tob, mse = first["realizations"]["mean_torque_on_bit"], first["realizations"]["mechanical_specific_energy"]
     rows = {line.split("│")[1].strip(): [c.strip() for c in line.split("│")[2:]]
             for line in field.stdout.splitlines() if line.count("│") > 8}
     assert rows["ROP mean"][:2] == ["ft/h", f"{rop['mean'] * 3600 / FT:.4g}"]

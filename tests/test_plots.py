@@ -297,7 +297,7 @@ def test_realization_histograms_follow_the_unit_system(stats_dataset, tmp_path, 
     """realizations.png in field units: ROP in ft/h, TOB in kft·lbf, FOB in klbf, MSE in psi, bit speed in rpm;
     each histogram's mean line is the SI mean over the defining factor."""
     stats = stats_dataset.copy()
-    si_values = {"rate_of_penetration_mean": 3.5e-3, "torque_on_bit_mean": 4.5e3, "force_on_bit_mean": 1e5,
+    si_values = {"mean_rate_of_penetration": 3.5e-3, "mean_torque_on_bit": 4.5e3, "mean_force_on_bit": 1e5,
                  "mechanical_specific_energy": 2e8, "bit_speed_min": 5.0}
     for name, value in si_values.items():
         stats[f"realization_{name}"] = xr.DataArray(value * np.linspace(0.9, 1.1, 8), dims="realization",

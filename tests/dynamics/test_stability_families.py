@@ -74,13 +74,14 @@ def test_shares_and_leading_root_per_family_above_buckling(coarse_case):
 
 
 def test_coexisting_cycles_and_old_stores():
-    """The derived flag: stable torsion and axial roots (NaN: the family is absent) with a run in stick-slip;
+    """The derived flag: stable torsion and axial roots (NaN: the family is absent) with a run in stick-slip
+    (the bit stuck part of the time, not all of it);
     NaN where both growth rates or the stick time are unknown. A store written before an output existed reads
     it as NaN."""
-    values = {"torsional_growth_rate": np.array([-0.1, -0.1, 0.2, np.nan, -0.1, np.nan]),
-              "axial_growth_rate": np.array([-1.0, -1.0, -1.0, -1.0, 0.3, np.nan]),
-              "stick_time_fraction": np.array([0.3, 0.0, 0.3, 0.2, 0.2, 0.2])}
-    np.testing.assert_array_equal(coexisting_cycles(values), [1.0, 0.0, 0.0, 1.0, 0.0, np.nan])
+    values = {"torsional_growth_rate": np.array([-0.1, -0.1, 0.2, np.nan, -0.1, np.nan, -0.1]),
+              "axial_growth_rate": np.array([-1.0, -1.0, -1.0, -1.0, 0.3, np.nan, -1.0]),
+              "stick_time_fraction": np.array([0.3, 0.0, 0.3, 0.2, 0.2, 0.2, 1.0])}  # 1: a stalled bit, no cycle
+    np.testing.assert_array_equal(coexisting_cycles(values), [1.0, 0.0, 0.0, 1.0, 0.0, np.nan, 0.0])
     group = {"a": np.arange(4.0)}
     read = stored_outputs(group, {"a": ["point"]}, ("a", "b"), (2, 2))
     np.testing.assert_array_equal(read["a"], [[0, 1], [2, 3]])

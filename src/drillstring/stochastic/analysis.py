@@ -11,6 +11,7 @@ import xarray as xr
 from drillstring.dynamics.indicators import (
     CYCLE_METRICS,
     DEFAULT_TRANSIENT,
+    RENAMED_METRICS,
     TOP_DRIVE_METRICS,
     cycle_metrics,
     top_drive_metrics,
@@ -49,6 +50,10 @@ def load_study(store_path: str | Path) -> xr.Dataset:
         except Exception as error:  # a chunk that does not decode (checksum, truncated file)
             found = "; ".join(damage(group)) or f"{type(error).__name__}: {error}"
             raise StoreError(f"{store_path} is damaged ({found}); {advice}") from None
+    # stores written before the time means had the maps' spelling: the same arrays under their old names
+    ds = ds.rename({old: new for old, new in RENAMED_METRICS.items() if old in ds and new not in ds})
+    ds = ds.rename({f"nominal_{old}": f"nominal_{new}" for old, new in RENAMED_METRICS.items()
+                    if f"nominal_{old}" in ds and f"nominal_{new}" not in ds})
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in stored_observables(ds) + ("radial_displacement",):
@@ -60,7 +65,7 @@ def load_study(store_path: str | Path) -> xr.Dataset:
 
 #: Prefix of the per-realization results in the statistics (``realization_stick_slip_index``, ...): apart
 #: from the pointwise statistics of the observables (``rate_of_penetration_mean`` is the mean over the
-#: realizations at each time; ``realization_rate_of_penetration_mean`` each realization's time mean).
+#: realizations at each time; ``realization_mean_rate_of_penetration`` each realization's time mean).
 REALIZATION_PREFIX = "realization_"
 #: The per-realization results summarised under ``realizations``: the cycle metrics and the bit-speed
 #: oscillation (max − min)/2Ω of maps and sensitivity runs; with a top drive also the

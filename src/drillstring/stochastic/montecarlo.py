@@ -39,7 +39,7 @@ import zarr
 from drillstring.case import Case
 from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
-from drillstring.dynamics.indicators import TOP_DRIVE_METRICS, has_top_drive
+from drillstring.dynamics.indicators import RENAMED_METRICS, TOP_DRIVE_METRICS, has_top_drive
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.stability import family_growth_rates
 from drillstring.dynamics.simulate import (
@@ -426,7 +426,9 @@ class StudyStore(TaskStore):
         """:meth:`TaskStore.open_group`, refusing a store written before the per-realization metrics
         (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`) were stored."""
         group = super().open_group(path, mode)
-        missing = [name for name in REALIZATION_METRICS if name not in dict(group.attrs["layout"])]
+        layout = dict(group.attrs["layout"])
+        old_names = {new: old for old, new in RENAMED_METRICS.items()}  # read under their earlier spelling
+        missing = [name for name in REALIZATION_METRICS if name not in layout and old_names.get(name) not in layout]
         if missing:
             raise StoreError(f"{path} is a study store of an older drillstring version (no {missing[0]} per "
                              "realization); delete it (or use another --out folder) to start over")

@@ -60,16 +60,16 @@ from drillstring.stochastic.store import DONE, FAILED
 
 #: Scalar outputs of every run: name -> (unit, description).
 RUN_OUTPUTS: dict[str, tuple[str, str]] = {
-    "mean_rate_of_penetration": ("m/s", "time-mean rate of penetration"),
+    "mean_rate_of_penetration": CYCLE_METRICS["mean_rate_of_penetration"],
     "std_rate_of_penetration": ("m/s", "standard deviation in time of the rate of penetration"),
     "bit_speed_oscillation": ("1", "bit-speed oscillation (max - min)/(2 top speed)"),
     "stick_time_fraction": ("1", "fraction of the time with the bit below 10 % of the top speed"),
     "bit_bounce_fraction": ("1", "fraction of the time with the bit off the rock (zero force on bit)"),
     "bit_speed_min": ("rad/s", "smallest bit speed"),
     "bit_speed_max": ("rad/s", "largest bit speed"),
-    "mean_torque_on_bit": ("N m", "time-mean torque on bit"),
+    "mean_torque_on_bit": CYCLE_METRICS["mean_torque_on_bit"],
     "std_torque_on_bit": ("N m", "standard deviation in time of the torque on bit"),
-    "mean_force_on_bit": ("N", "time-mean force on bit"),
+    "mean_force_on_bit": CYCLE_METRICS["mean_force_on_bit"],
     "std_force_on_bit": ("N", "standard deviation in time of the force on bit"),
     "mechanical_specific_energy": ("Pa", "mechanical specific energy (Teale) from the time means"),
     "max_radial_displacement": ("m", "largest radial displacement at the probes"),
@@ -106,7 +106,8 @@ TOP_DRIVE_OUTPUTS: dict[str, tuple[str, str]] = {
 #: Per-point outputs derived from the stored ones (maps and probabilistic maps): name -> (unit, description).
 DERIVED_OUTPUTS: dict[str, tuple[str, str]] = {
     "coexisting_cycles": ("1", "1 where steady drilling is linearly stable (torsion and axial) but the run ends in "
-                               "stick-slip: a stick-slip cycle coexists with stable steady drilling"),
+                               "stick-slip (the bit stuck part of the time): a stick-slip cycle coexists with "
+                               "stable steady drilling"),
 }
 
 
@@ -115,8 +116,10 @@ def coexisting_cycles(values) -> np.ndarray:
     ``torsional_growth_rate``, ``axial_growth_rate``, ``stick_time_fraction``): 1.0 where the torsional and
     axial roots of steady drilling all decay (its linearisation says steady drilling is stable; a family the
     model lacks, NaN growth rate, counts as stable; the lateral roots are left out: a buckled string's lateral
-    divergence is static and is not what stick-slip comes from) and yet the run spends time with the bit
-    stuck after the transient (``stick_time_fraction > 0``): the run landed on a stick-slip limit cycle that
+    divergence is static and is not what stick-slip comes from) and yet the bit sticks and slips after the
+    transient (``0 < stick_time_fraction < 1``; stuck all the time is a stalled bit, not a cycle — e.g. a
+    controller whose integral action builds the motor torque slower than the run lasts): the run landed on a
+    stick-slip limit cycle that
     coexists with stable steady drilling (a subcritical Hopf bifurcation; which one the string takes
     depends on the start). 0.0 where not; NaN where a growth rate of both families or the stick time is NaN
     (no steady drilling, or a run that left no value)."""
@@ -125,7 +128,7 @@ def coexisting_cycles(values) -> np.ndarray:
     stick = np.asarray(values["stick_time_fraction"], dtype=float)
     with np.errstate(invalid="ignore"):
         stable = (np.isnan(torsion) | (torsion < 0.0)) & (np.isnan(axial) | (axial < 0.0))
-        out = (stable & (stick > 0.0)).astype(float)
+        out = (stable & (stick > 0.0) & (stick < 1.0)).astype(float)
     out[(np.isnan(torsion) & np.isnan(axial)) | np.isnan(stick)] = math.nan
     return out
 
@@ -224,7 +227,7 @@ def result_outputs(result, case: Case, t_transient: float, *, cycle: tuple[str, 
         out[name] = metrics[name]
     out["bit_speed_oscillation"] = (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * top_speed)
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
-        out[f"mean_{name}"] = metrics[f"{name}_mean"]
+        out[f"mean_{name}"] = metrics[f"mean_{name}"]
         values = _steady(obs[name], steady)
         if values.size:
             out[f"std_{name}"] = float(values.std())
