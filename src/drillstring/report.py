@@ -530,6 +530,12 @@ def _map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
             ("points where steady drilling is linearly stable", _num(summary.get("linearly_stable_points"))),
             ("points without steady drilling (no penetration)", _num(summary.get("points_without_steady_drilling"))),
             ("points in stick-slip", _num(summary.get("stick_slip_points")))]
+    for family, counts in (summary.get("linearly_stable_points_by_family") or {}).items():
+        rows.insert(-2, (f"... whose {family} roots all decay",
+                         f"{_num(counts['stable'])} of {_num(counts['stable'] + counts['unstable'])}"))
+    if "coexisting_cycle_points" in summary:
+        rows.append(("... in stick-slip although steady drilling is linearly stable (coexisting cycles)",
+                     _num(summary["coexisting_cycle_points"])))
     best = summary.get("largest_rate_of_penetration")
     if best:
         rows.append(("largest mean rate of penetration",

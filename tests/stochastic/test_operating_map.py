@@ -136,6 +136,8 @@ def test_map_files_and_refusals(torsional_case, tmp_path):
     np.testing.assert_allclose(stored.buckling_margin.values[0], critical - np.array([6e4, 9e4]))
     assert "Operating map" in (out / "report.html").read_text() and (out / "map.png").stat().st_size > 10_000
     assert (out / "stability.png").stat().st_size > 10_000
+    report = (out / "report.html").read_text()
+    assert "whose torsional roots all decay" in report and "coexisting cycles" in report
     for family in ("axial", "torsional", "lateral"):  # per-family counts from the stored growth rates
         rates = stored[f"{family}_growth_rate"].values
         counts = outcome.summary["linearly_stable_points_by_family"][family]
