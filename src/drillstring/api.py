@@ -108,6 +108,7 @@ def simulate(
                  f"torsional{'' if model.top_drive.imposed else ' + rigid'}, "
                  f"{model.family.count('lateral_y')} lateral per plane",
         "elements": model.static.mesh.n_elements,
+        "lateral_modes": int(model.family.count("lateral_y")),
     }
     kwargs = dict(
         t_end=window.t_end,
@@ -124,12 +125,35 @@ def simulate(
     try:
         result = simulate_model(model, **kwargs)
     except SimulationError as error:
-        dataset = run_dataset(error.result, case_toml=case.to_toml(), extra_attrs=extra)
+        dataset = _with_derived(run_dataset(error.result, case_toml=case.to_toml(), extra_attrs=extra), model)
         if raise_on_failure:
             error.dataset = dataset
             raise
         return dataset
-    return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
+    return _with_derived(run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra), model)
+
+
+def _with_derived(dataset, model):
+    """A run's Dataset with what its figure shows besides the observables: the ``hook_load`` [N] during a
+    ramped start (:class:`~drillstring.forces.hook_load.HookLoadRamp`: the static hook load plus the weight
+    not yet transferred) and, for a Detournay bit, the ``wear_flat_force`` [N] (the force on bit less the
+    cutting force, :meth:`~drillstring.forces.detournay.DetournayParameters.cutting_force`); the
+    ``depth_of_cut`` observable is dropped for the laws without one."""
+    from drillstring.quantities import LONG_NAMES, UNITS
+
+    t = dataset["time"].values
+    if model.hook_load.active:
+        values = model.static.weight_on_hook - model.hook_load.force(t)
+        dataset["hook_load"] = ("time", values, {"units": UNITS["hook_load"], "long_name": LONG_NAMES["hook_load"]})
+    if model.bit_rock.delayed:
+        force = dataset["force_on_bit"].values
+        wear = np.where(force > 0.0, force - model.bit_rock.detournay.cutting_force(dataset["depth_of_cut"].values),
+                        0.0)
+        dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
+                                                     "long_name": LONG_NAMES["wear_flat_force"]})
+    elif "depth_of_cut" in dataset:
+        dataset = dataset.drop_vars("depth_of_cut")
+    return dataset
 
 
 class StudyFailed(RuntimeError):
@@ -791,7 +815,8 @@ def operating_map(
     rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
     run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
     resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
-    ``map.json`` (the summary), ``map.png`` and ``report.html`` (figure and report in the unit system ``units``,
+    ``map.json`` (the summary), ``map.png``, ``stability.png`` (per-family growth rates) and ``report.html``
+    (figures and report in the unit system ``units``,
     ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si). Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
@@ -829,14 +854,19 @@ def operating_map(
 def _finish_map(case, folder, units, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
     from drillstring.interactive import map_figures
-    from drillstring.plots import plot_map
+    from drillstring.plots import plot_map, plot_map_stability
     from drillstring.report import write_map_report
     from drillstring.stochastic.operating_map import map_dataset, map_summary
 
     figures = {"figure": ("map.png", partial(plot_map, units=units),
                           "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
                           "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
-                          "red dashed: lateral buckling limit; dots: simulated points")}
+                          "red dashed: lateral buckling limit; dots: simulated points; open orange circles: "
+                          "stick-slip although steady drilling is linearly stable (coexisting cycles)"),
+               "stability": ("stability.png", partial(plot_map_stability, units=units),
+                             "Growth rate of the leading torsional, axial and lateral root of steady drilling over "
+                             "the map (blue decays, red grows; black: the family's boundary): the torsional and axial "
+                             "windows are not hidden by a buckled string's lateral root")}
     return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
                       partial(write_map_report, units=units),
                       f"Operating map: case '{case.name}'", partial(map_figures, units=units))
@@ -904,9 +934,10 @@ def _finish_sampled_map(case, folder, units, run):
     from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
 
     figures = {"figure": ("probabilities.png", partial(plot_probability_map, units=units),
-                          "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
-                          "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
-                          "buckling limit; dots: the points"),
+                          "Probabilities of stick-slip, of a buckled string, of wall impact, of unstable steady "
+                          "drilling (any root, a torsional root, an axial root), of stick-slip although steady "
+                          "drilling is linearly stable (coexisting cycles) and of bit bounce over the map, each from "
+                          "the point's realizations; red dashed: the nominal lateral buckling limit; dots: the points"),
                "quantiles": ("quantiles.png", partial(plot_quantile_map, units=units),
                              "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
                              "point's realizations")}

@@ -649,7 +649,9 @@ class Damping(_Base):
     ``basis = "free_free"``: xi, c1 and c2 are defined on the modes of the unconstrained string (axial and
     torsional families; the rigid modes get c1 and c2), then projected on the reduced basis;
     ``"constrained"``: xi on every mode of the reduced basis (torsional modes top-held), c2 unused.
-    See :mod:`drillstring.damping`.
+    ``mass_proportional`` α [1/s] and ``stiffness_proportional`` β [s] add Rayleigh damping ``α M + β K`` of
+    the string (``α`` alone: the distributed viscous damping ``k ρA u̇``, ``k ρJ θ̇`` of Aarsnes & van de Wouw's
+    model, with ``k = α``), on top of the above. See :mod:`drillstring.damping`.
     """
 
     modal_damping_ratio: Dimensionless = Field(0.3, ge=0, lt=1, description="xi [-]")
@@ -658,6 +660,8 @@ class Damping(_Base):
     basis: Literal["free_free", "constrained"] = Field(
         "free_free", description="modes on which xi, c1, c2 are defined"
     )
+    mass_proportional: float = Field(0.0, ge=0, le=1e6, description="Rayleigh alpha [1/s]: C += alpha M")
+    stiffness_proportional: Time = Field(0.0, ge=0, le=1e3, description="Rayleigh beta [s]: C += beta K")
 
 
 class Environment(_Base):
