@@ -240,3 +240,46 @@ def test_docs_table_of_the_reference_critical_speeds_is_the_command_s(reference_
             assert f"{found[(line, family, mode, 'backward')].speed / RPM:.1f}" == backward
             assert f"{forward.bha_energy_share:.0%}" == share
         assert re.fullmatch(r"\d+×", line)
+
+
+def test_interpolated_whirl_equals_the_exact_roots_at_every_speed(reference_case):
+    """The reference string's lateral whirl over 400 speeds, solved exactly at a few speeds and interpolated
+    in between (checked Hermite interpolation), equals the exact roots (each speed solved) at 25 speeds drawn
+    at random to 1e-9 of the largest root, and needs far fewer exact solutions than speeds."""
+    from drillstring.critical_speeds import _whirl_roots, lateral_whirl
+    from drillstring.fem.assembly import gyroscopic_matrix
+
+    system = case_linear_system(reference_case, case_static_state(reference_case))
+    basis = 60
+    speeds = np.linspace(5.0, 300.0, 400) * RPM
+    solutions = []
+    forward, backward, _, lam = lateral_whirl(system, speeds, basis,
+                                              progress=lambda done, total: solutions.append((done, total)))
+    assert solutions[-1][1] == 400 and 9 <= solutions[-1][0] <= 60
+    found = family_modes(system, "lateral_y", basis)
+    h = found.shapes.T @ (gyroscopic_matrix(system.mesh) @ turned_plane(system.mesh, found.shapes))
+    h = 0.5 * (h + h.T)
+    for i in np.random.default_rng(1).choice(400, 25, replace=False):
+        exact_forward, _, exact_backward, _ = _whirl_roots(np.sqrt(lam), h, speeds[i])
+        assert np.abs(forward[i] - exact_forward).max() <= 1e-9 * np.sqrt(lam.max())
+        assert np.abs(backward[i] - exact_backward).max() <= 1e-9 * np.sqrt(lam.max())
+    # The slopes are the roots' own: a finite difference of the exact roots agrees with them.
+    step = 1e-3
+    f0, df0, b0, db0 = _whirl_roots(np.sqrt(lam), h, 10.0)
+    f1, _, b1, _ = _whirl_roots(np.sqrt(lam), h, 10.0 + step)
+    np.testing.assert_allclose((f1 - f0) / step, df0, rtol=1e-4, atol=1e-9)
+    np.testing.assert_allclose((b1 - b0) / step, db0, rtol=1e-4, atol=1e-9)
+
+
+def test_too_many_speeds_refused_before_any_work(reference_case, monkeypatch):
+    import drillstring
+    from drillstring import critical_speeds
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the system was built")
+
+    monkeypatch.setattr("drillstring.modal.case_linear_system", no_work)
+    with pytest.raises(ValueError, match=r"^top_speed = '5:300:100000': 100,000 speeds, more than the 10,000"):
+        drillstring.campbell(reference_case, top_speed="5:300:100000", default_unit="rpm")
+    with pytest.raises(ValueError, match="20,000 speeds"):
+        critical_speeds.case_campbell(reference_case, np.linspace(1.0, 30.0, 20_000))

@@ -597,7 +597,7 @@ def test_detournay_defaults_are_the_published_bit():
     ("bit_radius", "-1 m", "'-1 m'", "must be > 0"),
     ("bit_radius", "20 m", "20.0", "must be within [0.001, 10] m"),
     ("intrinsic_specific_energy", 0, "0", "must be > 0"),
-    ("intrinsic_specific_energy", "1e15 Pa", "1000000000000000.0", "must be within [1000, 1e+12] Pa"),
+    ("intrinsic_specific_energy", "1e15 Pa", "1000000000000000.0", "must be within [1e+06, 1e+12] Pa"),
     ("contact_stress", "60 mm", "'60 mm'", "pressure"),
     ("wear_flat_length", "-11 mm", "'-11 mm'", "must be >= 0"),
     ("friction_coefficient", 20.0, "20.0", "must be within [0, 10]"),

@@ -215,7 +215,8 @@ def test_cases_lists_reference_contact_and_stick_slip():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
     names = [line.split()[0] for line in result.stdout.splitlines()]
-    assert names == ["aarsnes2019", "contact", "deviated", "reference", "reference_components", "stick_slip"]
+    assert names == ["aarsnes2019", "aarsnes2019_paper", "contact", "deviated", "reference", "reference_components",
+                     "stick_slip"]
     assert "hits the wall" in result.stdout and "full stick-slip" in result.stdout
     assert "Aarsnes & van de Wouw (2019)" in result.stdout
 
@@ -442,8 +443,8 @@ def test_study_writes_everything_and_resumes(coarse_case, tmp_path):
     # Field units: the cycle-metric table, the report, the histograms and the interactive page (JSON stays SI).
     field = _study(coarse_case, out, "--units", "field")
     assert field.exit_code == 0, field.output
-    rop, fob = first["realizations"]["rate_of_penetration_mean"], first["realizations"]["force_on_bit_mean"]
-    tob, mse = first["realizations"]["torque_on_bit_mean"], first["realizations"]["mechanical_specific_energy"]
+    rop, fob = first["realizations"]["mean_rate_of_penetration"], first["realizations"]["mean_force_on_bit"]
+    tob, mse = first["realizations"]["mean_torque_on_bit"], first["realizations"]["mechanical_specific_energy"]
     rows = {line.split("│")[1].strip(): [c.strip() for c in line.split("│")[2:]]
             for line in field.stdout.splitlines() if line.count("│") > 8}
     assert rows["ROP mean"][:2] == ["ft/h", f"{rop['mean'] * 3600 / FT:.4g}"]
@@ -876,7 +877,7 @@ def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
 
 def test_stability_json_and_table(coarse_case):
     data = _json("stability", str(coarse_case), "--json")
-    assert set(data) == {"stable", "steady_state", "modes"}
+    assert set(data) == {"stable", "steady_state", "modes", "leading_by_family", "mixed_roots"}
     assert data["stable"] is False  # free–free damping: the first torsional mode grows
     steady = data["steady_state"]
     assert steady["bit_speed"] == pytest.approx(100 * 3.141592653589793 / 30)
@@ -885,8 +886,11 @@ def test_stability_json_and_table(coarse_case):
     assert leading["family"] == "torsional" and leading["growth_rate"] > 0
     result = _invoke("stability", str(coarse_case))
     assert result.exit_code == 0, result.output
-    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate"):
+    for text in ("rate of penetration", "m/h", "UNSTABLE", "torsional", "growth rate", "Leading root of each family",
+                 "energy a/t/l [%]"):
         assert text in result.stdout, text
+    assert data["leading_by_family"]["torsional"]["growth_rate"] == leading["growth_rate"]
+    assert data["leading_by_family"]["torsional"]["stable"] is False
 
 
 def test_stability_with_the_delayed_law(tmp_path):
@@ -901,7 +905,7 @@ def test_stability_with_the_delayed_law(tmp_path):
     path = tmp_path / "published.toml"
     path.write_text(case.to_toml(), encoding="utf-8")
     data = _json("stability", str(path), "--json")
-    assert set(data) == {"stable", "steady_state", "modes", "delay"}
+    assert set(data) == {"stable", "steady_state", "modes", "delay", "leading_by_family", "mixed_roots"}
     steady = data["steady_state"]
     assert steady["rate_of_penetration"] == pytest.approx(30 / 3600, rel=1e-6)
     assert steady["delay"] == pytest.approx(0.5) and steady["depth_of_cut"] == pytest.approx(30 / 3600 * 0.5, rel=1e-6)
@@ -1061,7 +1065,9 @@ def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_f
     assert summary["samples"] == 3 and summary["done"] == 12 and summary["sigma"] == 4000.0
     assert summary["parameters"] == ["weight_on_hook", "fluid.inlet_velocity"]
     assert set(summary["probabilities"]) == {"stick_slip_probability", "buckling_probability", "impact_probability",
-                                             "instability_probability", "bounce_probability"}
+                                             "instability_probability", "bounce_probability",
+                                             "torsional_instability_probability", "axial_instability_probability",
+                                             "coexistence_probability"}
     for name in ("map.zarr", "map.nc", "map.json", "probabilities.png", "quantiles.png", "report.html",
                  "interactive.html"):
         assert (out / name).exists(), name
@@ -1100,10 +1106,12 @@ def test_probabilistic_map_command_writes_the_files_and_resumes(torsional_case_f
 
 
 @pytest.mark.parametrize("old, new, line", [
+    # an overflow is refused while the unit is read, for every field (issue 26), then a range (next two)
     ('length = "1400 m"', 'length = "1e306 km"',
-     "sections[0].length = inf: must be within [0.001, 100000] m (it overflows to infinity)"),
-    ('young_modulus = "210 GPa"', 'young_modulus = "1e300 GPa"',
-     "materials.steel.young_modulus = inf: must be within [1e+06, 1e+13] Pa (it overflows to infinity)"),
+     "sections[0].length = '1e306 km': overflows to infinity in SI units (m); the largest number is about 1.8e308; "
+     "must be within [0.001, 100000] m"),
+    ('young_modulus = "210 GPa"', 'young_modulus = "1e300 GPa"', "materials.steel.young_modulus = '1e300 GPa': "
+     "overflows to infinity in SI units (Pa); the largest number is about 1.8e308; must be within [1e+06, 1e+13] Pa"),
     ("atol = 1e-9", "atol = 1e-300", "simulation.atol = 1e-300: must be within [1e-20, 1000]"),
     ("a2 = 5.672e-8", "a2 = 5e-324", "bit_rock.a2 = 5e-324: must be within [1e-15, 0.001] m/(N*s)"),
 ])

@@ -193,3 +193,35 @@ def test_projection_without_modes_equals_the_dense_one(uniform_string, kind, fam
     np.testing.assert_allclose(sparse_force, dense_force, rtol=0, atol=1e-10 * np.abs(dense_force).max())
     with pytest.raises(ValueError, match="no rigid mode"):
         projected_free_free_damping(m[1:, 1:], k[1:, 1:], shapes[1:], XI, coefficient, dense_limit=0)
+
+
+def test_rayleigh_damping_on_the_modes_and_the_imposed_rotation(uniform_string):
+    """Rayleigh damping α M + β K (issue 25): on the mass-normalised top-held torsional modes it is diagonal,
+    α + β ω², i.e. the ratio ξ(ω) = α/(2ω) + βω/2 of each mode; it adds to the other definitions; with the top
+    turned at Ω the mass-proportional part loads the modes with −Ω α Ψᵀ M 1 (the viscous torque α ρ I_p Ω per
+    unit length of the rigidly turning string); α alone on a uniform rod, the first top-held mode decays
+    at exactly α/2 (the damped wave equation ρ(ü + α u̇) = G u'': s² + α s + ω² = 0)."""
+    _, mesh, system = uniform_string
+    modes, _ = _top_held_torsion(system, 4)
+    dofs = dof(np.arange(mesh.n_nodes), THETA_X)
+    basis = np.zeros((mesh.n_dofs, 4))
+    basis[dofs[1:]] = modes.shapes[dofs[1:]]
+    omega = modes.angular_frequencies
+    alpha, beta = 0.7, 2e-3
+    common = dict(damping_ratio=0.0, rigid_axial=0.0, rigid_rotation=0.0, top_speed=10.0, definition="constrained")
+    damped = reduced_structural_damping(system.mass, system.stiffness, basis, ["torsional"] * 4, omega,
+                                        rayleigh=(alpha, beta), **common)
+    np.testing.assert_allclose(damped.matrix, np.diag(alpha + beta * omega**2), rtol=1e-9, atol=1e-9)
+    m = system.mass[dofs][:, dofs].toarray()
+    expected = -10.0 * alpha * (modes.shapes[dofs].T @ (m @ np.ones(len(dofs))))
+    np.testing.assert_allclose(damped.generalized_force, expected, rtol=1e-8, atol=1e-12)
+    plus = reduced_structural_damping(system.mass, system.stiffness, basis, ["torsional"] * 4, omega,
+                                      rayleigh=(alpha, beta), **{**common, "damping_ratio": XI})
+    np.testing.assert_allclose(plus.matrix, damped.matrix + np.diag(2 * XI * omega), rtol=1e-9, atol=1e-9)
+    viscous = reduced_structural_damping(system.mass, system.stiffness, basis, ["torsional"] * 4, omega,
+                                         rayleigh=(alpha, 0.0), **common)
+    lam = np.linalg.eigvals(np.block([[np.zeros((4, 4)), np.eye(4)], [-np.diag(omega**2), -viscous.matrix]]))
+    np.testing.assert_allclose(lam.real, -alpha / 2, rtol=1e-9)
+    with pytest.raises(ValueError, match="alpha .* and beta .* must be finite and >= 0"):
+        reduced_structural_damping(system.mass, system.stiffness, basis, ["torsional"] * 4, omega,
+                                   rayleigh=(-1.0, 0.0), **common)

@@ -155,7 +155,13 @@ def map_dataset():
 
 def test_map_figures_carry_the_values_with_gaps(map_dataset):
     figures = map_figures(map_dataset)
-    assert len(figures) == 4
+    assert len(figures) == 4  # no per-family growth rate in this map: no family figure
+    family = map_dataset.assign(torsional_growth_rate=map_dataset.growth_rate - 0.5,
+                                lateral_growth_rate=map_dataset.growth_rate * np.nan)
+    torsion = map_figures(family)[4:]
+    assert len(torsion) == 1 and torsion[0]["data"][0]["zmid"] == 0.0
+    assert torsion[0]["data"][0]["z"][0][1] == pytest.approx(1.0 - 2.0 - 0.5)  # z[weight][speed]
+    assert any(t["type"] == "contour" for t in torsion[0]["data"])
     heat = figures[0]["data"][0]
     assert heat["x"] == [60.0, 100.0, 140.0] and heat["y"] == [60.0, 100.0, 140.0]
     assert heat["z"][2][2] is None  # failed point
@@ -169,7 +175,7 @@ def test_map_figures_follow_the_unit_system(map_dataset):
     in (the SI values over the defining factors: 1 klbf = 4448.2216152605 N, 1 ft = 0.3048 m, 1 psi =
     6894.757293168361 Pa)."""
     klbf, ft, psi = 4448.2216152605, 0.3048, 6894.757293168361
-    rop, oscillation, mse, radial = map_figures(map_dataset, units="field")
+    rop, oscillation, mse, radial, *_ = map_figures(map_dataset, units="field")
     heat = rop["data"][0]
     assert heat["y"] == pytest.approx([60e3 / klbf, 100e3 / klbf, 140e3 / klbf], rel=1e-5)  # 6 digits kept
     assert heat["z"][1][0] == pytest.approx(2.0 * 3600.0 / ft, rel=1e-5)

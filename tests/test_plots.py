@@ -115,6 +115,33 @@ def test_plot_run_writes_png(run_dataset, tmp_path, drawn):
     assert fig._suptitle.get_text() == "Drilling run: case 'synthetic'"
 
 
+def test_plot_run_panels_fit_the_case(run_dataset, tmp_path, drawn):
+    """A torsional-axial case with a Detournay bit, a top drive and a ramped start (issue 25): no lateral
+    panels (radial displacement, orbit, contact force), but the quill speed, the surface torque, the force on
+    bit with its wear-flat part, the depth of cut and the hook load."""
+    t = run_dataset.time.values
+    ds = run_dataset.drop_vars(["radial_displacement", "lateral_displacement", "contact_force"]).assign(
+        quill_speed=("time", TOP_SPEED * (1 + 0.1 * np.sin(t))),
+        surface_torque=("time", 5e3 + 1e3 * np.sin(t)),
+        wear_flat_force=("time", 6e4 * np.ones_like(t)),
+        depth_of_cut=("time", 4e-3 * np.sin(t)),
+        hook_load=("time", 5e5 + 1e5 * (1 - np.minimum(t / 2.0, 1.0))),
+    ).assign_attrs(lateral_modes=0, top_drive="pi")
+    assert plots.run_panels(ds) == ("rop", "speed", "torque", "force", "depth_of_cut", "hook_load")
+    assert plots.run_panels(run_dataset) == ("rop", "speed", "radial", "torque", "orbit", "contact")
+    _assert_png(plots.plot_run(ds, tmp_path / "detournay.png"))
+    (fig,) = drawn
+    rop, speed, torque, force, depth, hook = fig.axes
+    (_, bit), (_, quill), (_, set_point) = _lines(speed)
+    np.testing.assert_allclose(quill, ds.quill_speed.values * 60 / (2 * math.pi))
+    np.testing.assert_allclose(_lines(torque)[1][1], ds.surface_torque.values / 1e3)
+    (_, fob), (_, wear) = _lines(force)
+    np.testing.assert_allclose(fob, 100.0) and np.testing.assert_allclose(wear, 60.0)  # kN
+    np.testing.assert_allclose(_lines(depth)[0][1], 1e3 * ds.depth_of_cut.values)  # mm
+    np.testing.assert_allclose(_lines(hook)[0][1], ds.hook_load.values / 1e3)
+    assert "hook load [kN]" == hook.get_ylabel() and "depth of cut [mm]" == depth.get_ylabel()
+
+
 def test_plot_run_partial_failed_run(run_dataset, tmp_path, drawn):
     partial = run_dataset.isel(time=slice(0, 10)).assign_attrs(status="failed")
     _assert_png(plots.plot_run(partial, tmp_path / "partial.png"))
@@ -270,7 +297,7 @@ def test_realization_histograms_follow_the_unit_system(stats_dataset, tmp_path, 
     """realizations.png in field units: ROP in ft/h, TOB in kft·lbf, FOB in klbf, MSE in psi, bit speed in rpm;
     each histogram's mean line is the SI mean over the defining factor."""
     stats = stats_dataset.copy()
-    si_values = {"rate_of_penetration_mean": 3.5e-3, "torque_on_bit_mean": 4.5e3, "force_on_bit_mean": 1e5,
+    si_values = {"mean_rate_of_penetration": 3.5e-3, "mean_torque_on_bit": 4.5e3, "mean_force_on_bit": 1e5,
                  "mechanical_specific_energy": 2e8, "bit_speed_min": 5.0}
     for name, value in si_values.items():
         stats[f"realization_{name}"] = xr.DataArray(value * np.linspace(0.9, 1.1, 8), dims="realization",

@@ -18,10 +18,10 @@ def test_cycle_metric_units_in_both_systems():
     from drillstring.quantities import METRIC_DISPLAY, metric_unit
 
     expected = {  # name -> (si label, si scale, field label, field scale)
-        "rate_of_penetration_mean": ("m/h", 3600.0, "ft/h", 3600.0 / 0.3048),
-        "torque_on_bit_mean": ("kN·m", 1e-3, "kft·lbf", 1.0 / 1355.8179483314004),
+        "mean_rate_of_penetration": ("m/h", 3600.0, "ft/h", 3600.0 / 0.3048),
+        "mean_torque_on_bit": ("kN·m", 1e-3, "kft·lbf", 1.0 / 1355.8179483314004),
         "surface_torque_amplitude": ("kN·m", 1e-3, "kft·lbf", 1.0 / 1355.8179483314004),
-        "force_on_bit_mean": ("kN", 1e-3, "klbf", 1.0 / 4448.2216152605),
+        "mean_force_on_bit": ("kN", 1e-3, "klbf", 1.0 / 4448.2216152605),
         "mechanical_specific_energy": ("MPa", 1e-6, "psi", 1.0 / 6894.757293168361),
         "bit_speed_min": ("rpm", 30.0 / math.pi, "rpm", 30.0 / math.pi),
         "quill_speed_max": ("rpm", 30.0 / math.pi, "rpm", 30.0 / math.pi),

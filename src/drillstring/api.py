@@ -1,6 +1,7 @@
 """The Python API for notebooks: load a case, run one drilling simulation, a Monte Carlo study, a
 comparison of the two nonlinear models. The command line calls these functions (one set of defaults,
-one set of checks) and only parses and formats.
+one set of checks) and only parses and formats. Each public function runs its dense linear algebra
+single-threaded (:mod:`drillstring.blas_threads`), whatever the caller's BLAS settings.
 
 >>> import drillstring
 >>> ds = drillstring.simulate("reference", t_end=5.0)        # doctest: +SKIP
@@ -17,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
+from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case, load_case
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SEED
 from drillstring.units import display_unit, unit_system
@@ -48,11 +50,24 @@ def _tolerance(name: str, value) -> float | None:
                                                    allowed="a number in (0, 1), e.g. 1e-6")
 
 
+def _weight_on_bit(case: Case, value) -> float:
+    """The ``weight_on_bit`` argument [N] overriding the case's, checked as the case's own (> 0, at most
+    1e9 N, less than the string's weight with gravity on): TypeError or ValueError naming the argument."""
+    from drillstring.checks import real_number
+
+    value = real_number("weight_on_bit", value, unit="N", low=0.0, low_open=True)
+    problem = case.weight_on_bit_problem(value)
+    if problem:
+        raise ValueError(f"weight_on_bit = {value!r} N: {problem}")
+    return value
+
+
 def _callable(name: str, value) -> None:
     if value is not None and not callable(value):
         raise TypeError(f"{name} = {value!r}: must be a callable or None")
 
 
+@single_threaded_blas()
 def simulate(
     case: Case | str | Path = "reference",
     *,
@@ -71,7 +86,6 @@ def simulate(
     ``.dataset`` holds what was computed (or, with ``raise_on_failure=False``, that Dataset is
     returned with ``attrs["status"] == "failed"``).
     """
-    from drillstring.checks import real_number
     from drillstring.dynamics.rom import case_reduced_model
     from drillstring.dynamics.simulate import SimulationError, simulate_model
     from drillstring.results import run_dataset
@@ -81,7 +95,7 @@ def simulate(
     window = _window(case, t_end, output_step)
     rtol, atol = _tolerance("rtol", rtol), _tolerance("atol", atol)
     if weight_on_bit is not None:
-        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+        weight_on_bit = _weight_on_bit(case, weight_on_bit)
     _callable("progress", progress)
     model = case_reduced_model(case, weight_on_bit=weight_on_bit)
     extra = {
@@ -94,6 +108,7 @@ def simulate(
                  f"torsional{'' if model.top_drive.imposed else ' + rigid'}, "
                  f"{model.family.count('lateral_y')} lateral per plane",
         "elements": model.static.mesh.n_elements,
+        "lateral_modes": int(model.family.count("lateral_y")),
     }
     kwargs = dict(
         t_end=window.t_end,
@@ -110,12 +125,35 @@ def simulate(
     try:
         result = simulate_model(model, **kwargs)
     except SimulationError as error:
-        dataset = run_dataset(error.result, case_toml=case.to_toml(), extra_attrs=extra)
+        dataset = _with_derived(run_dataset(error.result, case_toml=case.to_toml(), extra_attrs=extra), model)
         if raise_on_failure:
             error.dataset = dataset
             raise
         return dataset
-    return run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra)
+    return _with_derived(run_dataset(result, case_toml=case.to_toml(), extra_attrs=extra), model)
+
+
+def _with_derived(dataset, model):
+    """A run's Dataset with what its figure shows besides the observables: the ``hook_load`` [N] during a
+    ramped start (:class:`~drillstring.forces.hook_load.HookLoadRamp`: the static hook load plus the weight
+    not yet transferred) and, for a Detournay bit, the ``wear_flat_force`` [N] (the force on bit less the
+    cutting force, :meth:`~drillstring.forces.detournay.DetournayParameters.cutting_force`); the
+    ``depth_of_cut`` observable is dropped for the laws without one."""
+    from drillstring.quantities import LONG_NAMES, UNITS
+
+    t = dataset["time"].values
+    if model.hook_load.active:
+        values = model.static.weight_on_hook - model.hook_load.force(t)
+        dataset["hook_load"] = ("time", values, {"units": UNITS["hook_load"], "long_name": LONG_NAMES["hook_load"]})
+    if model.bit_rock.delayed:
+        force = dataset["force_on_bit"].values
+        wear = np.where(force > 0.0, force - model.bit_rock.detournay.cutting_force(dataset["depth_of_cut"].values),
+                        0.0)
+        dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
+                                                     "long_name": LONG_NAMES["wear_flat_force"]})
+    elif "depth_of_cut" in dataset:
+        dataset = dataset.drop_vars("depth_of_cut")
+    return dataset
 
 
 class StudyFailed(RuntimeError):
@@ -241,6 +279,7 @@ def _engine(workers, scheduler, progress, note, worker_timeout):
                   worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
 
 
+@single_threaded_blas()
 def monte_carlo_study(
     case: Case | str | Path = "reference",
     *,
@@ -416,6 +455,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
     return {**paths, **figures}
 
 
+@single_threaded_blas()
 def static(case: Case | str | Path = "reference"):
     """The prestressed static state of ``case`` and its lateral buckling margin.
 
@@ -435,6 +475,7 @@ def static(case: Case | str | Path = "reference"):
 MAX_MODES = 1000
 
 
+@single_threaded_blas()
 def modes(case: Case | str | Path = "reference", *, count: int = 10):
     """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
     of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
@@ -452,6 +493,7 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
 
 
+@single_threaded_blas()
 def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | None = None):
     """Steady drilling of ``case`` (closed form) and the eigenvalues of its reduced model linearised
     about it, bit–rock law included (:mod:`drillstring.dynamics.stability`).
@@ -462,17 +504,17 @@ def stability(case: Case | str | Path = "reference", *, weight_on_bit: float | N
     ``growth_rate`` [1/s]), ``.leading`` and ``.to_dict()`` (JSON-ready). ``weight_on_bit`` [N]
     overrides the case's.
     """
-    from drillstring.checks import real_number
     from drillstring.dynamics.stability import case_stability
 
     case = as_case(case)
     if weight_on_bit is not None:
-        weight_on_bit = real_number("weight_on_bit", weight_on_bit, unit="N", low=0.0, low_open=True)
+        weight_on_bit = _weight_on_bit(case, weight_on_bit)
     return case_stability(case, weight_on_bit=weight_on_bit)
 
 
+@single_threaded_blas()
 def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: int | None = None,
-             default_unit: str = ""):
+             default_unit: str = "", progress: Callable[[int, int], None] | None = None):
     """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
     torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
     the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
@@ -481,21 +523,32 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
     in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a
     :class:`~drillstring.critical_speeds.CampbellDiagram` (``.to_dict()`` is JSON-ready). Raises ValueError (one
-    line naming the argument) for a bad grid or a blade count outside [1,
-    :data:`~drillstring.critical_speeds.MAX_BLADES`], TypeError for a blade count that is not an integer."""
+    line naming the argument) for a bad grid, more than :data:`~drillstring.critical_speeds.MAX_CAMPBELL_SPEEDS`
+    speeds or a blade count outside [1, :data:`~drillstring.critical_speeds.MAX_BLADES`] (before any work),
+    TypeError for a blade count that is not an integer. ``progress(done, total)`` is called after each exact
+    solution of the lateral whirl (``total``: an upper bound; a diagram of 3,000 speeds needs about 20)."""
     from drillstring.case import DIMENSIONS
     from drillstring.checks import integer
-    from drillstring.critical_speeds import DEFAULT_BLADES, DEFAULT_CAMPBELL_TOP_SPEED, MAX_BLADES, case_campbell
+    from drillstring.critical_speeds import (
+        DEFAULT_BLADES,
+        DEFAULT_CAMPBELL_TOP_SPEED,
+        MAX_BLADES,
+        case_campbell,
+        check_speed_count,
+    )
     from drillstring.stochastic.operating_map import parse_axis
 
     the_case = as_case(case)
     blades = integer("blades", DEFAULT_BLADES if blades is None else blades, low=1, high=MAX_BLADES)
+    _callable("progress", progress)
     dimension = {d.name: d for d in DIMENSIONS}["angular speed"]
     speeds = parse_axis(DEFAULT_CAMPBELL_TOP_SPEED if top_speed is None else top_speed, dimension,
                         name="top_speed", default_unit=default_unit)
-    return case_campbell(the_case, speeds, blades)
+    check_speed_count(len(speeds), name=f"top_speed = {top_speed!r}" if isinstance(top_speed, str) else "top_speed")
+    return case_campbell(the_case, speeds, blades, progress=progress)
 
 
+@single_threaded_blas()
 def stability_boundary(case: Case | str | Path = "reference") -> dict:
     """The stability boundary of steady drilling along the weight-on-bit at the case's top speed (SI):
     ``weight_on_bit`` [N] where the leading growth rate crosses 0 nearest the case's weight-on-bit (None
@@ -507,6 +560,7 @@ def stability_boundary(case: Case | str | Path = "reference") -> dict:
     return weight_on_bit_boundary(as_case(case))
 
 
+@single_threaded_blas()
 def study(
     case: Case | str | Path = "reference",
     *,
@@ -579,6 +633,7 @@ def _difference_numbers(full, reduced, steady) -> dict[str, float | None]:
     }
 
 
+@single_threaded_blas()
 def compare(
     case: Case | str | Path = "reference",
     *,
@@ -728,6 +783,7 @@ def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, 
     return settings
 
 
+@single_threaded_blas()
 def operating_map(
     case: Case | str | Path = "reference",
     *,
@@ -759,7 +815,8 @@ def operating_map(
     rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
     run on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/map.zarr is
     resumable. In ``out``: ``map.nc`` (dims ``top_speed``, ``weight_on_bit``; units in attributes),
-    ``map.json`` (the summary), ``map.png`` and ``report.html`` (figure and report in the unit system ``units``,
+    ``map.json`` (the summary), ``map.png``, ``stability.png`` (per-family growth rates) and ``report.html``
+    (figures and report in the unit system ``units``,
     ``"si"`` or ``"field"``; None: ``$DRILLSTRING_UNITS``, else si). Checked before anything runs: the grid
     (every weight-on-bit below the string's weight), ``out``, the scheduler and the lock.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
@@ -797,14 +854,19 @@ def operating_map(
 def _finish_map(case, folder, units, run):
     """Under the map's lock: its Dataset, summary and (in ``folder``, unless None) files."""
     from drillstring.interactive import map_figures
-    from drillstring.plots import plot_map
+    from drillstring.plots import plot_map, plot_map_stability
     from drillstring.report import write_map_report
     from drillstring.stochastic.operating_map import map_dataset, map_summary
 
     figures = {"figure": ("map.png", partial(plot_map, units=units),
                           "Mean ROP, bit-speed oscillation, mechanical specific energy and largest radial displacement "
                           "over the map; black line: linear stability boundary of steady drilling (hatched: unstable); "
-                          "red dashed: lateral buckling limit; dots: simulated points")}
+                          "red dashed: lateral buckling limit; dots: simulated points; open orange circles: "
+                          "stick-slip although steady drilling is linearly stable (coexisting cycles)"),
+               "stability": ("stability.png", partial(plot_map_stability, units=units),
+                             "Growth rate of the leading torsional, axial and lateral root of steady drilling over "
+                             "the map (blue decays, red grows; black: the family's boundary): the torsional and axial "
+                             "windows are not hidden by a buckled string's lateral root")}
     return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
                       partial(write_map_report, units=units),
                       f"Operating map: case '{case.name}'", partial(map_figures, units=units))
@@ -872,9 +934,10 @@ def _finish_sampled_map(case, folder, units, run):
     from drillstring.stochastic.probabilistic_map import sampled_map_dataset, sampled_map_summary
 
     figures = {"figure": ("probabilities.png", partial(plot_probability_map, units=units),
-                          "Probabilities of stick-slip, of a buckled string, of wall impact and of unstable steady "
-                          "drilling over the map, each from the point's realizations; red dashed: the nominal lateral "
-                          "buckling limit; dots: the points"),
+                          "Probabilities of stick-slip, of a buckled string, of wall impact, of unstable steady "
+                          "drilling (any root, a torsional root, an axial root), of stick-slip although steady "
+                          "drilling is linearly stable (coexisting cycles) and of bit bounce over the map, each from "
+                          "the point's realizations; red dashed: the nominal lateral buckling limit; dots: the points"),
                "quantiles": ("quantiles.png", partial(plot_quantile_map, units=units),
                              "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
                              "point's realizations")}
@@ -896,6 +959,7 @@ class SensitivityOutcome:
     note: str | None = None
 
 
+@single_threaded_blas()
 def sensitivity(
     case: Case | str | Path = "reference",
     *,

@@ -33,6 +33,7 @@ of numbers shared with the finite-element model: mesh layout, mode-family sizes,
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import stat
 import tomllib
@@ -217,6 +218,8 @@ def _fmt_value(value: Any) -> str:
 
 
 def _fmt_limit(value: Any) -> str:
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**6:
+        return str(value)  # an integer limit exactly (a seed's 2**64 - 1, not 1.84467e+19)
     return f"{value:g}" if isinstance(value, (int, float)) and not isinstance(value, bool) else repr(value)
 
 
@@ -383,6 +386,52 @@ class _Base(BaseModel):
             entries = _entries_from_validation_error(exc, type(self), data)
             raise CaseError(entries, source=f"<{type(self).__name__}>") from None
 
+    def model_copy(self, *, update: Mapping[str, Any] | None = None, deep: bool = False) -> Any:
+        """pydantic's copy, ``update`` (field name -> new value) checked for its *kind*: an unknown field, or a
+        value that is not of the field's kind (``{"simulation": 5}``: a number where a table is expected),
+        raises :class:`CaseError` naming the field; a mapping given for a table is validated into it. The
+        *values* are not validated: the model copies values already checked, and tests build deliberately
+        extreme models this way. :meth:`copy_with` is the validated path (every rule, cross-field too)."""
+        if not update:
+            return super().model_copy(deep=deep)
+        if not isinstance(update, Mapping):
+            raise TypeError(f"update = {update!r}: must be a mapping of field names to values")
+        fields = type(self).model_fields
+        checked = {}
+        problems: list[_Entry] = []
+        for name, value in update.items():
+            if name not in fields:
+                problems.append(((name,), _fmt_value(value), f"unknown key; allowed keys here: {', '.join(fields)}"))
+                continue
+            kind = _unwrap(fields[name].annotation)
+            if value is None:
+                if type(None) not in typing.get_args(fields[name].annotation):
+                    problems.append(((name,), "None", "required: cannot be None"))
+            elif isinstance(kind, type) and issubclass(kind, BaseModel):
+                if isinstance(value, Mapping):
+                    value = kind.model_validate(dict(value))
+                elif not isinstance(value, kind):
+                    problems.append(((name,), _fmt_value(value), f"must be a {kind.__name__} (or a table of its "
+                                                                 f"keys), not {type(value).__name__}"))
+            elif kind is float and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+                problems.append(((name,), _fmt_value(value), f"must be a number, not {type(value).__name__}"))
+            elif typing.get_origin(kind) in (list, dict) and not isinstance(value, typing.get_origin(kind)):
+                problems.append(((name,), _fmt_value(value), f"must be a {typing.get_origin(kind).__name__}, not "
+                                                             f"{type(value).__name__}"))
+            checked[name] = value
+        if problems:
+            raise CaseError(problems, source=f"<{type(self).__name__}.model_copy>")
+        return super().model_copy(update=checked, deep=deep)
+
+    def copy_with(self, update: Mapping[str, Any]) -> Any:
+        """A copy with ``update`` (field name -> new value) validated like a new model: every field rule and
+        cross-field rule applies, and a bad value raises :class:`CaseError` naming it."""
+        if not isinstance(update, Mapping):
+            raise TypeError(f"update = {update!r}: must be a mapping of field names to values")
+        data = {name: getattr(self, name) for name in type(self).model_fields}
+        data.update(update)
+        return type(self).model_validate(data)
+
     @classmethod
     def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Any:  # type: ignore[override]
         try:
@@ -518,7 +567,7 @@ class BitRock(_Base):
     )
 
     # -- law = "detournay" (Detournay & Defourny 1992; Richard, Germay & Detournay 2007) --------------------
-    blades: int = Field(4, ge=1, description="detournay: number of blades n [-]")
+    blades: int = Field(4, ge=1, le=100, description="detournay: number of blades n [-]")
     bit_radius: Length = Field(0.108, gt=0, description="detournay: bit radius a [m]")
     intrinsic_specific_energy: Pressure = Field(
         60e6, gt=0, description="detournay: intrinsic specific energy of the rock eps [Pa]")
@@ -600,7 +649,9 @@ class Damping(_Base):
     ``basis = "free_free"``: xi, c1 and c2 are defined on the modes of the unconstrained string (axial and
     torsional families; the rigid modes get c1 and c2), then projected on the reduced basis;
     ``"constrained"``: xi on every mode of the reduced basis (torsional modes top-held), c2 unused.
-    See :mod:`drillstring.damping`.
+    ``mass_proportional`` α [1/s] and ``stiffness_proportional`` β [s] add Rayleigh damping ``α M + β K`` of
+    the string (``α`` alone: the distributed viscous damping ``k ρA u̇``, ``k ρJ θ̇`` of Aarsnes & van de Wouw's
+    model, with ``k = α``), on top of the above. See :mod:`drillstring.damping`.
     """
 
     modal_damping_ratio: Dimensionless = Field(0.3, ge=0, lt=1, description="xi [-]")
@@ -609,6 +660,8 @@ class Damping(_Base):
     basis: Literal["free_free", "constrained"] = Field(
         "free_free", description="modes on which xi, c1, c2 are defined"
     )
+    mass_proportional: float = Field(0.0, ge=0, le=1e6, description="Rayleigh alpha [1/s]: C += alpha M")
+    stiffness_proportional: Time = Field(0.0, ge=0, le=1e3, description="Rayleigh beta [s]: C += beta K")
 
 
 class Environment(_Base):
@@ -648,7 +701,7 @@ class Simulation(_Base):
     output_step: Time = Field(0.01, gt=0, description="output sampling step [s]; <= t_end")
     rtol: Dimensionless = Field(1e-6, gt=0, lt=1)
     atol: Dimensionless = Field(1e-9, gt=0)
-    max_steps: int = Field(2_000_000, gt=0)
+    max_steps: int = Field(2_000_000, gt=0, le=10**12)
     min_step: Time = Field(1e-12, gt=0, description="smallest step before giving up [s]")
     method: Literal["dopri5", "bs32"] = "dopri5"
 
@@ -667,7 +720,7 @@ class Initial(_Base):
     spinning at the top speed, the bit-rock law switched on at t = 0. Both add a seeded lateral perturbation."""
 
     lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
-    seed: int = Field(0, ge=0)
+    seed: int = Field(0, ge=0, le=2**64 - 1)
     start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
     clearance: Length = Field(0.005, ge=0, le=1.0, description="ramp: bit height above the rock at t = 0 [m]")
     weight_ramp_time: Time = Field(
@@ -1014,8 +1067,11 @@ PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
     (("bit_rock", "regularization"), 1e-6, 1e3, "rad/s"),
     (("bit_rock", "stick_stiffening_limit"), 1.0, 1e6, ""),
     (("bit_rock", "bit_radius"), 1e-3, 10.0, "m"),
-    (("bit_rock", "intrinsic_specific_energy"), 1e3, 1e12, "Pa"),
-    (("bit_rock", "cutting_inclination"), 0.0, 10.0, ""),
+    # Detournay: rocks from chalk to granite have eps of 10-400 MPa and zeta of 0.4-1 (Detournay, Richard &
+    # Shepherd 2008); zeta -> 0 or eps -> 0 makes the depth of cut per turn (W - a sigma l)/(a zeta eps n)
+    # unbounded (a steady ROP of 4.7e9 m/h at zeta = 0).
+    (("bit_rock", "intrinsic_specific_energy"), 1e6, 1e12, "Pa"),
+    (("bit_rock", "cutting_inclination"), 0.1, 10.0, ""),
     (("bit_rock", "contact_stress"), 0.0, 1e12, "Pa"),
     (("bit_rock", "wear_flat_length"), 0.0, 10.0, "m"),
     (("bit_rock", "friction_coefficient"), 0.0, 10.0, ""),
@@ -1025,11 +1081,20 @@ PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
     (("contact", "shock_stiffness"), 0.0, 1e15, "N/m2"),
     (("contact", "friction_coefficient"), 0.0, 10.0, ""),
     (("contact", "speed_regularization"), 1e-6, 1e3, "rad/s"),
-    (("operation", "top_speed"), 0.0, 1e3, "rad/s"),
+    (("operation", "top_speed"), 1e-3, 1e3, "rad/s"),  # 0.01 rpm at least (1/Z² of the bit law grows as 1/speed²)
     (("operation", "weight_on_bit"), 0.0, 1e9, "N"),
     (("damping", "rigid_axial"), 0.0, 1e12, "N*s/m"),
     (("damping", "rigid_rotation"), 0.0, 1e12, "N*m*s/rad"),
     (("environment", "gravity"), 0.0, 100.0, "m/s2"),
+    (("sections", "*", "eccentricity_angle"), -1e4, 1e4, "rad"),
+    (("bow", "angle"), -1e4, 1e4, "rad"),
+    (("top_drive", "inertia"), 1e-3, 1e9, "kg*m2"),
+    (("top_drive", "proportional_gain"), 0.0, 1e12, "N*m*s/rad"),
+    (("top_drive", "integral_gain"), 0.0, 1e12, "N*m/rad"),
+    (("top_drive", "max_torque"), 1.0, 1e9, "N*m"),
+    (("top_drive", "ramp_time"), 0.0, 1e5, "s"),
+    (("top_drive", "filter_frequency"), 1e-6, 1e6, "rad/s"),
+    (("simulation", "t_end"), 1e-9, 1e7, "s"),
     (("simulation", "rtol"), 1e-14, 1.0, ""),
     (("simulation", "atol"), 1e-20, 1e3, ""),
     (("simulation", "min_step"), 1e-20, 1.0, "s"),
@@ -1198,6 +1263,20 @@ class Case(_Base):
         breaks = mesh_breaks([s.length for s in self.sections], points)
         return sum(element_counts(breaks, self.mesh.max_element_length))
 
+    def weight_on_bit_problem(self, weight_on_bit: float) -> str | None:
+        """Why ``weight_on_bit`` [N] cannot be this case's (the rule of ``operation.weight_on_bit``, also
+        applied to the API's overrides), or None: at most its :data:`PHYSICAL_BOUNDS` ceiling, and, with
+        gravity on, less than the string's weight (the hook cannot push; with gravity off the string weighs
+        nothing and the hook pushes)."""
+        high = next(h for path, _, h, _ in PHYSICAL_BOUNDS if path == ("operation", "weight_on_bit"))
+        if not weight_on_bit <= high:
+            return f"must be within [0, {high:g}] N"
+        w = self.weight
+        if self.model.gravity and weight_on_bit >= w:
+            return (f"must be less than the string's weight: weight_on_bit {weight_on_bit / 1e3:.4g} kN"
+                    f" >= weight {w / 1e3:.6g} kN")
+        return None
+
     # -- cross-field validation --------------------------------------------------------------------------
 
     @model_validator(mode="after")
@@ -1217,6 +1296,10 @@ class Case(_Base):
                         f"must be less than the borehole diameter ({self.borehole.diameter:g} m)",
                     )
                 )
+        if self.bit_rock.law == "detournay" and self.bit_rock.bit_radius > self.borehole.diameter / 2.0:
+            problems.append((("bit_rock", "bit_radius"), self.bit_rock.bit_radius,
+                             f"must be at most the borehole radius ({self.borehole.diameter / 2.0:g} m): the bit "
+                             f"cuts the hole"))
         L = self.length
         for i, st in enumerate(self.stabilizers):
             if not 0.0 < st.position <= L:
@@ -1239,18 +1322,9 @@ class Case(_Base):
 
         problems.extend(self._mesh_problems())
 
-        # With gravity off the string weighs nothing and the hook pushes; the rule only applies with gravity.
-        if self.model.gravity:
-            w, wob = self.weight, self.operation.weight_on_bit
-            if wob >= w:
-                problems.append(
-                    (
-                        ("operation", "weight_on_bit"),
-                        wob,
-                        f"must be less than the string's weight: weight_on_bit {wob / 1e3:.4g} kN"
-                        f" >= weight {w / 1e3:.6g} kN",
-                    )
-                )
+        wob_problem = self.weight_on_bit_problem(self.operation.weight_on_bit)
+        if wob_problem:
+            problems.append((("operation", "weight_on_bit"), self.operation.weight_on_bit, wob_problem))
         gaps = [(self.borehole.diameter - s.outer_diameter) / 2.0 for s in self.sections]
         i_min = min(range(len(gaps)), key=gaps.__getitem__)
         amp = self.initial.lateral_perturbation
@@ -1360,7 +1434,19 @@ def case_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Case:
     try:
         return Case.model_validate(dict(data))
     except CaseError as exc:
-        raise CaseError(exc.entries, source=source) from None
+        raise CaseError([_with_range(entry) for entry in exc.entries], source=source) from None
+
+
+def _with_range(entry: _Entry) -> _Entry:
+    """``entry`` with the field's plausible range (:data:`PHYSICAL_BOUNDS`) added when its value overflowed or
+    underflowed while its unit was read (the range is otherwise checked after every field is read)."""
+    loc, value, message = entry
+    if not message.startswith(("overflows", "underflows")):
+        return entry
+    for path, low, high, unit in PHYSICAL_BOUNDS:
+        if len(path) == len(loc) and all(p == "*" or p == item for p, item in zip(path, loc)):
+            return loc, value, f"{message}; must be within [{low:g}, {high:g}] {unit}".rstrip()
+    return entry
 
 
 def _looks_like_path(source: str) -> bool:
@@ -1393,6 +1479,59 @@ def _read_case_file(path: Path, label: str) -> bytes:
     return raw
 
 
+#: Longest key of a case file, dotted parts together [characters], and most parts of a dotted key (a case
+#: needs 3: ``[uncertainty.correlation]``; tomllib's time grows with the square of the parts: 20,000 took 25 s).
+MAX_KEY_LENGTH, MAX_KEY_PARTS = 400, MAX_CASE_DEPTH
+
+
+def _toml_key_problem(text: str) -> str | None:
+    """Why the keys of the TOML ``text`` are too long or too deeply dotted for a case, or None; a linear scan
+    before ``tomllib`` parses it (the parser takes minutes, or runs out of memory, on a key of 100,000 parts).
+
+    Each line's key (a ``[table]``/``[[array]]`` header, or what comes before ``=``) is scanned outside quotes
+    and outside multi-line strings; a ``"."`` inside a quoted key is not a separator."""
+    delimiter = None  # the closing quotes of the multi-line string the scan is in, if any
+    for number, line in enumerate(text.splitlines(), start=1):
+        if delimiter is not None:  # inside a multi-line string: find its end, keys start on a later line
+            if line.count(delimiter) % 2 == 1:
+                delimiter = None
+            continue
+        stripped = line.lstrip()
+        if not stripped or stripped[0] == "#":
+            continue
+        header = stripped[0] == "["
+        parts, length, quote = 1, 0, None
+        i = (2 if stripped.startswith("[[") else 1) if header else 0
+        while i < len(stripped):
+            char = stripped[i]
+            if quote is not None:
+                if char == "\\" and quote == '"':
+                    i += 1
+                elif char == quote:
+                    quote = None
+            elif char in "\"'":
+                quote = char
+            elif char == "." :
+                parts += 1
+            elif (char == "]" and header) or (char == "=" and not header):
+                break
+            elif not (char.isascii() and (char.isalnum() or char in "_- \t")):
+                break  # not a key (a value line of a multi-line array): nothing to check
+            i += 1
+            length += 1
+            if length > MAX_KEY_LENGTH:
+                return f"line {number}: a key longer than {MAX_KEY_LENGTH} characters"
+            if parts > MAX_KEY_PARTS:
+                return f"line {number}: a dotted key of more than {MAX_KEY_PARTS} parts"
+        if not header:
+            value = stripped[i + 1:]
+            for opening in ('"""', "'''"):
+                if value.count(opening) % 2 == 1:
+                    delimiter = opening
+                    break
+    return None
+
+
 def load_case(source: str | Path) -> Case:
     """Load a case: a built-in name (see :func:`builtin_cases`, e.g. ``"reference"``) or a path to a TOML file.
 
@@ -1419,9 +1558,14 @@ def load_case(source: str | Path) -> Case:
         raw = resource.read_bytes()
         folder = _cases_dir()
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise CaseError(f"{label}: not UTF-8 text ({exc.reason} at byte {exc.start})", source=label) from None
+    problem = _toml_key_problem(text)
+    if problem:
+        raise CaseError(f"{label}: {problem}", source=label)
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{label}: TOML syntax error: {exc}", source=label) from None
     except RecursionError:

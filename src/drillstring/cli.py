@@ -123,11 +123,16 @@ CaseArg = Annotated[
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON (SI units) on stdout instead of tables.")]
 
 
-def _unit_system_option(value: str | None) -> str:
-    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2)."""
+def _unit_system_option(ctx: typer.Context, value: str | None) -> str:
+    """The ``--units`` value, else ``$DRILLSTRING_UNITS``, else ``si``; a bad one is a usage error (exit 2),
+    except an unusable ``$DRILLSTRING_UNITS`` under ``--json`` (SI whatever the unit system): then a note on
+    stderr and ``si`` for any figure or report the command also writes."""
     try:
         return unit_system(value)
     except ValueError as error:
+        if value is None and ctx.params.get("as_json"):
+            typer.echo(f"note: {error}; ignored, --json output is SI", err=True)
+            return "si"
         raise typer.BadParameter(str(error)) from None
 
 
@@ -273,7 +278,10 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
     from drillstring import api
 
     the_case = _load(case)
-    state, margin = api.static(the_case)
+    try:
+        state, margin = api.static(the_case)
+    except ValueError as error:  # a model too large to solve (modal.DENSE_FALLBACK_MEMORY), as `modes` says
+        _fail(str(error))
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
@@ -412,8 +420,15 @@ def campbell(
         _check_output("--plot", plot)
     from drillstring import api
 
+    columns = (TextColumn("Campbell diagram: lateral whirl solved exactly at {task.completed} speeds, "
+                          "interpolated between them"), TimeElapsedColumn())
     try:
-        diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm")
+        with Progress(*columns, console=_err_console(), transient=True) as bar:
+            task = bar.add_task("campbell", total=None)
+            diagram = api.campbell(the_case, top_speed=top_speed, blades=blades, default_unit="rpm",
+                                   progress=lambda done, total: bar.update(task, completed=done))
+    except KeyboardInterrupt:
+        _fail("interrupted", EXIT_INTERRUPTED)
     except ValueError as error:
         _fail(str(error).replace("top_speed = ", "--top-speed = ").replace("blades = ", "--blades = "))
     payload = diagram.to_dict()
@@ -550,7 +565,8 @@ def stability(
     title = ("Characteristic roots of the linearised delay system (sorted by frequency)" if result.delay
              else "Eigenvalues of the linearised model (sorted by frequency)")
     modes_table = Table(title=title, title_justify="left")
-    for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]", "note"):
+    for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]",
+                   "energy a/t/l [%]", "note"):
         modes_table.add_column(column, justify="left" if column in ("family", "note") else "right")
     lateral_shown = 0
     hidden = 0
@@ -561,11 +577,24 @@ def stability(
                 continue
             lateral_shown += 1
         modes_table.add_row(mode.family, f"{mode.frequency:.4f}", f"{100 * mode.damping_ratio:.2f}",
-                            f"{mode.growth_rate:.4g}", "UNSTABLE" if mode.growth_rate > 0 else "")
+                            f"{mode.growth_rate:.4g}", _shares_text(mode.shares),
+                            ", ".join(n for n, on in (("UNSTABLE", mode.growth_rate > 0), ("mixed", mode.mixed)) if on))
     console.print(modes_table)
+    families = Table(title="Leading root of each family", title_justify="left")
+    for column in ("family", "frequency [Hz]", "growth rate [1/s]", "energy a/t/l [%]", "family stable"):
+        families.add_column(column, justify="left" if column in ("family", "family stable") else "right")
+    for family, mode in result.leading_by_family.items():
+        if mode is None:
+            families.add_row(family, "-", "-", "-", "no root")
+            continue
+        families.add_row(family, f"{mode.frequency:.4f}", f"{mode.growth_rate:.4g}", _shares_text(mode.shares),
+                         "yes" if result.family_stable(family) else "NO")
+    console.print(families)
     if hidden:
         console.print(escape(f"+ {hidden} more (stable) lateral modes: drillstring stability {case} --json"),
                       soft_wrap=True)
+    if result.steady_state.note:
+        console.print(escape(f"Warning: {result.steady_state.note}."), soft_wrap=True)
     leading = result.leading
     if result.stable:
         console.print(escape(f"Steady drilling is stable: slowest decay {leading.growth_rate:.4g} 1/s "
@@ -577,6 +606,13 @@ def stability(
             f"settles into a self-excited vibration."), soft_wrap=True)
     if boundary:
         console.print(escape(_boundary_line(found, units)), soft_wrap=True)
+
+
+def _shares_text(shares: dict | None) -> str:
+    """The energy shares (axial/torsional/lateral) of a root in percent, e.g. ``98/2/0``."""
+    if not shares:
+        return "-"
+    return "/".join(f"{100 * shares[f]:.0f}" for f in ("axial", "torsional", "lateral"))
 
 
 def _boundary_line(found: dict, units: str | None = None) -> str:
@@ -749,6 +785,8 @@ def simulate(
             except SimulationError as error:
                 failure = error
                 ds = error.dataset
+    except ValueError as error:  # refused before the run (a model too large to build), as `modes` says
+        _fail(str(error))
     except KeyboardInterrupt:
         _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
@@ -1060,6 +1098,10 @@ def _indicator_line(summary: dict[str, Any], units: str | None = None) -> str | 
     if stability.get("unstable_fraction") is not None:
         text = (f"steady drilling unstable (growth rate > 0) in {stability['unstable_realizations']} of "
                 f"{stability['realizations_with_growth_rate']} ({100 * stability['unstable_fraction']:.3g} %)")
+        families = [f"{family} {entry['unstable_realizations']}" for family, entry in
+                    (stability.get("by_family") or {}).items() if entry["realizations_with_roots"]]
+        if families:
+            text += f" (a growing root per family: {', '.join(families)})"
         boundary = stability.get("boundary") or {}
         if boundary.get("weight_on_bit") is not None:
             force = display_unit("force", units)
@@ -1309,8 +1351,9 @@ def map_command(
     Per point: mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical specific energy,
     largest radial displacement and impacts, the leading growth rate of the linear stability of steady
     drilling and the buckling margin. Writes OUT/map.zarr (resumable), OUT/map.nc, OUT/map.json,
-    OUT/map.png (contours with the stability boundary, the buckling limit and the points) and
-    OUT/report.html.
+    OUT/map.png (contours with the stability boundary, the buckling limit and the points; open circles where
+    a run ends in stick-slip although steady drilling is linearly stable), OUT/stability.png (the growth rate
+    of the leading torsional, axial and lateral root per point) and OUT/report.html.
     """
     the_case = _load(case)
     if workers is not None and scheduler:
@@ -1373,6 +1416,18 @@ def _print_probability_map(name: str, summary: dict[str, Any], units: str) -> No
             cells += [spread("rate_of_penetration_q", i, j, rop.scale), spread("stick_slip_index_q", i, j, 1.0)]
             table.add_row(*cells)
     console.print(table)
+    families = Table(title="Stability per family and coexisting cycles per point", title_justify="left",
+                     caption="P(coexisting): stick-slip although the torsional and axial roots of steady drilling "
+                             "all decay", caption_justify="left")
+    for header in ("rpm", f"WOB [{force.label}]", "P(torsional root grows)", "P(axial root grows)", "P(coexisting)"):
+        families.add_column(escape(header), justify="right")
+    for i, speed in enumerate(speeds):
+        for j, wob in enumerate(weights):
+            families.add_row(f"{speed * _RPM:g}", f"{force(wob):g}",
+                             *(_fmt(probabilities[key]["values"][i][j], ".3f") for key in (
+                                 "torsional_instability_probability", "axial_instability_probability",
+                                 "coexistence_probability")))
+    console.print(families)
     console.print(escape(f"critical weight-on-bit (lateral buckling, nominal case): "
                          f"{force(summary['critical_weight_on_bit']):,.1f} {force.label}"), soft_wrap=True)
     files = summary.get("files") or {}
@@ -1400,7 +1455,12 @@ def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_row("points where steady drilling is linearly stable", f"{summary['linearly_stable_points']}")
+    for family, counts in summary.get("linearly_stable_points_by_family", {}).items():
+        table.add_row(f"  ... whose {family} roots all decay", f"{counts['stable']} of "
+                                                               f"{counts['stable'] + counts['unstable']}")
     table.add_row("points in stick-slip", f"{summary['stick_slip_points']}")
+    table.add_row("  ... although steady drilling is linearly stable (coexisting cycles)",
+                  f"{summary.get('coexisting_cycle_points', 0)}")
     table.add_row("points without steady drilling (no penetration)", f"{summary['points_without_steady_drilling']}")
     table.add_row("critical weight-on-bit (lateral buckling)",
                   f"{force(summary['critical_weight_on_bit']):,.1f} {force.label}")
@@ -1417,7 +1477,7 @@ def _print_map(name: str, summary: dict[str, Any], units: str) -> None:
     files = summary.get("files") or {}
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
-        console.print(escape(f"Map: {files['map']}, figure: {files['figure']}, report: {files['report']}, "
+        console.print(escape(f"Map: {files['map']}, figures: {files['figure']}, {files['stability']}, report: {files['report']}, "
                              f"interactive: {files['interactive']}"), soft_wrap=True)
 
 

@@ -75,7 +75,8 @@ def expand(components: list[Any], materials: Mapping[str, Any], borehole_diamete
     :class:`drillstring.case.Component` objects, top to bit); ``materials`` maps a material name to an object
     with ``young_modulus``, ``density`` and ``poisson_ratio`` [SI]. Raises :class:`ComponentProblem` listing
     what cannot be built (an unknown material, a weight per length heavier than a solid bar, a blade diameter
-    above the borehole's, a stabilizer of no length at the top of the string)."""
+    above the borehole's, a body or tool joint as wide as the hole, a stabilizer of no length at the top of
+    the string)."""
     sections: list[dict[str, Any]] = []
     stabilizers: list[dict[str, Any]] = []
     added: dict[str, dict[str, float]] = {}
@@ -119,6 +120,13 @@ def expand(components: list[Any], materials: Mapping[str, Any], borehole_diamete
             mass = c.weight_per_length
         area = _tube_area(c.outer_diameter, inner)
         joint = getattr(c, "tool_joint", None)
+        if borehole_diameter is not None:  # the pipe body and its tool joints must pass in the hole
+            if c.outer_diameter >= borehole_diameter:
+                problems.append((where + ("outer_diameter",), c.outer_diameter,
+                                 f"must be less than the borehole diameter ({borehole_diameter:g} m)"))
+            if joint is not None and joint.outer_diameter >= borehole_diameter:
+                problems.append((where + ("tool_joint", "outer_diameter"), joint.outer_diameter,
+                                 f"must be less than the borehole diameter ({borehole_diameter:g} m)"))
         if joint is not None:
             joint_inner = inner if joint.inner_diameter is None else joint.inner_diameter
             extra = material.density * (_tube_area(joint.outer_diameter, joint_inner) - area) * joint.length

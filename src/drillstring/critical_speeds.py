@@ -27,7 +27,9 @@ spinning Timoshenko shaft)::
   ``u = Λ^{1/2} x`` it is the symmetric eigenproblem ``[[0, Λ^{1/2}], [Λ^{1/2}, Ω H]] (u, ω x) =
   ω (u, ω x)`` (``eigh``); a buckled string (some ``ω_j² < 0``) is solved as the general linearised
   problem and keeps its real roots. The basis holds every lateral mode below twice the diagram's
-  highest frequency (at least 20), so truncation stays far below the gyroscopic split.
+  highest frequency (at least 20), so truncation stays far below the gyroscopic split. The roots are solved
+  exactly at a few speeds and interpolated in between with their Hellmann–Feynman slopes, every interval
+  checked against an exact solution (:func:`lateral_whirl`): 3,000 speeds in about 3 s.
 
 The fluid's Coriolis and viscous terms ``C_f`` are left out, as in ``drillstring modes`` (they damp and
 shift the modes slightly but do not depend on the rotary speed); at ``Ω = 0`` the diagram gives exactly
@@ -177,9 +179,57 @@ def turned_plane(mesh, shapes_y: np.ndarray) -> np.ndarray:
     return out
 
 
-def lateral_whirl(system: LinearSystem, speeds, basis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+#: Interpolated whirl frequencies agree with the exact roots within this share of the highest root, checked
+#: at the middle of every interval between exact solutions (:func:`lateral_whirl`).
+WHIRL_TOLERANCE = 1e-8
+#: Exact solutions first spread evenly over the speeds (then added where the check asks for them).
+_FIRST_ANCHORS = 9
+#: Most speeds of one diagram (each curve holds one frequency per speed; 10,000 speeds of the reference
+#: string's 600 curves are 48 MB of numbers, and a JSON of about 100 MB).
+MAX_CAMPBELL_SPEEDS = 10_000
+
+
+def _whirl_roots(root: np.ndarray, h: np.ndarray, spin: float) -> tuple[np.ndarray, ...]:
+    """Exact forward and backward whirl roots [rad/s] at one ``spin`` (all ω_j² > 0), ascending, and their
+    slopes dω/dΩ: the eigenvalues θ of ``A(Ω) = [[0, Λ^{1/2}], [Λ^{1/2}, Ω H]]`` (module docstring) and, by
+    Hellmann–Feynman, ``dθ/dΩ = vᵀ (∂A/∂Ω) v = v_2ᵀ H v_2`` for each unit eigenvector ``v = (v_1, v_2)``.
+    ``A`` has exactly n positive and n negative eigenvalues at every speed (its determinant, ±∏ω_j², never
+    vanishes, and at Ω = 0 they are ±ω_j)."""
+    n = len(root)
+    a = np.zeros((2 * n, 2 * n))
+    a[np.arange(n), n + np.arange(n)] = root
+    a[n + np.arange(n), np.arange(n)] = root
+    a[n:, n:] = spin * h
+    theta, v = sla.eigh(a)
+    lower = v[n:, :]
+    slope = np.einsum("ik,ik->k", lower, h @ lower)
+    # theta ascending: the n negative ones first (backward, -θ ascending = theta reversed), then forward.
+    return theta[n:], slope[n:], -theta[:n][::-1], -slope[:n][::-1]
+
+
+def _hermite(s0: float, s1: float, y0, d0, y1, d1, s: np.ndarray) -> np.ndarray:
+    """Cubic Hermite interpolation on [s0, s1] of values ``y`` and slopes ``d`` (arrays over the roots), at the
+    speeds ``s``: one row per speed."""
+    width = s1 - s0
+    t = ((np.asarray(s) - s0) / width)[:, None]
+    return ((2 * t**3 - 3 * t**2 + 1) * y0 + (t**3 - 2 * t**2 + t) * width * d0
+            + (-2 * t**3 + 3 * t**2) * y1 + (t**3 - t**2) * width * d1)
+
+
+def lateral_whirl(system: LinearSystem, speeds, basis: int, *, tolerance: float = WHIRL_TOLERANCE,
+                  progress=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Forward and backward whirl angular frequencies [rad/s] of the lateral family at each spin speed
     (module docstring), on the ``basis`` lowest non-rotating modes of one plane.
+
+    Each root is an analytic function of the speed, whose slope the eigenvector gives (Hellmann–Feynman,
+    :func:`_whirl_roots`). The roots are solved exactly at a few speeds (:data:`_FIRST_ANCHORS` spread
+    evenly) and interpolated in between by cubic Hermite polynomials on their values and slopes; every
+    interval is checked at its middle speed against an exact solution (which joins the exact ones) and split
+    until the interpolation agrees there within ``tolerance`` times the largest root. The reference string
+    (320 modes per plane, 3,000 speeds) needs a few tens of exact solutions instead of 3,000. A buckled
+    string (some ω_j² < 0) is solved exactly at every speed (the general linearised problem, real roots
+    kept). ``progress(done, total)``, if given, is called after each exact solution (``total`` is an upper
+    bound: the number of speeds).
 
     Returns ``(forward, backward, share, eigenvalues)``: arrays (n_speeds, basis), each row ascending (NaN
     where a root is not real: an unstable mode of a buckled string), each basis mode's BHA energy share and
@@ -193,21 +243,72 @@ def lateral_whirl(system: LinearSystem, speeds, basis: int) -> tuple[np.ndarray,
     speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
     forward = np.full((len(speeds), n), np.nan)
     backward = np.full((len(speeds), n), np.nan)
+    share = bha_energy_share(system, phi_y)
+    if len(speeds) == 0:
+        return forward, backward, share, lam
+    if np.all(lam > 0.0):
+        _interpolated_whirl(np.sqrt(lam), h, speeds, forward, backward, tolerance, progress)
+        return forward, backward, share, lam
     for i, spin in enumerate(speeds):
-        if np.all(lam > 0.0):
-            root = np.diag(np.sqrt(lam))
-            a = np.block([[np.zeros((n, n)), root], [root, spin * h]])
-            roots = sla.eigh(a, eigvals_only=True)
-        else:
-            a = np.block([[np.zeros((n, n)), np.eye(n)], [np.diag(lam), spin * h]])
-            roots = np.linalg.eigvals(a)
-            scale = max(1.0, float(np.abs(roots).max()))
-            roots = roots[np.abs(roots.imag) <= 1e-9 * scale].real
+        a = np.block([[np.zeros((n, n)), np.eye(n)], [np.diag(lam), spin * h]])
+        roots = np.linalg.eigvals(a)
+        scale = max(1.0, float(np.abs(roots).max()))
+        roots = roots[np.abs(roots.imag) <= 1e-9 * scale].real
         fwd = np.sort(roots[roots > 0.0])[:n]
         bwd = np.sort(-roots[roots < 0.0])[:n]
         forward[i, :len(fwd)] = fwd
         backward[i, :len(bwd)] = bwd
-    return forward, backward, bha_energy_share(system, phi_y), lam
+        if progress is not None:
+            progress(i + 1, len(speeds))
+    return forward, backward, share, lam
+
+
+def _interpolated_whirl(root, h, speeds, forward, backward, tolerance, progress) -> None:
+    """Fill ``forward`` and ``backward`` (rows: ``speeds``) by checked Hermite interpolation between exact
+    solutions (:func:`lateral_whirl`)."""
+    grid, where = np.unique(speeds, return_inverse=True)
+    m = len(grid)
+    exact: dict[int, tuple[np.ndarray, ...]] = {}
+
+    def solve(i: int) -> tuple[np.ndarray, ...]:
+        if i not in exact:
+            exact[i] = _whirl_roots(root, h, float(grid[i]))
+            if progress is not None:
+                progress(len(exact), m)
+        return exact[i]
+
+    first = sorted(set(np.linspace(0, m - 1, min(m, _FIRST_ANCHORS)).round().astype(int).tolist()))
+    scale = float(root.max()) * (1.0 + 1e-3)  # about the largest root (the split is a small fraction of it)
+    out_f = np.empty((m, len(root)))
+    out_b = np.empty((m, len(root)))
+    for i in first:
+        f, _, b, _ = solve(i)
+        out_f[i], out_b[i] = f, b
+    stack = list(zip(first[:-1], first[1:]))
+    while stack:
+        lo, hi = stack.pop()
+        if hi - lo <= 1:
+            continue
+        mid = (lo + hi) // 2
+        f0, df0, b0, db0 = solve(lo)
+        f1, df1, b1, db1 = solve(hi)
+        fm, _, bm, _ = solve(mid)
+        out_f[mid], out_b[mid] = fm, bm
+        guess_f = _hermite(grid[lo], grid[hi], f0, df0, f1, df1, grid[mid:mid + 1])[0]
+        guess_b = _hermite(grid[lo], grid[hi], b0, db0, b1, db1, grid[mid:mid + 1])[0]
+        error = max(float(np.abs(guess_f - fm).max()), float(np.abs(guess_b - bm).max()))
+        if error > tolerance * scale:
+            stack.extend(((lo, mid), (mid, hi)))
+            continue
+        for a, c in ((lo, mid), (mid, hi)):  # both halves from their exact ends: better than the checked guess
+            if c - a > 1:
+                fa, dfa, ba, dba = solve(a)
+                fc, dfc, bc, dbc = solve(c)
+                inside = grid[a + 1:c]
+                out_f[a + 1:c] = _hermite(grid[a], grid[c], fa, dfa, fc, dfc, inside)
+                out_b[a + 1:c] = _hermite(grid[a], grid[c], ba, dba, bc, dbc, inside)
+    forward[:] = np.sort(out_f, axis=1)[where]
+    backward[:] = np.sort(out_b, axis=1)[where]
 
 
 def _crossings(speeds: np.ndarray, frequencies: np.ndarray, order: int) -> list[tuple[float, float]]:
@@ -221,16 +322,15 @@ def _crossings(speeds: np.ndarray, frequencies: np.ndarray, order: int) -> list[
         if speeds[0] <= speed <= speeds[-1] and frequencies[0] > 0.0:
             out.append((float(speed), float(frequencies[0])))
         return out
-    for j in range(len(speeds) - 1):
-        a, b = gap[j], gap[j + 1]
-        if not (np.isfinite(a) and np.isfinite(b)):
-            continue
-        if a == 0.0:
-            out.append((float(speeds[j]), float(frequencies[j])))
-        elif a * b < 0.0:
-            t = a / (a - b)
-            speed = speeds[j] + t * (speeds[j + 1] - speeds[j])
-            out.append((float(speed), float(order * speed / (2.0 * math.pi))))
+    a, b = gap[:-1], gap[1:]
+    usable = np.isfinite(a) & np.isfinite(b)
+    at_node = np.flatnonzero(usable & (a == 0.0))
+    across = np.flatnonzero(usable & (a * b < 0.0))
+    t = a[across] / (a[across] - b[across])
+    crossed = speeds[across] + t * (speeds[across + 1] - speeds[across])
+    found = [(int(j), float(speeds[j]), float(frequencies[j])) for j in at_node]
+    found += [(int(j), float(x), float(order * x / (2.0 * math.pi))) for j, x in zip(across, crossed)]
+    out = [(speed, frequency) for _, speed, frequency in sorted(found)]
     if len(speeds) and gap[-1] == 0.0:
         out.append((float(speeds[-1]), float(frequencies[-1])))
     return out
@@ -238,15 +338,18 @@ def _crossings(speeds: np.ndarray, frequencies: np.ndarray, order: int) -> list[
 
 def campbell_diagram(system: LinearSystem, speeds, orders=(1, DEFAULT_BLADES), *,
                      operating_speed: float | None = None, max_frequency: float | None = None,
-                     lateral_basis: int | None = None) -> CampbellDiagram:
+                     lateral_basis: int | None = None, progress=None) -> CampbellDiagram:
     """The Campbell diagram of a prestressed linear system over ``speeds`` [rad/s] (module docstring).
 
     ``orders``: the excitation lines; ``max_frequency`` [Hz]: the highest frequency shown (default: the
     highest line at the highest speed); ``lateral_basis``: modes of one plane in the lateral basis
-    (default: every mode below twice ``max_frequency``, at least 20)."""
+    (default: every mode below twice ``max_frequency``, at least 20); ``progress(done, total)``: called
+    after each exact solution of the lateral family (:func:`lateral_whirl`). At most
+    :data:`MAX_CAMPBELL_SPEEDS` speeds (refused before any work)."""
     speeds = np.sort(np.atleast_1d(np.asarray(speeds, dtype=float)))
+    check_speed_count(len(speeds))
     if speeds.size == 0 or not np.all(np.isfinite(speeds)) or np.any(speeds < 0.0):
-        raise ValueError(f"speeds = {list(speeds)!r}: must be finite numbers >= 0 [rad/s]")
+        raise ValueError(f"speeds = {list(speeds[:5])!r}...: must be finite numbers >= 0 [rad/s]")
     orders = tuple(sorted({int(k) for k in orders}))
     if not orders or orders[0] < 1:
         raise ValueError(f"orders = {orders!r}: every order must be an integer >= 1")
@@ -264,7 +367,7 @@ def campbell_diagram(system: LinearSystem, speeds, orders=(1, DEFAULT_BLADES), *
     if lateral_basis is None:
         lateral_basis = max(_MIN_BASIS, len(family_modes_below(system, "lateral_y", 1,
                                                                  _BASIS_FACTOR * cutoff).frequencies))
-    forward, backward, share, eigenvalues = lateral_whirl(system, speeds, lateral_basis)
+    forward, backward, share, eigenvalues = lateral_whirl(system, speeds, lateral_basis, progress=progress)
     # A buckled string's statically unstable modes (ω² < 0, listed first by `drillstring modes`) have no real
     # whirl frequency: they are left out, and the other modes keep their numbers.
     unstable = int(np.count_nonzero(eigenvalues < 0.0))
@@ -290,11 +393,21 @@ def campbell_diagram(system: LinearSystem, speeds, orders=(1, DEFAULT_BLADES), *
                            tuple(notes))
 
 
-def case_campbell(case, speeds, blades: int = DEFAULT_BLADES) -> CampbellDiagram:
+def check_speed_count(count: int, name: str = "speeds") -> None:
+    """Refuse (ValueError naming ``name``) more than :data:`MAX_CAMPBELL_SPEEDS` speeds, before any work."""
+    if count > MAX_CAMPBELL_SPEEDS:
+        raise ValueError(f"{name}: {count:,} speeds, more than the {MAX_CAMPBELL_SPEEDS:,} allowed (the curves "
+                         f"of a diagram already look smooth with a few hundred)")
+
+
+def case_campbell(case, speeds, blades: int = DEFAULT_BLADES, progress=None) -> CampbellDiagram:
     """The Campbell diagram of a :class:`~drillstring.case.Case` prestressed at its weight-on-bit, over
-    ``speeds`` [rad/s], with the lines 1× and ``blades`` × and the case's top speed marked."""
+    ``speeds`` [rad/s], with the lines 1× and ``blades`` × and the case's top speed marked;
+    ``progress(done, total)`` as :func:`campbell_diagram`'s."""
     from drillstring.modal import case_linear_system
     from drillstring.statics import case_static_state
 
+    check_speed_count(len(np.atleast_1d(speeds)))
     system = case_linear_system(case, case_static_state(case))
-    return campbell_diagram(system, speeds, (1, blades), operating_speed=float(case.operation.top_speed))
+    return campbell_diagram(system, speeds, (1, blades), operating_speed=float(case.operation.top_speed),
+                            progress=progress)

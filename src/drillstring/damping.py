@@ -41,6 +41,16 @@ where the integrand of each mode is ``(ω/2) sech(s − ln ω)``: the rule conve
 (Trefethen & Weideman, SIAM Rev. 56 (2014) 385, §5), 6e-15 relative at ``Δs = 0.3``. Each node of the rule
 is one sparse solve with the banded ``t² M + K``: memory and time linear in the family's size.
 
+**Rayleigh damping** (``rayleigh = (α, β)``, optional, added to either definition): ``C_R = α M + β K``
+(Rayleigh, *The Theory of Sound* I, §97, 1877; Clough & Penzien, *Dynamics of Structures*, §12-4), projected
+on the basis as ``α Φᵀ M Φ + β Φᵀ K Φ`` (every family; ``K`` the linear stiffness, without prestress). On a
+mode of circular frequency ω it gives the ratio ``ξ(ω) = α/(2ω) + βω/2``. ``α`` alone is viscous damping
+proportional to mass: for a uniform rod ``ρA ü + α ρA u̇ = EA u''`` (and likewise in torsion), the distributed
+damping of Aarsnes & van de Wouw's drill-string model (J. Sound Vib. 444 (2019) 127–151, their ``k`` [1/s]).
+It acts on the absolute velocity, so the rigid motions feel it too (``C_R r = α M r``: the resistance
+``α m`` to a rigid translation, ``α J`` to a rigid rotation) and, with the top rotation imposed, it adds the
+constant generalised force ``−Ω α Ψᵀ M r``.
+
 ``constrained`` is the earlier definition: ``2 ξ |ω_i|`` on every elastic basis mode (torsional modes
 top-held), ``c1 / m`` on the rigid axial mode, and ``c2`` unused. It over-damps the first torsional mode
 (ξ = 0.3 instead of ≈ 0.09) and is kept as an option for comparison.
@@ -219,6 +229,7 @@ def reduced_structural_damping(
     rigid_rotation: float,
     top_speed: float,
     definition: str = "free_free",
+    rayleigh: tuple[float, float] = (0.0, 0.0),
 ) -> ReducedDamping:
     """Structural damping of the reduced model (module docstring).
 
@@ -230,9 +241,43 @@ def reduced_structural_damping(
         damping_ratio: ξ [-]; rigid_axial: c1 [N·s/m]; rigid_rotation: c2 [N·m·s/rad];
         top_speed: Ω [rad/s], imposed at the top.
         definition: "free_free" or "constrained".
+        rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above (module docstring).
     """
     if definition not in DAMPING_BASES:
         raise ValueError(f"damping basis = {definition!r}: must be one of {', '.join(DAMPING_BASES)}")
+    extra = rayleigh_damping(mass, stiffness, basis, family, rayleigh, top_speed)
+    found = _reduced_structural_damping(mass, stiffness, basis, family, angular_frequencies,
+                                        damping_ratio=damping_ratio, rigid_axial=rigid_axial,
+                                        rigid_rotation=rigid_rotation, top_speed=top_speed, definition=definition)
+    if extra is None:
+        return found
+    return ReducedDamping(found.matrix + extra.matrix, found.generalized_force + extra.generalized_force)
+
+
+def rayleigh_damping(mass, stiffness, basis: np.ndarray, family, rayleigh: tuple[float, float],
+                     top_speed: float) -> ReducedDamping | None:
+    """Rayleigh damping ``α M + β K`` on the basis ``Φ`` (module docstring): ``α Φᵀ M Φ + β Φᵀ K Φ`` and, with
+    the top rotation imposed at ``top_speed`` Ω [rad/s], the generalised force ``−Ω α Ψᵀ M r`` on the torsional
+    columns (``r`` the unit rigid rotation; ``K r = 0``). None when α = β = 0."""
+    alpha, beta = (float(v) for v in rayleigh)
+    if not (alpha >= 0.0 and beta >= 0.0 and np.isfinite(alpha) and np.isfinite(beta)):
+        raise ValueError(f"rayleigh = {rayleigh!r}: alpha [1/s] and beta [s] must be finite and >= 0")
+    if alpha == 0.0 and beta == 0.0:
+        return None
+    matrix = alpha * (basis.T @ (mass @ basis)) + beta * (basis.T @ (stiffness @ basis))
+    force = np.zeros(basis.shape[1])
+    if alpha and top_speed:
+        columns = np.nonzero(np.asarray(family) == "torsional")[0]
+        rigid = np.zeros(basis.shape[0])
+        rigid[dof(np.arange(basis.shape[0] // 6), THETA_X)] = 1.0
+        force[columns] = -top_speed * alpha * (basis[:, columns].T @ (mass @ rigid))
+    return ReducedDamping(0.5 * (matrix + matrix.T), force)
+
+
+def _reduced_structural_damping(mass, stiffness, basis, family, angular_frequencies, *, damping_ratio: float,
+                                rigid_axial: float, rigid_rotation: float, top_speed: float,
+                                definition: str) -> ReducedDamping:
+    """:func:`reduced_structural_damping` without the Rayleigh part."""
     labels = np.asarray(family)
     n = basis.shape[1]
     matrix = np.zeros((n, n))

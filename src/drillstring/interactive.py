@@ -175,6 +175,34 @@ def map_figures(ds, *, units: str | None = None) -> list[dict]:
                                "top speed [rpm]", f"weight-on-bit [{force.label}]",
                                shapes=_buckling_line(critical, weights),
                                legend={"orientation": "h", "y": -0.2}))
+    figures += _family_figures(ds, speeds, weights, critical, force.label)
+    return figures
+
+
+def _family_figures(ds, speeds, weights, critical: float, force: str) -> list[dict]:
+    """One heat map per family of :data:`~drillstring.plots.STABILITY_PANELS` whose growth rate the map holds
+    (``<family>_growth_rate`` [1/s], on a blue–red scale centred on 0, with its zero contour): the torsional
+    and axial stability that a buckled string's lateral root hides in the overall growth rate."""
+    from drillstring.plots import STABILITY_PANELS
+
+    figures = []
+    for family, title in STABILITY_PANELS:
+        name = f"{family}_growth_rate"
+        if name not in ds or not np.isfinite(np.asarray(ds[name].values, dtype=float)).any():
+            continue
+        growth = np.asarray(ds[name].values, dtype=float)
+        label = f"growth rate of the leading {family} root [1/s]"
+        data = [_heatmap(speeds, weights, growth, label, title, force, colorscale="RdBu", reversescale=True,
+                         zmid=0.0)]
+        if speeds.size >= 2 and weights.size >= 2 and np.nanmax(growth) > 0 > np.nanmin(growth):
+            data.append({"type": "contour", "x": _values(speeds), "y": _values(weights), "z": _grid(growth.T),
+                         "contours": {"start": 0, "end": 0, "size": 1, "coloring": "none"}, "showscale": False,
+                         "line": {"color": "black", "width": 2}, "name": f"{family} stability boundary",
+                         "showlegend": True, "hoverinfo": "skip"})
+        figures.append(_figure(f"stability of the {title}", f"{label} over the map (blue decays, red grows); "
+                               f"black: where it crosses 0; red dashed: lateral buckling limit ({critical:.4g} "
+                               f"{force}).", data, "top speed [rpm]", f"weight-on-bit [{force}]",
+                               shapes=_buckling_line(critical, weights), legend={"orientation": "h", "y": -0.2}))
     return figures
 
 

@@ -67,6 +67,9 @@ TITLES: dict[str, str] = {
     "contact_force": "contact force",
     "quill_speed": "quill speed",
     "surface_torque": "surface torque",
+    "depth_of_cut": "depth of cut",
+    "hook_load": "hook load",
+    "wear_flat_force": "wear-flat force",
 }
 
 #: The four observables of the study figures, in panel order (a study of a case with a top drive adds the
@@ -135,26 +138,52 @@ def _probe_positions(ds: xr.Dataset) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------------------
 
 
+def run_panels(ds: xr.Dataset) -> tuple[str, ...]:
+    """The panels of :func:`plot_run` that fit the run's case, in order: ``rop``, ``speed`` (bit, and the
+    quill with a top drive), ``radial`` (lateral modes only), ``torque`` (on bit, and at the surface with a
+    top drive), ``orbit`` and ``contact`` (lateral modes only), ``force`` (a Detournay bit: the force on bit
+    and its wear-flat part), ``depth_of_cut`` (a Detournay bit) and ``hook_load`` (a ramped start). The case
+    has lateral modes unless the Dataset's ``lateral_modes`` attribute says 0 (a Dataset without it is taken
+    to have them, as runs written before)."""
+    lateral = int(ds.attrs.get("lateral_modes", 1)) > 0
+    panels = ["rop", "speed"] + (["radial"] if lateral else []) + ["torque"]
+    panels += ["orbit", "contact"] if lateral else []
+    if "wear_flat_force" in ds:
+        panels.append("force")
+    if "depth_of_cut" in ds:
+        panels.append("depth_of_cut")
+    if "hook_load" in ds:
+        panels.append("hook_load")
+    return tuple(panels)
+
+
 def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units: str | None = None) -> Path:
-    """Six panels of one simulation written to the PNG ``path``: the four of the reference study's figure —
-    ROP [m/h], bit speed [rpm] with the top speed (``ds.attrs["top_speed"]`` [rad/s]) dashed, radial
-    displacement [mm] at the probe nearest ``probe_x`` [m] with its gap (coordinate ``gap``) dashed, and
-    torque-on-bit [kN·m], vs time [s] — and the lateral motion: the whirl orbit at that probe (w against v
-    [mm], with the borehole wall as a circle of radius the gap) and the contact force of the wall on the
-    string [kN] vs time. A failed (partial) run is plotted as far as it went, with its status in the title.
-    Units of ``units`` (see the module docstring).
+    """The panels of one simulation that fit its case (:func:`run_panels`), written to the PNG ``path``: ROP
+    [m/h]; bit speed [rpm] with the top speed (``ds.attrs["top_speed"]`` [rad/s]) dashed and, with a top
+    drive, the quill speed; with lateral modes the radial displacement [mm] at the probe nearest ``probe_x``
+    [m] with its gap (coordinate ``gap``) dashed; the torque on bit [kN·m] and the surface torque; with lateral modes the whirl orbit at that probe (w against v [mm], the borehole wall a
+    circle of radius the gap) and the wall's contact force [kN]; for a Detournay bit the force on bit with its
+    wear-flat part [kN] and the depth of cut per blade [mm]; during a ramped start the hook load [kN], all
+    vs time [s]. A failed (partial) run is plotted as far as it went, with its status in the title. Units
+    of ``units`` (see the module docstring).
     """
     small, length = display_unit("small_length", units), display_unit("length", units)
     t = np.asarray(ds["time"].values, dtype=float)
-    fig, axes = _figure(3, 2, _RUN_FIGURE, margins=_PANEL_MARGINS)
-    ax_rop, ax_speed, ax_radial, ax_tob, ax_orbit, ax_contact = axes
+    panels = run_panels(ds)
+    rows = (len(panels) + 1) // 2
+    fig, grid = _figure(rows, 2, (_RUN_FIGURE[0], _RUN_FIGURE[1] * rows / 3), margins=_PANEL_MARGINS)
+    for ax in grid[len(panels):]:
+        ax.set_axis_off()
+    axes = dict(zip(panels, grid))
+    imposed = ds.attrs.get("top_drive", "imposed_speed") == "imposed_speed"
 
+    ax_rop = axes["rop"]
     ax_rop.plot(t, _scaled(ds["rate_of_penetration"].values, "rate_of_penetration", units), lw=0.9)
     ax_rop.set_ylabel(_label("rate_of_penetration", units))
 
+    ax_speed = axes["speed"]
     ax_speed.plot(t, _scaled(ds["bit_speed"].values, "bit_speed", units), lw=0.9, label="bit")
     top = ds.attrs.get("top_speed")
-    imposed = ds.attrs.get("top_drive", "imposed_speed") == "imposed_speed"
     if "quill_speed" in ds and not imposed:
         ax_speed.plot(t, _scaled(ds["quill_speed"].values, "quill_speed", units), lw=0.9, label="quill")
     if top is not None:
@@ -163,35 +192,56 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
     ax_speed.set_ylabel(_label("bit_speed", units))
     ax_speed.legend(loc="best", fontsize="small")
 
-    x = _probe_positions(ds)
-    if "radial_displacement" in ds and x.size:
-        i = _probe_index(x, probe_x)
-        r = ds["radial_displacement"].isel(probe=i).values
-        r_mm = _scaled(r, "radial_displacement", units)
-        ax_radial.plot(t, r_mm, lw=0.9, label="r")
-        if np.isfinite(r_mm).any():
-            # The gap line can dwarf a small orbit: say how large it is.
-            ax_radial.text(0.02, 0.95, f"max r = {np.nanmax(r_mm):.3g} {small.label}",
-                           transform=ax_radial.transAxes, va="top", fontsize="small")
-        if "gap" in ds.coords or "gap" in ds:
-            gap = float(np.atleast_1d(ds["gap"].values)[i])
-            ax_radial.axhline(small(gap), color="k", ls="--", lw=0.9, label="gap")
-        ax_radial.set_title(f"probe at x = {length(x[i]):.0f} {length.label}", fontsize="medium")
-        ax_radial.legend(loc="best", fontsize="small")
-    else:
-        ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
-    ax_radial.set_ylabel(_label("radial_displacement", units))
+    if "radial" in axes:
+        ax_radial = axes["radial"]
+        x = _probe_positions(ds)
+        if "radial_displacement" in ds and x.size:
+            i = _probe_index(x, probe_x)
+            r = ds["radial_displacement"].isel(probe=i).values
+            r_mm = _scaled(r, "radial_displacement", units)
+            ax_radial.plot(t, r_mm, lw=0.9, label="r")
+            if np.isfinite(r_mm).any():
+                # The gap line can dwarf a small orbit: say how large it is.
+                ax_radial.text(0.02, 0.95, f"max r = {np.nanmax(r_mm):.3g} {small.label}",
+                               transform=ax_radial.transAxes, va="top", fontsize="small")
+            if "gap" in ds.coords or "gap" in ds:
+                gap = float(np.atleast_1d(ds["gap"].values)[i])
+                ax_radial.axhline(small(gap), color="k", ls="--", lw=0.9, label="gap")
+            ax_radial.set_title(f"probe at x = {length(x[i]):.0f} {length.label}", fontsize="medium")
+            ax_radial.legend(loc="best", fontsize="small")
+        else:
+            ax_radial.text(0.5, 0.5, "no probe", ha="center", va="center", transform=ax_radial.transAxes)
+        ax_radial.set_ylabel(_label("radial_displacement", units))
 
+    ax_tob = axes["torque"]
     ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit", units), lw=0.9, label="on bit")
     if "surface_torque" in ds:
         ax_tob.plot(t, _scaled(ds["surface_torque"].values, "surface_torque", units), lw=0.9, label="surface")
         ax_tob.legend(loc="best", fontsize="small")
     ax_tob.set_ylabel(_label("torque_on_bit", units).replace("torque-on-bit", "torque"))
 
-    _orbit_panel(ax_orbit, ((ds, "orbit", {"lw": 0.6}),), probe_x, units)
-    _contact_panel(ax_contact, ((ds, None, {"lw": 0.8}),), units)
-    for ax in axes:
-        if ax is not ax_orbit:
+    if "orbit" in axes:
+        _orbit_panel(axes["orbit"], ((ds, "orbit", {"lw": 0.6}),), probe_x, units)
+        _contact_panel(axes["contact"], ((ds, None, {"lw": 0.8}),), units)
+    if "force" in axes:
+        ax = axes["force"]
+        ax.plot(t, _scaled(ds["force_on_bit"].values, "force_on_bit", units), lw=0.9, label="on bit")
+        ax.plot(t, _scaled(ds["wear_flat_force"].values, "wear_flat_force", units), lw=0.9,
+                label="wear-flat part")
+        ax.set_ylabel(_label("force_on_bit", units))
+        ax.legend(loc="best", fontsize="small")
+    if "depth_of_cut" in axes:
+        ax = axes["depth_of_cut"]
+        ax.plot(t, _scaled(ds["depth_of_cut"].values, "depth_of_cut", units), lw=0.9)
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_ylabel(_label("depth_of_cut", units))
+        ax.set_title("depth of cut per blade (≤ 0: the bit off the rock)", fontsize="medium")
+    if "hook_load" in axes:
+        ax = axes["hook_load"]
+        ax.plot(t, _scaled(ds["hook_load"].values, "hook_load", units), lw=0.9)
+        ax.set_ylabel(_label("hook_load", units))
+    for name, ax in axes.items():
+        if name != "orbit":
             ax.set_xlabel("time [s]")
         ax.grid(True, alpha=0.3)
     title = "Drilling run"
@@ -661,6 +711,7 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
         ax.plot(xx[done], yy[done], ".", color="k", ms=3, clip_on=False)
         if (~done).any():
             ax.plot(xx[~done], yy[~done], "x", color="C3", ms=6, clip_on=False)
+        _mark_coexisting(ax, ds, xx, yy)
         ax.set_xlabel("top speed [rpm]")
         ax.set_ylabel(f"weight-on-bit [{force.label}]")
         ax.set_title(title, fontsize="medium")
@@ -673,6 +724,8 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
                Line2D([], [], color="k", marker=".", ls="", label="simulated point")]
     if (status != 1).any():
         handles.append(Line2D([], [], color="C3", marker="x", ls="", label="failed point"))
+    if _coexisting(ds).any():
+        handles.append(COEXISTING_HANDLE())
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
     title = "Operating map"
     name = _case_name(ds.attrs.get("case", ""))
@@ -685,12 +738,105 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
     return _save(fig, path)
 
 
+def _coexisting(ds: xr.Dataset) -> np.ndarray:
+    """Mask of the map's points where a stick-slip cycle coexists with stable steady drilling."""
+    if "coexisting_cycles" not in ds:
+        return np.zeros(ds["status"].shape, dtype=bool)
+    return np.nan_to_num(np.asarray(ds["coexisting_cycles"].values, dtype=float)) > 0.0
+
+
+def COEXISTING_HANDLE():  # noqa: N802 - a legend entry, built when drawn
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], color="C1", marker="o", mfc="none", ms=9, mew=1.6, ls="",
+                  label="stick-slip although steady drilling is linearly stable (coexisting cycles)")
+
+
+def _mark_coexisting(ax, ds: xr.Dataset, xx: np.ndarray, yy: np.ndarray) -> None:
+    mask = _coexisting(ds)
+    if mask.any():
+        ax.plot(xx[mask], yy[mask], "o", mfc="none", color="C1", ms=9, mew=1.6, clip_on=False, zorder=3)
+
+
+#: Families drawn by :func:`plot_map_stability`: family, title.
+STABILITY_PANELS = (
+    ("torsional", "torsional roots"),
+    ("axial", "axial roots"),
+    ("lateral", "lateral roots"),
+)
+
+
+def plot_map_stability(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
+    """The linear stability of steady drilling per family over a map (a Dataset of :func:`drillstring.
+    stochastic.operating_map.map_dataset`): one panel per family of :data:`STABILITY_PANELS`, the growth rate
+    of the family's leading root [1/s] on a diverging scale centred on 0 (blue: decays, red: grows), its
+    zero contour (black) and unstable side hatched, so that the torsional and axial stability windows stay
+    visible where a buckled string's lateral root leads the map's overall growth rate; the lateral buckling
+    limit (red dashed), the points, and the points where a stick-slip cycle coexists with stable steady
+    drilling (open orange circles). A family without roots on the map is left blank. Written to the PNG
+    ``path``, weights-on-bit in the unit system ``units``."""
+    from matplotlib.colors import TwoSlopeNorm
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
+    force = display_unit("force", units)
+    y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
+    status = np.asarray(ds["status"].values)
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    fig, axes = _figure(1, len(STABILITY_PANELS), (6.0 * len(STABILITY_PANELS), 5.6))
+    for ax, (family, title) in zip(axes, STABILITY_PANELS):
+        name = f"{family}_growth_rate"
+        growth = np.asarray(ds[name].values, dtype=float) if name in ds else np.full(xx.shape, np.nan)
+        finite = np.isfinite(growth)
+        ax.set_title(title, fontsize="medium")
+        _points_and_buckling(ax, ds, x, y, force)
+        _mark_coexisting(ax, ds, xx, yy)
+        if not finite.any():
+            ax.text(0.5, 0.5, "no root of this family", ha="center", va="center", transform=ax.transAxes)
+            continue
+        bound = max(float(np.max(np.abs(growth[finite]))), 1e-12)
+        norm = TwoSlopeNorm(vcenter=0.0, vmin=-bound, vmax=bound)
+        if x.size >= 2 and y.size >= 2:
+            artist = ax.contourf(x, y, growth.T, levels=np.linspace(-bound, bound, 21), cmap="RdBu_r", norm=norm)
+            if finite.sum() >= 4 and np.nanmax(growth) > 0 > np.nanmin(growth):
+                ax.contour(x, y, growth.T, levels=[0.0], colors="k", linewidths=1.6)
+            if finite.sum() >= 4 and np.nanmax(growth) > 0:
+                ax.contourf(x, y, growth.T, levels=[0.0, np.inf], colors="none", hatches=["//"])
+        else:
+            artist = ax.scatter(xx.ravel(), yy.ravel(), c=growth.ravel(), cmap="RdBu_r", norm=norm, s=80, zorder=2)
+        stable = int(np.sum(growth[finite] < 0.0))
+        ax.set_title(f"{title}: {stable} of {int(finite.sum())} points stable", fontsize="medium")
+        fig.colorbar(artist, ax=ax, label=f"growth rate of the leading {family} root [1/s]")
+    if (status != 1).any():
+        for ax in axes:
+            ax.plot(xx[status != 1], yy[status != 1], "x", color="C3", ms=6, clip_on=False)
+    critical = force(float(ds.attrs.get("critical_weight_on_bit", np.nan)))
+    handles = [Line2D([], [], color="k", lw=1.6, label="family's stability boundary (growth rate 0)"),
+               Patch(facecolor="none", edgecolor="k", hatch="//", label="a root of the family grows"),
+               Line2D([], [], color="C3", ls="--", lw=1.6,
+                      label=f"lateral buckling, WOB = {critical:.4g} {force.label}"),
+               Line2D([], [], color="k", marker=".", ls="", label="point")]
+    if _coexisting(ds).any():
+        handles.append(COEXISTING_HANDLE())
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
+    title = "Linear stability of steady drilling per family"
+    name = _case_name(ds.attrs.get("case", ""))
+    if name:
+        title += f": case '{name}'"
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
 #: Panels of a probabilistic map: variable, label.
 PROBABILITY_PANELS = (
     ("stick_slip_probability", "probability of stick-slip"),
     ("buckling_probability", "probability of a buckled string"),
     ("impact_probability", "probability of wall impact"),
     ("instability_probability", "probability of unstable steady drilling"),
+    ("torsional_instability_probability", "probability of a growing torsional root"),
+    ("axial_instability_probability", "probability of a growing axial root"),
+    ("coexistence_probability", "probability of stick-slip with stable steady drilling"),
     ("bounce_probability", "probability of bit bounce"),
 )
 
@@ -728,16 +874,17 @@ def _map_legend(fig, ds: xr.Dataset, force: DisplayUnit) -> None:
 
 def plot_probability_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> Path:
     """Probabilistic operating map (a Dataset of :func:`drillstring.stochastic.probabilistic_map.
-    sampled_map_dataset`) as five panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
-    the probabilities of stick-slip, of a buckled string, of wall impact, of unstable steady drilling and of
-    bit bounce (colour scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
+    sampled_map_dataset`) as eight panels over top speed [rpm] × the points' nominal weight-on-bit (kN or klbf):
+    the probabilities of :data:`PROBABILITY_PANELS` — stick-slip, a buckled string, wall impact, unstable steady
+    drilling (any root, then a torsional and an axial root), stick-slip with stable steady drilling
+    (coexisting cycles) and bit bounce (colour scale 0–1), with the nominal lateral buckling limit (dashed) and the points. Written to the PNG ``path``, in
     the units of ``units``."""
     from matplotlib.colors import Normalize
 
     force = display_unit("force", units)
     x = np.asarray(ds["top_speed"].values, dtype=float) * _RPM
     y = force(np.asarray(ds["weight_on_bit"].values, dtype=float))
-    fig, axes = _figure(2, 3, (18.0, 9.0))
+    fig, axes = _figure(2, 4, (24.0, 9.0))
     for ax in axes[len(PROBABILITY_PANELS):]:
         ax.set_axis_off()
     levels = np.linspace(0.0, 1.0, 11)

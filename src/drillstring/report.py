@@ -323,6 +323,11 @@ def _indicators_html(summary: Mapping[str, Any], units: str | None = None) -> st
                  f"{_num(stability['growth_rate']['mean'])}, {_num(stability['growth_rate']['q2.5'])} – "
                  f"{_num(stability['growth_rate']['q97.5'])}"),
                 ("nominal growth rate [1/s]", _num(stability.get("nominal_growth_rate")))]
+        for family, entry in (stability.get("by_family") or {}).items():
+            if entry["realizations_with_roots"]:
+                rows.append((f"draws with a growing {family} root; its growth rate [1/s]: mean (nominal)",
+                             f"{entry['unstable_realizations']} of {entry['realizations_with_roots']}; "
+                             f"{_num(entry['growth_rate']['mean'])} ({_num(entry['nominal_growth_rate'])})"))
         if boundary.get("weight_on_bit") is not None:
             force = display_unit("force", units)
             rows.append((f"stability boundary of the nominal case along the weight-on-bit [{force.label}]",
@@ -525,6 +530,12 @@ def _map_section(summary: Mapping[str, Any], units: str | None = None) -> str:
             ("points where steady drilling is linearly stable", _num(summary.get("linearly_stable_points"))),
             ("points without steady drilling (no penetration)", _num(summary.get("points_without_steady_drilling"))),
             ("points in stick-slip", _num(summary.get("stick_slip_points")))]
+    for family, counts in (summary.get("linearly_stable_points_by_family") or {}).items():
+        rows.insert(-2, (f"... whose {family} roots all decay",
+                         f"{_num(counts['stable'])} of {_num(counts['stable'] + counts['unstable'])}"))
+    if "coexisting_cycle_points" in summary:
+        rows.append(("... in stick-slip although steady drilling is linearly stable (coexisting cycles)",
+                     _num(summary["coexisting_cycle_points"])))
     best = summary.get("largest_rate_of_penetration")
     if best:
         rows.append(("largest mean rate of penetration",

@@ -14,6 +14,12 @@ customary and imperial units with every SI prefix), so any unit of the right dim
 
 Writing rules: units are case-sensitive (``mm`` is not ``Mm``); ``*``, ``·``, ``.`` and a space denote a product;
 ``^`` or ``**`` a power, and a digit right after a unit's name is its power (``m2``, ``kg/m3``, ``m/s2``).
+One number, then one unit: pint evaluates a unit as an arithmetic expression, so the unit is tokenised
+first (:func:`check_unit_text`) and a number inside it (a digit group: ``"1 200 m"`` would read 200 m), a
+comma (a decimal comma: ``"22,5 klbf"`` would read 5 klbf times 22), a power above 4, a power of a power
+(``"kN*9**9**9"``: pint would compute 9**387420489), more than 8 unit names, parentheses deeper than 2, a
+unit over 40 characters or a value over 80 are refused before pint sees them. A value that overflows or
+underflows in SI (``"1e308 kg*km2"``), or an integer beyond a float (``10**400``), is refused too.
 
 Angles are kept apart from plain numbers: pint treats the radian as dimensionless, but a unit is accepted here
 only when its power of angle matches the field's (``"N*m*s/rad"`` for a rotational damping, not ``"N*m*s"``;
@@ -40,6 +46,7 @@ import functools
 import math
 import os
 import re
+import sys
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -185,10 +192,89 @@ def _normalise_unit(unit: str) -> str:
     return _POWER_DIGITS.sub(r"**\1", _PRODUCT_DOT.sub("*", unit.strip()))
 
 
+#: Longest unit accepted [characters] (``"N*m*s/rad"`` has 9; ``"m/(N*s)"`` 7).
+MAX_UNIT_LENGTH = 40
+#: Most unit names in one unit, and the largest power of one (``kg/m3``: 2 names, power 3).
+MAX_UNIT_NAMES, MAX_UNIT_POWER = 8, 4
+#: Deepest parentheses in a unit.
+MAX_UNIT_PARENTHESES = 2
+
+_UNIT_TOKEN = re.compile(r"\s*(?:(?P<name>[^\W\d]+|°)|(?P<power>\*\*)|(?P<op>[*/()])|(?P<number>\d+(?:\.\d+)?))")
+
+
+def check_unit_text(unit: str) -> None:
+    """Refuse, before pint sees it, a unit that is not a short product of unit names and small powers.
+
+    pint evaluates a unit string as an arithmetic expression: ``"kN*9**9**9"`` asks for 9**387420489 (minutes
+    of work), ``"200 m"`` after a digit group (``"1 200 m"``) multiplies the value by 200, ``",5 klbf"`` after a
+    decimal comma (``"22,5 klbf"``) by 5. Here a unit is tokenised first: unit names, ``*``, ``/``,
+    parentheses (at most :data:`MAX_UNIT_PARENTHESES` deep) and powers ``**n`` of a name or a parenthesis,
+    ``|n|`` <= :data:`MAX_UNIT_POWER` (a plain ``1`` is allowed only as ``1/...``), at most
+    :data:`MAX_UNIT_NAMES` names and :data:`MAX_UNIT_LENGTH` characters. Raises ``ValueError`` (one line)
+    for anything else: a number in the unit, a comma, an exponent tower, an over-long unit.
+    """
+    if len(unit) > MAX_UNIT_LENGTH:
+        raise ValueError(f"unit of {len(unit):,} characters; at most {MAX_UNIT_LENGTH} are allowed")
+    if "," in unit:
+        raise ValueError("a comma is not allowed in a value (write the decimal point as '.', and no digit "
+                         "group separator: '22.5 klbf', '1200 m')")
+    text = _normalise_unit(unit)
+    names = depth = 0
+    previous = ""  # kind of the previous token: "", name, close, power, op, number
+    position = 0
+    while position < len(text):
+        token = _UNIT_TOKEN.match(text, position)
+        if token is None or token.end() == position:
+            if text[position:].strip() == "":
+                break
+            raise ValueError(f"character {text[position]!r} is not allowed in a unit")
+        position = token.end()
+        kind = token.lastgroup
+        value = token.group(kind)
+        if kind == "name":
+            names += 1
+            if names > MAX_UNIT_NAMES:
+                raise ValueError(f"more than {MAX_UNIT_NAMES} unit names in one unit")
+            previous = "name"
+        elif kind == "power":
+            if previous not in ("name", "close"):
+                raise ValueError("'**' or '^' must follow a unit name or a parenthesis")
+            sign = re.compile(r"\s*[-+]?\s*(\d+(?:\.\d+)?)").match(text, position)
+            if sign is None:
+                raise ValueError("a power must be a number: 'm**2', 'm^-1', 'm2'")
+            if float(sign.group(1)) > MAX_UNIT_POWER:
+                raise ValueError(f"power {sign.group(1)} in a unit; at most {MAX_UNIT_POWER} is allowed")
+            position = sign.end()
+            previous = "power"
+        elif kind == "number":
+            rest = text[position:].lstrip()
+            if not (value == "1" and previous == "" and rest.startswith("/")):
+                raise ValueError(f"a number ({value}) inside the unit: write one number then its unit (no digit "
+                                 "groups: '1200 m', not '1 200 m')")
+            previous = "number"
+        else:  # * / ( )
+            if value == "(":
+                depth += 1
+                if depth > MAX_UNIT_PARENTHESES:
+                    raise ValueError(f"parentheses nested more than {MAX_UNIT_PARENTHESES} deep in a unit")
+            elif value == ")":
+                depth -= 1
+                if depth < 0:
+                    raise ValueError("unbalanced parentheses in the unit")
+                previous = "close"
+                continue
+            previous = "op"
+        if previous == "power" and _UNIT_TOKEN.match(text, position) and text[position:].lstrip().startswith("**"):
+            raise ValueError("a power of a power (exponent tower) is not allowed in a unit")
+    if depth:
+        raise ValueError("unbalanced parentheses in the unit")
+
+
 @functools.lru_cache(maxsize=512)
 def _root(unit: str) -> _Root:
     """``unit`` in root units: (factor, sorted (root unit, power) pairs); raises ValueError if unknown."""
     ureg = registry()
+    check_unit_text(unit)  # raises ValueError with its own message (not caught below)
     try:
         quantity = ureg.parse_expression(_normalise_unit(unit))
         if not isinstance(quantity, ureg.Quantity):  # a bare number
@@ -222,8 +308,18 @@ def _ratio(unit: str, dim: Dimension) -> float | None:
 def unit_factor(unit: str, dim: Dimension) -> float:
     """The SI value of 1 ``unit`` of dimension ``dim`` (``unit_factor("ft", LENGTH)`` = 0.3048); raises
     ``ValueError`` with a one-line explanation when ``unit`` is unknown or of another dimension."""
+    if not isinstance(dim, Dimension):
+        raise TypeError(f"dim = {dim!r}: must be a drillstring.units.Dimension (e.g. units.LENGTH), not "
+                        f"{type(dim).__name__}")
+    if not isinstance(unit, str):
+        raise TypeError(f"unit = {unit!r}: must be a string, not {type(unit).__name__}")
+    shown = unit if len(unit) <= 40 else unit[:37] + "..."
     if not dim.si:
-        raise ValueError(f"a plain number without unit is expected ({dim.name}), got unit '{unit}'")
+        raise ValueError(f"a plain number without unit is expected ({dim.name}), got unit '{shown}'")
+    try:
+        check_unit_text(unit)
+    except ValueError as error:
+        raise ValueError(f"unit '{shown}': {error}") from None
     try:
         ratio = _ratio(unit, dim)
     except ValueError:
@@ -245,11 +341,19 @@ def to_si(value: Any, dim: Dimension) -> float:
     Raises ``ValueError`` with a one-line explanation (the dimension expected, the allowed units) when the
     value cannot be converted.
     """
+    if not isinstance(dim, Dimension):
+        raise TypeError(f"dim = {dim!r}: must be a drillstring.units.Dimension (e.g. units.LENGTH), not "
+                        f"{type(dim).__name__}")
     if isinstance(value, bool):
         raise ValueError(f"expected a number, got a boolean; allowed units: {dim.allowed}")
     if isinstance(value, (int, float)):
-        number, unit = float(value), ""
+        try:
+            number, unit = float(value), ""
+        except OverflowError:  # an integer beyond 1.8e308
+            raise ValueError(f"{_digits(value)}: too large (the largest number is about 1.8e308)") from None
     elif isinstance(value, str):
+        if len(value) > MAX_VALUE_LENGTH:
+            raise ValueError(f"a value of {len(value):,} characters; at most {MAX_VALUE_LENGTH} are allowed")
         match = _QUANTITY.match(value)
         if match is None:
             hint = f'a number or a "value unit" string (allowed units: {dim.allowed})'
@@ -265,7 +369,22 @@ def to_si(value: Any, dim: Dimension) -> float:
         raise ValueError("must be a finite number")
     if not unit:
         return number
-    return number * unit_factor(unit, dim)
+    si = number * unit_factor(unit, dim)
+    if not math.isfinite(si):
+        raise ValueError(f"overflows to infinity in SI units ({dim.si}); the largest number is about 1.8e308")
+    if si == 0.0 and number != 0.0 or 0.0 < abs(si) < sys.float_info.min:
+        raise ValueError(f"underflows to {si:g} in SI units ({dim.si}); the smallest number is about 2.2e-308")
+    return si
+
+
+#: Longest ``"value unit"`` string accepted [characters].
+MAX_VALUE_LENGTH = 80
+
+
+def _digits(value: int) -> str:
+    """A huge integer shown short: its number of digits."""
+    text = str(value) if abs(value) < 10**40 else f"an integer of {len(str(abs(value))):,} digits"
+    return text
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -317,6 +436,8 @@ def unit_system(choice: str | None = None, name: str = "--units") -> UnitSystem:
     but ``si`` or ``field``.
     """
     source = name
+    if choice is not None and not isinstance(choice, str):
+        raise TypeError(f"{name} = {choice!r}: must be a string, one of {', '.join(UNIT_SYSTEMS)}")
     if choice is None:
         choice, source = os.environ.get(UNITS_ENVIRONMENT, "").strip() or "si", UNITS_ENVIRONMENT
     text = choice.strip().lower()
@@ -330,7 +451,9 @@ def display_unit(kind: str, system: str | None = None) -> DisplayUnit:
     quantity of ``kind`` (``"force"``, ``"length"``, ``"diameter"``, ``"small_length"``,
     ``"rate_of_penetration"``, ``"torque"``, ``"angular_speed"``, ``"density"``, ``"pressure"``, ``"stiffness"``,
     ``"flow"``, ``"mass_per_length"``)."""
-    return _display_unit(kind, unit_system(system))
+    if kind not in _DISPLAY:
+        raise ValueError(f"kind = {kind!r}: must be one of {', '.join(_DISPLAY)}")
+    return _display_unit(kind, unit_system(system, name="system"))
 
 
 @functools.lru_cache(maxsize=64)

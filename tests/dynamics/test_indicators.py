@@ -53,14 +53,14 @@ def test_cycle_metrics_of_a_sine_bit_speed():
     assert out["bit_speed_max"] == pytest.approx(1.7 * omega, rel=1e-9)
     assert out["stick_slip_index"] == pytest.approx(0.7, rel=1e-4)
     assert out["period"] == pytest.approx(4.0, rel=1e-6)
-    assert out["rate_of_penetration_mean"] == pytest.approx(3e-3, rel=1e-4)
-    assert out["torque_on_bit_mean"] == pytest.approx(5e3, rel=1e-4)
-    assert out["force_on_bit_mean"] == 1e5
+    assert out["mean_rate_of_penetration"] == pytest.approx(3e-3, rel=1e-4)
+    assert out["mean_torque_on_bit"] == pytest.approx(5e3, rel=1e-4)
+    assert out["mean_force_on_bit"] == 1e5
     assert out["stick_time_fraction"] == 0.0
     expected = 1e5 / area + omega * 5e3 / (area * 3e-3)  # Teale with the time means
     assert out["mechanical_specific_energy"] == pytest.approx(expected, rel=1e-3)
     assert out["mechanical_specific_energy"] == pytest.approx(mechanical_specific_energy(
-        1e5, out["torque_on_bit_mean"], omega, out["rate_of_penetration_mean"], area), rel=1e-14)
+        1e5, out["mean_torque_on_bit"], omega, out["mean_rate_of_penetration"], area), rel=1e-14)
 
 
 def test_cycle_metrics_of_a_stick_slip_cycle():

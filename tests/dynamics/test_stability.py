@@ -113,7 +113,7 @@ def test_reference_modes_and_json(reference_case):
     assert len(unstable) == 1 and unstable[0].family == "torsional"
     assert -0.02 < unstable[0].damping_ratio < 0
     payload = result.to_dict()
-    assert set(payload) == {"stable", "steady_state", "modes"}
+    assert set(payload) == {"stable", "steady_state", "modes", "leading_by_family", "mixed_roots"}
     assert set(payload["steady_state"]) == {"rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"}
     frequencies = [m["frequency"] for m in payload["modes"]]
     assert frequencies == sorted(frequencies)
@@ -143,7 +143,8 @@ def test_growth_rate_root_of_known_functions():
 
     assert growth_rate_root(parabola, 140e3, 1.0, 1e6) == pytest.approx(150e3, abs=1.0)
     assert growth_rate_root(parabola, 160e3, 1.0, 1e6) == pytest.approx(150e3, abs=1.0)
-    assert growth_rate_root(parabola, 50e3, 1.0, 1e6) is None  # positive all the way down
+    # positive all the way down from 50 kN: the search goes on upwards, over the whole range (issue 26)
+    assert growth_rate_root(parabola, 50e3, 1.0, 1e6) == pytest.approx(60e3, abs=1.0)
     assert growth_rate_root(lambda x: 1.0 + x, 100e3, 1.0, 1e6) is None  # never crosses 0
 
     def undefined_below(x):  # no steady drilling below 90 kN
@@ -152,6 +153,16 @@ def test_growth_rate_root_of_known_functions():
         return 1.0
 
     assert growth_rate_root(undefined_below, 100e3, 1.0, 1e6) is None
+
+    def rising_undefined_below(x):  # the reference case's shape: no steady drilling below 6 kN
+        if x < 6e3:
+            raise ValueError("no steady drilling")
+        return (x - 95.98e3) / 1e6
+
+    # From 300 kN the growing steps jump from 107 kN to 4.5 kN, where nothing is defined: the step is
+    # halved back instead of ending the search (it said "no crossing" for starts of 300-1,163 kN).
+    for start in (300e3, 600e3, 1163e3):
+        assert growth_rate_root(rising_undefined_below, start, 1.0, 1.2e6) == pytest.approx(95.98e3, abs=1.0)
 
 
 def test_weight_on_bit_boundary_of_the_reference_case(reference_case):

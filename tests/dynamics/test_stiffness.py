@@ -5,9 +5,8 @@ import pytest
 
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.stability import linearized_matrix, steady_drilling
-from drillstring.dynamics.stiffness import STABILITY_RADIUS, stiffness_diagnosis, stiffness_rates
+from drillstring.dynamics.stiffness import BIT_ROCK, CONTACT, STABILITY_RADIUS, stiffness_diagnosis, stiffness_rates
 
-BIT_ROCK = "bit–rock law (the nonlinear axial and torsional forces)"
 
 
 @pytest.mark.parametrize("a2", [5.672e-8, 2.5e-8])
@@ -26,10 +25,41 @@ def test_bit_rock_rate_is_the_closed_form_jacobians(small_case, a2):
     assert rates[BIT_ROCK] == pytest.approx(exact, rel=1e-5)
     assert rates[next(k for k in rates if k.startswith("modes"))] == pytest.approx(
         np.abs(model.angular_frequencies).max(), rel=1e-12)
-    assert rates["borehole contact (the nonlinear lateral forces)"] < 1e-6 * exact  # centred: no contact
+    assert rates[CONTACT] < 1e-6 * exact  # centred: no contact
     assert next(iter(rates)) == BIT_ROCK
     line = stiffness_diagnosis(model, 0.0, steady.state)
     assert line.startswith(f"likely stiff term: {BIT_ROCK}, λ = ")
     allowed = float(line.split("stable steps ≲ ")[1].split(" s (next: ")[0])
     assert allowed == pytest.approx(STABILITY_RADIUS["dopri5"] / exact, rel=5e-3)  # printed to 3 digits
     assert f"(next: {list(rates)[1]}, λ = " in line
+
+
+def test_top_drive_controller_named_with_its_closed_form_rate(small_case):
+    """An absurd top drive (a 1e9 N·m·s/rad proportional gain on a 1e-3 kg·m² quill) is named, not the bit–rock
+    law (issue 26): its rate is the gain over the modal inertia of the quill, k_p |φ_q|² (φ_q the quill's row
+    of the modal shapes), the root of λ² − k_p|φ_q|² λ − k_i|φ_q|² = 0 for a negligible k_i."""
+    from drillstring.dynamics.stiffness import TOP_DRIVE
+
+    case = small_case.model_copy(update={"top_drive": {"controller": "pi", "inertia": 1e-3,
+                                                       "proportional_gain": 1e9, "integral_gain": 1.0}})
+    model = case_reduced_model(case)
+    y = model.initial_state(1e-5, 0)
+    rates = stiffness_rates(model, 0.0, y)
+    assert next(iter(rates)) == TOP_DRIVE
+    assert rates[TOP_DRIVE] == pytest.approx(1e9 * model.quill_shapes @ model.quill_shapes, rel=1e-6)
+    assert rates[BIT_ROCK] < 1e-3 * rates[TOP_DRIVE]
+    assert stiffness_diagnosis(model, 0.0, y).startswith(f"likely stiff term: {TOP_DRIVE}, λ = ")
+
+
+def test_contact_named_when_the_string_presses_the_wall(small_case):
+    """A string pressed into the wall (a lateral state beyond the radial gap): the contact is the stiffest
+    term, and the bit–rock law's rate (from the law's own derivatives at the bit) is the one it has with the
+    string centred, although the contact's friction torque loads the torsion (it was blamed on the bit–rock
+    law, issue 26)."""
+    model = case_reduced_model(small_case)
+    centred = model.initial_state(0.0, 0)
+    pressed = model.initial_state(3.0 * float(model.gap.min()) + 0.05, 0)
+    at_rest, in_contact = stiffness_rates(model, 0.0, centred), stiffness_rates(model, 0.0, pressed)
+    assert next(iter(in_contact)) == CONTACT
+    assert in_contact[BIT_ROCK] == pytest.approx(at_rest[BIT_ROCK], rel=1e-6)
+    assert at_rest[CONTACT] < 1e-3 * in_contact[CONTACT]

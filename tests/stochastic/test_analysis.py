@@ -136,6 +136,17 @@ def test_stability_of_the_draws():
     assert section["unstable_realizations"] == int(np.sum(a > 0)) and section["realizations_with_growth_rate"] == 60
     assert section["growth_rate"]["mean"] == pytest.approx(a.mean())
     assert section["nominal_growth_rate"] == 0.0125 and section["boundary"] == boundary
+    assert section["by_family"] == {}  # a store written before the families were told apart
+    raw["torsional_growth_rate"] = ("realization", a - 0.02)  # per family, as the workers now store them
+    raw["nominal_torsional_growth_rate"] = ("one", [-0.0075])
+    raw["lateral_growth_rate"] = ("realization", np.full(60, np.nan))
+    raw["nominal_lateral_growth_rate"] = ("one", [np.nan])
+    section = study_summary(study_statistics(raw, t_transient=10.0), t_transient=10.0)["stability"]
+    torsion = section["by_family"]["torsional"]
+    assert torsion["unstable_realizations"] == int(np.sum(a > 0.02)) and torsion["realizations_with_roots"] == 60
+    assert torsion["growth_rate"]["mean"] == pytest.approx(a.mean() - 0.02)
+    assert torsion["nominal_growth_rate"] == -0.0075
+    assert section["by_family"]["lateral"]["realizations_with_roots"] == 0 and "axial" not in section["by_family"]
 
 
 def test_time_convergence_over_growing_windows():

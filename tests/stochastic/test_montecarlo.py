@@ -518,7 +518,8 @@ def test_correlated_normal_draws(small_case):
 
 
 @pytest.mark.parametrize("laws, message", [
-    ((("operation.top_speed", "normal 10 5 rpm"),), r"probability 0\.0228 outside .*at most 0\.001"),
+    # below the top speed's floor, 1e-3 rad/s (0.0095 rpm): P = Φ((0.0095 - 10)/5) = 0.0229
+    ((("operation.top_speed", "normal 10 5 rpm"),), r"probability 0\.0229 outside .*at most 0\.001"),
     ((("operation.top_sped", "normal 100 5 rpm"),), "did you mean 'top_speed'"),
     ((("fluid.inlet_velocity", "uniform 1.8 1.2 m/s"),), "fluid.inlet_velocity"),
     ((("weight_on_hook", "normal 1063 300 kN"),), r"^sigma = 300000 N: .* at most 32\.\d+ kN"),
@@ -544,5 +545,43 @@ def test_store_without_the_per_realization_metrics_is_refused(small_case, tmp_pa
     layout = dict(store.group.attrs["layout"])
     del layout["growth_rate"]
     store.group.attrs["layout"] = layout
+    from drillstring.stochastic.store import metadata_checksum  # an old store, consistent with itself
+
+    store.group.attrs["metadata_checksum"] = metadata_checksum(dict(store.group.attrs))
     with pytest.raises(StoreError, match="older drillstring version .*no growth_rate"):
         mc.open_study_group(path)
+
+
+def test_store_with_the_earlier_spelling_of_the_time_means_is_read(small_case, tmp_path):
+    """A study store written when the realizations' time means were spelled ``rate_of_penetration_mean``,
+    ... (before maps and studies shared ``mean_rate_of_penetration``, ...) reads as before: the same values
+    under the one spelling, and the per-family growth rates it lacks are left out of the summary."""
+    from drillstring.dynamics.indicators import RENAMED_METRICS
+    from drillstring.stochastic.analysis import study_summary
+
+    path = tmp_path / "old.zarr"
+    mc.run_study(small_case, woh_settings(small_case, 1000.0, samples=2, t_end=0.2, output_step=0.05), path,
+                 execution.Engine(workers=1))
+    fresh = study_statistics(load_study(path))
+    group = zarr.open_group(str(path), mode="a")
+    layout = dict(group.attrs["layout"])
+    for old, new in RENAMED_METRICS.items():
+        for prefix in ("", "nominal_"):
+            array = group[prefix + new]
+            group.create_array(prefix + old, data=array[...], dimension_names=list(layout[prefix + new]),
+                               attributes=dict(array.attrs))
+            del group[prefix + new]
+            layout[prefix + old] = layout.pop(prefix + new)
+    for name in ("axial_growth_rate", "torsional_growth_rate", "lateral_growth_rate"):
+        for prefix in ("", "nominal_"):
+            del group[prefix + name]
+            layout.pop(prefix + name)
+    group.attrs["layout"] = layout
+    raw = load_study(path)
+    assert "rate_of_penetration_mean" not in raw and "mean_rate_of_penetration" in raw
+    stats = study_statistics(raw)
+    for new in RENAMED_METRICS.values():
+        np.testing.assert_array_equal(stats[f"realization_{new}"].values, fresh[f"realization_{new}"].values)
+    summary = study_summary(stats, t_transient=0.1)
+    assert summary["stability"]["by_family"] == {}
+    assert "mean_rate_of_penetration" in summary["realizations"]

@@ -126,7 +126,7 @@ def test_map_files_and_refusals(torsional_case, tmp_path):
     out = tmp_path / "m"
     outcome = api.operating_map(torsional_case, top_speed=[8.0, 16.0], weight_on_bit="60,90 kN", t_end=2.0,
                                 output_step=0.05, workers=1, out=out)
-    assert set(outcome.files) == {"store", "map", "summary", "figure", "report", "interactive"}
+    assert set(outcome.files) == {"store", "map", "summary", "figure", "stability", "report", "interactive"}
     stored = xr.open_dataset(out / "map.nc", engine="h5netcdf").load()
     assert stored.top_speed.attrs["units"] == "rad/s" and stored.weight_on_bit.attrs["units"] == "N"
     assert stored.mean_rate_of_penetration.attrs["units"] == "m/s"
@@ -135,6 +135,20 @@ def test_map_files_and_refusals(torsional_case, tmp_path):
     critical = stored.attrs["critical_weight_on_bit"]
     np.testing.assert_allclose(stored.buckling_margin.values[0], critical - np.array([6e4, 9e4]))
     assert "Operating map" in (out / "report.html").read_text() and (out / "map.png").stat().st_size > 10_000
+    assert (out / "stability.png").stat().st_size > 10_000
+    report = (out / "report.html").read_text()
+    assert "whose torsional roots all decay" in report and "coexisting cycles" in report
+    for family in ("axial", "torsional", "lateral"):  # per-family counts from the stored growth rates
+        rates = stored[f"{family}_growth_rate"].values
+        counts = outcome.summary["linearly_stable_points_by_family"][family]
+        assert counts == {"stable": int(np.sum(rates[np.isfinite(rates)] < 0)),
+                          "unstable": int(np.sum(rates[np.isfinite(rates)] >= 0))}
+    assert np.isnan(stored["lateral_growth_rate"].values).all()  # no lateral modes in this case
+    np.testing.assert_array_equal(stored["torsional_growth_rate"].values, stored["growth_rate"].values)
+    coexisting = (stored["torsional_growth_rate"] < 0) & (stored["axial_growth_rate"] < 0) & (
+        stored["stick_time_fraction"] > 0) & (stored["stick_time_fraction"] < 1)
+    np.testing.assert_array_equal(stored["coexisting_cycles"].values, coexisting.values.astype(float))
+    assert outcome.summary["coexisting_cycle_points"] == int(coexisting.sum())
     again = api.operating_map(torsional_case, top_speed=[8.0, 16.0], weight_on_bit="60,90 kN", t_end=2.0,
                               output_step=0.05, workers=1, out=out)
     assert again.already == 4 and again.summary["points_this_run"] == 0

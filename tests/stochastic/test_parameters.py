@@ -28,16 +28,18 @@ def case():
 @pytest.mark.parametrize(
     ("path", "value", "unit", "bounds"),
     [
-        ("operation.top_speed", 100 * RPM, "rad/s", "> 0"),
-        ("operation.weight_on_bit", 1e5, "N", "> 0"),
-        ("fluid.inlet_velocity", 1.5, "m/s", ">= 0"),
-        ("bit_rock.a2", 5.672e-8, "m/(N*s)", "> 0"),
-        ("sections[1].outer_diameter", 0.2286, "m", "> 0"),
+        # the field's own range, within its plausible range (PHYSICAL_BOUNDS) and, for the weight-on-bit,
+        # below the string's weight: a law is checked against them before any realization (issue 26)
+        ("operation.top_speed", 100 * RPM, "rad/s", ">= 0.001 and <= 1000"),
+        ("operation.weight_on_bit", 1e5, "N", "> 0 and < 1.16343e+06"),
+        ("fluid.inlet_velocity", 1.5, "m/s", ">= 0 and <= 1000"),
+        ("bit_rock.a2", 5.672e-8, "m/(N*s)", ">= 1e-15 and <= 0.001"),
+        ("sections[1].outer_diameter", 0.2286, "m", ">= 0.001 and <= 10"),
         ("damping.modal_damping_ratio", 0.3, "", ">= 0 and < 1"),
-        ("materials.steel.young_modulus", 210e9, "Pa", "> 0"),
-        ('materials["steel"].density', 7850.0, "kg/m3", "> 0"),
+        ("materials.steel.young_modulus", 210e9, "Pa", ">= 1e+06 and <= 1e+13"),
+        ('materials["steel"].density', 7850.0, "kg/m3", ">= 1 and <= 100000"),
         ("mesh.probes[0]", 1560.0, "m", "any number"),
-        ("stabilizers[0].stiffness", 17.5e6, "N/m", "> 0"),
+        ("stabilizers[0].stiffness", 17.5e6, "N/m", "> 0 and <= 1e+15"),
     ],
 )
 def test_read_numeric_parameters(case, path, value, unit, bounds):

@@ -62,3 +62,33 @@ def test_refusals(tmp_path):
     del group["y"]
     with pytest.raises(StoreError, match=r"missing array\(s\): y"):
         Squares(tmp_path / "s.zarr", 4)
+
+
+class Drawn(Squares):
+    """A store with metadata outside the fingerprint (as a study's parameter laws and moments)."""
+
+    def __init__(self, path, n):
+        TaskStore.__init__(self, path, case_toml="# none\n", settings={"n": n},
+                           layout={"y": ArraySpec(("row",))}, sizes={"row": n},
+                           attrs={"parameters": ["weight_on_hook"], "parameter_std": [5000.0]})
+
+
+def test_metadata_is_checksummed_and_an_edited_digit_is_refused(tmp_path):
+    """One digit of the metadata changed in zarr.json (parameter_std 5000 -> 4000, outside the fingerprint:
+    it moved a study's ROP ratio from 15.94 to 19.93 unnoticed) is refused by readers and writers alike;
+    rows finishing (failures, sessions) do not count as a change."""
+    import json
+
+    path = tmp_path / "s.zarr"
+    store = Drawn(path, 2)
+    store.write_many([TaskOutcome(0, FAILED, "boom", {}, 0.1)])
+    store.record_session("now", 1.0, 1, 1)
+    Drawn.open_group(path)  # whole: the writers' own attributes are not part of the checksum
+    meta = path / "zarr.json"
+    text = meta.read_text()
+    assert text.count("5000.0") == 1
+    meta.write_text(text.replace("5000.0", "4000.0"))
+    for open_it in (lambda: Drawn.open_group(path), lambda: Drawn(path, 2)):
+        with pytest.raises(StoreError, match="metadata .* changed since the store was created"):
+            open_it()
+    json.loads(meta.read_text())  # still valid JSON: only the checksum tells

@@ -211,7 +211,7 @@ def _dim(name):
         ("fluid.inlet_velocity", "maxent std=1", ["maxent needs mean"]),
         ("damping.modal_damping_ratio", "uniform 0.1 0.5 rpm", ["a plain number without unit is expected"]),
         ("damping.modal_damping_ratio", "uniform 0.5 1.2", ["probability 0.286 outside the allowed range (>= 0 and < 1)"]),
-        ("operation.top_speed", "normal 100 60 rpm", ["probability 0.0478 outside the allowed range (> 0 rad/s)"]),
+        ("operation.top_speed", "normal 100 60 rpm", ["probability 0.0478 outside the allowed range (>= 0.001 and <= 1000 rad/s)"]),
         ("reduced_model.axial_modes", "uniform 1 5", ["integer setting cannot carry a continuous law"]),
         ("operation.top_sped", "uniform 1 5", ["unknown case parameter 'operation.top_sped'"]),
     ],

@@ -111,19 +111,26 @@ def bounce_fraction(force_on_bit) -> float | None:
     return float(np.mean(values <= 0.0)) if values.size else None
 
 
-#: Per-run cycle metrics (SI) after the transient: name -> (unit, description); :func:`cycle_metrics`.
+#: Per-run cycle metrics (SI) after the transient: name -> (unit, description); :func:`cycle_metrics`. The one
+#: table of the time means (``mean_rate_of_penetration``, ``mean_torque_on_bit``, ``mean_force_on_bit``) shared
+#: by studies and maps (:data:`~drillstring.stochastic.runs.RUN_OUTPUTS` takes them from here); stores written
+#: before this spelling (``rate_of_penetration_mean``, ...) are read through :data:`RENAMED_METRICS`.
 CYCLE_METRICS: dict[str, tuple[str, str]] = {
     "stick_slip_index": ("1", "stick-slip index (max - min)/(2 mean) of the bit speed"),
     "bit_speed_min": ("rad/s", "smallest bit speed"),
     "bit_speed_max": ("rad/s", "largest bit speed"),
     "period": ("s", "period of the bit-speed oscillation (NaN when it does not oscillate)"),
-    "rate_of_penetration_mean": ("m/s", "time-mean rate of penetration"),
-    "torque_on_bit_mean": ("N m", "time-mean torque on bit"),
-    "force_on_bit_mean": ("N", "time-mean force on bit"),
+    "mean_rate_of_penetration": ("m/s", "time-mean rate of penetration"),
+    "mean_torque_on_bit": ("N m", "time-mean torque on bit"),
+    "mean_force_on_bit": ("N", "time-mean force on bit"),
     "mechanical_specific_energy": ("Pa", "mechanical specific energy (Teale) from the time means"),
     "stick_time_fraction": ("1", "fraction of the time with the bit below 10 % of the top speed"),
     "bit_bounce_fraction": ("1", "fraction of the time with the bit off the rock (zero force on bit)"),
 }
+#: Earlier spellings of the time means (study stores written before the maps' and studies' names were made one):
+#: old name -> name of :data:`CYCLE_METRICS`.
+RENAMED_METRICS = {"rate_of_penetration_mean": "mean_rate_of_penetration", "torque_on_bit_mean": "mean_torque_on_bit",
+                   "force_on_bit_mean": "mean_force_on_bit"}
 #: Hysteresis of the period's level crossings, as a fraction of the bit-speed range (max - min).
 PERIOD_HYSTERESIS = 0.25
 #: Below this range (max - min) relative to the mean speed, the bit speed counts as constant: no period.
@@ -171,7 +178,7 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
     - ``stick_slip_index = (max − min)/(2·mean)`` of the bit speed (the field's definition, divided by the
       time-mean bit speed, not by Ω; NaN when the mean is not positive); ``bit_speed_min``, ``_max``;
     - ``period``: :func:`oscillation_period` of the bit speed;
-    - time means of ROP, TOB and FOB (``*_mean``), and :func:`mechanical_specific_energy` from them with Ω;
+    - time means of ROP, TOB and FOB (``mean_*``), and :func:`mechanical_specific_energy` from them with Ω;
     - ``stick_time_fraction``: fraction of the samples with the bit below ``STICK_SPEED_RATIO·Ω``;
     - ``bit_bounce_fraction``: fraction of the samples with the bit off the rock (:func:`bounce_fraction`).
 
@@ -182,7 +189,7 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
         values = _finite(np.asarray(observables[name])[steady])
         if values.size:
-            out[f"{name}_mean"] = float(values.mean())
+            out[f"mean_{name}"] = float(values.mean())
     speed_all = np.asarray(observables["bit_speed"], dtype=float)[steady]
     speed = _finite(speed_all)
     if speed.size:
@@ -197,7 +204,7 @@ def cycle_metrics(time, observables, top_speed: float, area: float, t_transient:
     bounce = bounce_fraction(np.asarray(observables["force_on_bit"], dtype=float)[steady])
     out["bit_bounce_fraction"] = math.nan if bounce is None else bounce
     out["mechanical_specific_energy"] = mechanical_specific_energy(
-        out["force_on_bit_mean"], out["torque_on_bit_mean"], top_speed, out["rate_of_penetration_mean"], area)
+        out["mean_force_on_bit"], out["mean_torque_on_bit"], top_speed, out["mean_rate_of_penetration"], area)
     return out
 
 

@@ -102,7 +102,9 @@ OBSERVABLES = (
     "nodes_in_contact",  # number of nodes touching the borehole
     "contact_force",  # N, total normal force of the wall on the string, Σ k_i (r_i − g_i)₊ over stations
     "quill_speed",  # rad/s, θ̇x at the top (the set point with an imposed speed)
-    "surface_torque",  # N·m, elastic torque the top element takes from the quill, (K q) at the top's θx
+    "surface_torque",  # N·m, torque the string takes from the quill: τ_m − J_td θ̈₀ with a top drive (the quill's
+                       # equation of motion); the elastic torque of the top element, (K q) at θx, with the speed imposed
+    "depth_of_cut",  # m, depth of cut per blade of a delayed (Detournay) law; 0 for the other laws
 )
 #: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
 #: kernel writes by these names, so reordering the tuple reorders the output consistently).
@@ -116,6 +118,7 @@ _CONTACTS = OBSERVABLE_COLUMN["nodes_in_contact"]
 _CONTACT_FORCE = OBSERVABLE_COLUMN["contact_force"]
 _QUILL_SPEED = OBSERVABLE_COLUMN["quill_speed"]
 _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
+_DEPTH_OF_CUT = OBSERVABLE_COLUMN["depth_of_cut"]
 #: First column of the probes' displacements: after the observables, for ``n_p`` probes, ``n_p`` columns of
 #: radial displacement r, then ``n_p`` of v (along y), then ``n_p`` of w (along z) [m]
 #: (:func:`observation_width`).
@@ -545,6 +548,27 @@ def _rhs_kernel(d, t, y, out):
 
 
 @inner_kernel()
+def _surface_torque(d, t, y):
+    """The surface torque T_s [N·m] of a top drive from the quill's equation of motion, ``J_td θ̈₀ = τ_m −
+    T_s``: the motor torque (:func:`~drillstring.forces.top_drive.top_drive_law`) minus the quill's inertial
+    torque, with ``θ̈₀ = qᵀη̈`` from the model's right-hand side at ``(t, y)``. For the same quill and bit
+    motion it does not depend on ``J_td`` (the elastic torque of the top element, read from a truncated
+    basis, does: the basis's shapes depend on ``J_td``)."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.blocks[2], d.blocks[3]
+    rate = np.empty(y.shape[0])
+    _rhs_kernel(d, t, y, rate)
+    quill, elastic = _top_motion(d, y)
+    args = d.laws[_TOP_DRIVE:]
+    filtered = y[2 * n + 1] if args[0] == Z_TORQUE else 0.0
+    torque, _, _ = top_drive_law(args, t, quill, elastic, y[2 * n], filtered)
+    acceleration = 0.0
+    for j in range(t0, t1):
+        acceleration += d.torsion_rows[1, j - t0] * rate[n + j]
+    return torque - args[1] * acceleration
+
+
+@inner_kernel()
 def _expand(shapes_t, dofs, y, offset, out):
     """out[dofs] += shapesᵀ-columns · y[offset:offset + n_f] (one family's part of Φη)."""
     for j in range(shapes_t.shape[0]):
@@ -753,7 +777,7 @@ def observe_kernel(d, o, t, y, out):
     """Observables (:data:`OBSERVABLES`, by their columns) and the radial displacement at the probes for
     the state ``y`` at time ``t`` [s], from the case-2 data ``d`` (:class:`RhsData`) and ``o``
     (:class:`ObserveData`, whose contact mask it fills). Returns the number of nodes in contact."""
-    axial_force, bit_torque, _, depth, bit_velocity, bit_speed = _bit_rock(d, t, y)
+    axial_force, bit_torque, depth_of_cut, depth, bit_velocity, bit_speed = _bit_rock(d, t, y)
     force = _contact_state(d, y, o.v, o.w, o.in_contact)
     count = 0
     for i in range(o.in_contact.shape[0]):
@@ -763,9 +787,12 @@ def observe_kernel(d, o, t, y, out):
     out[_TOB] = -bit_torque
     out[_FOB] = -axial_force
     out[_DEPTH] = depth
+    out[_DEPTH_OF_CUT] = depth_of_cut
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
     out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
+    if d.laws[_TOP_DRIVE] != 0.0:  # a top drive: the torque from the quill's equation of motion
+        out[_SURFACE_TORQUE] = _surface_torque(d, t, y)
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
         j = o.probe_nodes[k]
@@ -1256,6 +1283,7 @@ def reduced_model(
     lateral_cutoff: float = 0.0,
     top_drive: TopDriveParameters | None = None,
     hook_load: HookLoadRamp | None = None,
+    rayleigh: tuple[float, float] = (0.0, 0.0),
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -1273,6 +1301,7 @@ def reduced_model(
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
         top_drive: the top boundary; None: the top speed imposed.
         hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
+        rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
     """
     drive = top_drive is not None and not top_drive.imposed
     if drive:
@@ -1288,7 +1317,7 @@ def reduced_model(
     structural = reduced_structural_damping(
         system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
         rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
-        top_speed=0.0 if drive else top_speed, definition=damping_basis,
+        top_speed=0.0 if drive else top_speed, definition=damping_basis, rayleigh=rayleigh,
     )
     damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
     return ReducedOrderModel(
@@ -1338,6 +1367,7 @@ def case_reduced_model(
         modal_damping_ratio=case.damping.modal_damping_ratio,
         rigid_axial_damping=case.damping.rigid_axial,
         rigid_rotation_damping=case.damping.rigid_rotation,
+        rayleigh=(case.damping.mass_proportional, case.damping.stiffness_proportional),
         damping_basis=case.damping.basis,
         top_speed=case.operation.top_speed,
         bit_rock=case_bit_rock(case),

@@ -73,13 +73,16 @@ from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
+#: A root is *mixed* when no family holds at least this share of its modal energy (:attr:`ModeStability.shares`).
+MIXED_SHARE = 0.8
 
 
 @dataclass(frozen=True)
 class SteadyDrilling:
     """Steady drilling (SI): ``rate_of_penetration`` [m/s], ``bit_speed`` [rad/s], ``torque_on_bit``
     [N·m], ``force_on_bit`` [N]; ``state`` is the reduced state ``[η, η̇]`` at t = 0 (rigid axial
-    coordinate 0); ``depth_of_cut`` [m] per blade and ``delay`` [s] of a delayed law (0 otherwise)."""
+    coordinate 0); ``depth_of_cut`` [m] per blade and ``delay`` [s] of a delayed law (0 otherwise); ``note``:
+    '' or one line saying that the state is not at the set point asked for (:func:`steady_drilling`)."""
 
     rate_of_penetration: float
     bit_speed: float
@@ -88,12 +91,15 @@ class SteadyDrilling:
     state: np.ndarray
     depth_of_cut: float = 0.0
     delay: float = 0.0
+    note: str = ""
 
     def to_dict(self) -> dict[str, float]:
         out = {"rate_of_penetration": self.rate_of_penetration, "bit_speed": self.bit_speed,
                "torque_on_bit": self.torque_on_bit, "force_on_bit": self.force_on_bit}
         if self.delay > 0.0:
             out.update(depth_of_cut=self.depth_of_cut, delay=self.delay)
+        if self.note:
+            out["note"] = self.note
         return out
 
 
@@ -102,17 +108,25 @@ class ModeStability:
     """One eigenvalue λ of the linearised model (one of each complex-conjugate pair).
 
     ``frequency`` = |Im λ| / 2π [Hz], ``damping_ratio`` = −Re λ / |λ| [-], ``growth_rate`` = Re λ [1/s]
-    (> 0: the mode grows), ``family`` the family holding most of the mode's modal energy.
+    (> 0: the mode grows), ``family`` the family holding most of the mode's modal energy, ``shares`` the
+    share of each family (:data:`STABILITY_FAMILIES`) in that energy, ``½ Σ (|δη̇_j|² + |ω_j²| |δη_j|²)``
+    over the family's modal coordinates j of the root's eigenvector (they add up to 1).
     """
 
     family: str
     frequency: float
     damping_ratio: float
     growth_rate: float
+    shares: dict[str, float] | None = None
 
     @property
     def eigenvalue(self) -> complex:
         return complex(self.growth_rate, 2.0 * math.pi * self.frequency)
+
+    @property
+    def mixed(self) -> bool:
+        """No family holds :data:`MIXED_SHARE` of the root's modal energy (False without shares)."""
+        return bool(self.shares) and max(self.shares.values()) < MIXED_SHARE
 
 
 @dataclass(frozen=True)
@@ -136,10 +150,36 @@ class StabilityResult:
         """The mode with the largest growth rate."""
         return max(self.modes, key=lambda m: m.growth_rate)
 
+    @property
+    def leading_by_family(self) -> dict[str, ModeStability | None]:
+        """The root of largest growth rate of each family (:data:`STABILITY_FAMILIES`; a root belongs to the
+        family holding most of its energy), None for a family without a root. Unlike :attr:`leading`, the
+        torsional and axial roots stay visible above the buckling load, where a lateral divergence leads."""
+        out: dict[str, ModeStability | None] = {}
+        for family in STABILITY_FAMILIES:
+            own = [m for m in self.modes if m.family == family]
+            out[family] = max(own, key=lambda m: m.growth_rate) if own else None
+        return out
+
+    def family_stable(self, family: str) -> bool | None:
+        """Every root of ``family`` decays (None: the family has no root)."""
+        own = [m for m in self.modes if m.family == family]
+        return all(m.growth_rate < 0.0 for m in own) if own else None
+
+    @property
+    def mixed_roots(self) -> list[ModeStability]:
+        """The roots no family dominates (:attr:`ModeStability.mixed`), sorted by frequency."""
+        return [m for m in self.modes if m.mixed]
+
     def to_dict(self) -> dict:
-        """JSON-ready (SI): ``stable``, ``steady_state``, ``modes`` (list sorted by frequency)."""
+        """JSON-ready (SI): ``stable``, ``steady_state``, ``modes`` (list sorted by frequency, each with its
+        family's energy ``shares``), ``leading_by_family`` (per family: the leading root or None, and
+        ``stable``) and ``mixed_roots``."""
         out = {"stable": self.stable, "steady_state": self.steady_state.to_dict(),
-               "modes": [asdict(m) for m in self.modes]}
+               "modes": [asdict(m) for m in self.modes],
+               "leading_by_family": {f: (None if m is None else {**asdict(m), "stable": self.family_stable(f)})
+                                     for f, m in self.leading_by_family.items()},
+               "mixed_roots": [asdict(m) for m in self.mixed_roots]}
         if self.top_drive is not None:
             out["top_drive"] = self.top_drive
         if self.delay is not None:
@@ -184,24 +224,66 @@ def _steady_load(model: ReducedOrderModel, omega: float, r: int):
     return rop, force, torque, velocity, load, motor
 
 
+#: Samples of the scan for the proportional controller's steady speed in (0, Ω] (:func:`proportional_speed`).
+DROOP_SCAN = 256
+#: A steady speed this close to the set point (relative) counts as the set point.
+SET_POINT_TOLERANCE = 1e-3
+
+
+def proportional_speed(motor_torque, set_point: float, proportional_gain: float) -> float:
+    """The steady quill speed ω [rad/s] of a proportional controller (``integral_gain = 0``): the root of
+    ``ω − Ω + τ_m(ω)/k_p = 0`` **nearest the set point** Ω in (0, Ω] (``motor_torque(ω)`` [N·m] the torque
+    steady drilling at ω needs), found by scanning down from Ω (:data:`DROOP_SCAN` steps) to the first sign
+    change, then Brent's method. A velocity-weakening load may have other roots further down: they are
+    other branches, never taken (a fixed-point iteration could jump there). ValueError (one line, naming
+    the gain and the torque at the set point) when no root exists in (0, Ω]."""
+    from scipy.optimize import brentq
+
+    def residual(omega: float) -> float:
+        return omega - set_point + motor_torque(omega) / proportional_gain
+
+    at_set_point = residual(set_point)
+    if at_set_point == 0.0:
+        return float(set_point)
+    if at_set_point < 0.0:
+        raise ValueError(f"no steady rotation below the set point {set_point:.6g} rad/s: the load torque "
+                         f"{motor_torque(set_point):.6g} N*m drives the string (proportional_gain = "
+                         f"{proportional_gain:.6g} N*m*s/rad, integral_gain = 0)")
+    grid = np.linspace(set_point, 0.0, DROOP_SCAN + 1)[1:-1]
+    upper = set_point
+    for omega in grid:
+        value = residual(float(omega))
+        if value <= 0.0:
+            return float(brentq(residual, float(omega), upper, xtol=1e-14 * set_point, rtol=1e-13))
+        upper = float(omega)
+    raise ValueError(f"no steady rotation: proportional_gain = {proportional_gain:.6g} N*m*s/rad cannot carry the "
+                     f"load torque {motor_torque(set_point):.6g} N*m at a positive speed (integral_gain = 0)")
+
+
 def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     """The steady drilling state of ``model``, eq. (1) (with a top drive: the module docstring). Raises
     ValueError when the law gives no penetration (ROP <= 0: the bit would lift off, the drilling regime does
-    not exist) or the motor would need more than its maximum torque. Off bottom: steady rotation, ROP 0."""
+    not exist) or the motor would need more than its maximum torque. Off bottom: steady rotation, ROP 0.
+
+    With ``integral_gain = 0`` the controller droops: the steady speed is :func:`proportional_speed`, the
+    branch nearest the set point, and when it differs from the set point by more than
+    :data:`SET_POINT_TOLERANCE` the state's ``note`` says so in one line, naming the speed and the weight on
+    bit found (the state is then not the operating point asked for)."""
     r = rigid_axial_column(model)
     drive = model.top_drive
     omega = model.top_speed
-    rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
+    note = ""
     if not drive.imposed and drive.integral_gain == 0.0:
-        for _ in range(200):  # ω = Ω − τ_m(ω)/k_p: τ_m varies little with ω, a contraction for k_p ≫ |∂τ/∂ω|
-            updated = drive.set_point - motor / drive.proportional_gain if drive.proportional_gain > 0 else -np.inf
-            if not updated > 0.0:
-                raise ValueError(f"no steady rotation: proportional_gain = {drive.proportional_gain:.6g} N*m*s/rad"
-                                 f" cannot carry the load torque {motor:.6g} N*m at a positive speed")
-            if abs(updated - omega) <= 1e-12 * abs(omega):
-                break
-            omega = updated
-            rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
+        if not drive.proportional_gain > 0.0:
+            raise ValueError(f"no steady rotation: proportional_gain = {drive.proportional_gain:.6g} N*m*s/rad"
+                             " and integral_gain = 0: the controller applies no torque")
+        omega = proportional_speed(lambda w: _steady_load(model, w, r)[5], drive.set_point,
+                                   drive.proportional_gain)
+        if abs(omega - drive.set_point) > SET_POINT_TOLERANCE * drive.set_point:
+            note = (f"steady drilling at {omega * 30.0 / math.pi:.4g} rpm with {model.weight_on_bit / 1e3:.4g} kN "
+                    f"on bit, not the set point {drive.set_point * 30.0 / math.pi:.4g} rpm: integral_gain = 0 "
+                    f"lets the speed droop by the load torque / proportional_gain")
+    rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
     if not drive.imposed and abs(motor) > drive.max_torque:
         raise ValueError(f"no steady drilling: the motor torque needed, {motor:.6g} N*m, exceeds "
                          f"top_drive.max_torque = {drive.max_torque:.6g} N*m")
@@ -220,7 +302,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     return SteadyDrilling(rate_of_penetration=float(rop), bit_speed=float(omega), torque_on_bit=-torque,
                           force_on_bit=-force, state=np.concatenate([offsets, velocity, states]),
                           depth_of_cut=law.steady_depth_of_cut(rop, omega),
-                          delay=law.detournay.sector / omega if law.delayed else 0.0)
+                          delay=law.detournay.sector / omega if law.delayed else 0.0, note=note)
 
 
 def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
@@ -257,11 +339,14 @@ def _family_of(model: ReducedOrderModel) -> np.ndarray:
 
 def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:
     """The state matrix without the rigid axial position (the depth drilled: no equation depends on it) and,
-    with a top drive, the rigid rotation's angle (likewise), and the mask of the rows kept."""
+    with a top drive, the rigid rotation's angle (likewise) and, with ``integral_gain = 0``, the controller's
+    integral state (likewise), and the mask of the rows kept."""
     keep = np.ones(model.state_size, dtype=bool)
     keep[rigid_axial_column(model)] = False
     if model.rigid_rotation_column is not None:
         keep[model.rigid_rotation_column] = False
+    if model.top_drive.n_states and model.top_drive.integral_gain == 0.0:
+        keep[2 * model.size] = False  # the integral state: with k_i = 0 no equation depends on it
     return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
 
 
@@ -310,6 +395,18 @@ def leading_growth_rate(model: ReducedOrderModel) -> float:
     return float(np.max(sla.eigvals(matrix).real))
 
 
+def family_growth_rates(model: ReducedOrderModel) -> dict[str, float]:
+    """The leading growth rate [1/s] of every root (``growth_rate``, as :func:`leading_growth_rate`) and of each
+    family's roots (``{family}_growth_rate`` for :data:`STABILITY_FAMILIES`; NaN for a family without roots),
+    from :func:`stability` (eigenvectors needed to tell the families apart). ValueError when there is no
+    steady drilling."""
+    found = stability(model)
+    out = {"growth_rate": found.leading.growth_rate}
+    for family, root in found.leading_by_family.items():
+        out[f"{family}_growth_rate"] = math.nan if root is None else root.growth_rate
+    return out
+
+
 def stability(model: ReducedOrderModel) -> StabilityResult:
     """Steady drilling of ``model`` and the eigenvalues of the model linearised about it (for a delayed law
     the characteristic roots of eq. (3) and, for each, the null vector of ``sI − A0 − A1 e^{−sτ0}``)."""
@@ -337,13 +434,15 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
     for k, lam in enumerate(values):
         if lam.imag < 0.0:
             continue
-        shares = [energy[labels == f, k].sum() for f in STABILITY_FAMILIES]
+        shares = np.array([energy[labels == f, k].sum() for f in STABILITY_FAMILIES])
         family = STABILITY_FAMILIES[int(np.argmax(shares))]
+        total = float(shares.sum())
         magnitude = abs(lam)
         modes.append(ModeStability(
             family=family, frequency=float(lam.imag / (2.0 * math.pi)),
             damping_ratio=float(-lam.real / magnitude) if magnitude > 0 else 0.0,
             growth_rate=float(lam.real),
+            shares={f: float(v / total) if total > 0 else math.nan for f, v in zip(STABILITY_FAMILIES, shares)},
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
     return StabilityResult(steady, modes, None if model.top_drive.imposed else model.top_drive.describe(), delay)
@@ -365,12 +464,13 @@ BOUNDARY_TOLERANCE = 1.0
 
 def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_step: float = BOUNDARY_FIRST_STEP,
                      xtol: float = BOUNDARY_TOLERANCE) -> float | None:
-    """The root nearest ``start`` of a growth rate ``growth(x)`` [1/s] along one parameter x, searched in
-    ``(lower, upper)``: from ``start`` the bracket grows geometrically (steps ``first_step·start``, × 1.5)
-    in the direction in which the sign should change — downwards when ``growth(start) > 0`` (the growth
-    rate of steady drilling rises with the weight-on-bit), upwards otherwise —, then the root is found by
-    Brent's method to ``xtol``. ``growth`` may raise ValueError (no steady state there): the search then
-    stops on that side. None when no sign change is found."""
+    """The root nearest ``start`` of a growth rate ``growth(x)`` [1/s] along one parameter x, searched over
+    the whole range ``(lower, upper)``: brackets grow from ``start`` outward on both sides in turn
+    (steps ``first_step·start``, × 1.5 each), the side where the sign should change first — downwards when
+    ``growth(start) > 0`` (the growth rate of steady drilling rises with the weight-on-bit) —, then the
+    root is found by Brent's method to ``xtol``. ``growth`` may raise ValueError (no steady state there):
+    past a step that lands there, the edge of the defined range is found by bisection (within
+    1e-4·``start``), every defined piece checked for a sign change, and the search ends on that side. None when no sign change is found on either side."""
     from scipy.optimize import brentq
 
     def safe(x: float) -> float | None:
@@ -385,31 +485,46 @@ def growth_rate_root(growth, start: float, lower: float, upper: float, *, first_
         return None
     if g0 == 0.0:
         return float(start)
-    direction = -1.0 if g0 > 0.0 else 1.0
-    step = first_step * abs(start)
-    near, g_near = start, g0
-    while True:
-        far = near + direction * step
-        if not lower < far < upper:
-            far = lower if direction < 0 else upper
-        g_far = safe(far)
-        if g_far is None:
-            return None
-        if g_far == 0.0:
-            return float(far)
-        if (g_far > 0.0) != (g_near > 0.0):
-            return float(brentq(lambda x: growth(x), min(near, far), max(near, far), xtol=xtol))
-        if far in (lower, upper):
-            return None
-        near, g_near = far, g_far
-        step *= 1.5
+    expected = -1.0 if g0 > 0.0 else 1.0
+    edge_tolerance = max(xtol, 1e-4 * abs(start))  # how close to the edge of the defined range a side ends
+    # per side: [last defined x, its growth rate, next step, still searching]
+    sides = {d: [float(start), g0, first_step * abs(start), True] for d in (expected, -expected)}
+    while any(side[3] for side in sides.values()):
+        for direction, side in sides.items():
+            near, g_near, step, searching = side
+            if not searching:
+                continue
+            far = near + direction * step
+            if not lower < far < upper:
+                far = lower if direction < 0 else upper
+            g_far = safe(far)
+            if g_far is None:  # past the edge of the defined range: bisect towards it, checking each piece
+                while abs(far - near) > edge_tolerance:
+                    middle = 0.5 * (near + far)
+                    g_middle = safe(middle)
+                    if g_middle is None:
+                        far = middle
+                        continue
+                    if g_middle == 0.0 or (g_middle > 0.0) != (g_near > 0.0):
+                        far, g_far = middle, g_middle
+                        break
+                    near, g_near = middle, g_middle
+                if g_far is None:
+                    side[3] = False  # the edge is reached without a sign change
+                    continue
+            if g_far == 0.0:
+                return float(far)
+            if (g_far > 0.0) != (g_near > 0.0):
+                return float(brentq(lambda x: growth(x), min(near, far), max(near, far), xtol=xtol))
+            side[:] = [far, g_far, step * 1.5, far not in (lower, upper)]
+    return None
 
 
 def weight_on_bit_boundary(case) -> dict:
     """The stability boundary of steady drilling of ``case`` along the weight-on-bit at its top speed (SI):
     ``weight_on_bit`` [N] where the leading growth rate of :func:`case_stability` crosses 0 nearest the
-    case's weight-on-bit (:func:`growth_rate_root`, searched in (0, string weight)), None when it does not
-    in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
+    case's weight-on-bit (:func:`growth_rate_root`, searched on both sides over (0, string weight), to the
+    edge of steady drilling), None when it does not in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
     ``nominal_growth_rate`` [1/s]. Above the boundary steady drilling is unstable (a Hopf bifurcation: the
     torsional mode's damping turns negative through the velocity-weakening bit torque)."""
     from functools import lru_cache

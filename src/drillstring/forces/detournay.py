@@ -151,6 +151,12 @@ class DetournayParameters:
                          self.friction_arm, self.contact_velocity, self.friction_speed, self.sector],
                         dtype=np.float64)
 
+    def cutting_force(self, depth_of_cut):
+        """``W_c = a ζ ε n d_n`` [N] for the depth of cut per blade ``d_n`` [m] (array-like), 0 off the rock
+        (``d_n ≤ 0``): the cutting part of the force on bit; the rest is the wear flats' contact."""
+        d = np.asarray(depth_of_cut, dtype=np.float64)
+        return np.where(d > 0.0, self.cutting_stiffness * np.maximum(d, 0.0), 0.0)
+
     # -- the law at one state: NumPy reference and Jacobian ------------------------------------------------
     def evaluate(self, depth_of_cut, bit_axial_velocity, bit_speed):
         """NumPy reference of :func:`detournay_force`: ``(axial_force [N], torque [N·m])`` on the string for

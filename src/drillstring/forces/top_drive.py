@@ -33,8 +33,13 @@ Controllers (``top_drive.controller``):
   loop is stiff: ``k_p = 10 Z_p``, ``k_i = k_p²/(4 J_td)`` (a critically damped quill) unless given;
   ``ω_f = ω_s / 5`` unless given.
 
-The surface torque ``T_s`` is the elastic torque of the top element, ``(K q)`` at the top's θx (positive
-while the string is driven forward); it is also the ``surface_torque`` observable.
+The z_torque feedback reads ``T_s`` as the elastic torque of the top element, ``(K q)`` at the top's θx
+(positive while the string is driven forward). The ``surface_torque`` observable of a top drive is instead
+the torque consistent with the quill's equation of motion, ``T_s = τ_m − J_td θ̈₀`` (the motor torque less
+the quill's inertial torque, ``θ̈₀`` from the model's right-hand side): read from a truncated modal basis the
+elastic torque of the top element depends on ``J_td`` (its shapes do) — 0.08–4 kN·m at 100 kg·m² against
+2.4–9.2 kN·m at 1000 kg·m² for the same quill and bit motion — while ``τ_m − J_td θ̈₀`` does not
+(tests/dynamics/test_surface_torque.py).
 
 The component's states are ``z`` (every controller) and ``x`` (``z_torque`` only), integrated with the
 modal coordinates. Its pieces: :class:`TopDriveParameters` (built from the case in one place,

@@ -11,6 +11,7 @@ import xarray as xr
 from drillstring.dynamics.indicators import (
     CYCLE_METRICS,
     DEFAULT_TRANSIENT,
+    RENAMED_METRICS,
     TOP_DRIVE_METRICS,
     cycle_metrics,
     top_drive_metrics,
@@ -19,7 +20,7 @@ from drillstring.dynamics.indicators import (
 from drillstring.quantities import LONG_NAMES, UNITS
 from drillstring.stochastic.montecarlo import open_study_group, stored_observables
 from drillstring.stochastic.locks import StudyLock
-from drillstring.stochastic.runs import REALIZATION_METRICS
+from drillstring.stochastic.runs import FAMILY_GROWTH_METRICS, REALIZATION_METRICS
 from drillstring.stochastic.store import DONE, FAILED, StoreError, damage
 from drillstring.stochastic.statistics import (
     dispersion,
@@ -49,6 +50,10 @@ def load_study(store_path: str | Path) -> xr.Dataset:
         except Exception as error:  # a chunk that does not decode (checksum, truncated file)
             found = "; ".join(damage(group)) or f"{type(error).__name__}: {error}"
             raise StoreError(f"{store_path} is damaged ({found}); {advice}") from None
+    # stores written before the time means had the maps' spelling: the same arrays under their old names
+    ds = ds.rename({old: new for old, new in RENAMED_METRICS.items() if old in ds and new not in ds})
+    ds = ds.rename({f"nominal_{old}": f"nominal_{new}" for old, new in RENAMED_METRICS.items()
+                    if f"nominal_{old}" in ds and f"nominal_{new}" not in ds})
     ds = ds.assign_coords(realization=np.arange(ds.sizes["realization"]))
     ds = ds.set_coords(["x"]) if "x" in ds.data_vars else ds
     for name in stored_observables(ds) + ("radial_displacement",):
@@ -60,7 +65,7 @@ def load_study(store_path: str | Path) -> xr.Dataset:
 
 #: Prefix of the per-realization results in the statistics (``realization_stick_slip_index``, ...): apart
 #: from the pointwise statistics of the observables (``rate_of_penetration_mean`` is the mean over the
-#: realizations at each time; ``realization_rate_of_penetration_mean`` each realization's time mean).
+#: realizations at each time; ``realization_mean_rate_of_penetration`` each realization's time mean).
 REALIZATION_PREFIX = "realization_"
 #: The per-realization results summarised under ``realizations``: the cycle metrics and the bit-speed
 #: oscillation (max − min)/2Ω of maps and sensitivity runs; with a top drive also the
@@ -78,9 +83,10 @@ TIME_CONVERGENCE_THRESHOLD = 0.02
 
 def _metric_names(raw: xr.Dataset) -> list[str]:
     """The per-realization metrics a study store holds: :data:`~drillstring.stochastic.runs.
-    REALIZATION_METRICS`, and the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS` of a case with
-    a top drive."""
-    return list(REALIZATION_METRICS) + [name for name in TOP_DRIVE_METRICS if name in raw]
+    REALIZATION_METRICS`, the per-family growth rates (:data:`~drillstring.stochastic.runs.FAMILY_GROWTH_METRICS`,
+    in stores written since they exist) and the :data:`~drillstring.dynamics.indicators.TOP_DRIVE_METRICS` of a
+    case with a top drive."""
+    return list(REALIZATION_METRICS) + [name for name in (*FAMILY_GROWTH_METRICS, *TOP_DRIVE_METRICS) if name in raw]
 
 
 def _realization_metrics(raw: xr.Dataset, rows: np.ndarray, t_transient: float, prefix: str = "") -> dict:
@@ -155,7 +161,7 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
     metrics = _realization_metrics(raw, rows, t_transient)
     nominal = _realization_metrics(raw, rows, t_transient, prefix="nominal_")
     coords = {"realization": done.realization.values}
-    for name, (unit, description) in {**REALIZATION_METRICS, **TOP_DRIVE_METRICS}.items():
+    for name, (unit, description) in {**REALIZATION_METRICS, **FAMILY_GROWTH_METRICS, **TOP_DRIVE_METRICS}.items():
         if name not in metrics:
             continue
         window = f" after t = {t_transient:g} s" if name in CYCLE_METRICS or name in TOP_DRIVE_METRICS else ""
@@ -289,12 +295,25 @@ def realizations_summary(stats: xr.Dataset) -> dict:
 def stability_summary(stats: xr.Dataset, boundary: dict | None = None) -> dict:
     """``unstable_fraction``: the share of the realizations (with a growth rate) whose steady drilling is
     unstable (leading growth rate > 0), their count, the distribution of the growth rate [1/s]
-    (:func:`distribution_summary`) and the nominal run's; ``boundary``: the nominal case's stability
+    (:func:`distribution_summary`) and the nominal run's; ``by_family``: the same per family of roots (axial,
+    torsional, lateral: a buckled string's lateral divergence does not hide the torsional roots; absent in
+    stores written before); ``boundary``: the nominal case's stability
     boundary along the weight-on-bit (:func:`~drillstring.dynamics.stability.weight_on_bit_boundary`) when
     given."""
     rates = stats.get(REALIZATION_PREFIX + "growth_rate")
     growth = np.asarray(rates.values, dtype=float) if rates is not None else np.zeros(0)
     finite = growth[np.isfinite(growth)]
+    by_family = {}
+    for name in FAMILY_GROWTH_METRICS:
+        values = stats.get(REALIZATION_PREFIX + name)
+        if values is None:  # a store written before the families were told apart
+            continue
+        own = np.asarray(values.values, dtype=float)
+        own = own[np.isfinite(own)]
+        by_family[name.removesuffix("_growth_rate")] = {
+            "unstable_realizations": int(np.sum(own > 0.0)), "realizations_with_roots": int(own.size),
+            "growth_rate": distribution_summary(own),
+            "nominal_growth_rate": _finite_or_none(values.attrs.get("nominal", math.nan))}
     return {
         "unstable_fraction": float(np.mean(finite > 0.0)) if finite.size else None,
         "unstable_realizations": int(np.sum(finite > 0.0)),
@@ -302,6 +321,7 @@ def stability_summary(stats: xr.Dataset, boundary: dict | None = None) -> dict:
         "growth_rate": distribution_summary(finite),
         "nominal_growth_rate": (_finite_or_none(rates.attrs.get("nominal", math.nan)) if rates is not None
                                 else None),
+        "by_family": by_family,
         "boundary": boundary,
     }
 

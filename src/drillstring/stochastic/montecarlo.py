@@ -39,9 +39,9 @@ import zarr
 from drillstring.case import Case
 from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
-from drillstring.dynamics.indicators import TOP_DRIVE_METRICS, has_top_drive
+from drillstring.dynamics.indicators import RENAMED_METRICS, TOP_DRIVE_METRICS, has_top_drive
 from drillstring.dynamics.rom import case_reduced_model
-from drillstring.dynamics.stability import leading_growth_rate
+from drillstring.dynamics.stability import family_growth_rates
 from drillstring.dynamics.simulate import (
     SimulationError,
     SimulationResult,
@@ -54,6 +54,7 @@ from drillstring.quantities import STUDY_OBSERVABLES, TOP_DRIVE_OBSERVABLES, sto
 from drillstring.stochastic.execution import Engine, StoreRun, run_locked
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
 from drillstring.stochastic.runs import (
+    FAMILY_GROWTH_METRICS,
     REALIZATION_METRICS,
     compile_kernels,
     metrics_transient,
@@ -327,9 +328,9 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         model = case_reduced_model(realized)
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
         try:
-            outcome.metrics["growth_rate"] = leading_growth_rate(model)
+            outcome.metrics.update(family_growth_rates(model))
         except ValueError:  # no steady drilling at these inputs: the bit-rock law gives no penetration
-            outcome.metrics["growth_rate"] = math.nan
+            outcome.metrics.update({name: math.nan for name in ("growth_rate", *FAMILY_GROWTH_METRICS)})
         try:
             result: SimulationResult = simulate_model(
                 model, **simulation_options(realized, settings.t_end, settings.output_step))
@@ -383,7 +384,7 @@ class StudyStore(TaskStore):
         n_t = len(settings.time)
         per_row = dict(chunk_rows=1)
         observables = study_observables(case)
-        metrics = {**REALIZATION_METRICS, **(TOP_DRIVE_METRICS if has_top_drive(case) else {})}
+        metrics = {**REALIZATION_METRICS, **FAMILY_GROWTH_METRICS, **(TOP_DRIVE_METRICS if has_top_drive(case) else {})}
         layout = {
             "time": ArraySpec(("time",), data=settings.time, attributes={"units": "s"}),
             "x": ArraySpec(("probe",), data=np.asarray(case.mesh.probes, dtype=float), attributes={"units": "m"}),
@@ -425,7 +426,9 @@ class StudyStore(TaskStore):
         """:meth:`TaskStore.open_group`, refusing a store written before the per-realization metrics
         (:data:`~drillstring.stochastic.runs.REALIZATION_METRICS`) were stored."""
         group = super().open_group(path, mode)
-        missing = [name for name in REALIZATION_METRICS if name not in dict(group.attrs["layout"])]
+        layout = dict(group.attrs["layout"])
+        old_names = {new: old for old, new in RENAMED_METRICS.items()}  # read under their earlier spelling
+        missing = [name for name in REALIZATION_METRICS if name not in layout and old_names.get(name) not in layout]
         if missing:
             raise StoreError(f"{path} is a study store of an older drillstring version (no {missing[0]} per "
                              "realization); delete it (or use another --out folder) to start over")

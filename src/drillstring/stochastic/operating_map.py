@@ -37,8 +37,10 @@ from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
 from drillstring.dynamics.indicators import bit_area, has_top_drive
-from drillstring.stochastic.runs import (RUN_OUTPUTS, STABILITY_OUTPUTS, TOP_DRIVE_OUTPUTS, compile_kernels,
-                                        run_outputs, with_top_drive_outputs)
+from drillstring.dynamics.stability import STABILITY_FAMILIES
+from drillstring.stochastic.runs import (DERIVED_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS, TOP_DRIVE_OUTPUTS,
+                                        coexisting_cycles, compile_kernels, run_outputs, stored_outputs,
+                                        with_top_drive_outputs)
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 
 __all__ = [
@@ -181,12 +183,23 @@ class MapSettings:
 
 
 def check_map(case: Case, settings: MapSettings) -> None:
-    """Refuse (ValueError, one line) a grid whose weights-on-bit reach the string's weight (no such
-    point can run); the time window is checked by :class:`MapSettings` itself."""
+    """Refuse (ValueError, one line, before any point runs) a grid whose weights-on-bit reach the string's
+    weight, or any value of either axis that the case's field refuses (its range,
+    :data:`drillstring.case.PHYSICAL_BOUNDS`: a top speed above 1e3 rad/s): no such point could run. The
+    time window is checked by :class:`MapSettings` itself."""
     heaviest = max(settings.weight_on_bit)
     if case.model.gravity and heaviest >= case.weight:
         raise ValueError(f"weight_on_bit = {heaviest:.6g} N: every weight-on-bit of the map must be less than the "
                          f"string's weight, {case.weight:.6g} N")
+    for axis, values, unit in (("top_speed", settings.top_speed, "rad/s"),
+                               ("weight_on_bit", settings.weight_on_bit, "N")):
+        for value in values:
+            try:
+                with_parameters(case, {MAP_AXES[axis]: value})
+            except ValueError as error:
+                reason = str(error).split(": ", 1)[-1]
+                raise ValueError(f"{axis} = {value:.6g} {unit}: {reason} (a value of the map's grid; no point "
+                                 "was run)") from None
 
 
 # --- the store -----------------------------------------------------------------------------------
@@ -268,7 +281,9 @@ def map_dataset(store_path: str | Path) -> xr.Dataset:
         wob = np.asarray(group["weight_on_bit"][:], dtype=float)
         shape = (top.size, wob.size)
         outputs = with_top_drive_outputs(MAP_OUTPUTS, any(name in attrs["layout"] for name in TOP_DRIVE_OUTPUTS))
-        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*outputs, "status", "wall_time")}
+        arrays = stored_outputs(group, attrs["layout"], (*outputs, "status", "wall_time"), shape)
+    arrays["coexisting_cycles"] = np.where(arrays["status"] == DONE, coexisting_cycles(arrays), np.nan)
+    outputs = {**outputs, **DERIVED_OUTPUTS}
     coords = {
         "top_speed": ("top_speed", top, {"units": "rad/s", "long_name": "top (rotary) speed"}),
         "weight_on_bit": ("weight_on_bit", wob, {"units": "N", "long_name": "static weight on bit"}),
@@ -308,8 +323,10 @@ def map_attributes(attrs: dict, window: dict) -> dict[str, Any]:
 
 
 def map_summary(ds: xr.Dataset) -> dict[str, Any]:
-    """JSON-ready highlights of a map (SI): grid, counts, the point of largest mean ROP, the share of
-    linearly stable points, the critical weight-on-bit."""
+    """JSON-ready highlights of a map (SI): grid, counts, the point of largest mean ROP, the count of
+    linearly stable points (every root) and, per family, of points whose roots of that family all decay
+    (``linearly_stable_points_by_family``: stable and unstable counts), the points where a stick-slip cycle
+    coexists with stable steady drilling (``coexisting_cycle_points``), the critical weight-on-bit."""
     rop = ds["mean_rate_of_penetration"].where(ds["status"] == DONE)
     best: dict[str, Any] | None = None
     if bool(np.isfinite(rop.values).any()):
@@ -321,6 +338,12 @@ def map_summary(ds: xr.Dataset) -> dict[str, Any]:
     growth = ds["growth_rate"].values
     defined = np.isfinite(growth)
     done = ds["status"].values == DONE
+    by_family = {}
+    for family in STABILITY_FAMILIES:
+        rates = ds[f"{family}_growth_rate"].values
+        by_family[family] = {"stable": int(np.sum(rates[np.isfinite(rates)] < 0.0)),
+                             "unstable": int(np.sum(rates[np.isfinite(rates)] >= 0.0))}
+    coexisting = ds["coexisting_cycles"].values
     return {
         "top_speed": [float(v) for v in ds.top_speed.values],
         "weight_on_bit": [float(v) for v in ds.weight_on_bit.values],
@@ -332,6 +355,8 @@ def map_summary(ds: xr.Dataset) -> dict[str, Any]:
         "critical_weight_on_bit": float(ds.attrs["critical_weight_on_bit"]),
         "bit_area": float(ds.attrs["bit_area"]),
         "linearly_stable_points": int(np.sum(growth[defined] < 0.0)),
+        "linearly_stable_points_by_family": by_family,
+        "coexisting_cycle_points": int(np.nansum(coexisting > 0.0)),
         "points_without_steady_drilling": int(np.sum(~defined & done)),
         "stick_slip_points": int(np.nansum(ds["stick_time_fraction"].values > 0.0)),
         "largest_rate_of_penetration": best,

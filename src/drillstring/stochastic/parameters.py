@@ -52,7 +52,16 @@ from typing import Any
 import annotated_types
 from pydantic import BaseModel, BeforeValidator
 
-from drillstring.case import DIMENSIONLESS, DIMENSIONS, Case, CaseError, Dimension, case_from_dict, to_si
+from drillstring.case import (
+    DIMENSIONLESS,
+    DIMENSIONS,
+    PHYSICAL_BOUNDS,
+    Case,
+    CaseError,
+    Dimension,
+    case_from_dict,
+    to_si,
+)
 
 __all__ = [
     "WEIGHT_ON_HOOK",
@@ -393,7 +402,33 @@ def case_parameter(case: Case, path: str) -> CaseParameter:
         raise ParameterError(f"{canonical} is not a numeric parameter ({_kind_name(tp)})")
     integer = tp is int
     dimension = DIMENSIONLESS if integer else _dimension_of(metadata)
-    return CaseParameter(canonical, location, dimension, integer, _bounds_from_metadata(metadata), description)
+    bounds = _bounds_from_metadata(metadata)
+    if location == ("operation", "weight_on_bit") and case.model.gravity:  # the hook cannot push
+        bounds = _intersection(bounds, Bounds(0.0, case.weight))
+    return CaseParameter(canonical, location, dimension, integer, _intersection(bounds, _physical(location)),
+                         description)
+
+
+def _physical(location: tuple) -> Bounds:
+    """The plausible range of the field at ``location`` (:data:`drillstring.case.PHYSICAL_BOUNDS`, where the
+    case is refused), or no bound: a law is checked against it before any realization runs."""
+    for path, low, high, _ in PHYSICAL_BOUNDS:
+        if len(path) == len(location) and all(p == "*" or p == item for p, item in zip(path, location)):
+            return Bounds(low, high, True, True)
+    return Bounds()
+
+
+def _intersection(a: Bounds, b: Bounds) -> Bounds:
+    """The values both ``a`` and ``b`` allow."""
+    if b.lower > a.lower or (b.lower == a.lower and not b.lower_closed):
+        lower, lower_closed = b.lower, b.lower_closed
+    else:
+        lower, lower_closed = a.lower, a.lower_closed
+    if b.upper < a.upper or (b.upper == a.upper and not b.upper_closed):
+        upper, upper_closed = b.upper, b.upper_closed
+    else:
+        upper, upper_closed = a.upper, a.upper_closed
+    return Bounds(lower, upper, lower_closed, upper_closed)
 
 
 def parameter_value(case: Case, path: str) -> float:

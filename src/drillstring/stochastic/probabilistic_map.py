@@ -28,6 +28,10 @@ realizations (n of them; failed ones are excluded and listed):
 ``impact_probability``         share with ``impacts > 0`` (a node entered contact with the borehole wall)
 ``instability_probability``    share with ``growth_rate > 0`` (steady drilling linearly unstable; a draw
                                without steady drilling, growth rate NaN, counts as not unstable)
+``torsional_``, ``axial_``     the same for the leading root of the torsional, resp. axial family
+``instability_probability``    (``{family}_growth_rate > 0``): not hidden by a buckled string's lateral root
+``coexistence_probability``    share with ``coexisting_cycles`` (:func:`~drillstring.stochastic.runs.
+                               coexisting_cycles`): stick-slip although steady drilling is linearly stable
 ``bounce_probability``         share with ``bit_bounce_fraction > 0`` (the bit left the rock, zero force on
                                bit, some of the time after the transient)
 ``*_standard_error``           the binomial standard error ``sqrt(P̂(1 − P̂)/n)`` of each
@@ -63,8 +67,9 @@ from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.operating_map import MAP_AXES, MAX_POINTS, MapSettings, check_map, map_attributes
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, with_parameters
-from drillstring.stochastic.runs import (REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS, TOP_DRIVE_OUTPUTS,
-                                        compile_kernels, run_outputs, with_top_drive_outputs)
+from drillstring.stochastic.runs import (DERIVED_OUTPUTS, REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS,
+                                        TOP_DRIVE_OUTPUTS, coexisting_cycles, compile_kernels, run_outputs,
+                                        stored_outputs, with_top_drive_outputs)
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
@@ -92,6 +97,13 @@ PROBABILITIES: dict[str, tuple[str, Callable[[np.ndarray], np.ndarray], str]] = 
     "impact_probability": ("impacts", lambda v: v > 0.0, "probability of wall impact"),
     "instability_probability": ("growth_rate", lambda v: v > 0.0,
                                 "probability of unstable steady drilling (growth rate > 0)"),
+    "torsional_instability_probability": ("torsional_growth_rate", lambda v: v > 0.0,
+                                          "probability of a growing torsional root of steady drilling"),
+    "axial_instability_probability": ("axial_growth_rate", lambda v: v > 0.0,
+                                      "probability of a growing axial root of steady drilling"),
+    "coexistence_probability": ("coexisting_cycles", lambda v: v > 0.0,
+                                "probability of stick-slip although steady drilling is linearly stable "
+                                "(torsion and axial): coexisting cycles"),
     "bounce_probability": ("bit_bounce_fraction", lambda v: v > 0.0,
                            "probability of bit bounce (the bit off the rock some of the time)"),
 }
@@ -319,8 +331,10 @@ def sampled_map_dataset(store_path: str | Path) -> xr.Dataset:
         samples = int(dict(attrs["settings"])["samples"])
         shape = (top.size, wob.size, samples)
         outputs = with_top_drive_outputs(SAMPLE_OUTPUTS, any(name in attrs["layout"] for name in TOP_DRIVE_OUTPUTS))
-        arrays = {name: np.asarray(group[name][:]).reshape(shape) for name in (*outputs, "status", "wall_time")}
+        arrays = stored_outputs(group, attrs["layout"], (*outputs, "status", "wall_time"), shape)
         inputs = np.asarray(group["input_values"][:], dtype=float).reshape(*shape, -1)
+    arrays["coexisting_cycles"] = coexisting_cycles(arrays)
+    outputs = {**outputs, **DERIVED_OUTPUTS}
     dims = ("top_speed", "weight_on_bit", "sample")
     coords = {
         "top_speed": ("top_speed", top, {"units": "rad/s", "long_name": "top (rotary) speed"}),

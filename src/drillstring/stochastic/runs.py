@@ -23,9 +23,14 @@ name                           unit    definition
 (the bit-speed, ROP, TOB, FOB and MSE outputs from :func:`~drillstring.dynamics.indicators.cycle_metrics`).
 With ``stability``, the linear stability of steady drilling (:func:`~drillstring.dynamics.stability.stability`, on
 the same reduced model) adds ``growth_rate`` [1/s] (the leading eigenvalue's real part; > 0: steady drilling is
-unstable), ``leading_frequency`` [Hz], ``leading_family`` (0 axial, 1 torsional, 2 lateral) and the
-closed-form steady state ``steady_rate_of_penetration`` [m/s], ``steady_torque_on_bit`` [N m],
-``steady_force_on_bit`` [N] (NaN where the bit–rock law gives no penetration).
+unstable), ``leading_frequency`` [Hz], ``leading_family`` (0 axial, 1 torsional, 2 lateral), per family
+(:data:`~drillstring.dynamics.stability.STABILITY_FAMILIES`) the leading root's ``{family}_growth_rate`` [1/s]
+and ``{family}_frequency`` [Hz] (a root belongs to the family holding most of its modal energy: above the
+buckling load the lateral divergence leads, and the torsional and axial growth rates stay visible),
+``leading_share`` (the leading root's share of energy in its family), ``mixed_roots`` (how many roots no
+family dominates) and the closed-form steady state ``steady_bit_speed`` [rad/s], ``steady_rate_of_penetration``
+[m/s], ``steady_torque_on_bit`` [N m], ``steady_force_on_bit`` [N] (NaN where the bit–rock law gives no
+penetration).
 """
 
 from __future__ import annotations
@@ -55,16 +60,16 @@ from drillstring.stochastic.store import DONE, FAILED
 
 #: Scalar outputs of every run: name -> (unit, description).
 RUN_OUTPUTS: dict[str, tuple[str, str]] = {
-    "mean_rate_of_penetration": ("m/s", "time-mean rate of penetration"),
+    "mean_rate_of_penetration": CYCLE_METRICS["mean_rate_of_penetration"],
     "std_rate_of_penetration": ("m/s", "standard deviation in time of the rate of penetration"),
     "bit_speed_oscillation": ("1", "bit-speed oscillation (max - min)/(2 top speed)"),
     "stick_time_fraction": ("1", "fraction of the time with the bit below 10 % of the top speed"),
     "bit_bounce_fraction": ("1", "fraction of the time with the bit off the rock (zero force on bit)"),
     "bit_speed_min": ("rad/s", "smallest bit speed"),
     "bit_speed_max": ("rad/s", "largest bit speed"),
-    "mean_torque_on_bit": ("N m", "time-mean torque on bit"),
+    "mean_torque_on_bit": CYCLE_METRICS["mean_torque_on_bit"],
     "std_torque_on_bit": ("N m", "standard deviation in time of the torque on bit"),
-    "mean_force_on_bit": ("N", "time-mean force on bit"),
+    "mean_force_on_bit": CYCLE_METRICS["mean_force_on_bit"],
     "std_force_on_bit": ("N", "standard deviation in time of the force on bit"),
     "mechanical_specific_energy": ("Pa", "mechanical specific energy (Teale) from the time means"),
     "max_radial_displacement": ("m", "largest radial displacement at the probes"),
@@ -75,6 +80,12 @@ STABILITY_OUTPUTS: dict[str, tuple[str, str]] = {
     "growth_rate": ("1/s", "leading growth rate of the linearised model about steady drilling (> 0: unstable)"),
     "leading_frequency": ("Hz", "frequency of the leading eigenvalue"),
     "leading_family": ("1", "family of the leading eigenvalue: 0 axial, 1 torsional, 2 lateral"),
+    **{f"{family}_growth_rate": ("1/s", f"leading growth rate of the {family} roots (NaN: the model has none)")
+       for family in STABILITY_FAMILIES},
+    **{f"{family}_frequency": ("Hz", f"frequency of the leading {family} root") for family in STABILITY_FAMILIES},
+    "leading_share": ("1", "share of the leading root's modal energy in its family (< 0.8: a mixed root)"),
+    "mixed_roots": ("1", "roots whose energy no family holds 80 % of"),
+    "steady_bit_speed": ("rad/s", "bit speed of steady drilling (the set point unless integral_gain = 0)"),
     "steady_rate_of_penetration": ("m/s", "rate of penetration of steady drilling (closed form)"),
     "steady_torque_on_bit": ("N m", "torque on bit of steady drilling (closed form)"),
     "steady_force_on_bit": ("N", "force on bit of steady drilling (closed form)"),
@@ -90,6 +101,44 @@ REALIZATION_OUTPUTS: dict[str, tuple[str, str]] = {
 TOP_DRIVE_OUTPUTS: dict[str, tuple[str, str]] = {
     "surface_torque_amplitude": TOP_DRIVE_METRICS["surface_torque_amplitude"],
 }
+
+
+#: Per-point outputs derived from the stored ones (maps and probabilistic maps): name -> (unit, description).
+DERIVED_OUTPUTS: dict[str, tuple[str, str]] = {
+    "coexisting_cycles": ("1", "1 where steady drilling is linearly stable (torsion and axial) but the run ends in "
+                               "stick-slip (the bit stuck part of the time): a stick-slip cycle coexists with "
+                               "stable steady drilling"),
+}
+
+
+def coexisting_cycles(values) -> np.ndarray:
+    """:data:`DERIVED_OUTPUTS` ``coexisting_cycles`` from a run's outputs (a mapping of arrays of one shape:
+    ``torsional_growth_rate``, ``axial_growth_rate``, ``stick_time_fraction``): 1.0 where the torsional and
+    axial roots of steady drilling all decay (its linearisation says steady drilling is stable; a family the
+    model lacks, NaN growth rate, counts as stable; the lateral roots are left out: a buckled string's lateral
+    divergence is static and is not what stick-slip comes from) and yet the bit sticks and slips after the
+    transient (``0 < stick_time_fraction < 1``; stuck all the time is a stalled bit, not a cycle — e.g. a
+    controller whose integral action builds the motor torque slower than the run lasts): the run landed on a
+    stick-slip limit cycle that
+    coexists with stable steady drilling (a subcritical Hopf bifurcation; which one the string takes
+    depends on the start). 0.0 where not; NaN where a growth rate of both families or the stick time is NaN
+    (no steady drilling, or a run that left no value)."""
+    torsion = np.asarray(values["torsional_growth_rate"], dtype=float)
+    axial = np.asarray(values["axial_growth_rate"], dtype=float)
+    stick = np.asarray(values["stick_time_fraction"], dtype=float)
+    with np.errstate(invalid="ignore"):
+        stable = (np.isnan(torsion) | (torsion < 0.0)) & (np.isnan(axial) | (axial < 0.0))
+        out = (stable & (stick > 0.0) & (stick < 1.0)).astype(float)
+    out[(np.isnan(torsion) & np.isnan(axial)) | np.isnan(stick)] = math.nan
+    return out
+
+
+def stored_outputs(group, layout, names, shape) -> dict[str, np.ndarray]:
+    """The arrays ``names`` of a task store's Zarr ``group``, each reshaped to ``shape``; a name its
+    ``layout`` (the store's recorded layout) lacks — an output added after the store was written — reads as
+    NaN, so that older stores stay readable."""
+    return {name: (np.asarray(group[name][:]).reshape(shape) if name in layout else np.full(shape, math.nan))
+            for name in names}
 
 
 def with_top_drive_outputs(outputs: dict[str, tuple[str, str]], top_drive: bool) -> dict[str, tuple[str, str]]:
@@ -108,6 +157,14 @@ REALIZATION_METRICS: dict[str, tuple[str, str]] = {
     "top_speed": ("rad/s", "top speed of the realized case"),
     "bit_area": ("m^2", "bit area of the realized case (borehole cross-section)"),
     "growth_rate": ("1/s", "leading growth rate of steady drilling at the realization's inputs (> 0: unstable)"),
+}
+
+
+#: Per-family growth rates of each realization of a Monte Carlo study (:func:`~drillstring.dynamics.stability.
+#: family_growth_rates`): stored by studies written since they exist, read when a store holds them.
+FAMILY_GROWTH_METRICS: dict[str, tuple[str, str]] = {
+    f"{family}_growth_rate": ("1/s", f"leading growth rate of the {family} roots of steady drilling (NaN: none)")
+    for family in STABILITY_FAMILIES
 }
 
 
@@ -170,7 +227,7 @@ def result_outputs(result, case: Case, t_transient: float, *, cycle: tuple[str, 
         out[name] = metrics[name]
     out["bit_speed_oscillation"] = (metrics["bit_speed_max"] - metrics["bit_speed_min"]) / (2.0 * top_speed)
     for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
-        out[f"mean_{name}"] = metrics[f"{name}_mean"]
+        out[f"mean_{name}"] = metrics[f"mean_{name}"]
         values = _steady(obs[name], steady)
         if values.size:
             out[f"std_{name}"] = float(values.std())
@@ -191,15 +248,22 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
         return out, str(error)
     leading = found.leading
     steady = found.steady_state
+    for family, root in found.leading_by_family.items():
+        if root is not None:
+            out[f"{family}_growth_rate"] = root.growth_rate
+            out[f"{family}_frequency"] = root.frequency
     out.update({
         "growth_rate": leading.growth_rate,
         "leading_frequency": leading.frequency,
         "leading_family": float(STABILITY_FAMILIES.index(leading.family)),
+        "leading_share": max(leading.shares.values()) if leading.shares else math.nan,
+        "mixed_roots": float(len(found.mixed_roots)),
+        "steady_bit_speed": steady.bit_speed,
         "steady_rate_of_penetration": steady.rate_of_penetration,
         "steady_torque_on_bit": steady.torque_on_bit,
         "steady_force_on_bit": steady.force_on_bit,
     })
-    return out, ""
+    return out, steady.note
 
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,

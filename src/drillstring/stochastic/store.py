@@ -11,7 +11,10 @@ sensitivity design) is a :class:`TaskStore` with its own arrays; the machinery i
   required attributes and every array of its recorded layout, with the recorded sizes; anything else is
   refused with what is missing (:class:`StoreError`), never a traceback from inside Zarr;
 - the *fingerprint* (a hash of the case and the settings) must match: a store is resumed only by the
-  run that created it;
+  run that created it; the *metadata checksum* (:func:`metadata_checksum`, a hash of every attribute
+  fixed at creation: case, settings, the random parameters' laws, means and standard deviations) is
+  checked whenever the store is opened, by readers too: edited metadata is refused (:class:`StoreError`;
+  a store written before it had none and is read as before);
 - every chunk is checked when a writer opens the store (:meth:`TaskStore.verify`; chunks carry a
   checksum, ``zstd`` with ``checksum=True``): a chunk that is missing where a finished row's data should
   be, or that cannot be decoded, is named in :attr:`TaskStore.repairs` and its rows are set back to
@@ -183,6 +186,19 @@ def fingerprint(case_toml: str, settings: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+#: Attributes a store's writers change as rows finish: outside the metadata checksum.
+MUTABLE_ATTRIBUTES = ("failures", "sessions", "metadata_checksum")
+
+
+def metadata_checksum(attrs: dict) -> str:
+    """SHA-256 of a store's fixed attributes (the case, the settings, the layout and sizes, the random
+    parameters' names, laws, means and standard deviations...: everything but
+    :data:`MUTABLE_ATTRIBUTES`), written at creation and checked at every opening: a changed digit in
+    the metadata is found as a damaged chunk is (the data chunks carry their own checksums)."""
+    fixed = {k: v for k, v in attrs.items() if k not in MUTABLE_ATTRIBUTES}
+    return hashlib.sha256(json.dumps(fixed, sort_keys=True, default=str).encode()).hexdigest()
+
+
 class TaskStore:
     """A store of ``total`` rows along ``row_dim`` (see the module docstring).
 
@@ -250,6 +266,9 @@ class TaskStore:
     def _create(path: Path, header: dict, layout: dict[str, ArraySpec], sizes: dict[str, int]) -> None:
         g = zarr.open_group(str(path), mode="w")
         g.attrs.update(header)
+        # The checksum of the attributes as they read back from disk (JSON: tuples become lists), as the
+        # check on opening sees them.
+        g.attrs["metadata_checksum"] = metadata_checksum(dict(zarr.open_group(str(path), mode="r").attrs))
         for name, spec in layout.items():
             shape = tuple(int(sizes[d]) for d in spec.dims)
             if spec.data is not None:
@@ -288,6 +307,10 @@ class TaskStore:
         if kind != cls.kind or "layout" not in attrs or "sizes" not in attrs:
             found = f"a {kind} store" if kind != cls.kind else "a store of an older drillstring version"
             raise StoreError(f"{path} is not {what} (it is {found}); {advice}")
+        recorded = attrs.get("metadata_checksum")
+        if recorded is not None and recorded != metadata_checksum(attrs):
+            raise StoreError(f"{path}: its metadata (zarr.json attributes: case, settings, parameters' laws) "
+                             f"changed since the store was created (checksum mismatch); {advice}")
         try:
             names = set(group.array_keys())
         except Exception as error:

@@ -46,9 +46,12 @@ mean ``M`` and standard deviation ``S``. A mean and a standard deviation *alone*
 (``maxent min=0 mean=M std=S``) give another law, the normal truncated to ``[0, ∞)`` (which exists only for
 ``S < M``).
 
-A law must respect the parameter's range (:class:`~drillstring.stochastic.parameters.Bounds`): a law whose
-probability outside the range exceeds :data:`OUT_OF_RANGE_TOLERANCE` is refused (e.g. a normal top speed
-whose standard deviation is comparable with its mean); use a law on a bounded or positive support instead.
+A law must respect the parameter's range (:class:`~drillstring.stochastic.parameters.Bounds`: the field's own
+range within its plausible range, ``drillstring.case.PHYSICAL_BOUNDS``): a law whose probability outside the
+range exceeds :data:`OUT_OF_RANGE_TOLERANCE` is refused (e.g. a normal top speed whose standard deviation is
+comparable with its mean); use a law on a bounded or positive support instead. The case itself must accept
+the law's quantiles at that tolerance (its cross-field rules: a collar diameter below the borehole's), all
+checked when the law is declared, before any realization.
 Integer settings cannot carry a continuous law.
 
 Joint laws
@@ -451,7 +454,31 @@ def _bind(case: Case, path: str, spec: str | Mapping[str, Any],
     except ValueError as exc:
         raise ParameterError(f"{parameter.path} = {text!r}: {exc}".replace("\n", " ")) from None
     _check_range(parameter, law, text, tolerance)
+    _check_case_at_extremes(case, parameter, law, text, tolerance)
     return UncertainParameter(parameter, law)
+
+
+def _check_case_at_extremes(case: Case, parameter: CaseParameter, law: ParameterLaw, spec_text: str,
+                            tolerance: float) -> None:
+    """Refuse, before any realization, a law whose draws the *case* refuses more often than ``tolerance``:
+    the case is validated with the parameter at the law's ``tolerance`` and ``1 − tolerance`` quantiles
+    (every other value nominal), so that the cross-field rules count too (a collar diameter reaching the
+    borehole's, a lateral perturbation reaching the gap), not only the field's own range."""
+    if tolerance >= 0.5:
+        return
+    for q in (tolerance, 1.0 - tolerance):
+        value = float(law.density.ppf(q))
+        if not math.isfinite(value):
+            continue
+        try:
+            with_parameters(case, {parameter.path: value})
+        except ParameterError as error:
+            unit = f" {parameter.unit}" if parameter.unit else ""
+            reason = str(error).split(": ", 1)[-1]
+            raise ParameterError(
+                f"{parameter.path} = {spec_text!r}: the case refuses the law's {q:.6g} quantile, {value:.6g}{unit} "
+                f"({reason}); allowed: a law whose draws the case accepts but for a share of at most "
+                f"{tolerance:g}") from None
 
 
 class Uncertainty:
