@@ -70,6 +70,7 @@ import scipy.linalg as sla
 
 from drillstring.dynamics.delay_stability import DelayRoots, characteristic_roots, regenerative_coupling
 from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
+from drillstring.forces.registry import BitContext, BitSteadyState
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -147,41 +148,36 @@ class StabilityResult:
         return out
 
 
-def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float:
-    """Eq. (1) at the bit speed ``omega`` [rad/s]; 0 off bottom."""
-    if not model.bit_rock.on_bottom:
-        return 0.0
+def _steady_law(model: ReducedOrderModel, omega: float, r: int) -> BitSteadyState:
+    """The bit law's steady drilling at the bit speed ``omega`` [rad/s] (the law's own
+    :meth:`~drillstring.forces.registry.BitLaw.steady_drilling`): the rigid axial equation
+    ``b_r (f + wob) + g_r = D_rr V / b_r`` is ``−f(V, Ω) = W − c V`` with the axial load
+    ``W = wob + g_r / b_r`` and the resistance ``c = D_rr / b_r²``; eq. (1) for a law affine in V."""
     b_r = model.bit_u[r]
-    # the steady axial force is affine in V: sampled at 1 and 2 m/s, where every law is in contact
-    f_one = model.bit_rock.steady_forces(1.0, omega)[0]
-    f1 = model.bit_rock.steady_forces(2.0, omega)[0] - f_one
-    f0 = f_one - f1
-    d_rr = model.damping[r, r]
-    g = model.generalized_force
-    rop = (b_r * (float(f0) + model.weight_on_bit) + g[r]) / (d_rr / b_r - b_r * f1)
-    if not rop > 0.0:
+    steady = model.bit_rock.steady_drilling(omega, model.weight_on_bit + model.generalized_force[r] / b_r,
+                                            model.damping[r, r] / b_r**2)
+    if steady is None:
         raise ValueError(
             f"no steady drilling at weight_on_bit = {model.weight_on_bit:.6g} N, top_speed = {omega:.6g} rad/s:"
-            f" the bit-rock law gives rate_of_penetration = {rop:.3g} m/s <= 0"
+            f" the bit-rock law {model.bit_rock.name!r} gives no rate_of_penetration > 0"
         )
-    return float(rop)
+    return steady
 
 
 def _steady_load(model: ReducedOrderModel, omega: float, r: int):
-    """Steady drilling at the bit speed ``omega``: (ROP, bit force, bit torque, modal velocity, generalized
-    load without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
-    rop = _steady_penetration(model, omega, r)
-    force, torque = model.bit_rock.steady_forces(rop, omega)
+    """Steady drilling at the bit speed ``omega``: (the law's steady state, modal velocity, generalized load
+    without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
+    law = _steady_law(model, omega, r)
     n = model.size
     velocity = np.zeros(n)
-    velocity[r] = rop / model.bit_u[r]
+    velocity[r] = law.rate_of_penetration / model.bit_u[r]
     spin = model.rigid_rotation_column
     if spin is not None:
         velocity[spin] = omega / model.quill_shapes[spin]
-    load = (model.bit_u * (force + model.weight_on_bit) + model.bit_t * torque + model.generalized_force
-            - model.damping @ velocity)
+    load = (model.bit_u * (law.axial_force + model.weight_on_bit) + model.bit_t * law.torque
+            + model.generalized_force - model.damping @ velocity)
     motor = 0.0 if spin is None else float(-load[spin] / model.quill_shapes[spin])
-    return rop, force, torque, velocity, load, motor
+    return law, velocity, load, motor
 
 
 def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
@@ -191,7 +187,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     r = rigid_axial_column(model)
     drive = model.top_drive
     omega = model.top_speed
-    rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
+    law, velocity, load, motor = _steady_load(model, omega, r)
     if not drive.imposed and drive.integral_gain == 0.0:
         for _ in range(200):  # ω = Ω − τ_m(ω)/k_p: τ_m varies little with ω, a contraction for k_p ≫ |∂τ/∂ω|
             updated = drive.set_point - motor / drive.proportional_gain if drive.proportional_gain > 0 else -np.inf
@@ -201,7 +197,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
             if abs(updated - omega) <= 1e-12 * abs(omega):
                 break
             omega = updated
-            rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
+            law, velocity, load, motor = _steady_load(model, omega, r)
     if not drive.imposed and abs(motor) > drive.max_torque:
         raise ValueError(f"no steady drilling: the motor torque needed, {motor:.6g} N*m, exceeds "
                          f"top_drive.max_torque = {drive.max_torque:.6g} N*m")
@@ -211,16 +207,14 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     offsets = np.zeros(n)
     elastic = model.omega2 != 0.0
     offsets[elastic] = load[elastic] / model.omega2[elastic]
-    states = np.zeros(drive.n_states)
-    if states.size:
-        states[0] = motor / drive.integral_gain if drive.integral_gain > 0 else 0.0
-    if states.size > 1:
-        states[1] = float(model.surface_torque_shapes @ offsets)
-    law = model.bit_rock
-    return SteadyDrilling(rate_of_penetration=float(rop), bit_speed=float(omega), torque_on_bit=-torque,
-                          force_on_bit=-force, state=np.concatenate([offsets, velocity, states]),
-                          depth_of_cut=law.steady_depth_of_cut(rop, omega),
-                          delay=law.detournay.sector / omega if law.delayed else 0.0)
+    states = np.zeros(model.state_size - 2 * n)
+    if drive.drives:
+        first = model.layout.states["top_boundary"] - 2 * n
+        states[first:first + drive.n_states] = drive.steady_states(motor, float(model.surface_torque_shapes @ offsets))
+    return SteadyDrilling(rate_of_penetration=law.rate_of_penetration, bit_speed=float(omega),
+                          torque_on_bit=-law.torque, force_on_bit=-law.axial_force,
+                          state=np.concatenate([offsets, velocity, states]), depth_of_cut=law.depth_of_cut,
+                          delay=model.bit_rock.sector / omega if model.bit_rock.delayed else 0.0)
 
 
 def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
@@ -228,7 +222,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     positions included; ``s`` the top drive controller's states)."""
     n = model.size
     size = model.state_size
-    jac = model.bit_rock.jacobian(steady.rate_of_penetration, steady.bit_speed, steady.depth_of_cut)
+    jac = model.bit_rock.jacobian_at(_context(model, steady))
     bu, bt = model.bit_u, model.bit_t
     coupling = (np.outer(bu, jac[0, 0] * bu + jac[0, 1] * bt) + np.outer(bt, jac[1, 0] * bu + jac[1, 1] * bt))
     a = np.zeros((size, size))
@@ -236,18 +230,23 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     a[n:2 * n, :n] = -np.diag(model.omega2)
     a[n:2 * n, n:2 * n] = coupling - model.damping
     drive = model.top_drive
-    if drive.n_states:
+    if drive.drives:
         q, s = model.quill_shapes, model.surface_torque_shapes
-        law = drive.jacobian()  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
-        rows = [(slice(n, 2 * n), q, law[0]), (2 * n, 1.0, law[1])]
-        if drive.n_states > 1:
-            rows.append((2 * n + 1, 1.0, law[2]))
+        law = drive.jacobian()  # rows (τ_m, then each state's rate), columns (θ̇₀, T_s, then each state)
+        first = model.layout.states["top_boundary"]
+        rows = [(slice(n, 2 * n), q, law[0])] + [(first + k, 1.0, law[1 + k]) for k in range(drive.n_states)]
         for row, weight, d in rows:
             a[row, :n] += np.multiply.outer(weight, d[1] * s)
             a[row, n:2 * n] += np.multiply.outer(weight, d[0] * q)
             for k in range(drive.n_states):
-                a[row, 2 * n + k] += weight * d[2 + k]
+                a[row, first + k] += weight * d[2 + k]
     return a
+
+
+def _context(model: ReducedOrderModel, steady: SteadyDrilling) -> BitContext:
+    """The bit law's context in steady drilling (at t = 0, the bit at its static position)."""
+    return BitContext(0.0, 0.0, 0.0, steady.rate_of_penetration, steady.bit_speed, steady.depth_of_cut,
+                      model.weight_on_bit)
 
 
 def _family_of(model: ReducedOrderModel) -> np.ndarray:
@@ -270,9 +269,8 @@ def delay_matrices(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np
     included), with the delay ``steady.delay``."""
     n = model.size
     a0 = linearized_matrix(model, steady)
-    law = model.bit_rock
-    partials = law.detournay.jacobian(steady.depth_of_cut, steady.rate_of_penetration, steady.bit_speed)
-    coupling = regenerative_coupling(model.bit_u, model.bit_t, f_d=partials[0, 0], t_d=partials[1, 0],
+    f_d, t_d = model.bit_rock.depth_partials(_context(model, steady))
+    coupling = regenerative_coupling(model.bit_u, model.bit_t, f_d=f_d, t_d=t_d,
                                      rate_of_penetration=steady.rate_of_penetration, bit_speed=steady.bit_speed)
     a1 = np.zeros_like(a0)
     a0[n:2 * n, :n] += coupling
