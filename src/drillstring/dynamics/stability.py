@@ -159,7 +159,7 @@ def _steady_law(model: ReducedOrderModel, omega: float, r: int) -> BitSteadyStat
     if steady is None:
         raise ValueError(
             f"no steady drilling at weight_on_bit = {model.weight_on_bit:.6g} N, top_speed = {omega:.6g} rad/s:"
-            f" the bit-rock law {model.bit_rock.name!r} gives no rate_of_penetration > 0"
+            f" the bit-rock law {model.bit_rock.name!r} gives no rate_of_penetration > 0 (rate_of_penetration <= 0)"
         )
     return steady
 

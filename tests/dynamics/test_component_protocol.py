@@ -1,0 +1,185 @@
+"""The component protocol (drillstring.forces.registry): a bit–rock law defined here, outside the package,
+registered with one decorator and run through ``simulate`` (the NumPy reference engine) and ``stability``;
+the registry's computed layout; the package's laws behind the compiled dispatch."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import pytest
+from numba import njit
+
+from drillstring.case import BitRock, TopDrive
+from drillstring.dynamics.rom import case_reduced_model, rigid_axial_column
+from drillstring.dynamics.simulate import simulate_model
+from drillstring.dynamics.stability import linearized_matrix, stability, steady_drilling
+from drillstring.forces.registry import (
+    BIT_LAW,
+    HEADER,
+    BitContext,
+    BitLaw,
+    BitSteadyState,
+    bit_context,
+    bit_law,
+    bit_laws,
+    register,
+    top_boundaries,
+)
+
+
+@njit(cache=True)
+def _weakening_kernel(args, ctx):
+    """The law below, compiled: ``args = [W0, a, μR, β, ω_s, ω_r]``."""
+    weight = args[0] + ctx.axial_velocity / args[1]
+    if weight <= 0.0:
+        return 0.0, 0.0
+    w = ctx.bit_speed
+    shape = (1.0 + args[3] * math.exp(-abs(w) / args[4])) * math.tanh(w / args[5])
+    return -weight, -args[2] * weight * shape
+
+
+@register
+@dataclass(frozen=True)
+class VelocityWeakeningBit(BitLaw):
+    """A bit–rock law that does not exist in the package: the rock carries ``W = W0 + u̇/a`` (a threshold
+    ``W0`` [N] and a penetration rate ``a`` [m/(N·s)] per newton above it; no force when W ≤ 0) and resists
+    the rotation with a friction torque ``μR W g(ω)`` that weakens with speed, ``g(ω) = (1 + β e^{−|ω|/ω_s})
+    tanh(ω/ω_r)``."""
+
+    name: ClassVar[str] = "velocity_weakening_test"
+    kernel_size: ClassVar[int] = 6
+    kernel: ClassVar = _weakening_kernel
+
+    threshold: float = 2e4  # W0 [N]
+    rate: float = 4.4e-8  # a [m/(N·s)]
+    friction_arm: float = 0.05  # μR [m]
+    weakening: float = 1.0  # β [-]
+    weakening_speed: float = 5.0  # ω_s [rad/s]
+    regularization: float = 0.5  # ω_r [rad/s]
+
+    @classmethod
+    def from_case(cls, case):
+        return cls()
+
+    def kernel_array(self):
+        return np.array([self.threshold, self.rate, self.friction_arm, self.weakening, self.weakening_speed,
+                         self.regularization])
+
+    def _shape(self, w):
+        return (1.0 + self.weakening * np.exp(-np.abs(w) / self.weakening_speed)) * np.tanh(w / self.regularization)
+
+    def evaluate_at(self, ctx: BitContext):
+        u, w = np.broadcast_arrays(np.asarray(ctx.axial_velocity, float), np.asarray(ctx.bit_speed, float))
+        weight = self.threshold + u / self.rate
+        contact = weight > 0.0
+        return (np.where(contact, -weight, 0.0), np.where(contact, -self.friction_arm * weight * self._shape(w), 0.0))
+
+    def jacobian_at(self, ctx: BitContext):
+        u, w = float(ctx.axial_velocity), float(ctx.bit_speed)
+        weight = self.threshold + u / self.rate
+        if weight <= 0.0:
+            return np.zeros((2, 2))
+        decay = self.weakening * math.exp(-abs(w) / self.weakening_speed)
+        tanh = math.tanh(w / self.regularization)
+        slope = -math.copysign(decay / self.weakening_speed, w) * tanh + (1.0 + decay) * (1.0 - tanh**2) / \
+            self.regularization
+        return np.array([[-1.0 / self.rate, 0.0],
+                         [-self.friction_arm * float(self._shape(w)) / self.rate, -self.friction_arm * weight * slope]])
+
+    def steady_drilling(self, bit_speed, axial_load, resistance):
+        rop = (axial_load - self.threshold) / (1.0 / self.rate + resistance)
+        if not rop > 0.0:
+            return None
+        force, torque = self.evaluate(rop, bit_speed)
+        return BitSteadyState(rop, float(force), float(torque))
+
+
+LAW = VelocityWeakeningBit()
+
+
+def test_the_outside_law_is_registered_outside_the_package():
+    assert bit_law("velocity_weakening_test") is VelocityWeakeningBit
+    assert "velocity_weakening_test" in bit_laws()
+    assert VelocityWeakeningBit.component_code < 0  # never in the compiled dispatch
+    package = {name: bit_law(name).component_code for name in ("detournay", "off_bottom", "tucker_wang")}
+    assert sorted(package.values()) == [1.0, 2.0, 3.0]  # the package's codes do not move
+    with pytest.raises(ValueError, match="bit law 'no_such_law': must be one of .*tucker_wang"):
+        bit_law("no_such_law")
+
+
+def test_case_names_are_the_registered_ones():
+    """The case format is unchanged; its law names are exactly the package's registered components."""
+    package = {n for n in bit_laws() if bit_law(n).__module__.startswith("drillstring.")}
+    assert set(BitRock.model_fields["law"].annotation.__args__) == package
+    assert set(TopDrive.model_fields["controller"].annotation.__args__) >= {"imposed_speed"}
+    assert "top_drive" in top_boundaries()
+
+
+def test_outside_law_kernel_reference_and_jacobian():
+    rng = np.random.default_rng(2)
+    args = LAW.kernel_array()
+    for u, w in zip(rng.uniform(-2e-3, 6e-3, 20), rng.uniform(-3.0, 15.0, 20)):
+        ctx = bit_context(u, w, time=1.0, weight_on_bit=1e5)
+        assert _weakening_kernel(args, ctx) == pytest.approx(tuple(map(float, LAW.evaluate_at(ctx))), rel=1e-13)
+        jac = LAW.jacobian_at(ctx)
+        for j, (du, dw) in enumerate([(1e-9, 0.0), (0.0, 1e-6)]):
+            plus = np.array(LAW.evaluate(u + du, w + dw), dtype=float)
+            minus = np.array(LAW.evaluate(u - du, w - dw), dtype=float)
+            np.testing.assert_allclose(jac[:, j], (plus - minus) / (2 * (du + dw)), rtol=1e-6,
+                                       atol=1e-9 * np.abs(jac).max())
+
+
+@pytest.fixture(scope="module")
+def model(torsional_case):
+    return case_reduced_model(torsional_case, bit_rock=LAW)
+
+
+def test_layout_is_computed(model):
+    """The law's numbers sit after the header, the others after them, the offsets from the sizes."""
+    layout = model.layout
+    assert layout.numbers["bit_law"] == BIT_LAW == len(HEADER)
+    assert layout.numbers["top_boundary"] == BIT_LAW + VelocityWeakeningBit.kernel_size
+    np.testing.assert_array_equal(model.case2_data.laws[BIT_LAW:BIT_LAW + 6], LAW.kernel_array())
+    assert layout.state_size == model.state_size == 2 * model.size  # imposed speed: no states
+
+
+def test_stability_asks_the_outside_law(model, torsional_case):
+    steady = steady_drilling(model)
+    r = rigid_axial_column(model)
+    b_r = model.bit_u[r]
+    load = model.weight_on_bit + model.generalized_force[r] / b_r
+    resistance = model.damping[r, r] / b_r**2
+    assert steady.rate_of_penetration == pytest.approx((load - LAW.threshold) / (1 / LAW.rate + resistance),
+                                                       rel=1e-12)
+    # an equilibrium of the NumPy reference right-hand side
+    n = model.size
+    rhs = model.rhs_reference(0.0, steady.state)
+    assert np.abs(rhs[n:]).max() < 1e-9 * np.abs(model.omega2 * steady.state[:n]).max()
+    # the linearization (the law's Jacobian) against finite differences of that right-hand side
+    a = linearized_matrix(model, steady)
+    y = steady.state
+    fd = np.zeros_like(a)
+    for k in range(len(y)):
+        step = 1e-7 * max(1.0, abs(y[k]))
+        d = np.zeros_like(y)
+        d[k] = step
+        fd[:, k] = (model.rhs_reference(0.0, y + d) - model.rhs_reference(0.0, y - d)) / (2 * step)
+    np.testing.assert_allclose(a, fd, atol=1e-7 * np.abs(a).max())
+    # velocity weakening (β) feeds the torsional modes negative damping: the leading root grows with it
+    weak = stability(model).leading.growth_rate
+    strong = stability(case_reduced_model(torsional_case, bit_rock=VelocityWeakeningBit(weakening=4.0)))
+    assert strong.leading.growth_rate > weak and strong.leading.family == "torsional"
+
+
+def test_simulate_runs_the_outside_law_through_the_reference_engine(model):
+    steady = steady_drilling(model)
+    result = simulate_model(model, engine="reference", t_end=0.4, output_step=0.05, initial_state=steady.state)
+    obs = result.observables
+    np.testing.assert_allclose(obs["rate_of_penetration"], steady.rate_of_penetration, rtol=1e-6)
+    np.testing.assert_allclose(obs["force_on_bit"], steady.force_on_bit, rtol=1e-6)
+    np.testing.assert_allclose(obs["torque_on_bit"], steady.torque_on_bit, rtol=1e-6)
+    with pytest.raises(ValueError, match="'velocity_weakening_test' is registered outside the drillstring package"):
+        simulate_model(model, t_end=0.1, output_step=0.05)
