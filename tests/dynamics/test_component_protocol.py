@@ -22,6 +22,8 @@ from drillstring.forces.registry import (
     BitContext,
     BitLaw,
     BitSteadyState,
+    TopBoundary,
+    TopContext,
     bit_context,
     bit_law,
     bit_laws,
@@ -183,3 +185,71 @@ def test_simulate_runs_the_outside_law_through_the_reference_engine(model):
     np.testing.assert_allclose(obs["torque_on_bit"], steady.torque_on_bit, rtol=1e-6)
     with pytest.raises(ValueError, match="'velocity_weakening_test' is registered outside the drillstring package"):
         simulate_model(model, t_end=0.1, output_step=0.05)
+
+
+# --- a top boundary without states, defined here ------------------------------------------------------------
+
+
+@njit(cache=True)
+def _damper_kernel(args, ctx, states, rates):
+    """``[k, Ω]`` -> the motor torque ``k (Ω − θ̇₀)``; no states."""
+    return args[0] * (args[1] - ctx.quill_speed)
+
+
+@register
+@dataclass(frozen=True)
+class SpeedDamper(TopBoundary):
+    """A top drive without controller states: a motor turning at Ω coupled to the quill (inertia J) by a
+    viscous coupling k, ``τ_m = k (Ω − θ̇₀)`` — the PI controller with k_i = 0, less its integral state."""
+
+    name: ClassVar[str] = "speed_damper_test"
+    kernel_size: ClassVar[int] = 2
+    kernel: ClassVar = _damper_kernel
+
+    set_point: float
+    gain: float
+    inertia: float
+
+    @property
+    def top_inertia(self):
+        return self.inertia
+
+    def kernel_array(self):
+        return np.array([self.gain, self.set_point])
+
+    def evaluate_at(self, ctx: TopContext, states):
+        return self.gain * (self.set_point - ctx.quill_speed), np.zeros(0)
+
+    def jacobian(self):
+        return np.array([[-self.gain, 0.0]])
+
+    def steady_states(self, motor_torque, surface_torque):
+        return np.zeros(0)
+
+    def steady_speed(self, motor_torque):
+        return self.set_point - motor_torque / self.gain
+
+
+def test_a_top_boundary_without_states(torsional_case):
+    """The state-less boundary against the package's PI controller with k_i = 0 (the same torque; its integral
+    state feeds nothing back): the same steady state, the same roots (the PI's extra one is its integral
+    state's 0), the same run — the NumPy reference applies the motor torque of a boundary without states."""
+    gain, inertia = 3e3, 800.0
+    pi_case = torsional_case.model_copy(update={"top_drive": torsional_case.top_drive.model_copy(update={
+        "controller": "pi", "proportional_gain": gain, "integral_gain": 0.0, "inertia": inertia})})
+    pi = case_reduced_model(pi_case)
+    damper = case_reduced_model(torsional_case, top_drive=SpeedDamper(torsional_case.operation.top_speed, gain,
+                                                                       inertia))
+    assert damper.state_size == 2 * damper.size and pi.state_size == 2 * pi.size + 1
+    a, b = stability(pi), stability(damper)
+    assert b.steady_state.bit_speed == pytest.approx(a.steady_state.bit_speed, rel=1e-12)
+    assert b.steady_state.torque_on_bit == pytest.approx(a.steady_state.torque_on_bit, rel=1e-12)
+    roots_pi = sorted((m.growth_rate, m.frequency) for m in a.modes if abs(m.eigenvalue) > 1e-9)
+    roots = sorted((m.growth_rate, m.frequency) for m in b.modes)
+    np.testing.assert_allclose(roots, roots_pi, rtol=1e-8, atol=1e-10)
+    options = dict(t_end=1.0, output_step=0.1, rtol=1e-9, atol=1e-12, lateral_perturbation=0.0)
+    expected = simulate_model(pi, **options).observables
+    got = simulate_model(damper, engine="reference", **options).observables
+    for name in ("bit_speed", "quill_speed", "surface_torque", "torque_on_bit"):
+        np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-6 * np.abs(expected[name]).max(),
+                                   err_msg=name)

@@ -84,6 +84,7 @@ from drillstring.forces.registry import (
     TOP_BOUNDARY_CODE,
     BitContext,
     BitLaw,
+    TopBoundary,
     TopContext,
     bit_law_force,
     compiled,
@@ -869,8 +870,8 @@ class ReducedOrderModel:
         if self.top_drive is None:
             self.top_drive = TopDriveParameters("imposed_speed", float(self.top_speed))
         #: the kernels' base spin speed [rad/s]: Ω with the top speed imposed, 0 with a top drive
-        self.base_speed = float(self.top_speed) if self.top_drive.imposed else 0.0
-        if not self.top_drive.imposed and self.nonlinear == "full":
+        self.base_speed = 0.0 if self.top_drive.drives else float(self.top_speed)
+        if self.top_drive.drives and self.nonlinear == "full":
             raise ValueError("nonlinear = 'full' with a top drive is not supported yet: use 'bit_and_contact'")
         mesh = self.static.mesh
         nodes = np.arange(mesh.n_nodes)
@@ -911,7 +912,7 @@ class ReducedOrderModel:
         self.blocks = np.array(blocks, dtype=np.int64)
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
         #: column of the rigid rotation (a top drive), None when the top is held
-        self.rigid_rotation_column = None if self.top_drive.imposed else t0
+        self.rigid_rotation_column = t0 if self.top_drive.drives else None
         top_dof = dof(0, THETA_X)
         self.quill_shapes = np.ascontiguousarray(phi[top_dof])
         self.surface_torque_shapes = np.zeros(n)
@@ -1204,7 +1205,7 @@ class ReducedOrderModel:
         converges to the physical shape as lateral modes are added. With a top drive the rigid rotation
         carries Ω (or the string starts at rest when the set point is ramped) and the controller's states
         start at 0 (the motor torque builds up from 0)."""
-        at_rest = self.top_drive.ramp_time > 0.0  # a ramped set point starts from rest: no spin, no whirl
+        at_rest = self.top_drive.starts_at_rest  # a ramped set point starts from rest: no spin, no whirl
         y0 = np.zeros(self.state_size)
         if not at_rest:
             y0[:2 * self.size] = self.turning_whirl()
@@ -1304,11 +1305,11 @@ def reduced_model(
         top_drive: the top boundary; None: the top speed imposed.
         hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
     """
-    drive = top_drive is not None and not top_drive.imposed
+    drive = top_drive is not None and top_drive.drives
     if drive:
         torsional_modes += 1
     modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                          top_inertia=top_drive.inertia if drive else None)
+                          top_inertia=top_drive.top_inertia if drive else None)
     lateral_modes = len(modes.lateral_y.angular_frequencies)
     families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
     basis = np.hstack([f.shapes for f in families])
@@ -1349,17 +1350,20 @@ def case_reduced_model(
     nonlinear: str | None = None,
     lateral_cutoff: float | None = None,
     bit_rock: BitLaw | None = None,
+    top_drive: TopBoundary | None = None,
 ) -> ReducedOrderModel:
     """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
-    (``bit_rock``: a bit–rock law instance, e.g. one registered outside the package, instead of the case's)
+    (``bit_rock``, ``top_drive``: a bit–rock law or a top boundary instance, e.g. one registered outside the
+    package, instead of the case's)
     (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
     ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``). A
     ``lateral_modes`` given without ``lateral_cutoff`` asks for exactly that many lateral modes (no
     cut-off)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
-    top_drive = case_top_drive(
-        case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
+    if top_drive is None:
+        top_drive = case_top_drive(
+            case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
     r = case.reduced_model
     return reduced_model(
         static,

@@ -188,19 +188,14 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     drive = model.top_drive
     omega = model.top_speed
     law, velocity, load, motor = _steady_load(model, omega, r)
-    if not drive.imposed and drive.integral_gain == 0.0:
-        for _ in range(200):  # ω = Ω − τ_m(ω)/k_p: τ_m varies little with ω, a contraction for k_p ≫ |∂τ/∂ω|
-            updated = drive.set_point - motor / drive.proportional_gain if drive.proportional_gain > 0 else -np.inf
-            if not updated > 0.0:
-                raise ValueError(f"no steady rotation: proportional_gain = {drive.proportional_gain:.6g} N*m*s/rad"
-                                 f" cannot carry the load torque {motor:.6g} N*m at a positive speed")
+    if drive.drives:
+        for _ in range(200):  # ω = the speed at which the boundary gives τ_m(ω) (the set point with integral
+            updated = drive.steady_speed(motor)  # action; Ω − τ_m/k_p without): a contraction for k_p ≫ |∂τ/∂ω|
             if abs(updated - omega) <= 1e-12 * abs(omega):
                 break
             omega = updated
             law, velocity, load, motor = _steady_load(model, omega, r)
-    if not drive.imposed and abs(motor) > drive.max_torque:
-        raise ValueError(f"no steady drilling: the motor torque needed, {motor:.6g} N*m, exceeds "
-                         f"top_drive.max_torque = {drive.max_torque:.6g} N*m")
+        drive.check_steady_torque(motor)
     n = model.size
     if model.rigid_rotation_column is not None:
         load = load + model.quill_shapes * motor
@@ -344,7 +339,7 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
             growth_rate=float(lam.real),
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
-    return StabilityResult(steady, modes, None if model.top_drive.imposed else model.top_drive.describe(), delay)
+    return StabilityResult(steady, modes, model.top_drive.describe() if model.top_drive.drives else None, delay)
 
 
 def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResult:

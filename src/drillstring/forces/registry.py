@@ -167,7 +167,14 @@ class BitLaw:
 
 
 class TopBoundary:
-    """Base of the top boundaries (module docstring). Instances are the boundary's parameters (SI)."""
+    """Base of the top boundaries (module docstring). Instances are the boundary's parameters (SI).
+
+    A boundary that drives the string (``drives``) lumps ``top_inertia`` [kg·m²] at the quill (the torsional
+    basis is then free at the top, its first mode the rigid rotation), declares its ``n_states``, its kernel
+    ``kernel(args, ctx, states, rates) -> τ_m`` and NumPy reference ``evaluate_at(ctx, states) -> (τ_m,
+    rates)``, ``jacobian()`` (rows τ_m then each state's rate; columns θ̇₀, T_s, then each state),
+    ``steady_states(motor_torque, surface_torque)``, ``steady_speed(motor_torque)`` (the quill speed [rad/s]
+    at which it gives that torque; ValueError when none) and ``check_steady_torque(motor_torque)``."""
 
     name: ClassVar[str]
     #: drives the string through a motor torque (False: the top speed is imposed)
@@ -175,6 +182,8 @@ class TopBoundary:
     kernel_size: ClassVar[int] = 0
     kernel: ClassVar[Any] = None
     component_code: ClassVar[float] = 0.0
+    #: the run starts from rest (a ramped set point) instead of spinning at the top speed
+    starts_at_rest: ClassVar[bool] = False
 
     @property
     def n_states(self) -> int:
@@ -182,6 +191,13 @@ class TopBoundary:
 
     def kernel_array(self) -> np.ndarray:
         return np.zeros(0)
+
+    def check_steady_torque(self, motor_torque: float) -> None:
+        """ValueError when the boundary cannot give ``motor_torque`` [N·m] in steady rotation (none here)."""
+
+    def describe(self) -> dict:
+        """JSON-ready summary (SI)."""
+        return {"top_boundary": self.name}
 
 
 _REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}}

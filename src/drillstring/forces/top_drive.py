@@ -127,6 +127,33 @@ class TopDriveParameters(TopBoundary):
         return not self.imposed
 
     @property
+    def top_inertia(self) -> float:
+        """J_td [kg·m²], lumped at the quill."""
+        return self.inertia
+
+    @property
+    def starts_at_rest(self) -> bool:  # type: ignore[override]
+        """True when the set point is ramped from 0 (the run starts at rest)."""
+        return self.ramp_time > 0.0
+
+    def steady_speed(self, motor_torque: float) -> float:
+        """The quill speed [rad/s] of steady rotation with the motor torque ``motor_torque`` [N·m]: the set point
+        with integral action (k_i > 0), ``Ω − τ_m/k_p`` without; ValueError when that is not positive."""
+        if self.integral_gain > 0.0:
+            return self.set_point
+        updated = self.set_point - motor_torque / self.proportional_gain if self.proportional_gain > 0 else -np.inf
+        if not updated > 0.0:
+            raise ValueError(f"no steady rotation: proportional_gain = {self.proportional_gain:.6g} N*m*s/rad"
+                             f" cannot carry the load torque {motor_torque:.6g} N*m at a positive speed")
+        return float(updated)
+
+    def check_steady_torque(self, motor_torque: float) -> None:
+        """ValueError when ``motor_torque`` [N·m] exceeds τ_max."""
+        if abs(motor_torque) > self.max_torque:
+            raise ValueError(f"no steady drilling: the motor torque needed, {motor_torque:.6g} N*m, exceeds "
+                             f"top_drive.max_torque = {self.max_torque:.6g} N*m")
+
+    @property
     def code(self) -> int:
         return CONTROLLERS.index(self.controller)
 
