@@ -110,6 +110,9 @@ def test_the_outside_law_is_registered_outside_the_package():
     assert sorted(package.values()) == [1.0, 2.0, 3.0]  # the package's codes do not move
     with pytest.raises(ValueError, match="bit law 'no_such_law': must be one of .*tucker_wang"):
         bit_law("no_such_law")
+    with pytest.raises(ValueError, match="'tucker_wang' is already registered by drillstring.forces.bit_rock"):
+        register(type("Impostor", (VelocityWeakeningBit,), {"name": "tucker_wang"}))
+    assert bit_law("tucker_wang").__module__ == "drillstring.forces.bit_rock"
 
 
 def test_case_names_are_the_registered_ones():

@@ -2,9 +2,11 @@
 
 **Steady drilling** is the equilibrium of the reduced model in which the whole string turns at the top
 speed Ω and advances at a constant rate of penetration: the rigid axial coordinate moves at a constant
-speed, every other coordinate sits at a constant offset. With the bit–rock law (Tucker & Wang, SPEC §6)
-written as ``f(u̇, Ω) = f0 + f1 u̇`` (affine in the bit's axial speed at a fixed bit speed), the rigid axial
-equation ``b_r (f + wob) + g_r = D_rr η̇_r``, ``u̇ = b_r η̇_r`` gives, in closed form,
+speed, every other coordinate sits at a constant offset. The rigid axial equation
+``b_r (f + wob) + g_r = D_rr η̇_r``, ``u̇ = b_r η̇_r`` is ``−f(V, Ω) = W − c V`` with ``W = wob + g_r/b_r``
+and ``c = D_rr/b_r²``: the bit–rock law solves it itself (its ``steady_drilling``,
+:mod:`drillstring.forces.registry`; the analysis never samples the law). For a law affine in the bit's axial
+speed at a fixed bit speed, ``f(u̇, Ω) = f0 + f1 u̇`` (Tucker & Wang, SPEC §6; Detournay), that is
 
     ROP = (b_r (f0 + wob) + g_r) / (D_rr / b_r − b_r f1)                                        (1)
 

@@ -221,8 +221,10 @@ def register(cls: type) -> type:
     process); one from outside the package a negative code (never in the compiled dispatch)."""
     kind = _kind(cls)
     table = _REGISTRY[kind]
-    if cls.name in table and table[cls.name] is not cls and _in_package(table[cls.name]):
-        raise ValueError(f"{kind} {cls.name!r} is already registered by {table[cls.name].__module__}")
+    known = table.get(cls.name)
+    if known is not None and _in_package(known) and \
+            (known.__module__, known.__qualname__) != (cls.__module__, cls.__qualname__):
+        raise ValueError(f"{kind} {cls.name!r} is already registered by {known.__module__}.{known.__qualname__}")
     table[cls.name] = cls
     inside = sorted(n for n, c in table.items() if _in_package(c) and (kind == "bit_law" or c.drives))
     outside = sorted(n for n, c in table.items() if not _in_package(c))
