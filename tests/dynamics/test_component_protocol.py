@@ -256,3 +256,14 @@ def test_a_top_boundary_without_states(torsional_case):
     for name in ("bit_speed", "quill_speed", "surface_torque", "torque_on_bit"):
         np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-6 * np.abs(expected[name]).max(),
                                    err_msg=name)
+
+
+def test_pack_refuses_a_law_whose_numbers_disagree_with_its_size(model):
+    """The registry checks the declared size against the numbers: an offset can never shift silently."""
+    from drillstring.forces.registry import pack
+
+    class Short(VelocityWeakeningBit):
+        kernel_size: ClassVar[int] = 7
+
+    with pytest.raises(ValueError, match="kernel_array\\(\\) has 6 numbers, kernel_size says 7"):
+        pack(Short(), model.top_drive, model.hook_load.kernel_array(), np.zeros(4), 2 * model.size)
