@@ -119,6 +119,13 @@ def test_case_names_are_the_registered_ones():
     """The case format is unchanged; its law names are exactly the package's registered components."""
     package = {n for n in bit_laws() if bit_law(n).__module__.startswith("drillstring.")}
     assert set(BitRock.model_fields["law"].annotation.__args__) == package
+    # each law's keys are its own model; [bit_rock] is their union, no key read by two laws
+    owned = [set(bit_law(n).keys.model_fields) for n in sorted(package) if bit_law(n).keys is not None]
+    assert sum(len(k) for k in owned) == len(set().union(*owned))
+    assert set().union(*owned) == set(BitRock.model_fields) - {"law"}
+    for n in package:
+        for field in getattr(bit_law(n).keys, "model_fields", {}).values():
+            assert field.description  # units in the description, bounds in the metadata where they apply
     assert set(TopDrive.model_fields["controller"].annotation.__args__) >= {"imposed_speed"}
     assert "top_drive" in top_boundaries()
 

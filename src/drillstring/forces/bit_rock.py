@@ -66,6 +66,7 @@ from typing import ClassVar
 import numpy as np
 from numba import njit
 
+from drillstring.case import TuckerWangKeys
 from drillstring.forces.registry import BitContext, BitLaw, BitSteadyState, register
 
 __all__ = [
@@ -118,6 +119,7 @@ class BitRockParameters(BitLaw):
 
     name: ClassVar[str] = "tucker_wang"
     kernel_size: ClassVar[int] = KERNEL_SIZE
+    keys: ClassVar = TuckerWangKeys
 
     a1: float
     a2: float

@@ -57,6 +57,7 @@ from typing import ClassVar
 import numpy as np
 from numba import njit
 
+from drillstring.case import DetournayKeys
 from drillstring.forces.registry import BitContext, BitLaw, BitSteadyState, register
 
 __all__ = [
@@ -101,6 +102,7 @@ class DetournayParameters(BitLaw):
 
     name: ClassVar[str] = "detournay"
     kernel_size: ClassVar[int] = KERNEL_SIZE
+    keys: ClassVar = DetournayKeys
     delayed: ClassVar[bool] = True
 
     blades: int

@@ -134,7 +134,8 @@ class BitLaw:
     delayed: ClassVar[bool] = False
     #: touches the rock (False: the bit hangs free)
     on_bottom: ClassVar[bool] = True
-    #: the case keys it reads: a pydantic model with units and bounds (None: read from ``case.bit_rock``)
+    #: its case keys, read from ``[bit_rock]``: its own pydantic model, with units and bounds
+    #: (:class:`~drillstring.case.TuckerWangKeys`, ...; None: it has none); ``[bit_rock]`` is their union
     keys: ClassVar[Any] = None
     #: code in the kernels' array (set by :func:`register`)
     component_code: ClassVar[float] = 0.0
@@ -182,6 +183,8 @@ class TopBoundary:
     kernel_size: ClassVar[int] = 0
     kernel: ClassVar[Any] = None
     component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds)
+    keys: ClassVar[Any] = None
     #: the run starts from rest (a ramped set point) instead of spinning at the top speed
     starts_at_rest: ClassVar[bool] = False
 

@@ -57,6 +57,7 @@ from typing import ClassVar
 import numpy as np
 from numba import njit
 
+from drillstring.case import TopDrive
 from drillstring.forces.registry import TopBoundary, TopContext, register
 
 #: The top boundaries, ``top_drive.controller`` in a case; code = index (the kernels read the code).
@@ -90,6 +91,7 @@ class TopDriveParameters(TopBoundary):
 
     name: ClassVar[str] = "top_drive"
     kernel_size: ClassVar[int] = KERNEL_SIZE
+    keys: ClassVar = TopDrive
 
     controller: str
     set_point: float
