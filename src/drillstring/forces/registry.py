@@ -17,9 +17,13 @@ lag angle) and ``depth_partials(ctx)``.
 
 **Top boundaries** (:class:`TopBoundary`): the top of the torsion; those that drive the string
 (``drives = True``) declare ``n_states`` (their own states, integrated with the modal coordinates),
-``kernel(args, ctx, states, rates) -> motor torque`` (writes the states' rates), ``reference(ctx,
-states) -> (torque, rates)``, ``jacobian()`` (rows: torque then each state's rate; columns: quill speed,
-surface torque, then each state) and ``steady_states(motor_torque, surface_torque)``.
+``kernel(args, ctx, states, rates) -> motor torque`` (reading the named context :class:`TopContext`; writes
+the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian()`` (rows: torque then each
+state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
+surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
+
+Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
+(:class:`~drillstring.case.TuckerWangKeys`, ...).
 
 **Offsets are computed, never written.** The compiled kernels read every component's numbers from one
 flat float array (one field of the kernels' data: every field is an argument of each inner kernel, and
@@ -52,6 +56,9 @@ from numba.core.extending import overload
 
 __all__ = [
     "BIT_LAW",
+    "HISTORY",
+    "HOOK_LOAD",
+    "TOP_BOUNDARY_CODE",
     "HEADER",
     "BitContext",
     "BitLaw",
@@ -59,9 +66,11 @@ __all__ = [
     "Layout",
     "TopBoundary",
     "TopContext",
+    "bit_context",
     "bit_law",
     "bit_law_force",
     "bit_laws",
+    "compiled",
     "pack",
     "package_components",
     "register",
