@@ -274,3 +274,88 @@ def test_pack_refuses_a_law_whose_numbers_disagree_with_its_size(model):
 
     with pytest.raises(ValueError, match="kernel_array\\(\\) has 6 numbers, kernel_size says 7"):
         pack(Short(), model.top_drive, model.hook_load.kernel_array(), np.zeros(4), 2 * model.size)
+
+
+# --- a delayed law (it reads the depth of cut), defined here ---------------------------------------------------
+
+
+@njit(cache=True)
+def _cutting_kernel(args, ctx):
+    """``[k, c, ω_r]`` -> ``(−k d, −c d clip(ω/ω_r, −1, 1))`` for a depth of cut d > 0, else no contact."""
+    d = ctx.depth_of_cut
+    if not d > 0.0:
+        return 0.0, 0.0
+    turn = min(max(ctx.bit_speed / args[2], -1.0), 1.0)
+    return -args[0] * d, -args[1] * d * turn
+
+
+@register
+@dataclass(frozen=True)
+class PureCutting(BitLaw):
+    """Cutting without wear flats, ``W = k d``, ``T = c d`` (d the depth of cut per blade, one blade sector
+    of lag): the Detournay law with σ = 0, written from scratch as a law outside the package."""
+
+    name: ClassVar[str] = "pure_cutting_test"
+    kernel_size: ClassVar[int] = 3
+    kernel: ClassVar = _cutting_kernel
+    delayed: ClassVar[bool] = True
+
+    stiffness: float  # k [N/m]
+    torque_rate: float  # c [N·m/m]
+    blades: int
+    friction_speed: float = 5e-3  # ω_r [rad/s]
+
+    @property
+    def sector(self):
+        return 2.0 * math.pi / self.blades
+
+    def kernel_array(self):
+        return np.array([self.stiffness, self.torque_rate, self.friction_speed])
+
+    def evaluate_at(self, ctx):
+        d, w = np.broadcast_arrays(np.asarray(ctx.depth_of_cut, float), np.asarray(ctx.bit_speed, float))
+        on = d > 0.0
+        turn = np.clip(w / self.friction_speed, -1.0, 1.0)
+        return np.where(on, -self.stiffness * d, 0.0), np.where(on, -self.torque_rate * d * turn, 0.0)
+
+    def jacobian_at(self, ctx):
+        d, w = float(ctx.depth_of_cut), float(ctx.bit_speed)
+        slope = 1.0 / self.friction_speed if d > 0.0 and abs(w) < self.friction_speed else 0.0
+        return np.array([[0.0, 0.0], [0.0, -self.torque_rate * d * slope]])
+
+    def depth_partials(self, ctx):
+        if not ctx.depth_of_cut > 0.0:
+            return 0.0, 0.0
+        return -self.stiffness, -self.torque_rate * min(max(ctx.bit_speed / self.friction_speed, -1.0), 1.0)
+
+    def steady_drilling(self, bit_speed, axial_load, resistance):
+        rop = axial_load / (self.stiffness * self.sector / bit_speed + resistance)
+        if not rop > 0.0:
+            return None
+        depth = rop * self.sector / bit_speed
+        force, torque = self.evaluate_at(bit_context(rop, bit_speed, depth))
+        return BitSteadyState(rop, float(force), float(torque), depth)
+
+
+def test_a_delayed_law_from_outside_equals_the_detournay_law_it_rewrites(torsional_case):
+    """The delayed path of the protocol (depth of cut from the bit's history, the start's helical bottom, the
+    delay roots) for a law from outside: equal to the package's Detournay law without wear flats."""
+    case = torsional_case.model_copy(update={
+        "bit_rock": torsional_case.bit_rock.model_copy(update={"law": "detournay", "contact_stress": 0.0}),
+        "initial": torsional_case.initial.model_copy(update={"start": "on_bottom"})})
+    detournay = case_reduced_model(case)
+    law = detournay.bit_rock
+    outside = case_reduced_model(case, bit_rock=PureCutting(law.cutting_stiffness, law.cutting_torque_rate,
+                                                            law.blades, law.friction_speed))
+    a, b = stability(detournay), stability(outside)
+    assert b.steady_state.rate_of_penetration == pytest.approx(a.steady_state.rate_of_penetration, rel=1e-12)
+    assert b.steady_state.delay == pytest.approx(a.steady_state.delay, rel=1e-12)
+    assert b.leading.growth_rate == pytest.approx(a.leading.growth_rate, rel=1e-8, abs=1e-10)
+    assert b.leading.frequency == pytest.approx(a.leading.frequency, rel=1e-8)
+    options = dict(t_end=0.6, output_step=0.05, rtol=1e-9, atol=1e-12)
+    expected = simulate_model(detournay, engine="reference", **options).observables
+    got = simulate_model(outside, engine="reference", **options).observables
+    for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit", "bit_depth"):
+        np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-9 * np.abs(expected[name]).max(),
+                                   err_msg=name)
+    assert np.abs(expected["force_on_bit"]).max() > 0.0

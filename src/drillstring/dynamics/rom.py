@@ -1138,8 +1138,8 @@ class ReducedOrderModel:
         """Set the hole bottom under the bit at the start of a run from the state ``y`` at t = 0 (a delayed
         bit–rock law only; nothing otherwise): with a ramped start (:attr:`hook_load`) a flat bottom
         ``clearance`` below the bit; else the helical bottom of steady drilling with the depth of cut
-        ``depth_of_cut`` [m] per blade under the bit — by default that of the closed-form steady state
-        at the static weight-on-bit (:meth:`~drillstring.forces.detournay.DetournayParameters.rate_of_penetration`;
+        ``depth_of_cut`` [m] per blade under the bit — by default the law's own at the static weight-on-bit
+        and the top speed (its ``start_depth_of_cut``; for the Detournay law the closed-form steady state,
         0 when that weight does not exceed the wear flats' contact force)."""
         if not self.bit_rock.delayed:
             return
@@ -1150,8 +1150,7 @@ class ReducedOrderModel:
             return
         if depth_of_cut is None:
             speed = self.top_speed
-            depth_of_cut = self.bit_rock.steady_depth_of_cut(law.rate_of_penetration(self.weight_on_bit, speed),
-                                                             speed)
+            depth_of_cut = law.start_depth_of_cut(self.weight_on_bit, speed)
         start_history(self.history, angle, position, depth_of_cut / law.sector)
 
     def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:

@@ -158,6 +158,11 @@ class DetournayParameters(BitLaw):
         ``bit_speed`` Ω [rad/s]: ``V · 2π/(nΩ)`` (the advance over one blade passage)."""
         return rate_of_penetration * self.sector / bit_speed
 
+    def start_depth_of_cut(self, weight_on_bit: float, bit_speed: float) -> float:
+        """The depth of cut [m] per blade of steady drilling under ``weight_on_bit`` [N] at ``bit_speed``
+        [rad/s] (:meth:`rate_of_penetration`; 0 when the flats carry the whole weight)."""
+        return self.steady_depth_of_cut(self.rate_of_penetration(weight_on_bit, bit_speed), bit_speed)
+
     def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState | None:
         """Steady drilling at Ω = ``bit_speed`` [rad/s] under ``axial_load`` W [N] less ``resistance`` c
         [N·s/m] times V, in closed form with the flats in contact: ``−f = aσl + a ζ ε n · V (2π/(nΩ))``

@@ -170,6 +170,12 @@ class BitLaw:
         (a :class:`BitSteadyState`), None when there is none."""
         raise NotImplementedError
 
+    def start_depth_of_cut(self, weight_on_bit: float, bit_speed: float) -> float:
+        """A delayed law's depth of cut [m] per blade under the bit at the start of a run on the static state:
+        that of its steady drilling under ``weight_on_bit`` [N] at ``bit_speed`` [rad/s] (0 when none)."""
+        steady = self.steady_drilling(bit_speed, weight_on_bit, 0.0)
+        return steady.depth_of_cut if steady is not None else 0.0
+
     # -- conveniences over the context ---------------------------------------------------------------------
     def evaluate(self, bit_axial_velocity, bit_speed, depth_of_cut=0.0):
         """:meth:`evaluate_at` at the bit's axial velocity [m/s], speed [rad/s] and depth of cut [m] per blade."""
