@@ -563,7 +563,7 @@ DETOURNAY_KEYS = ("blades", "bit_radius", "intrinsic_specific_energy", "cutting_
 def _detournay_law(case: Case):
     from drillstring.forces.bit_rock import case_bit_rock
 
-    return case_bit_rock(case).detournay
+    return case_bit_rock(case)
 
 
 def test_detournay_keys_with_units(data):

@@ -105,7 +105,7 @@ def simulate(
         "top_drive": case.top_drive.controller,
         "bit_rock_law": case.bit_rock.law,
         "modes": f"{case.reduced_model.axial_modes} axial + rigid, {case.reduced_model.torsional_modes} "
-                 f"torsional{'' if model.top_drive.imposed else ' + rigid'}, "
+                 f"torsional{' + rigid' if model.top_drive.drives else ''}, "
                  f"{model.family.count('lateral_y')} lateral per plane",
         "elements": model.static.mesh.n_elements,
         "lateral_modes": int(model.family.count("lateral_y")),

@@ -537,23 +537,9 @@ class Fluid(_Base):
     axial_loads: bool = False
 
 
-class BitRock(_Base):
-    """Bit-rock interaction law (docs/model.md, §5 and "Bit–rock law: Detournay"):
-
-    - ``law = "tucker_wang"`` (the default): Tucker & Wang's law, coefficients ``a1`` .. ``a5`` and the
-      regularisation ``e`` (``regularization``, ``stick_stiffening_limit``);
-    - ``"off_bottom"``: the bit hangs free: no bit-rock force, weight-on-bit 0, the hook carries the whole
-      string (``operation.weight_on_bit`` is then not used);
-    - ``"detournay"``: the Detournay law of drag (PDC) bits, cutting plus wear-flat friction with the depth of
-      cut set by the bit's own motion one blade passage earlier (:mod:`drillstring.forces.detournay`):
-      ``blades`` n, ``bit_radius`` a, ``intrinsic_specific_energy`` ε, ``cutting_inclination`` ζ,
-      ``contact_stress`` σ, ``wear_flat_length`` l, ``friction_coefficient`` μ, ``bit_geometry`` γ
-      (``W = a ζ ε n d_n + a σ l``, ``T = ½ a² ε n d_n + ½ μ γ a · a σ l``), and the regularisations of its
-      set-valued parts, ``contact_velocity`` v_r and ``friction_speed`` ω_r.
-
-    Each law reads its own keys only; the others keep their defaults and are not used."""
-
-    law: Literal["tucker_wang", "off_bottom", "detournay"] = Field("tucker_wang", description="bit-rock law")
+class TuckerWangKeys(_Base):
+    """The case keys of the Tucker–Wang bit–rock law (``bit_rock.law = "tucker_wang"``,
+    :mod:`drillstring.forces.bit_rock`), with their units and bounds."""
 
     a1: Velocity = Field(3.429e-3, ge=0, description="a1 [m/s]")
     a2: PenetrationPerForce = Field(5.672e-8, gt=0, description="a2 [m/(N*s)]")
@@ -565,6 +551,11 @@ class BitRock(_Base):
         100.0, gt=1, description="largest ratio of the axial resistance 1/(a2 Z^2) to its value at the top speed;"
         " 1/Z^2 is frozen below the bit speed where it is reached (integrable stick) [-]"
     )
+
+
+class DetournayKeys(_Base):
+    """The case keys of the Detournay bit–rock law (``bit_rock.law = "detournay"``,
+    :mod:`drillstring.forces.detournay`), with their units and bounds."""
 
     # -- law = "detournay" (Detournay & Defourny 1992; Richard, Germay & Detournay 2007) --------------------
     blades: int = Field(4, ge=1, le=100, description="detournay: number of blades n [-]")
@@ -586,6 +577,29 @@ class BitRock(_Base):
     friction_speed: AngularSpeed = Field(
         5e-3, gt=0, description="detournay: omega_r, the torque ramps from 0 to its full value as the bit "
         "speed goes from 0 to omega_r (a stuck bit turns at most omega_r) [rad/s]")
+
+
+class _BitRockLaw(_Base):
+    law: Literal["tucker_wang", "off_bottom", "detournay"] = Field("tucker_wang", description="bit-rock law")
+
+
+class BitRock(DetournayKeys, TuckerWangKeys, _BitRockLaw):
+    """Bit-rock interaction law (docs/model.md, §5 and "Bit–rock law: Detournay"):
+
+    - ``law = "tucker_wang"`` (the default): Tucker & Wang's law, coefficients ``a1`` .. ``a5`` and the
+      regularisation ``e`` (``regularization``, ``stick_stiffening_limit``);
+    - ``"off_bottom"``: the bit hangs free: no bit-rock force, weight-on-bit 0, the hook carries the whole
+      string (``operation.weight_on_bit`` is then not used);
+    - ``"detournay"``: the Detournay law of drag (PDC) bits, cutting plus wear-flat friction with the depth of
+      cut set by the bit's own motion one blade passage earlier (:mod:`drillstring.forces.detournay`):
+      ``blades`` n, ``bit_radius`` a, ``intrinsic_specific_energy`` ε, ``cutting_inclination`` ζ,
+      ``contact_stress`` σ, ``wear_flat_length`` l, ``friction_coefficient`` μ, ``bit_geometry`` γ
+      (``W = a ζ ε n d_n + a σ l``, ``T = ½ a² ε n d_n + ½ μ γ a · a σ l``), and the regularisations of its
+      set-valued parts, ``contact_velocity`` v_r and ``friction_speed`` ω_r.
+
+    Each law reads its own keys only; the others keep their defaults and are not used.
+    A law's keys are its own model (:class:`TuckerWangKeys`, :class:`DetournayKeys`; the law declares it as
+    its ``keys``, :mod:`drillstring.forces.registry`); this table is their union, as a case file writes it."""
 
 
 class Contact(_Base):

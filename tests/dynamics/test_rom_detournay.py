@@ -38,14 +38,14 @@ def test_compiled_and_reference_paths_agree(detournay_case):
         a, b = compiled.observables[name], reference.observables[name]
         np.testing.assert_allclose(a, b, rtol=0, atol=2e-5 * np.abs(b).max(), err_msg=name)
     # the delay acts: 0.8 s at 100 rpm is more than five blade passages
-    assert 0.8 > 5 * model.bit_rock.detournay.sector / model.top_speed
+    assert 0.8 > 5 * model.bit_rock.sector / model.top_speed
 
 
 def test_the_start_on_the_steady_bottom_carries_the_weight(detournay_case):
     """Started on the helical bottom of steady drilling (its depth of cut per blade under the bit), the bit
     carries the closed-form cutting force at once: the rock's force at t = 0 is W_c of the static weight."""
     model = case_reduced_model(detournay_case)
-    law = model.bit_rock.detournay
+    law = model.bit_rock
     run = simulate_model(model, t_end=0.01, output_step=0.01)
     cutting = model.weight_on_bit - law.contact_force  # W − aσl, the flats idle at rest
     assert run.observables["force_on_bit"][0] == pytest.approx(cutting, rel=1e-9)
@@ -57,7 +57,7 @@ def test_the_bit_sticks(detournay_case):
     (cutting at the frozen depth of cut plus the flats' friction), then it slips."""
     case = _with(detournay_case, operation={"top_speed": 20 * RPM})
     model = case_reduced_model(case)
-    law = model.bit_rock.detournay
+    law = model.bit_rock
     run = simulate_model(model, t_end=4.0, output_step=0.005)
     t, o = run.time, run.observables
     stuck = np.abs(o["bit_speed"]) <= 2.0 * law.friction_speed

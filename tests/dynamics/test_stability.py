@@ -209,7 +209,7 @@ def test_detournay_steady_drilling_is_the_closed_form(published_coarse):
     model = case_reduced_model(published_coarse)
     result = stability(model)
     steady = result.steady_state
-    law = model.bit_rock.detournay
+    law = model.bit_rock
     closed = law.steady_state(30.0 / 3600.0, model.top_speed)
     assert steady.rate_of_penetration == pytest.approx(closed.rate_of_penetration, rel=1e-7)
     assert steady.delay == pytest.approx(0.5, rel=1e-12)

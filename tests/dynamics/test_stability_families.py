@@ -13,7 +13,7 @@ from drillstring.dynamics.stability import (
     SET_POINT_TOLERANCE,
     STABILITY_FAMILIES,
     _steady_load,
-    proportional_speed,
+    boundary_steady_speed,
     stability,
     steady_drilling,
 )
@@ -112,7 +112,7 @@ def test_integral_gain_zero_stays_on_the_set_points_branch(drooping):
     steady = steady_drilling(model)
     omega, set_point, k_p = steady.bit_speed, model.top_drive.set_point, model.top_drive.proportional_gain
     r = rigid_axial_column(model)
-    motor = lambda w: _steady_load(model, w, r)[5]  # noqa: E731
+    motor = lambda w: _steady_load(model, w, r)[3]  # noqa: E731
     assert 0.0 < omega < set_point
     assert omega - set_point + motor(omega) / k_p == pytest.approx(0.0, abs=1e-9 * set_point)
     scan = np.linspace(omega, set_point, 2001)[1:]
@@ -133,11 +133,16 @@ def test_proportional_speed_takes_the_branch_of_the_set_point():
     """A load with two steady branches (velocity weakening): ω − Ω + τ(ω)/k_p has roots at 2 and 8 rad/s in
     (0, Ω = 10]; the one nearest the set point, 8, is returned; a load the gain cannot carry is refused."""
     k_p, set_point = 1.0, 10.0
+
+    def proportional(gain):
+        return lambda torque: set_point - torque / gain
+
     motor = lambda w: set_point - w + (w - 2.0) * (w - 8.0) * 0.1  # noqa: E731
-    assert proportional_speed(motor, set_point, k_p) == pytest.approx(8.0, rel=1e-12)
+    assert boundary_steady_speed(motor, proportional(k_p), set_point) == pytest.approx(8.0, rel=1e-12)
     with pytest.raises(ValueError, match="cannot carry the load torque 20 N\\*m"):
-        proportional_speed(lambda w: 20.0, set_point, k_p)
-    assert abs(proportional_speed(lambda w: 1e-6, set_point, 1e4) - set_point) < SET_POINT_TOLERANCE * set_point
+        boundary_steady_speed(lambda w: 20.0, proportional(k_p), set_point)
+    speed = boundary_steady_speed(lambda w: 1e-6, proportional(1e4), set_point)
+    assert abs(speed - set_point) < SET_POINT_TOLERANCE * set_point
 
 
 def test_stick_slip_coexists_with_stable_steady_drilling():

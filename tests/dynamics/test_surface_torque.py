@@ -34,7 +34,7 @@ def test_steady_surface_torque_is_the_motor_torque(runs):
     equation asks for (torque on bit and rigid-rotation friction), whatever J_td."""
     for model, _ in runs.values():
         steady = steady_drilling(model)
-        motor = _steady_load(model, steady.bit_speed, rigid_axial_column(model))[5]
+        motor = _steady_load(model, steady.bit_speed, rigid_axial_column(model))[3]
         torque = model.observe(0.0, steady.state)[OBSERVABLE_COLUMN["surface_torque"]]
         assert torque == pytest.approx(motor, rel=1e-9)
         assert torque == pytest.approx(steady.torque_on_bit, rel=2e-3)  # + the small rigid-rotation friction

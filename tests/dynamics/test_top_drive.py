@@ -14,12 +14,14 @@ from drillstring.dynamics.runge_kutta import integrate
 from drillstring.dynamics.simulate import simulate_model
 from drillstring.dynamics.stability import linearized_matrix, stability, steady_drilling
 from drillstring.fem.dofs import THETA_X, dof
+from drillstring.forces.registry import TopContext
 from drillstring.forces.top_drive import (
     TopDriveParameters,
     evaluate_top_drive,
     reflection_coefficient,
     soft_torque_gains,
     top_drive_jacobian,
+    top_drive_kernel,
     top_drive_law,
 )
 from drillstring.modal import family_dofs, top_inertia_matrix
@@ -181,7 +183,19 @@ def test_compiled_law_matches_the_reference_and_its_jacobian(params):
     # the Jacobian against central differences, unsaturated, after the ramp
     point = np.array([9.5, 5e3, 1.0, 4.9e3])
     jac = top_drive_jacobian(params)
-    np.testing.assert_array_equal(params.jacobian(), jac)
+    m = params.n_states
+    np.testing.assert_array_equal(params.jacobian(), jac[:1 + m, :2 + m])  # the states it owns only
+    assert not jac[1 + m:].any() and not jac[:, 2 + m:].any()
+    # the component's kernel (named context, its own states at an offset) against its NumPy reference
+    for t, speed, torque, integral, filtered in ((2.0, 8.0, 3e3, 1.0, 2e3), (9.0, 12.0, -1e3, -4.0, 5e2)):
+        states = np.array([7.0, integral, filtered, 7.0])
+        rates = np.full(4, -1.0)
+        ctx = TopContext(t, speed, torque)
+        motor = top_drive_kernel(params.kernel_array(), ctx, states[1:], rates[1:])
+        expected, expected_rates = params.evaluate_at(ctx, states[1:1 + m])
+        assert motor == pytest.approx(expected, rel=1e-14)
+        np.testing.assert_allclose(rates[1:1 + m], expected_rates, rtol=1e-14)
+        assert rates[0] == -1.0 and (rates[1 + m:] == -1.0).all()  # nothing outside its own states
     for k in range(4):
         step = np.zeros(4)
         step[k] = 1e-4 * max(1.0, abs(point[k]))

@@ -7,18 +7,19 @@ import pytest
 
 from drillstring.forces.bit_rock import (
     KERNEL_SIZE,
-    ON_BOTTOM,
     STICK_SPEED_FLOOR_RATIO,
     BitRockParameters,
     bit_rock_force,
     bit_rock_force_floored,
     bit_rock_jacobian,
-    bit_rock_law,
     case_bit_rock,
     evaluate_bit_rock,
     regularizer,
     steady_state,
+    tucker_wang_kernel,
 )
+from drillstring.forces.off_bottom import OffBottom
+from drillstring.forces.registry import bit_context
 
 RPM = 2.0 * math.pi / 60.0
 P = BitRockParameters.reference()
@@ -222,22 +223,42 @@ def test_bit_rock_jacobian_against_finite_differences():
 
 @pytest.mark.parametrize("law", ["tucker_wang", "off_bottom"])
 def test_component_kernel_is_the_reference_law(law):
-    """The compiled kernel reading the packed numbers gives exactly the NumPy reference (zero off bottom),
-    also with other components' numbers after its own; the Jacobian is zero off bottom."""
-    params = BitRockParameters(*P.as_array(), stick_speed_floor_ratio=1e-3, law=law)
+    """The compiled kernel reading its numbers and the named context gives exactly the NumPy reference (zero
+    off bottom); the Jacobian is zero off bottom."""
+    params = (BitRockParameters(*P.as_array(), stick_speed_floor_ratio=1e-3) if law == "tucker_wang"
+              else OffBottom())
     packed = params.kernel_array()
-    assert packed.shape == (KERNEL_SIZE,) and packed.dtype == np.float64
-    assert packed[ON_BOTTOM] == (1.0 if law == "tucker_wang" else 0.0)
-    shared = np.concatenate([packed, [7.0, -3.0, 1e9]])
+    assert packed.shape == (type(params).kernel_size,) and packed.dtype == np.float64
+    assert params.name == law and params.on_bottom == (law == "tucker_wang")
     for u, w in [(3.6e-3, 10.47), (0.0, 0.0), (1e-3, 1e-4), (-2e-3, -4.0)]:
-        expected = tuple(float(v) for v in params.evaluate(u, w))
-        assert bit_rock_law(shared, 0.0, u, w) == expected
+        ctx = bit_context(u, w, time=1.0, position=0.1, angle=3.0, weight_on_bit=1e5)
+        expected = tuple(float(v) for v in params.evaluate_at(ctx))
+        assert type(params).kernel(packed, ctx) == expected
         if law == "off_bottom":
             assert expected == (0.0, 0.0)
-            np.testing.assert_array_equal(params.jacobian(u, w), np.zeros((2, 2)))
+            np.testing.assert_array_equal(params.jacobian_at(ctx), np.zeros((2, 2)))
         else:
+            assert tucker_wang_kernel(packed, ctx) == expected
             raw = bit_rock_force_floored(u, w, *params.kernel_args())
             assert expected == (raw if raw[0] <= 0.0 else (0.0, 0.0))
+    assert KERNEL_SIZE == 7
+
+
+def test_steady_drilling_balances_the_axial_load():
+    """The law's steady state under an axial load W less a resistance c V: −f(V, Ω) = W − c V exactly, and
+    with c = 0 the closed form of :func:`steady_state`."""
+    omega = 100 * RPM
+    for weight, resistance in ((1e5, 0.0), (1e5, 2e6), (8e4, 5e5)):
+        steady = P.steady_drilling(omega, weight, resistance)
+        force, torque = P.evaluate(steady.rate_of_penetration, omega)
+        assert -float(force) == pytest.approx(weight - resistance * steady.rate_of_penetration, rel=1e-12)
+        assert (steady.axial_force, steady.torque) == (float(force), float(torque))
+    rop, tob = steady_state(1e5, omega, P)
+    steady = P.steady_drilling(omega, 1e5, 0.0)
+    assert steady.rate_of_penetration == pytest.approx(rop, rel=1e-12)
+    assert -steady.torque == pytest.approx(tob, rel=1e-12)
+    assert P.steady_drilling(omega, 0.0, 0.0) is None  # a2 W < a1 + ...: the bit would lift off
+    assert OffBottom().steady_drilling(omega, 1e5, 0.0).rate_of_penetration == 0.0
 
 
 def test_case_bit_rock_is_built_from_the_case(coarse_case):
@@ -245,7 +266,7 @@ def test_case_bit_rock_is_built_from_the_case(coarse_case):
     params = case_bit_rock(coarse_case)
     assert (params.a1, params.a2, params.a3, params.a4, params.a5, params.e) == (b.a1, b.a2, b.a3, b.a4, b.a5,
                                                                                   b.regularization)
-    assert params.law == b.law
+    assert params.name == b.law
     # 1 + (e/θ̇_floor)² = K (1 + (e/Ω)²), K the case's stiffening limit
     omega = coarse_case.operation.top_speed
     k = b.stick_stiffening_limit

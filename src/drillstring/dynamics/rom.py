@@ -60,8 +60,7 @@ from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
 from drillstring.dynamics.delay import allocate_storage, delayed_difference, record_bottom, view
 from drillstring.dynamics.delay import start as start_history
-from drillstring.forces.bit_rock import KERNEL_SIZE as BIT_ROCK_SIZE
-from drillstring.forces.bit_rock import DELAYED_LAW, ON_BOTTOM, BitRockParameters, bit_rock_law, case_bit_rock
+from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import (
     ContactParameters,
     ContactStations,
@@ -78,16 +77,22 @@ from drillstring.forces.nonlinear import (
     modal_mass_coupling,
     nonlinear_elements,
 )
-from drillstring.forces.hook_load import KERNEL_SIZE as HOOK_LOAD_SIZE
 from drillstring.forces.hook_load import HookLoadRamp, hook_load_change
-from drillstring.forces.top_drive import KERNEL_SIZE as TOP_DRIVE_SIZE
-from drillstring.forces.top_drive import (
-    Z_TORQUE,
-    TopDriveParameters,
-    case_top_drive,
-    evaluate_top_drive,
-    top_drive_law,
+from drillstring.forces.registry import (
+    HISTORY,
+    HOOK_LOAD,
+    TOP_BOUNDARY_CODE,
+    TOP_INERTIA,
+    BitContext,
+    BitLaw,
+    TopBoundary,
+    TopContext,
+    bit_law_force,
+    compiled,
+    pack,
+    top_boundary_torque,
 )
+from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
 from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
 from drillstring.statics import StaticState, case_static_state
@@ -130,18 +135,11 @@ def observation_width(n_probes: int) -> int:
     return PROBE_COLUMN + 3 * n_probes
 
 
-#: Where the boundary components' numbers sit in ``RhsData.laws``: first the bit–rock law's
-#: (:meth:`~drillstring.forces.bit_rock.BitRockParameters.kernel_array`, ``BIT_ROCK_SIZE`` entries, read by
-#: :func:`~drillstring.forces.bit_rock.bit_rock_law`), then the top drive's from ``_TOP_DRIVE``
-#: (:meth:`~drillstring.forces.top_drive.TopDriveParameters.kernel_args`; code 0: imposed speed).
-#: One array, not a field each: every field of RhsData is an argument of each inner kernel, and four more
-#: fields made the reference realization 30 % slower (measured; LLVM inlines less).
-_TOP_DRIVE = BIT_ROCK_SIZE
-#: Where the hook load's numbers (:meth:`~drillstring.forces.hook_load.HookLoadRamp.kernel_array`) start.
-_HOOK_LOAD = _TOP_DRIVE + TOP_DRIVE_SIZE
-#: Where the bit's history (the hole bottom by angle, :func:`~drillstring.dynamics.delay.allocate_storage`)
-#: starts: the rest of ``laws`` (a few numbers for a law that reads none).
-_HISTORY = _HOOK_LOAD + HOOK_LOAD_SIZE
+#: The boundary components' numbers sit in ``RhsData.laws``, one flat array laid out by the registry
+#: (:func:`~drillstring.forces.registry.pack`: a header with the components' codes and offsets, then the bit
+#: law's numbers, the top boundary's, the hook load's and the bit's history, the hole bottom by angle). One
+#: array, not a field each: every field of RhsData is an argument of each inner kernel, and four more fields
+#: made the reference realization 30 % slower (measured; LLVM inlines less).
 #: Coefficients of a dense-output polynomial the scratch of :class:`ObserveData` holds (dopri5: 4).
 _DENSE_ORDER_MAX = 8
 
@@ -224,8 +222,8 @@ class RhsData(NamedTuple):
     lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # the boundary components' numbers: the bit–rock law's, from _TOP_DRIVE the top drive's,
-    #                   from _HOOK_LOAD the hook load's, from _HISTORY the bit's history (the hole bottom)
+    laws: np.ndarray  # the boundary components' numbers (drillstring.forces.registry.pack): header, the bit
+    #                   law's, the top boundary's, the hook load's, the bit's history (the hole bottom)
     contact: ContactData
     turning: TurningLoadData
 
@@ -372,13 +370,14 @@ def _bit_state(d, t, y):
 
 @inner_kernel()
 def _bit_rock(d, t, y):
-    """The bit–rock law at the bit (:func:`~drillstring.forces.bit_rock.bit_rock_law`): ``(axial force [N],
-    torque [N·m], depth of cut per blade [m], bit position u [m], axial velocity [m/s], spin speed
+    """The bit–rock law at the bit (the registered law of the model, :func:`~drillstring.forces.registry.
+    bit_law_force`, reading the named context :class:`~drillstring.forces.registry.BitContext`): ``(axial force
+    [N], torque [N·m], depth of cut per blade [m], bit position u [m], axial velocity [m/s], spin speed
     [rad/s])``. A delayed law's depth of cut is ``u(t)`` minus the hole bottom one blade sector behind
     (:func:`~drillstring.dynamics.delay.delayed_difference`); the other laws read none (0)."""
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = _depth_of_cut(d, position, angle)
-    force, torque = bit_rock_law(d.laws, depth, velocity, speed)
+    force, torque = bit_law_force(d.laws, BitContext(t, position, angle, velocity, speed, depth, d.weight_on_bit))
     return force, torque, depth, position, velocity, speed
 
 
@@ -392,8 +391,19 @@ def _depth_of_cut(d, position, angle):
 @overload(_depth_of_cut)
 def _depth_of_cut_compiled(d, position, angle):
     if _is(d, DelayedRhsData):
-        return lambda d, position, angle: delayed_difference(view(d.laws[_HISTORY:]), angle, position)
+        return lambda d, position, angle: delayed_difference(view(d.laws[int(d.laws[HISTORY]):]), angle, position)
     return lambda d, position, angle: 0.0
+
+
+def _delayed(d):
+    """True for :class:`DelayedRhsData` (a law that reads the bit's history), resolved when compiled."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_delayed)
+def _delayed_compiled(d):
+    delayed = _is(d, DelayedRhsData)
+    return lambda d: delayed
 
 
 @inner_kernel()
@@ -451,20 +461,16 @@ def _top_motion(d, y):
 
 @inner_kernel()
 def _top_drive(d, t, y, out):
-    """The top drive's motor torque on the torsional modes and its controller's state derivatives
-    (``y[2n:]``, ``out[2n:]``; :func:`~drillstring.forces.top_drive.top_drive_law`)."""
+    """The top boundary's motor torque on the torsional modes; its kernel (the registered boundary,
+    :func:`~drillstring.forces.registry.top_boundary_torque`, reading the named context
+    :class:`~drillstring.forces.registry.TopContext`) reads its states in ``y`` and writes their rates in
+    ``out`` where the registry put them."""
     n = d.omega2.shape[0]
     t0, t1 = d.blocks[2], d.blocks[3]
     quill, surface = _top_motion(d, y)
-    args = d.laws[_TOP_DRIVE:]
-    z_torque = args[0] == Z_TORQUE
-    filtered = y[2 * n + 1] if z_torque else 0.0
-    torque, d_integral, d_filtered = top_drive_law(args, t, quill, surface, y[2 * n], filtered)
+    torque = top_boundary_torque(d.laws, TopContext(t, quill, surface), y, out)
     for j in range(t0, t1):
         out[n + j] += d.torsion_rows[1, j - t0] * torque
-    out[2 * n] = d_integral
-    if z_torque:
-        out[2 * n + 1] = d_filtered
 
 
 @njit(cache=True)
@@ -482,12 +488,12 @@ def _rhs_kernel(d, t, y, out):
         out[i] = eta_dot[i]
         acc[i] = d.generalized_force[i] - d.omega2[i] * eta[i]
     _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
-    if d.laws[_TOP_DRIVE] != 0.0:
+    if d.laws[TOP_BOUNDARY_CODE] != 0.0:
         _top_drive(d, t, y, out)
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
-    hook = hook_load_change(d.laws[_HOOK_LOAD:], t)
+    hook = hook_load_change(d.laws[int(d.laws[HOOK_LOAD]):], t)
     for j in range(a0, a1):
         acc[j] += d.axial_rows[0, j - a0] * axial_force + d.axial_rows[1, j - a0] * hook
     for j in range(t0, t1):
@@ -549,23 +555,23 @@ def _rhs_kernel(d, t, y, out):
 
 @inner_kernel()
 def _surface_torque(d, t, y):
-    """The surface torque T_s [N·m] of a top drive from the quill's equation of motion, ``J_td θ̈₀ = τ_m −
-    T_s``: the motor torque (:func:`~drillstring.forces.top_drive.top_drive_law`) minus the quill's inertial
-    torque, with ``θ̈₀ = qᵀη̈`` from the model's right-hand side at ``(t, y)``. For the same quill and bit
-    motion it does not depend on ``J_td`` (the elastic torque of the top element, read from a truncated
-    basis, does: the basis's shapes depend on ``J_td``)."""
+    """The surface torque T_s [N·m] of a driving top boundary from the quill's equation of motion, ``J_td θ̈₀ =
+    τ_m − T_s``: the boundary's motor torque (:func:`~drillstring.forces.registry.top_boundary_torque`) minus the
+    quill's inertial torque, with ``θ̈₀ = qᵀη̈`` from the model's right-hand side at ``(t, y)`` and ``J_td`` the
+    inertia the boundary lumps at the quill (the registry's header). For the same quill and bit motion it does
+    not depend on ``J_td`` (the elastic torque of the top element, read from a truncated basis, does: the
+    basis's shapes depend on ``J_td``)."""
     n = d.omega2.shape[0]
     t0, t1 = d.blocks[2], d.blocks[3]
     rate = np.empty(y.shape[0])
     _rhs_kernel(d, t, y, rate)
     quill, elastic = _top_motion(d, y)
-    args = d.laws[_TOP_DRIVE:]
-    filtered = y[2 * n + 1] if args[0] == Z_TORQUE else 0.0
-    torque, _, _ = top_drive_law(args, t, quill, elastic, y[2 * n], filtered)
+    states_rate = np.empty(y.shape[0])  # the boundary writes its states' rates: not needed here
+    torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
     acceleration = 0.0
     for j in range(t0, t1):
         acceleration += d.torsion_rows[1, j - t0] * rate[n + j]
-    return torque - args[1] * acceleration
+    return torque - d.laws[TOP_INERTIA] * acceleration
 
 
 @inner_kernel()
@@ -791,7 +797,7 @@ def observe_kernel(d, o, t, y, out):
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
     out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
-    if d.laws[_TOP_DRIVE] != 0.0:  # a top drive: the torque from the quill's equation of motion
+    if d.laws[TOP_BOUNDARY_CODE] != 0.0:  # a driving boundary: the torque from the quill's equation of motion
         out[_SURFACE_TORQUE] = _surface_torque(d, t, y)
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
@@ -810,7 +816,7 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     (:func:`~drillstring.dynamics.delay.record_bottom`) from the step's continuous extension: the stages
     ``k_old`` (s, len(y)) and the tableau's ``dense`` (s, p) coefficients, ``y(t_old + σh) = y_old +
     h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
-    if d.laws[ON_BOTTOM] == DELAYED_LAW:
+    if _delayed(d):
         a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
         order = dense.shape[1]
         angle_coef = o.dense[0, :order]
@@ -829,7 +835,7 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
                 angle_coef[p] += h * dense[i, p] * spin
         angle_coef[0] += d.top_speed * h
         position, angle, _, _ = _bit_state(d, t_old, y_old)
-        record_bottom(view(d.laws[_HISTORY:]), angle, angle_coef, position, position_coef)
+        record_bottom(view(d.laws[int(d.laws[HISTORY]):]), angle, angle_coef, position, position_coef)
     return impacts_kernel(d, o, y)
 
 
@@ -875,7 +881,7 @@ class ReducedOrderModel:
     damping: np.ndarray
     top_speed: float
     weight_on_bit: float
-    bit_rock: BitRockParameters
+    bit_rock: BitLaw
     contact: ContactParameters
     stations: ContactStations
     probe_positions: np.ndarray
@@ -892,8 +898,8 @@ class ReducedOrderModel:
         if self.top_drive is None:
             self.top_drive = TopDriveParameters("imposed_speed", float(self.top_speed))
         #: the kernels' base spin speed [rad/s]: Ω with the top speed imposed, 0 with a top drive
-        self.base_speed = float(self.top_speed) if self.top_drive.imposed else 0.0
-        if not self.top_drive.imposed and self.nonlinear == "full":
+        self.base_speed = 0.0 if self.top_drive.drives else float(self.top_speed)
+        if self.top_drive.drives and self.nonlinear == "full":
             raise ValueError("nonlinear = 'full' with a top drive is not supported yet: use 'bit_and_contact'")
         mesh = self.static.mesh
         nodes = np.arange(mesh.n_nodes)
@@ -934,7 +940,7 @@ class ReducedOrderModel:
         self.blocks = np.array(blocks, dtype=np.int64)
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
         #: column of the rigid rotation (a top drive), None when the top is held
-        self.rigid_rotation_column = None if self.top_drive.imposed else t0
+        self.rigid_rotation_column = t0 if self.top_drive.drives else None
         top_dof = dof(0, THETA_X)
         self.quill_shapes = np.ascontiguousarray(phi[top_dof])
         self.surface_torque_shapes = np.zeros(n)
@@ -942,6 +948,9 @@ class ReducedOrderModel:
         c = self.contact
         st = self.stations
         transposed = np.ascontiguousarray
+        history = (allocate_storage(self.bit_rock.sector, self.history_bins) if self.bit_rock.delayed
+                   else allocate_storage(1.0, 4))
+        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load.kernel_array(), history, 2 * n)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -959,10 +968,7 @@ class ReducedOrderModel:
                                               np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
             top_speed=self.base_speed,
             weight_on_bit=float(self.weight_on_bit),
-            laws=np.concatenate([self.bit_rock.kernel_array(), self.top_drive.kernel_args(),
-                                 self.hook_load.kernel_array(),
-                                 allocate_storage(self.bit_rock.detournay.sector, self.history_bins)
-                                 if self.bit_rock.delayed else allocate_storage(1.0, 4)]),
+            laws=laws,
             contact=ContactData(
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
@@ -1026,8 +1032,9 @@ class ReducedOrderModel:
 
     @property
     def state_size(self) -> int:
-        """Entries of the state ``[η, η̇, s]``: 2n plus the top drive controller's states ``s``."""
-        return 2 * self.size + self.top_drive.n_states
+        """Entries of the state ``[η, η̇, s]``: 2n plus the components' states ``s`` (the top boundary's), laid
+        out by the registry (:attr:`layout`)."""
+        return self.layout.state_size
 
     @property
     def observable_names(self) -> tuple[str, ...]:
@@ -1041,9 +1048,25 @@ class ReducedOrderModel:
         np.minimum.at(gap, self.stations.node, self.stations.gap)
         return gap
 
+    @property
+    def compiled(self) -> bool:
+        """True when the compiled kernels hold the model's components (the package's registered ones); a
+        component registered outside the package runs through :meth:`rhs_reference` only
+        (:mod:`drillstring.forces.registry`)."""
+        return compiled(self.bit_rock) and compiled(self.top_drive)
+
+    def require_compiled(self) -> None:
+        """ValueError naming the component when :attr:`compiled` is False."""
+        for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive)):
+            if not compiled(component):
+                raise ValueError(
+                    f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
+                    f"kernels do not hold it: use engine = 'reference' (docs/extending.md)")
+
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt for y = [η, η̇] at time ``t`` [s] (t enters through the rotation Ω t that turns the
         turning loads)."""
+        self.require_compiled()
         out = np.empty_like(y)
         evaluate_rhs(self.rhs_data, float(t), np.ascontiguousarray(y, dtype=float), out)
         return out
@@ -1055,11 +1078,12 @@ class ReducedOrderModel:
         eta, eta_dot = y[:n], y[n:2 * n]
         bit_velocity = self.bit_u @ eta_dot
         bit_speed = self.base_speed + self.bit_t @ eta_dot
+        position, angle = self.bit_position(t, y)
         depth = 0.0
         if self.bit_rock.delayed:  # u minus the hole bottom one blade sector behind the bit
-            position, angle = self.bit_position(t, y)
             depth = delayed_difference(self.history, angle, position)
-        axial_force, bit_torque = self.bit_rock.evaluate(bit_velocity, bit_speed, depth)
+        axial_force, bit_torque = self.bit_rock.evaluate_at(BitContext(
+            t, position, angle, bit_velocity, bit_speed, depth, self.weight_on_bit))
         st = self.stations
         spin = self.base_speed + self.phi_tx @ eta_dot
         force_v, force_w, torque, _ = evaluate_contact(
@@ -1076,12 +1100,13 @@ class ReducedOrderModel:
                        + self.top_u * float(self.hook_load.force(t))
                        + self.generalized_force + np.where(lateral, turning, 0.0))
         acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
-        states = np.zeros(self.top_drive.n_states)
-        if states.size:
-            torque, states[0], filtered_rate = evaluate_top_drive(
-                self.top_drive, t, self.base_speed + self.quill_shapes @ eta_dot, self.surface_torque_shapes @ eta,
-                y[2 * n], y[2 * n + 1] if states.size > 1 else 0.0)
-            states[1:] = filtered_rate
+        states = np.zeros(self.state_size - 2 * n)
+        if self.top_drive.drives:  # the motor torque of any driving boundary, its states where the registry put them
+            first = self.layout.states["top_boundary"]
+            torque, rates = self.top_drive.evaluate_at(
+                TopContext(t, self.base_speed + self.quill_shapes @ eta_dot, self.surface_torque_shapes @ eta),
+                y[first:first + self.top_drive.n_states])
+            states[first - 2 * n:first - 2 * n + self.top_drive.n_states] = rates
             acceleration = acceleration + self.quill_shapes * torque
         if self.nonlinear == "full":
             q = self.basis @ eta
@@ -1100,6 +1125,19 @@ class ReducedOrderModel:
         its v and w [m] (:func:`observation_width` columns)."""
         out = np.empty(observation_width(len(self.probe_nodes)))
         observe_kernel(self.case2_data, self.observe_data, float(t), np.ascontiguousarray(y, dtype=float), out)
+        if not compiled(self.bit_rock):  # a law from outside the package: its force from its NumPy reference
+            n = self.size
+            position, angle = self.bit_position(t, y)
+            depth = delayed_difference(self.history, angle, position) if self.bit_rock.delayed else 0.0
+            force, torque = self.bit_rock.evaluate_at(BitContext(
+                t, position, angle, out[_ROP], self.base_speed + self.bit_t @ y[n:2 * n], depth, self.weight_on_bit))
+            out[_TOB], out[_FOB] = -float(torque), -float(force)
+        if self.top_drive.drives and not compiled(self.top_drive):  # its motor torque from its NumPy reference
+            n, first = self.size, self.layout.states["top_boundary"]
+            torque, _ = self.top_drive.evaluate_at(TopContext(t, out[_QUILL_SPEED], self.surface_torque_shapes @ y[:n]),
+                                                   y[first:first + self.top_drive.n_states])
+            quill_acceleration = self.quill_shapes @ self.rhs_reference(t, y)[n:2 * n]
+            out[_SURFACE_TORQUE] = float(torque) - self.top_drive.top_inertia * quill_acceleration
         return out
 
     def contact_mask(self) -> np.ndarray:
@@ -1122,7 +1160,7 @@ class ReducedOrderModel:
     def history(self):
         """The bit's history (:class:`~drillstring.dynamics.delay.AngleHistory`): views into the kernels' law
         numbers, so what is set or recorded here is what the compiled kernels read."""
-        return view(self.case2_data.laws[_HISTORY:])
+        return view(self.case2_data.laws[self.layout.numbers["history"]:])
 
     def bit_position(self, t: float, y: np.ndarray) -> tuple[float, float]:
         """The bit's axial position u [m] (from the static state, down) and angle θ [rad] at time ``t``
@@ -1134,20 +1172,19 @@ class ReducedOrderModel:
         """Set the hole bottom under the bit at the start of a run from the state ``y`` at t = 0 (a delayed
         bit–rock law only; nothing otherwise): with a ramped start (:attr:`hook_load`) a flat bottom
         ``clearance`` below the bit; else the helical bottom of steady drilling with the depth of cut
-        ``depth_of_cut`` [m] per blade under the bit — by default that of the closed-form steady state
-        at the static weight-on-bit (:meth:`~drillstring.forces.detournay.DetournayParameters.rate_of_penetration`;
+        ``depth_of_cut`` [m] per blade under the bit — by default the law's own at the static weight-on-bit
+        and the top speed (its ``start_depth_of_cut``; for the Detournay law the closed-form steady state,
         0 when that weight does not exceed the wear flats' contact force)."""
         if not self.bit_rock.delayed:
             return
         position, angle = self.bit_position(0.0, y)
-        law = self.bit_rock.detournay
+        law = self.bit_rock
         if self.hook_load.active:
             start_history(self.history, angle, position + self.hook_load.clearance, 0.0)
             return
         if depth_of_cut is None:
             speed = self.top_speed
-            depth_of_cut = self.bit_rock.steady_depth_of_cut(law.rate_of_penetration(self.weight_on_bit, speed),
-                                                             speed)
+            depth_of_cut = law.start_depth_of_cut(self.weight_on_bit, speed)
         start_history(self.history, angle, position, depth_of_cut / law.sector)
 
     def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:
@@ -1201,7 +1238,7 @@ class ReducedOrderModel:
         converges to the physical shape as lateral modes are added. With a top drive the rigid rotation
         carries Ω (or the string starts at rest when the set point is ramped) and the controller's states
         start at 0 (the motor torque builds up from 0)."""
-        at_rest = self.top_drive.ramp_time > 0.0  # a ramped set point starts from rest: no spin, no whirl
+        at_rest = self.top_drive.starts_at_rest  # a ramped set point starts from rest: no spin, no whirl
         y0 = np.zeros(self.state_size)
         if not at_rest:
             y0[:2 * self.size] = self.turning_whirl()
@@ -1272,7 +1309,7 @@ def reduced_model(
     modal_damping_ratio: float,
     rigid_axial_damping: float,
     top_speed: float,
-    bit_rock: BitRockParameters,
+    bit_rock: BitLaw,
     contact: ContactParameters,
     borehole_diameter: float,
     rigid_rotation_damping: float = 0.0,
@@ -1303,11 +1340,11 @@ def reduced_model(
         hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
         rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
     """
-    drive = top_drive is not None and not top_drive.imposed
+    drive = top_drive is not None and top_drive.drives
     if drive:
         torsional_modes += 1
     modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                          top_inertia=top_drive.inertia if drive else None)
+                          top_inertia=top_drive.top_inertia if drive else None)
     lateral_modes = len(modes.lateral_y.angular_frequencies)
     families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
     basis = np.hstack([f.shapes for f in families])
@@ -1347,16 +1384,21 @@ def case_reduced_model(
     static: StaticState | None = None,
     nonlinear: str | None = None,
     lateral_cutoff: float | None = None,
+    bit_rock: BitLaw | None = None,
+    top_drive: TopBoundary | None = None,
 ) -> ReducedOrderModel:
     """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
+    (``bit_rock``, ``top_drive``: a bit–rock law or a top boundary instance, e.g. one registered outside the
+    package, instead of the case's)
     (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
     ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``). A
     ``lateral_modes`` given without ``lateral_cutoff`` asks for exactly that many lateral modes (no
     cut-off)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
-    top_drive = case_top_drive(
-        case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
+    if top_drive is None:
+        top_drive = case_top_drive(
+            case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
     r = case.reduced_model
     return reduced_model(
         static,
@@ -1370,7 +1412,7 @@ def case_reduced_model(
         rayleigh=(case.damping.mass_proportional, case.damping.stiffness_proportional),
         damping_basis=case.damping.basis,
         top_speed=case.operation.top_speed,
-        bit_rock=case_bit_rock(case),
+        bit_rock=case_bit_rock(case) if bit_rock is None else bit_rock,
         contact=case_contact(case),
         borehole_diameter=case.borehole.diameter,
         probe_positions=case.mesh.probes,

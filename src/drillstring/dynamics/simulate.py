@@ -108,6 +108,7 @@ def simulate_model(
             raise ValueError(f"initial_state has shape {y0.shape}: must be ({model.state_size},)")
     model.start_history(y0, initial_depth_of_cut)
     if engine == "compiled":
+        model.require_compiled()
         return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
                                   atol=atol, method=method, max_steps=max_steps, min_step=min_step,
                                   progress=progress, raise_on_failure=raise_on_failure)

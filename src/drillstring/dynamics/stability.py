@@ -2,9 +2,11 @@
 
 **Steady drilling** is the equilibrium of the reduced model in which the whole string turns at the top
 speed Ω and advances at a constant rate of penetration: the rigid axial coordinate moves at a constant
-speed, every other coordinate sits at a constant offset. With the bit–rock law (Tucker & Wang, SPEC §6)
-written as ``f(u̇, Ω) = f0 + f1 u̇`` (affine in the bit's axial speed at a fixed bit speed), the rigid axial
-equation ``b_r (f + wob) + g_r = D_rr η̇_r``, ``u̇ = b_r η̇_r`` gives, in closed form,
+speed, every other coordinate sits at a constant offset. The rigid axial equation
+``b_r (f + wob) + g_r = D_rr η̇_r``, ``u̇ = b_r η̇_r`` is ``−f(V, Ω) = W − c V`` with ``W = wob + g_r/b_r``
+and ``c = D_rr/b_r²``: the bit–rock law solves it itself (its ``steady_drilling``,
+:mod:`drillstring.forces.registry`; the analysis never samples the law). For a law affine in the bit's axial
+speed at a fixed bit speed, ``f(u̇, Ω) = f0 + f1 u̇`` (Tucker & Wang, SPEC §6; Detournay), that is
 
     ROP = (b_r (f0 + wob) + g_r) / (D_rr / b_r − b_r f1)                                        (1)
 
@@ -70,6 +72,7 @@ import scipy.linalg as sla
 
 from drillstring.dynamics.delay_stability import DelayRoots, characteristic_roots, regenerative_coupling
 from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
+from drillstring.forces.registry import BitContext, BitSteadyState
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -187,68 +190,64 @@ class StabilityResult:
         return out
 
 
-def _steady_penetration(model: ReducedOrderModel, omega: float, r: int) -> float:
-    """Eq. (1) at the bit speed ``omega`` [rad/s]; 0 off bottom."""
-    if not model.bit_rock.on_bottom:
-        return 0.0
+def _steady_law(model: ReducedOrderModel, omega: float, r: int) -> BitSteadyState:
+    """The bit law's steady drilling at the bit speed ``omega`` [rad/s] (the law's own
+    :meth:`~drillstring.forces.registry.BitLaw.steady_drilling`): the rigid axial equation
+    ``b_r (f + wob) + g_r = D_rr V / b_r`` is ``−f(V, Ω) = W − c V`` with the axial load
+    ``W = wob + g_r / b_r`` and the resistance ``c = D_rr / b_r²``; eq. (1) for a law affine in V."""
     b_r = model.bit_u[r]
-    # the steady axial force is affine in V: sampled at 1 and 2 m/s, where every law is in contact
-    f_one = model.bit_rock.steady_forces(1.0, omega)[0]
-    f1 = model.bit_rock.steady_forces(2.0, omega)[0] - f_one
-    f0 = f_one - f1
-    d_rr = model.damping[r, r]
-    g = model.generalized_force
-    rop = (b_r * (float(f0) + model.weight_on_bit) + g[r]) / (d_rr / b_r - b_r * f1)
-    if not rop > 0.0:
+    steady = model.bit_rock.steady_drilling(omega, model.weight_on_bit + model.generalized_force[r] / b_r,
+                                            model.damping[r, r] / b_r**2)
+    if steady is None:
         raise ValueError(
             f"no steady drilling at weight_on_bit = {model.weight_on_bit:.6g} N, top_speed = {omega:.6g} rad/s:"
-            f" the bit-rock law gives rate_of_penetration = {rop:.3g} m/s <= 0"
+            f" the bit-rock law {model.bit_rock.name!r} gives no rate_of_penetration > 0 (rate_of_penetration <= 0)"
         )
-    return float(rop)
+    return steady
 
 
 def _steady_load(model: ReducedOrderModel, omega: float, r: int):
-    """Steady drilling at the bit speed ``omega``: (ROP, bit force, bit torque, modal velocity, generalized
-    load without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
-    rop = _steady_penetration(model, omega, r)
-    force, torque = model.bit_rock.steady_forces(rop, omega)
+    """Steady drilling at the bit speed ``omega``: (the law's steady state, modal velocity, generalized load
+    without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
+    law = _steady_law(model, omega, r)
     n = model.size
     velocity = np.zeros(n)
-    velocity[r] = rop / model.bit_u[r]
+    velocity[r] = law.rate_of_penetration / model.bit_u[r]
     spin = model.rigid_rotation_column
     if spin is not None:
         velocity[spin] = omega / model.quill_shapes[spin]
-    load = (model.bit_u * (force + model.weight_on_bit) + model.bit_t * torque + model.generalized_force
-            - model.damping @ velocity)
+    load = (model.bit_u * (law.axial_force + model.weight_on_bit) + model.bit_t * law.torque
+            + model.generalized_force - model.damping @ velocity)
     motor = 0.0 if spin is None else float(-load[spin] / model.quill_shapes[spin])
-    return rop, force, torque, velocity, load, motor
+    return law, velocity, load, motor
 
 
-#: Samples of the scan for the proportional controller's steady speed in (0, Ω] (:func:`proportional_speed`).
+#: Samples of the scan for a drooping top boundary's steady speed in (0, Ω] (:func:`boundary_steady_speed`).
 DROOP_SCAN = 256
 #: A steady speed this close to the set point (relative) counts as the set point.
 SET_POINT_TOLERANCE = 1e-3
 
 
-def proportional_speed(motor_torque, set_point: float, proportional_gain: float) -> float:
-    """The steady quill speed ω [rad/s] of a proportional controller (``integral_gain = 0``): the root of
-    ``ω − Ω + τ_m(ω)/k_p = 0`` **nearest the set point** Ω in (0, Ω] (``motor_torque(ω)`` [N·m] the torque
-    steady drilling at ω needs), found by scanning down from Ω (:data:`DROOP_SCAN` steps) to the first sign
-    change, then Brent's method. A velocity-weakening load may have other roots further down: they are
-    other branches, never taken (a fixed-point iteration could jump there). ValueError (one line, naming
-    the gain and the torque at the set point) when no root exists in (0, Ω]."""
+def boundary_steady_speed(motor_torque, boundary_speed, set_point: float) -> float:
+    """The steady quill speed ω [rad/s] of a driving top boundary: the root of ``ω − ω_b(τ_m(ω)) = 0``
+    **nearest the set point** Ω in (0, Ω], with ``motor_torque(ω)`` [N·m] the torque steady drilling at ω
+    needs and ``boundary_speed(τ)`` [rad/s] the speed at which the boundary gives that torque (Ω with integral
+    action, so ω = Ω at once; ``Ω − τ/k_p`` for a proportional controller, ``integral_gain = 0``). Found by
+    scanning down from Ω (:data:`DROOP_SCAN` steps) to the first sign change, then Brent's method. A
+    velocity-weakening load may have other roots further down: they are other branches, never taken (a
+    fixed-point iteration could jump there). ValueError (one line, naming the torque at the set point) when
+    no root exists in (0, Ω]."""
     from scipy.optimize import brentq
 
     def residual(omega: float) -> float:
-        return omega - set_point + motor_torque(omega) / proportional_gain
+        return omega - boundary_speed(motor_torque(omega))
 
     at_set_point = residual(set_point)
     if at_set_point == 0.0:
         return float(set_point)
     if at_set_point < 0.0:
         raise ValueError(f"no steady rotation below the set point {set_point:.6g} rad/s: the load torque "
-                         f"{motor_torque(set_point):.6g} N*m drives the string (proportional_gain = "
-                         f"{proportional_gain:.6g} N*m*s/rad, integral_gain = 0)")
+                         f"{motor_torque(set_point):.6g} N*m drives the string")
     grid = np.linspace(set_point, 0.0, DROOP_SCAN + 1)[1:-1]
     upper = set_point
     for omega in grid:
@@ -256,8 +255,8 @@ def proportional_speed(motor_torque, set_point: float, proportional_gain: float)
         if value <= 0.0:
             return float(brentq(residual, float(omega), upper, xtol=1e-14 * set_point, rtol=1e-13))
         upper = float(omega)
-    raise ValueError(f"no steady rotation: proportional_gain = {proportional_gain:.6g} N*m*s/rad cannot carry the "
-                     f"load torque {motor_torque(set_point):.6g} N*m at a positive speed (integral_gain = 0)")
+    raise ValueError(f"no steady rotation: the top boundary cannot carry the load torque "
+                     f"{motor_torque(set_point):.6g} N*m at a positive speed (no integral action)")
 
 
 def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
@@ -265,44 +264,46 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     ValueError when the law gives no penetration (ROP <= 0: the bit would lift off, the drilling regime does
     not exist) or the motor would need more than its maximum torque. Off bottom: steady rotation, ROP 0.
 
-    With ``integral_gain = 0`` the controller droops: the steady speed is :func:`proportional_speed`, the
+    With ``integral_gain = 0`` the controller droops: the steady speed is :func:`boundary_steady_speed`, the
     branch nearest the set point, and when it differs from the set point by more than
     :data:`SET_POINT_TOLERANCE` the state's ``note`` says so in one line, naming the speed and the weight on
     bit found (the state is then not the operating point asked for)."""
     r = rigid_axial_column(model)
     drive = model.top_drive
     omega = model.top_speed
+    law, velocity, load, motor = _steady_load(model, omega, r)
     note = ""
-    if not drive.imposed and drive.integral_gain == 0.0:
-        if not drive.proportional_gain > 0.0:
-            raise ValueError(f"no steady rotation: proportional_gain = {drive.proportional_gain:.6g} N*m*s/rad"
-                             " and integral_gain = 0: the controller applies no torque")
-        omega = proportional_speed(lambda w: _steady_load(model, w, r)[5], drive.set_point,
-                                   drive.proportional_gain)
-        if abs(omega - drive.set_point) > SET_POINT_TOLERANCE * drive.set_point:
+    if drive.drives:
+        set_point = omega
+
+        def speed_of_boundary(motor_torque: float) -> float:
+            try:  # the boundary refuses a speed that is not positive: the residual stays positive there
+                return drive.steady_speed(motor_torque)
+            except ValueError:
+                return 0.0
+
+        omega = boundary_steady_speed(lambda w: _steady_load(model, w, r)[3], speed_of_boundary, set_point)
+        if omega != set_point:
+            law, velocity, load, motor = _steady_load(model, omega, r)
+        if abs(omega - set_point) > SET_POINT_TOLERANCE * set_point:
             note = (f"steady drilling at {omega * 30.0 / math.pi:.4g} rpm with {model.weight_on_bit / 1e3:.4g} kN "
-                    f"on bit, not the set point {drive.set_point * 30.0 / math.pi:.4g} rpm: integral_gain = 0 "
-                    f"lets the speed droop by the load torque / proportional_gain")
-    rop, force, torque, velocity, load, motor = _steady_load(model, omega, r)
-    if not drive.imposed and abs(motor) > drive.max_torque:
-        raise ValueError(f"no steady drilling: the motor torque needed, {motor:.6g} N*m, exceeds "
-                         f"top_drive.max_torque = {drive.max_torque:.6g} N*m")
+                    f"on bit, not the set point {set_point * 30.0 / math.pi:.4g} rpm: without integral action "
+                    f"the top boundary's speed droops with the load torque")
+        drive.check_steady_torque(motor)
     n = model.size
     if model.rigid_rotation_column is not None:
         load = load + model.quill_shapes * motor
     offsets = np.zeros(n)
     elastic = model.omega2 != 0.0
     offsets[elastic] = load[elastic] / model.omega2[elastic]
-    states = np.zeros(drive.n_states)
-    if states.size:
-        states[0] = motor / drive.integral_gain if drive.integral_gain > 0 else 0.0
-    if states.size > 1:
-        states[1] = float(model.surface_torque_shapes @ offsets)
-    law = model.bit_rock
-    return SteadyDrilling(rate_of_penetration=float(rop), bit_speed=float(omega), torque_on_bit=-torque,
-                          force_on_bit=-force, state=np.concatenate([offsets, velocity, states]),
-                          depth_of_cut=law.steady_depth_of_cut(rop, omega),
-                          delay=law.detournay.sector / omega if law.delayed else 0.0, note=note)
+    states = np.zeros(model.state_size - 2 * n)
+    if drive.drives:
+        first = model.layout.states["top_boundary"] - 2 * n
+        states[first:first + drive.n_states] = drive.steady_states(motor, float(model.surface_torque_shapes @ offsets))
+    return SteadyDrilling(rate_of_penetration=law.rate_of_penetration, bit_speed=float(omega),
+                          torque_on_bit=-law.torque, force_on_bit=-law.axial_force,
+                          state=np.concatenate([offsets, velocity, states]), depth_of_cut=law.depth_of_cut,
+                          delay=model.bit_rock.sector / omega if model.bit_rock.delayed else 0.0, note=note)
 
 
 def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
@@ -310,7 +311,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     positions included; ``s`` the top drive controller's states)."""
     n = model.size
     size = model.state_size
-    jac = model.bit_rock.jacobian(steady.rate_of_penetration, steady.bit_speed, steady.depth_of_cut)
+    jac = model.bit_rock.jacobian_at(_context(model, steady))
     bu, bt = model.bit_u, model.bit_t
     coupling = (np.outer(bu, jac[0, 0] * bu + jac[0, 1] * bt) + np.outer(bt, jac[1, 0] * bu + jac[1, 1] * bt))
     a = np.zeros((size, size))
@@ -318,18 +319,23 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     a[n:2 * n, :n] = -np.diag(model.omega2)
     a[n:2 * n, n:2 * n] = coupling - model.damping
     drive = model.top_drive
-    if drive.n_states:
+    if drive.drives:
         q, s = model.quill_shapes, model.surface_torque_shapes
-        law = drive.jacobian()  # rows (τ_m, ż, ẋ), columns (θ̇₀, T_s, z, x)
-        rows = [(slice(n, 2 * n), q, law[0]), (2 * n, 1.0, law[1])]
-        if drive.n_states > 1:
-            rows.append((2 * n + 1, 1.0, law[2]))
+        law = drive.jacobian()  # rows (τ_m, then each state's rate), columns (θ̇₀, T_s, then each state)
+        first = model.layout.states["top_boundary"]
+        rows = [(slice(n, 2 * n), q, law[0])] + [(first + k, 1.0, law[1 + k]) for k in range(drive.n_states)]
         for row, weight, d in rows:
             a[row, :n] += np.multiply.outer(weight, d[1] * s)
             a[row, n:2 * n] += np.multiply.outer(weight, d[0] * q)
             for k in range(drive.n_states):
-                a[row, 2 * n + k] += weight * d[2 + k]
+                a[row, first + k] += weight * d[2 + k]
     return a
+
+
+def _context(model: ReducedOrderModel, steady: SteadyDrilling) -> BitContext:
+    """The bit law's context in steady drilling (at t = 0, the bit at its static position)."""
+    return BitContext(0.0, 0.0, 0.0, steady.rate_of_penetration, steady.bit_speed, steady.depth_of_cut,
+                      model.weight_on_bit)
 
 
 def _family_of(model: ReducedOrderModel) -> np.ndarray:
@@ -355,9 +361,8 @@ def delay_matrices(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np
     included), with the delay ``steady.delay``."""
     n = model.size
     a0 = linearized_matrix(model, steady)
-    law = model.bit_rock
-    partials = law.detournay.jacobian(steady.depth_of_cut, steady.rate_of_penetration, steady.bit_speed)
-    coupling = regenerative_coupling(model.bit_u, model.bit_t, f_d=partials[0, 0], t_d=partials[1, 0],
+    f_d, t_d = model.bit_rock.depth_partials(_context(model, steady))
+    coupling = regenerative_coupling(model.bit_u, model.bit_t, f_d=f_d, t_d=t_d,
                                      rate_of_penetration=steady.rate_of_penetration, bit_speed=steady.bit_speed)
     a1 = np.zeros_like(a0)
     a0[n:2 * n, :n] += coupling
@@ -445,7 +450,7 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
             shares={f: float(v / total) if total > 0 else math.nan for f, v in zip(STABILITY_FAMILIES, shares)},
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
-    return StabilityResult(steady, modes, None if model.top_drive.imposed else model.top_drive.describe(), delay)
+    return StabilityResult(steady, modes, model.top_drive.describe() if model.top_drive.drives else None, delay)
 
 
 def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResult:

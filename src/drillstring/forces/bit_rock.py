@@ -42,41 +42,35 @@ If ``e = 0`` (unregularised law, ``Z = sgn θ̇``) the kernels return ``Z = 0`` 
 
 The component (SPEC §11)
 ------------------------
-The law is one component of the reduced model. Its pieces: :class:`BitRockParameters` (built from the case
-in one place, :func:`case_bit_rock`), the numbers the compiled kernel reads packed in one float array
-(:meth:`BitRockParameters.kernel_array`, :data:`KERNEL_SIZE` entries, the on-bottom flag at
-:data:`ON_BOTTOM`), the compiled kernel :func:`bit_rock_law`, the NumPy reference :func:`evaluate_bit_rock`
-and the Jacobian :func:`bit_rock_jacobian` (used by the stability analysis). ``law = "off_bottom"`` makes
-every piece return zero. ``law = "detournay"`` is the law of drag bits with a regenerative depth of cut
-(:mod:`drillstring.forces.detournay`, its numbers after the Tucker–Wang ones in the same array, from
-:data:`DETOURNAY`): the kernel then reads the depth of cut per blade, which the reduced model computes from
-the bit's history.
+The law is one component of the reduced model (:mod:`drillstring.forces.registry`), registered as
+``"tucker_wang"``: :class:`BitRockParameters` is its parameters (built from the case in one place,
+:meth:`BitRockParameters.from_case`), the numbers its compiled kernel reads
+(:meth:`BitRockParameters.kernel_array`, :data:`KERNEL_SIZE` entries), the compiled kernel
+:func:`tucker_wang_kernel` (reading the named context :class:`~drillstring.forces.registry.BitContext`),
+its NumPy reference :func:`evaluate_bit_rock`, its Jacobian :func:`bit_rock_jacobian` and its steady drilling
+(:meth:`BitRockParameters.steady_drilling`, closed form). The other laws are components of their own:
+:mod:`drillstring.forces.off_bottom` and :mod:`drillstring.forces.detournay`.
 
-**Unilateral contact (every law).** The rock pushes the bit, never pulls it: when a law gives an axial
-force on the string pointing down (``f > 0``: the Tucker–Wang law does so when the bit moves up faster than
-``a3 h − a1`` over ``1/Z²``, about 1.9 mm/s at the reference point), the bit has left the rock and the
-component returns no force and no torque. The Detournay law loses contact by itself when the depth of cut
-is not positive. The time the force on bit is zero is the bit's bounce.
+**Unilateral contact.** The rock pushes the bit, never pulls it: when the law gives an axial force on the
+string pointing down (``f > 0``: it does so when the bit moves up faster than ``a3 h − a1`` over ``1/Z²``,
+about 1.9 mm/s at the reference point), the bit has left the rock and the component returns no force and no
+torque. The time the force on bit is zero is the bit's bounce.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import astuple, dataclass
+from typing import ClassVar
 
 import numpy as np
 from numba import njit
 
-from drillstring.forces.detournay import KERNEL_SIZE as DETOURNAY_SIZE
-from drillstring.forces.detournay import DetournayParameters, detournay_force
+from drillstring.case import TuckerWangKeys
+from drillstring.forces.registry import BitContext, BitLaw, BitSteadyState, register
 
 __all__ = [
-    "BIT_ROCK_LAWS",
-    "DELAYED_LAW",
-    "DETOURNAY",
     "KERNEL_SIZE",
-    "LAW_CODE",
-    "ON_BOTTOM",
     "STICK_SPEED_FLOOR_RATIO",
     "BitRockParameters",
     "regularizer",
@@ -84,36 +78,25 @@ __all__ = [
     "bit_rock_force_floored",
     "bit_rock_law_array",
     "bit_rock_jacobian",
-    "bit_rock_law",
     "case_bit_rock",
+    "tucker_wang_kernel",
     "evaluate_bit_rock",
     "steady_state",
     "stick_speed_floor_ratio",
 ]
 
-#: The bit–rock laws: Tucker & Wang (SPEC §6), the bit off bottom (no bit–rock force, SPEC §11), and the
-#: Detournay law of drag bits (:mod:`drillstring.forces.detournay`).
-BIT_ROCK_LAWS = ("tucker_wang", "off_bottom", "detournay")
-#: The code of each law in the kernel array (at :data:`ON_BOTTOM`; 0 is off bottom).
-LAW_CODE = {"off_bottom": 0.0, "tucker_wang": 1.0, "detournay": 2.0}
-#: The code of the law that reads the depth of cut (the bit's history): the Detournay law.
-DELAYED_LAW = LAW_CODE["detournay"]
-
-#: Index of the law code in :meth:`BitRockParameters.kernel_array` (:data:`LAW_CODE`; 0.0 off bottom).
-ON_BOTTOM = 7
-#: First index of the Detournay law's numbers (:meth:`~drillstring.forces.detournay.DetournayParameters.kernel_array`).
-DETOURNAY = 8
-#: Entries of :meth:`BitRockParameters.kernel_array`: ``[a1, a2, a3, a4, a5, e, θ̇_floor, law code]``, then
-#: the Detournay law's numbers (zeros for the other laws).
-KERNEL_SIZE = DETOURNAY + DETOURNAY_SIZE
+#: Entries of :meth:`BitRockParameters.kernel_array`: ``[a1, a2, a3, a4, a5, e, θ̇_floor]``.
+KERNEL_SIZE = 7
 
 #: Default ratio ``θ̇_floor / e`` below which ``1/Z²`` is frozen (see module docstring).
 STICK_SPEED_FLOOR_RATIO = 1.0e-6
 
 
+@register
 @dataclass(frozen=True)
-class BitRockParameters:
-    """Coefficients of the bit–rock law (SPEC §6, values for the reference case in SPEC §9).
+class BitRockParameters(BitLaw):
+    """The Tucker–Wang bit–rock law, registered as ``"tucker_wang"`` (SPEC §6, values for the reference case
+    in SPEC §9).
 
     Attributes
     ----------
@@ -132,12 +115,11 @@ class BitRockParameters:
     stick_speed_floor_ratio : float
         [-] ``θ̇_floor / e``: below ``|θ̇| = θ̇_floor`` the term ``1/Z²`` is frozen so that the law stays
         finite at stick (module docstring). Not part of :meth:`as_array`.
-    law : str
-        "tucker_wang" (the law above), "off_bottom" (the bit hangs free: no force, no torque) or
-        "detournay" (:mod:`drillstring.forces.detournay`, its parameters in ``detournay``).
-    detournay : DetournayParameters or None
-        The bit and rock of the Detournay law (required with ``law = "detournay"``).
     """
+
+    name: ClassVar[str] = "tucker_wang"
+    kernel_size: ClassVar[int] = KERNEL_SIZE
+    keys: ClassVar = TuckerWangKeys
 
     a1: float
     a2: float
@@ -146,14 +128,8 @@ class BitRockParameters:
     a5: float
     e: float
     stick_speed_floor_ratio: float = STICK_SPEED_FLOOR_RATIO
-    law: str = "tucker_wang"
-    detournay: DetournayParameters | None = None
 
     def __post_init__(self) -> None:
-        if self.law not in BIT_ROCK_LAWS:
-            raise ValueError(f"law = {self.law!r}: must be one of {', '.join(BIT_ROCK_LAWS)}")
-        if self.law == "detournay" and self.detournay is None:
-            raise ValueError('law = "detournay" needs its parameters (detournay = DetournayParameters(...))')
         for name in ("a1", "a2", "a3", "a4", "a5", "e", "stick_speed_floor_ratio"):
             value = getattr(self, name)
             if not math.isfinite(value):
@@ -170,6 +146,15 @@ class BitRockParameters:
         """Reference-case coefficients (SPEC §9)."""
         return cls(a1=3.429e-3, a2=5.672e-8, a3=1.374e-4, a4=9.537e6, a5=1.475e3, e=2.0)
 
+    @classmethod
+    def from_case(cls, case) -> "BitRockParameters":
+        """The law of a :class:`~drillstring.case.Case` (``[bit_rock]``: ``a1`` .. ``a5``, ``regularization``)
+        with the stick floor from ``stick_stiffening_limit`` at the case's top speed
+        (:func:`stick_speed_floor_ratio`)."""
+        b = case.bit_rock
+        return cls(b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
+                   stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit))
+
     @property
     def stick_speed_floor(self) -> float:
         """[rad/s] ``θ̇_floor = stick_speed_floor_ratio · e``."""
@@ -183,47 +168,49 @@ class BitRockParameters:
         """``(a1, a2, a3, a4, a5, e, θ̇_floor)``, the trailing arguments of :func:`bit_rock_force_floored`."""
         return (self.a1, self.a2, self.a3, self.a4, self.a5, self.e, self.stick_speed_floor)
 
-    @property
-    def on_bottom(self) -> bool:
-        """True when the bit touches the rock (every law but ``off_bottom``)."""
-        return self.law != "off_bottom"
-
-    @property
-    def delayed(self) -> bool:
-        """True when the law reads the depth of cut (the bit's history): the Detournay law."""
-        return self.law == "detournay"
-
     def kernel_array(self) -> np.ndarray:
-        """The numbers :func:`bit_rock_law` reads, as float64: ``[a1, a2, a3, a4, a5, e, θ̇_floor,
-        law code]`` (law code at :data:`ON_BOTTOM`, :data:`LAW_CODE`), then from :data:`DETOURNAY` the
-        Detournay law's numbers (zeros for the other laws); :data:`KERNEL_SIZE` entries."""
-        detournay = (self.detournay.kernel_array() if self.detournay is not None
-                     else np.zeros(DETOURNAY_SIZE))
-        return np.array([*self.kernel_args(), LAW_CODE[self.law], *detournay], dtype=np.float64)
+        """The numbers :func:`tucker_wang_kernel` reads, float64: ``[a1, a2, a3, a4, a5, e, θ̇_floor]``."""
+        return np.array(self.kernel_args(), dtype=np.float64)
 
+    # -- the protocol (drillstring.forces.registry) -------------------------------------------------------
+    def evaluate_at(self, ctx: BitContext):
+        """NumPy reference, :func:`evaluate_bit_rock` at the context's axial velocity and bit speed."""
+        return evaluate_bit_rock(ctx.axial_velocity, ctx.bit_speed, self)
+
+    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
+        """:func:`bit_rock_jacobian` at the context's axial velocity and bit speed."""
+        return bit_rock_jacobian(ctx.axial_velocity, ctx.bit_speed, self)
+
+    def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState | None:
+        """Steady drilling at Ω = ``bit_speed`` [rad/s] under ``axial_load`` W [N] less ``resistance`` c
+        [N·s/m] times V, in closed form: the law is affine in u̇ at a fixed θ̇, ``f = (−u̇/Z² + a3 h − a1)/a2``
+        (``1/Z²`` at the floored speed), so ``V = (W + (a3 h − a1)/a2) / (1/(a2 Z²) + c)`` (with ``c = 0``
+        :func:`steady_state`'s ``Z² (a2 W − a1) + Z a3 Ω``). None when V ≤ 0 (the bit would lift off)."""
+        omega = float(bit_speed)
+        h = math.hypot(omega, self.e)
+        speed = max(abs(omega), self.stick_speed_floor)
+        inv_z2 = 1.0 + (self.e / speed) ** 2 if speed > 0.0 else 1.0
+        offset = (self.a3 * h - self.a1) / self.a2  # f at u̇ = 0 [N]
+        rop = (axial_load + offset) / (inv_z2 / self.a2 + resistance)
+        if not rop > 0.0:
+            return None
+        force, torque = self.evaluate(rop, omega)
+        return BitSteadyState(float(rop), float(force), float(torque))
+
+    # -- the law in its historical arguments ---------------------------------------------------------------
     def evaluate(self, bit_axial_velocity, bit_speed, depth_of_cut=0.0):
         """:func:`evaluate_bit_rock` of this law: ``(axial_force [N], torque [N·m])`` on the string."""
-        return evaluate_bit_rock(bit_axial_velocity, bit_speed, self, depth_of_cut)
-
-    def steady_depth_of_cut(self, rate_of_penetration: float, bit_speed: float) -> float:
-        """The depth of cut per blade [m] of steady drilling at ``rate_of_penetration`` V [m/s] and
-        ``bit_speed`` Ω [rad/s] for a delayed law, ``V · 2π/(nΩ)`` (the advance over one blade passage);
-        0 for the other laws (they read none)."""
-        if not self.delayed:
-            return 0.0
-        return rate_of_penetration * self.detournay.sector / bit_speed
+        return evaluate_bit_rock(bit_axial_velocity, bit_speed, self)
 
     def steady_forces(self, rate_of_penetration: float, bit_speed: float) -> tuple[float, float]:
         """``(axial_force [N], torque [N·m])`` on the string in steady drilling at ``rate_of_penetration`` V
-        [m/s] and ``bit_speed`` Ω [rad/s]: the law at ``u̇ = V``, ``θ̇ = Ω`` and the steady depth of cut
-        (:meth:`steady_depth_of_cut`)."""
-        force, torque = self.evaluate(rate_of_penetration, bit_speed,
-                                      self.steady_depth_of_cut(rate_of_penetration, bit_speed))
+        [m/s] and ``bit_speed`` Ω [rad/s]: the law at ``u̇ = V``, ``θ̇ = Ω``."""
+        force, torque = self.evaluate(rate_of_penetration, bit_speed)
         return float(force), float(torque)
 
     def jacobian(self, bit_axial_velocity: float, bit_speed: float, depth_of_cut: float = 0.0) -> np.ndarray:
         """:func:`bit_rock_jacobian` of this law."""
-        return bit_rock_jacobian(bit_axial_velocity, bit_speed, self, depth_of_cut)
+        return bit_rock_jacobian(bit_axial_velocity, bit_speed, self)
 
 
 def stick_speed_floor_ratio(regularization: float, top_speed: float, stiffening_limit: float) -> float:
@@ -315,29 +302,27 @@ def bit_rock_force(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e):
 
 
 @njit(cache=True)
-def bit_rock_law(args, depth_of_cut, bit_axial_velocity, bit_speed):
-    """The component's compiled kernel: bit–rock ``(axial_force [N], torque [N·m])`` on the string for the
-    numbers ``args`` of :meth:`BitRockParameters.kernel_array` (only its first :data:`KERNEL_SIZE` entries
-    are read, so the array may carry other components' numbers after them); ``(0, 0)`` off bottom and
-    whenever the law would pull the bit down (unilateral contact, module docstring). ``depth_of_cut`` [m]
-    per blade is read by the Detournay law only."""
-    code = args[ON_BOTTOM]
-    if code == 0.0:
-        return 0.0, 0.0
-    if code == DELAYED_LAW:
-        return detournay_force(args[DETOURNAY:], depth_of_cut, bit_axial_velocity, bit_speed)
-    force, torque = bit_rock_force_floored(bit_axial_velocity, bit_speed, args[0], args[1], args[2], args[3],
+def tucker_wang_kernel(args, ctx):
+    """The component's compiled kernel: bit–rock ``(axial_force [N], torque [N·m])`` on the string at the
+    context ``ctx`` (:class:`~drillstring.forces.registry.BitContext`: its axial velocity and bit speed) for
+    the numbers ``args`` of :meth:`BitRockParameters.kernel_array`; ``(0, 0)`` whenever the law would pull the
+    bit down (unilateral contact, module docstring)."""
+    force, torque = bit_rock_force_floored(ctx.axial_velocity, ctx.bit_speed, args[0], args[1], args[2], args[3],
                                            args[4], args[5], args[6])
     if force > 0.0:  # the rock would pull the bit: it has left the rock
         return 0.0, 0.0
     return force, torque
 
 
+BitRockParameters.kernel = tucker_wang_kernel
+
+
 @njit(cache=True)
-def bit_rock_law_array(args, depth_of_cut, bit_axial_velocity, bit_speed, axial_force, torque):
-    """Loop of :func:`bit_rock_law` over 1-D arrays; fills ``axial_force``/``torque`` in place."""
+def bit_rock_law_array(args, bit_axial_velocity, bit_speed, axial_force, torque):
+    """Loop of :func:`tucker_wang_kernel` over 1-D arrays; fills ``axial_force``/``torque`` in place."""
     for i in range(bit_axial_velocity.shape[0]):
-        axial_force[i], torque[i] = bit_rock_law(args, depth_of_cut[i], bit_axial_velocity[i], bit_speed[i])
+        ctx = BitContext(0.0, 0.0, 0.0, bit_axial_velocity[i], bit_speed[i], 0.0, 0.0)
+        axial_force[i], torque[i] = tucker_wang_kernel(args, ctx)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -345,22 +330,20 @@ def bit_rock_law_array(args, depth_of_cut, bit_axial_velocity, bit_speed, axial_
 # --------------------------------------------------------------------------------------------------------
 
 
-def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters, depth_of_cut=0.0):
-    """Vectorised bit–rock law: ``(axial_force [N], torque [N·m])`` on the string, broadcast over inputs.
+def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
+    """Vectorised Tucker–Wang law: ``(axial_force [N], torque [N·m])`` on the string, broadcast over inputs.
 
-    ``bit_axial_velocity`` [m/s], ``bit_speed`` [rad/s] and ``depth_of_cut`` [m] per blade (read by the
-    Detournay law only) are array-likes (broadcast together). Scalars in, 0-d arrays out. The component's
-    kernel :func:`bit_rock_law` (the law, its stick handling, unilateral contact) applied elementwise.
+    ``bit_axial_velocity`` [m/s] and ``bit_speed`` [rad/s] are array-likes (broadcast together). Scalars in,
+    0-d arrays out. The component's kernel :func:`tucker_wang_kernel` (the law, its stick handling,
+    unilateral contact) applied elementwise.
     """
-    u, w, d = np.broadcast_arrays(
-        np.asarray(bit_axial_velocity, dtype=np.float64), np.asarray(bit_speed, dtype=np.float64),
-        np.asarray(depth_of_cut, dtype=np.float64),
-    )
+    u, w = np.broadcast_arrays(np.asarray(bit_axial_velocity, dtype=np.float64),
+                               np.asarray(bit_speed, dtype=np.float64))
     shape = u.shape
     force = np.empty(u.size)
     torque = np.empty(u.size)
-    bit_rock_law_array(params.kernel_array(), np.ascontiguousarray(d).reshape(-1),
-                       np.ascontiguousarray(u).reshape(-1), np.ascontiguousarray(w).reshape(-1), force, torque)
+    bit_rock_law_array(params.kernel_array(), np.ascontiguousarray(u).reshape(-1),
+                       np.ascontiguousarray(w).reshape(-1), force, torque)
     return force.reshape(shape), torque.reshape(shape)
 
 
@@ -398,8 +381,7 @@ def steady_state(weight_on_bit, bit_speed, params: BitRockParameters, allow_nega
     return rop, tob
 
 
-def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRockParameters,
-                      depth_of_cut: float = 0.0) -> np.ndarray:
+def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRockParameters) -> np.ndarray:
     """``[[f_u, f_θ], [t_u, t_θ]]``: partial derivatives of the bit–rock force f [N] and torque t [N·m]
     on the string (SPEC §6) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
 
@@ -408,16 +390,10 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRo
         f_u = −(1 + e²/θ̇²)/a2,      f_θ = 2 e² u̇/(a2 θ̇³) + a3 θ̇/(a2 h),
         t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
 
-    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero off bottom
-    and where the law would pull the bit (unilateral contact). For the Detournay law the partials with
-    respect to ``u̇`` and ``θ̇`` at the depth of cut ``depth_of_cut`` [m] per blade (those with respect to
-    the depth of cut: :meth:`~drillstring.forces.detournay.DetournayParameters.jacobian`).
+    Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero where the law
+    would pull the bit (unilateral contact).
     """
-    if not params.on_bottom:
-        return np.zeros((2, 2))
-    if params.delayed:
-        return params.detournay.jacobian(depth_of_cut, bit_axial_velocity, bit_speed)[:, 1:]
-    if bit_rock_law(params.kernel_array(), 0.0, bit_axial_velocity, bit_speed)[0] == 0.0:
+    if evaluate_bit_rock(bit_axial_velocity, bit_speed, params)[0] == 0.0:
         return np.zeros((2, 2))
     u, w = float(bit_axial_velocity), float(bit_speed)
     a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
@@ -432,19 +408,9 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRo
     return np.array([[f_u, f_theta], [t_u, t_theta]])
 
 
-def case_bit_rock(case) -> BitRockParameters:
-    """The bit–rock law of a :class:`~drillstring.case.Case` (``[bit_rock]``): its coefficients, its law (with
-    the Detournay law's bit and rock) and the stick floor from ``stick_stiffening_limit`` at the case's top speed (:func:`stick_speed_floor_ratio`)."""
-    b = case.bit_rock
-    detournay = None
-    if b.law == "detournay":
-        detournay = DetournayParameters(
-            blades=b.blades, radius=b.bit_radius, intrinsic_specific_energy=b.intrinsic_specific_energy,
-            cutting_inclination=b.cutting_inclination, contact_stress=b.contact_stress,
-            wear_flat_length=b.wear_flat_length, friction_coefficient=b.friction_coefficient,
-            geometry=b.bit_geometry, contact_velocity=b.contact_velocity, friction_speed=b.friction_speed)
-    return BitRockParameters(
-        b.a1, b.a2, b.a3, b.a4, b.a5, b.regularization,
-        stick_speed_floor_ratio(b.regularization, case.operation.top_speed, b.stick_stiffening_limit),
-        law=b.law, detournay=detournay,
-    )
+def case_bit_rock(case) -> BitLaw:
+    """The bit–rock law of a :class:`~drillstring.case.Case`: the registered law named by ``bit_rock.law``
+    (:func:`~drillstring.forces.registry.bit_law`), built from the case by its own ``from_case``."""
+    from drillstring.forces.registry import bit_law
+
+    return bit_law(case.bit_rock.law).from_case(case)

@@ -41,6 +41,10 @@ at all: no cutting, no flat contact, no torque.
 
 Forces are returned on the string along / about ``+x`` (down; with the top's rotation), like the other
 bit–rock laws (:mod:`drillstring.forces.bit_rock`): ``(−W, −T)`` while drilling.
+
+The component (:mod:`drillstring.forces.registry`), registered as ``"detournay"``: :class:`DetournayParameters`
+(built from the case by :meth:`DetournayParameters.from_case`), its kernel :func:`detournay_kernel` (reading
+the depth of cut of the named context), its NumPy reference, Jacobian and steady drilling in closed form.
 """
 
 from __future__ import annotations
@@ -48,14 +52,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from typing import ClassVar
+
 import numpy as np
 from numba import njit
+
+from drillstring.case import DetournayKeys
+from drillstring.forces.registry import BitContext, BitLaw, BitSteadyState, register
 
 __all__ = [
     "DetournayParameters",
     "DetournaySteadyState",
     "KERNEL_SIZE",
     "detournay_force",
+    "detournay_kernel",
 ]
 
 #: Numbers of :meth:`DetournayParameters.kernel_array`: ``[a ζ ε n, ½ a² ε n, a σ l, ½ μ γ a, v_r, ω_r, 2π/n]``.
@@ -79,15 +89,21 @@ class DetournaySteadyState:
     torque_on_bit: float  # T = T_c + T_f [N·m]
 
 
+@register
 @dataclass(frozen=True)
-class DetournayParameters:
-    """The bit and the rock of the Detournay law (module docstring; SI units).
+class DetournayParameters(BitLaw):
+    """The bit and the rock of the Detournay law (module docstring; SI units), registered as ``"detournay"``.
 
     Attributes: ``blades`` n [-], ``radius`` a [m], ``intrinsic_specific_energy`` ε [Pa],
     ``cutting_inclination`` ζ [-], ``contact_stress`` σ [Pa], ``wear_flat_length`` l [m],
     ``friction_coefficient`` μ [-], ``geometry`` γ [-], ``contact_velocity`` v_r [m/s] and
     ``friction_speed`` ω_r [rad/s] (the regularisations of the set-valued parts).
     """
+
+    name: ClassVar[str] = "detournay"
+    kernel_size: ClassVar[int] = KERNEL_SIZE
+    keys: ClassVar = DetournayKeys
+    delayed: ClassVar[bool] = True
 
     blades: int
     radius: float
@@ -112,6 +128,52 @@ class DetournayParameters:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} = {value!r}: must be finite and >= 0")
+
+    @classmethod
+    def from_case(cls, case) -> "DetournayParameters":
+        """The bit and rock of a :class:`~drillstring.case.Case` (``[bit_rock]``, law = "detournay")."""
+        b = case.bit_rock
+        return cls(blades=b.blades, radius=b.bit_radius, intrinsic_specific_energy=b.intrinsic_specific_energy,
+                   cutting_inclination=b.cutting_inclination, contact_stress=b.contact_stress,
+                   wear_flat_length=b.wear_flat_length, friction_coefficient=b.friction_coefficient,
+                   geometry=b.bit_geometry, contact_velocity=b.contact_velocity, friction_speed=b.friction_speed)
+
+    # -- the protocol (drillstring.forces.registry) -------------------------------------------------------
+    def evaluate_at(self, ctx: BitContext):
+        """NumPy reference: :meth:`evaluate` at the context's depth of cut, axial velocity and bit speed."""
+        return self.evaluate(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
+
+    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
+        """``[[f_u, f_ω], [t_u, t_ω]]`` of :meth:`jacobian` (the partials in the depth of cut:
+        :meth:`depth_partials`)."""
+        return self.jacobian(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)[:, 1:]
+
+    def depth_partials(self, ctx: BitContext) -> tuple[float, float]:
+        """``(f_d [N/m], t_d [N·m/m])``: the partials of :meth:`jacobian` in the depth of cut per blade."""
+        jac = self.jacobian(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
+        return float(jac[0, 0]), float(jac[1, 0])
+
+    def steady_depth_of_cut(self, rate_of_penetration: float, bit_speed: float) -> float:
+        """The depth of cut per blade [m] of steady drilling at ``rate_of_penetration`` V [m/s] and
+        ``bit_speed`` Ω [rad/s]: ``V · 2π/(nΩ)`` (the advance over one blade passage)."""
+        return rate_of_penetration * self.sector / bit_speed
+
+    def start_depth_of_cut(self, weight_on_bit: float, bit_speed: float) -> float:
+        """The depth of cut [m] per blade of steady drilling under ``weight_on_bit`` [N] at ``bit_speed``
+        [rad/s] (:meth:`rate_of_penetration`; 0 when the flats carry the whole weight)."""
+        return self.steady_depth_of_cut(self.rate_of_penetration(weight_on_bit, bit_speed), bit_speed)
+
+    def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState | None:
+        """Steady drilling at Ω = ``bit_speed`` [rad/s] under ``axial_load`` W [N] less ``resistance`` c
+        [N·s/m] times V, in closed form with the flats in contact: ``−f = aσl + a ζ ε n · V (2π/(nΩ))``
+        (:meth:`axial_force_affine`), so ``V = (W − aσl) / (a ζ ε n 2π/(nΩ) + c)``. None when V ≤ 0."""
+        f0, f1 = self.axial_force_affine(bit_speed)
+        rop = (axial_load + f0) / (resistance - f1)
+        if not rop > 0.0:
+            return None
+        depth = self.steady_depth_of_cut(rop, bit_speed)
+        force, torque = self.evaluate(depth, rop, bit_speed)
+        return BitSteadyState(float(rop), float(force), float(torque), float(depth))
 
     # -- the law's constants ---------------------------------------------------------------------------
     @property
@@ -262,3 +324,13 @@ def detournay_force(args, depth_of_cut, bit_axial_velocity, bit_speed):
     weight = args[0] * depth_of_cut + contact
     torque = (args[1] * depth_of_cut + args[3] * contact) * turn
     return -weight, -torque
+
+
+@njit(cache=True)
+def detournay_kernel(args, ctx):
+    """The component's compiled kernel: :func:`detournay_force` at the context's depth of cut, axial velocity
+    and bit speed (:class:`~drillstring.forces.registry.BitContext`)."""
+    return detournay_force(args, ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
+
+
+DetournayParameters.kernel = detournay_kernel

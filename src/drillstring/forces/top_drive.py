@@ -41,11 +41,15 @@ elastic torque of the top element depends on ``J_td`` (its shapes do) — 0.08�
 2.4–9.2 kN·m at 1000 kg·m² for the same quill and bit motion — while ``τ_m − J_td θ̈₀`` does not
 (tests/dynamics/test_surface_torque.py).
 
-The component's states are ``z`` (every controller) and ``x`` (``z_torque`` only), integrated with the
-modal coordinates. Its pieces: :class:`TopDriveParameters` (built from the case in one place,
-:func:`case_top_drive`), the compiled kernel :func:`top_drive_law`, the NumPy reference
-:func:`evaluate_top_drive`, the Jacobian :func:`top_drive_jacobian` (used by the closed-loop stability)
-and the closed form (2), :func:`reflection_coefficient`.
+The component (:mod:`drillstring.forces.registry`, registered as ``"top_drive"``; the imposed speed is the
+top drive that does not drive, ``controller = "imposed_speed"``) declares its states: ``z`` (every
+controller) and ``x`` (``z_torque`` only), integrated with the modal coordinates where the registry puts them
+(:attr:`TopDriveParameters.n_states`). Its pieces: :class:`TopDriveParameters` (built from the case in one
+place, :func:`case_top_drive`), the compiled kernel :func:`top_drive_kernel` (reading the named context
+:class:`~drillstring.forces.registry.TopContext` and its own states) over the law :func:`top_drive_law`, the
+NumPy reference :meth:`TopDriveParameters.evaluate_at`, the Jacobian :func:`top_drive_jacobian` (used by the
+closed-loop stability), the steady states :meth:`TopDriveParameters.steady_states` and the closed form (2),
+:func:`reflection_coefficient`.
 """
 
 from __future__ import annotations
@@ -53,8 +57,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from typing import ClassVar
+
 import numpy as np
 from numba import njit
+
+from drillstring.case import TopDrive
+from drillstring.forces.registry import TopBoundary, TopContext, register
 
 #: The top boundaries, ``top_drive.controller`` in a case; code = index (the kernels read the code).
 CONTROLLERS = ("imposed_speed", "pi", "soft_torque", "z_torque")
@@ -67,9 +76,10 @@ Z_TORQUE_STIFFNESS = 10.0
 Z_TORQUE_FILTER_RATIO = 5.0
 
 
+@register
 @dataclass(frozen=True)
-class TopDriveParameters:
-    """The top boundary (SI units).
+class TopDriveParameters(TopBoundary):
+    """The top boundary (SI units), registered as ``"top_drive"``.
 
     Attributes:
         controller: one of :data:`CONTROLLERS`.
@@ -83,6 +93,10 @@ class TopDriveParameters:
         stick_slip_frequency: ω_s [rad/s] the tuning used (0 when not needed).
         tuned: names of the gains computed by the tuning rule rather than given.
     """
+
+    name: ClassVar[str] = "top_drive"
+    kernel_size: ClassVar[int] = KERNEL_SIZE
+    keys: ClassVar = TopDrive
 
     controller: str
     set_point: float
@@ -115,6 +129,38 @@ class TopDriveParameters:
         return self.controller == "imposed_speed"
 
     @property
+    def drives(self) -> bool:  # type: ignore[override]
+        """True when a motor drives the quill (every controller but the imposed speed)."""
+        return not self.imposed
+
+    @property
+    def top_inertia(self) -> float:
+        """J_td [kg·m²], lumped at the quill."""
+        return self.inertia
+
+    @property
+    def starts_at_rest(self) -> bool:  # type: ignore[override]
+        """True when the set point is ramped from 0 (the run starts at rest)."""
+        return self.ramp_time > 0.0
+
+    def steady_speed(self, motor_torque: float) -> float:
+        """The quill speed [rad/s] of steady rotation with the motor torque ``motor_torque`` [N·m]: the set point
+        with integral action (k_i > 0), ``Ω − τ_m/k_p`` without; ValueError when that is not positive."""
+        if self.integral_gain > 0.0:
+            return self.set_point
+        updated = self.set_point - motor_torque / self.proportional_gain if self.proportional_gain > 0 else -np.inf
+        if not updated > 0.0:
+            raise ValueError(f"no steady rotation: proportional_gain = {self.proportional_gain:.6g} N*m*s/rad"
+                             f" cannot carry the load torque {motor_torque:.6g} N*m at a positive speed")
+        return float(updated)
+
+    def check_steady_torque(self, motor_torque: float) -> None:
+        """ValueError when ``motor_torque`` [N·m] exceeds τ_max."""
+        if abs(motor_torque) > self.max_torque:
+            raise ValueError(f"no steady drilling: the motor torque needed, {motor_torque:.6g} N*m, exceeds "
+                             f"top_drive.max_torque = {self.max_torque:.6g} N*m")
+
+    @property
     def code(self) -> int:
         return CONTROLLERS.index(self.controller)
 
@@ -129,9 +175,35 @@ class TopDriveParameters:
                          self.set_point, self.ramp_time, self.pipe_impedance, self.filter_frequency],
                         dtype=np.float64)
 
+    def kernel_array(self) -> np.ndarray:
+        """The numbers :func:`top_drive_kernel` reads: :meth:`kernel_args`."""
+        return self.kernel_args()
+
     def jacobian(self) -> np.ndarray:
-        """:func:`top_drive_jacobian` of this top boundary."""
-        return top_drive_jacobian(self)
+        """:func:`top_drive_jacobian` of this top boundary: rows τ_m then the rate of each of its
+        :attr:`n_states` states, columns θ̇₀, T_s then each state."""
+        return top_drive_jacobian(self)[:1 + self.n_states, :2 + self.n_states]
+
+    def evaluate_at(self, ctx: TopContext, states) -> tuple[float, np.ndarray]:
+        """NumPy reference of :func:`top_drive_kernel`: ``(τ_m [N·m], rates of the states)``."""
+        rates = np.zeros(self.n_states)
+        if not self.n_states:
+            return 0.0, rates
+        torque, rates[0], filtered_rate = evaluate_top_drive(
+            self, ctx.time, ctx.quill_speed, ctx.surface_torque, states[0], states[1] if self.n_states > 1 else 0.0)
+        rates[1:] = filtered_rate
+        return torque, rates
+
+    def steady_states(self, motor_torque: float, surface_torque: float) -> np.ndarray:
+        """The controller's states in steady rotation with the motor torque ``motor_torque`` [N·m] and the
+        surface torque ``surface_torque`` [N·m]: ``z = τ_m / k_i`` (0 without integral action), the
+        z_torque filter ``x = T_s``."""
+        states = np.zeros(self.n_states)
+        if states.size:
+            states[0] = motor_torque / self.integral_gain if self.integral_gain > 0 else 0.0
+        if states.size > 1:
+            states[1] = surface_torque
+        return states
 
     def impedance(self, omega) -> np.ndarray:
         """``Z_td(iω) = iωJ_td + k_p + k_i/(iω)`` [N·m·s/rad] (ω [rad/s] > 0), the linear top drive seen
@@ -214,6 +286,25 @@ def top_drive_law(args, t, quill_speed, surface_torque, integral, filtered):
         if error < 0.0:
             d_integral = 0.0
     return torque, d_integral, d_filtered
+
+
+@njit(cache=True)
+def top_drive_kernel(args, ctx, states, rates):
+    """The component's compiled kernel: the motor torque τ_m [N·m] at the context ``ctx``
+    (:class:`~drillstring.forces.registry.TopContext`) for the numbers ``args`` of
+    :meth:`TopDriveParameters.kernel_args`, reading the controller's states ``states`` (z, then x for
+    z_torque) and writing their rates in ``rates`` (:func:`top_drive_law`)."""
+    z_torque = args[0] == Z_TORQUE
+    filtered = states[1] if z_torque else 0.0
+    torque, d_integral, d_filtered = top_drive_law(args, ctx.time, ctx.quill_speed, ctx.surface_torque, states[0],
+                                                   filtered)
+    rates[0] = d_integral
+    if z_torque:
+        rates[1] = d_filtered
+    return torque
+
+
+TopDriveParameters.kernel = top_drive_kernel
 
 
 def evaluate_top_drive(params: TopDriveParameters, t, quill_speed, surface_torque, integral, filtered=0.0):

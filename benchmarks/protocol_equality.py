@@ -1,0 +1,88 @@
+"""Equality of a source tree with another (issue 22, the component protocol): every output array of one run
+and every eigenvalue of the stability analysis of the built-in cases, saved by each tree and compared.
+
+    python benchmarks/protocol_equality.py save OUT.npz          # run with PYTHONPATH=<tree>/src
+    python benchmarks/protocol_equality.py compare A.npz B.npz    # the largest relative difference
+
+The cases: ``reference``, ``stick_slip``, ``contact`` and ``aarsnes2019`` as written (their bases of today,
+their own run length), and, for the top boundaries, the stick-slip case under each controller
+(``pi``, ``soft_torque``, ``z_torque``, 3 s), and off bottom.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import sys  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+CASES = ("reference", "stick_slip", "contact", "aarsnes2019")
+CONTROLLERS = {"pi": {"controller": "pi", "proportional_gain": 2000.0, "integral_gain": 4000.0},
+               "soft_torque": {"controller": "soft_torque"}, "z_torque": {"controller": "z_torque"}}
+
+
+def _variants():
+    from drillstring.case import load_case
+
+    for name in CASES:
+        yield name, load_case(name), None
+    base = load_case("stick_slip")
+    for name, fields in CONTROLLERS.items():
+        case = base.model_copy(update={"top_drive": base.top_drive.model_copy(update=fields)})
+        yield f"stick_slip_{name}", case, 3.0
+    case = base.model_copy(update={"bit_rock": base.bit_rock.model_copy(update={"law": "off_bottom"})})
+    yield "stick_slip_off_bottom", case, 2.0
+
+
+def save(path: str) -> None:
+    from drillstring.api import simulate, stability
+
+    out = {}
+    for name, case, t_end in _variants():
+        data = simulate(case, t_end=t_end)
+        for var in data.data_vars:
+            out[f"{name}/{var}"] = np.asarray(data[var].values, dtype=float)
+        out[f"{name}/time"] = np.asarray(data["time"].values, dtype=float)
+        try:
+            result = stability(case)
+        except ValueError as error:
+            print(name, "stability:", error, flush=True)
+            continue
+        modes = sorted(result.modes, key=lambda m: (m.frequency, m.growth_rate))
+        out[f"{name}/eigenvalues"] = np.array([[m.growth_rate, m.frequency, m.damping_ratio] for m in modes])
+        out[f"{name}/steady"] = np.array(list(result.steady_state.to_dict().values()), dtype=float)
+        print(name, "done", flush=True)
+    np.savez(path, **out)
+
+
+def compare(a: str, b: str) -> None:
+    x, y = np.load(a), np.load(b)
+    keys = sorted(set(x.files) | set(y.files))
+    worst = 0.0
+    for key in keys:
+        if key not in x.files or key not in y.files:
+            print(f"{key}: only in {'the first' if key in x.files else 'the second'}")
+            worst = np.inf
+            continue
+        u, v = x[key], y[key]
+        if u.shape != v.shape:
+            print(f"{key}: shapes {u.shape} and {v.shape}")
+            worst = np.inf
+            continue
+        scale = np.max(np.abs(u)) if u.size else 0.0
+        diff = float(np.max(np.abs(u - v)) / scale) if scale > 0 else float(np.max(np.abs(u - v), initial=0.0))
+        worst = max(worst, diff)
+        if diff > 1e-12:
+            print(f"{key}: {diff:.3g}")
+    print(f"largest relative difference (max |a - b| / max |a| per array): {worst:.3g} over {len(keys)} arrays")
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "save":
+        save(sys.argv[2])
+    else:
+        compare(sys.argv[2], sys.argv[3])

@@ -1,0 +1,402 @@
+"""The component protocol: bit–rock laws and top boundaries that register themselves (SPEC §11).
+
+A **component** is one module holding one class. The class is its parameters (built from the case by
+``from_case``), and declares everything the reduced model, the integrators and the stability analysis ask of
+it; nobody else names the component. Registering is one decorator, :func:`register`; docs/extending.md
+walks through adding a law.
+
+**Bit–rock laws** (:class:`BitLaw`): the force and torque the rock exerts on the string at the bit,
+from a named context (:class:`BitContext`: time, bit position and angle, axial velocity, bit speed, depth
+of cut, static weight-on-bit), never from positional arguments. A law declares ``name``, ``kernel_size``
+(how many numbers its compiled kernel reads), ``kernel_array()`` (those numbers), ``kernel`` (the compiled
+kernel, ``kernel(args, ctx) -> (axial_force, torque)``), ``evaluate_at(ctx)`` (its NumPy reference, array
+fields broadcast), ``jacobian_at(ctx)`` (``[[f_u, f_θ], [t_u, t_θ]]``) and ``steady_drilling(bit_speed,
+axial_load, resistance)`` (the steady state, :class:`BitSteadyState`: the stability analysis asks the law,
+it never samples it). A law that reads the depth of cut (``delayed = True``) also gives ``sector`` (the
+lag angle) and ``depth_partials(ctx)``.
+
+**Top boundaries** (:class:`TopBoundary`): the top of the torsion; those that drive the string
+(``drives = True``) declare ``n_states`` (their own states, integrated with the modal coordinates),
+``kernel(args, ctx, states, rates) -> motor torque`` (reading the named context :class:`TopContext`; writes
+the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian()`` (rows: torque then each
+state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
+surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
+
+Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
+(:class:`~drillstring.case.TuckerWangKeys`, ...).
+
+**Offsets are computed, never written.** The compiled kernels read every component's numbers from one
+flat float array (one field of the kernels' data: every field is an argument of each inner kernel, and
+more fields made the reference realization 30 % slower, measured): a header of :data:`HEADER` entries (the
+codes of the components and where their slices start), then the bit law's numbers (from
+:data:`BIT_LAW`), the top boundary's, the hook load's and the bit's history, each where
+:func:`pack` puts it. The states of the components follow the modal coordinates in the state vector at
+the offsets :func:`pack` computes from their ``n_states``.
+
+**Compiled dispatch.** The kernels call :func:`bit_law_force` and :func:`top_boundary_torque`; when they are
+compiled, the registry writes the dispatch over the codes of the package's registered components
+(:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
+same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
+component registered from **outside the package** (a test, a user's script) runs through the NumPy
+reference engine (``simulate_model(..., engine="reference")``) and the stability analysis; the compiled
+engine refuses it with a clear error. Why: the cached kernels are keyed on the package's sources only
+(:mod:`drillstring.kernel_cache`), so an outside kernel compiled into them would be left out of, or stale in,
+the cache; compiling it in means a step loop of its own type per process (a cold compile, docs/extending.md).
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass
+from typing import Any, ClassVar, NamedTuple
+
+import numpy as np
+from numba.core.extending import overload
+
+__all__ = [
+    "BIT_LAW",
+    "HISTORY",
+    "HOOK_LOAD",
+    "TOP_BOUNDARY_CODE",
+    "TOP_INERTIA",
+    "HEADER",
+    "BitContext",
+    "BitLaw",
+    "BitSteadyState",
+    "Layout",
+    "TopBoundary",
+    "TopContext",
+    "bit_context",
+    "bit_law",
+    "bit_law_force",
+    "bit_laws",
+    "compiled",
+    "pack",
+    "package_components",
+    "register",
+    "top_boundaries",
+    "top_boundary",
+    "top_boundary_torque",
+]
+
+#: The header of the kernels' flat array: the bit law's code, the top boundary's code (0: it does not drive
+#: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
+#: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
+#: bit's history starts.
+HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
+          "history")
+BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY = range(len(HEADER))
+#: Where the bit law's numbers start (right after the header).
+BIT_LAW = len(HEADER)
+
+
+class BitContext(NamedTuple):
+    """What a bit–rock law may read (SI; floats in the compiled kernels, array-likes in the references):
+    ``time`` [s], ``position`` u [m] of the bit from the static state (down), ``angle`` θ [rad],
+    ``axial_velocity`` u̇ [m/s] (> 0 drilling), ``bit_speed`` θ̇ [rad/s], ``depth_of_cut`` [m] per blade
+    (delayed laws; 0 for the others), ``weight_on_bit`` [N], the static one."""
+
+    time: Any
+    position: Any
+    angle: Any
+    axial_velocity: Any
+    bit_speed: Any
+    depth_of_cut: Any
+    weight_on_bit: Any
+
+
+def bit_context(axial_velocity=0.0, bit_speed=0.0, depth_of_cut=0.0, *, time=0.0, position=0.0, angle=0.0,
+                weight_on_bit=0.0) -> BitContext:
+    """A :class:`BitContext` by keyword (the fields a law does not read default to 0)."""
+    return BitContext(time, position, angle, axial_velocity, bit_speed, depth_of_cut, weight_on_bit)
+
+
+class TopContext(NamedTuple):
+    """What a top boundary may read: ``time`` [s], ``quill_speed`` θ̇₀ [rad/s], ``surface_torque`` T_s [N·m]
+    (the elastic torque of the top element)."""
+
+    time: Any
+    quill_speed: Any
+    surface_torque: Any
+
+
+@dataclass(frozen=True)
+class BitSteadyState:
+    """Steady drilling of a bit law at a bit speed: ``rate_of_penetration`` V [m/s] (0: rotation without
+    penetration), the ``axial_force`` [N] and ``torque`` [N·m] on the string, ``depth_of_cut`` [m] per blade
+    (0 for a law that reads none)."""
+
+    rate_of_penetration: float
+    axial_force: float
+    torque: float
+    depth_of_cut: float = 0.0
+
+
+class BitLaw:
+    """Base of the bit–rock laws (module docstring). Subclasses set the class attributes and the methods;
+    instances are the law's parameters (SI)."""
+
+    name: ClassVar[str]
+    #: numbers of :meth:`kernel_array`
+    kernel_size: ClassVar[int]
+    #: the compiled kernel ``kernel(args, ctx) -> (axial_force [N], torque [N·m])`` on the string
+    kernel: ClassVar[Any]
+    #: reads the depth of cut (the bit's history)
+    delayed: ClassVar[bool] = False
+    #: touches the rock (False: the bit hangs free)
+    on_bottom: ClassVar[bool] = True
+    #: its case keys, read from ``[bit_rock]``: its own pydantic model, with units and bounds
+    #: (:class:`~drillstring.case.TuckerWangKeys`, ...; None: it has none); ``[bit_rock]`` is their union
+    keys: ClassVar[Any] = None
+    #: code in the kernels' array (set by :func:`register`)
+    component_code: ClassVar[float] = 0.0
+
+    @classmethod
+    def from_case(cls, case) -> "BitLaw":
+        raise NotImplementedError
+
+    def kernel_array(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def evaluate_at(self, ctx: BitContext):
+        """NumPy reference of :attr:`kernel`: ``(axial_force, torque)`` arrays, the context's fields broadcast."""
+        raise NotImplementedError
+
+    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
+        """``[[f_u, f_θ], [t_u, t_θ]]``: partials of the force and torque in u̇ and θ̇ at ``ctx``."""
+        raise NotImplementedError
+
+    def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState:
+        """Steady drilling at ``bit_speed`` Ω [rad/s] when the string pushes the bit with ``axial_load`` W [N]
+        less ``resistance`` c [N·s/m] times the rate of penetration: the V ≥ 0 with ``−f(V, Ω) = W − c V``
+        (a :class:`BitSteadyState`), None when there is none."""
+        raise NotImplementedError
+
+    def start_depth_of_cut(self, weight_on_bit: float, bit_speed: float) -> float:
+        """A delayed law's depth of cut [m] per blade under the bit at the start of a run on the static state:
+        that of its steady drilling under ``weight_on_bit`` [N] at ``bit_speed`` [rad/s] (0 when none)."""
+        steady = self.steady_drilling(bit_speed, weight_on_bit, 0.0)
+        return steady.depth_of_cut if steady is not None else 0.0
+
+    # -- conveniences over the context ---------------------------------------------------------------------
+    def evaluate(self, bit_axial_velocity, bit_speed, depth_of_cut=0.0):
+        """:meth:`evaluate_at` at the bit's axial velocity [m/s], speed [rad/s] and depth of cut [m] per blade."""
+        return self.evaluate_at(bit_context(bit_axial_velocity, bit_speed, depth_of_cut))
+
+
+class TopBoundary:
+    """Base of the top boundaries (module docstring). Instances are the boundary's parameters (SI).
+
+    A boundary that drives the string (``drives``) lumps ``top_inertia`` [kg·m²] at the quill (the torsional
+    basis is then free at the top, its first mode the rigid rotation), declares its ``n_states``, its kernel
+    ``kernel(args, ctx, states, rates) -> τ_m`` and NumPy reference ``evaluate_at(ctx, states) -> (τ_m,
+    rates)``, ``jacobian()`` (rows τ_m then each state's rate; columns θ̇₀, T_s, then each state),
+    ``steady_states(motor_torque, surface_torque)``, ``steady_speed(motor_torque)`` (the quill speed [rad/s]
+    at which it gives that torque; ValueError when none) and ``check_steady_torque(motor_torque)``."""
+
+    name: ClassVar[str]
+    #: drives the string through a motor torque (False: the top speed is imposed)
+    drives: ClassVar[bool] = True
+    kernel_size: ClassVar[int] = 0
+    kernel: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds)
+    keys: ClassVar[Any] = None
+    #: the run starts from rest (a ramped set point) instead of spinning at the top speed
+    starts_at_rest: ClassVar[bool] = False
+
+    @property
+    def n_states(self) -> int:
+        return 0
+
+    def kernel_array(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def check_steady_torque(self, motor_torque: float) -> None:
+        """ValueError when the boundary cannot give ``motor_torque`` [N·m] in steady rotation (none here)."""
+
+    def describe(self) -> dict:
+        """JSON-ready summary (SI)."""
+        return {"top_boundary": self.name}
+
+
+_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}}
+_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary"}
+
+
+def _kind(cls: type) -> str:
+    for base, kind in _KINDS.items():
+        if issubclass(cls, base):
+            return kind
+    raise TypeError(f"{cls.__name__} is neither a BitLaw nor a TopBoundary")
+
+
+def _in_package(cls: type) -> bool:
+    return cls.__module__.split(".")[0] == __name__.split(".")[0]
+
+
+def register(cls: type) -> type:
+    """Class decorator: register a bit–rock law or a top boundary under its ``name``. The package's
+    components get their code from their rank among the package's names of that kind (the same in every
+    process); one from outside the package a negative code (never in the compiled dispatch)."""
+    kind = _kind(cls)
+    table = _REGISTRY[kind]
+    known = table.get(cls.name)
+    if known is not None and _in_package(known) and \
+            (known.__module__, known.__qualname__) != (cls.__module__, cls.__qualname__):
+        raise ValueError(f"{kind} {cls.name!r} is already registered by {known.__module__}.{known.__qualname__}")
+    table[cls.name] = cls
+    inside = sorted(n for n, c in table.items() if _in_package(c) and (kind == "bit_law" or c.drives))
+    outside = sorted(n for n, c in table.items() if not _in_package(c))
+    for name, c in table.items():
+        if name in inside:
+            c.component_code = float(inside.index(name) + 1)
+        elif name in outside:
+            c.component_code = -float(outside.index(name) + 1)
+        else:
+            c.component_code = 0.0
+    return cls
+
+
+_LOADED = False
+
+
+def package_components() -> None:
+    """Import every module of :mod:`drillstring.forces` once, so that every component of the package is
+    registered (their set, hence their codes and the compiled dispatch, is the same in every process)."""
+    global _LOADED
+    if _LOADED:
+        return
+    _LOADED = True
+    package = importlib.import_module("drillstring.forces")
+    for info in pkgutil.iter_modules(package.__path__):
+        importlib.import_module(f"drillstring.forces.{info.name}")
+
+
+def _lookup(kind: str, name: str):
+    package_components()
+    table = _REGISTRY[kind]
+    if name not in table:
+        raise ValueError(f"{kind.replace('_', ' ')} {name!r}: must be one of {', '.join(sorted(table))}")
+    return table[name]
+
+
+def bit_law(name: str) -> type[BitLaw]:
+    """The registered bit–rock law ``name`` (ValueError naming the registered ones otherwise)."""
+    return _lookup("bit_law", name)
+
+
+def top_boundary(name: str) -> type[TopBoundary]:
+    """The registered top boundary ``name``."""
+    return _lookup("top_boundary", name)
+
+
+def bit_laws() -> tuple[str, ...]:
+    """Names of the registered bit–rock laws."""
+    package_components()
+    return tuple(sorted(_REGISTRY["bit_law"]))
+
+
+def top_boundaries() -> tuple[str, ...]:
+    """Names of the registered top boundaries."""
+    package_components()
+    return tuple(sorted(_REGISTRY["top_boundary"]))
+
+
+def compiled(component) -> bool:
+    """True when the compiled kernels dispatch to ``component`` (a package component)."""
+    return _in_package(type(component))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The flat array of the kernels and the state vector: offsets computed from the components' sizes
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where each component's numbers start in the kernels' array and where each component's states start
+    in the state vector (absolute indices)."""
+
+    numbers: dict[str, int]
+    states: dict[str, int]
+    state_size: int
+
+
+def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarray,
+         modal_states: int) -> tuple[np.ndarray, Layout]:
+    """The kernels' flat array ``[header, bit law, top boundary, hook load, history]`` and its
+    :class:`Layout`; the top boundary's states follow the ``modal_states`` entries ``[η, η̇]``."""
+    package_components()  # every package component registered: the codes are final
+    parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
+             "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
+             "hook_load": np.asarray(hook_load, dtype=np.float64), "history": np.asarray(history, dtype=np.float64)}
+    if parts["bit_law"].shape != (type(bit).kernel_size,):
+        raise ValueError(f"bit law {bit.name!r}: kernel_array() has {parts['bit_law'].size} numbers, "
+                         f"kernel_size says {type(bit).kernel_size}")
+    numbers, offset = {}, BIT_LAW
+    for name, values in parts.items():
+        numbers[name] = offset
+        offset += values.size
+    states = {"top_boundary": modal_states}
+    size = modal_states + top.n_states
+    header = np.zeros(len(HEADER))
+    header[BIT_LAW_CODE] = bit.component_code
+    header[TOP_BOUNDARY_CODE] = top.component_code if top.drives else 0.0
+    header[TOP_BOUNDARY] = numbers["top_boundary"]
+    header[TOP_BOUNDARY_STATES] = states["top_boundary"]
+    header[TOP_INERTIA] = top.top_inertia if top.drives else 0.0
+    header[HOOK_LOAD] = numbers["hook_load"]
+    header[HISTORY] = numbers["history"]
+    return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Compiled dispatch, written from the registry when the kernels are compiled
+# ---------------------------------------------------------------------------------------------------------
+
+
+def bit_law_force(laws, ctx):
+    """``(axial_force [N], torque [N·m])`` of the bit law whose code and numbers ``laws`` holds (the kernels'
+    flat array) at the context ``ctx`` (:class:`BitContext`); NaN for a code no package law has. Compiled
+    code only."""
+    raise NotImplementedError("compiled code only")
+
+
+def top_boundary_torque(laws, ctx, y, out):
+    """The motor torque [N·m] of the top boundary whose code and numbers ``laws`` holds, at ``ctx``
+    (:class:`TopContext`), reading its states in ``y`` and writing their rates in ``out`` at the index the
+    header gives; NaN for a code no package boundary has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+def _dispatch_source(kind: str, signature: str, call: str, fallback: str) -> tuple[str, dict]:
+    package_components()
+    entries = sorted((c.component_code, c) for c in _REGISTRY[kind].values()
+                     if _in_package(c) and c.component_code > 0.0)
+    namespace: dict[str, Any] = {"np": np}
+    lines = [f"def dispatch({signature}):", f"    code = laws[{BIT_LAW_CODE if kind == 'bit_law' else TOP_BOUNDARY_CODE}]"]
+    for i, (code, cls) in enumerate(entries):
+        namespace[f"kernel_{i}"] = cls.kernel
+        lines.append(f"    if code == {code!r}:")
+        lines.append(f"        return kernel_{i}({call})")
+    lines.append(f"    return {fallback}")
+    return "\n".join(lines) + "\n", namespace
+
+
+@overload(bit_law_force)
+def _bit_law_force_compiled(laws, ctx):
+    source, namespace = _dispatch_source("bit_law", "laws, ctx", f"laws[{BIT_LAW}:], ctx", "np.nan, np.nan")
+    exec(compile(source, "<bit_law_force dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+
+
+@overload(top_boundary_torque)
+def _top_boundary_torque_compiled(laws, ctx, y, out):
+    source, namespace = _dispatch_source(
+        "top_boundary", "laws, ctx, y, out",
+        f"laws[int(laws[{TOP_BOUNDARY}]):], ctx, y[int(laws[{TOP_BOUNDARY_STATES}]):], "
+        f"out[int(laws[{TOP_BOUNDARY_STATES}]):]", "np.nan")
+    exec(compile(source, "<top_boundary_torque dispatch>", "exec"), namespace)
+    return namespace["dispatch"]

@@ -1,0 +1,361 @@
+"""The component protocol (drillstring.forces.registry): a bit–rock law defined here, outside the package,
+registered with one decorator and run through ``simulate`` (the NumPy reference engine) and ``stability``;
+the registry's computed layout; the package's laws behind the compiled dispatch."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import pytest
+from numba import njit
+
+from drillstring.case import BitRock, TopDrive
+from drillstring.dynamics.rom import case_reduced_model, rigid_axial_column
+from drillstring.dynamics.simulate import simulate_model
+from drillstring.dynamics.stability import linearized_matrix, stability, steady_drilling
+from drillstring.forces.registry import (
+    BIT_LAW,
+    HEADER,
+    BitContext,
+    BitLaw,
+    BitSteadyState,
+    TopBoundary,
+    TopContext,
+    bit_context,
+    bit_law,
+    bit_laws,
+    register,
+    top_boundaries,
+)
+
+
+@njit(cache=True)
+def _weakening_kernel(args, ctx):
+    """The law below, compiled: ``args = [W0, a, μR, β, ω_s, ω_r]``."""
+    weight = args[0] + ctx.axial_velocity / args[1]
+    if weight <= 0.0:
+        return 0.0, 0.0
+    w = ctx.bit_speed
+    shape = (1.0 + args[3] * math.exp(-abs(w) / args[4])) * math.tanh(w / args[5])
+    return -weight, -args[2] * weight * shape
+
+
+@register
+@dataclass(frozen=True)
+class VelocityWeakeningBit(BitLaw):
+    """A bit–rock law that does not exist in the package: the rock carries ``W = W0 + u̇/a`` (a threshold
+    ``W0`` [N] and a penetration rate ``a`` [m/(N·s)] per newton above it; no force when W ≤ 0) and resists
+    the rotation with a friction torque ``μR W g(ω)`` that weakens with speed, ``g(ω) = (1 + β e^{−|ω|/ω_s})
+    tanh(ω/ω_r)``."""
+
+    name: ClassVar[str] = "velocity_weakening_test"
+    kernel_size: ClassVar[int] = 6
+    kernel: ClassVar = _weakening_kernel
+
+    threshold: float = 2e4  # W0 [N]
+    rate: float = 4.4e-8  # a [m/(N·s)]
+    friction_arm: float = 0.05  # μR [m]
+    weakening: float = 1.0  # β [-]
+    weakening_speed: float = 5.0  # ω_s [rad/s]
+    regularization: float = 0.5  # ω_r [rad/s]
+
+    @classmethod
+    def from_case(cls, case):
+        return cls()
+
+    def kernel_array(self):
+        return np.array([self.threshold, self.rate, self.friction_arm, self.weakening, self.weakening_speed,
+                         self.regularization])
+
+    def _shape(self, w):
+        return (1.0 + self.weakening * np.exp(-np.abs(w) / self.weakening_speed)) * np.tanh(w / self.regularization)
+
+    def evaluate_at(self, ctx: BitContext):
+        u, w = np.broadcast_arrays(np.asarray(ctx.axial_velocity, float), np.asarray(ctx.bit_speed, float))
+        weight = self.threshold + u / self.rate
+        contact = weight > 0.0
+        return (np.where(contact, -weight, 0.0), np.where(contact, -self.friction_arm * weight * self._shape(w), 0.0))
+
+    def jacobian_at(self, ctx: BitContext):
+        u, w = float(ctx.axial_velocity), float(ctx.bit_speed)
+        weight = self.threshold + u / self.rate
+        if weight <= 0.0:
+            return np.zeros((2, 2))
+        decay = self.weakening * math.exp(-abs(w) / self.weakening_speed)
+        tanh = math.tanh(w / self.regularization)
+        slope = -math.copysign(decay / self.weakening_speed, w) * tanh + (1.0 + decay) * (1.0 - tanh**2) / \
+            self.regularization
+        return np.array([[-1.0 / self.rate, 0.0],
+                         [-self.friction_arm * float(self._shape(w)) / self.rate, -self.friction_arm * weight * slope]])
+
+    def steady_drilling(self, bit_speed, axial_load, resistance):
+        rop = (axial_load - self.threshold) / (1.0 / self.rate + resistance)
+        if not rop > 0.0:
+            return None
+        force, torque = self.evaluate(rop, bit_speed)
+        return BitSteadyState(rop, float(force), float(torque))
+
+
+LAW = VelocityWeakeningBit()
+
+
+def test_the_outside_law_is_registered_outside_the_package():
+    assert bit_law("velocity_weakening_test") is VelocityWeakeningBit
+    assert "velocity_weakening_test" in bit_laws()
+    assert VelocityWeakeningBit.component_code < 0  # never in the compiled dispatch
+    package = {name: bit_law(name).component_code for name in ("detournay", "off_bottom", "tucker_wang")}
+    assert sorted(package.values()) == [1.0, 2.0, 3.0]  # the package's codes do not move
+    with pytest.raises(ValueError, match="bit law 'no_such_law': must be one of .*tucker_wang"):
+        bit_law("no_such_law")
+    with pytest.raises(ValueError, match="'tucker_wang' is already registered by drillstring.forces.bit_rock"):
+        register(type("Impostor", (VelocityWeakeningBit,), {"name": "tucker_wang"}))
+    assert bit_law("tucker_wang").__module__ == "drillstring.forces.bit_rock"
+
+
+def test_case_names_are_the_registered_ones():
+    """The case format is unchanged; its law names are exactly the package's registered components."""
+    package = {n for n in bit_laws() if bit_law(n).__module__.startswith("drillstring.")}
+    assert set(BitRock.model_fields["law"].annotation.__args__) == package
+    # each law's keys are its own model; [bit_rock] is their union, no key read by two laws
+    owned = [set(bit_law(n).keys.model_fields) for n in sorted(package) if bit_law(n).keys is not None]
+    assert sum(len(k) for k in owned) == len(set().union(*owned))
+    assert set().union(*owned) == set(BitRock.model_fields) - {"law"}
+    for n in package:
+        for field in getattr(bit_law(n).keys, "model_fields", {}).values():
+            assert field.description  # units in the description, bounds in the metadata where they apply
+    assert set(TopDrive.model_fields["controller"].annotation.__args__) >= {"imposed_speed"}
+    assert "top_drive" in top_boundaries()
+
+
+def test_outside_law_kernel_reference_and_jacobian():
+    rng = np.random.default_rng(2)
+    args = LAW.kernel_array()
+    for u, w in zip(rng.uniform(-2e-3, 6e-3, 20), rng.uniform(-3.0, 15.0, 20)):
+        ctx = bit_context(u, w, time=1.0, weight_on_bit=1e5)
+        assert _weakening_kernel(args, ctx) == pytest.approx(tuple(map(float, LAW.evaluate_at(ctx))), rel=1e-13)
+        jac = LAW.jacobian_at(ctx)
+        for j, (du, dw) in enumerate([(1e-9, 0.0), (0.0, 1e-6)]):
+            plus = np.array(LAW.evaluate(u + du, w + dw), dtype=float)
+            minus = np.array(LAW.evaluate(u - du, w - dw), dtype=float)
+            np.testing.assert_allclose(jac[:, j], (plus - minus) / (2 * (du + dw)), rtol=1e-6,
+                                       atol=1e-9 * np.abs(jac).max())
+
+
+@pytest.fixture(scope="module")
+def model(torsional_case):
+    return case_reduced_model(torsional_case, bit_rock=LAW)
+
+
+def test_layout_is_computed(model):
+    """The law's numbers sit after the header, the others after them, the offsets from the sizes."""
+    layout = model.layout
+    assert layout.numbers["bit_law"] == BIT_LAW == len(HEADER)
+    assert layout.numbers["top_boundary"] == BIT_LAW + VelocityWeakeningBit.kernel_size
+    np.testing.assert_array_equal(model.case2_data.laws[BIT_LAW:BIT_LAW + 6], LAW.kernel_array())
+    assert layout.state_size == model.state_size == 2 * model.size  # imposed speed: no states
+
+
+def test_stability_asks_the_outside_law(model, torsional_case):
+    steady = steady_drilling(model)
+    r = rigid_axial_column(model)
+    b_r = model.bit_u[r]
+    load = model.weight_on_bit + model.generalized_force[r] / b_r
+    resistance = model.damping[r, r] / b_r**2
+    assert steady.rate_of_penetration == pytest.approx((load - LAW.threshold) / (1 / LAW.rate + resistance),
+                                                       rel=1e-12)
+    # an equilibrium of the NumPy reference right-hand side
+    n = model.size
+    rhs = model.rhs_reference(0.0, steady.state)
+    assert np.abs(rhs[n:]).max() < 1e-9 * np.abs(model.omega2 * steady.state[:n]).max()
+    # the linearization (the law's Jacobian) against finite differences of that right-hand side
+    a = linearized_matrix(model, steady)
+    y = steady.state
+    fd = np.zeros_like(a)
+    for k in range(len(y)):
+        step = 1e-7 * max(1.0, abs(y[k]))
+        d = np.zeros_like(y)
+        d[k] = step
+        fd[:, k] = (model.rhs_reference(0.0, y + d) - model.rhs_reference(0.0, y - d)) / (2 * step)
+    np.testing.assert_allclose(a, fd, atol=1e-7 * np.abs(a).max())
+    # velocity weakening (β) feeds the torsional modes negative damping: the leading root grows with it
+    weak = stability(model).leading.growth_rate
+    strong = stability(case_reduced_model(torsional_case, bit_rock=VelocityWeakeningBit(weakening=4.0)))
+    assert strong.leading.growth_rate > weak and strong.leading.family == "torsional"
+
+
+def test_simulate_runs_the_outside_law_through_the_reference_engine(model):
+    steady = steady_drilling(model)
+    result = simulate_model(model, engine="reference", t_end=0.4, output_step=0.05, initial_state=steady.state)
+    obs = result.observables
+    np.testing.assert_allclose(obs["rate_of_penetration"], steady.rate_of_penetration, rtol=1e-6)
+    np.testing.assert_allclose(obs["force_on_bit"], steady.force_on_bit, rtol=1e-6)
+    np.testing.assert_allclose(obs["torque_on_bit"], steady.torque_on_bit, rtol=1e-6)
+    with pytest.raises(ValueError, match="'velocity_weakening_test' is registered outside the drillstring package"):
+        simulate_model(model, t_end=0.1, output_step=0.05)
+
+
+# --- a top boundary without states, defined here ------------------------------------------------------------
+
+
+@njit(cache=True)
+def _damper_kernel(args, ctx, states, rates):
+    """``[k, Ω]`` -> the motor torque ``k (Ω − θ̇₀)``; no states."""
+    return args[0] * (args[1] - ctx.quill_speed)
+
+
+@register
+@dataclass(frozen=True)
+class SpeedDamper(TopBoundary):
+    """A top drive without controller states: a motor turning at Ω coupled to the quill (inertia J) by a
+    viscous coupling k, ``τ_m = k (Ω − θ̇₀)`` — the PI controller with k_i = 0, less its integral state."""
+
+    name: ClassVar[str] = "speed_damper_test"
+    kernel_size: ClassVar[int] = 2
+    kernel: ClassVar = _damper_kernel
+
+    set_point: float
+    gain: float
+    inertia: float
+
+    @property
+    def top_inertia(self):
+        return self.inertia
+
+    def kernel_array(self):
+        return np.array([self.gain, self.set_point])
+
+    def evaluate_at(self, ctx: TopContext, states):
+        return self.gain * (self.set_point - ctx.quill_speed), np.zeros(0)
+
+    def jacobian(self):
+        return np.array([[-self.gain, 0.0]])
+
+    def steady_states(self, motor_torque, surface_torque):
+        return np.zeros(0)
+
+    def steady_speed(self, motor_torque):
+        return self.set_point - motor_torque / self.gain
+
+
+def test_a_top_boundary_without_states(torsional_case):
+    """The state-less boundary against the package's PI controller with k_i = 0 (the same torque; its integral
+    state feeds nothing back): the same steady state, the same roots (the PI's extra one is its integral
+    state's 0), the same run — the NumPy reference applies the motor torque of a boundary without states."""
+    gain, inertia = 3e3, 800.0
+    pi_case = torsional_case.model_copy(update={"top_drive": torsional_case.top_drive.model_copy(update={
+        "controller": "pi", "proportional_gain": gain, "integral_gain": 0.0, "inertia": inertia})})
+    pi = case_reduced_model(pi_case)
+    damper = case_reduced_model(torsional_case, top_drive=SpeedDamper(torsional_case.operation.top_speed, gain,
+                                                                       inertia))
+    assert damper.state_size == 2 * damper.size and pi.state_size == 2 * pi.size + 1
+    a, b = stability(pi), stability(damper)
+    assert b.steady_state.bit_speed == pytest.approx(a.steady_state.bit_speed, rel=1e-12)
+    assert b.steady_state.torque_on_bit == pytest.approx(a.steady_state.torque_on_bit, rel=1e-12)
+    roots_pi = sorted((m.growth_rate, m.frequency) for m in a.modes if abs(m.eigenvalue) > 1e-9)
+    roots = sorted((m.growth_rate, m.frequency) for m in b.modes)
+    np.testing.assert_allclose(roots, roots_pi, rtol=1e-8, atol=1e-10)
+    options = dict(t_end=1.0, output_step=0.1, rtol=1e-9, atol=1e-12, lateral_perturbation=0.0)
+    expected = simulate_model(pi, **options).observables
+    got = simulate_model(damper, engine="reference", **options).observables
+    for name in ("bit_speed", "quill_speed", "surface_torque", "torque_on_bit"):
+        np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-6 * np.abs(expected[name]).max(),
+                                   err_msg=name)
+
+
+def test_pack_refuses_a_law_whose_numbers_disagree_with_its_size(model):
+    """The registry checks the declared size against the numbers: an offset can never shift silently."""
+    from drillstring.forces.registry import pack
+
+    class Short(VelocityWeakeningBit):
+        kernel_size: ClassVar[int] = 7
+
+    with pytest.raises(ValueError, match="kernel_array\\(\\) has 6 numbers, kernel_size says 7"):
+        pack(Short(), model.top_drive, model.hook_load.kernel_array(), np.zeros(4), 2 * model.size)
+
+
+# --- a delayed law (it reads the depth of cut), defined here ---------------------------------------------------
+
+
+@njit(cache=True)
+def _cutting_kernel(args, ctx):
+    """``[k, c, ω_r]`` -> ``(−k d, −c d clip(ω/ω_r, −1, 1))`` for a depth of cut d > 0, else no contact."""
+    d = ctx.depth_of_cut
+    if not d > 0.0:
+        return 0.0, 0.0
+    turn = min(max(ctx.bit_speed / args[2], -1.0), 1.0)
+    return -args[0] * d, -args[1] * d * turn
+
+
+@register
+@dataclass(frozen=True)
+class PureCutting(BitLaw):
+    """Cutting without wear flats, ``W = k d``, ``T = c d`` (d the depth of cut per blade, one blade sector
+    of lag): the Detournay law with σ = 0, written from scratch as a law outside the package."""
+
+    name: ClassVar[str] = "pure_cutting_test"
+    kernel_size: ClassVar[int] = 3
+    kernel: ClassVar = _cutting_kernel
+    delayed: ClassVar[bool] = True
+
+    stiffness: float  # k [N/m]
+    torque_rate: float  # c [N·m/m]
+    blades: int
+    friction_speed: float = 5e-3  # ω_r [rad/s]
+
+    @property
+    def sector(self):
+        return 2.0 * math.pi / self.blades
+
+    def kernel_array(self):
+        return np.array([self.stiffness, self.torque_rate, self.friction_speed])
+
+    def evaluate_at(self, ctx):
+        d, w = np.broadcast_arrays(np.asarray(ctx.depth_of_cut, float), np.asarray(ctx.bit_speed, float))
+        on = d > 0.0
+        turn = np.clip(w / self.friction_speed, -1.0, 1.0)
+        return np.where(on, -self.stiffness * d, 0.0), np.where(on, -self.torque_rate * d * turn, 0.0)
+
+    def jacobian_at(self, ctx):
+        d, w = float(ctx.depth_of_cut), float(ctx.bit_speed)
+        slope = 1.0 / self.friction_speed if d > 0.0 and abs(w) < self.friction_speed else 0.0
+        return np.array([[0.0, 0.0], [0.0, -self.torque_rate * d * slope]])
+
+    def depth_partials(self, ctx):
+        if not ctx.depth_of_cut > 0.0:
+            return 0.0, 0.0
+        return -self.stiffness, -self.torque_rate * min(max(ctx.bit_speed / self.friction_speed, -1.0), 1.0)
+
+    def steady_drilling(self, bit_speed, axial_load, resistance):
+        rop = axial_load / (self.stiffness * self.sector / bit_speed + resistance)
+        if not rop > 0.0:
+            return None
+        depth = rop * self.sector / bit_speed
+        force, torque = self.evaluate_at(bit_context(rop, bit_speed, depth))
+        return BitSteadyState(rop, float(force), float(torque), depth)
+
+
+def test_a_delayed_law_from_outside_equals_the_detournay_law_it_rewrites(torsional_case):
+    """The delayed path of the protocol (depth of cut from the bit's history, the start's helical bottom, the
+    delay roots) for a law from outside: equal to the package's Detournay law without wear flats."""
+    case = torsional_case.model_copy(update={
+        "bit_rock": torsional_case.bit_rock.model_copy(update={"law": "detournay", "contact_stress": 0.0}),
+        "initial": torsional_case.initial.model_copy(update={"start": "on_bottom"})})
+    detournay = case_reduced_model(case)
+    law = detournay.bit_rock
+    outside = case_reduced_model(case, bit_rock=PureCutting(law.cutting_stiffness, law.cutting_torque_rate,
+                                                            law.blades, law.friction_speed))
+    a, b = stability(detournay), stability(outside)
+    assert b.steady_state.rate_of_penetration == pytest.approx(a.steady_state.rate_of_penetration, rel=1e-12)
+    assert b.steady_state.delay == pytest.approx(a.steady_state.delay, rel=1e-12)
+    assert b.leading.growth_rate == pytest.approx(a.leading.growth_rate, rel=1e-8, abs=1e-10)
+    assert b.leading.frequency == pytest.approx(a.leading.frequency, rel=1e-8)
+    options = dict(t_end=0.6, output_step=0.05, rtol=1e-9, atol=1e-12)
+    expected = simulate_model(detournay, engine="reference", **options).observables
+    got = simulate_model(outside, engine="reference", **options).observables
+    for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit", "bit_depth"):
+        np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-9 * np.abs(expected[name]).max(),
+                                   err_msg=name)
+    assert np.abs(expected["force_on_bit"]).max() > 0.0
