@@ -146,11 +146,12 @@ def _with_derived(dataset, model):
         values = model.static.weight_on_hook - model.hook_load.force(t)
         dataset["hook_load"] = ("time", values, {"units": UNITS["hook_load"], "long_name": LONG_NAMES["hook_load"]})
     if model.bit_rock.delayed:
-        force = dataset["force_on_bit"].values
-        wear = np.where(force > 0.0, force - model.bit_rock.detournay.cutting_force(dataset["depth_of_cut"].values),
-                        0.0)
-        dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
-                                                     "long_name": LONG_NAMES["wear_flat_force"]})
+        cutting_force = getattr(model.bit_rock, "cutting_force", None)  # the law itself (component protocol)
+        if cutting_force is not None:  # the Detournay law: the rest of the force on bit is the wear flats'
+            force = dataset["force_on_bit"].values
+            wear = np.where(force > 0.0, force - cutting_force(dataset["depth_of_cut"].values), 0.0)
+            dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
+                                                         "long_name": LONG_NAMES["wear_flat_force"]})
     elif "depth_of_cut" in dataset:
         dataset = dataset.drop_vars("depth_of_cut")
     return dataset
