@@ -46,3 +46,51 @@ def test_example_prints_what_the_readme_shows(tmp_path, index):
     done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == shown.split()
+
+
+def test_first_case_of_ones_own_loads_and_is_not_buckled(tmp_path):
+    """The README's "first case of your own" is a valid case file in field units whose three stabilizers keep the
+    bottom-hole assembly straight at its 25 klbf (the tutorial shows one stabilizer is not enough)."""
+    from drillstring.buckling import case_buckling_margin
+    from drillstring.case import load_case
+
+    (code,) = [code for _, code in _blocks("toml")]
+    path = tmp_path / "my_case.toml"
+    path.write_text(code, encoding="utf-8")
+    case = load_case(path)
+    assert len(case.stabilizers) == 3
+    assert case.operation.weight_on_bit == pytest.approx(25e3 * 4.4482216152605)
+    margin = case_buckling_margin(case)
+    assert not margin.buckled and margin.critical_weight_on_bit > case.operation.weight_on_bit
+
+
+def _slug(heading: str) -> str:
+    """The anchor a Markdown renderer (and the docs site, MyST's GitHub-style slugs) gives a heading."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def test_relative_links_point_to_files_and_headings_that_exist():
+    """Every relative link of the README leads to a file of the repository and, with a #fragment into a
+    Markdown page, to one of its headings (the docs site checks its own pages' links when it is built)."""
+    text = README.read_text(encoding="utf-8")
+    links = re.findall(r"\]\(([^)\s]+)\)", text)
+    assert len(links) > 20
+    for link in links:
+        if re.match(r"[a-z]+://", link):
+            continue
+        target, _, fragment = link.partition("#")
+        path = README.parent / target
+        assert path.exists(), link
+        if fragment and path.suffix == ".md":
+            headings = re.findall(r"^#+ (.*)$", path.read_text(encoding="utf-8"), re.M)
+            assert fragment in {_slug(h) for h in headings}, link
+
+
+def test_the_guide_shows_the_readme_examples_unchanged():
+    """docs/guide/python-api.md repeats the README's two checked examples with their output: the same text,
+    so that what the tests above run is what the site shows."""
+    guide = (README.parent / "docs" / "guide" / "python-api.md").read_text(encoding="utf-8")
+    for language in ("python", "text"):
+        shown = [code for _, code in _blocks(language)][:2]
+        in_guide = re.findall(rf"```{language}\n(.*?)```", guide, re.S)[:2]
+        assert in_guide == shown

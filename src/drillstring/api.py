@@ -146,11 +146,12 @@ def _with_derived(dataset, model):
         values = model.static.weight_on_hook - model.hook_load.force(t)
         dataset["hook_load"] = ("time", values, {"units": UNITS["hook_load"], "long_name": LONG_NAMES["hook_load"]})
     if model.bit_rock.delayed:
-        force = dataset["force_on_bit"].values
-        wear = np.where(force > 0.0, force - model.bit_rock.detournay.cutting_force(dataset["depth_of_cut"].values),
-                        0.0)
-        dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
-                                                     "long_name": LONG_NAMES["wear_flat_force"]})
+        cutting_force = getattr(model.bit_rock, "cutting_force", None)  # the law itself (component protocol)
+        if cutting_force is not None:  # the Detournay law: the rest of the force on bit is the wear flats'
+            force = dataset["force_on_bit"].values
+            wear = np.where(force > 0.0, force - cutting_force(dataset["depth_of_cut"].values), 0.0)
+            dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
+                                                         "long_name": LONG_NAMES["wear_flat_force"]})
     elif "depth_of_cut" in dataset:
         dataset = dataset.drop_vars("depth_of_cut")
     return dataset
@@ -518,7 +519,7 @@ def campbell(case: Case | str | Path = "reference", *, top_speed=None, blades: i
     """The Campbell diagram of ``case`` (:mod:`drillstring.critical_speeds`): natural frequencies of the axial,
     torsional and lateral (forward and backward whirl) families against the rotary speed, prestressed at
     the case's weight-on-bit, with the drilling fluid and the gyroscopic terms; the excitation lines 1×
-    and ``blades``× (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
+    and ``blades`` × (default :data:`~drillstring.critical_speeds.DEFAULT_BLADES`) and their critical speeds.
 
     ``top_speed``: the speeds, SI numbers [rad/s] or a grid string (``"5 rpm:300 rpm:60"``, bare numbers
     in ``default_unit`` or SI), default :data:`~drillstring.critical_speeds.DEFAULT_CAMPBELL_TOP_SPEED`. Returns a

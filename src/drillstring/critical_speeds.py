@@ -402,7 +402,7 @@ def check_speed_count(count: int, name: str = "speeds") -> None:
 
 def case_campbell(case, speeds, blades: int = DEFAULT_BLADES, progress=None) -> CampbellDiagram:
     """The Campbell diagram of a :class:`~drillstring.case.Case` prestressed at its weight-on-bit, over
-    ``speeds`` [rad/s], with the lines 1× and ``blades``× and the case's top speed marked;
+    ``speeds`` [rad/s], with the lines 1× and ``blades`` × and the case's top speed marked;
     ``progress(done, total)`` as :func:`campbell_diagram`'s."""
     from drillstring.modal import case_linear_system
     from drillstring.statics import case_static_state

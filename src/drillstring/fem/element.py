@@ -5,6 +5,7 @@ Nodal DOFs, in this order at each node (SPEC §2; numbered in :mod:`drillstring.
 DOFs 0–5 belong to the first (upper) node, 6–11 to the second.
 
 Interpolation (SPEC §3):
+
 - ``u`` and ``θx``: linear.
 - bending: the shear-locking-free *interdependent* interpolation of Friedman & Kosmatka,
   "An improved two-node Timoshenko beam finite element", Computers & Structures 47 (1993) 473–481:

@@ -28,7 +28,7 @@ tangential force opposes ``s``. Its sign is regularised on the velocity scale ``
 ``sgn_ε(s/R)`` with the same ``ε`` [rad/s] as the torque, so that ``ε`` keeps one unit.
 
 Distributed wall stiffness (mesh-objective contact)
---------------------------------------------------
+---------------------------------------------------
 A per-node ``k_sh`` makes the law depend on the mesh: a length ``ℓ`` of string pressed ``δ`` into the wall
 pushes back ``k_sh δ`` times the number of nodes on ``ℓ``. The wall is therefore modelled as a
 **distributed** stiffness ``k'_sh`` [N/m per m of string = N/m²]: the string section at ``x`` receives

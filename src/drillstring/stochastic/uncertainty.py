@@ -34,8 +34,8 @@ law                positional       information (support; moments)  Maximum-Entr
                                     ``E{ln X}``                     ``ln k − ψ(k) = ln E{X} − E{ln X}``
 ``maxent``         (keys only)      ``[min, max]`` (defaults        closed form when the set is one of the
                                     ``−∞``, ``+∞``) and any of      above, else the numerical dual: bounded
-                                    ``mean``, ``std``, ``log_mean`` + mean -> truncated exponential; bounded
-                                                                    (or ``[0, ∞)``) + mean + std ->
+                                    ``mean``, ``std``,              + mean -> truncated exponential; bounded
+                                    ``log_mean``                    (or ``[0, ∞)``) + mean + std ->
                                                                     truncated normal
 =================  ===============  ==============================  ========================================
 
