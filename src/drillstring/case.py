@@ -706,6 +706,10 @@ class ReducedModel(_Base):
     lateral_modes: int = Field(20, ge=0)
     lateral_cutoff: Dimensionless = Field(
         1.5, ge=0, description="keep every lateral mode below this multiple of the rotation frequency [-]")
+    truncation_correction: Literal["none", "static"] = Field(
+        "static", description="correction for the modes left out: 'static' appends to the axial and torsional "
+        "families their residual-flexibility attachment modes at the bit (and the top with a top drive); "
+        "'none', the modes alone")
 
 
 class Simulation(_Base):
