@@ -147,7 +147,7 @@ def _with_derived(dataset, model):
         dataset["hook_load"] = ("time", values, {"units": UNITS["hook_load"], "long_name": LONG_NAMES["hook_load"]})
     if model.bit_rock.delayed:
         force = dataset["force_on_bit"].values
-        wear = np.where(force > 0.0, force - model.bit_rock.detournay.cutting_force(dataset["depth_of_cut"].values),
+        wear = np.where(force > 0.0, force - model.bit_rock.cutting_force(dataset["depth_of_cut"].values),
                         0.0)
         dataset["wear_flat_force"] = ("time", wear, {"units": UNITS["wear_flat_force"],
                                                      "long_name": LONG_NAMES["wear_flat_force"]})
