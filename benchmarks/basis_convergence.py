@@ -8,7 +8,8 @@
    living in the attachment modes). Up to 20 modes every root is found (:func:`stability`); above, the root
    nearest the 10-mode one by Newton's method on det Δ (the full root search grows like the cube of the basis).
 2. Cost of the attachment modes for the explicit integrator (dopri5, rtol 1e-6): accepted and rejected steps
-   and wall time of the same run with and without them, in the same process, for ``stick_slip`` (a top drive:
+   and wall time of the same run with and without them, in the same process, for ``reference`` (Tucker–Wang law,
+   imposed speed), ``stick_slip`` (a top drive:
    two torsional attachment modes, bit and top, and one axial) and ``aarsnes2019`` (the Detournay law).
 """
 
@@ -73,7 +74,7 @@ def cost(t_end: float) -> None:
     print("|---|---|---|---|---|---|---|")
     warm = simulate_model(case_reduced_model(load_case("stick_slip")), t_end=0.05, output_step=0.01)  # compile
     del warm
-    for name in ("stick_slip", "aarsnes2019"):
+    for name in ("reference", "stick_slip", "aarsnes2019"):
         base = load_case(name)
         for correction in ("none", "static"):
             case = _with(base, correction)
