@@ -578,7 +578,8 @@ def stability(
             lateral_shown += 1
         modes_table.add_row(mode.family, f"{mode.frequency:.4f}", f"{100 * mode.damping_ratio:.2f}",
                             f"{mode.growth_rate:.4g}", _shares_text(mode.shares),
-                            ", ".join(n for n, on in (("UNSTABLE", mode.growth_rate > 0), ("mixed", mode.mixed)) if on))
+                            ", ".join(n for n, on in (("UNSTABLE", mode.growth_rate > 0), ("mixed", mode.mixed),
+                                                            ("beyond the basis", mode.beyond_basis)) if on))
     console.print(modes_table)
     families = Table(title="Leading root of each family", title_justify="left")
     for column in ("family", "frequency [Hz]", "growth rate [1/s]", "energy a/t/l [%]", "family stable"):

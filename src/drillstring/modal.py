@@ -120,11 +120,15 @@ class ModeFamily:
             reported as −sqrt(|ω²|).
         shapes: (n_dofs, n_modes) global mode shapes, zero on constrained DOFs, normalised to unit
             modal mass: φᵀ (M + M_f) φ = 1.
+        attachments: the last ``attachments`` columns are not modes but the family's residual-flexibility
+            attachment modes (Ritz vectors, their ω the Rayleigh quotients), 0 without a truncation correction.
     """
 
     name: str
     angular_frequencies: np.ndarray
     shapes: np.ndarray
+    #: how many of the last columns are residual-flexibility attachment modes (:func:`residual_flexibility_modes`)
+    attachments: int = 0
 
     @property
     def frequencies(self) -> np.ndarray:
@@ -267,16 +271,102 @@ def family_modes_below(system: LinearSystem, family: str, count: int, cutoff: fl
     return ModeFamily(family, found.angular_frequencies[:keep], found.shapes[:, :keep])
 
 
+#: The truncation corrections of :func:`compute_modes` (case key ``reduced_model.truncation_correction``).
+TRUNCATION_CORRECTIONS = ("none", "static")
+
+
+def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs, top_inertia: float | None = None,
+                               rigid: bool = False) -> ModeFamily:
+    """``kept`` with the static correction for the modes left out at ``load_dofs`` (global DOFs of the family):
+    its residual-flexibility attachment modes, appended after the kept modes.
+
+    For a unit load ``f`` at each load DOF the residual flexibility response is
+    ``ψ = (K⁻¹ − Φ Ω⁻² Φᵀ) f`` (Craig & Chang, "On the use of attachment modes in substructure coupling for
+    dynamic analysis", AIAA paper 77-405, 1977; MacNeal, Comput. Struct. 1 (1971) 581): the static response
+    ``K⁻¹ f`` less what the kept modes already carry, i.e. ``K⁻¹ f`` made M-orthogonal to the kept modes (then
+    K-orthogonal too, since ``K Φ = M Φ Ω²``). With a rigid mode (``rigid``: the kept family's first column,
+    ``K`` singular) the load is first balanced by the rigid body's inertia, ``f − M r rᵀ f`` (inertia relief),
+    and the response taken with one DOF grounded; the M-orthogonalisation then removes the rigid part.
+    The span of these responses is put in Rayleigh–Ritz form, ``Ψᵀ M Ψ = I``, ``Ψᵀ K Ψ = diag(ω̃²)``, so that
+    the augmented basis ``[Φ Ψ]`` still diagonalises both matrices (the reduced model needs no other change)
+    and each ω̃ lies above the highest kept ω. The augmented basis reproduces exactly the static (quasi-static)
+    response to any load at ``load_dofs``, which a truncated modal basis does not.
+
+    ``top_inertia``: the top-drive inertia [kg·m²] lumped at the top's θx (a torsional family free at the top),
+    None when the top is held. Load DOFs the family does not hold, or responses the kept modes already span,
+    add nothing."""
+    family = kept.name
+    top_free = top_inertia is not None and family == "torsional"
+    dofs = family_dofs(system.mesh, family, top_free)
+    mass_global = system.mass + top_inertia_matrix(system.mesh, top_inertia) if top_free else system.mass
+    k = sp.csc_matrix(system.stiffness[dofs][:, dofs])
+    m = sp.csr_matrix(mass_global[dofs][:, dofs])
+    local = np.searchsorted(dofs, np.asarray(load_dofs, dtype=np.int64))
+    local = local[(local < len(dofs)) & (dofs[np.minimum(local, len(dofs) - 1)] == np.asarray(load_dofs))]
+    phi = kept.shapes[dofs]
+    if len(local) == 0 or phi.shape[1] >= len(dofs):
+        return kept
+    load = np.zeros((len(dofs), len(local)))
+    load[local, np.arange(len(local))] = 1.0
+    response = np.zeros_like(load)
+    if rigid:
+        r = phi[:, :1]
+        load = load - m @ (r @ (r.T @ load))
+        free = np.arange(1, len(dofs))  # grounded at the family's first DOF (the top)
+        response[free] = spla.splu(k[free][:, free]).solve(load[free])
+    else:
+        response = spla.splu(k).solve(load)
+    before = np.sqrt(np.einsum("ij,ij->j", response, m @ response))
+    for _ in range(2):  # M-orthogonal to every kept mode (twice: classical Gram–Schmidt, re-orthogonalised)
+        response -= phi @ (phi.T @ (m @ response))
+    k_r = response.T @ (k @ response)
+    m_r = response.T @ (m @ response)
+    # a response the kept modes already span (all the family's modes kept) leaves only rounding
+    keep = np.sqrt(np.maximum(np.diag(m_r), 0.0)) > 1e-8 * before
+    if not keep.any():
+        return kept
+    response, k_r, m_r = response[:, keep], k_r[np.ix_(keep, keep)], m_r[np.ix_(keep, keep)]
+    values, q = sla.eigh(k_r, m_r)
+    vectors = response @ q
+    shapes = np.zeros((system.mesh.n_dofs, vectors.shape[1]))
+    shapes[dofs] = vectors
+    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, mass_global @ shapes))
+    pivot = np.argmax(np.abs(shapes), axis=0)
+    shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
+    omega = np.sign(values) * np.sqrt(np.abs(values))
+    return ModeFamily(family, np.concatenate([kept.angular_frequencies, omega]),
+                      np.hstack([kept.shapes, shapes]), kept.attachments + shapes.shape[1])
+
+
 def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int,
-                  lateral_cutoff: float = 0.0, top_inertia: float | None = None) -> Modes:
+                  lateral_cutoff: float = 0.0, top_inertia: float | None = None,
+                  truncation_correction: str = "none") -> Modes:
     """Modes of every family: ``axial`` counts the rigid mode; ``lateral`` is per plane, at least, with every
     lateral mode below ``lateral_cutoff`` [rad/s] (:func:`family_modes_below`; the z plane takes as many
     modes as the y plane); ``top_inertia``: the torsion's top is free with that inertia [kg·m²] (a top drive;
-    ``torsional`` then counts the rigid rotation), None: held (imposed speed)."""
+    ``torsional`` then counts the rigid rotation), None: held (imposed speed).
+
+    ``truncation_correction``: "none", the modes alone; "static", each of the axial and torsional families
+    followed by its residual-flexibility attachment modes (:func:`residual_flexibility_modes`) at the DOFs
+    where the laws act: the bit's u (axial), the bit's θx and, with a top drive, the top's θx (torsional).
+    The lateral families are left as they are (the contact acts all along them)."""
+    if truncation_correction not in TRUNCATION_CORRECTIONS:
+        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
+                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
     lateral_y = family_modes_below(system, "lateral_y", lateral, lateral_cutoff)
+    axial_family = family_modes(system, "axial", axial)
+    torsional_family = family_modes(system, "torsional", torsional, top_inertia)
+    if truncation_correction == "static":
+        bit = system.mesh.n_nodes - 1
+        if axial > 0:
+            axial_family = residual_flexibility_modes(system, axial_family, [dof(bit, U)], rigid=True)
+        if torsional > 0:
+            loads = [dof(bit, THETA_X)] + ([dof(0, THETA_X)] if top_inertia is not None else [])
+            torsional_family = residual_flexibility_modes(system, torsional_family, loads, top_inertia,
+                                                          rigid=top_inertia is not None)
     return Modes(
-        axial=family_modes(system, "axial", axial),
-        torsional=family_modes(system, "torsional", torsional, top_inertia),
+        axial=axial_family,
+        torsional=torsional_family,
         lateral_y=lateral_y,
         lateral_z=family_modes(system, "lateral_z", len(lateral_y.angular_frequencies)),
     )

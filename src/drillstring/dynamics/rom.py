@@ -866,6 +866,8 @@ class ReducedOrderModel:
             its ``clearance`` above the rock, and transfers the weight-on-bit over the ramp time.
         history_bins: bins per blade sector of the bit's history (:mod:`drillstring.dynamics.delay`) for a
             delayed bit–rock law.
+        residual_columns: (n,) True on the columns that are residual-flexibility attachment modes (the truncation
+            correction, :func:`drillstring.modal.residual_flexibility_modes`), not modes; None: none are.
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
     and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
@@ -891,6 +893,7 @@ class ReducedOrderModel:
     top_drive: TopDriveParameters | None = None
     hook_load: HookLoadRamp | None = None
     history_bins: int = 2048
+    residual_columns: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -912,6 +915,11 @@ class ReducedOrderModel:
             raise ValueError(f"generalized_force: must be {n} finite numbers (one per mode), got shape "
                              f"{force.shape}")
         self.generalized_force = force
+        self.residual_columns = (np.zeros(n, dtype=bool) if self.residual_columns is None
+                                 else np.asarray(self.residual_columns, dtype=bool))
+        if self.residual_columns.shape != (n,):
+            raise ValueError(f"residual_columns: must be {n} booleans (one per basis column), got shape "
+                             f"{self.residual_columns.shape}")
         if self.turning_loads is None:
             self.turning_loads = TurningLoads.empty(mesh.n_dofs)
         if self.hook_load is None:
@@ -1321,6 +1329,7 @@ def reduced_model(
     top_drive: TopDriveParameters | None = None,
     hook_load: HookLoadRamp | None = None,
     rayleigh: tuple[float, float] = (0.0, 0.0),
+    truncation_correction: str = "none",
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -1339,18 +1348,25 @@ def reduced_model(
         top_drive: the top boundary; None: the top speed imposed.
         hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
         rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
+        truncation_correction: "none" (the modes alone) or "static" (each of the axial and torsional families
+            followed by its residual-flexibility attachment modes at the bit, and at the top with a top drive:
+            :func:`drillstring.modal.compute_modes`).
     """
     drive = top_drive is not None and top_drive.drives
     if drive:
         torsional_modes += 1
     modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                          top_inertia=top_drive.top_inertia if drive else None)
-    lateral_modes = len(modes.lateral_y.angular_frequencies)
+                          top_inertia=top_drive.top_inertia if drive else None,
+                          truncation_correction=truncation_correction)
     families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
     basis = np.hstack([f.shapes for f in families])
     omega = np.concatenate([f.angular_frequencies for f in families])
-    family = ["rigid_axial"] + ["axial"] * axial_modes
-    family += ["torsional"] * torsional_modes + ["lateral_y"] * lateral_modes + ["lateral_z"] * lateral_modes
+    # the family's size, its attachment modes (truncation_correction = "static") included
+    family = ["rigid_axial"] + ["axial"] * (len(modes.axial.angular_frequencies) - 1)
+    for f in families[1:]:
+        family += [f.name] * len(f.angular_frequencies)
+    residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies) - f.attachments
+                               for f in families])
     structural = reduced_structural_damping(
         system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
         rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
@@ -1364,7 +1380,7 @@ def reduced_model(
         stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
-        top_drive=top_drive, hook_load=hook_load,
+        top_drive=top_drive, hook_load=hook_load, residual_columns=residual,
     )
 
 
@@ -1421,6 +1437,7 @@ def case_reduced_model(
         lateral_cutoff=_lateral_cutoff(r.lateral_cutoff, lateral_modes, lateral_cutoff) * case.operation.top_speed,
         top_drive=top_drive,
         hook_load=case_hook_load(case, static.weight_on_bit),
+        truncation_correction=r.truncation_correction,
     )
 
 

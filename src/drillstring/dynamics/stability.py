@@ -78,6 +78,8 @@ from drillstring.forces.registry import BitContext, BitSteadyState
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
 #: A root is *mixed* when no family holds at least this share of its modal energy (:attr:`ModeStability.shares`).
 MIXED_SHARE = 0.8
+#: A root is *beyond the basis* when its attachment modes hold at least this share of its modal energy.
+RESIDUAL_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -113,7 +115,9 @@ class ModeStability:
     ``frequency`` = |Im λ| / 2π [Hz], ``damping_ratio`` = −Re λ / |λ| [-], ``growth_rate`` = Re λ [1/s]
     (> 0: the mode grows), ``family`` the family holding most of the mode's modal energy, ``shares`` the
     share of each family (:data:`STABILITY_FAMILIES`) in that energy, ``½ Σ (|δη̇_j|² + |ω_j²| |δη_j|²)``
-    over the family's modal coordinates j of the root's eigenvector (they add up to 1).
+    over the family's modal coordinates j of the root's eigenvector (they add up to 1). ``residual_share``: the
+    share of that energy in the basis's residual-flexibility attachment modes (``reduced_model.
+    truncation_correction = "static"``); a root with at least :data:`RESIDUAL_SHARE` of it is :attr:`beyond_basis`.
     """
 
     family: str
@@ -121,6 +125,14 @@ class ModeStability:
     damping_ratio: float
     growth_rate: float
     shares: dict[str, float] | None = None
+    residual_share: float = 0.0
+
+    @property
+    def beyond_basis(self) -> bool:
+        """The root lives mostly in the attachment modes: a root of the basis's cut-off (at the attachment
+        modes' Rayleigh-quotient frequency, above every kept mode), not of the string; it is listed but not
+        counted by :attr:`StabilityResult.leading` and :attr:`StabilityResult.stable`."""
+        return self.residual_share >= RESIDUAL_SHARE
 
     @property
     def eigenvalue(self) -> complex:
@@ -136,7 +148,9 @@ class ModeStability:
 class StabilityResult:
     """Steady drilling and the eigenvalues of the reduced model linearised about it.
 
-    ``modes`` are sorted by frequency; ``stable`` is True when every growth rate is negative.
+    ``modes`` are sorted by frequency; ``stable`` is True when every growth rate is negative. The roots
+    :attr:`ModeStability.beyond_basis` (of a basis with attachment modes) stay in ``modes`` but are left out
+    of ``stable``, ``leading`` and the per-family results: the basis does not resolve their frequency.
     """
 
     steady_state: SteadyDrilling
@@ -145,13 +159,18 @@ class StabilityResult:
     delay: dict | None = None  # a delayed law: the delay system's roots (:func:`delay_roots_summary`)
 
     @property
+    def resolved(self) -> list[ModeStability]:
+        """The roots that are not :attr:`ModeStability.beyond_basis` (all of them without attachment modes)."""
+        return [m for m in self.modes if not m.beyond_basis]
+
+    @property
     def stable(self) -> bool:
-        return all(m.growth_rate < 0.0 for m in self.modes)
+        return all(m.growth_rate < 0.0 for m in self.resolved)
 
     @property
     def leading(self) -> ModeStability:
-        """The mode with the largest growth rate."""
-        return max(self.modes, key=lambda m: m.growth_rate)
+        """The mode with the largest growth rate (among :attr:`resolved`)."""
+        return max(self.resolved, key=lambda m: m.growth_rate)
 
     @property
     def leading_by_family(self) -> dict[str, ModeStability | None]:
@@ -160,13 +179,13 @@ class StabilityResult:
         torsional and axial roots stay visible above the buckling load, where a lateral divergence leads."""
         out: dict[str, ModeStability | None] = {}
         for family in STABILITY_FAMILIES:
-            own = [m for m in self.modes if m.family == family]
+            own = [m for m in self.resolved if m.family == family]
             out[family] = max(own, key=lambda m: m.growth_rate) if own else None
         return out
 
     def family_stable(self, family: str) -> bool | None:
         """Every root of ``family`` decays (None: the family has no root)."""
-        own = [m for m in self.modes if m.family == family]
+        own = [m for m in self.resolved if m.family == family]
         return all(m.growth_rate < 0.0 for m in own) if own else None
 
     @property
@@ -393,6 +412,8 @@ def leading_growth_rate(model: ReducedOrderModel) -> float:
     steady drilling is unstable): :func:`stability`'s ``leading.growth_rate`` from the eigenvalues alone
     (no eigenvectors, no families), for a study's every realization; for a delayed law the leading
     characteristic root's (:func:`delay_roots`). ValueError when there is no steady drilling."""
+    if model.residual_columns.any():  # the roots beyond the basis are told apart by their eigenvectors
+        return float(stability(model).leading.growth_rate)
     steady = steady_drilling(model)
     if model.bit_rock.delayed:
         return float(delay_roots(model, steady).growth_rate)
@@ -440,6 +461,7 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
         if lam.imag < 0.0:
             continue
         shares = np.array([energy[labels == f, k].sum() for f in STABILITY_FAMILIES])
+        residual = float(energy[model.residual_columns, k].sum())
         family = STABILITY_FAMILIES[int(np.argmax(shares))]
         total = float(shares.sum())
         magnitude = abs(lam)
@@ -448,6 +470,7 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
             damping_ratio=float(-lam.real / magnitude) if magnitude > 0 else 0.0,
             growth_rate=float(lam.real),
             shares={f: float(v / total) if total > 0 else math.nan for f, v in zip(STABILITY_FAMILIES, shares)},
+            residual_share=residual / total if total > 0 else 0.0,
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
     return StabilityResult(steady, modes, model.top_drive.describe() if model.top_drive.drives else None, delay)
