@@ -47,7 +47,6 @@ from numba.core import event
 
 from drillstring.dynamics.rom import (
     accepted_step_kernel,
-    evaluate_rhs,
     impacts_kernel,
     observation_width,
     observe_kernel,

@@ -3,7 +3,11 @@
 Design (after SciPy's ``solve_ivp`` and diffrax): the *method* is data — a :class:`ButcherTableau` —, the
 *step-size controller* is a separate object (:class:`StepSizeController`), the *stepper*
 (:class:`RungeKuttaStepper`) performs one step attempt per :meth:`~RungeKuttaStepper.step` call, and the
-*driver* (:func:`integrate`) produces output on a user-set grid through the stepper's dense output.
+*driver* (:func:`integrate`) produces output on a user-set grid through the stepper's dense output. The
+arithmetic of one attempt (stages, error estimate, dense-output stages) is the NumPy reference of the method's
+step kind (:class:`drillstring.dynamics.steps.explicit_rk.ReferenceStep` for a :class:`ButcherTableau`), the
+kind whose compiled step the compiled loop (:mod:`drillstring.dynamics.compiled`) runs: the same split into
+step and loop on both paths.
 
 Methods
 -------
