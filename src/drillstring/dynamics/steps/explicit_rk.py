@@ -52,18 +52,18 @@ def allocate(tableau: ButcherTableau, n: int) -> ExplicitRungeKuttaStep:
 def attempt(data, rhs_data, t, h, y, f, y_new, err):
     """Stages from ``f`` (the first), the candidate ``y_new`` (FSAL: the last stage's argument) and the
     error estimate ``err``; stops at the first stage with a non-finite value. Returns (evaluations, finite)."""
-    k = data.k
+    k, a, b, c, error_weights, fsal = data.k, data.a, data.b, data.c, data.error_weights, data.fsal
     n = y.shape[0]
-    s = data.c.shape[0]
+    s = c.shape[0]
     for j in range(n):
         k[0, j] = f[j]
     for i in range(1, s):
         for j in range(n):
             acc = 0.0
             for m in range(i):
-                acc += data.a[i, m] * k[m, j]
+                acc += a[i, m] * k[m, j]
             y_new[j] = y[j] + h * acc
-        evaluate_rhs(rhs_data, t + data.c[i] * h, y_new, k[i])
+        evaluate_rhs(rhs_data, t + c[i] * h, y_new, k[i])
         finite = True
         for j in range(n):
             if not math.isfinite(k[i, j]):
@@ -71,14 +71,14 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
         if not finite:
             return i, False
     for j in range(n):
-        if not data.fsal:
+        if not fsal:
             acc = 0.0
             for m in range(s):
-                acc += data.b[m] * k[m, j]
+                acc += b[m] * k[m, j]
             y_new[j] = y[j] + h * acc
         e = 0.0
         for m in range(s):
-            e += data.error_weights[m] * k[m, j]
+            e += error_weights[m] * k[m, j]
         err[j] = h * e
     return s - 1, True
 

@@ -27,10 +27,10 @@ A kind is one module that registers one :class:`StepKind` (:func:`register`):
 
 The right-hand side is :func:`~drillstring.dynamics.rom.evaluate_rhs` of ``rhs_data`` (an implicit or
 Rosenbrock kind reads its Jacobian from the model's data the same way). :func:`attempt` and :func:`accept`
-are resolved by the type of ``data`` when the loop is compiled (Numba ``overload``) and inlined into it, so
-the loop never names a kind and compiles only the one it runs. The two functions are Numba-compilable
-Python functions (or ``njit`` dispatchers, whose Python function is used), their parameters named as those
-of :func:`attempt` and :func:`accept` (Numba checks the names). A kind defined outside the package is not covered by the kernel
+are resolved by the type of ``data`` when the loop is compiled (Numba ``overload``), so the loop never names
+a kind and compiles only the one it runs. The two functions are Numba-compilable Python functions (or ``njit``
+dispatchers, whose Python function is used), their parameters named as those of :func:`attempt` and
+:func:`accept` (Numba checks the names). A kind defined outside the package is not covered by the kernel
 cache's source hash (:mod:`drillstring.kernel_cache`), so the loop runs it compiled without the disk cache
 (``cacheable = False``, the default for a module outside ``drillstring``).
 """
@@ -112,15 +112,16 @@ def accept(data, rhs_data, t_new, y, f):
 
 
 def _implementation(function):
-    """The Python function of a step's ``attempt`` or ``accept`` (given plain or as a Numba dispatcher): the
-    overloads inline it into the loop when the loop is compiled (Numba IR, ``inline="always"``). As functions
-    of their own — each lowering the model's large structured data again — the first compilation took about
-    30 % more CPU time than before the split (20.9 s against 16.1 s on the reference case), inlined about 10 %
-    (``benchmarks/bench_step_loop.py``)."""
+    """The Python function of a step's ``attempt`` or ``accept`` (given plain or as a Numba dispatcher), which
+    the overload compiles as its implementation: one compiled function per kind and signature, not a wrapper
+    calling a dispatcher. Measured on the reference case (CPU time of the first compilation, fresh cache):
+    a wrapper calling the kind's dispatcher cost about 30 % more than before the split (20.9 s against
+    16.1 s), the same functions inlined into the loop at Numba's IR level (``inline="always"``) 4–25 % more,
+    this ±5 % (``benchmarks/bench_step_loop.py``)."""
     return getattr(function, "py_func", function)
 
 
-@overload(attempt, inline="always")
+@overload(attempt)
 def _attempt_compiled(data, rhs_data, t, h, y, f, y_new, err):
     kind = _registered(data)
     if kind is None:
@@ -128,7 +129,7 @@ def _attempt_compiled(data, rhs_data, t, h, y, f, y_new, err):
     return _implementation(kind.attempt)
 
 
-@overload(accept, inline="always")
+@overload(accept)
 def _accept_compiled(data, rhs_data, t_new, y, f):
     kind = _registered(data)
     if kind is None:
