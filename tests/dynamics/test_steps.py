@@ -51,12 +51,11 @@ def heun_euler_attempt(data, rhs_data, t, h, y, f, y_new, err):
 
 
 @njit
-def heun_euler_accept(data, rhs_data, t_new, y, f):
+def heun_euler_accept(data, y, f):
     for j in range(y.shape[0]):
         data.dense_stages[0, j] = f[j]
         data.dense_stages[1, j] = data.k2[j]
-    evaluate_rhs(rhs_data, t_new, y, f)
-    return 1
+    return False  # f at the new state is not known: the loop evaluates it
 
 
 KIND = register(StepKind(method=HeunEuler, data=HeunEulerStep, allocate=heun_euler_data,

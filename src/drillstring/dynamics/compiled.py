@@ -47,6 +47,7 @@ from numba.core import event
 
 from drillstring.dynamics.rom import (
     accepted_step_kernel,
+    evaluate_rhs,
     impacts_kernel,
     observation_width,
     observe_kernel,
@@ -187,7 +188,9 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
             y_old[j] = y[j]
             y[j] = y_new[j]
         t_new = t_end if last else t + h
-        state[N_RHS] += step_accept(step, rhs_data, t_new, y, f)
+        if not step_accept(step, y, f):
+            evaluate_rhs(rhs_data, t_new, y, f)
+            state[N_RHS] += 1
         dense, kept = step.dense, step.dense_stages
         state[IMPACTS] += accepted_step_kernel(case2, observe_data, t, h, y_old, kept, dense, y)
         state[T] = t_new

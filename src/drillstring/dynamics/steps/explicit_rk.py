@@ -84,9 +84,9 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
 
 
 @njit
-def accept(data, rhs_data, t_new, y, f):
-    """Keep the accepted step's stages for its dense output; ``f`` at the new state (FSAL: the last
-    stage). Returns the evaluations made (0 with FSAL, else 1)."""
+def accept(data, y, f):
+    """Keep the accepted step's stages for its dense output; with FSAL ``f`` at the new state ``y`` is the
+    last stage: set it and return True; else return False (the loop evaluates it)."""
     k, kept = data.k, data.dense_stages
     n = y.shape[0]
     s = k.shape[0]
@@ -96,9 +96,8 @@ def accept(data, rhs_data, t_new, y, f):
     if data.fsal:
         for j in range(n):
             f[j] = k[s - 1, j]
-        return 0
-    evaluate_rhs(rhs_data, t_new, y, f)
-    return 1
+        return True
+    return False
 
 
 def _describe_nonfinite(x: np.ndarray) -> str:

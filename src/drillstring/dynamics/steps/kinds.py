@@ -17,9 +17,11 @@ A kind is one module that registers one :class:`StepKind` (:func:`register`):
   ``y`` at ``t`` with ``f = dy/dt`` there, the candidate ``y_new`` at ``t + h`` and its local error estimate
   ``err`` (absolute, not scaled); the right-hand-side evaluations it made and whether every one was finite
   (when not, ``y_new`` and ``err`` are not used and the loop rejects the step);
-- ``accept(data, rhs_data, t_new, y, f) -> evaluations``: compiled, called once the loop has accepted the
-  attempt and moved ``y`` to the new state: keep the step's dense output in ``data.dense_stages`` and set
-  ``f = dy/dt`` at ``(t_new, y)``;
+- ``accept(data, y, f) -> known``: compiled, called once the loop has accepted the attempt and moved ``y``
+  to the new state: keep the step's dense output in ``data.dense_stages``; when the step knows ``dy/dt`` at
+  the new state (FSAL: its last stage), write it into ``f`` and return True, else return False and the loop
+  evaluates it. (No right-hand-side data here: each compiled call passes the model's large structured data
+  anew, which costs run time, see :func:`_implementation`);
 - optionally ``reference(method, y)``: the NumPy reference of the same step for a right-hand side in Python,
   used by :class:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper` (the reference integrator's own loop):
   an object with ``order``, ``dense``, ``dense_stages`` as above, ``attempt(rhs, t, h, y, f) -> (y_new, err,
@@ -106,7 +108,7 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
     raise NotImplementedError("compiled code only: resolved by the type of the step's data")
 
 
-def accept(data, rhs_data, t_new, y, f):
+def accept(data, y, f):
     """What the kind of ``data`` keeps of an accepted step (module docstring). Compiled code only."""
     raise NotImplementedError("compiled code only: resolved by the type of the step's data")
 
@@ -130,7 +132,7 @@ def _attempt_compiled(data, rhs_data, t, h, y, f, y_new, err):
 
 
 @overload(accept)
-def _accept_compiled(data, rhs_data, t_new, y, f):
+def _accept_compiled(data, y, f):
     kind = _registered(data)
     if kind is None:
         return None
