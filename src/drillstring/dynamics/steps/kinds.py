@@ -116,10 +116,10 @@ def accept(data, y, f):
 def _implementation(function):
     """The Python function of a step's ``attempt`` or ``accept`` (given plain or as a Numba dispatcher), which
     the overload compiles as its implementation: one compiled function per kind and signature, not a wrapper
-    calling a dispatcher. Measured on the reference case (CPU time of the first compilation, fresh cache):
-    a wrapper calling the kind's dispatcher cost about 30 % more than before the split (20.9 s against
-    16.1 s), the same functions inlined into the loop at Numba's IR level (``inline="always"``) 4–25 % more,
-    this ±5 % (``benchmarks/bench_step_loop.py``)."""
+    calling a dispatcher. Measured on the reference case (CPU time of the first compilation, fresh cache;
+    docs/performance.md): a wrapper calling the kind's dispatcher cost about 30 % more than before the split,
+    the same functions inlined into the loop at Numba's IR level (``inline="always"``) 4–25 % more, this 3–12 %
+    (``benchmarks/bench_step_loop.py``)."""
     return getattr(function, "py_func", function)
 
 
