@@ -1,21 +1,27 @@
-"""Fast path: the embedded Runge–Kutta loop for the reduced-order model, compiled with Numba.
+"""Fast path: the adaptive step loop for the reduced-order model, compiled with Numba.
 
-The same method data (:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`), the same step-size
-controller — the compiled functions :func:`~drillstring.dynamics.runge_kutta.error_norm` and
-:func:`~drillstring.dynamics.runge_kutta.step_factor`, shared with the reference integrator
-:func:`~drillstring.dynamics.runge_kutta.integrate` — and the same dense output, with the ROM's
-right-hand side (:func:`~drillstring.dynamics.rom.evaluate_rhs`) and observation kernels
-(:func:`~drillstring.dynamics.rom.observe_kernel`, :func:`~drillstring.dynamics.rom.impacts_kernel`: the
-model's public interface to the loop, see :mod:`drillstring.dynamics.rom`) called directly from compiled
-code, so that no Python runs inside the step loop; the loop is generic over the model's components. Tests check that both paths agree to
-within the integration tolerance.
+The loop is split from the step. The *step* — its stages, its local error estimate and its dense output — is
+a step kind of :mod:`drillstring.dynamics.steps`, chosen by the type of the method's data when the loop is
+compiled (:mod:`drillstring.dynamics.steps.explicit_rk` for a
+:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`; an implicit or Rosenbrock step is one more kind).
+The *loop* (:func:`_run_chunk`) owns the rest: the step-size controller — the compiled functions
+:func:`~drillstring.dynamics.runge_kutta.error_norm` and :func:`~drillstring.dynamics.runge_kutta.step_factor`,
+shared with the reference integrator :func:`~drillstring.dynamics.runge_kutta.integrate` —, acceptance, landing
+on t_end, the pauses and the collapse check, the observations on the output grid from the step's dense output,
+and what the model does after each accepted step (impacts, the delayed bit history). It calls the ROM's
+right-hand side (:func:`~drillstring.dynamics.rom.evaluate_rhs`, through the step) and observation kernels
+(:func:`~drillstring.dynamics.rom.observe_kernel`, :func:`~drillstring.dynamics.rom.accepted_step_kernel`: the
+model's public interface to the loop, see :mod:`drillstring.dynamics.rom`) directly from compiled code, so that
+no Python runs inside the step loop; the loop is generic over the model's components and over the step kinds.
+Tests check that the compiled and the reference paths agree to within the integration tolerance.
 
-The compiled loop takes four structured arguments built in one place each: :class:`Workspace` (state
-and buffers, :meth:`Workspace.allocate`), :class:`StepperSettings` (method and controller,
-:meth:`StepperSettings.create`), and the model's ``rhs_data`` and ``observe_data``
-(:class:`~drillstring.dynamics.rom.ReducedOrderModel`). It is compiled once per type of ``rhs_data``
-(case 2 or case 1) and cached on disk; the first compilation in a fresh cache is announced on stderr
-and its duration is reported as ``compile_time``, apart from the solver's ``wall_time``.
+The compiled loop takes five structured arguments built in one place each: :class:`Workspace` (state
+and buffers, :meth:`Workspace.allocate`), the step's data (:func:`~drillstring.dynamics.steps.step_data`),
+:class:`StepperSettings` (controller and limits, :meth:`StepperSettings.create`), and the model's ``rhs_data``
+and ``observe_data`` (:class:`~drillstring.dynamics.rom.ReducedOrderModel`). It is compiled once per type of
+``rhs_data`` (case 2 or case 1) and of the step's data, and cached on disk (a step kind defined outside the
+package runs uncached); the first compilation in a fresh cache is announced on stderr and its duration is
+reported as ``compile_time``, apart from the solver's ``wall_time``.
 
 The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
 step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
@@ -46,13 +52,11 @@ from drillstring.dynamics.rom import (
     observation_width,
     observe_kernel,
 )
-from drillstring.dynamics.runge_kutta import (
-    TABLEAUS,
-    ButcherTableau,
-    StepSizeController,
-    error_norm,
-    step_factor,
-)
+from drillstring.dynamics.runge_kutta import TABLEAUS, StepSizeController, error_norm, step_factor
+from drillstring.dynamics.steps import accept as step_accept
+from drillstring.dynamics.steps import attempt as step_attempt
+from drillstring.dynamics.steps import kind_of, step_data
+from drillstring.dynamics.steps.kinds import kind_of_data
 from drillstring.dynamics.stiffness import stiffness_diagnosis
 
 SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE, PAUSED, COLLAPSED = 0, 1, 2, 3, 4, 5
@@ -73,15 +77,9 @@ CAUSES = {0: "", 1: "error estimate not met", 2: "non-finite values in the right
 
 
 class StepperSettings(NamedTuple):
-    """The method and the step-size controller, as the compiled loop reads them."""
+    """The step-size controller and the run's limits, as the compiled loop reads them (the method's data is
+    the step kind's own, :mod:`drillstring.dynamics.steps`)."""
 
-    a: np.ndarray  # (s, s) stage coefficients
-    b: np.ndarray  # (s,) weights of the propagated solution
-    error_weights: np.ndarray  # (s,) b − b_hat
-    c: np.ndarray  # (s,) nodes
-    dense: np.ndarray  # (s, p) continuous extension
-    fsal: bool
-    order: float  # q, order of the error estimate
     rtol: float
     atol: np.ndarray  # (n,) one absolute tolerance per state component
     safety: float
@@ -95,14 +93,9 @@ class StepperSettings(NamedTuple):
     stretch: float  # a step within this fraction of t_end is stretched to land on it
 
     @classmethod
-    def create(cls, tableau: ButcherTableau, controller: StepSizeController, n: int, *,
-               min_step: float, max_steps: int, stretch: float = 0.01) -> StepperSettings:
-        if tableau.dense is None:
-            raise ValueError(f"the compiled path needs a tableau with dense output; {tableau.name} has none")
-        c = np.ascontiguousarray
+    def create(cls, controller: StepSizeController, n: int, *, min_step: float, max_steps: int,
+               stretch: float = 0.01) -> StepperSettings:
         return cls(
-            a=c(tableau.a), b=c(tableau.b), error_weights=c(tableau.error_weights), c=c(tableau.c),
-            dense=c(tableau.dense), fsal=bool(tableau.fsal), order=float(tableau.controller_order),
             rtol=float(controller.rtol), atol=controller.atol_vector(n), safety=float(controller.safety),
             min_factor=float(controller.min_factor), max_factor=float(controller.max_factor),
             beta1=float(controller.beta1), beta2=float(controller.beta2),
@@ -113,26 +106,24 @@ class StepperSettings(NamedTuple):
 
 class Workspace(NamedTuple):
     """The integrator's state and buffers: ``state`` (scalars indexed by ``T``, ``H``, …), the current
-    state ``y`` and its derivative ``f``, the stages ``k`` of the step being attempted and ``k_old`` of
-    the last accepted one (dense output), and the output ``grid`` and the rows ``out`` it fills."""
+    state ``y`` and its derivative ``f``, the state ``y_old`` at the start of the last accepted step (dense
+    output), and the output ``grid`` and the rows ``out`` it fills. The step's own buffers (stages) are in
+    its data (:mod:`drillstring.dynamics.steps`)."""
 
     state: np.ndarray  # (N_STATE,)
     y: np.ndarray  # (n,)
     f: np.ndarray  # (n,)
-    k: np.ndarray  # (s, n)
-    k_old: np.ndarray  # (s, n)
     y_old: np.ndarray  # (n,)
-    y_new: np.ndarray  # (n,) scratch: stage arguments, then the candidate solution
+    y_new: np.ndarray  # (n,) scratch: the candidate solution, then dense output
     error: np.ndarray  # (n,) scratch: local error estimate
     grid: np.ndarray  # (n_out,) output times [s]
     out: np.ndarray  # (n_out, n_columns) observations
 
     @classmethod
-    def allocate(cls, y0: np.ndarray, n_stages: int, grid: np.ndarray, n_columns: int) -> Workspace:
+    def allocate(cls, y0: np.ndarray, grid: np.ndarray, n_columns: int) -> Workspace:
         n = y0.shape[0]
         return cls(
-            state=np.zeros(N_STATE), y=np.array(y0, dtype=float), f=np.zeros(n),
-            k=np.zeros((n_stages, n)), k_old=np.zeros((n_stages, n)), y_old=np.zeros(n),
+            state=np.zeros(N_STATE), y=np.array(y0, dtype=float), f=np.zeros(n), y_old=np.zeros(n),
             y_new=np.zeros(n), error=np.zeros(n), grid=np.ascontiguousarray(grid, dtype=float),
             out=np.full((len(grid), n_columns), np.nan),
         )
@@ -144,17 +135,15 @@ def _observe(work, row, t, y, case2, observe_data):
     observe_kernel(case2, observe_data, t, y, work.out[row])
 
 
-@njit(cache=True)
-def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
+def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
     """Advance until the output grid is filled up to ``t_stop`` (or t_end). Returns a status code.
-    ``rhs_data`` is the model's right-hand-side data (case 2 or case 1), ``case2`` its case-2 part
+    ``step`` is the step kind's data (:mod:`drillstring.dynamics.steps`: its type chooses the step),
+    ``rhs_data`` the model's right-hand-side data (case 2 or case 1), ``case2`` its case-2 part
     (what the observation kernel reads)."""
     st = settings
-    state, y, f, k, k_old, y_old, y_new, err = (work.state, work.y, work.f, work.k, work.k_old,
-                                                work.y_old, work.y_new, work.error)
+    state, y, f, y_old, y_new, err = work.state, work.y, work.f, work.y_old, work.y_new, work.error
     grid = work.grid
     n = y.shape[0]
-    s = st.c.shape[0]
     n_grid = grid.shape[0]
     t_end = grid[n_grid - 1]
     while True:
@@ -174,40 +163,13 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
             last = True
         elif h < st.min_step:
             return MIN_STEP
-        # stages
-        for j in range(n):
-            k[0, j] = f[j]
-        finite = True
-        for i in range(1, s):
-            for j in range(n):
-                acc = 0.0
-                for m in range(i):
-                    acc += st.a[i, m] * k[m, j]
-                y_new[j] = y[j] + h * acc
-            evaluate_rhs(rhs_data, t + st.c[i] * h, y_new, k[i])
-            for j in range(n):
-                if not math.isfinite(k[i, j]):
-                    finite = False
-            if not finite:
-                state[N_RHS] += i
-                break
+        evaluations, finite = step_attempt(step, rhs_data, t, h, y, f, y_new, err)
+        state[N_RHS] += evaluations
         norm = math.nan
         if finite:
-            state[N_RHS] += s - 1
-            # y_new (FSAL: the last stage argument) and the local error estimate
-            for j in range(n):
-                if not st.fsal:
-                    acc = 0.0
-                    for m in range(s):
-                        acc += st.b[m] * k[m, j]
-                    y_new[j] = y[j] + h * acc
-                e = 0.0
-                for m in range(s):
-                    e += st.error_weights[m] * k[m, j]
-                err[j] = h * e
             norm = error_norm(y, y_new, err, st.rtol, st.atol)
         accepted, factor, err_prev = step_factor(
-            norm, state[ERR_PREV], state[REJECTED_LAST] > 0.0, st.order, st.safety, st.min_factor,
+            norm, state[ERR_PREV], state[REJECTED_LAST] > 0.0, step.order, st.safety, st.min_factor,
             st.max_factor, st.beta1, st.beta2)
         state[ERR_PREV] = err_prev
         if not accepted:
@@ -221,25 +183,20 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
         for j in range(n):
             if not math.isfinite(y_new[j]):
                 return NON_FINITE
-        # commit: keep the step's stages for dense output
+        # commit; the step keeps what its dense output needs and gives f at the new state
         for j in range(n):
             y_old[j] = y[j]
             y[j] = y_new[j]
-        for m in range(s):
-            for j in range(n):
-                k_old[m, j] = k[m, j]
-        if st.fsal:
-            for j in range(n):
-                f[j] = k[s - 1, j]
         t_new = t_end if last else t + h
-        if not st.fsal:
+        if not step_accept(step, y, f):
             evaluate_rhs(rhs_data, t_new, y, f)
             state[N_RHS] += 1
-        state[IMPACTS] += accepted_step_kernel(case2, observe_data, t, h, y_old, k_old, st.dense, y)
+        dense, kept = step.dense, step.dense_stages
+        state[IMPACTS] += accepted_step_kernel(case2, observe_data, t, h, y_old, kept, dense, y)
         state[T] = t_new
         state[H] = min(h * factor, st.max_step)
         state[N_ACCEPTED] += 1
-        # outputs inside (t, t_new]
+        # outputs inside (t, t_new]: y(t + θh) = y_old + h Σ_m Σ_p dense[m, p] θ^(p+1) kept[m]
         while row < n_grid and grid[row] <= t_new:
             tg = grid[row]
             if tg == t_new:
@@ -248,19 +205,29 @@ def _run_chunk(work, t_stop, settings, rhs_data, case2, observe_data):
                 theta = (tg - t) / h
                 for j in range(n):
                     acc = 0.0
-                    for m in range(s):
+                    for m in range(kept.shape[0]):
                         bm = 0.0
                         power = theta
-                        for p in range(st.dense.shape[1]):
-                            bm += st.dense[m, p] * power
+                        for p in range(dense.shape[1]):
+                            bm += dense[m, p] * power
                             power *= theta
-                        acc += bm * k_old[m, j]
+                        acc += bm * kept[m, j]
                     y_new[j] = y_old[j] + h * acc
                 _observe(work, row, tg, y_new, case2, observe_data)
             row += 1
             state[N_OUT] = row
         if last:
             return SUCCESS
+
+
+#: The loop compiled for the package's step kinds (cached on disk), and for kinds defined elsewhere (not
+#: cached: the kernel cache's source hash does not cover them, :mod:`drillstring.dynamics.steps.kinds`).
+_run_chunk_cached = njit(cache=True)(_run_chunk)
+_run_chunk_uncached = njit(cache=False)(_run_chunk)
+
+
+def _loop(step) -> Callable:
+    return _run_chunk_cached if kind_of_data(step).cacheable else _run_chunk_uncached
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -313,29 +280,37 @@ def _prepare(dispatcher, *args) -> None:
     dispatcher.compile(tuple(typeof(a) for a in args))
 
 
-def _compile_kernels(model, work: Workspace, settings: StepperSettings) -> tuple[float, bool]:
-    """Compile (or load from the cache) every kernel the integration of ``model`` calls. Returns the
-    time it took [s] and whether anything was compiled; the first compilation is announced."""
+def _compile_kernels(model, work: Workspace, step, settings: StepperSettings) -> tuple[float, bool]:
+    """Compile (or load from the cache) every kernel the integration of ``model`` with the step ``step``
+    calls. Returns the time it took [s] and whether anything was compiled; the first compilation is
+    announced."""
     start = _time.perf_counter()
     monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
     with event.install_listener("numba:compile", monitor):
-        _prepare(_run_chunk, work, 0.0, settings, model.rhs_data, model.case2_data, model.observe_data)
+        _prepare(_loop(step), work, 0.0, step, settings, model.rhs_data, model.case2_data, model.observe_data)
         _prepare(_observe, work, 0, 0.0, work.y, model.case2_data, model.observe_data)
         _prepare(impacts_kernel, model.case2_data, model.observe_data, work.y)
         model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
     return _time.perf_counter() - start, monitor.compiled
 
 
-def prepare_kernels(model, tableau: ButcherTableau | str = "dopri5") -> tuple[float, bool]:
+def _method(method):
+    """A method given by name (:data:`~drillstring.dynamics.runge_kutta.TABLEAUS`) or as itself."""
+    return TABLEAUS[method] if isinstance(method, str) else method
+
+
+def prepare_kernels(model, tableau="dopri5") -> tuple[float, bool]:
     """Compile, or load from Numba's cache, the kernels that integrating ``model`` (a
-    :class:`~drillstring.dynamics.rom.ReducedOrderModel`) with ``tableau`` needs, without integrating.
+    :class:`~drillstring.dynamics.rom.ReducedOrderModel`) with the method ``tableau`` (a name, a
+    :class:`~drillstring.dynamics.runge_kutta.ButcherTableau` or a method of another registered step kind,
+    :mod:`drillstring.dynamics.steps`) needs, without integrating.
     Kernels depend on the types of the model's data only (case 1 or case 2), not on its sizes, so one
     call prepares every realization of a study. Returns ``(seconds, compiled)``."""
-    tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
+    method = _method(tableau)
     n = model.state_size
-    settings = StepperSettings.create(tab, StepSizeController(), n, min_step=1e-12, max_steps=1)
-    work = Workspace.allocate(np.zeros(n), tab.n_stages, np.zeros(2), observation_width(len(model.probe_nodes)))
-    return _compile_kernels(model, work, settings)
+    settings = StepperSettings.create(StepSizeController(), n, min_step=1e-12, max_steps=1)
+    work = Workspace.allocate(np.zeros(n), np.zeros(2), observation_width(len(model.probe_nodes)))
+    return _compile_kernels(model, work, step_data(method, n), settings)
 
 
 def integrate_compiled(
@@ -343,7 +318,7 @@ def integrate_compiled(
     y0: np.ndarray,
     grid: np.ndarray,
     *,
-    tableau: ButcherTableau | str = "dopri5",
+    tableau="dopri5",
     rtol: float = 1e-6,
     atol: float = 1e-9,
     max_step: float = math.inf,
@@ -353,25 +328,31 @@ def integrate_compiled(
     chunks: int = 100,
 ):
     """Integrate ``model`` (a :class:`~drillstring.dynamics.rom.ReducedOrderModel`) from ``y0`` at t = 0
-    over the output ``grid`` (starting at 0, ending at t_end) in compiled code.
+    over the output ``grid`` (starting at 0, ending at t_end) in compiled code, with the method ``tableau``:
+    a name of :data:`~drillstring.dynamics.runge_kutta.TABLEAUS`, a
+    :class:`~drillstring.dynamics.runge_kutta.ButcherTableau`, or a method of any registered step kind
+    (:mod:`drillstring.dynamics.steps`), whose type chooses the step.
 
     Returns ``(outputs, stats, message)``: outputs (n_written, n_observables) rows for the first
     n_written grid times, a dict of solver statistics — ``wall_time`` the solver's own time [s],
     ``compile_time`` the time spent compiling or loading the kernels before it [s] (``compiled``: whether
     anything had to be compiled) —, and an empty message or the cause of failure.
     """
-    tab = TABLEAUS[tableau] if isinstance(tableau, str) else tableau
+    method = _method(tableau)
+    kind_of(method)  # a clear TypeError for a method of no registered kind
     y0 = np.array(y0, dtype=float)
     ctrl = StepSizeController(rtol=rtol, atol=atol, max_step=max_step)
-    settings = StepperSettings.create(tab, ctrl, y0.shape[0], min_step=min_step, max_steps=max_steps)
-    work = Workspace.allocate(y0, tab.n_stages, grid, observation_width(len(model.probe_nodes)))
+    settings = StepperSettings.create(ctrl, y0.shape[0], min_step=min_step, max_steps=max_steps)
+    step = step_data(method, y0.shape[0])
+    work = Workspace.allocate(y0, grid, observation_width(len(model.probe_nodes)))
     grid = work.grid
     rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
-    compile_time, compiled = _compile_kernels(model, work, settings)
+    compile_time, compiled = _compile_kernels(model, work, step, settings)
+    run_chunk = _loop(step)
 
     start = _time.perf_counter()
     work.f[:] = model.rhs(0.0, work.y)
-    h0 = ctrl.initial_step(model.rhs, 0.0, work.y, work.f, tab.controller_order)
+    h0 = ctrl.initial_step(model.rhs, 0.0, work.y, work.f, step.order)
     state = work.state
     state[H] = h0
     state[ERR_PREV] = 1.0
@@ -390,7 +371,7 @@ def integrate_compiled(
             attempts = state[N_ACCEPTED] + state[N_REJECTED]
             state[PAUSE_AT] = attempts + budget
             called = _time.perf_counter()
-            status = _run_chunk(work, float(t_stop), settings, rhs_data, case2, observe_data)
+            status = run_chunk(work, float(t_stop), step, settings, rhs_data, case2, observe_data)
             elapsed = _time.perf_counter() - called  # Ctrl-C is raised here, between calls
             if progress is not None:
                 progress(float(state[T]))
@@ -443,6 +424,6 @@ def integrate_compiled(
         if last and status != NON_FINITE:
             cause += f"; last rejection: {last}"
         if status != NON_FINITE:
-            cause += "; " + stiffness_diagnosis(model, t, work.y, tab.name)
+            cause += "; " + stiffness_diagnosis(model, t, work.y, method.name)
         message = f"integration failed at t = {t:.10g} s (h = {h:.3g} s): {cause}"
     return work.out[:n_written], stats, message

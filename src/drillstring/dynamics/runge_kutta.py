@@ -3,7 +3,11 @@
 Design (after SciPy's ``solve_ivp`` and diffrax): the *method* is data — a :class:`ButcherTableau` —, the
 *step-size controller* is a separate object (:class:`StepSizeController`), the *stepper*
 (:class:`RungeKuttaStepper`) performs one step attempt per :meth:`~RungeKuttaStepper.step` call, and the
-*driver* (:func:`integrate`) produces output on a user-set grid through the stepper's dense output.
+*driver* (:func:`integrate`) produces output on a user-set grid through the stepper's dense output. The
+arithmetic of one attempt (stages, error estimate, dense-output stages) is the NumPy reference of the method's
+step kind (:class:`drillstring.dynamics.steps.explicit_rk.ReferenceStep` for a :class:`ButcherTableau`), the
+kind whose compiled step the compiled loop (:mod:`drillstring.dynamics.compiled`) runs: the same split into
+step and loop on both paths.
 
 Methods
 -------
@@ -79,6 +83,7 @@ __all__ = [
     "DORMAND_PRINCE_54",
     "BOGACKI_SHAMPINE_32",
     "TABLEAUS",
+    "dense_weights",
     "StepSizeController",
     "error_norm",
     "step_factor",
@@ -203,9 +208,15 @@ class ButcherTableau:
         """``b_i(θ)``, shape ``(s,)`` for scalar θ or ``(m, s)`` for an array of θ."""
         if self.dense is None:
             raise ValueError(f"{self.name} has no dense-output coefficients")
-        th = np.asarray(theta, dtype=np.float64)
-        powers = th[..., None] ** np.arange(1, self.dense.shape[1] + 1)
-        return powers @ self.dense.T
+        return dense_weights(self.dense, theta)
+
+
+def dense_weights(dense: np.ndarray, theta: float | np.ndarray) -> np.ndarray:
+    """``b_i(θ) = Σ_p dense[i, p] θ^(p+1)`` of a continuous extension ``dense`` (s, p): shape ``(s,)`` for
+    scalar θ or ``(m, s)`` for an array of θ."""
+    th = np.asarray(theta, dtype=np.float64)
+    powers = th[..., None] ** np.arange(1, dense.shape[1] + 1)
+    return powers @ dense.T
 
 
 def _fr(*xs: int | str) -> list[float]:
@@ -534,16 +545,14 @@ class RungeKuttaStepper:
             )
         self.f = f
 
-        # method data laid out for the hot path
-        s = tableau.n_stages
-        self._s = s
-        self._c = tableau.c
-        self._a_rows = tuple(np.ascontiguousarray(tableau.a[i, :i]) for i in range(s))
-        self._b = tableau.b
-        self._e = tableau.error_weights
-        self._q = tableau.controller_order
-        self._k = np.empty((s, y.size), dtype=y.dtype)  # stages of the step being attempted
-        self._k_last = np.empty_like(self._k)  # stages of the last accepted step (dense output)
+        # the step itself: the NumPy reference of the method's step kind (drillstring.dynamics.steps)
+        from drillstring.dynamics.steps import kind_of
+
+        kind = kind_of(tableau)
+        if kind.reference is None:
+            raise TypeError(f"the step kind of {tableau.name} has no NumPy reference: compiled path only")
+        self._step = kind.reference(tableau, y)
+        self._q = self._step.order
 
         self._t0 = self.t
         self._fixed = controller is None
@@ -602,26 +611,8 @@ class RungeKuttaStepper:
             if t + h == t:
                 raise self._fail("step size below the floating-point resolution of t")
 
-        rhs, c, k, a_rows = self.rhs, self._c, self._k, self._a_rows
-        k[0] = self.f
-        cause = None
-        y_new = None
-        with np.errstate(all="ignore"):
-            try:
-                for i in range(1, self._s):
-                    yi = y + h * (a_rows[i] @ k[: i])
-                    k[i] = rhs(t + c[i] * h, yi)
-                self.n_rhs += self._s - 1
-                if not np.isfinite(k).all():
-                    bad = int(np.argmax(~np.isfinite(k).all(axis=1)))
-                    cause = f"{_describe_nonfinite(k[bad])} in the right-hand side (stage {bad + 1})"
-                else:
-                    # FSAL: the last stage argument *is* y_new; otherwise weight the stages with b
-                    y_new = yi if self.tableau.fsal else y + h * (self._b @ k)
-                    err = h * (self._e @ k)
-            except (FloatingPointError, OverflowError) as exc:
-                self.n_rhs += i  # stages evaluated, including the failing one
-                cause = f"{type(exc).__name__} in the right-hand side: {exc}"
+        y_new, err, evaluations, cause = self._step.attempt(self.rhs, t, h, y, self.f)
+        self.n_rhs += evaluations
 
         ctrl = self.controller
         if cause is not None:
@@ -650,17 +641,13 @@ class RungeKuttaStepper:
 
         if not np.isfinite(y_new).all():
             raise self._fail(f"non-finite state ({_describe_nonfinite(y_new)}) after an accepted step", h)
-        if self.tableau.fsal:
-            f_new = k[-1].copy()
-        else:
-            with np.errstate(all="ignore"):
-                f_new = np.asarray(rhs(t + h, y_new), dtype=y.dtype)
-            self.n_rhs += 1
+        f_new, evaluations = self._step.accept(self.rhs, t + h, y_new)
+        if evaluations:
+            self.n_rhs += evaluations
             if not np.isfinite(f_new).all():
                 raise self._fail(f"{_describe_nonfinite(f_new)} in the right-hand side at the accepted state", h)
 
-        # commit; keep the accepted step's data for dense output
-        self._k, self._k_last = self._k_last, self._k
+        # commit; the step kept the accepted step's data for dense output
         self.t_old, self.h_last = t, h
         self._y_old, self._f_old = y, self.f
         if last:
@@ -682,12 +669,12 @@ class RungeKuttaStepper:
         shape ``(p, n)``, ``coef[p] = h Σ_i dense[i, p] k_i`` (the same values :meth:`interpolate`
         gives). For a caller that records the solution's history (e.g. :mod:`.delay`). Valid until the
         next accepted step; raises ``ValueError`` when the tableau has no continuous extension."""
-        if self.tableau.dense is None:
+        if self._step.dense is None:
             raise ValueError(f"{self.tableau.name} has no dense-output coefficients: no dense polynomial")
         if self._y_old is None:
             raise RuntimeError("no accepted step yet: no dense polynomial")
         h = self.h_last
-        coef = h * (self.tableau.dense.T @ self._k_last)
+        coef = h * (self._step.dense.T @ self._step.dense_stages)
         return self.t_old, h, self._y_old.copy(), coef
 
     def interpolate(self, t: float | np.ndarray) -> np.ndarray:
@@ -703,9 +690,9 @@ class RungeKuttaStepper:
         if np.any(theta < -1e-9) or np.any(theta > 1.0 + 1e-9):
             raise ValueError("interpolate: time outside the last accepted step")
         y0 = self._y_old
-        if self.tableau.dense is not None:
-            w = self.tableau.dense_weights(theta)  # (s,) or (m, s)
-            return y0 + h * (w @ self._k_last)
+        if self._step.dense is not None:
+            w = dense_weights(self._step.dense, theta)  # (s,) or (m, s)
+            return y0 + h * (w @ self._step.dense_stages)
         # cubic Hermite on (y0, f0), (y1, f1)
         th = theta[..., None]
         th2 = th * th

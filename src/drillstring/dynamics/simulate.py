@@ -74,7 +74,7 @@ def simulate_model(
     output_step: float,
     rtol: float = 1e-6,
     atol: float = 1e-9,
-    method: str = "dopri5",
+    method: str | object = "dopri5",
     max_steps: int = 2_000_000,
     min_step: float = 1e-12,
     lateral_perturbation: float = 1e-4,
@@ -92,7 +92,9 @@ def simulate_model(
     ``engine``: "compiled" (default; :mod:`drillstring.dynamics.compiled`, the whole step loop in
     Numba) or "reference" (the generic :func:`~drillstring.dynamics.runge_kutta.integrate` calling
     the NumPy right-hand side :meth:`ReducedOrderModel.rhs_reference`). Both use the same method,
-    controller and dense output; tests check they agree within the integration tolerance.
+    controller and dense output; tests check they agree within the integration tolerance. ``method``: a
+    name of :data:`~drillstring.dynamics.runge_kutta.TABLEAUS`, or a method object of a registered step
+    kind (:mod:`drillstring.dynamics.steps`; the reference engine needs a kind with a NumPy reference).
     ``initial_state`` ([η, η̇] and the top drive's states, :attr:`ReducedOrderModel.state_size`) replaces the model's initial state (e.g. steady drilling plus a
     perturbation, :mod:`drillstring.dynamics.stability`). A delayed bit–rock law starts from the hole
     bottom of :meth:`ReducedOrderModel.start_history` (``initial_depth_of_cut`` [m] per blade under the bit

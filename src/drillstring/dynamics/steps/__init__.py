@@ -1,0 +1,8 @@
+"""Steps of the compiled integrator, one module per kind, the loop (:mod:`drillstring.dynamics.compiled`)
+generic over them: :mod:`.kinds` (what a kind provides, the registry), :mod:`.explicit_rk` (explicit embedded
+Runge–Kutta pairs)."""
+
+from drillstring.dynamics.steps import explicit_rk  # noqa: F401  (registers the explicit Runge–Kutta step)
+from drillstring.dynamics.steps.kinds import StepKind, accept, attempt, kind_of, register, step_data
+
+__all__ = ["StepKind", "accept", "attempt", "kind_of", "register", "step_data"]
