@@ -126,18 +126,22 @@ def _compact(table: Table) -> None:
 
 
 def _print_vertical(console: Console, table: Table) -> None:
-    """``table`` as one block per row: the first cell, then ``header: value`` for each other non-empty cell."""
+    """``table`` as one block per row: the first cell, then ``header: value`` for each other non-empty cell (the
+    value on a line of its own, indented, when both do not fit on one)."""
     if table.title:
         console.print(table.title)
     headers = [column.header if isinstance(column.header, str) else escape(str(column.header))
                for column in table.columns]
     columns = [list(column.cells) for column in table.columns]
     for row in range(table.row_count):
-        cells = [str(column[row]) if row < len(column) else "" for column in columns]
-        lines = [f"{header}: {cell}" for header, cell in zip(headers, cells) if Text.from_markup(cell).plain.strip()]
-        if lines:
-            console.print(lines[0])
-            for line in lines[1:]:
-                console.print(f"  {line}")
+        cells = [(header, str(column[row]) if row < len(column) else "") for header, column in zip(headers, columns)]
+        cells = [(header, cell) for header, cell in cells if Text.from_markup(cell).plain.strip()]
+        for k, (header, cell) in enumerate(cells):
+            indent = "  " if k else ""
+            line = f"{indent}{header}: {cell}"
+            if k and Text.from_markup(line).cell_len > console.width:
+                console.print(f"{indent}{header}:")
+                line = f"{indent}  {cell}"
+            console.print(line)
     if table.caption:
         console.print(table.caption)
