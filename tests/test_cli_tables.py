@@ -40,8 +40,8 @@ def _table() -> Table:
 
 @pytest.mark.parametrize("width", range(20, 131, 5))
 def test_every_cell_and_header_word_stays_whole_at_any_width(width):
-    """Every number cell (with its spaces: '12.3 / 45.6', '0.123 ± 0.045') appears whole on one line, every word
-    of a text cell or a header too, and no line is wider than the console, from 20 to 130 columns."""
+    """Every word of every cell and header (every number: '12,345,678.9', '-1.2345e-05') appears whole on one
+    line, no '…', and no line is wider than the console, from 20 to 130 columns."""
     text = _render(_table(), width)
     assert "…" not in text
     lines = text.splitlines()
@@ -49,28 +49,27 @@ def test_every_cell_and_header_word_stays_whole_at_any_width(width):
     table = _table()
     for column in table.columns:
         for cell in column.cells:
-            # A number column's cell is whole on one line (the vertical layout indents it by four when it does
-            # not fit beside its header); a text column wraps between words.
-            pieces = [cell] if column.justify == "right" and len(cell) <= width - 4 else cell.split()
-            for piece in pieces:
+            # Each word whole on a line: a number has no space, so no number is split or cut.
+            for piece in cell.split():
                 assert any(piece in line for line in lines), (width, piece, text)
         for word in Text.from_markup(column.header).plain.split():
             assert any(word in line for line in lines), (width, word, text)
 
 
 def test_layouts_from_wide_to_vertical():
-    """Wide: the table as rich draws it; narrower: chosen widths (text wraps), then no borders (columns one
-    space apart), then one block of 'header: value' lines per row. The widest cells and longest words of this
-    table need 81 columns of content (104 unwrapped), with 22 of borders and padding, or 6 of single spaces."""
+    """Wide: the table as rich draws it; narrower: chosen widths (text and number cells wrap between words),
+    then no borders (columns one space apart), then one block of 'header: value' lines per row. The longest
+    words of this table take 76 columns (104 unwrapped), with 22 of borders and padding, or 6 of spaces."""
     wide = _render(_table(), 200)
     assert wide.splitlines()[1].startswith("┏") and "│ rate of penetration " in wide
-    fixed = _render(_table(), 103)
+    fixed = _render(_table(), 98)
     assert fixed.splitlines()[1].startswith("┏") and "│ rate of penetration " not in fixed
-    for width in (102, 87):
+    for width in (97, 82):
         borderless = _render(_table(), width)
         assert "┏" not in borderless and "│" not in borderless and "─" * width in borderless
-    vertical = _render(_table(), 86)
-    assert "  mean δ [%]: 0.64213" in vertical and "observable: rate of penetration" in vertical
+    vertical = _render(_table(), 81)
+    assert "observable: rate of penetration\n  mean δ [%]: 0.64213\n" in vertical
+    assert "0.123 ± 0.045\n  mean δ [%]: 12,345,678.9\n" in vertical  # a row without a first cell: indented
 
 
 @pytest.fixture(scope="module")

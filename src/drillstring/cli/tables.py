@@ -5,9 +5,9 @@ rich fits a table that is too wide by shrinking its columns and, as a last resor
 every cell and every word of a header stays whole:
 
 1. the table at its natural width, when it fits;
-2. else the same table with column widths chosen here: each right-justified (number) column at least as wide
-   as its widest cell, each column at least as wide as its longest word, the space left going to the columns
-   that wrap (text wraps between words);
+2. else the same table with column widths chosen here: each column at least as wide as its longest word (a
+   number has no space, so it is never split), the space left going first to the right-justified (number)
+   columns so that their cells stay on one line, then to the columns that wrap (between words);
 3. else the same in a narrower frame (no borders or padding: columns one space apart, a rule under the header);
 4. else, when even that does not fit, one block per row of ``header: value`` lines (a vertical layout).
 
@@ -47,18 +47,23 @@ def _longest_word(text: Text) -> int:
 
 def column_widths(console: Console, table: Table, width: int) -> list[int] | None:
     """Content widths of the columns of ``table`` (padding and borders excluded) that fit a total width
-    ``width`` with no cell cut; None when rich's natural widths already fit, or when no widths do (see
-    :func:`fits`)."""
-    natural, minimum = _width_ranges(console, table)
+    ``width`` with no word cut; None when rich's natural widths already fit, or when no widths do (see
+    :func:`fits`). Each column gets at least its longest word (a number has no space: it is never split); the
+    space left goes first to the number columns, so that each cell stays on one line ("0.123 ± 0.045"), the
+    columns needing least first, then to every column that would wrap, the widest need first."""
+    natural, whole, floor = _width_ranges(console, table)
     if natural is None:
         return None
     room = width - _frame_width(table)
-    if sum(natural) <= room or sum(minimum) > room:
+    if sum(natural) <= room or sum(floor) > room:
         return None
-    widths = list(minimum)
+    widths = list(floor)
     spare = room - sum(widths)
-    # The space left goes to the columns that would wrap, the widest need first (text columns first, as their
-    # minimum is a word while a number column's is already its widest cell).
+    for i in sorted(range(len(widths)), key=lambda i: whole[i] - widths[i]):
+        need = whole[i] - widths[i]
+        if 0 < need <= spare:
+            widths[i] += need
+            spare -= need
     while spare > 0:
         short = [i for i in range(len(widths)) if widths[i] < natural[i]]
         if not short:
@@ -76,28 +81,28 @@ def _frame_width(table: Table) -> int:
     return table._extra_width + sum(table._get_padding_width(i) for i in range(len(table.columns)))
 
 
-def _width_ranges(console: Console, table: Table) -> tuple[list[int] | None, list[int]]:
-    """Natural and smallest uncut content width of each column; (None, []) when a cell is not text."""
-    natural, minimum = [], []
+def _width_ranges(console: Console, table: Table) -> tuple[list[int] | None, list[int], list[int]]:
+    """Per column: its natural content width, the width that keeps each of its number cells on one line, and
+    its longest word; (None, [], []) when a cell is not text."""
+    natural, whole, floor = [], [], []
     for column in table.columns:
         header = _text(console, column.header) if table.show_header else Text("")
         cells = [_text(console, cell) for cell in column.cells]
         if header is None or any(cell is None for cell in cells):
-            return None, []
+            return None, [], []
         everything = [header, *cells]
-        longest = max(_longest_line(t) for t in everything)
-        words = max(_longest_word(t) for t in everything)
-        # A number column keeps each cell on one line: "1,234.5 / 2,345.6" is never wrapped either.
-        whole = max((_longest_line(t) for t in cells), default=0) if column.justify == "right" else 0
-        natural.append(longest)
-        minimum.append(max(words, whole, 1))
-    return natural, minimum
+        words = max(max(_longest_word(t) for t in everything), 1)
+        natural.append(max(_longest_line(t) for t in everything))
+        floor.append(words)
+        cells_width = max((_longest_line(t) for t in cells), default=0) if column.justify == "right" else 0
+        whole.append(max(words, cells_width))
+    return natural, whole, floor
 
 
 def fits(console: Console, table: Table) -> bool:
-    """Whether ``table`` can be printed as a table in the console's width without cutting a cell."""
-    natural, minimum = _width_ranges(console, table)
-    return natural is None or sum(minimum) <= console.width - _frame_width(table)
+    """Whether ``table`` can be printed as a table in the console's width without cutting a word."""
+    natural, _, floor = _width_ranges(console, table)
+    return natural is None or sum(floor) <= console.width - _frame_width(table)
 
 
 def print_table(console: Console, table: Table) -> None:
@@ -126,8 +131,8 @@ def _compact(table: Table) -> None:
 
 
 def _print_vertical(console: Console, table: Table) -> None:
-    """``table`` as one block per row: the first cell, then ``header: value`` for each other non-empty cell (the
-    value on a line of its own, indented, when both do not fit on one)."""
+    """``table`` as one block per row: ``header: value`` for the first cell, then indented for each other
+    non-empty cell (the value on a line of its own, further indented, when both do not fit on one)."""
     if table.title:
         console.print(table.title)
     headers = [column.header if isinstance(column.header, str) else escape(str(column.header))
@@ -135,9 +140,11 @@ def _print_vertical(console: Console, table: Table) -> None:
     columns = [list(column.cells) for column in table.columns]
     for row in range(table.row_count):
         cells = [(header, str(column[row]) if row < len(column) else "") for header, column in zip(headers, columns)]
-        cells = [(header, cell) for header, cell in cells if Text.from_markup(cell).plain.strip()]
+        cells = [(header, cell, Text.from_markup(cell).plain.strip() != "") for header, cell in cells]
+        continued = not cells[0][2]  # a row without a first cell goes on with the row above: indented too
+        cells = [(header, cell) for header, cell, shown in cells if shown]
         for k, (header, cell) in enumerate(cells):
-            indent = "  " if k else ""
+            indent = "  " if k or continued else ""
             line = f"{indent}{header}: {cell}"
             if k and Text.from_markup(line).cell_len > console.width:
                 console.print(f"{indent}{header}:")
