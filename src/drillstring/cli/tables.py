@@ -7,7 +7,8 @@ every cell and every word of a header stays whole:
 1. the table at its natural width, when it fits;
 2. else the same table with column widths chosen here: each column at least as wide as its longest word (a
    number has no space, so it is never split), the space left going first to the right-justified (number)
-   columns so that their cells stay on one line, then to the columns that wrap (between words);
+   columns so that their cells stay on one line, then to keeping the cells of as many other columns on one
+   line as it can (headers wrap first), then to the columns that still wrap (between words);
 3. else the same in a narrower frame (no borders or padding: columns one space apart, a rule under the header);
 4. else, when even that does not fit, one block per row of ``header: value`` lines (a vertical layout).
 
@@ -49,21 +50,26 @@ def column_widths(console: Console, table: Table, width: int) -> list[int] | Non
     """Content widths of the columns of ``table`` (padding and borders excluded) that fit a total width
     ``width`` with no word cut; None when rich's natural widths already fit, or when no widths do (see
     :func:`fits`). Each column gets at least its longest word (a number has no space: it is never split); the
-    space left goes first to the number columns, so that each cell stays on one line ("0.123 ± 0.045"), the
-    columns needing least first, then to every column that would wrap, the widest need first."""
+    space left goes first to the number columns, so that each cell stays on one line ("0.123 ± 0.045"), then
+    to keeping the cells of as many other columns on one line (headers may wrap), in both the columns needing
+    least first, then to every column that would still wrap, the widest need first."""
     natural, whole, floor = _width_ranges(console, table)
     if natural is None:
+        return None
+    one_line = _cell_widths(console, table)
+    if one_line is None:
         return None
     room = width - _frame_width(table)
     if sum(natural) <= room or sum(floor) > room:
         return None
     widths = list(floor)
     spare = room - sum(widths)
-    for i in sorted(range(len(widths)), key=lambda i: whole[i] - widths[i]):
-        need = whole[i] - widths[i]
-        if 0 < need <= spare:
-            widths[i] += need
-            spare -= need
+    for target in (whole, one_line):  # number cells on one line, then as many columns' cells as can be
+        for i in sorted(range(len(widths)), key=lambda i: target[i] - widths[i]):
+            need = target[i] - widths[i]
+            if 0 < need <= spare:
+                widths[i] += need
+                spare -= need
     while spare > 0:
         short = [i for i in range(len(widths)) if widths[i] < natural[i]]
         if not short:
@@ -97,6 +103,18 @@ def _width_ranges(console: Console, table: Table) -> tuple[list[int] | None, lis
         cells_width = max((_longest_line(t) for t in cells), default=0) if column.justify == "right" else 0
         whole.append(max(words, cells_width))
     return natural, whole, floor
+
+
+def _cell_widths(console: Console, table: Table) -> list[int] | None:
+    """The widest cell line of each column, its header left out (at least its longest word)."""
+    widths = []
+    for column in table.columns:
+        header = _text(console, column.header) if table.show_header else Text("")
+        cells = [_text(console, cell) for cell in column.cells]
+        if header is None or any(cell is None for cell in cells):
+            return None
+        widths.append(max([_longest_word(header), *(_longest_line(cell) for cell in cells), 1]))
+    return widths
 
 
 def fits(console: Console, table: Table) -> bool:
