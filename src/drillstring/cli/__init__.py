@@ -32,7 +32,13 @@ Commands
 
 Conventions for every command (follow them when adding one)
 ------------------------------------------------------------
-- Load the case with :func:`_load`: an invalid case prints its message to stderr and exits with code 2.
+- A command lives in the module of its group and takes the shared options of :mod:`~drillstring.cli.options`
+  (``CaseArg``, ``JsonOpt``, ``UnitsOpt``, ``ParamOption``, ``OutOption``, ...); import the module here, in
+  the order of ``--help``.
+- Load the case with :func:`~drillstring.cli.options._load`: an invalid case prints its message to stderr and
+  exits with code 2.
+- Print a table with :func:`~drillstring.cli.tables.print_table`, never ``console.print(table)``: at 80
+  columns and below it wraps or narrows the table and never cuts a number or a header with ``…``.
 - Physics stays out of this module: a command calls the package API and only formats the result.
 - ``--json`` prints ``json.dumps(payload, indent=2)`` of SI values, and nothing else, on stdout.
 - Human-readable output (rich tables) converts units here, at the edge, into the unit system of the shared
