@@ -1,0 +1,5 @@
+"""``python -m drillstring.cli``: the console script."""
+
+from drillstring.cli import run
+
+run()

@@ -1,0 +1,115 @@
+"""What the commands running the study engine (``study``, ``map``, ``sensitivity``) share: the declared laws of
+``--param``/``--correlation``, the progress bar, and running a call of the engine under the output folder's
+lock with one-line errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from drillstring.cli.options import EXIT_INTERRUPTED, EXIT_RUN_FAILED, _err_console, _fail
+
+def _declared_laws(param: list[str] | None, correlation: list[str] | None):
+    """The ``--param`` laws (None when none is given) and the ``--correlation`` table; a malformed value
+    ends the command (exit code 2)."""
+    from drillstring.stochastic.parameters import ParameterError
+    from drillstring.stochastic.uncertainty import correlation_table, split_assignment, split_correlation
+
+    try:
+        laws = None
+        if param:
+            laws = {}
+            for text in param:
+                path, spec = split_assignment(text)
+                if path in laws:
+                    raise ParameterError(f"--param {path} is given twice")
+                laws[path] = spec
+        table = correlation_table([split_correlation(t) for t in correlation]) if correlation else None
+    except ParameterError as error:
+        _fail(str(error))
+    return laws, table
+
+
+class _StudyProgress:
+    """``progress(done, failed, total)`` for the engine's runs: a rich bar (stderr) of the ``noun``
+    (realizations, grid points, runs), failures and time left. The bar starts at the first call, so that
+    a run refused before it starts prints no empty bar."""
+
+    def __init__(self, console: Console, noun: str = "realizations") -> None:
+        self.console = console
+        self.noun = noun
+        self.bar: Progress | None = None
+        self.task = None
+
+    def __call__(self, done: int, failed: int, total: int) -> None:
+        if self.bar is None:
+            columns = (TextColumn(escape(self.noun)), BarColumn(), MofNCompleteColumn(),
+                       TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
+                       TimeRemainingColumn())
+            self.bar = Progress(*columns, console=self.console)
+            self.bar.start()
+            self.task = self.bar.add_task(self.noun, total=total, completed=done + failed, failed=failed)
+        else:
+            self.bar.update(self.task, completed=done + failed, failed=failed)
+
+    def stop(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+def _api():
+    from drillstring import api
+
+    return api
+
+
+def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
+    """Run ``call(progress, note)`` (an API function of the study engine) for a command writing to ``out``:
+    the store's lock is taken before loading the engine (a second run on the folder is refused at once),
+    a progress bar and notes go to stderr, and every error ends the command with one line: exit 130 when
+    interrupted (what finished is saved), 1 for a run that started and failed (an output write that failed:
+    disk full, no permission), 2 for refused input (settings, store, scheduler, lock, another kind of run in
+    the folder, an output path that is not a regular file). Temporary files left in ``out`` by a killed run
+    are removed. A folder created here and left empty is removed."""
+    from drillstring.files import LockedError, remove_stale_temporaries, write_error_message
+    from drillstring.stochastic import execution
+    from drillstring.stochastic.locks import StudyLock, StudyLocked
+
+    err = _err_console()
+
+    def note(text: str) -> None:
+        err.print(escape(f"note: {text}"), soft_wrap=True)
+
+    created = not out.exists()
+    lock = StudyLock(out / store_name, what=what)
+    try:  # taken before loading the engine: a second run on this folder is refused at once
+        lock.__enter__()
+    except StudyLocked as error:
+        _fail(str(error))
+    if lock.note:
+        note(lock.note)
+    tracker = _StudyProgress(err, noun)
+    try:
+        remove_stale_temporaries(out)
+        try:
+            return call(tracker, note)
+        finally:
+            tracker.stop()
+    except execution.Interrupted as error:
+        _fail(str(error), EXIT_INTERRUPTED)
+    except KeyboardInterrupt:
+        _fail(f"interrupted; finished {noun} are saved in {out / store_name}; run the same command again to "
+              "resume", EXIT_INTERRUPTED)
+    except (execution.WorkersLost, _api().StudyFailed) as error:
+        _fail(str(error), EXIT_RUN_FAILED)
+    except OSError as error:  # an output write that failed: disk full, no permission, read-only filesystem
+        _fail(write_error_message(error, f"finished {noun} are kept in {out / store_name}"), EXIT_RUN_FAILED)
+    except (ValueError, LockedError) as error:  # settings, store, scheduler or lock refused
+        _fail(str(error))
+    finally:
+        lock.__exit__(None, None, None)
+        if created and out.is_dir() and not any(out.iterdir()):  # refused before anything was written
+            out.rmdir()

@@ -1,0 +1,178 @@
+"""``drillstring cases``, ``drillstring static`` and ``drillstring modes``."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Annotated
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from drillstring.case import Case, CaseError, builtin_cases, load_case
+from drillstring.cli.options import CaseArg, JsonOpt, UnitsOpt, _console, _fail, _load, _print_json, app
+from drillstring.cli.tables import print_table
+from drillstring.units import display_unit
+
+if TYPE_CHECKING:
+    from drillstring.buckling import BucklingMargin
+
+@app.command()
+def cases() -> None:
+    """List the built-in cases."""
+    names = builtin_cases()
+    if not names:
+        typer.echo("no built-in cases found")
+        return
+    width = max(len(n) for n in names)
+    for name in names:
+        try:
+            description = load_case(name).description
+        except CaseError:
+            description = "(invalid case file)"
+        typer.echo(f"{name:<{width}}  {description}".rstrip())
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring static
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]:
+    """(label, x) of the top, section changes, stabilizers and the bit, sorted by x, equal x merged."""
+    points: list[tuple[float, str]] = [(0.0, "top (hook)")]
+    end = 0.0
+    for upper, lower in zip(case.sections[:-1], case.sections[1:]):
+        end += upper.length
+        points.append((end, f"{upper.name} / {lower.name}"))
+    for i, stabilizer in enumerate(case.stabilizers):
+        label = "stabilizer" if len(case.stabilizers) == 1 else f"stabilizer {i + 1}"
+        points.append((stabilizer.position, label))
+    length = float(x[-1])
+    points.append((length, "bit"))
+    tolerance = 1e-6 * max(1.0, length)
+    merged: list[tuple[str, float]] = []
+    for position, label in sorted(points, key=lambda p: p[0]):
+        if merged and abs(merged[-1][1] - position) <= tolerance:
+            merged[-1] = (f"{merged[-1][0]}, {label}", merged[-1][1])
+        else:
+            merged.append((label, position))
+    return merged
+
+
+@app.command()
+def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOpt = None) -> None:
+    """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
+    weight-on-bit (lateral buckling), axial force."""
+    from drillstring import api
+
+    the_case = _load(case)
+    try:
+        state, margin = api.static(the_case)
+    except ValueError as error:  # a model too large to solve (modal.DENSE_FALLBACK_MEMORY), as `modes` says
+        _fail(str(error))
+    x = np.asarray(state.mesh.nodes, dtype=float)
+    n = np.asarray(state.axial_force, dtype=float)
+    if as_json:
+        _print_json(
+            {
+                "weight": float(state.weight),
+                "weight_on_hook": float(state.weight_on_hook),
+                "weight_on_bit": float(state.weight_on_bit),
+                "neutral_point_height": float(state.neutral_point_height),
+                "critical_weight_on_bit": margin.critical_weight_on_bit,
+                "axial_force": [[float(xi), float(ni)] for xi, ni in zip(x, n)],
+            }
+        )
+        return
+
+    console = _console()
+    force, length = display_unit("force", units), display_unit("length", units)
+    summary = Table(title=escape(f"Static state: case {the_case.name!r}"), title_justify="left")
+    summary.add_column("quantity")
+    summary.add_column("value", justify="right")
+    summary.add_column("unit")
+    summary.add_row("weight", f"{force(state.weight):,.2f}", force.label)
+    summary.add_row("weight-on-hook", f"{force(state.weight_on_hook):,.2f}", force.label)
+    summary.add_row("weight-on-bit", f"{force(state.weight_on_bit):,.2f}", force.label)
+    summary.add_row("neutral point above the bit", f"{length(state.neutral_point_height):,.2f}", length.label)
+    summary.add_row("critical weight-on-bit (lateral buckling)",
+                    f"{force(margin.critical_weight_on_bit):,.2f}", force.label)
+    summary.add_row("string length", f"{length(state.mesh.length):,.1f}", length.label)
+    print_table(console, summary)
+    console.print(escape(_buckling_note(margin, units)), soft_wrap=True)
+
+    forces = Table(title="Axial force N (tension > 0)", title_justify="left")
+    forces.add_column("where")
+    forces.add_column(escape(f"x [{length.label}]"), justify="right")
+    forces.add_column(escape(f"above bit [{length.label}]"), justify="right")
+    forces.add_column(escape(f"N [{force.label}]"), justify="right")
+    for label, position in _axial_force_landmarks(the_case, x):
+        # N is continuous and linear inside each element, so interpolation between nodes is exact.
+        value = float(np.interp(position, x, n))
+        height = state.mesh.length - position
+        forces.add_row(escape(label), f"{length(position):,.1f}", f"{length(height):,.1f}", f"{force(value):,.2f}")
+    print_table(console, forces)
+    console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"), soft_wrap=True)
+
+
+def _buckling_note(margin: BucklingMargin, units: str) -> str:
+    """One line: the lateral buckling margin of the case at its weight-on-bit."""
+    force = display_unit("force", units)
+    critical, wob, kn = force(margin.critical_weight_on_bit), force(margin.weight_on_bit), force.label
+    if margin.buckled:
+        return (f"BUCKLED: weight-on-bit {wob:,.2f} {kn} exceeds the critical {critical:,.2f} {kn}; the straight "
+                "string is statically unstable (lowest lateral mode has ω² < 0).")
+    return (f"Lateral buckling at weight-on-bit {critical:,.2f} {kn}: margin {critical - wob:,.2f} {kn} "
+            f"({critical / wob:.2f} × the case's {wob:,.2f} {kn}).")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# drillstring modes
+# ---------------------------------------------------------------------------------------------------------
+
+
+@app.command()
+def modes(
+    case: CaseArg = "reference",
+    count: Annotated[
+        int, typer.Option("--count", "-n", min=1, help="Number of modes per family (axial includes the rigid mode).")
+    ] = 10,
+    as_json: JsonOpt = False,
+    units: UnitsOpt = None,
+) -> None:
+    """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
+    from drillstring import api
+
+    the_case = _load(case)
+    try:
+        found, margin = api.modes(the_case, count=count)
+    except ValueError as error:
+        _fail(str(error))
+    families = {
+        "axial": [float(f) for f in found.axial.frequencies],
+        "torsional": [float(f) for f in found.torsional.frequencies],
+        "lateral": [float(f) for f in found.lateral.frequencies],
+    }
+    if as_json:
+        _print_json(families)
+        return
+
+    table = Table(title=escape(f"Natural frequencies: case {the_case.name!r}"), title_justify="left")
+    table.add_column("mode", justify="right")
+    for name in families:
+        table.add_column(escape(f"{name} [Hz]"), justify="right")
+    rows = max(len(v) for v in families.values())
+    for i in range(rows):
+        cells = [f"{v[i]:.4f}" if i < len(v) else "" for v in families.values()]
+        table.add_row(str(i + 1), *cells)
+    console = _console()
+    print_table(console, table)
+    for note in (
+        "axial: both ends free; mode 1 is the rigid translation (0 Hz).",
+        "torsional: top held, bit free. lateral: one plane of each y/z pair.",
+        "Prestress (geometric stiffness) and drilling fluid included; a negative frequency is an unstable "
+        "mode, -sqrt(|ω²|)/2π.",
+        _buckling_note(margin, units),
+    ):
+        console.print(escape(note), soft_wrap=True)

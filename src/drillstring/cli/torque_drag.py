@@ -1,0 +1,121 @@
+"""``drillstring torque-drag``: soft-string torque and drag along the case's well."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from drillstring.case import Case
+from drillstring.cli.options import CaseArg, JsonOpt, UnitsOpt, _check_output, _console, _fail, _load, _print_json, app
+from drillstring.cli.tables import print_table
+from drillstring.units import display_unit
+
+@app.command("torque-drag")
+def torque_drag_command(
+    case: CaseArg = "deviated",
+    plot: Annotated[Path | None, typer.Option("--plot", help="PNG of the loads along the string; the well path "
+                                              "(FILE-path.png) and the broomstick chart (FILE-broomstick.png) "
+                                              "are written beside it.")] = None,
+    measurements: Annotated[Path | None, typer.Option("--measurements", help="CSV of measured hook loads "
+                            "(bit_depth [unit], operation, hook_load [unit]): calibrate the friction factors.")] = None,
+    sigma: Annotated[str | None, typer.Option("--sigma", help="With --measurements: the noise standard deviation "
+                     "of a hook load (e.g. '20 kN'; bare numbers in N); default: estimated.")] = None,
+    html_page: Annotated[Path | None, typer.Option("--html", help="Interactive page: 3-D well path, loads.")] = None,
+    as_json: JsonOpt = False,
+    units: UnitsOpt = None,
+) -> None:
+    """Soft-string torque and drag (Johancsik et al. 1984) along the case's well: hook load, surface torque,
+    axial and side forces for tripping out and in, rotating off bottom, sliding and drilling; sinusoidal and
+    helical buckling; lock-up when sliding; friction factors calibrated from measured hook loads."""
+    the_case = _load(case)
+    for option, path in (("--plot", plot), ("--html", html_page)):
+        if path is not None:
+            _check_output(option, path)
+    from drillstring.units import FORCE, to_si
+    from drillstring.well.analysis import analyse
+    from drillstring.well.calibration import read_measurements
+
+    noise = None
+    if sigma is not None:
+        try:
+            noise = to_si(sigma, FORCE)
+        except ValueError as error:
+            _fail(f"--sigma = {sigma}: {error}")
+        if not (math.isfinite(noise) and noise > 0.0):
+            _fail(f"--sigma = {sigma}: must be a force > 0 (e.g. '20 kN')")
+    try:
+        data = read_measurements(measurements) if measurements is not None else None
+    except (OSError, ValueError) as error:
+        _fail(f"--measurements = {measurements}: {error}")
+    try:
+        analysis = analyse(the_case, measurements=data, sigma=noise)
+    except ValueError as error:
+        _fail(str(error))
+    payload = analysis.payload
+    if plot is not None:
+        _torque_drag_figures(the_case, analysis, plot, data, units)
+        payload["figures"] = [str(plot), str(plot.with_name(plot.stem + "-path.png")),
+                              str(plot.with_name(plot.stem + "-broomstick.png"))]
+    if html_page is not None:
+        from drillstring.interactive import write_interactive_page
+        from drillstring.torque_drag_plots import well_figures
+
+        head = f"<meta charset='utf-8'><title>Torque and drag: {escape(the_case.name)}</title>"
+        write_interactive_page(html_page, head, f"<h1>Torque and drag: case {the_case.name}</h1>",
+                               well_figures(analysis.trajectory, analysis.results, units=units))
+        payload["interactive"] = str(html_page)
+    if as_json:
+        _print_json(payload)
+        return
+    force, length, torque = (display_unit(k, units) for k in ("force", "length", "torque"))
+    table = Table(title=escape(f"Torque and drag: case {the_case.name!r}"), title_justify="left")
+    for column in ("operation", f"hook load [{force.label}]", f"surface torque [{torque.label}]",
+                   "sinusoidal buckling", "helical buckling"):
+        table.add_column(escape(column), justify="left" if column in ("operation",) else "right")
+    for op, row in payload["operations"].items():
+        intervals = [", ".join(f"{length(a):,.0f}–{length(b):,.0f}" for a, b in row[key]) or "none"
+                     for key in ("sinusoidal_buckling", "helical_buckling")]
+        hook = "locked up" if row["locked_up"] else f"{force(row['hook_load']):,.1f}"
+        table.add_row(op.replace("_", " "), hook, f"{torque(row['surface_torque']):,.2f}", *map(escape, intervals))
+    console = _console()
+    print_table(console, table)
+    well = payload["well"]
+    console.print(escape(f"Well: {length(well['depth']):,.1f} {length.label} MD, "
+                         f"{length(well['true_vertical_depth']):,.1f} {length.label} TVD, {well['stations']} stations; friction factors cased "
+                         f"{well['cased_hole_friction']:g}, open hole {well['open_hole_friction']:g}; lock-up when "
+                         "sliding: " + ("none" if payload["lockup_depth"] is None else
+                                         f"bit at {length(payload['lockup_depth']):,.0f} {length.label}")),
+                  soft_wrap=True)
+    if "calibration" in payload:
+        cal = payload["calibration"]
+        console.print(escape("Calibrated friction factors (posterior mean ± std, 90 % interval): " + "; ".join(
+            f"{name.replace('_', ' ')} {cal[name]['mean']:.3f} ± {cal[name]['std']:.3f} "
+            f"[{cal[name]['interval_90'][0]:.3f}, {cal[name]['interval_90'][1]:.3f}]"
+            for name in ("cased_hole_friction", "open_hole_friction"))
+            + f"; residual {force(cal['residual_sigma']):,.2f} {force.label} ({cal['noise']})"), soft_wrap=True)
+    for key in ("figures", "interactive"):
+        if key in payload:
+            console.print(escape(f"{key}: {payload[key]}"), soft_wrap=True)
+
+
+def _torque_drag_figures(case: Case, analysis, plot: Path, measurements, units: str | None) -> None:
+    from drillstring.torque_drag_plots import plot_broomstick, plot_torque_drag, plot_well_path
+    from drillstring.well.calibration import broomstick, posterior_bands
+
+    shoe = 0.0 if case.well is None else case.well.casing_shoe
+    plot_torque_drag(analysis.results, plot, critical=analysis.critical, units=units,
+                     title=f"Torque and drag: case {case.name!r}")
+    plot_well_path(analysis.trajectory, plot.with_name(plot.stem + "-path.png"), casing_shoe=shoe, units=units,
+                   title=f"Well path: case {case.name!r}")
+    depths = np.linspace(case.length / 30.0, case.length, 30)
+    frictions = (0.1, 0.2, 0.3, 0.4)
+    bands = None if analysis.posterior is None else posterior_bands(case, analysis.posterior, depths)
+    plot_broomstick(depths, broomstick(case, depths, frictions), frictions,
+                    plot.with_name(plot.stem + "-broomstick.png"), measurements=measurements, bands=bands,
+                    units=units, title=f"Broomstick chart: case {case.name!r}")
