@@ -127,8 +127,7 @@ class ModeFamily:
     name: str
     angular_frequencies: np.ndarray
     shapes: np.ndarray
-    #: how many of the last columns are residual-flexibility attachment modes (:func:`residual_flexibility_modes`)
-    attachments: int = 0
+    attachments: int = 0  # the last columns that are attachment modes (:func:`residual_flexibility_modes`)
 
     @property
     def frequencies(self) -> np.ndarray:
