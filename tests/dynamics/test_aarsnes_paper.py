@@ -79,11 +79,12 @@ def paper_case():
     return load_case("aarsnes2019_paper")
 
 
-def _model_root(case, modes: int, start: complex) -> complex:
+def _model_root(case, modes: int, start: complex, truncation_correction: str = "none") -> complex:
     """The model's characteristic root (delay system (3) of :mod:`drillstring.dynamics.stability`) nearest
-    ``start``, by Newton's method on det Δ, with ``modes`` axial and torsional modes."""
+    ``start``, by Newton's method on det Δ, with ``modes`` axial and torsional modes (and the basis's
+    truncation correction ``truncation_correction``)."""
     model = case_reduced_model(case.model_copy(update={"reduced_model": case.reduced_model.model_copy(
-        update={"axial_modes": modes, "torsional_modes": modes})}))
+        update={"axial_modes": modes, "torsional_modes": modes, "truncation_correction": truncation_correction})}))
     steady = steady_drilling(model)
     a0, a1 = delay_matrices(model, steady)
     root = complex(_newton(a0, a1, steady.delay, [start])[0])
@@ -126,3 +127,16 @@ def test_leading_roots_against_the_papers_characteristic_equation(paper_case):
         assert abs(fine.real - target.real) < abs(coarse.real - target.real)
         if rank < 2:
             assert 2 * fine.real - coarse.real == pytest.approx(target.real, rel=0.02)
+
+
+def test_leading_roots_with_the_truncation_correction(paper_case):
+    """With the truncation correction (the bit's residual-flexibility attachment modes) a basis of 40 modes per
+    family is converged where the plain basis is not: the two leading roots of (★) within 2 % in growth rate
+    (measured −0.4 % and +0.7 %; the plain basis at 80 modes: +2.4 % and +10 %) and 0.3 % in frequency."""
+    model = case_reduced_model(paper_case.model_copy(update={"reduced_model": paper_case.reduced_model.model_copy(
+        update={"axial_modes": 4, "torsional_modes": 4})}))
+    steady = steady_drilling(model)
+    for target in paper_roots(steady.rate_of_penetration, steady.bit_speed)[:2]:
+        root = _model_root(paper_case, 40, target, truncation_correction="static")
+        assert root.imag == pytest.approx(target.imag, rel=3e-3)
+        assert root.real == pytest.approx(target.real, rel=0.02)
