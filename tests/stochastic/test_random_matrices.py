@@ -1,0 +1,137 @@
+"""The SE+ ensemble of random reduced matrices (Soize 2000, 2005) and the random reduced model built on it."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drillstring.dynamics.rom import case_reduced_model
+from drillstring.stochastic.random_matrices import (
+    ModelDispersion,
+    dispersion_limit,
+    germ,
+    measured_dispersion,
+    model_generator,
+    random_matrix,
+    random_reduced_model,
+)
+
+N_DRAWS = 4000
+
+
+@pytest.mark.parametrize("n, delta", [(3, 0.3), (8, 0.5)])
+def test_germ_mean_is_identity_within_its_known_standard_error(n, delta):
+    """E{G} = I: each entry of the mean of N draws lies within 5 standard errors of I, the standard error
+    from the known variance Var(G_jk) = δ²(1 + δ_jk)/(n + 1) (a wrong diagonal scale of H, e.g. without σ,
+    moves the mean by O(1), hundreds of standard errors)."""
+    rng = np.random.default_rng(1)
+    draws = np.array([germ(n, delta, rng) for _ in range(N_DRAWS)])
+    error = draws.mean(axis=0) - np.eye(n)
+    standard = np.sqrt(delta**2 * (1.0 + np.eye(n)) / (n + 1) / N_DRAWS)
+    assert np.max(np.abs(error) / standard) < 5.0
+    # the entries' variance itself, within 10 % (N = 4000: the sampling error of a variance is ~3-5 %)
+    variance = draws.var(axis=0)
+    np.testing.assert_allclose(variance, delta**2 * (1.0 + np.eye(n)) / (n + 1), rtol=0.15)
+
+
+@pytest.mark.parametrize("n, delta", [(3, 0.3), (8, 0.5), (20, 0.1)])
+def test_measured_dispersion_equals_delta(n, delta):
+    """δ̂ = (mean ‖G − I‖²_F / n)^{1/2} of 4000 draws equals δ within 3 % (the standard error of δ̂² here is
+    below 1.5 % of δ², so 3 % on δ is over 4 standard errors)."""
+    rng = np.random.default_rng(2)
+    draws = np.array([germ(n, delta, rng) for _ in range(N_DRAWS)])
+    assert measured_dispersion(draws) == pytest.approx(delta, rel=0.03)
+
+
+def test_every_draw_is_positive_definite_even_near_the_limit():
+    """2000 draws at δ = 0.95 δ_max: every G and every L G Lᵀ positive definite (smallest eigenvalue > 0)."""
+    rng = np.random.default_rng(3)
+    n = 6
+    delta = 0.95 * dispersion_limit(n)
+    nominal = np.diag(np.arange(1.0, n + 1.0) ** 2)
+    for _ in range(2000):
+        assert np.linalg.eigvalsh(germ(n, delta, rng))[0] > 0.0
+        drawn = random_matrix(nominal, delta, rng)
+        assert np.linalg.eigvalsh(drawn)[0] > 0.0
+
+
+def test_random_matrix_mean_is_the_nominal_matrix():
+    """E{L G Lᵀ} = A for a full positive-definite A, and a semi-definite A (a zero eigenvalue) keeps its null
+    space exactly in every draw."""
+    rng = np.random.default_rng(4)
+    a = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]])
+    delta = 0.4
+    draws = np.array([random_matrix(a, delta, rng) for _ in range(N_DRAWS)])
+    # Var(Ã_jk) <= ‖L‖⁴ δ²·2/(n+1) bounds each entry's standard error
+    bound = np.linalg.norm(a, 2) * delta * math.sqrt(2.0 / 4.0 / N_DRAWS)
+    assert np.max(np.abs(draws.mean(axis=0) - a)) < 5.0 * bound
+    singular = np.diag([0.0, 2.0, 5.0])
+    drawn = random_matrix(singular, delta, rng)
+    assert np.all(drawn[0] == 0.0) and np.all(drawn[:, 0] == 0.0)
+    assert np.linalg.eigvalsh(drawn[1:, 1:])[0] > 0.0
+
+
+def test_zero_dispersion_draws_nothing():
+    rng = np.random.default_rng(5)
+    state = rng.bit_generator.state
+    a = np.diag([1.0, 2.0])
+    assert random_matrix(a, 0.0, rng) is a
+    np.testing.assert_array_equal(germ(4, 0.0, rng), np.eye(4))
+    assert rng.bit_generator.state == state
+
+
+def test_dispersion_out_of_range_is_refused_with_field_value_and_range():
+    with pytest.raises(ValueError, match=r"uncertainty\.model\.stiffness_dispersion = -0\.1: must be"):
+        ModelDispersion(stiffness=-0.1)
+    with pytest.raises(ValueError, match=r"uncertainty\.model\.mass_dispersion = 1\.2"):
+        ModelDispersion.from_mapping({"mass_dispersion": 1.2})
+    with pytest.raises(ValueError, match=r"uncertainty\.model\.damping: unknown key"):
+        ModelDispersion.from_mapping({"damping": 0.1})
+    # a family of n = 2 modes: δ_max = sqrt(3/7) = 0.6547
+    with pytest.raises(ValueError, match=r"damping_dispersion = 0\.7: must be in \[0, 0\.6547\).*n = 2 modes"):
+        ModelDispersion(damping=0.7).check({"torsional": 2})
+    with pytest.raises(ValueError, match=r"dispersion = 0\.9: must be in \[0, 0\.6547\)"):
+        germ(2, 0.9, np.random.default_rng(0))
+
+
+@pytest.fixture(scope="module")
+def small_model(small_case):
+    return case_reduced_model(small_case)
+
+
+def test_zero_dispersions_give_the_nominal_model_itself(small_model):
+    assert random_reduced_model(small_model, ModelDispersion(), model_generator(0, 3)) is small_model
+
+
+def test_realized_model_solves_the_random_generalized_eigenproblem(small_model):
+    """The realized model is a ROM of the same form: per family, Φ̃ = Φ X, ω̃² = λ, D̃' = Xᵀ D̃ X with
+    Xᵀ M̃ X = I and K̃ X = M̃ X Λ; hence the realized linear frequencies are the square roots of the
+    generalized eigenvalues of (K̃, M̃) redrawn from the same stream, the rigid axial mode stays rigid (ω = 0)
+    and the damping stays block diagonal and positive semi-definite."""
+    dispersion = ModelDispersion(mass=0.2, stiffness=0.3, damping=0.4)
+    a = random_reduced_model(small_model, dispersion, model_generator(7, 1))
+    b = random_reduced_model(small_model, dispersion, model_generator(7, 1))
+    np.testing.assert_array_equal(a.basis, b.basis)  # redrawn from (seed, index)
+    assert a.family == small_model.family and a.basis.shape == small_model.basis.shape
+    rigid = small_model.family.index("rigid_axial")
+    assert a.omega2[rigid] == 0.0
+    assert not np.allclose(a.omega2, small_model.omega2)
+    np.testing.assert_array_equal(a.damping[small_model.damping == 0.0], 0.0)
+    assert np.linalg.eigvalsh(0.5 * (a.damping + a.damping.T))[0] > -1e-9 * np.abs(a.damping).max()
+    # the same draws by hand, family by family, in the order of random_reduced_model
+    from scipy import linalg
+
+    from drillstring.stochastic.random_matrices import family_columns
+
+    rng = model_generator(7, 1)
+    for columns in family_columns(small_model).values():
+        if not len(columns):
+            continue
+        m = random_matrix(np.eye(len(columns)), 0.2, rng)
+        k = random_matrix(np.diag(small_model.omega2[columns]), 0.3, rng)
+        random_matrix(small_model.damping[np.ix_(columns, columns)], 0.4, rng)
+        expected = linalg.eigh(k, m, eigvals_only=True)
+        np.testing.assert_allclose(a.omega2[columns], expected, rtol=1e-10, atol=1e-9 * expected.max())
+        # Φ̃ᵀ M_phys Φ̃ = Xᵀ X and the mass-normalisation Xᵀ M̃ X = I
+        x = np.linalg.lstsq(small_model.basis[:, columns], a.basis[:, columns], rcond=None)[0]
+        np.testing.assert_allclose(x.T @ m @ x, np.eye(len(columns)), atol=1e-8)
