@@ -195,7 +195,7 @@ _STUDY_CAPTIONS = {
 }
 
 
-def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None,
+def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None, model=None,
                    samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
     """The validated settings of a Monte Carlo study of ``case`` (TypeError / ValueError naming the field or
     the parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
@@ -205,6 +205,9 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
     Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given (a
     shorthand for the law ``weight_on_hook = "normal mean=<hook load> std=<sigma>"``, declared first). With
     none of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``model``: the model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
+    "damping_dispersion": δ_D}`` (:mod:`~drillstring.stochastic.random_matrices`), else the case's
+    ``[uncertainty.model]`` table, else none.
     """
     from drillstring.checks import real_number
     from drillstring.stochastic import DEFAULT_SIGMA
@@ -224,6 +227,12 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
         sigma = real_number("sigma", sigma, unit="N", low=0.0, low_open=True)
     _mapping("parameters", parameters)
     _mapping("correlation", correlation)
+    _mapping("model", model)
+    from drillstring.stochastic.random_matrices import ModelDispersion
+
+    if model is None and case.uncertainty is not None and case.uncertainty.model is not None:
+        model = case.uncertainty.model.model_dump()
+    dispersions = ModelDispersion.from_mapping(model or {})
     first = dict([weight_on_hook_normal(case, sigma)]) if sigma is not None else None
     declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
     if declared is None:
@@ -236,7 +245,8 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
     bare = case.model_copy(update={"uncertainty": None})
     settings = StudySettings(samples=samples, seed=seed, t_end=window.t_end, output_step=window.output_step,
                              laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
-                             correlated=correlated, correlation=matrix)
+                             correlated=correlated, correlation=matrix,
+                             model_dispersion=(dispersions.mass, dispersions.stiffness, dispersions.damping))
     check_study(bare, settings)
     return settings, bare
 
@@ -288,6 +298,7 @@ def monte_carlo_study(
     dispersion: float | None = None,
     parameters: Mapping[str, Any] | None = None,
     correlation: Mapping[str, Any] | None = None,
+    model: Mapping[str, float] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -310,6 +321,9 @@ def monte_carlo_study(
     [...], "matrix": [[...]]}``), or the case's ``[uncertainty]`` table when ``parameters`` is None; and the
     weight-on-hook, Normal of standard deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of
     them). Nothing declared: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``model``: nonparametric model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
+    "damping_dispersion": δ_D}`` (random reduced matrices, :mod:`~drillstring.stochastic.random_matrices`;
+    default the case's ``[uncertainty.model]``).
     ``samples`` realizations (>= 2) of ``t_end`` [s]
     run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
     (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
@@ -338,8 +352,8 @@ def monte_carlo_study(
 
     units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
-                                    correlation=correlation, samples=samples, seed=seed, t_end=t_end,
-                                    output_step=output_step)
+                                    correlation=correlation, model=model, samples=samples, seed=seed,
+                                    t_end=t_end, output_step=output_step)
     t_transient = _window(case, settings.t_end, settings.output_step, transient).transient
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
     folder = _output_folder(out, "drillstring-study-")
@@ -569,6 +583,7 @@ def study(
     dispersion: float | None = None,
     parameters: Mapping[str, Any] | None = None,
     correlation: Mapping[str, Any] | None = None,
+    model: Mapping[str, float] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -591,7 +606,7 @@ def study(
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     return monte_carlo_study(
-        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation,
+        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation, model=model,
         samples=samples, seed=seed, out=out, workers=workers, scheduler=scheduler, t_end=t_end,
         output_step=output_step, transient=transient, progress=progress,
     ).statistics
