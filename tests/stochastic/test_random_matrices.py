@@ -180,3 +180,23 @@ def test_a_dispersion_above_the_family_limit_is_refused_before_running(small_cas
     with pytest.raises(ValueError, match=r"uncertainty\.model\.damping_dispersion = -0\.5"):
         mc.StudySettings(laws=(mc.weight_on_hook_normal(small_case, 5000.0),), samples=2,
                          model_dispersion=(0.0, 0.0, -0.5))
+
+
+def test_the_case_files_uncertainty_model_table_reaches_the_study_settings(small_case):
+    """[uncertainty.model] alone (no parameter law) declares the model uncertainty; the study then draws the
+    default weight-on-hook law beside it; an argument overrides the table; a value >= 1 is refused by the
+    case with the field."""
+    from drillstring.api import study_settings
+    import tomllib
+
+    from drillstring.case import CaseError, case_from_dict
+
+    toml = small_case.to_toml() + "\n[uncertainty.model]\nstiffness_dispersion = 0.2\ndamping_dispersion = 0.3\n"
+    case = case_from_dict(tomllib.loads(toml))
+    settings, bare = study_settings(case, samples=2, t_end=0.3, output_step=0.05)
+    assert settings.model_dispersion == (0.0, 0.2, 0.3) and bare.uncertainty is None
+    assert [path for path, _ in settings.laws] == ["weight_on_hook"]
+    settings, _ = study_settings(case, model={"mass_dispersion": 0.1}, samples=2, t_end=0.3, output_step=0.05)
+    assert settings.model_dispersion == (0.1, 0.0, 0.0)
+    with pytest.raises(CaseError, match="stiffness_dispersion"):
+        case_from_dict(tomllib.loads(toml.replace("stiffness_dispersion = 0.2", "stiffness_dispersion = 1.2")))
