@@ -101,13 +101,20 @@ def main() -> None:
         values, outcome, wall = run(case, settings, args.workers)
         found[name] = values
         print(f"  {name:10s}: {outcome.completed} finished, {outcome.failed} failed, {wall:.1f} s")
-    print(f"\n| output | model: mean | model: std | parameters: mean | parameters: std | std ratio model/param |")
+    print("\n| output | model: mean | model: std (IQR) | parameters: mean | parameters: std (IQR) "
+          "| ratio model/param: std (IQR) |")
     print("|---|---|---|---|---|---|")
+
+    def iqr(x):
+        q1, q3 = np.nanpercentile(x, [25, 75])
+        return float(q3 - q1)
+
     for key in found["model"]:
         m, p = found["model"][key], found["parameters"][key]
         sm, sp = float(np.nanstd(m, ddof=1)), float(np.nanstd(p, ddof=1))
-        ratio = sm / sp if sp > 0 else float("inf")
-        print(f"| {key} | {np.nanmean(m):.4g} | {sm:.3g} | {np.nanmean(p):.4g} | {sp:.3g} | {ratio:.2f} |")
+        im, ip = iqr(m), iqr(p)
+        print(f"| {key} | {np.nanmean(m):.4g} | {sm:.3g} ({im:.3g}) | {np.nanmean(p):.4g} | {sp:.3g} ({ip:.3g}) | "
+              f"{sm / sp if sp > 0 else float('inf'):.2f} ({im / ip if ip > 0 else float('inf'):.2f}) |")
 
 
 if __name__ == "__main__":

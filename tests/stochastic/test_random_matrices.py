@@ -167,6 +167,11 @@ def test_study_realizations_draw_their_own_model_and_zero_dispersion_is_bit_iden
     for i in range(2):
         assert not np.array_equal(a["bit_speed"][i], b["bit_speed"][i])
     assert list(b.attrs["settings"]["model_dispersion"]) == [0.1, 0.2, 0.3] and b.attrs["settings"]["seed"] == 5
+    from drillstring.stochastic.analysis import load_study, study_statistics
+
+    stats = study_statistics(load_study(tmp_path / "model.zarr"))
+    assert list(stats.attrs["model_dispersion"]) == [0.1, 0.2, 0.3] and stats.attrs["seed"] == 5
+    assert list(study_statistics(load_study(tmp_path / "plain.zarr")).attrs["model_dispersion"]) == [0.0] * 3
 
 
 def test_a_dispersion_above_the_family_limit_is_refused_before_running(small_case):
