@@ -205,3 +205,43 @@ def test_the_case_files_uncertainty_model_table_reaches_the_study_settings(small
     assert settings.model_dispersion == (0.1, 0.0, 0.0)
     with pytest.raises(CaseError, match="stiffness_dispersion"):
         case_from_dict(tomllib.loads(toml.replace("stiffness_dispersion = 0.2", "stiffness_dispersion = 1.2")))
+
+
+def test_probabilistic_map_realizations_draw_random_matrices_per_sample(torsional_case):
+    """A probabilistic map's realization (point, sample) runs the model of model_generator(seed, sample): its
+    stability outputs equal those of that realized model, differ from the nominal one, and δ = 0 leaves the
+    realization bit-identical to a map without model uncertainty."""
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.stochastic import probabilistic_map as pm
+    from drillstring.stochastic.operating_map import MapSettings
+    from drillstring.stochastic.runs import stability_outputs
+
+    grid = MapSettings((10.0,), (6e4, 7e4), t_end=0.3, output_step=0.05)
+    plain = pm.SampledMapSettings(grid, samples=2, seed=4, sigma=1.0)
+    model = pm.SampledMapSettings(grid, samples=2, seed=4, sigma=1.0, model_dispersion=(0.1, 0.2, 0.3))
+    pm.check_sampled_map(torsional_case, model)
+    index = 1 * 2 + 1  # point 1, sample 1
+    a, b = pm.run_realization(torsional_case, plain, index), pm.run_realization(torsional_case, model, index)
+    assert a.status == b.status == 1
+    realized_case = pm.point_uncertainty(torsional_case, model, 1).apply(
+        pm.point_case(torsional_case, model, 1), b.values["input_values"])
+    realized = random_reduced_model(case_reduced_model(realized_case), model.model, model_generator(4, 1))
+    expected, _ = stability_outputs(realized)
+    assert b.values["torsional_growth_rate"] == pytest.approx(expected["torsional_growth_rate"], rel=1e-9)
+    assert b.values["torsional_growth_rate"] != a.values["torsional_growth_rate"]
+    zero = pm.SampledMapSettings(grid, samples=2, seed=4, sigma=1.0, model_dispersion=(0.0, 0.0, 0.0))
+    c = pm.run_realization(torsional_case, zero, index)
+    assert all(c.values[k] == a.values[k] or (np.isnan(c.values[k]) and np.isnan(a.values[k]))
+               for k in a.values if k != "input_values")
+
+
+def test_sensitivity_refuses_a_case_with_model_uncertainty_rather_than_ignore_it(small_case, tmp_path):
+    from drillstring.api import sensitivity
+    from drillstring.case import ModelUncertaintyTable, UncertaintyTable
+
+    table = UncertaintyTable(parameters={"operation.top_speed": "uniform 90 110 rpm"},
+                             model=ModelUncertaintyTable(stiffness_dispersion=0.1))
+    case = small_case.model_copy(update={"uncertainty": table})
+    with pytest.raises(ValueError, match=r"^\[uncertainty\.model\] of the case: Sobol' sensitivity runs do not"):
+        sensitivity(case, samples=8, out=tmp_path / "s")
+    assert not (tmp_path / "s").exists()

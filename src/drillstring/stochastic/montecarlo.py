@@ -43,7 +43,6 @@ from drillstring.dynamics.indicators import RENAMED_METRICS, TOP_DRIVE_METRICS, 
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.stochastic.random_matrices import (
     ModelDispersion,
-    family_columns,
     model_generator,
     random_reduced_model,
 )
@@ -145,9 +144,7 @@ class StudySettings:
         object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
         object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
         object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
-        if len(tuple(self.model_dispersion)) != 3:
-            raise ValueError(f"model_dispersion = {self.model_dispersion!r}: must be (mass, stiffness, damping)")
-        object.__setattr__(self, "model_dispersion", astuple_dispersion(ModelDispersion(*self.model_dispersion)))
+        object.__setattr__(self, "model_dispersion", ModelDispersion.from_tuple(self.model_dispersion).as_tuple())
 
     @property
     def model(self) -> ModelDispersion:
@@ -158,11 +155,6 @@ class StudySettings:
     def time(self) -> np.ndarray:
         """The common output grid [s] (the integrator's grid: k·Δt, t_end included)."""
         return output_grid(self.t_end, self.output_step)
-
-
-def astuple_dispersion(d: ModelDispersion) -> tuple[float, float, float]:
-    """``(δ_M, δ_K, δ_D)`` of a model dispersion."""
-    return (d.mass, d.stiffness, d.damping)
 
 
 def check_study_size(case: Case, settings: StudySettings) -> None:
@@ -333,7 +325,7 @@ def check_study(case: Case, settings: StudySettings) -> None:
             )
     study_uncertainty(case, settings, check=True)
     if settings.model.active:
-        settings.model.check({f: len(c) for f, c in family_columns(case_reduced_model(case)).items()})
+        settings.model.check_model(case_reduced_model(case))
 
 
 def run_realization(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:

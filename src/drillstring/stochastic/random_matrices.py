@@ -142,6 +142,30 @@ class ModelDispersion:
             raise ValueError(f"uncertainty.model.{unknown[0]}: unknown key; allowed: {', '.join(cls.KEYS)}")
         return cls(*(mapping.get(k, 0.0) for k in cls.KEYS))
 
+    @classmethod
+    def from_tuple(cls, values) -> ModelDispersion:
+        """From ``(δ_M, δ_K, δ_D)`` (a settings field; ValueError naming ``model_dispersion`` otherwise)."""
+        values = tuple(values)
+        if len(values) != 3:
+            raise ValueError(f"model_dispersion = {values!r}: must be (mass, stiffness, damping) dispersions")
+        return cls(*values)
+
+    @classmethod
+    def declared(cls, case, model: Mapping[str, Any] | None = None) -> ModelDispersion:
+        """``model`` when given, else the case's ``[uncertainty.model]`` table, else none (all zero)."""
+        if model is None and case.uncertainty is not None and case.uncertainty.model is not None:
+            model = case.uncertainty.model.model_dump()
+        return cls.from_mapping(model or {})
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        """``(δ_M, δ_K, δ_D)``."""
+        return (self.mass, self.stiffness, self.damping)
+
+    def check_model(self, model) -> None:
+        """:meth:`check` against the families of a reduced model (nothing when no dispersion is positive)."""
+        if self.active:
+            self.check({f: len(c) for f, c in family_columns(model).items()})
+
     def to_mapping(self) -> dict[str, float]:
         return dict(zip(self.KEYS, (self.mass, self.stiffness, self.damping)))
 
