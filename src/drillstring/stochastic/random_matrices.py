@@ -207,7 +207,9 @@ def random_reduced_model(model, dispersion: ModelDispersion, rng: np.random.Gene
     The damping matrix must be block diagonal by family (as every ROM built here is). The realized model has
     the same families, sizes and column order; within a family the columns are the realized modes in
     increasing ω² (a rigid mode, of zero stiffness, stays first and pure). ``residual_columns`` keeps its
-    positions; ``modes`` stays the nominal modal analysis.
+    positions (the attachment columns, highest in their family, stay last; once the random mass mixes them
+    with the modes, the flag is an approximation); ``modes`` stays the nominal modal analysis. A top drive's
+    rigid rotation stays the first torsional column with ω = 0.
     """
     if not dispersion.active:
         return model
