@@ -245,3 +245,27 @@ def test_sensitivity_refuses_a_case_with_model_uncertainty_rather_than_ignore_it
     with pytest.raises(ValueError, match=r"^\[uncertainty\.model\] of the case: Sobol' sensitivity runs do not"):
         sensitivity(case, samples=8, out=tmp_path / "s")
     assert not (tmp_path / "s").exists()
+
+
+def test_rigid_modes_stay_rigid_and_first_with_a_top_drive():
+    """With a top drive the torsional family starts with the rigid rotation (ω = 0): in every realized model it
+    is still the family's first column, with ω = 0 exactly and the nominal rigid shape (scaled by the random
+    mass), and so is the rigid axial translation."""
+    from drillstring.case import load_case
+
+    case = load_case("stick_slip")
+    case = case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(update={
+            "axial_modes": 2, "torsional_modes": 3, "lateral_modes": 2, "lateral_cutoff": 0.0})})
+    nominal = case_reduced_model(case)
+    rotation, translation = nominal.rigid_rotation_column, nominal.family.index("rigid_axial")
+    assert rotation is not None and nominal.omega2[rotation] == 0.0
+    for index in range(5):
+        realized = random_reduced_model(nominal, ModelDispersion(0.3, 0.3, 0.3), model_generator(2, index))
+        assert realized.rigid_rotation_column == rotation
+        for column in (rotation, translation):
+            assert realized.omega2[column] == 0.0
+            shape, drawn = nominal.basis[:, column], realized.basis[:, column]
+            scale = (drawn @ shape) / (shape @ shape)
+            np.testing.assert_allclose(drawn, scale * shape, atol=1e-12 * np.abs(drawn).max())
