@@ -175,12 +175,14 @@ def test_study_realizations_draw_their_own_model_and_zero_dispersion_is_bit_iden
 
 
 def test_a_dispersion_above_the_family_limit_is_refused_before_running(small_case):
-    """small_case has 2 elastic torsional modes: δ_max = sqrt(3/7) = 0.655 for that family."""
+    """small_case has 2 elastic axial modes (and the rigid one, without stiffness) and 2 torsional modes: the
+    stiffness germs are of size 2, δ_max = sqrt(3/7) = 0.655; the axial family is named first."""
     from drillstring.stochastic import montecarlo as mc
 
     s = mc.StudySettings(laws=(mc.weight_on_hook_normal(small_case, 5000.0),), samples=2, t_end=0.3,
                          output_step=0.05, model_dispersion=(0.0, 0.7, 0.0))
-    with pytest.raises(ValueError, match=r"stiffness_dispersion = 0\.7: must be in \[0, 0\.6547\).*torsional"):
+    with pytest.raises(ValueError,
+                       match=r"stiffness_dispersion = 0\.7: must be in \[0, 0\.6547\).*axial family of n = 2"):
         mc.check_study(small_case, s)
     with pytest.raises(ValueError, match=r"uncertainty\.model\.damping_dispersion = -0\.5"):
         mc.StudySettings(laws=(mc.weight_on_hook_normal(small_case, 5000.0),), samples=2,
@@ -269,3 +271,12 @@ def test_rigid_modes_stay_rigid_and_first_with_a_top_drive():
             shape, drawn = nominal.basis[:, column], realized.basis[:, column]
             scale = (drawn @ shape) / (shape @ shape)
             np.testing.assert_allclose(drawn, scale * shape, atol=1e-12 * np.abs(drawn).max())
+
+
+def test_the_limit_is_that_of_each_germ_the_rigid_mode_left_out_of_the_stiffness(small_model):
+    """small_case's axial family: the rigid mode and 2 elastic ones. Its mass germ has n = 3 (δ_max = 0.7071),
+    its stiffness germ n = 2 (δ_max = 0.6547, the rigid mode has no stiffness): δ_K = 0.68 is refused before
+    any draw, δ_M = 0.68 is not."""
+    with pytest.raises(ValueError, match=r"stiffness_dispersion = 0\.68: must be in \[0, 0\.6547\).*axial"):
+        random_reduced_model(small_model, ModelDispersion(stiffness=0.68), model_generator(0, 0))
+    ModelDispersion(mass=0.68).check({"axial": (3, 2, 3)})

@@ -162,9 +162,15 @@ class ModelDispersion:
         return (self.mass, self.stiffness, self.damping)
 
     def check_model(self, model) -> None:
-        """:meth:`check` against the families of a reduced model (nothing when no dispersion is positive)."""
-        if self.active:
-            self.check({f: len(c) for f, c in family_columns(model).items()})
+        """:meth:`check` against the germ sizes of each family of a reduced model: its columns (mass), its
+        positive ω² (stiffness) and the rank of its damping block (nothing when no dispersion is positive)."""
+        if not self.active:
+            return
+        sizes = {}
+        for family, c in family_columns(model).items():
+            rank = _factor(model.damping[np.ix_(c, c)])[0].shape[1] if self.damping > 0.0 else len(c)
+            sizes[family] = (len(c), int(np.sum(model.omega2[c] > 0.0)), rank)
+        self.check(sizes)
 
     def to_mapping(self) -> dict[str, float]:
         return dict(zip(self.KEYS, (self.mass, self.stiffness, self.damping)))
@@ -174,11 +180,13 @@ class ModelDispersion:
         """True when any dispersion is positive."""
         return self.mass > 0.0 or self.stiffness > 0.0 or self.damping > 0.0
 
-    def check(self, sizes: Mapping[str, int]) -> None:
-        """Refuse (ValueError naming the field, its value and the range) a dispersion at or above
-        δ_max(n) of a family of ``n`` modes (``sizes``: family -> number of columns)."""
-        for key, value in self.to_mapping().items():
-            for family, n in sizes.items():
+    def check(self, sizes: Mapping[str, int | tuple[int, int, int]]) -> None:
+        """Refuse (ValueError naming the field, its value and the range) a dispersion at or above δ_max(n) of
+        its germ of size ``n`` (``sizes``: family -> its number of modes, or the germ sizes ``(mass,
+        stiffness, damping)`` of the family)."""
+        for j, (key, value) in enumerate(self.to_mapping().items()):
+            for family, size in sizes.items():
+                n = size if isinstance(size, int) else size[j]
                 if value > 0.0 and n > 0 and value >= dispersion_limit(n):
                     raise ValueError(
                         f"uncertainty.model.{key} = {value:g}: must be in [0, {dispersion_limit(n):.4g}) = "
@@ -214,7 +222,7 @@ def random_reduced_model(model, dispersion: ModelDispersion, rng: np.random.Gene
     if not dispersion.active:
         return model
     columns = family_columns(model)
-    dispersion.check({f: len(c) for f, c in columns.items()})
+    dispersion.check_model(model)
     n = len(model.angular_frequencies)
     inside = np.zeros((n, n), dtype=bool)
     for c in columns.values():
