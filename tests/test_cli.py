@@ -556,6 +556,11 @@ def nothing_runs(monkeypatch):
                           "of 2000000"]),
     (("--transient", "nan"), ["transient = nan s"]),
     (("--param", "simulation.t_end=uniform 20 30"), ["simulation.t_end = 'uniform 20 30': cannot be random"]),
+    (("--param", "uncertainty.model.stiffness_dispersion=1.5"),
+     ["uncertainty.model.stiffness_dispersion = 1.5: must be a number in [0, 1)"]),
+    (("--param", "uncertainty.model.mass_dispersion=lots"),
+     ["--param uncertainty.model.mass_dispersion = 'lots': must be a number in [0, 1)"]),
+    (("--param", "uncertainty.model.stiffness=0.1"), ["uncertainty.model.stiffness: unknown key"]),
 ])
 def test_study_impossible_settings_refused_before_running(coarse_case, tmp_path, nothing_runs, args, expected):
     out = tmp_path / "bad"

@@ -195,7 +195,7 @@ _STUDY_CAPTIONS = {
 }
 
 
-def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None,
+def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None, model=None,
                    samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
     """The validated settings of a Monte Carlo study of ``case`` (TypeError / ValueError naming the field or
     the parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
@@ -205,6 +205,9 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
     Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given (a
     shorthand for the law ``weight_on_hook = "normal mean=<hook load> std=<sigma>"``, declared first). With
     none of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``model``: the model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
+    "damping_dispersion": δ_D}`` (:mod:`~drillstring.stochastic.random_matrices`), else the case's
+    ``[uncertainty.model]`` table, else none.
     """
     from drillstring.checks import real_number
     from drillstring.stochastic import DEFAULT_SIGMA
@@ -224,6 +227,10 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
         sigma = real_number("sigma", sigma, unit="N", low=0.0, low_open=True)
     _mapping("parameters", parameters)
     _mapping("correlation", correlation)
+    _mapping("model", model)
+    from drillstring.stochastic.random_matrices import ModelDispersion
+
+    dispersions = ModelDispersion.declared(case, model)
     first = dict([weight_on_hook_normal(case, sigma)]) if sigma is not None else None
     declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
     if declared is None:
@@ -236,7 +243,8 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
     bare = case.model_copy(update={"uncertainty": None})
     settings = StudySettings(samples=samples, seed=seed, t_end=window.t_end, output_step=window.output_step,
                              laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
-                             correlated=correlated, correlation=matrix)
+                             correlated=correlated, correlation=matrix,
+                             model_dispersion=dispersions.as_tuple())
     check_study(bare, settings)
     return settings, bare
 
@@ -288,6 +296,7 @@ def monte_carlo_study(
     dispersion: float | None = None,
     parameters: Mapping[str, Any] | None = None,
     correlation: Mapping[str, Any] | None = None,
+    model: Mapping[str, float] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -310,6 +319,9 @@ def monte_carlo_study(
     [...], "matrix": [[...]]}``), or the case's ``[uncertainty]`` table when ``parameters`` is None; and the
     weight-on-hook, Normal of standard deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of
     them). Nothing declared: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``model``: nonparametric model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
+    "damping_dispersion": δ_D}`` (random reduced matrices, :mod:`~drillstring.stochastic.random_matrices`;
+    default the case's ``[uncertainty.model]``).
     ``samples`` realizations (>= 2) of ``t_end`` [s]
     run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
     (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
@@ -338,8 +350,8 @@ def monte_carlo_study(
 
     units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
-                                    correlation=correlation, samples=samples, seed=seed, t_end=t_end,
-                                    output_step=output_step)
+                                    correlation=correlation, model=model, samples=samples, seed=seed,
+                                    t_end=t_end, output_step=output_step)
     t_transient = _window(case, settings.t_end, settings.output_step, transient).transient
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
     folder = _output_folder(out, "drillstring-study-")
@@ -569,6 +581,7 @@ def study(
     dispersion: float | None = None,
     parameters: Mapping[str, Any] | None = None,
     correlation: Mapping[str, Any] | None = None,
+    model: Mapping[str, float] | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
     out: str | Path | None = None,
@@ -591,7 +604,7 @@ def study(
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
     return monte_carlo_study(
-        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation,
+        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation, model=model,
         samples=samples, seed=seed, out=out, workers=workers, scheduler=scheduler, t_end=t_end,
         output_step=output_step, transient=transient, progress=progress,
     ).statistics
@@ -805,6 +818,7 @@ def operating_map(
     correlation: Mapping[str, Any] | None = None,
     seed: int = DEFAULT_SEED,
     units: str | None = None,
+    model: Mapping[str, float] | None = None,
 ) -> MapOutcome:
     """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
     one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
@@ -829,8 +843,11 @@ def operating_map(
     :data:`~drillstring.stochastic.DEFAULT_SIGMA` —, drawn from the streams ``(seed, sample)``; per point the
     probabilities of stick-slip, buckling, wall impact and unstable steady drilling and quantiles of the ROP and
     of the stick-slip index; files ``map.nc``, ``map.json``, ``probabilities.png``, ``quantiles.png``,
-    ``report.html`` and ``interactive.html``. Without ``samples``, ``sigma``, ``parameters``, ``correlation`` and ``seed`` are unused
-    (giving one of the first three is refused) and the map is deterministic.
+    ``report.html`` and ``interactive.html``. ``model``: random reduced matrices (``{"stiffness_dispersion":
+    δ_K, ...}``, :mod:`~drillstring.stochastic.random_matrices`; default the case's ``[uncertainty.model]``),
+    sample ``j`` drawing them from ``model_generator(seed, j)`` at every point. Without ``samples``, ``sigma``,
+    ``parameters``, ``correlation``, ``model`` and ``seed`` are unused (giving one of the first four is
+    refused) and the map is deterministic.
     """
     from drillstring.stochastic.operating_map import run_map
 
@@ -841,10 +858,10 @@ def operating_map(
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
     if samples is not None:
         return _sampled_map(case, settings, engine, out, samples=samples, sigma=sigma, parameters=parameters,
-                            correlation=correlation, seed=seed, units=units)
-    if sigma is not None or parameters is not None or correlation is not None:
-        raise ValueError("sigma, parameters and correlation declare the uncertainty of a probabilistic map: give "
-                         "samples (realizations per point) too")
+                            correlation=correlation, model=model, seed=seed, units=units)
+    if sigma is not None or parameters is not None or correlation is not None or model is not None:
+        raise ValueError("sigma, parameters, correlation and model declare the uncertainty of a probabilistic map: "
+                         "give samples (realizations per point) too")
     case = case.model_copy(update={"uncertainty": None})
     folder = _output_folder(out, "drillstring-map-")
     run = run_map(case, settings, folder / "map.zarr", engine,
@@ -901,7 +918,8 @@ def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, 
     return ds, summary, files
 
 
-def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, seed, units) -> MapOutcome:
+def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, model, seed,
+                 units) -> MapOutcome:
     """A probabilistic map (:func:`operating_map` with ``samples``), its figures and report in ``units``."""
     from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
@@ -909,6 +927,10 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
 
     _mapping("parameters", parameters)
     _mapping("correlation", correlation)
+    _mapping("model", model)
+    from drillstring.stochastic.random_matrices import ModelDispersion
+
+    dispersions = ModelDispersion.declared(case, model)
     declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
     if declared is None and sigma is None:
         sigma = DEFAULT_SIGMA
@@ -918,7 +940,7 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
         if declared.correlation is not None:
             correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
     settings = SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, laws=laws, correlated=correlated,
-                                  correlation=matrix)
+                                  correlation=matrix, model_dispersion=dispersions.as_tuple())
     case = case.model_copy(update={"uncertainty": None})
     folder = _output_folder(out, "drillstring-map-")
     run = run_sampled_map(case, settings, folder / "map.zarr", engine,
@@ -1005,6 +1027,11 @@ def sensitivity(
                              allowed="a number in (0, 1), e.g. 0.95")
     resamples = integer("resamples", resamples, low=1, high=MAX_RESAMPLES)
     window = _window(case, t_end, output_step, transient)
+    if parameters is None and case.uncertainty is not None and case.uncertainty.model is not None \
+            and any(case.uncertainty.model.model_dump().values()):
+        raise ValueError("[uncertainty.model] of the case: Sobol' sensitivity runs do not draw random reduced "
+                         "matrices (a random matrix is no point of the unit hypercube); give the parameters "
+                         "(--param PATH=LAW), or run a study or a probabilistic map for the model uncertainty")
     declared = declared_uncertainty(case, parameters)
     if declared is None:
         raise ValueError("no uncertain parameter: give parameters (path -> law), e.g. --param "

@@ -755,14 +755,34 @@ class CorrelationTable(_Base):
     matrix: list[list[float]] = Field(description="their correlation matrix, one row per parameter")
 
 
+class ModelUncertaintyTable(_Base):
+    """Nonparametric model uncertainty: the dispersions δ of the random reduced mass, stiffness and damping
+    matrices of Soize's SE+ ensemble (:mod:`drillstring.stochastic.random_matrices`), each in [0, 1) and
+    below sqrt((n+1)/(n+5)) for every mode family of n modes (checked when a study uses them)."""
+
+    mass_dispersion: float = Field(0.0, ge=0, lt=1, description="δ_M of the random reduced mass matrix [-]")
+    stiffness_dispersion: float = Field(0.0, ge=0, lt=1, description="δ_K of the random reduced stiffness matrix [-]")
+    damping_dispersion: float = Field(0.0, ge=0, lt=1, description="δ_D of the random reduced damping matrix [-]")
+
+
 class UncertaintyTable(_Base):
     """Uncertain parameters for studies and sensitivity analyses (``drillstring study``, ``drillstring
     sensitivity``): case-parameter path -> law, as a spec string (``"uniform 1.2 1.8 m/s"``) or a table
     (``{law = "uniform", min = 1.2, max = 1.8, unit = "m/s"}``). The paths and laws are checked against the
     case when a study uses them (:mod:`drillstring.stochastic.uncertainty`); a single run ignores them."""
 
-    parameters: dict[str, str | dict[str, str | float]] = Field(min_length=1)
+    parameters: dict[str, str | dict[str, str | float]] = Field(default_factory=dict)
     correlation: CorrelationTable | None = None
+    model: ModelUncertaintyTable | None = Field(
+        None, description="random reduced mass, stiffness and damping matrices of a study's realizations "
+        "(:mod:`drillstring.stochastic.random_matrices`)")
+
+    @model_validator(mode="after")
+    def _something(self) -> UncertaintyTable:
+        if not self.parameters and self.model is None:
+            raise _Problems([(("parameters",), self.parameters, "give at least one uncertain parameter (or a "
+                              "[uncertainty.model] table)")])
+        return self
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -33,6 +33,25 @@ def _declared_laws(param: list[str] | None, correlation: list[str] | None):
     return laws, table
 
 
+#: The ``--param`` prefix of the model uncertainty's dispersions (the case file's ``[uncertainty.model]``).
+MODEL_PREFIX = "uncertainty.model."
+
+
+def _model_dispersions(laws: dict[str, str] | None) -> tuple[dict[str, str] | None, dict[str, float] | None]:
+    """Split the ``--param uncertainty.model.KEY=δ`` values (random reduced matrices) off the laws: ``(laws or
+    None, {KEY: δ} or None)``; a value that is not a number ends the command (exit code 2)."""
+    if not laws:
+        return laws, None
+    model = {}
+    for path in [p for p in laws if p.startswith(MODEL_PREFIX)]:
+        text = laws.pop(path)
+        try:
+            model[path[len(MODEL_PREFIX):]] = float(text)
+        except ValueError:
+            _fail(f"--param {path} = {text!r}: must be a number in [0, 1) (a dispersion)")
+    return laws or None, model or None
+
+
 class _StudyProgress:
     """``progress(done, failed, total)`` for the engine's runs: a rich bar (stderr) of the ``noun``
     (realizations, grid points, runs), failures and time left. The bar starts at the first call, so that

@@ -9,7 +9,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from drillstring.cli.engine import _declared_laws, _engine_command
+from drillstring.cli.engine import _declared_laws, _engine_command, _model_dispersions
 from drillstring.cli.options import (_RPM, CaseArg, CorrelationOption, JsonOpt, OutOption, ParamOption,
                                      RunTEndOption, SchedulerOption, TransientOption, UnitsOpt, WorkersOption,
                                      _check_output, _console, _fail, _load, _note_resumed, _print_json, app)
@@ -74,6 +74,7 @@ def map_command(
     if samples is None and (sigma is not None or param or correlation):
         _fail("--sigma, --param and --correlation declare the uncertainty of a probabilistic map: give --samples N")
     laws, correlated = _declared_laws(param, correlation)
+    laws, model = _model_dispersions(laws)
     from drillstring import api
 
     try:  # bare numbers of the options are in rpm and N; the grid is passed on in SI
@@ -88,7 +89,8 @@ def map_command(
         lambda progress, note: api.operating_map(
             the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
             transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note,
-            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, seed=seed, units=units))
+            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, model=model, seed=seed,
+            units=units))
     _note_resumed(outcome.already, settings.points * (samples or 1), noun, out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)

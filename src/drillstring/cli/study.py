@@ -9,7 +9,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from drillstring.cli.engine import _api, _declared_laws, _engine_command
+from drillstring.cli.engine import _api, _declared_laws, _engine_command, _model_dispersions
 from drillstring.cli.options import (_RPM, CaseArg, CorrelationOption, JsonOpt, ParamOption, UnitsOpt,
                                      _check_output, _console, _fail, _load, _note_resumed, _print_json, app)
 from drillstring.cli.tables import _fmt, print_table
@@ -173,7 +173,9 @@ def study(
 
     The random parameters: each --param PATH=LAW (else the case file's uncertainty table), correlated
     normals by --correlation, and the weight-on-hook, Normal of standard deviation --sigma (or
-    --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN.
+    --dispersion × its mean). Nothing declared: the weight-on-hook Normal with σ = 5 kN. Model uncertainty
+    (random reduced mass, stiffness and damping matrices): --param uncertainty.model.stiffness_dispersion=0.1
+    (and mass_dispersion, damping_dispersion), else the case file's [uncertainty.model] table.
 
     Runs the realizations into OUT/study.zarr (an interrupted study resumes with the same command), then
     writes OUT/summary.json, OUT/statistics.nc, the figures convergence.png, envelopes.png, realizations.png and
@@ -184,6 +186,7 @@ def study(
     if sigma is not None and dispersion is not None:
         _fail("give --sigma or --dispersion, not both")
     laws, correlated = _declared_laws(param, correlation)
+    laws, model = _model_dispersions(laws)
     if workers is not None and scheduler:
         _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     _check_output("--out", out, folder=True)
@@ -191,8 +194,8 @@ def study(
         out, "study.zarr", "study", "realizations",
         lambda progress, note: _api().monte_carlo_study(
             the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
-            correlation=correlated, samples=samples, seed=seed, workers=workers, scheduler=scheduler,
-            t_end=t_end, transient=transient, units=units))
+            correlation=correlated, model=model, samples=samples, seed=seed, workers=workers,
+            scheduler=scheduler, t_end=t_end, transient=transient, units=units))
     _note_resumed(outcome.already, samples, "realizations", out / "study.zarr")
 
     payload = outcome.summary

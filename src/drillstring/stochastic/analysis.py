@@ -197,6 +197,8 @@ def study_statistics(raw: xr.Dataset, level: float = 0.95, t_transient: float | 
         "n_samples": n_done,
         "n_failed": int((raw.status.values == FAILED).sum()),
         "seed": int(settings.get("seed", -1)),
+        # (δ_M, δ_K, δ_D) of the random reduced matrices (drillstring.stochastic.random_matrices); zeros: none
+        "model_dispersion": [float(v) for v in settings.get("model_dispersion", (0.0, 0.0, 0.0))],
         "sigma": sigma,
         "weight_on_hook_mean": mean_woh,
         "weight_on_bit_nominal": nominal_wob,
@@ -410,6 +412,8 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, bou
         "n_samples": int(stats.attrs["n_samples"]),
         "n_failed": int(stats.attrs["n_failed"]),
         "seed": int(stats.attrs["seed"]),
+        "model_dispersion": dict(zip(("mass", "stiffness", "damping"),
+                                     map(float, stats.attrs.get("model_dispersion", (0.0, 0.0, 0.0))))),
         "sigma": _finite_or_none(stats.attrs["sigma"]),
         "weight_on_hook_mean": float(stats.attrs["weight_on_hook_mean"]),
         "weight_on_hook_dispersion": inputs.get("weight_on_hook"),

@@ -41,6 +41,11 @@ from drillstring.checks import integer
 from drillstring.checks import seed as check_seed
 from drillstring.dynamics.indicators import RENAMED_METRICS, TOP_DRIVE_METRICS, has_top_drive
 from drillstring.dynamics.rom import case_reduced_model
+from drillstring.stochastic.random_matrices import (
+    ModelDispersion,
+    model_generator,
+    random_reduced_model,
+)
 from drillstring.dynamics.stability import family_growth_rates
 from drillstring.dynamics.simulate import (
     SimulationError,
@@ -104,6 +109,10 @@ class StudySettings:
         laws: ``((path, spec), ...)`` of the random parameters (canonical specs).
         correlated: paths of the correlated normal parameters.
         correlation: their correlation matrix (rows of numbers).
+        model_dispersion: ``(δ_M, δ_K, δ_D)`` of the random reduced mass, stiffness and damping matrices
+            (:mod:`~drillstring.stochastic.random_matrices`; all 0: none). Realization ``i`` draws them from
+            :func:`~drillstring.stochastic.random_matrices.model_generator` ``(seed, i)``; the nominal run
+            keeps the nominal model.
 
     Checked when built (TypeError / ValueError naming the field; the time window by
     :func:`~drillstring.dynamics.simulate.run_window`).
@@ -116,6 +125,7 @@ class StudySettings:
     laws: tuple[tuple[str, str], ...] = ()
     correlated: tuple[str, ...] = ()
     correlation: tuple[tuple[float, ...], ...] = ()
+    model_dispersion: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         samples = integer("samples", self.samples, low=MIN_SAMPLES,
@@ -134,6 +144,12 @@ class StudySettings:
         object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
         object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
         object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
+        object.__setattr__(self, "model_dispersion", ModelDispersion.from_tuple(self.model_dispersion).as_tuple())
+
+    @property
+    def model(self) -> ModelDispersion:
+        """The model uncertainty (:class:`~drillstring.stochastic.random_matrices.ModelDispersion`)."""
+        return ModelDispersion(*self.model_dispersion)
 
     @property
     def time(self) -> np.ndarray:
@@ -308,6 +324,8 @@ def check_study(case: Case, settings: StudySettings) -> None:
                 f"{largest_accepted_sigma(case) / 1e3:.4g} kN for this case"
             )
     study_uncertainty(case, settings, check=True)
+    if settings.model.active:
+        settings.model.check_model(case_reduced_model(case))
 
 
 def run_realization(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:
@@ -326,6 +344,8 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         outcome.weight_on_hook = realized.weight_on_hook
         outcome.weight_on_bit = realized.operation.weight_on_bit
         model = case_reduced_model(realized)
+        if index != NOMINAL:
+            model = random_reduced_model(model, settings.model, model_generator(settings.seed, index))
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
         try:
             outcome.metrics.update(family_growth_rates(model))
@@ -376,7 +396,7 @@ class StudyStore(TaskStore):
     row_dim = "realization"
     noun = "realizations"
     flush_interval = 0.0  # each realization written as it arrives: its time histories dominate the write
-    differ = "case or settings differ: samples, sigma, laws, seed, t_end, output_step"
+    differ = "case or settings differ: samples, sigma, laws, seed, t_end, output_step, model_dispersion"
 
     def __init__(self, path: str | Path, case: Case, settings: StudySettings) -> None:
         self.case = case

@@ -70,6 +70,7 @@ from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, wi
 from drillstring.stochastic.runs import (DERIVED_OUTPUTS, REALIZATION_OUTPUTS, RUN_OUTPUTS, STABILITY_OUTPUTS,
                                         TOP_DRIVE_OUTPUTS, coexisting_cycles, compile_kernels, run_outputs,
                                         stored_outputs, with_top_drive_outputs)
+from drillstring.stochastic.random_matrices import ModelDispersion, model_generator, random_reduced_model
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 
@@ -132,6 +133,9 @@ class SampledMapSettings:
             weight-on-hook is not random.
         laws: ``((path, spec), ...)`` of the other random parameters (canonical specs).
         correlated, correlation: correlated normal parameters and their correlation matrix.
+        model_dispersion: ``(δ_M, δ_K, δ_D)`` of random reduced matrices
+            (:mod:`~drillstring.stochastic.random_matrices`); sample ``j`` draws them from
+            ``model_generator(seed, j)`` at every point (as its parameters: common random numbers).
     """
 
     grid: MapSettings
@@ -141,6 +145,7 @@ class SampledMapSettings:
     laws: tuple[tuple[str, str], ...] = ()
     correlated: tuple[str, ...] = ()
     correlation: tuple[tuple[float, ...], ...] = ()
+    model_dispersion: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         from drillstring.checks import real_number
@@ -165,6 +170,12 @@ class SampledMapSettings:
         object.__setattr__(self, "laws", laws)
         object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
         object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
+        object.__setattr__(self, "model_dispersion", ModelDispersion.from_tuple(self.model_dispersion).as_tuple())
+
+    @property
+    def model(self) -> ModelDispersion:
+        """The model uncertainty (:class:`~drillstring.stochastic.random_matrices.ModelDispersion`)."""
+        return ModelDispersion(*self.model_dispersion)
 
     @property
     def realizations(self) -> int:
@@ -229,6 +240,10 @@ def check_sampled_map(case: Case, settings: SampledMapSettings) -> None:
         point_uncertainty(case, settings, 0, tolerance=OUT_OF_RANGE_PROBABILITY)
     except ParameterError as error:
         raise ValueError(str(error)) from None
+    if settings.model.active:
+        from drillstring.dynamics.rom import case_reduced_model
+
+        settings.model.check_model(case_reduced_model(point_case(case, settings, 0)))
 
 
 # --- the store -----------------------------------------------------------------------------------
@@ -281,12 +296,18 @@ def run_realization(case: Case, settings: SampledMapSettings, index: int) -> Tas
         if values is not None:
             outcome.values["input_values"] = values
         return outcome
+    realize = (partial(_random_model, settings.model, settings.seed, sample) if settings.model.active else None)
     outcome = run_outputs(realized, index, t_end=grid.t_end, output_step=grid.output_step,
                           t_transient=grid.transient, with_stability=True, with_realization=True,
-                          with_top_drive=has_top_drive(case))
+                          with_top_drive=has_top_drive(case), realize_model=realize)
     outcome.values["realized_weight_on_bit"] = realized.operation.weight_on_bit
     outcome.values["input_values"] = values
     return outcome
+
+
+def _random_model(dispersion: ModelDispersion, seed: int, sample: int, model):
+    """Sample ``sample``'s random reduced matrices of ``model`` (:mod:`~drillstring.stochastic.random_matrices`)."""
+    return random_reduced_model(model, dispersion, model_generator(seed, sample))
 
 
 def run_sampled_map(case: Case, settings: SampledMapSettings, store_path: str | Path, engine: Engine = Engine(), *,
