@@ -63,3 +63,33 @@ def test_contact_named_when_the_string_presses_the_wall(small_case):
     assert next(iter(in_contact)) == CONTACT
     assert in_contact[BIT_ROCK] == pytest.approx(at_rest[BIT_ROCK], rel=1e-6)
     assert at_rest[CONTACT] < 1e-3 * in_contact[CONTACT]
+
+
+def test_bit_rock_rows_are_the_delayed_laws_own_partials():
+    """The diagnosis differentiates a delayed law through its named context (issue 22's protocol): on
+    ``aarsnes2019`` (Detournay), at a state where the wear flats' dashpot and the regularised stick are both
+    active (u̇ = v_r/2, θ̇ = ω_r/2), the bit–rock rows equal the law's closed-form partials in the depth of cut,
+    the axial velocity and the bit speed, carried along the bit's shapes."""
+    from drillstring.case import load_case
+    from drillstring.dynamics.delay import delayed_difference, start
+    from drillstring.dynamics.stiffness import _bit_rock_rows
+
+    model = case_reduced_model(load_case("aarsnes2019"))
+    law, n = model.bit_rock, model.size
+    steady = steady_drilling(model)
+    position, angle = model.bit_position(0.0, steady.state)  # the helical bottom of steady drilling under it
+    start(model.history, angle, position, steady.depth_of_cut / law.sector)
+    axial_velocity, bit_speed = 0.5 * law.contact_velocity, 0.5 * law.friction_speed
+    y = steady.state.copy()
+    y[n:2 * n] = (axial_velocity * model.bit_u / (model.bit_u @ model.bit_u)
+                  + (bit_speed - model.base_speed) * model.bit_t / (model.bit_t @ model.bit_t))
+    position, angle = model.bit_position(0.0, y)
+    depth = delayed_difference(model.history, angle, position)
+    assert depth > 0.0
+    partials = law.jacobian(depth, axial_velocity, bit_speed)  # columns d, u̇, ω
+    shapes = np.column_stack([model.bit_u, model.bit_t])
+    rows = _bit_rock_rows(model, 0.0, y)
+    scale = np.abs(shapes @ partials[:, 1:] @ shapes.T).max()
+    np.testing.assert_allclose(rows[:, n:2 * n], shapes @ partials[:, 1:] @ shapes.T, rtol=0, atol=1e-6 * scale)
+    np.testing.assert_allclose(rows[:, :n], shapes @ partials[:, :1] @ model.bit_u[None, :], rtol=0,
+                               atol=1e-6 * np.abs(shapes @ partials[:, :1] @ model.bit_u[None, :]).max())

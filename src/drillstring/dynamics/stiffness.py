@@ -53,19 +53,25 @@ def _partials(function, point: np.ndarray) -> np.ndarray:
 
 
 def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
-    """The bit–rock law's part of ``∂(η̈)/∂y`` (n rows), from the law's own partial derivatives: its force and
-    torque act along the bit's shapes ``b_u``, ``b_t`` and depend on the bit's velocity ``b_uᵀη̇``, speed
-    ``Ω + b_tᵀη̇`` and (delayed laws) depth of cut through the bit's position ``b_uᵀη``."""
+    """The bit–rock law's part of ``∂(η̈)/∂y`` (n rows), from the law's own partial derivatives (its NumPy
+    reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named context, so any registered
+    law): its force and torque act along the bit's shapes ``b_u``, ``b_t`` and depend on the bit's velocity
+    ``b_uᵀη̇``, speed ``Ω + b_tᵀη̇`` and (delayed laws) depth of cut through the bit's position ``b_uᵀη``."""
     from drillstring.dynamics.delay import delayed_difference
+    from drillstring.forces.registry import bit_context
 
     n = model.size
     eta_dot = y[n:2 * n]
-    depth = 0.0
-    if model.bit_rock.delayed:
-        position, angle = model.bit_position(t, y)
-        depth = delayed_difference(model.history, angle, position)
+    position, angle = model.bit_position(t, y)
+    depth = delayed_difference(model.history, angle, position) if model.bit_rock.delayed else 0.0
     point = np.array([model.bit_u @ eta_dot, model.base_speed + model.bit_t @ eta_dot, depth])
-    law = _partials(lambda x: np.array(model.bit_rock.evaluate(x[0], x[1], x[2]), dtype=float).ravel(), point)
+
+    def forces(x: np.ndarray) -> np.ndarray:
+        ctx = bit_context(x[0], x[1], x[2], time=t, position=position, angle=angle,
+                          weight_on_bit=model.weight_on_bit)
+        return np.array(model.bit_rock.evaluate_at(ctx), dtype=float).ravel()
+
+    law = _partials(forces, point)
     shapes = np.column_stack([model.bit_u, model.bit_t])  # (n, 2): force along b_u, torque along b_t
     rows = np.zeros((n, len(y)))
     rows[:, n:2 * n] = shapes @ law[:, :2] @ shapes.T
@@ -74,22 +80,24 @@ def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
 
 
 def _top_drive_rows(model, t: float, y: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
-    """The top drive's part of ``∂(η̈, ż)/∂y``: its motor torque acts along the quill's shapes and depends on
-    the quill speed, the surface torque and the controller's states (the law's partial derivatives), and the
-    controller's own rows (from the finite-difference ``jacobian``)."""
-    from drillstring.forces.top_drive import evaluate_top_drive
+    """The driving top boundary's part of ``∂(η̈, ż)/∂y``: its motor torque acts along the quill's shapes and
+    depends on the quill speed, the surface torque and its states (partial derivatives of its NumPy reference
+    :meth:`~drillstring.forces.registry.TopBoundary.evaluate_at` on the named context, so any registered
+    boundary, with states or without), and its states' own rows (from the finite-difference ``jacobian``)."""
+    from drillstring.forces.registry import TopContext
 
-    n, states = model.size, model.top_drive.n_states
+    n, boundary = model.size, model.top_drive
+    states = boundary.n_states if boundary.drives else 0
     rows = np.zeros((n + states, len(y)))
-    if not states:
+    if not boundary.drives:
         return rows
+    first = model.layout.states["top_boundary"]
     point = np.array([model.base_speed + model.quill_shapes @ y[n:2 * n], model.surface_torque_shapes @ y[:n],
-                      *y[2 * n:]])
-    torque = _partials(lambda x: [evaluate_top_drive(model.top_drive, t, x[0], x[1], x[2],
-                                                     x[3] if states > 1 else 0.0)[0]], point)[0]
+                      *y[first:first + states]])
+    torque = _partials(lambda x: [boundary.evaluate_at(TopContext(t, x[0], x[1]), x[2:])[0]], point)[0]
     rows[:n, n:2 * n] = np.outer(model.quill_shapes, torque[0] * model.quill_shapes)
     rows[:n, :n] = np.outer(model.quill_shapes, torque[1] * model.surface_torque_shapes)
-    rows[:n, 2 * n:] = np.outer(model.quill_shapes, torque[2:2 + states])
+    rows[:n, first:first + states] = np.outer(model.quill_shapes, torque[2:])
     rows[n:] = jacobian[n:]  # the jacobian holds the rows of η̈, then those of the states
     return rows
 
