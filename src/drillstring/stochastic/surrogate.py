@@ -145,13 +145,14 @@ class SearchProblem:
         return b[:, 0] + np.atleast_2d(np.asarray(u, dtype=float)) * (b[:, 1] - b[:, 0])
 
 
-def initial_design(problem: SearchProblem) -> np.ndarray:
-    """The first ``problem.initial`` points (rows, in the variables' units): the box's centre, then a scrambled
-    Sobol' sequence of ``problem.seed``."""
+def initial_design(problem: SearchProblem, count: int | None = None) -> np.ndarray:
+    """The first ``count`` (default ``problem.initial``) points (rows, in the variables' units): the box's
+    centre, then a scrambled Sobol' sequence of ``problem.seed``."""
     d = len(problem.bounds)
+    count = problem.initial if count is None else count
     sobol = qmc.Sobol(d, scramble=True, seed=np.random.default_rng([problem.seed, 7])).random_base2(
-        max(math.ceil(math.log2(max(problem.initial - 1, 1))), 0))
-    unit = np.vstack([np.full(d, 0.5), sobol])[:problem.initial]
+        max(math.ceil(math.log2(max(count - 1, 1))), 0))
+    unit = np.vstack([np.full(d, 0.5), sobol])[:count]
     return problem.from_unit(unit)
 
 
@@ -235,10 +236,11 @@ class Recommendation:
     constraint_sds: np.ndarray
 
 
-def recommend(problem: SearchProblem, x, surrogates: Surrogates) -> Recommendation:
-    """The point of largest posterior objective among the candidates and the evaluated points ``x`` whose
-    posterior constraint means hold; none: the least-infeasible one (module docstring)."""
-    unit = np.vstack([problem.to_unit(x), _candidates(problem)])
+def recommend(problem: SearchProblem, x, surrogates: Surrogates, *, candidates: bool = True) -> Recommendation:
+    """The point of largest posterior objective among the evaluated points ``x`` (and the candidates, unless
+    ``candidates`` is false) whose posterior constraint means hold; none: the least-infeasible one (module
+    docstring)."""
+    unit = np.vstack([problem.to_unit(x), _candidates(problem)]) if candidates else problem.to_unit(x)
     means = np.column_stack([gp.predict(unit)[0] for gp in surrogates.constraints]) if surrogates.constraints \
         else np.zeros((len(unit), 0))
     sds = np.column_stack([gp.predict(unit)[1] for gp in surrogates.constraints]) if surrogates.constraints \
@@ -287,14 +289,16 @@ class Estimates:
                               self.constraint_variances)
 
 
-def next_point(problem: SearchProblem, x, estimates: Estimates | None, budget: int) -> np.ndarray:
-    """Point number ``len(x)`` of a search of ``budget`` points, from the ``estimates`` at the points ``x``
-    before it: the initial design first; then :func:`propose`; the last point of the budget is the current
-    recommendation itself (so that the answer is a point with its own Monte Carlo estimate), unless it was
-    already evaluated. Deterministic: the same estimates give the same point (a resumed search repeats it)."""
-    index = 0 if x is None else len(x)
-    if index < problem.initial:
-        return initial_design(problem)[index]
+def next_point(problem: SearchProblem, x, estimates: Estimates | None, budget: int, *,
+               index: int | None = None) -> np.ndarray:
+    """Point number ``index`` (default ``len(x)``) of a search of ``budget`` points, from the ``estimates`` at
+    the points ``x`` before it (those with an estimate): the initial design first (and while fewer than 2
+    points have estimates); then :func:`propose`; the last point of the budget is the current recommendation
+    itself (so that the answer is a point with its own Monte Carlo estimate), unless it was already
+    evaluated. Deterministic: the same estimates give the same point (a resumed search repeats it)."""
+    index = (0 if x is None else len(x)) if index is None else index
+    if index < problem.initial or x is None or len(x) < 2:
+        return initial_design(problem, index + 1)[index]
     surrogates = estimates.fit(problem, x)
     if index == budget - 1:
         found = recommend(problem, x, surrogates).point
