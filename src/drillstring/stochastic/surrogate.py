@@ -215,11 +215,31 @@ def propose(problem: SearchProblem, x, surrogates: Surrogates) -> np.ndarray:
     if surrogates.objective is None or not feasible_here.any():
         return problem.from_unit(cand[int(np.argmax(feasibility))])[0]
     best = float(np.max(surrogates.objective.predict(evaluated[feasible_here])[0]))
-    mean, sd = surrogates.objective.predict(cand)
-    sd = np.maximum(sd, 1e-12)
-    z = (mean - best) / sd
-    improvement = (mean - best) * ndtr(z) + sd * np.exp(-0.5 * z * z) / math.sqrt(2 * math.pi)
-    return problem.from_unit(cand[int(np.argmax(improvement * feasibility))])[0]
+
+    def acquisition(unit: np.ndarray) -> np.ndarray:
+        mean, sd = surrogates.objective.predict(unit)
+        sd = np.maximum(sd, 1e-12)
+        z = (mean - best) / sd
+        improvement = (mean - best) * ndtr(z) + sd * np.exp(-0.5 * z * z) / math.sqrt(2 * math.pi)
+        return improvement * _feasibility(problem, surrogates, unit)
+
+    start = cand[int(np.argmax(acquisition(cand)))]
+    polished = _polish(lambda u: -float(acquisition(u[None, :])[0]), start)
+    if np.min(np.linalg.norm(evaluated - polished, axis=1)) < MIN_DISTANCE:
+        polished = start
+    return problem.from_unit(polished)[0]
+
+
+def _polish(loss, start: np.ndarray, constraints=()) -> np.ndarray:
+    """A local refinement of a candidate in the unit box (the candidates are about 0.03 apart): L-BFGS-B, or
+    SLSQP with ``constraints``; the start when that does not improve ``loss``."""
+    bounds = [(0.0, 1.0)] * len(start)
+    method = "SLSQP" if constraints else "L-BFGS-B"
+    found = minimize(loss, start, method=method, bounds=bounds, constraints=list(constraints),
+                     options={"maxiter": 50})
+    point = np.clip(found.x, 0.0, 1.0)
+    ok = all(c["fun"](point) >= -1e-9 for c in constraints)
+    return point if ok and np.isfinite(found.fun) and loss(point) < loss(start) else start
 
 
 @dataclass
@@ -246,10 +266,21 @@ def recommend(problem: SearchProblem, x, surrogates: Surrogates, *, candidates: 
     sds = np.column_stack([gp.predict(unit)[1] for gp in surrogates.constraints]) if surrogates.constraints \
         else np.zeros((len(unit), 0))
     limits = np.asarray(problem.limits, dtype=float)
-    ok = np.all(means <= limits, axis=1)
+    ok = np.all(means <= limits + 1e-9, axis=1)
     if ok.any() and surrogates.objective is not None:
         value = surrogates.objective.predict(unit)[0]
         index = int(np.flatnonzero(ok)[np.argmax(value[ok])])
+        if candidates:  # refined between the candidates: max μ_f subject to μ_k ≤ b_k
+            polished = _polish(lambda u: -float(surrogates.objective.predict(u[None, :])[0][0]), unit[index], [
+                {"type": "ineq", "fun": (lambda u, gp=gp, b=b: b - float(gp.predict(u[None, :])[0][0]))}
+                for gp, b in zip(surrogates.constraints, limits)])
+            unit = np.vstack([unit, polished])
+            means = np.vstack([means, [gp.predict(polished[None, :])[0][0] for gp in surrogates.constraints]]) \
+                if surrogates.constraints else np.zeros((len(unit), 0))
+            sds = np.vstack([sds, [gp.predict(polished[None, :])[1][0] for gp in surrogates.constraints]]) \
+                if surrogates.constraints else np.zeros((len(unit), 0))
+            ok = np.append(ok, bool(np.all(means[-1] <= limits + 1e-9)))
+            index = len(unit) - 1
     else:
         violation = np.max((means - limits) / np.maximum(sds, 1e-3), axis=1, initial=-np.inf)
         index = int(np.argmin(violation))

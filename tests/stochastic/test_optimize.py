@@ -1,0 +1,152 @@
+"""The robust operating point: the surrogate search on analytic problems with known constrained optima (one of
+them chance-constrained, estimated by Monte Carlo), infeasible constraints, the Gaussian process, and on the
+simulator: resume, the fingerprint and the refusals."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import ndtr, ndtri
+
+from drillstring.stochastic import execution
+from drillstring.stochastic import optimize as opt
+from drillstring.stochastic.surrogate import GaussianProcess, SearchProblem, constraint_confidence, search
+
+RPM = math.pi / 30.0
+
+
+def test_gaussian_process_interpolates_and_knows_its_noise():
+    """Noise-free samples of a smooth function: the posterior mean passes through them (sd ~ 0 there) and
+    predicts between them; with a known noise variance the posterior sd at a sample is below the noise's."""
+    x = np.linspace(0.0, 1.0, 9)[:, None]
+    y = np.sin(6.0 * x[:, 0])
+    gp = GaussianProcess.fit(x, y)
+    mean, sd = gp.predict(x)
+    assert np.max(np.abs(mean - y)) < 1e-3 and np.max(sd) < 1e-2
+    between = (x[:-1] + x[1:]) / 2
+    assert np.max(np.abs(gp.predict(between)[0] - np.sin(6.0 * between[:, 0]))) < 0.02
+    noisy = GaussianProcess.fit(x, y + 0.01 * np.cos(40 * x[:, 0]), np.full(9, 0.05**2))
+    assert np.all(noisy.predict(x)[1] < 0.05)
+
+
+def test_deterministic_constrained_optimum():
+    """max −(x1 − 0.7)² − (x2 − 0.8)² s.t. (x1 + x2)/2 ≤ 0.5: the projection of (0.7, 0.8) on the line, (0.45,
+    0.55); found within 0.03 in each variable from 16 points."""
+    def evaluate(x):
+        return -(x[0] - 0.7) ** 2 - (x[1] - 0.8) ** 2, 1e-8, [(x[0] + x[1]) / 2], [1e-8]
+
+    problem = SearchProblem(((0.0, 1.0), (0.0, 1.0)), (0.5,), maximize=True, initial=8, seed=1)
+    _, _, found = search(problem, evaluate, 16)
+    assert found.feasible
+    assert np.allclose(found.point, [0.45, 0.55], atol=0.03)
+
+
+def test_chance_constrained_optimum_from_monte_carlo_estimates():
+    """max E[x1 + x2 + 0.1 Z'] s.t. P(x1² + x2 + 0.3 Z > 2) ≤ 0.05, Z, Z' standard normal, each point estimated
+    from the same n = 2000 draws (common random numbers) with its binomial variance. The constraint is
+    x2 ≤ 2 − 0.3 z₀.₉₅ − x1², so the optimum is x1 = 1/2, x2 = 1.75 − 0.3 z₀.₉₅ = 1.2565, objective 1.7565.
+    The objective is flat along the boundary there (a shift δ in x1 costs δ²), so the tolerance is stated on
+    what matters: the exact probability at the answer within 2.5 binomial standard errors of 0.05 (±0.012),
+    the objective within 0.03 of the optimum, and the point within 0.06 of it in each variable."""
+    draws = np.random.default_rng(5).standard_normal((2000, 2))
+    z95 = float(ndtri(0.95))
+
+    def evaluate(x):
+        hit = x[0] ** 2 + x[1] + 0.3 * draws[:, 0] > 2.0
+        p, n = hit.mean(), hit.size
+        tilde = (p * n + 0.5) / (n + 1)
+        value = x[0] + x[1] + 0.1 * draws[:, 1]
+        return value.mean(), value.var() / n, [p], [tilde * (1 - tilde) / n]
+
+    problem = SearchProblem(((0.0, 2.0), (0.0, 2.0)), (0.05,), maximize=True, initial=8, seed=0)
+    points, estimates, found = search(problem, evaluate, 22)
+    assert found.feasible
+    x1, x2 = found.point
+    exact = float(ndtr((x1**2 + x2 - 2.0) / 0.3))
+    assert abs(exact - 0.05) < 2.5 * math.sqrt(0.05 * 0.95 / 2000)
+    assert abs((x1 + x2) - (0.5 + 1.75 - 0.3 * z95)) < 0.03
+    assert np.allclose(found.point, [0.5, 1.75 - 0.3 * z95], atol=0.06)
+    # the sequential points went near the constraint boundary x2 = 2 − 0.3 z₀.₉₅ − x1²
+    later = points[problem.initial:]
+    assert np.median(np.abs(later[:, 1] - (2.0 - 0.3 * z95 - later[:, 0] ** 2))) < 0.15
+
+
+def test_infeasible_constraints_give_the_least_infeasible_point():
+    """P(Z > 1 − x) ≤ 0.05 over x in [0, 1] is infeasible (P ≥ P(Z > 1) = 0.159); the least-infeasible point
+    is x = 0, flagged infeasible."""
+    draws = np.random.default_rng(2).standard_normal(400)
+
+    def evaluate(x):
+        p = np.mean(draws > 1.0 - x[0])
+        return x[0], 1e-6, [p], [p * (1 - p) / 400 + 1e-6]
+
+    problem = SearchProblem(((0.0, 1.0),), (0.05,), initial=4)
+    _, _, found = search(problem, evaluate, 8)
+    assert not found.feasible
+    assert found.point[0] < 0.1
+
+
+def test_constraint_confidence():
+    """The combined standard deviation adds the (Jeffreys-adjusted) binomial and surrogate variances; a
+    probability at its bound has confidence 1/2."""
+    s, c = constraint_confidence(0.05, 100, 0.05, 0.01)
+    tilde = 5.5 / 101
+    assert s == pytest.approx(math.sqrt(tilde * (1 - tilde) / 100 + 1e-4))
+    assert c == pytest.approx(0.5)
+    assert constraint_confidence(0.0, 400, 0.05, 0.0)[1] > 0.99
+
+
+def _settings(**extra):
+    base = dict(variables=(("top_speed", 80 * RPM, 120 * RPM), ("weight_on_bit", 80e3, 100e3)),
+                constraints=(("buckling", 0.05), ("stick_slip", 0.5)), samples=2, points=4, initial=3, t_end=0.6,
+                output_step=0.05, sigma=5e3)
+    return opt.OptimizationSettings(**(base | extra))
+
+
+def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path):
+    """A search whose last point's realizations are set back to pending reruns only those and ends with the
+    same design and answer; a store of other settings is refused by its fingerprint."""
+    settings = _settings()
+    path = tmp_path / "optimize.zarr"
+    run = opt.run_optimization(small_case, settings, path, execution.Engine(workers=1),
+                               finish=lambda r: opt.optimization_result(r.store))
+    assert run.computed == settings.realizations and run.failed == 0
+    first = run.result
+    status = run.store.group["status"]
+    status[6:8] = 0
+    again = opt.run_optimization(small_case, settings, path, execution.Engine(workers=1),
+                                 finish=lambda r: opt.optimization_result(r.store))
+    assert again.computed == 2
+    assert again.result["design"] == first["design"]
+    assert again.result["recommended"]["values"] == first["recommended"]["values"]
+    assert again.result["estimates"] == first["estimates"]
+    assert set(first["recommended"]) >= {"objective", "objective_standard_error", "constraints"}
+    with pytest.raises(ValueError, match="holds a different optimization"):
+        opt.run_optimization(small_case, _settings(samples=3), path, execution.Engine(workers=1))
+
+
+@pytest.mark.parametrize("extra, message", [
+    ({"variables": (("top_speed", 120 * RPM, 80 * RPM),)}, "reversed or equal"),
+    ({"constraints": (("buckling", 1.5),)}, r"must be a probability in \(0, 1\)"),
+    ({"objective": "rate_of_penetration_q0"}, "rate_of_penetration_qNN"),
+    ({"model_dispersion": (0.0, 1.2, 0.0)}, "stiffness_dispersion"),
+    ({"variables": (("weight_on_bit", 8e4, 9e4), ("weight_on_hook", 1e5, 2e5))}, "give one of them"),
+    ({"points": 3}, "initial"),
+])
+def test_bad_settings_are_refused_in_one_line(extra, message):
+    with pytest.raises((ValueError, TypeError), match=message) as error:
+        _settings(**extra)
+    assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("extra, message", [
+    ({"variables": (("top_drive.proportional_gain", 1.0, 10.0),)}, "the case cannot vary it"),
+    ({"variables": (("operation.top_sped", 1.0, 10.0),)}, "the case cannot vary it"),
+    ({"constraints": (("bucklin", 0.1),)}, "the event must be one of"),
+    ({"constraints": (("surface_torque_amplitude>8000", 0.1),)}, "no per-realization output"),
+    ({"variables": (("weight_on_bit", 8e4, 1e9),)}, "weight_on_bit"),
+])
+def test_a_variable_the_case_cannot_vary_is_refused(small_case, extra, message):
+    with pytest.raises(ValueError, match=message) as error:
+        opt.check_optimization(small_case, _settings(**extra))
+    assert "\n" not in str(error.value)
