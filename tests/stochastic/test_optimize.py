@@ -150,3 +150,22 @@ def test_a_variable_the_case_cannot_vary_is_refused(small_case, extra, message):
     with pytest.raises(ValueError, match=message) as error:
         opt.check_optimization(small_case, _settings(**extra))
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--vary", "top_speed=140:60"], "reversed or equal"),
+    (["--vary", "proportional_gain=1:100"], "the case cannot vary it"),
+    (["--vary", "top_speed=60:140", "-c", "buckling<=1.5"], "probability in (0, 1)"),
+    (["--vary", "top_speed=60:140", "-p", "uncertainty.model.stiffness_dispersion=2"], "stiffness_dispersion"),
+    (["--vary", "top_speed"], "NAME=LOW:HIGH"),
+    ([], "give at least one decision variable"),
+])
+def test_cli_refuses_bad_input_in_one_line_with_exit_2(tmp_path, argv, message):
+    from typer.testing import CliRunner
+
+    from drillstring.cli import app
+
+    result = CliRunner().invoke(app, ["optimize", "reference", *argv, "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2, result.output
+    assert message in result.stderr and "Traceback" not in result.output
+    assert len(result.stderr.strip().splitlines()) == 1
