@@ -141,9 +141,11 @@ def test_bad_settings_are_refused_in_one_line(extra, message):
 
 @pytest.mark.parametrize("extra, message", [
     ({"variables": (("top_drive.proportional_gain", 1.0, 10.0),)}, "the case cannot vary it"),
+    ({"variables": (("top_drive.inertia", 1.0, 10.0),)}, "the case cannot vary it"),
     ({"variables": (("operation.top_sped", 1.0, 10.0),)}, "the case cannot vary it"),
     ({"constraints": (("bucklin", 0.1),)}, "the event must be one of"),
-    ({"constraints": (("surface_torque_amplitude>8000", 0.1),)}, "no per-realization output"),
+    ({"constraints": (("surface_torque_amplitude>8000", 0.1),)}, "an output of a top drive only"),
+    ({"constraints": (("torque>8000", 0.1),)}, "no per-realization output"),
     ({"variables": (("weight_on_bit", 8e4, 1e9),)}, "weight_on_bit"),
 ])
 def test_a_variable_the_case_cannot_vary_is_refused(small_case, extra, message):

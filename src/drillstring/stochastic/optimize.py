@@ -103,6 +103,9 @@ def event_function(event: str, outputs) -> tuple[str, Callable[[np.ndarray], np.
     for sign in (">", "<"):
         if sign in text:
             output, value = (part.strip() for part in text.split(sign, 1))
+            if output in TOP_DRIVE_OUTPUTS and output not in outputs:
+                raise ValueError(f"constraint {text!r}: {output} is an output of a top drive only (this case's top "
+                                 "turns at an imposed speed: top_drive.controller = 'imposed_speed')")
             if output not in outputs:
                 raise ValueError(f"constraint {text!r}: {output!r} is no per-realization output; one of "
                                  f"{', '.join(outputs)}")
@@ -180,10 +183,10 @@ class OptimizationSettings:
         object.__setattr__(self, "points", integer("points", self.points, low=self.initial + 1,
                                                    allowed=f"an integer > initial = {self.initial}"))
         object.__setattr__(self, "seed", check_seed(self.seed))
-        law_paths = {p for p, _ in self.laws} | ({WEIGHT_ON_HOOK} if self.sigma is not None else set())
-        clash = next((p for p in paths if p in law_paths or (p == "operation.weight_on_bit" and
-                                                              WEIGHT_ON_HOOK in law_paths)), None)
-        if clash is not None and clash != "operation.weight_on_bit":
+        # A law of the top speed, weight-on-bit or hook load is refused by the point's map settings (sigma is
+        # the hook load's uncertainty around each point's own value); any other decision variable:
+        clash = next((p for p, _ in self.laws if p in paths), None)
+        if clash is not None:
             raise ValueError(f"{clash}: a decision variable cannot carry a law too")
         ModelDispersion.from_tuple(self.model_dispersion)
 
@@ -214,11 +217,10 @@ def point_settings(at_point: Case, settings: OptimizationSettings) -> SampledMap
 
 def check_optimization(case: Case, settings: OptimizationSettings) -> None:
     """Refuse (ValueError, one line, before anything runs): a decision variable the case cannot vary (an
-    unknown path, a top-drive gain without a top drive), bounds outside the parameter's range, an event of no
+    unknown path, a top-drive parameter when the top turns at an imposed speed), bounds outside the parameter's range, an event of no
     output, and uncertainty that cannot be drawn at some corner of the box (as a map refuses its points)."""
     for path, low, high in settings.variables:
-        if path.startswith("top_drive.") and path not in ("top_drive.inertia", "top_drive.max_torque") and \
-                not has_top_drive(case):
+        if path.startswith("top_drive.") and not has_top_drive(case):
             raise ValueError(f"{path}: the case cannot vary it (top_drive.controller = 'imposed_speed': no top-drive "
                              "controller; choose pi, soft_torque or z_torque in the case)")
         try:
