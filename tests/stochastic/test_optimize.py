@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from scipy.special import ndtr, ndtri
 
-from drillstring.stochastic import execution
 from drillstring.stochastic import optimize as opt
 from drillstring.stochastic.surrogate import GaussianProcess, SearchProblem, constraint_confidence, search
 
@@ -104,25 +103,41 @@ def _settings(**extra):
 
 
 def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path):
-    """A search whose last point's realizations are set back to pending reruns only those and ends with the
-    same design and answer; a store of other settings is refused by its fingerprint."""
-    settings = _settings()
-    path = tmp_path / "optimize.zarr"
-    run = opt.run_optimization(small_case, settings, path, execution.Engine(workers=1),
-                               finish=lambda r: opt.optimization_result(r.store))
-    assert run.computed == settings.realizations and run.failed == 0
-    first = run.result
-    status = run.store.group["status"]
-    status[6:8] = 0
-    again = opt.run_optimization(small_case, settings, path, execution.Engine(workers=1),
-                                 finish=lambda r: opt.optimization_result(r.store))
+    """drillstring.optimize writes its results file, dataset and figure; a search whose last point's
+    realizations are set back to pending reruns only those and ends with the same design and answer; a store
+    of other settings is refused by its fingerprint."""
+    import json
+
+    import zarr
+
+    import drillstring
+    from drillstring.operating_point import optimization_settings
+    from drillstring.stochastic.execution import Engine
+
+    arguments = dict(variables={"top_speed": "80 rpm:120 rpm", "weight_on_bit": "80 kN:100 kN"},
+                     constraints={"buckling": 0.05, "stick_slip": 0.5}, samples=2, points=4, initial=3, t_end=0.6,
+                     output_step=0.05, sigma=5e3, out=tmp_path, workers=1)
+    first = drillstring.optimize(small_case, **arguments)
+    summary = first.summary
+    assert summary["realizations"] == 8 and not summary["failures"]
+    assert summary["recommended"]["values"] in summary["design"]
+    assert json.loads((tmp_path / "optimize.json").read_text())["recommended"] == summary["recommended"]
+    assert (tmp_path / "optimize.png").stat().st_size > 20_000
+    assert first.dataset.mean_rate_of_penetration.shape == (4, 2)
+    point = summary["recommended"]["point"]
+    assert first.dataset.objective_estimate[point] == pytest.approx(
+        float(first.dataset.mean_rate_of_penetration[point].mean()))
+    zarr.open_group(str(tmp_path / "optimize.zarr"), mode="a")["status"][6:8] = 0
+    settings = optimization_settings(small_case, **{k: v for k, v in arguments.items() if k not in ("out", "workers")})
+    again = opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1),
+                                 finish=lambda run: opt.optimization_result(run.store))
     assert again.computed == 2
-    assert again.result["design"] == first["design"]
-    assert again.result["recommended"]["values"] == first["recommended"]["values"]
-    assert again.result["estimates"] == first["estimates"]
-    assert set(first["recommended"]) >= {"objective", "objective_standard_error", "constraints"}
+    for key in ("design", "estimates", "recommended"):
+        assert again.result[key] == summary[key]
     with pytest.raises(ValueError, match="holds a different optimization"):
-        opt.run_optimization(small_case, _settings(samples=3), path, execution.Engine(workers=1))
+        opt.run_optimization(small_case, optimization_settings(small_case, **(
+            {k: v for k, v in arguments.items() if k not in ("out", "workers")} | {"samples": 3})),
+            tmp_path / "optimize.zarr", Engine(workers=1))
 
 
 @pytest.mark.parametrize("extra, message", [
