@@ -186,3 +186,38 @@ def test_cli_refuses_bad_input_in_one_line_with_exit_2(tmp_path, argv, message):
     assert result.exit_code == 2, result.output
     assert message in result.stderr and "Traceback" not in result.output
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_point_estimates_from_realizations():
+    """Per design point, over its finished realizations only: the mean objective and its variance/n, a
+    quantile objective (as numpy's quantile, with a positive bootstrap variance), an MSE left undefined when a
+    finished realization has none, and each probability k/n with the Jeffreys-adjusted variance."""
+    rng = np.random.default_rng(0)
+    samples, points = 6, 3
+    rop = rng.uniform(1e-3, 5e-3, points * samples)
+    stick = np.tile([0.0, 0.2, 0.0, 0.0, 0.5, 0.0], points)
+    status = np.ones(points * samples, dtype=np.int8)
+    status[samples + 1] = 2  # a failed realization of point 1: left out
+    mse = np.full(points * samples, 1e8)
+    mse[2 * samples + 3] = np.nan  # point 2: one finished realization without penetration
+    arrays = {"mean_rate_of_penetration": rop, "stick_time_fraction": stick, "mechanical_specific_energy": mse,
+              "lowest_lateral_eigenvalue": np.ones(points * samples)}
+    outputs = tuple(arrays)
+    settings = _settings(constraints=(("stick_slip", 0.1), ("mean_rate_of_penetration<0.002", 0.2)), samples=samples,
+                         points=points, initial=2)
+    found = opt.point_estimates(settings, arrays, status, outputs)
+    assert list(found["count"]) == [6, 5, 6]
+    kept = np.delete(rop[samples:2 * samples], 1)
+    assert found["objective"][1] == pytest.approx(kept.mean())
+    assert found["objective_variance"][1] == pytest.approx(kept.var(ddof=1) / 5)
+    hits = np.delete(stick[samples:2 * samples], 1) > 0
+    assert found["probabilities"][1, 0] == pytest.approx(hits.mean())
+    assert found["probability_variances"][1, 0] == pytest.approx((hits.sum() + 0.5) / 6 * (1 - (hits.sum() + 0.5) / 6) / 5)
+    assert found["probabilities"][0, 1] == pytest.approx(np.mean(rop[:samples] < 0.002))
+    quantile = opt.point_estimates(_settings(objective="rate_of_penetration_q10", samples=samples, points=points,
+                                             initial=2), arrays, status, outputs)
+    assert quantile["objective"][0] == pytest.approx(np.quantile(rop[:samples], 0.1))
+    assert np.all(quantile["objective_variance"] > 0)
+    energy = opt.point_estimates(_settings(objective="mechanical_specific_energy", samples=samples, points=points,
+                                           initial=2), arrays, status, outputs)
+    assert energy["objective"][0] == pytest.approx(1e8) and np.isnan(energy["objective"][2])
