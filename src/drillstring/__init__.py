@@ -9,7 +9,8 @@ The notebook API: :func:`load_case`, :func:`static` (the prestressed static stat
 :func:`modes` (natural frequencies), :func:`simulate`, :func:`stability` (steady drilling and its linear
 stability), :func:`compare` (case 1 against case 2), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
 :func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
-(Sobol' indices), :func:`campbell` (Campbell diagram and critical speeds).
+(Sobol' indices), :func:`campbell` (Campbell diagram and critical speeds), :func:`optimize` (the robust operating point under
+chance constraints).
 """
 
 from drillstring._version import __version__  # noqa: F401  (the package's version)
@@ -36,4 +37,8 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring import api
 
         return getattr(api, name)
+    if name == "optimize":
+        from drillstring.operating_point import optimize
+
+        return optimize
     raise AttributeError(f"module 'drillstring' has no attribute {name!r}")

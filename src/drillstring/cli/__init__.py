@@ -59,7 +59,7 @@ Modules
 :mod:`~drillstring.cli.tables` (tables that fit the terminal), :mod:`~drillstring.cli.engine` (what the
 engine commands share), and one module per command group: ``static`` (cases, static, modes), ``campbell``,
 ``stability``, ``simulate`` (simulate, compare), ``study``, ``operating_map``, ``sensitivity``,
-``torque_drag``.
+``optimize``, ``torque_drag``.
 """
 
 from __future__ import annotations
@@ -78,6 +78,7 @@ from drillstring.cli import (  # noqa: E402, F401
     study,
     operating_map,
     sensitivity,
+    optimize,
     torque_drag,
 )
 from drillstring.cli.options import (  # noqa: E402, F401

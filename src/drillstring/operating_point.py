@@ -1,0 +1,234 @@
+"""``drillstring.optimize``: the robust operating point of a case (:mod:`drillstring.stochastic.optimize`), its
+results file, its figure and its store, as the notebook API and ``drillstring optimize`` see it."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+from drillstring.api import _engine, _mapping, _output_folder, _run_record, _window, as_case
+from drillstring.blas_threads import single_threaded_blas
+from drillstring.case import Case
+from drillstring.stochastic import DEFAULT_SEED
+from drillstring.units import unit_system
+
+__all__ = ["OptimizeOutcome", "optimize", "optimization_settings", "parse_bounds"]
+
+#: Realizations per design point by default.
+DEFAULT_POINT_SAMPLES = 8
+
+
+@dataclass
+class OptimizeOutcome:
+    """What :func:`optimize` did: the JSON-ready ``summary`` (as in ``optimize.json``: the recommended point,
+    its objective and probabilities with their errors, every design point), the ``dataset`` (realizations
+    ``point × sample`` and the per-point estimates), the files written, the realizations already in the store
+    before this call, a note (a stale lock taken over) or None."""
+
+    summary: dict
+    dataset: Any
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+    @property
+    def feasible(self) -> bool:
+        return bool(self.summary["feasible"])
+
+
+def parse_bounds(case: Case, name: str, text, default_unit: str = "") -> tuple[str, float, float]:
+    """``(path, low, high)`` [SI] of a decision variable ``name`` (an alias of
+    :data:`~drillstring.stochastic.optimize.DECISION_ALIASES` or a case path) and its bounds: ``"A:B"`` with a
+    unit after each value or once after the last (``"60 rpm:140 rpm"``, ``"80:120 kN"``; bare numbers in
+    ``default_unit``, else SI) or a pair of SI numbers. ValueError (one line naming the variable) otherwise."""
+    from drillstring.case import to_si
+    from drillstring.stochastic.operating_map import _split_unit
+    from drillstring.stochastic.optimize import decision_path
+    from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, case_parameter
+
+    path = decision_path(str(name))
+    try:
+        dimension = None if path == WEIGHT_ON_HOOK else case_parameter(case, path).dimension
+    except ParameterError as error:
+        raise ValueError(f"decision variable {path}: the case cannot vary it ({error})") from None
+    if path == WEIGHT_ON_HOOK:
+        from drillstring.units import FORCE as dimension
+    if isinstance(text, str):
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise ValueError(f"{path} = {text!r}: write the bounds as LOW:HIGH, e.g. '60 rpm:140 rpm' or '80:120 kN'")
+        _, last_unit = _split_unit(parts[1])
+        values = []
+        for part in parts:
+            number, unit = _split_unit(part)
+            unit = unit or last_unit or default_unit
+            try:
+                values.append(float(to_si(f"{number} {unit}" if unit else float(number), dimension)))
+            except ValueError as error:
+                raise ValueError(f"{path} = {text!r}: {error}") from None
+        low, high = values
+    else:
+        try:
+            low, high = (float(v) for v in text)
+        except (TypeError, ValueError):
+            raise ValueError(f"{path} = {text!r}: bounds must be 'LOW:HIGH' or a pair of numbers [SI]") from None
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise ValueError(f"{path} = {text!r}: bounds must be finite")
+    if not low < high:
+        raise ValueError(f"{path} = {text!r}: bounds reversed or equal (LOW must be less than HIGH)")
+    return path, low, high
+
+
+def optimization_settings(case: Case, *, variables, objective="rate_of_penetration", constraints=None,
+                          samples=DEFAULT_POINT_SAMPLES, points=None, initial=None, seed=DEFAULT_SEED, t_end=None,
+                          output_step=None, transient=None, sigma=None, parameters=None, correlation=None,
+                          model=None, default_units: Mapping[str, str] | None = None):
+    """The validated :class:`~drillstring.stochastic.optimize.OptimizationSettings` of a search of ``case``
+    (arguments as :func:`optimize`)."""
+    from drillstring.stochastic import DEFAULT_SIGMA
+    from drillstring.stochastic.optimize import OptimizationSettings, check_optimization
+    from drillstring.stochastic.random_matrices import ModelDispersion
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    _mapping("variables", variables)
+    _mapping("constraints", constraints)
+    _mapping("parameters", parameters)
+    _mapping("correlation", correlation)
+    _mapping("model", model)
+    if not variables:
+        raise ValueError("variables: give at least one decision variable with its bounds, e.g. "
+                         "{'top_speed': '60 rpm:140 rpm'}")
+    units = dict(default_units or {})
+    bounded = tuple(parse_bounds(case, name, text, units.get(name, "")) for name, text in variables.items())
+    dispersions = ModelDispersion.declared(case, model)
+    declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
+    if declared is None and sigma is None:
+        sigma = DEFAULT_SIGMA
+    laws, correlated, matrix = (), (), ()
+    if declared is not None:
+        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters)
+        if declared.correlation is not None:
+            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    window = _window(case, t_end, output_step, transient)
+    initial = max(4, 4 * len(bounded)) if initial is None else initial
+    points = 2 * initial if points is None else points
+    settings = OptimizationSettings(
+        variables=bounded, objective=objective, constraints=tuple((constraints or {}).items()), samples=samples,
+        points=points, initial=initial, seed=seed, t_end=window.t_end, output_step=window.output_step,
+        transient=window.transient, sigma=sigma, laws=laws, correlated=correlated, correlation=matrix,
+        model_dispersion=dispersions.as_tuple())
+    check_optimization(case.model_copy(update={"uncertainty": None}), settings)
+    return settings
+
+
+@single_threaded_blas()
+def optimize(
+    case: Case | str | Path = "reference",
+    *,
+    variables: Mapping[str, Any],
+    objective: str = "rate_of_penetration",
+    constraints: Mapping[str, float] | None = None,
+    samples: int = DEFAULT_POINT_SAMPLES,
+    points: int | None = None,
+    initial: int | None = None,
+    seed: int = DEFAULT_SEED,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    sigma: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
+    model: Mapping[str, float] | None = None,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+    units: str | None = None,
+    default_units: Mapping[str, str] | None = None,
+) -> OptimizeOutcome:
+    """The robust operating point of ``case`` (:mod:`drillstring.stochastic.optimize`).
+
+    ``variables``: decision variable -> bounds, ``{"top_speed": "60 rpm:140 rpm", "weight_on_bit": "80 kN:120
+    kN"}`` (aliases ``top_speed``, ``weight_on_bit``, ``weight_on_hook``, ``proportional_gain``,
+    ``integral_gain``, or any case path; bounds ``"LOW:HIGH"`` with units, or a pair of SI numbers).
+    ``objective``: ``rate_of_penetration`` (expected, maximised), ``rate_of_penetration_qNN`` (its NN % quantile,
+    maximised) or ``mechanical_specific_energy`` (expected, minimised). ``constraints``: event -> bound,
+    ``P(event) ≤ bound`` (``{"stick_slip": 0.05, "buckling": 0.01, "surface_torque_amplitude>8000": 0.01}``).
+    ``samples`` realizations per design point, ``points`` design points in all (default twice ``initial``,
+    itself 4 per variable, at least 4). The uncertainty at each point is a probabilistic map's
+    (:func:`~drillstring.api.operating_map` with ``samples``: ``sigma``, ``parameters``, ``correlation``,
+    ``model``, ``seed``; nothing declared: the weight-on-hook with σ = 5 kN). Runs of ``t_end`` [s] (default the
+    case's), outputs after ``transient``.
+
+    Writes ``out``/optimize.zarr (resumable), optimize.json (the summary), optimize.nc (the realizations and
+    per-point estimates) and optimize.png (the feasible region over the first two variables, the answer
+    marked; axes in the unit system ``units``). Infeasible constraints are not an exception: the outcome's
+    ``feasible`` is False and its recommended point is the least-infeasible one.
+    """
+    from drillstring.stochastic.optimize import run_optimization
+
+    units = unit_system(units, "units")
+    case = as_case(case)
+    settings = optimization_settings(case, variables=variables, objective=objective, constraints=constraints,
+                                     samples=samples, points=points, initial=initial, seed=seed, t_end=t_end,
+                                     output_step=output_step, transient=transient, sigma=sigma,
+                                     parameters=parameters, correlation=correlation, model=model,
+                                     default_units=default_units)
+    engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    case = case.model_copy(update={"uncertainty": None})
+    folder = _output_folder(out, "drillstring-optimize-")
+    run = run_optimization(case, settings, folder / "optimize.zarr", engine,
+                           finish=partial(_finish, case, settings, folder if out is not None else None, units))
+    summary, dataset, files = run.result
+    return OptimizeOutcome(summary, dataset, files, run.already, run.note)
+
+
+def _finish(case, settings, folder, units, run):
+    """Under the store's lock: the summary, the dataset and (in ``folder`` unless None) the files."""
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.optimize_plots import plot_optimization
+    from drillstring.results import write_netcdf
+    from drillstring.stochastic.optimize import optimization_result
+
+    result = optimization_result(run.store)
+    summary = {"case": case.name, **{k: v for k, v in result.items() if k not in ("surrogates", "problem")},
+               **_run_record(run.store, run, "realizations")}
+    dataset = _dataset(run.store, settings, result)
+    files: dict[str, Path] = {}
+    if folder is not None:
+        files = {"store": run.store.path, "summary": folder / "optimize.json", "results": folder / "optimize.nc",
+                 "figure": folder / "optimize.png"}
+        write_netcdf(dataset, files["results"])
+        plot_optimization(case, result, files["figure"], units=units)
+        summary["files"] = {k: str(v) for k, v in files.items()}
+        write_text_atomic(files["summary"], strict_json(summary) + "\n")
+    return summary, dataset, files
+
+
+def _dataset(store, settings, result):
+    """Realizations (``point × sample``) of every stored output, design values and per-point estimates."""
+    import numpy as np
+    import xarray as xr
+
+    s, n = settings.samples, settings.points
+    data = {}
+    for name in store.group:
+        array = np.asarray(store.group[name][...])
+        if array.ndim == 1 and array.size == n * s:
+            data[name] = (("point", "sample"), array.reshape(n, s), dict(store.group[name].attrs))
+    data["design_values"] = (("point", "variable"), np.asarray(result["design"], dtype=float))
+    data["objective_estimate"] = (("point",), np.asarray(result["estimates"]["objective"], dtype=float),
+                                  {"long_name": f"Monte Carlo estimate of the objective {settings.objective} [SI]"})
+    data["probability_estimates"] = (("point", "constraint"),
+                                     np.asarray(result["estimates"]["probabilities"], dtype=float).reshape(n, -1))
+    data["samples_done"] = (("point",), np.asarray(result["estimates"]["count"]))
+    ds = xr.Dataset(data, coords={"variable": [p for p, _, _ in settings.variables],
+                                  "constraint": [e for e, _ in settings.constraints]})
+    ds.attrs.update({"case": store.group.attrs["case"], "objective": settings.objective,
+                     "recommended_point": int(result["recommended"]["point"]), "feasible": int(result["feasible"])})
+    return ds
