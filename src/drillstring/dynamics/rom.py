@@ -94,7 +94,17 @@ from drillstring.forces.registry import (
 )
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
 from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
-from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
+from drillstring.modal import (
+    LinearSystem,
+    ModeFamily,
+    Modes,
+    case_linear_system,
+    compute_modes,
+    coupled_modes,
+    family_coupling,
+    family_dofs,
+    family_modes,
+)
 from drillstring.statics import StaticState, case_static_state
 
 #: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
@@ -201,11 +211,14 @@ class ContactData(NamedTuple):
 
 
 class RhsData(NamedTuple):
-    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from its own
-    mode family only: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
-    lateral z start, end] column ranges; ``bit_u``, ``torsion_rows`` hold only their family's columns and
-    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (family columns × nodes) and ``damping_t`` are stored
-    transposed so that products run column by column."""
+    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from the columns
+    that can move it: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
+    lateral z start, end] column ranges; ``axial_rows``, ``torsion_rows`` hold the columns of their range and
+    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (range columns × nodes) and ``damping_t`` are stored
+    transposed so that products run column by column. For a straight string each range is its family's
+    (the fast path: a quantity reads only its family's columns); when the families couple
+    (:attr:`ReducedOrderModel.coupled`) every range is the whole basis ``[0, n)``, every row holds every
+    column and the damping is one full block."""
 
     omega2: np.ndarray  # (n,) signed ω² [1/s²]
     damping_t: np.ndarray  # (n, n) Dᵀ [1/s]
@@ -894,6 +907,7 @@ class ReducedOrderModel:
     hook_load: HookLoadRamp | None = None
     history_bins: int = 2048
     residual_columns: np.ndarray | None = None
+    coupled: bool = False
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -904,6 +918,8 @@ class ReducedOrderModel:
         self.base_speed = 0.0 if self.top_drive.drives else float(self.top_speed)
         if self.top_drive.drives and self.nonlinear == "full":
             raise ValueError("nonlinear = 'full' with a top drive is not supported yet: use 'bit_and_contact'")
+        if self.coupled:
+            _check_coupled(self)
         mesh = self.static.mesh
         nodes = np.arange(mesh.n_nodes)
         phi = self.basis
@@ -939,6 +955,9 @@ class ReducedOrderModel:
         labels = np.array(self.family)
         blocks = []
         for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
+            if self.coupled:  # every physical quantity reads every column
+                blocks += [0, n]
+                continue
             columns = np.nonzero(np.isin(labels, names))[0]
             start = int(columns[0]) if len(columns) else 0
             end = int(columns[-1]) + 1 if len(columns) else 0
@@ -946,6 +965,10 @@ class ReducedOrderModel:
                 raise ValueError("mode families must be contiguous in the basis")
             blocks += [start, end]
         self.blocks = np.array(blocks, dtype=np.int64)
+        #: (n,) True on the columns that move the lateral DOFs (every column when the families couple)
+        self.lateral_columns = np.zeros(n, dtype=bool)
+        self.lateral_columns[blocks[4]:blocks[5]] = True
+        self.lateral_columns[blocks[6]:blocks[7]] = True
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
         #: column of the rigid rotation (a top drive), None when the top is held
         self.rigid_rotation_column = t0 if self.top_drive.drives else None
@@ -1029,7 +1052,11 @@ class ReducedOrderModel:
     @property
     def lowest_lateral_eigenvalue(self) -> float:
         """ω₁² [rad²/s²] of the lowest lateral mode of the basis (signed; negative: the straight string is
-        statically buckled, :mod:`drillstring.buckling`); NaN without lateral modes."""
+        statically buckled, :mod:`drillstring.buckling`); NaN without lateral modes. When the families couple:
+        the lowest ω² of the basis's modes (the rigid axial translation left out)."""
+        if self.coupled:
+            elastic = self.omega2[(np.array(self.family) != "rigid_axial") & ~self.residual_columns]
+            return float(elastic.min()) if len(elastic) else math.nan
         y0, y1 = int(self.blocks[4]), int(self.blocks[5])
         return float(self.omega2[y0]) if y1 > y0 else math.nan
 
@@ -1101,7 +1128,7 @@ class ReducedOrderModel:
         )
         n_nodes = self.static.mesh.n_nodes
         turning = self.basis.T @ self.turning_loads.forces(self.base_speed * t + self.phi_tx @ eta, spin)
-        lateral = np.array([f.startswith("lateral") for f in self.family])
+        lateral = self.lateral_columns
         generalized = (self.phi_v.T @ st.scatter(force_v, n_nodes) + self.phi_w.T @ st.scatter(force_w, n_nodes)
                        + self.phi_tx.T @ st.scatter(torque, n_nodes)
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
@@ -1223,6 +1250,12 @@ class ReducedOrderModel:
         omega = self.top_speed
         weight = np.exp(1j * turning.phase) * np.where(turning.speed_squared, omega**2, 1.0)
         _, _, _, _, y0, y1, z0, z1 = self.blocks
+        if self.coupled:  # one system: both planes' loads on the whole basis, the full damping
+            block = np.diag(self.omega2) - omega**2 * np.eye(n) + 1j * omega * self.damping
+            amplitude = np.linalg.solve(block, weight @ turning.load_y - 1j * (weight @ turning.load_z))
+            y[:n] = amplitude.real
+            y[n:] = (1j * omega * amplitude).real
+            return y
         for (start, end), load, factor in (((y0, y1), turning.load_y, 1.0), ((z0, z1), turning.load_z, -1j)):
             if end == start:
                 continue
@@ -1255,7 +1288,7 @@ class ReducedOrderModel:
         if self.rigid_rotation_column is not None and not at_rest:
             r = self.rigid_rotation_column  # spinning at Ω: the rigid rotation carries it
             y0[self.size + r] = self.top_speed / self.quill_shapes[r]
-        lateral = np.array([f.startswith("lateral") for f in self.family])
+        lateral = self.lateral_columns
         if not (lateral_perturbation > 0 and lateral.any()):
             return y0
         mesh = self.static.mesh
@@ -1297,6 +1330,21 @@ class ReducedOrderModel:
         """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
         n = self.size
         return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
+
+
+def _check_coupled(model: ReducedOrderModel) -> None:
+    """ValueError for what a model whose families couple does not support yet, naming it."""
+    if model.nonlinear == "full":
+        raise ValueError("nonlinear = 'full' with coupled families (a string out of its straight axis) is not "
+                         "supported: its mass correction is built family by family; use 'bit_and_contact'")
+    if model.top_drive.drives:
+        raise ValueError(f"top boundary {model.top_drive.name!r} with coupled families (a string out of its "
+                         "straight axis) is not supported: the rigid rotation of a bent string is not a motion of "
+                         "its global θx DOFs; use an imposed top speed")
+    if model.base_speed != 0.0:
+        raise ValueError(f"top_speed = {model.base_speed:g} rad/s with coupled families (a string out of its "
+                         "straight axis): the spin of a bent string about its centreline is not a rotation of its "
+                         "global θx DOFs (deviated-well dynamics); only 0 is supported")
 
 
 def rigid_axial_column(model: ReducedOrderModel) -> int:
@@ -1353,20 +1401,26 @@ def reduced_model(
             :func:`drillstring.modal.compute_modes`).
     """
     drive = top_drive is not None and top_drive.drives
-    if drive:
-        torsional_modes += 1
-    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                          top_inertia=top_drive.top_inertia if drive else None,
-                          truncation_correction=truncation_correction)
-    families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
-    basis = np.hstack([f.shapes for f in families])
-    omega = np.concatenate([f.angular_frequencies for f in families])
-    # the family's size, its attachment modes (truncation_correction = "static") included
-    family = ["rigid_axial"] + ["axial"] * (len(modes.axial.angular_frequencies) - 1)
-    for f in families[1:]:
-        family += [f.name] * len(f.angular_frequencies)
-    residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies) - f.attachments
-                               for f in families])
+    coupled = family_coupling(system) > 0.0
+    if coupled:
+        modes, basis, omega, family, residual = _coupled_basis(
+            system, axial_modes + 1 + torsional_modes + 2 * lateral_modes, lateral_cutoff, truncation_correction,
+            damping_basis)
+    else:
+        if drive:
+            torsional_modes += 1
+        modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
+                              top_inertia=top_drive.top_inertia if drive else None,
+                              truncation_correction=truncation_correction)
+        families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
+        basis = np.hstack([f.shapes for f in families])
+        omega = np.concatenate([f.angular_frequencies for f in families])
+        # the family's size, its attachment modes (truncation_correction = "static") included
+        family = ["rigid_axial"] + ["axial"] * (len(modes.axial.angular_frequencies) - 1)
+        for f in families[1:]:
+            family += [f.name] * len(f.angular_frequencies)
+        residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies)
+                                   - f.attachments for f in families])
     structural = reduced_structural_damping(
         system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
         rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
@@ -1380,8 +1434,29 @@ def reduced_model(
         stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
-        top_drive=top_drive, hook_load=hook_load, residual_columns=residual,
+        top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled,
     )
+
+
+def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_correction: str,
+                   damping_basis: str):
+    """The one basis of a system whose families couple (:func:`~drillstring.modal.coupled_modes`: the ``count``
+    lowest modes of the whole string and every one below ``cutoff`` [rad/s], then its attachment modes):
+    ``(modes, basis, ω, labels, residual)``, labels "rigid_axial" for the rigid translation and "coupled" for
+    the others."""
+    if damping_basis != "constrained":
+        raise ValueError(f"damping.basis = {damping_basis!r} with coupled families (a string out of its straight "
+                         "axis): the free-free damping is defined family by family; use 'constrained' (and "
+                         "Rayleigh damping)")
+    found = coupled_modes(system, count, cutoff, truncation_correction)
+    empty = {name: ModeFamily(name, np.zeros(0), np.zeros((system.mesh.n_dofs, 0)))
+             for name in ("axial", "torsional", "lateral_y", "lateral_z")}
+    n = len(found.angular_frequencies)
+    family = ["coupled"] * n
+    if n and found.angular_frequencies[0] == 0.0:  # coupled_modes put the rigid axial translation first
+        family[0] = "rigid_axial"
+    residual = np.arange(n) >= n - found.attachments
+    return Modes(**empty, coupled=found), found.shapes, found.angular_frequencies, family, residual
 
 
 def _lateral_cutoff(case_value: float, lateral_modes: int | None, lateral_cutoff: float | None) -> float:
