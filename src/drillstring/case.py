@@ -733,19 +733,29 @@ class Simulation(_Base):
         return self
 
 
-class Initial(_Base):
-    """Initial state and start. ``start = "ramp"`` (the default for new cases): the string turns off bottom,
-    the bit ``clearance`` above the rock, the hook carrying the whole string; the hook load is then slacked off
-    so that the weight on bit grows linearly from 0 to ``operation.weight_on_bit`` over ``weight_ramp_time``
-    (:mod:`drillstring.forces.hook_load`). ``"on_bottom"`` (the reference study's start): the static state
-    spinning at the top speed, the bit-rock law switched on at t = 0. Both add a seeded lateral perturbation."""
+class RampStartKeys(_Base):
+    """The case keys of the ramped start (``initial.start = "ramp"``, the hook load
+    :class:`~drillstring.forces.hook_load.HookLoadRamp`), with their units and bounds."""
 
-    lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
-    seed: int = Field(0, ge=0, le=2**64 - 1)
-    start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
     clearance: Length = Field(0.005, ge=0, le=1.0, description="ramp: bit height above the rock at t = 0 [m]")
     weight_ramp_time: Time = Field(
         10.0, gt=0, le=1e4, description="ramp: time over which the weight on bit reaches its value [s]")
+
+
+class _InitialState(_Base):
+    lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
+    seed: int = Field(0, ge=0, le=2**64 - 1)
+    start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
+
+
+class Initial(RampStartKeys, _InitialState):
+    """Initial state and start. ``start`` names the hook load (:mod:`drillstring.forces.registry`):
+    ``"ramp"`` (the default for new cases): the string turns off bottom,
+    the bit ``clearance`` above the rock, the hook carrying the whole string; the hook load is then slacked off
+    so that the weight on bit grows linearly from 0 to ``operation.weight_on_bit`` over ``weight_ramp_time``
+    (:mod:`drillstring.forces.hook_load`; its keys :class:`RampStartKeys`). ``"on_bottom"`` (the reference
+    study's start): the static state spinning at the top speed, the bit-rock law switched on at t = 0. Both add a
+    seeded lateral perturbation."""
 
 
 class CorrelationTable(_Base):

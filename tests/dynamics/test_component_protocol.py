@@ -22,6 +22,8 @@ from drillstring.forces.registry import (
     BitContext,
     BitLaw,
     BitSteadyState,
+    HookContext,
+    HookLoad,
     TopBoundary,
     TopContext,
     bit_context,
@@ -273,7 +275,7 @@ def test_pack_refuses_a_law_whose_numbers_disagree_with_its_size(model):
         kernel_size: ClassVar[int] = 7
 
     with pytest.raises(ValueError, match="kernel_array\\(\\) has 6 numbers, kernel_size says 7"):
-        pack(Short(), model.top_drive, model.hook_load.kernel_array(), np.zeros(4), 2 * model.size)
+        pack(Short(), model.top_drive, model.hook_load, np.zeros(4), 2 * model.size)
 
 
 # --- a delayed law (it reads the depth of cut), defined here ---------------------------------------------------
@@ -359,3 +361,53 @@ def test_a_delayed_law_from_outside_equals_the_detournay_law_it_rewrites(torsion
         np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-9 * np.abs(expected[name]).max(),
                                    err_msg=name)
     assert np.abs(expected["force_on_bit"]).max() > 0.0
+
+
+# --- a hook load defined here --------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _heave_kernel(args, ctx):
+    """``[A, ω]`` -> ``A sin(ω t)``."""
+    return args[0] * math.sin(args[1] * ctx.time)
+
+
+@register
+@dataclass(frozen=True)
+class HeavingHook(HookLoad):
+    """A hook load that does not exist in the package: a floating rig's heave pulling the top with ``A sin(ω t)``
+    [N] (``A`` [N], ``ω`` [rad/s])."""
+
+    name: ClassVar[str] = "heave_test"
+    kernel_size: ClassVar[int] = 2
+    kernel: ClassVar = _heave_kernel
+
+    amplitude: float = 2e4
+    frequency: float = 0.7
+
+    def kernel_array(self):
+        return np.array([self.amplitude, self.frequency])
+
+    def evaluate_at(self, ctx: HookContext):
+        return self.amplitude * np.sin(self.frequency * np.asarray(ctx.time, dtype=float))
+
+
+def test_a_hook_load_from_outside_acts_at_the_top_through_the_reference_engine(torsional_case):
+    """The outside hook load's force enters the right-hand side at the top's u and nowhere else; the registry
+    places its numbers and gives it a negative code; the compiled engine refuses it by name."""
+    from dataclasses import replace
+
+    plain = case_reduced_model(torsional_case)
+    heaving = replace(plain, hook_load=HeavingHook())
+    assert HeavingHook.component_code < 0.0 and not heaving.compiled and plain.compiled
+    start = heaving.layout.numbers["hook_load"]
+    np.testing.assert_array_equal(heaving.case2_data.laws[start:start + 2], [2e4, 0.7])
+    n = plain.size
+    y = np.random.default_rng(5).standard_normal(plain.state_size) * 1e-3
+    t = 1.3
+    difference = heaving.rhs_reference(t, y) - plain.rhs_reference(t, y)
+    np.testing.assert_allclose(difference[n:2 * n], plain.top_u * 2e4 * math.sin(0.7 * t), rtol=1e-9, atol=1e-9)
+    assert not difference[:n].any() and not difference[2 * n:].any()
+    np.testing.assert_allclose(plain.rhs(t, y), plain.rhs_reference(t, y), rtol=1e-10, atol=1e-8)
+    with pytest.raises(ValueError, match="hook load 'heave_test' is registered outside the drillstring package"):
+        heaving.rhs(t, y)

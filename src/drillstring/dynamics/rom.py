@@ -77,18 +77,21 @@ from drillstring.forces.nonlinear import (
     modal_mass_coupling,
     nonlinear_elements,
 )
-from drillstring.forces.hook_load import HookLoadRamp, hook_load_change
+from drillstring.forces.hook_load import OnBottomStart
 from drillstring.forces.registry import (
     HISTORY,
-    HOOK_LOAD,
     TOP_BOUNDARY_CODE,
     TOP_INERTIA,
     BitContext,
     BitLaw,
+    HookContext,
+    HookLoad,
     TopBoundary,
     TopContext,
     bit_law_force,
     compiled,
+    hook_load as registered_hook_load,
+    hook_load_force,
     pack,
     top_boundary_torque,
 )
@@ -506,7 +509,7 @@ def _rhs_kernel(d, t, y, out):
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
-    hook = hook_load_change(d.laws[int(d.laws[HOOK_LOAD]):], t)
+    hook = hook_load_force(d.laws, HookContext(t, d.weight_on_bit))
     for j in range(a0, a1):
         acc[j] += d.axial_rows[0, j - a0] * axial_force + d.axial_rows[1, j - a0] * hook
     for j in range(t0, t1):
@@ -874,8 +877,9 @@ class ReducedOrderModel:
             (its first column the rigid rotation), ``top_speed`` is the set point, the kernels' base spin
             speed is 0 (the rigid rotation carries the spin) and the state ``[η, η̇, s]`` holds the
             controller's states ``s`` after the modal coordinates (:attr:`state_size`).
-        hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`): ``None`` or a zero ramp
-            time is the reference start (on the static state at t = 0); a ramp starts off bottom, the bit
+        hook_load: the start, a hook load of the protocol (:class:`~drillstring.forces.registry.HookLoad`:
+            :class:`~drillstring.forces.hook_load.HookLoadRamp`, ...): ``None``, :class:`~drillstring.forces.
+            hook_load.OnBottomStart` or a zero ramp time is the reference start (on the static state at t = 0); a ramp starts off bottom, the bit
             its ``clearance`` above the rock, and transfers the weight-on-bit over the ramp time.
         history_bins: bins per blade sector of the bit's history (:mod:`drillstring.dynamics.delay`) for a
             delayed bit–rock law.
@@ -904,7 +908,7 @@ class ReducedOrderModel:
     generalized_force: np.ndarray | None = None
     turning_loads: TurningLoads | None = None
     top_drive: TopDriveParameters | None = None
-    hook_load: HookLoadRamp | None = None
+    hook_load: HookLoad | None = None
     history_bins: int = 2048
     residual_columns: np.ndarray | None = None
     coupled: bool = False
@@ -939,7 +943,7 @@ class ReducedOrderModel:
         if self.turning_loads is None:
             self.turning_loads = TurningLoads.empty(mesh.n_dofs)
         if self.hook_load is None:
-            self.hook_load = HookLoadRamp()
+            self.hook_load = OnBottomStart()
         self.omega2 = np.ascontiguousarray(np.sign(self.angular_frequencies) * self.angular_frequencies**2)
         self.bit_u = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, U)])
         self.top_u = np.ascontiguousarray(phi[dof(0, U)])
@@ -981,7 +985,7 @@ class ReducedOrderModel:
         transposed = np.ascontiguousarray
         history = (allocate_storage(self.bit_rock.sector, self.history_bins) if self.bit_rock.delayed
                    else allocate_storage(1.0, 4))
-        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load.kernel_array(), history, 2 * n)
+        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -1088,11 +1092,12 @@ class ReducedOrderModel:
         """True when the compiled kernels hold the model's components (the package's registered ones); a
         component registered outside the package runs through :meth:`rhs_reference` only
         (:mod:`drillstring.forces.registry`)."""
-        return compiled(self.bit_rock) and compiled(self.top_drive)
+        return compiled(self.bit_rock) and compiled(self.top_drive) and compiled(self.hook_load)
 
     def require_compiled(self) -> None:
         """ValueError naming the component when :attr:`compiled` is False."""
-        for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive)):
+        for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive),
+                                ("hook load", self.hook_load)):
             if not compiled(component):
                 raise ValueError(
                     f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
@@ -1132,7 +1137,7 @@ class ReducedOrderModel:
         generalized = (self.phi_v.T @ st.scatter(force_v, n_nodes) + self.phi_w.T @ st.scatter(force_w, n_nodes)
                        + self.phi_tx.T @ st.scatter(torque, n_nodes)
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
-                       + self.top_u * float(self.hook_load.force(t))
+                       + self.top_u * float(self.hook_load.evaluate_at(HookContext(t, self.weight_on_bit)))
                        + self.generalized_force + np.where(lateral, turning, 0.0))
         acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
         states = np.zeros(self.state_size - 2 * n)
@@ -1375,7 +1380,7 @@ def reduced_model(
     turning_loads: TurningLoads | None = None,
     lateral_cutoff: float = 0.0,
     top_drive: TopDriveParameters | None = None,
-    hook_load: HookLoadRamp | None = None,
+    hook_load: HookLoad | None = None,
     rayleigh: tuple[float, float] = (0.0, 0.0),
     truncation_correction: str = "none",
 ) -> ReducedOrderModel:
@@ -1394,7 +1399,7 @@ def reduced_model(
             (:func:`~drillstring.forces.contact.mesh_contact_stations`).
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
         top_drive: the top boundary; None: the top speed imposed.
-        hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
+        hook_load: the start (a :class:`~drillstring.forces.registry.HookLoad`); None: the reference start.
         rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
         truncation_correction: "none" (the modes alone) or "static" (each of the axial and torsional families
             followed by its residual-flexibility attachment modes at the bit, and at the top with a top drive:
@@ -1516,11 +1521,10 @@ def case_reduced_model(
     )
 
 
-def case_hook_load(case, weight_on_bit: float) -> HookLoadRamp:
-    """The start of a :class:`~drillstring.case.Case` (``[initial]``): the ramp of ``weight_on_bit`` [N] (the
-    static one) over ``weight_ramp_time`` with the bit ``clearance`` off bottom for ``start = "ramp"``; the
-    reference start (no ramp) for ``"on_bottom"``."""
-    i = case.initial
-    if i.start == "on_bottom":
-        return HookLoadRamp()
-    return HookLoadRamp(ramp_time=i.weight_ramp_time, weight_on_bit=float(weight_on_bit), clearance=i.clearance)
+def case_hook_load(case, weight_on_bit: float) -> HookLoad:
+    """The start of a :class:`~drillstring.case.Case` (``[initial]``): the registered hook load that
+    ``initial.start`` names (:func:`~drillstring.forces.registry.hook_load`), built from the case and the static
+    ``weight_on_bit`` [N]: the ramp of it over ``weight_ramp_time`` with the bit ``clearance`` off bottom for
+    ``start = "ramp"`` (:class:`~drillstring.forces.hook_load.HookLoadRamp`); the reference start for
+    ``"on_bottom"``."""
+    return registered_hook_load(case.initial.start).from_case(case, weight_on_bit)

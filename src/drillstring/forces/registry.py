@@ -1,4 +1,4 @@
-"""The component protocol: bit–rock laws and top boundaries that register themselves (SPEC §11).
+"""The component protocol: bit–rock laws, top boundaries and hook loads that register themselves (SPEC §11).
 
 A **component** is one module holding one class. The class is its parameters (built from the case by
 ``from_case``), and declares everything the reduced model, the integrators and the stability analysis ask of
@@ -22,6 +22,13 @@ the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian(
 state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
 surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
 
+**Hook loads** (:class:`HookLoad`): the extra axial force the hook applies at the string's top relative to the
+static state (a ramped start slacks off the weight-on-bit, :mod:`drillstring.forces.hook_load`), a prescribed
+function of the named context :class:`HookContext` (time, static weight-on-bit): ``kernel(args, ctx) -> force``
+and ``evaluate_at(ctx)``; it has no Jacobian on the state (it reads none). ``active`` says whether the run
+starts off bottom (``clearance`` [m] above the rock, the string hanging from the hook). The case's
+``initial.start`` names it (``"on_bottom"``: none, code 0, the kernels add nothing; ``"ramp"``).
+
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
 (:class:`~drillstring.case.TuckerWangKeys`, ...).
 
@@ -33,7 +40,8 @@ codes of the components and where their slices start), then the bit law's number
 :func:`pack` puts it. The states of the components follow the modal coordinates in the state vector at
 the offsets :func:`pack` computes from their ``n_states``.
 
-**Compiled dispatch.** The kernels call :func:`bit_law_force` and :func:`top_boundary_torque`; when they are
+**Compiled dispatch.** The kernels call :func:`bit_law_force`, :func:`top_boundary_torque` and
+:func:`hook_load_force`; when they are
 compiled, the registry writes the dispatch over the codes of the package's registered components
 (:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
 same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
@@ -58,6 +66,9 @@ __all__ = [
     "BIT_LAW",
     "HISTORY",
     "HOOK_LOAD",
+    "HOOK_LOAD_CODE",
+    "HookContext",
+    "HookLoad",
     "TOP_BOUNDARY_CODE",
     "TOP_INERTIA",
     "HEADER",
@@ -72,6 +83,9 @@ __all__ = [
     "bit_law_force",
     "bit_laws",
     "compiled",
+    "hook_load",
+    "hook_load_force",
+    "hook_loads",
     "pack",
     "package_components",
     "register",
@@ -83,10 +97,11 @@ __all__ = [
 #: The header of the kernels' flat array: the bit law's code, the top boundary's code (0: it does not drive
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
-#: bit's history starts.
+#: bit's history starts, the hook load's code (0: none, the kernels add nothing).
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
-          "history")
-BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY = range(len(HEADER))
+          "history", "hook_load_code")
+(BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY,
+ HOOK_LOAD_CODE) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
@@ -119,6 +134,13 @@ class TopContext(NamedTuple):
     time: Any
     quill_speed: Any
     surface_torque: Any
+
+
+class HookContext(NamedTuple):
+    """What a hook load may read: ``time`` [s] and the static ``weight_on_bit`` [N]."""
+
+    time: Any
+    weight_on_bit: Any
 
 
 @dataclass(frozen=True)
@@ -221,15 +243,51 @@ class TopBoundary:
         return {"top_boundary": self.name}
 
 
-_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}}
-_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary"}
+class HookLoad:
+    """Base of the hook loads (module docstring). Instances are the load's parameters (SI). A load that adds
+    nothing (``adds = False``, the reference start) has code 0 and no kernel."""
+
+    name: ClassVar[str]
+    #: adds a force (False: the kernels add nothing, code 0)
+    adds: ClassVar[bool] = True
+    kernel_size: ClassVar[int] = 0
+    #: the compiled kernel ``kernel(args, ctx) -> extra axial force [N]`` on the top along +x (down)
+    kernel: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds), read from ``[initial]``
+    keys: ClassVar[Any] = None
+    #: the run starts off bottom, the string hanging from the hook, the bit ``clearance`` [m] above the rock
+    active: ClassVar[bool] = False
+    clearance: float = 0.0
+
+    @classmethod
+    def from_case(cls, case, weight_on_bit: float) -> "HookLoad":
+        """The load of a :class:`~drillstring.case.Case` whose static weight-on-bit is ``weight_on_bit`` [N]."""
+        raise NotImplementedError
+
+    def kernel_array(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def evaluate_at(self, ctx: HookContext):
+        """NumPy reference of :attr:`kernel`: the extra axial force [N] at the top (``ctx.time`` may be an array)."""
+        return np.zeros_like(np.asarray(ctx.time, dtype=float))
+
+    def force(self, t):
+        """:meth:`evaluate_at` at time(s) ``t`` [s]."""
+        return self.evaluate_at(HookContext(t, 0.0))
+
+
+_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}}
+_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load"}
+#: whether a registered class of each kind enters the compiled dispatch (has a nonzero code)
+_DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds}
 
 
 def _kind(cls: type) -> str:
     for base, kind in _KINDS.items():
         if issubclass(cls, base):
             return kind
-    raise TypeError(f"{cls.__name__} is neither a BitLaw nor a TopBoundary")
+    raise TypeError(f"{cls.__name__} is neither a BitLaw, a TopBoundary nor a HookLoad")
 
 
 def _in_package(cls: type) -> bool:
@@ -247,7 +305,7 @@ def register(cls: type) -> type:
             (known.__module__, known.__qualname__) != (cls.__module__, cls.__qualname__):
         raise ValueError(f"{kind} {cls.name!r} is already registered by {known.__module__}.{known.__qualname__}")
     table[cls.name] = cls
-    inside = sorted(n for n, c in table.items() if _in_package(c) and (kind == "bit_law" or c.drives))
+    inside = sorted(n for n, c in table.items() if _in_package(c) and _DISPATCHED[kind](c))
     outside = sorted(n for n, c in table.items() if not _in_package(c))
     for name, c in table.items():
         if name in inside:
@@ -292,6 +350,17 @@ def top_boundary(name: str) -> type[TopBoundary]:
     return _lookup("top_boundary", name)
 
 
+def hook_load(name: str) -> type[HookLoad]:
+    """The registered hook load ``name`` (the case's ``initial.start``)."""
+    return _lookup("hook_load", name)
+
+
+def hook_loads() -> tuple[str, ...]:
+    """Names of the registered hook loads."""
+    package_components()
+    return tuple(sorted(_REGISTRY["hook_load"]))
+
+
 def bit_laws() -> tuple[str, ...]:
     """Names of the registered bit–rock laws."""
     package_components()
@@ -324,17 +393,20 @@ class Layout:
     state_size: int
 
 
-def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarray,
+def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
          modal_states: int) -> tuple[np.ndarray, Layout]:
     """The kernels' flat array ``[header, bit law, top boundary, hook load, history]`` and its
     :class:`Layout`; the top boundary's states follow the ``modal_states`` entries ``[η, η̇]``."""
     package_components()  # every package component registered: the codes are final
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
-             "hook_load": np.asarray(hook_load, dtype=np.float64), "history": np.asarray(history, dtype=np.float64)}
-    if parts["bit_law"].shape != (type(bit).kernel_size,):
-        raise ValueError(f"bit law {bit.name!r}: kernel_array() has {parts['bit_law'].size} numbers, "
-                         f"kernel_size says {type(bit).kernel_size}")
+             "hook_load": np.asarray(hook.kernel_array(), dtype=np.float64),
+             "history": np.asarray(history, dtype=np.float64)}
+    for kind, component in (("bit law", bit), ("hook load", hook)):
+        values = parts[kind.replace(" ", "_")]
+        if values.shape != (type(component).kernel_size,):
+            raise ValueError(f"{kind} {component.name!r}: kernel_array() has {values.size} numbers, "
+                             f"kernel_size says {type(component).kernel_size}")
     numbers, offset = {}, BIT_LAW
     for name, values in parts.items():
         numbers[name] = offset
@@ -349,6 +421,7 @@ def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarr
     header[TOP_INERTIA] = top.top_inertia if top.drives else 0.0
     header[HOOK_LOAD] = numbers["hook_load"]
     header[HISTORY] = numbers["history"]
+    header[HOOK_LOAD_CODE] = hook.component_code if hook.adds else 0.0
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -371,12 +444,27 @@ def top_boundary_torque(laws, ctx, y, out):
     raise NotImplementedError("compiled code only")
 
 
-def _dispatch_source(kind: str, signature: str, call: str, fallback: str) -> tuple[str, dict]:
+def hook_load_force(laws, ctx):
+    """The extra axial force [N] on the string's top of the hook load whose code and numbers ``laws`` holds, at
+    ``ctx`` (:class:`HookContext`): 0 for code 0 (none), NaN for a code no package hook load has. Compiled code
+    only."""
+    raise NotImplementedError("compiled code only")
+
+
+_CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook_load": HOOK_LOAD_CODE}
+
+
+def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
+                     ) -> tuple[str, dict]:
+    """The dispatch over the package's components of ``kind`` by their code; ``none``: what code 0 returns
+    (first test), when the kind has a component that adds nothing."""
     package_components()
     entries = sorted((c.component_code, c) for c in _REGISTRY[kind].values()
                      if _in_package(c) and c.component_code > 0.0)
     namespace: dict[str, Any] = {"np": np}
-    lines = [f"def dispatch({signature}):", f"    code = laws[{BIT_LAW_CODE if kind == 'bit_law' else TOP_BOUNDARY_CODE}]"]
+    lines = [f"def dispatch({signature}):", f"    code = laws[{_CODE_ENTRY[kind]}]"]
+    if none is not None:
+        lines += ["    if code == 0.0:", f"        return {none}"]
     for i, (code, cls) in enumerate(entries):
         namespace[f"kernel_{i}"] = cls.kernel
         lines.append(f"    if code == {code!r}:")
@@ -399,4 +487,12 @@ def _top_boundary_torque_compiled(laws, ctx, y, out):
         f"laws[int(laws[{TOP_BOUNDARY}]):], ctx, y[int(laws[{TOP_BOUNDARY_STATES}]):], "
         f"out[int(laws[{TOP_BOUNDARY_STATES}]):]", "np.nan")
     exec(compile(source, "<top_boundary_torque dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+
+
+@overload(hook_load_force)
+def _hook_load_force_compiled(laws, ctx):
+    source, namespace = _dispatch_source("hook_load", "laws, ctx", f"laws[int(laws[{HOOK_LOAD}]):], ctx", "np.nan",
+                                         none="0.0")
+    exec(compile(source, "<hook_load_force dispatch>", "exec"), namespace)
     return namespace["dispatch"]
