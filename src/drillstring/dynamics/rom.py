@@ -37,8 +37,9 @@ the type of that argument when it is compiled.
 nothing else of this module): the model's data ``rhs_data``, ``case2_data`` and ``observe_data`` and four
 public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel` (one observation row),
 :func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
-The components (bit–rock law, top boundary, contact, turning loads) are called inside these kernels, so
-the loop never names a law.
+The components are called inside these kernels, so the loop never names a law: the bit–rock law, the top
+boundary, the hook load and the contact law through the registry's compiled dispatch
+(:mod:`drillstring.forces.registry`, their numbers in ``RhsData.laws``), the turning loads by name.
 
 Impacts: a *contact zone* is a run of consecutive nodes in contact; an impact is a zone that appears
 with no node in contact within one node of it at the previous accepted step
@@ -62,11 +63,8 @@ from drillstring.dynamics.delay import allocate_storage, delayed_difference, rec
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import (
-    ContactParameters,
     ContactStations,
     case_contact,
-    distributed_contact_forces,
-    evaluate_contact,
     mesh_contact_stations,
 )
 from drillstring.forces.excitation import TurningLoads
@@ -84,12 +82,15 @@ from drillstring.forces.registry import (
     TOP_INERTIA,
     BitContext,
     BitLaw,
+    ContactContext,
+    ContactLaw,
     HookContext,
     HookLoad,
     TopBoundary,
     TopContext,
     bit_law_force,
     compiled,
+    contact_law_forces,
     hook_load as registered_hook_load,
     hook_load_force,
     pack,
@@ -201,15 +202,14 @@ class ContactWork(NamedTuple):
 
 class ContactData(NamedTuple):
     """The wall as the kernels read it: one entry per contact station
-    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node."""
+    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node. The contact law's numbers are in
+    the kernels' flat array (:func:`~drillstring.forces.registry.pack`), not here."""
 
     node: np.ndarray  # (n_stations,) int64
     gap: np.ndarray  # (n_stations,) radial clearance [m]
     outer_diameter: np.ndarray  # (n_stations,) [m]
     stiffness: np.ndarray  # (n_stations,) k_i = k'_sh ℓ_i [N/m]
-    friction: float  # μ_sh [-]
-    regularization: float  # ε [rad/s]
-    tangential: bool  # tangential friction force on the lateral DOFs
+    tangential: bool  # gather the stations' lateral velocities: the contact law reads them
     work: ContactWork
 
 
@@ -238,8 +238,8 @@ class RhsData(NamedTuple):
     lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # the boundary components' numbers (drillstring.forces.registry.pack): header, the bit
-    #                   law's, the top boundary's, the hook load's, the bit's history (the hole bottom)
+    laws: np.ndarray  # the components' numbers (drillstring.forces.registry.pack): header, the bit law's, the
+    #                   top boundary's, the hook load's, the contact law's, the bit's history (the hole bottom)
     contact: ContactData
     turning: TurningLoadData
 
@@ -552,10 +552,10 @@ def _rhs_kernel(d, t, y, out):
                 wd += d.phi_w_t[j - z0, i] * eta_dot[j]
         cw.v_dot[m] = vd
         cw.w_dot[m] = wd
-    distributed_contact_forces(cw.v_c[:n_c], cw.w_c[:n_c], cw.v_dot[:n_c], cw.w_dot[:n_c], cw.spin[:n_c],
-                               cw.gap[:n_c], cw.outer_diameter[:n_c], cw.stiffness[:n_c], c.friction,
-                               c.regularization, c.tangential, cw.force_v[:n_c], cw.force_w[:n_c],
-                               cw.torque[:n_c])
+    contact_law_forces(d.laws, ContactContext(cw.v_c[:n_c], cw.w_c[:n_c], cw.v_dot[:n_c], cw.w_dot[:n_c],
+                                              cw.spin[:n_c], cw.gap[:n_c], cw.outer_diameter[:n_c],
+                                              cw.stiffness[:n_c]),
+                       cw.force_v[:n_c], cw.force_w[:n_c], cw.torque[:n_c])
     for m in range(n_c):
         i = c.node[cw.stations[m]]
         fv = cw.force_v[m]
@@ -901,7 +901,7 @@ class ReducedOrderModel:
     top_speed: float
     weight_on_bit: float
     bit_rock: BitLaw
-    contact: ContactParameters
+    contact: ContactLaw
     stations: ContactStations
     probe_positions: np.ndarray
     nonlinear: str = "bit_and_contact"
@@ -985,7 +985,7 @@ class ReducedOrderModel:
         transposed = np.ascontiguousarray
         history = (allocate_storage(self.bit_rock.sector, self.history_bins) if self.bit_rock.delayed
                    else allocate_storage(1.0, 4))
-        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n)
+        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n, contact=self.contact)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -1008,8 +1008,7 @@ class ReducedOrderModel:
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
                 stiffness=transposed(self.station_stiffness, dtype=float),
-                friction=float(c.friction_coefficient), regularization=float(c.speed_regularization),
-                tangential=bool(c.tangential_friction), work=ContactWork.allocate(mesh.n_nodes, len(st)),
+                tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(mesh.n_nodes, len(st)),
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
         )
@@ -1092,12 +1091,12 @@ class ReducedOrderModel:
         """True when the compiled kernels hold the model's components (the package's registered ones); a
         component registered outside the package runs through :meth:`rhs_reference` only
         (:mod:`drillstring.forces.registry`)."""
-        return compiled(self.bit_rock) and compiled(self.top_drive) and compiled(self.hook_load)
+        return all(compiled(c) for c in (self.bit_rock, self.top_drive, self.hook_load, self.contact))
 
     def require_compiled(self) -> None:
         """ValueError naming the component when :attr:`compiled` is False."""
         for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive),
-                                ("hook load", self.hook_load)):
+                                ("hook load", self.hook_load), ("contact law", self.contact)):
             if not compiled(component):
                 raise ValueError(
                     f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
@@ -1126,11 +1125,12 @@ class ReducedOrderModel:
             t, position, angle, bit_velocity, bit_speed, depth, self.weight_on_bit))
         st = self.stations
         spin = self.base_speed + self.phi_tx @ eta_dot
-        force_v, force_w, torque, _ = evaluate_contact(
-            st.gather(self.phi_v @ eta), st.gather(self.phi_w @ eta), st.gather(self.phi_v @ eta_dot),
-            st.gather(self.phi_w @ eta_dot), st.gather(spin), st.gap, st.outer_diameter, self.contact,
-            stiffness=self.station_stiffness,
-        )
+        lateral_velocity = self.contact.reads_lateral_velocity
+        force_v, force_w, torque = self.contact.evaluate_at(ContactContext(
+            st.gather(self.phi_v @ eta), st.gather(self.phi_w @ eta),
+            st.gather(self.phi_v @ eta_dot) if lateral_velocity else np.zeros(len(st)),
+            st.gather(self.phi_w @ eta_dot) if lateral_velocity else np.zeros(len(st)),
+            st.gather(spin), st.gap, st.outer_diameter, self.station_stiffness))
         n_nodes = self.static.mesh.n_nodes
         turning = self.basis.T @ self.turning_loads.forces(self.base_speed * t + self.phi_tx @ eta, spin)
         lateral = self.lateral_columns
@@ -1371,7 +1371,7 @@ def reduced_model(
     rigid_axial_damping: float,
     top_speed: float,
     bit_rock: BitLaw,
-    contact: ContactParameters,
+    contact: ContactLaw,
     borehole_diameter: float,
     rigid_rotation_damping: float = 0.0,
     damping_basis: str = "free_free",

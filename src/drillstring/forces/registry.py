@@ -22,6 +22,14 @@ the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian(
 state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
 surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
 
+**Contact laws** (:class:`ContactLaw`): the force of the borehole wall on the string at the contact
+stations outside their clearance, from the named context :class:`ContactContext` (arrays over those stations:
+lateral displacements and velocities, spin speed, gap, outer diameter, station stiffness): ``kernel(args, ctx,
+force_v, force_w, torque)`` fills the three arrays, ``evaluate_at(ctx) -> (force_v, force_w, torque)`` is its
+NumPy reference and ``jacobian_at(ctx)`` the (n, 3, 5) partials over (v, w, v̇, ẇ, θ̇x) per station.
+``reads_lateral_velocity`` says whether the kernels must gather the stations' lateral velocities for it (they
+are left at 0 otherwise). The case's ``[contact]`` holds its keys.
+
 **Hook loads** (:class:`HookLoad`): the extra axial force the hook applies at the string's top relative to the
 static state (a ramped start slacks off the weight-on-bit, :mod:`drillstring.forces.hook_load`), a prescribed
 function of the named context :class:`HookContext` (time, static weight-on-bit): ``kernel(args, ctx) -> force``
@@ -75,6 +83,13 @@ __all__ = [
     "BitContext",
     "BitLaw",
     "BitSteadyState",
+    "CONTACT_LAW",
+    "CONTACT_LAW_CODE",
+    "ContactContext",
+    "ContactLaw",
+    "contact_law",
+    "contact_law_forces",
+    "contact_laws",
     "Layout",
     "TopBoundary",
     "TopContext",
@@ -97,11 +112,12 @@ __all__ = [
 #: The header of the kernels' flat array: the bit law's code, the top boundary's code (0: it does not drive
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
-#: bit's history starts, the hook load's code (0: none, the kernels add nothing).
+#: bit's history starts, the hook load's code (0: none, the kernels add nothing), the contact law's code and where
+#: its numbers start.
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
-          "history", "hook_load_code")
+          "history", "hook_load_code", "contact_law_code", "contact_law")
 (BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY,
- HOOK_LOAD_CODE) = range(len(HEADER))
+ HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
@@ -134,6 +150,22 @@ class TopContext(NamedTuple):
     time: Any
     quill_speed: Any
     surface_torque: Any
+
+
+class ContactContext(NamedTuple):
+    """What a contact law may read, one entry per contact station outside its gap (1-D float64 arrays, SI):
+    lateral displacements ``v``, ``w`` [m] and velocities ``v_dot``, ``w_dot`` [m/s] (0 unless the law
+    ``reads_lateral_velocity``), ``spin_speed`` θ̇x [rad/s], ``gap`` [m], ``outer_diameter`` [m] and the
+    station's ``stiffness`` [N/m]."""
+
+    v: Any
+    w: Any
+    v_dot: Any
+    w_dot: Any
+    spin_speed: Any
+    gap: Any
+    outer_diameter: Any
+    stiffness: Any
 
 
 class HookContext(NamedTuple):
@@ -243,6 +275,41 @@ class TopBoundary:
         return {"top_boundary": self.name}
 
 
+class ContactLaw:
+    """Base of the contact laws (module docstring). Instances are the law's parameters (SI)."""
+
+    name: ClassVar[str]
+    kernel_size: ClassVar[int] = 0
+    #: the compiled kernel ``kernel(args, ctx, force_v, force_w, torque)``: fills the forces [N] and torques [N·m]
+    kernel: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds), read from ``[contact]``
+    keys: ClassVar[Any] = None
+    #: k'_sh [N/m per m of string], the wall's distributed stiffness: station i gets k'_sh ℓ_i (the context's
+    #: ``stiffness``, :meth:`~drillstring.forces.contact.ContactStations.stiffness`)
+    shock_stiffness: float
+
+    @classmethod
+    def from_case(cls, case) -> "ContactLaw":
+        raise NotImplementedError
+
+    @property
+    def reads_lateral_velocity(self) -> bool:
+        """Whether the law reads the stations' lateral velocities (the kernels gather them only then)."""
+        return True
+
+    def kernel_array(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def evaluate_at(self, ctx: ContactContext):
+        """NumPy reference of :attr:`kernel`: ``(force_v, force_w, torque)`` arrays, one entry per station."""
+        raise NotImplementedError
+
+    def jacobian_at(self, ctx: ContactContext) -> np.ndarray:
+        """(n, 3, 5): rows force_v, force_w, torque; columns v, w, v̇, ẇ, θ̇x; one block per station."""
+        raise NotImplementedError
+
+
 class HookLoad:
     """Base of the hook loads (module docstring). Instances are the load's parameters (SI). A load that adds
     nothing (``adds = False``, the reference start) has code 0 and no kernel."""
@@ -277,17 +344,18 @@ class HookLoad:
         return self.evaluate_at(HookContext(t, 0.0))
 
 
-_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}}
-_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load"}
+_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {}}
+_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load", ContactLaw: "contact_law"}
 #: whether a registered class of each kind enters the compiled dispatch (has a nonzero code)
-_DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds}
+_DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds,
+               "contact_law": lambda c: True}
 
 
 def _kind(cls: type) -> str:
     for base, kind in _KINDS.items():
         if issubclass(cls, base):
             return kind
-    raise TypeError(f"{cls.__name__} is neither a BitLaw, a TopBoundary nor a HookLoad")
+    raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad or a ContactLaw")
 
 
 def _in_package(cls: type) -> bool:
@@ -355,6 +423,17 @@ def hook_load(name: str) -> type[HookLoad]:
     return _lookup("hook_load", name)
 
 
+def contact_law(name: str) -> type[ContactLaw]:
+    """The registered contact law ``name``."""
+    return _lookup("contact_law", name)
+
+
+def contact_laws() -> tuple[str, ...]:
+    """Names of the registered contact laws."""
+    package_components()
+    return tuple(sorted(_REGISTRY["contact_law"]))
+
+
 def hook_loads() -> tuple[str, ...]:
     """Names of the registered hook loads."""
     package_components()
@@ -394,15 +473,18 @@ class Layout:
 
 
 def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
-         modal_states: int) -> tuple[np.ndarray, Layout]:
-    """The kernels' flat array ``[header, bit law, top boundary, hook load, history]`` and its
-    :class:`Layout`; the top boundary's states follow the ``modal_states`` entries ``[η, η̇]``."""
+         modal_states: int, contact: ContactLaw | None = None) -> tuple[np.ndarray, Layout]:
+    """The kernels' flat array ``[header, bit law, top boundary, hook load, contact law, history]`` (the history
+    last: it runs to the end) and its :class:`Layout`; the top boundary's states follow the ``modal_states``
+    entries ``[η, η̇]``. ``contact`` None: no contact law (code 0, its kernel gives no force)."""
     package_components()  # every package component registered: the codes are final
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
              "hook_load": np.asarray(hook.kernel_array(), dtype=np.float64),
+             "contact_law": np.asarray(contact.kernel_array() if contact is not None else np.zeros(0), dtype=np.float64),
              "history": np.asarray(history, dtype=np.float64)}
-    for kind, component in (("bit law", bit), ("hook load", hook)):
+    checked = [("bit law", bit), ("hook load", hook)] + ([("contact law", contact)] if contact is not None else [])
+    for kind, component in checked:
         values = parts[kind.replace(" ", "_")]
         if values.shape != (type(component).kernel_size,):
             raise ValueError(f"{kind} {component.name!r}: kernel_array() has {values.size} numbers, "
@@ -422,6 +504,8 @@ def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
     header[HOOK_LOAD] = numbers["hook_load"]
     header[HISTORY] = numbers["history"]
     header[HOOK_LOAD_CODE] = hook.component_code if hook.adds else 0.0
+    header[CONTACT_LAW_CODE] = contact.component_code if contact is not None else 0.0
+    header[CONTACT_LAW] = numbers["contact_law"]
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -451,7 +535,15 @@ def hook_load_force(laws, ctx):
     raise NotImplementedError("compiled code only")
 
 
-_CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook_load": HOOK_LOAD_CODE}
+def contact_law_forces(laws, ctx, force_v, force_w, torque):
+    """Fill ``force_v``, ``force_w`` [N] and ``torque`` [N·m] at the stations of ``ctx`` (:class:`ContactContext`)
+    with the contact law whose code and numbers ``laws`` holds: 0 for code 0 (none), NaN for a code no package
+    law has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+_CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook_load": HOOK_LOAD_CODE,
+               "contact_law": CONTACT_LAW_CODE}
 
 
 def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
@@ -496,3 +588,24 @@ def _hook_load_force_compiled(laws, ctx):
                                          none="0.0")
     exec(compile(source, "<hook_load_force dispatch>", "exec"), namespace)
     return namespace["dispatch"]
+
+
+def _fill(force_v, force_w, torque, value):
+    for i in range(force_v.shape[0]):
+        force_v[i] = value
+        force_w[i] = value
+        torque[i] = value
+
+
+@overload(contact_law_forces)
+def _contact_law_forces_compiled(laws, ctx, force_v, force_w, torque):
+    from numba import njit
+
+    source, namespace = _dispatch_source(
+        "contact_law", "laws, ctx, force_v, force_w, torque",
+        f"laws[int(laws[{CONTACT_LAW}]):], ctx, force_v, force_w, torque", "fill(force_v, force_w, torque, np.nan)",
+        none="fill(force_v, force_w, torque, 0.0)")
+    namespace["fill"] = njit(_fill)
+    exec(compile(source, "<contact_law_forces dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+
