@@ -228,14 +228,16 @@ class RhsData(NamedTuple):
     damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
     generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
     blocks: np.ndarray  # (8,) int64
-    axial_rows: np.ndarray  # (2, n_a) axial columns of: u at the bit, u at the top (where the hook pulls)
-    torsion_rows: np.ndarray  # (3, n_t) torsional columns of: θx at the bit, θx at the top (the quill, where
-    #                           the motor torque acts; 0 when held), the surface-torque row (K Φ) at the top's θx
-    phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
-    phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
-    phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
+    axial_rows: np.ndarray  # (2, a1 − a0) columns of the axial range of: u at the bit, u at the top (where the
+    #                         hook pulls)
+    torsion_rows: np.ndarray  # (3, t1 − t0) columns of the torsional range of: θx at the bit, θx at the top (the
+    #                           quill, where the motor torque acts; 0 when held), the surface-torque row (K Φ) at
+    #                           the top's θx
+    phi_v_t: np.ndarray  # (y1 − y0, n_nodes): v at every node, columns of the lateral-y range
+    phi_w_t: np.ndarray  # (z1 − z0, n_nodes): w at every node, columns of the lateral-z range
+    phi_tx_t: np.ndarray  # (t1 − t0, n_nodes): θx at every node, columns of the torsional range
     smallest_gap: float  # min of the stations' gaps [m]
-    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
+    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral-y range's columns), then |φ_w| (z range's)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
     laws: np.ndarray  # the components' numbers (drillstring.forces.registry.pack): header, the bit law's, the
