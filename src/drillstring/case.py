@@ -454,20 +454,29 @@ class Material(_Base):
         return self.young_modulus / (2.0 * (1.0 + self.poisson_ratio))
 
 
-class Section(_Base):
-    """A hollow circular section of the string (drill pipe, drill collar, ...), listed from top to bit."""
+class ImbalanceKeys(_Base):
+    """The case keys of a section's mass imbalance (the turning-load source ``"imbalance"``,
+    :class:`~drillstring.forces.turning_loads.MassImbalance`), with their units and bounds."""
 
+    eccentricity: Length = Field(
+        0.0, ge=0, description="mass imbalance: offset e of the section's mass centre from its axis [m]; the "
+        "centrifugal force rho A e (spin speed)^2 per metre turns with the string (0: none)")
+    eccentricity_angle: Angle = Field(
+        0.0, description="direction of the offset from y when the section's rotation is 0 [rad]")
+
+
+class _SectionShape(_Base):
     name: str
     length: Length = Field(gt=0, description="length [m]")
     outer_diameter: Length = Field(gt=0, description="outer diameter D_o [m]")
     inner_diameter: Length = Field(ge=0, description="inner (bore) diameter D_i [m]; 0 for a solid section")
     material: str = Field("steel", description="key into Case.materials")
     shear_factor: Dimensionless = Field(6.0 / 7.0, gt=0, le=1, description="Timoshenko shear factor k_s [-]")
-    eccentricity: Length = Field(
-        0.0, ge=0, description="mass imbalance: offset e of the section's mass centre from its axis [m]; the "
-        "centrifugal force rho A e (spin speed)^2 per metre turns with the string (0: none)")
-    eccentricity_angle: Angle = Field(
-        0.0, description="direction of the offset from y when the section's rotation is 0 [rad]")
+
+
+class Section(ImbalanceKeys, _SectionShape):
+    """A hollow circular section of the string (drill pipe, drill collar, ...), listed from top to bit; its
+    imbalance keys are :class:`ImbalanceKeys`."""
 
     @model_validator(mode="after")
     def _inner_less_than_outer(self) -> Section:

@@ -39,7 +39,8 @@ public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel
 :func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
 The components are called inside these kernels, so the loop never names a law: the bit–rock law, the top
 boundary, the hook load and the contact law through the registry's compiled dispatch
-(:mod:`drillstring.forces.registry`, their numbers in ``RhsData.laws``), the turning loads by name.
+(:mod:`drillstring.forces.registry`, their numbers in ``RhsData.laws``); the turning loads of every registered
+source through their one shared kernel (:mod:`drillstring.forces.turning_loads`).
 
 Impacts: a *contact zone* is a run of consecutive nodes in contact; an impact is a zone that appears
 with no node in contact within one node of it at the previous accepted step

@@ -30,6 +30,14 @@ NumPy reference and ``jacobian_at(ctx)`` the (n, 3, 5) partials over (v, w, v̇,
 ``reads_lateral_velocity`` says whether the kernels must gather the stations' lateral velocities for it (they
 are left at 0 otherwise). The case's ``[contact]`` holds its keys.
 
+**Turning-load sources** (:class:`TurningLoadSource`): loads fixed to the string's sections that turn with
+them (mass imbalance, a stress-free bow, :mod:`drillstring.forces.turning_loads`). They share one compiled
+kernel (a load fixed in the rotating section, scaled by 1 or by the local spin speed squared), so a source
+declares no kernel: its ``keys``, ``from_case(case)`` and ``loads(mesh)`` (its entries, a
+:class:`~drillstring.forces.excitation.TurningLoads`); the reduced model projects the entries of every source
+on its modes once. A source from outside the package therefore runs in the compiled kernels too (passed
+explicitly: the case builds the package's sources only, in their declared ``order``).
+
 **Hook loads** (:class:`HookLoad`): the extra axial force the hook applies at the string's top relative to the
 static state (a ramped start slacks off the weight-on-bit, :mod:`drillstring.forces.hook_load`), a prescribed
 function of the named context :class:`HookContext` (time, static weight-on-bit): ``kernel(args, ctx) -> force``
@@ -101,6 +109,9 @@ __all__ = [
     "hook_load",
     "hook_load_force",
     "hook_loads",
+    "TurningLoadSource",
+    "turning_load_source",
+    "turning_load_sources",
     "pack",
     "package_components",
     "register",
@@ -310,6 +321,25 @@ class ContactLaw:
         raise NotImplementedError
 
 
+class TurningLoadSource:
+    """Base of the turning-load sources (module docstring). Instances are the source's parameters (SI)."""
+
+    name: ClassVar[str]
+    #: its case keys (a pydantic model with units and bounds)
+    keys: ClassVar[Any] = None
+    #: rank among the package's sources when the case builds them (their entries are concatenated in this order)
+    order: ClassVar[int] = 0
+    component_code: ClassVar[float] = 0.0
+
+    @classmethod
+    def from_case(cls, case) -> "TurningLoadSource":
+        raise NotImplementedError
+
+    def loads(self, mesh):
+        """Its entries on ``mesh`` (a :class:`~drillstring.forces.excitation.TurningLoads`, empty when none)."""
+        raise NotImplementedError
+
+
 class HookLoad:
     """Base of the hook loads (module docstring). Instances are the load's parameters (SI). A load that adds
     nothing (``adds = False``, the reference start) has code 0 and no kernel."""
@@ -344,18 +374,21 @@ class HookLoad:
         return self.evaluate_at(HookContext(t, 0.0))
 
 
-_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {}}
-_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load", ContactLaw: "contact_law"}
+_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {},
+                                          "turning_load": {}}
+_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load", ContactLaw: "contact_law",
+          TurningLoadSource: "turning_load"}
 #: whether a registered class of each kind enters the compiled dispatch (has a nonzero code)
 _DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds,
-               "contact_law": lambda c: True}
+               "contact_law": lambda c: True, "turning_load": lambda c: False}
 
 
 def _kind(cls: type) -> str:
     for base, kind in _KINDS.items():
         if issubclass(cls, base):
             return kind
-    raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad or a ContactLaw")
+    raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad, a ContactLaw or a "
+                    "TurningLoadSource")
 
 
 def _in_package(cls: type) -> bool:
@@ -432,6 +465,20 @@ def contact_laws() -> tuple[str, ...]:
     """Names of the registered contact laws."""
     package_components()
     return tuple(sorted(_REGISTRY["contact_law"]))
+
+
+def turning_load_sources(package_only: bool = False) -> tuple[str, ...]:
+    """Names of the registered turning-load sources, in their ``order`` (then by name); ``package_only``: the
+    package's only."""
+    package_components()
+    table = _REGISTRY["turning_load"]
+    return tuple(sorted((n for n, c in table.items() if _in_package(c) or not package_only),
+                        key=lambda n: (table[n].order, n)))
+
+
+def turning_load_source(name: str) -> type[TurningLoadSource]:
+    """The registered turning-load source ``name``."""
+    return _lookup("turning_load", name)
 
 
 def hook_loads() -> tuple[str, ...]:
