@@ -454,20 +454,29 @@ class Material(_Base):
         return self.young_modulus / (2.0 * (1.0 + self.poisson_ratio))
 
 
-class Section(_Base):
-    """A hollow circular section of the string (drill pipe, drill collar, ...), listed from top to bit."""
+class ImbalanceKeys(_Base):
+    """The case keys of a section's mass imbalance (the turning-load source ``"imbalance"``,
+    :class:`~drillstring.forces.turning_loads.MassImbalance`), with their units and bounds."""
 
+    eccentricity: Length = Field(
+        0.0, ge=0, description="mass imbalance: offset e of the section's mass centre from its axis [m]; the "
+        "centrifugal force rho A e (spin speed)^2 per metre turns with the string (0: none)")
+    eccentricity_angle: Angle = Field(
+        0.0, description="direction of the offset from y when the section's rotation is 0 [rad]")
+
+
+class _SectionShape(_Base):
     name: str
     length: Length = Field(gt=0, description="length [m]")
     outer_diameter: Length = Field(gt=0, description="outer diameter D_o [m]")
     inner_diameter: Length = Field(ge=0, description="inner (bore) diameter D_i [m]; 0 for a solid section")
     material: str = Field("steel", description="key into Case.materials")
     shear_factor: Dimensionless = Field(6.0 / 7.0, gt=0, le=1, description="Timoshenko shear factor k_s [-]")
-    eccentricity: Length = Field(
-        0.0, ge=0, description="mass imbalance: offset e of the section's mass centre from its axis [m]; the "
-        "centrifugal force rho A e (spin speed)^2 per metre turns with the string (0: none)")
-    eccentricity_angle: Angle = Field(
-        0.0, description="direction of the offset from y when the section's rotation is 0 [rad]")
+
+
+class Section(ImbalanceKeys, _SectionShape):
+    """A hollow circular section of the string (drill pipe, drill collar, ...), listed from top to bit; its
+    imbalance keys are :class:`ImbalanceKeys`."""
 
     @model_validator(mode="after")
     def _inner_less_than_outer(self) -> Section:
@@ -733,19 +742,29 @@ class Simulation(_Base):
         return self
 
 
-class Initial(_Base):
-    """Initial state and start. ``start = "ramp"`` (the default for new cases): the string turns off bottom,
-    the bit ``clearance`` above the rock, the hook carrying the whole string; the hook load is then slacked off
-    so that the weight on bit grows linearly from 0 to ``operation.weight_on_bit`` over ``weight_ramp_time``
-    (:mod:`drillstring.forces.hook_load`). ``"on_bottom"`` (the reference study's start): the static state
-    spinning at the top speed, the bit-rock law switched on at t = 0. Both add a seeded lateral perturbation."""
+class RampStartKeys(_Base):
+    """The case keys of the ramped start (``initial.start = "ramp"``, the hook load
+    :class:`~drillstring.forces.hook_load.HookLoadRamp`), with their units and bounds."""
 
-    lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
-    seed: int = Field(0, ge=0, le=2**64 - 1)
-    start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
     clearance: Length = Field(0.005, ge=0, le=1.0, description="ramp: bit height above the rock at t = 0 [m]")
     weight_ramp_time: Time = Field(
         10.0, gt=0, le=1e4, description="ramp: time over which the weight on bit reaches its value [s]")
+
+
+class _InitialState(_Base):
+    lateral_perturbation: Length = Field(1e-4, ge=0, description="amplitude [m]; < smallest radial gap")
+    seed: int = Field(0, ge=0, le=2**64 - 1)
+    start: Literal["ramp", "on_bottom"] = Field("ramp", description="how the run starts")
+
+
+class Initial(RampStartKeys, _InitialState):
+    """Initial state and start. ``start`` names the hook load (:mod:`drillstring.forces.registry`):
+    ``"ramp"`` (the default for new cases): the string turns off bottom,
+    the bit ``clearance`` above the rock, the hook carrying the whole string; the hook load is then slacked off
+    so that the weight on bit grows linearly from 0 to ``operation.weight_on_bit`` over ``weight_ramp_time``
+    (:mod:`drillstring.forces.hook_load`; its keys :class:`RampStartKeys`). ``"on_bottom"`` (the reference
+    study's start): the static state spinning at the top speed, the bit-rock law switched on at t = 0. Both add a
+    seeded lateral perturbation."""
 
 
 class CorrelationTable(_Base):

@@ -4,11 +4,16 @@ Linear system (SPEC §3–§5): mass ``M + M_f``, stiffness ``K + K_stab + K_g(q
 Dynamic boundary conditions: top ``v = w = 0`` and ``θx`` imposed (so its relative rotation is 0),
 top axially free; bit ``v = w = 0``, ``u`` and ``θx`` free; bending rotations free at both ends.
 
-In the linear model the axial, torsional and the two lateral planes are uncoupled (the coupling
-blocks of the matrices are exactly zero; :func:`family_coupling` checks it), so each family is solved
+For a straight string the axial, torsional and the two lateral planes are uncoupled (the coupling
+blocks of the matrices are exactly zero; :func:`family_coupling` measures it), so each family is solved
 as its own generalised symmetric eigenproblem. This classifies modes without ambiguity and separates
 the degenerate y/z lateral pairs cleanly. The axial family (both ends free) starts with the rigid
 axial translation, frequency 0.
+
+Families are a property of the assembled matrices, not an assumption: when they couple (elements rotated
+out of the straight axis, :mod:`drillstring.fem.geometry`), :func:`coupled_modes` solves the whole system on
+the union of the families' free DOFs, one basis whose every column may move every DOF (a
+:class:`ModeFamily` named ``"coupled"``, its rigid axial translation first when the system has one).
 """
 
 from __future__ import annotations
@@ -75,11 +80,13 @@ def build_linear_system(
     fluid: list[FluidCoefficients],
     *,
     prestress: bool = True,
+    rotations: np.ndarray | None = None,
 ) -> LinearSystem:
-    """Assemble the prestressed linear system (``prestress=False`` drops ``K_g``)."""
-    k, m = structural_matrices(mesh)
-    m_f, c_f, k_f = fluid_matrices(mesh, fluid)
-    k_g = geometric_stiffness(mesh, static.axial_force if prestress else np.zeros(mesh.n_nodes))
+    """Assemble the prestressed linear system (``prestress=False`` drops ``K_g``); ``rotations`` (n_el, 3, 3):
+    each element's direction cosines (:mod:`drillstring.fem.geometry`), None: a straight string along x."""
+    k, m = structural_matrices(mesh, rotations)
+    m_f, c_f, k_f = fluid_matrices(mesh, fluid, rotations)
+    k_g = geometric_stiffness(mesh, static.axial_force if prestress else np.zeros(mesh.n_nodes), rotations)
     return LinearSystem(mesh, static, m, m_f, (k + stabilizer_stiffness(mesh, stabilizers)).tocsr(),
                         k_g, k_f, c_f)
 
@@ -95,8 +102,15 @@ def family_dofs(mesh: Mesh, family: str, top_free: bool = False) -> np.ndarray:
                                    for kind, nodes in kinds]))
 
 
+def coupled_dofs(mesh: Mesh) -> np.ndarray:
+    """The free DOFs of the whole string under the dynamic boundary conditions (top held in rotation): the
+    union of every family's (:func:`family_dofs`), sorted."""
+    return np.unique(np.concatenate([family_dofs(mesh, f) for f in FAMILIES]))
+
+
 def family_coupling(system: LinearSystem) -> float:
-    """Largest |entry| of M, K or C_f that couples two different families (0 for this model)."""
+    """Largest |entry| of M, K or C_f that couples two different families: exactly 0 for a straight string,
+    positive when elements are rotated out of the string's axis (:mod:`drillstring.fem.geometry`)."""
     n = system.mesh.n_dofs
     label = np.full(n, -1)
     for i, family in enumerate(FAMILIES):
@@ -148,6 +162,8 @@ class Modes:
     torsional: ModeFamily
     lateral_y: ModeFamily
     lateral_z: ModeFamily
+    #: the one basis of a system whose families couple (:func:`coupled_modes`); the four families are then empty
+    coupled: ModeFamily | None = None
 
     @property
     def lateral(self) -> ModeFamily:
@@ -296,7 +312,7 @@ def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs
     add nothing."""
     family = kept.name
     top_free = top_inertia is not None and family == "torsional"
-    dofs = family_dofs(system.mesh, family, top_free)
+    dofs = coupled_dofs(system.mesh) if family == "coupled" else family_dofs(system.mesh, family, top_free)
     mass_global = system.mass + top_inertia_matrix(system.mesh, top_inertia) if top_free else system.mass
     k = sp.csc_matrix(system.stiffness[dofs][:, dofs])
     m = sp.csr_matrix(mass_global[dofs][:, dofs])
@@ -369,6 +385,59 @@ def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int
         lateral_y=lateral_y,
         lateral_z=family_modes(system, "lateral_z", len(lateral_y.angular_frequencies)),
     )
+
+
+def _rigid_translation(system: LinearSystem, dofs: np.ndarray) -> np.ndarray | None:
+    """The unit axial translation ``u = 1`` on ``dofs`` (a vector on them) when it is a zero-energy motion of
+    the stiffness there (``|K r| ≤ 1e-10 |K|₁ |r|``), else None."""
+    k = system.stiffness[dofs][:, dofs]
+    rigid = np.zeros(len(dofs))
+    rigid[dofs % 6 == U] = 1.0
+    scale = float(abs(k).sum(axis=0).max()) * float(np.abs(rigid).max())
+    return rigid if np.abs(k @ rigid).max() <= 1e-10 * scale else None
+
+
+def coupled_modes(system: LinearSystem, count: int, cutoff: float = 0.0,
+                  truncation_correction: str = "none") -> ModeFamily:
+    """The ``count`` lowest modes of the whole string (families coupled: :func:`family_coupling` > 0) on its
+    free DOFs (:func:`coupled_dofs`), and every mode with ``ω < cutoff`` [rad/s]; mass-normalised, a
+    deterministic sign. When the axial translation is a zero-energy motion (:func:`_rigid_translation`) it is
+    the first column, exact, at ω = 0 (it replaces the computed mode closest to it). ``truncation_correction =
+    "static"`` appends the residual-flexibility attachment modes (:func:`residual_flexibility_modes`) at the
+    bit's u and θx, computed on the whole system."""
+    if truncation_correction not in TRUNCATION_CORRECTIONS:
+        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
+                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
+    mesh = system.mesh
+    dofs = coupled_dofs(mesh)
+    k = system.stiffness[dofs][:, dofs]
+    m = system.mass[dofs][:, dofs]
+    wanted = min(max(int(count), 1), len(dofs))
+    while True:
+        values, vectors = _eigen(k, m, wanted)
+        if not cutoff > 0.0 or wanted >= len(dofs) or values[-1] >= cutoff**2:
+            break
+        wanted = min(len(dofs), 2 * wanted)
+    keep = min(len(values), max(int(count), int(np.count_nonzero(values < cutoff**2)) if cutoff > 0.0 else 0))
+    values, vectors = np.array(values[:keep]), np.array(vectors[:, :keep])
+    rigid = _rigid_translation(system, dofs)
+    if rigid is not None and keep:
+        rigid = rigid / np.sqrt(rigid @ (m @ rigid))
+        closest = int(np.argmax(np.abs(vectors.T @ (m @ rigid))))
+        order = [closest] + [j for j in range(keep) if j != closest]
+        values, vectors = values[order], vectors[:, order]
+        vectors[:, 0] = rigid
+        values[0] = 0.0
+    shapes = np.zeros((mesh.n_dofs, keep))
+    shapes[dofs] = vectors
+    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, system.mass @ shapes))
+    pivot = np.argmax(np.abs(shapes), axis=0)
+    shapes *= np.sign(shapes[pivot, np.arange(keep)])
+    found = ModeFamily("coupled", np.sign(values) * np.sqrt(np.abs(values)), shapes)
+    if truncation_correction == "static" and keep:
+        bit = mesh.n_nodes - 1
+        found = residual_flexibility_modes(system, found, [dof(bit, U), dof(bit, THETA_X)], rigid=rigid is not None)
+    return found
 
 
 def case_linear_system(case, static: StaticState) -> LinearSystem:

@@ -13,7 +13,7 @@ import pytest
 from numba import njit
 
 from drillstring.case import BitRock, TopDrive
-from drillstring.dynamics.rom import case_reduced_model, rigid_axial_column
+from drillstring.dynamics.rom import OBSERVABLE_COLUMN, case_reduced_model, rigid_axial_column
 from drillstring.dynamics.simulate import simulate_model
 from drillstring.dynamics.stability import linearized_matrix, stability, steady_drilling
 from drillstring.forces.registry import (
@@ -22,11 +22,17 @@ from drillstring.forces.registry import (
     BitContext,
     BitLaw,
     BitSteadyState,
+    ContactContext,
+    ContactLaw,
+    HookContext,
+    HookLoad,
     TopBoundary,
     TopContext,
     bit_context,
     bit_law,
     bit_laws,
+    contact_law,
+    contact_laws,
     register,
     top_boundaries,
 )
@@ -273,7 +279,7 @@ def test_pack_refuses_a_law_whose_numbers_disagree_with_its_size(model):
         kernel_size: ClassVar[int] = 7
 
     with pytest.raises(ValueError, match="kernel_array\\(\\) has 6 numbers, kernel_size says 7"):
-        pack(Short(), model.top_drive, model.hook_load.kernel_array(), np.zeros(4), 2 * model.size)
+        pack(Short(), model.top_drive, model.hook_load, np.zeros(4), 2 * model.size)
 
 
 # --- a delayed law (it reads the depth of cut), defined here ---------------------------------------------------
@@ -359,3 +365,122 @@ def test_a_delayed_law_from_outside_equals_the_detournay_law_it_rewrites(torsion
         np.testing.assert_allclose(got[name], expected[name], rtol=0, atol=1e-9 * np.abs(expected[name]).max(),
                                    err_msg=name)
     assert np.abs(expected["force_on_bit"]).max() > 0.0
+
+
+# --- a hook load defined here --------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _heave_kernel(args, ctx):
+    """``[A, ω]`` -> ``A sin(ω t)``."""
+    return args[0] * math.sin(args[1] * ctx.time)
+
+
+@register
+@dataclass(frozen=True)
+class HeavingHook(HookLoad):
+    """A hook load that does not exist in the package: a floating rig's heave pulling the top with ``A sin(ω t)``
+    [N] (``A`` [N], ``ω`` [rad/s])."""
+
+    name: ClassVar[str] = "heave_test"
+    kernel_size: ClassVar[int] = 2
+    kernel: ClassVar = _heave_kernel
+
+    amplitude: float = 2e4
+    frequency: float = 0.7
+
+    def kernel_array(self):
+        return np.array([self.amplitude, self.frequency])
+
+    def evaluate_at(self, ctx: HookContext):
+        return self.amplitude * np.sin(self.frequency * np.asarray(ctx.time, dtype=float))
+
+
+def test_a_hook_load_from_outside_acts_at_the_top_through_the_reference_engine(torsional_case):
+    """The outside hook load's force enters the right-hand side at the top's u and nowhere else; the registry
+    places its numbers and gives it a negative code; the compiled engine refuses it by name."""
+    from dataclasses import replace
+
+    plain = case_reduced_model(torsional_case)
+    heaving = replace(plain, hook_load=HeavingHook())
+    assert HeavingHook.component_code < 0.0 and not heaving.compiled and plain.compiled
+    start = heaving.layout.numbers["hook_load"]
+    np.testing.assert_array_equal(heaving.case2_data.laws[start:start + 2], [2e4, 0.7])
+    n = plain.size
+    y = np.random.default_rng(5).standard_normal(plain.state_size) * 1e-3
+    t = 1.3
+    difference = heaving.rhs_reference(t, y) - plain.rhs_reference(t, y)
+    np.testing.assert_allclose(difference[n:2 * n], plain.top_u * 2e4 * math.sin(0.7 * t), rtol=1e-9, atol=1e-9)
+    assert not difference[:n].any() and not difference[2 * n:].any()
+    np.testing.assert_allclose(plain.rhs(t, y), plain.rhs_reference(t, y), rtol=1e-10, atol=1e-8)
+    with pytest.raises(ValueError, match="hook load 'heave_test' is registered outside the drillstring package"):
+        heaving.rhs(t, y)
+
+
+# --- a contact law defined here ------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _frictionless_kernel(args, ctx, force_v, force_w, torque):
+    """The wall pushes back ``k_i (r − g)`` along the normal; no friction."""
+    for i in range(ctx.v.shape[0]):
+        r = math.sqrt(ctx.v[i] ** 2 + ctx.w[i] ** 2)
+        push = ctx.stiffness[i] * (r - ctx.gap[i]) / r if r > ctx.gap[i] else 0.0
+        force_v[i] = -push * ctx.v[i]
+        force_w[i] = -push * ctx.w[i]
+        torque[i] = 0.0
+
+
+@register
+@dataclass(frozen=True)
+class FrictionlessWall(ContactLaw):
+    """A contact law that does not exist in the package: the penalty wall without friction."""
+
+    name: ClassVar[str] = "frictionless_test"
+    kernel: ClassVar = _frictionless_kernel
+
+    shock_stiffness: float = 1e8
+
+    @property
+    def reads_lateral_velocity(self):
+        return False
+
+    def evaluate_at(self, ctx: ContactContext):
+        v, w = np.asarray(ctx.v, dtype=float), np.asarray(ctx.w, dtype=float)
+        r = np.hypot(v, w)
+        push = np.where(r > ctx.gap, np.asarray(ctx.stiffness) * (r - ctx.gap) / np.where(r > 0, r, 1.0), 0.0)
+        return -push * v, -push * w, np.zeros_like(v)
+
+
+def test_contact_is_a_registered_law_and_one_from_outside_runs_through_the_reference_engine(coarse_case):
+    """The package's contact law is registered with the case's ``[contact]`` as its keys; a frictionless wall
+    written here gives, through the NumPy reference, the package law with μ = 0 through the compiled kernels
+    (states far enough out that many stations touch); with tangential friction the compiled dispatch equals the
+    reference too; the compiled engine refuses the outside law by name."""
+    from dataclasses import replace
+
+    from drillstring.case import Contact
+    from drillstring.forces.contact import ContactParameters, case_contact
+
+    assert "penalty" in contact_laws() and contact_law("penalty") is ContactParameters
+    assert ContactParameters.keys is Contact and ContactParameters.component_code > 0.0
+    assert FrictionlessWall.component_code < 0.0
+    assert ContactParameters.from_case(coarse_case) == case_contact(coarse_case)
+    package = case_reduced_model(coarse_case, lateral_modes=5)
+    k, eps = package.contact.shock_stiffness, package.contact.speed_regularization
+    outside = replace(package, contact=FrictionlessWall(k))
+    frictionless = replace(package, contact=ContactParameters(k, 0.0, eps))
+    tangential = replace(package, contact=ContactParameters(k, 0.3, eps, True))
+    assert not outside.compiled and tangential.case2_data.contact.tangential
+    rng = np.random.default_rng(7)
+    for t in (0.0, 0.37):
+        y = rng.normal(size=2 * package.size) * 30.0
+        expected = frictionless.rhs(t, y)
+        np.testing.assert_allclose(outside.rhs_reference(t, y), expected, rtol=1e-10,
+                                   atol=1e-10 * np.abs(expected).max())
+        fast, slow = tangential.rhs(t, y), tangential.rhs_reference(t, y)
+        np.testing.assert_allclose(fast, slow, rtol=1e-10, atol=1e-10 * np.abs(slow).max())
+        assert np.abs(fast - expected).max() > 1e-3 * np.abs(expected).max()  # the friction does act
+    assert package.observe(0.0, y)[OBSERVABLE_COLUMN["nodes_in_contact"]] > 0
+    with pytest.raises(ValueError, match="contact law 'frictionless_test' is registered outside the drillstring"):
+        outside.rhs(0.0, y)

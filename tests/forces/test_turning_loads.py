@@ -81,3 +81,47 @@ def test_case_turning_loads_of_the_contact_case():
     assert len(loads) > 0 and loads.speed_squared.all()  # a mass imbalance, no bow
     reference = load_case("reference")
     assert len(case_turning_loads(reference, case_mesh(reference))) == 0
+
+
+def test_the_sources_are_registered_with_their_own_keys_and_one_from_outside_runs_compiled(coarse_case):
+    """The mass imbalance and the bow are registered turning-load sources, each with its own keys; a rotating
+    point force written here (no kernel of its own: the sources share one) runs through the compiled kernels and
+    pushes the string at rest with ``F (cos(Ωt + φ) φ_v(i) + sin(Ωt + φ) φ_w(i))`` on the modal accelerations."""
+    from dataclasses import dataclass, replace
+    from typing import ClassVar
+
+    from drillstring.case import Bow, ImbalanceKeys, Section
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.fem.dofs import V, W, dof
+    from drillstring.forces.registry import TurningLoadSource, register, turning_load_source, turning_load_sources
+    from drillstring.forces.turning_loads import MassImbalance, StressFreeBow
+
+    assert turning_load_sources(package_only=True) == ("imbalance", "bow")
+    assert turning_load_source("imbalance") is MassImbalance and MassImbalance.keys is ImbalanceKeys
+    assert StressFreeBow.keys is Bow and set(ImbalanceKeys.model_fields) <= set(Section.model_fields)
+
+    @register
+    @dataclass(frozen=True)
+    class RotatingPointForce(TurningLoadSource):
+        name: ClassVar[str] = "rotating_point_force_test"
+        node: int = 10
+        force: float = 3e3  # [N]
+        phase: float = 0.4  # [rad]
+
+        def loads(self, mesh):
+            pattern = lambda kind: sp.csc_matrix(([self.force], ([dof(self.node, kind)], [0])), shape=(mesh.n_dofs, 1))
+            return TurningLoads(np.array([self.node]), np.array([self.phase]), np.array([False]), pattern(V),
+                                pattern(W))
+
+    plain = case_reduced_model(coarse_case, lateral_modes=5)
+    source = RotatingPointForce()
+    pushed = replace(plain, turning_loads=case_turning_loads(coarse_case, plain.static.mesh, sources=[source]))
+    assert pushed.compiled  # the outside source needs no kernel of its own
+    n, t, omega = plain.size, 0.8, plain.top_speed
+    at_rest = np.zeros(2 * n)
+    push = pushed.rhs(t, at_rest)[n:] - plain.rhs(t, at_rest)[n:]
+    alpha = omega * t + source.phase
+    expected = source.force * (np.cos(alpha) * pushed.phi_v[source.node] + np.sin(alpha) * pushed.phi_w[source.node])
+    np.testing.assert_allclose(push, expected, rtol=1e-10, atol=1e-12 * np.abs(expected).max())
+    assert np.abs(expected).max() > 0.0
+    np.testing.assert_allclose(pushed.rhs(t, at_rest), pushed.rhs_reference(t, at_rest), rtol=1e-12, atol=1e-9)

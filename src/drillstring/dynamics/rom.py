@@ -37,8 +37,10 @@ the type of that argument when it is compiled.
 nothing else of this module): the model's data ``rhs_data``, ``case2_data`` and ``observe_data`` and four
 public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel` (one observation row),
 :func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
-The components (bit–rock law, top boundary, contact, turning loads) are called inside these kernels, so
-the loop never names a law.
+The components are called inside these kernels, so the loop never names a law: the bit–rock law, the top
+boundary, the hook load and the contact law through the registry's compiled dispatch
+(:mod:`drillstring.forces.registry`, their numbers in ``RhsData.laws``); the turning loads of every registered
+source through their one shared kernel (:mod:`drillstring.forces.turning_loads`).
 
 Impacts: a *contact zone* is a run of consecutive nodes in contact; an impact is a zone that appears
 with no node in contact within one node of it at the previous accepted step
@@ -62,11 +64,8 @@ from drillstring.dynamics.delay import allocate_storage, delayed_difference, rec
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import (
-    ContactParameters,
     ContactStations,
     case_contact,
-    distributed_contact_forces,
-    evaluate_contact,
     mesh_contact_stations,
 )
 from drillstring.forces.excitation import TurningLoads
@@ -77,24 +76,40 @@ from drillstring.forces.nonlinear import (
     modal_mass_coupling,
     nonlinear_elements,
 )
-from drillstring.forces.hook_load import HookLoadRamp, hook_load_change
+from drillstring.forces.hook_load import OnBottomStart
 from drillstring.forces.registry import (
     HISTORY,
-    HOOK_LOAD,
     TOP_BOUNDARY_CODE,
     TOP_INERTIA,
     BitContext,
     BitLaw,
+    ContactContext,
+    ContactLaw,
+    HookContext,
+    HookLoad,
     TopBoundary,
     TopContext,
     bit_law_force,
     compiled,
+    contact_law_forces,
+    hook_load as registered_hook_load,
+    hook_load_force,
     pack,
     top_boundary_torque,
 )
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
 from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
-from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
+from drillstring.modal import (
+    LinearSystem,
+    ModeFamily,
+    Modes,
+    case_linear_system,
+    compute_modes,
+    coupled_modes,
+    family_coupling,
+    family_dofs,
+    family_modes,
+)
 from drillstring.statics import StaticState, case_static_state
 
 #: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
@@ -188,42 +203,46 @@ class ContactWork(NamedTuple):
 
 class ContactData(NamedTuple):
     """The wall as the kernels read it: one entry per contact station
-    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node."""
+    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node. The contact law's numbers are in
+    the kernels' flat array (:func:`~drillstring.forces.registry.pack`), not here."""
 
     node: np.ndarray  # (n_stations,) int64
     gap: np.ndarray  # (n_stations,) radial clearance [m]
     outer_diameter: np.ndarray  # (n_stations,) [m]
     stiffness: np.ndarray  # (n_stations,) k_i = k'_sh ℓ_i [N/m]
-    friction: float  # μ_sh [-]
-    regularization: float  # ε [rad/s]
-    tangential: bool  # tangential friction force on the lateral DOFs
+    tangential: bool  # gather the stations' lateral velocities: the contact law reads them
     work: ContactWork
 
 
 class RhsData(NamedTuple):
-    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from its own
-    mode family only: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
-    lateral z start, end] column ranges; ``bit_u``, ``torsion_rows`` hold only their family's columns and
-    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (family columns × nodes) and ``damping_t`` are stored
-    transposed so that products run column by column."""
+    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from the columns
+    that can move it: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
+    lateral z start, end] column ranges; ``axial_rows``, ``torsion_rows`` hold the columns of their range and
+    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (range columns × nodes) and ``damping_t`` are stored
+    transposed so that products run column by column. For a straight string each range is its family's
+    (the fast path: a quantity reads only its family's columns); when the families couple
+    (:attr:`ReducedOrderModel.coupled`) every range is the whole basis ``[0, n)``, every row holds every
+    column and the damping is one full block."""
 
     omega2: np.ndarray  # (n,) signed ω² [1/s²]
     damping_t: np.ndarray  # (n, n) Dᵀ [1/s]
     damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
     generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
     blocks: np.ndarray  # (8,) int64
-    axial_rows: np.ndarray  # (2, n_a) axial columns of: u at the bit, u at the top (where the hook pulls)
-    torsion_rows: np.ndarray  # (3, n_t) torsional columns of: θx at the bit, θx at the top (the quill, where
-    #                           the motor torque acts; 0 when held), the surface-torque row (K Φ) at the top's θx
-    phi_v_t: np.ndarray  # lateral-y shapes (v at every node)
-    phi_w_t: np.ndarray  # lateral-z shapes (w at every node)
-    phi_tx_t: np.ndarray  # torsional shapes (θx at every node)
+    axial_rows: np.ndarray  # (2, a1 − a0) columns of the axial range of: u at the bit, u at the top (where the
+    #                         hook pulls)
+    torsion_rows: np.ndarray  # (3, t1 − t0) columns of the torsional range of: θx at the bit, θx at the top (the
+    #                           quill, where the motor torque acts; 0 when held), the surface-torque row (K Φ) at
+    #                           the top's θx
+    phi_v_t: np.ndarray  # (y1 − y0, n_nodes): v at every node, columns of the lateral-y range
+    phi_w_t: np.ndarray  # (z1 − z0, n_nodes): w at every node, columns of the lateral-z range
+    phi_tx_t: np.ndarray  # (t1 − t0, n_nodes): θx at every node, columns of the torsional range
     smallest_gap: float  # min of the stations' gaps [m]
-    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral y columns), then |φ_w| (z columns)
+    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral-y range's columns), then |φ_w| (z range's)
     top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
     weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # the boundary components' numbers (drillstring.forces.registry.pack): header, the bit
-    #                   law's, the top boundary's, the hook load's, the bit's history (the hole bottom)
+    laws: np.ndarray  # the components' numbers (drillstring.forces.registry.pack): header, the bit law's, the
+    #                   top boundary's, the hook load's, the contact law's, the bit's history (the hole bottom)
     contact: ContactData
     turning: TurningLoadData
 
@@ -493,7 +512,7 @@ def _rhs_kernel(d, t, y, out):
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
-    hook = hook_load_change(d.laws[int(d.laws[HOOK_LOAD]):], t)
+    hook = hook_load_force(d.laws, HookContext(t, d.weight_on_bit))
     for j in range(a0, a1):
         acc[j] += d.axial_rows[0, j - a0] * axial_force + d.axial_rows[1, j - a0] * hook
     for j in range(t0, t1):
@@ -536,10 +555,10 @@ def _rhs_kernel(d, t, y, out):
                 wd += d.phi_w_t[j - z0, i] * eta_dot[j]
         cw.v_dot[m] = vd
         cw.w_dot[m] = wd
-    distributed_contact_forces(cw.v_c[:n_c], cw.w_c[:n_c], cw.v_dot[:n_c], cw.w_dot[:n_c], cw.spin[:n_c],
-                               cw.gap[:n_c], cw.outer_diameter[:n_c], cw.stiffness[:n_c], c.friction,
-                               c.regularization, c.tangential, cw.force_v[:n_c], cw.force_w[:n_c],
-                               cw.torque[:n_c])
+    contact_law_forces(d.laws, ContactContext(cw.v_c[:n_c], cw.w_c[:n_c], cw.v_dot[:n_c], cw.w_dot[:n_c],
+                                              cw.spin[:n_c], cw.gap[:n_c], cw.outer_diameter[:n_c],
+                                              cw.stiffness[:n_c]),
+                       cw.force_v[:n_c], cw.force_w[:n_c], cw.torque[:n_c])
     for m in range(n_c):
         i = c.node[cw.stations[m]]
         fv = cw.force_v[m]
@@ -861,8 +880,9 @@ class ReducedOrderModel:
             (its first column the rigid rotation), ``top_speed`` is the set point, the kernels' base spin
             speed is 0 (the rigid rotation carries the spin) and the state ``[η, η̇, s]`` holds the
             controller's states ``s`` after the modal coordinates (:attr:`state_size`).
-        hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`): ``None`` or a zero ramp
-            time is the reference start (on the static state at t = 0); a ramp starts off bottom, the bit
+        hook_load: the start, a hook load of the protocol (:class:`~drillstring.forces.registry.HookLoad`:
+            :class:`~drillstring.forces.hook_load.HookLoadRamp`, ...): ``None``, :class:`~drillstring.forces.
+            hook_load.OnBottomStart` or a zero ramp time is the reference start (on the static state at t = 0); a ramp starts off bottom, the bit
             its ``clearance`` above the rock, and transfers the weight-on-bit over the ramp time.
         history_bins: bins per blade sector of the bit's history (:mod:`drillstring.dynamics.delay`) for a
             delayed bit–rock law.
@@ -884,16 +904,17 @@ class ReducedOrderModel:
     top_speed: float
     weight_on_bit: float
     bit_rock: BitLaw
-    contact: ContactParameters
+    contact: ContactLaw
     stations: ContactStations
     probe_positions: np.ndarray
     nonlinear: str = "bit_and_contact"
     generalized_force: np.ndarray | None = None
     turning_loads: TurningLoads | None = None
     top_drive: TopDriveParameters | None = None
-    hook_load: HookLoadRamp | None = None
+    hook_load: HookLoad | None = None
     history_bins: int = 2048
     residual_columns: np.ndarray | None = None
+    coupled: bool = False
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -904,6 +925,8 @@ class ReducedOrderModel:
         self.base_speed = 0.0 if self.top_drive.drives else float(self.top_speed)
         if self.top_drive.drives and self.nonlinear == "full":
             raise ValueError("nonlinear = 'full' with a top drive is not supported yet: use 'bit_and_contact'")
+        if self.coupled:
+            _check_coupled(self)
         mesh = self.static.mesh
         nodes = np.arange(mesh.n_nodes)
         phi = self.basis
@@ -923,7 +946,7 @@ class ReducedOrderModel:
         if self.turning_loads is None:
             self.turning_loads = TurningLoads.empty(mesh.n_dofs)
         if self.hook_load is None:
-            self.hook_load = HookLoadRamp()
+            self.hook_load = OnBottomStart()
         self.omega2 = np.ascontiguousarray(np.sign(self.angular_frequencies) * self.angular_frequencies**2)
         self.bit_u = np.ascontiguousarray(phi[dof(mesh.n_nodes - 1, U)])
         self.top_u = np.ascontiguousarray(phi[dof(0, U)])
@@ -939,6 +962,9 @@ class ReducedOrderModel:
         labels = np.array(self.family)
         blocks = []
         for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
+            if self.coupled:  # every physical quantity reads every column
+                blocks += [0, n]
+                continue
             columns = np.nonzero(np.isin(labels, names))[0]
             start = int(columns[0]) if len(columns) else 0
             end = int(columns[-1]) + 1 if len(columns) else 0
@@ -946,6 +972,10 @@ class ReducedOrderModel:
                 raise ValueError("mode families must be contiguous in the basis")
             blocks += [start, end]
         self.blocks = np.array(blocks, dtype=np.int64)
+        #: (n,) True on the columns that move the lateral DOFs (every column when the families couple)
+        self.lateral_columns = np.zeros(n, dtype=bool)
+        self.lateral_columns[blocks[4]:blocks[5]] = True
+        self.lateral_columns[blocks[6]:blocks[7]] = True
         a0, a1, t0, t1, y0, y1, z0, z1 = blocks
         #: column of the rigid rotation (a top drive), None when the top is held
         self.rigid_rotation_column = t0 if self.top_drive.drives else None
@@ -958,7 +988,7 @@ class ReducedOrderModel:
         transposed = np.ascontiguousarray
         history = (allocate_storage(self.bit_rock.sector, self.history_bins) if self.bit_rock.delayed
                    else allocate_storage(1.0, 4))
-        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load.kernel_array(), history, 2 * n)
+        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n, contact=self.contact)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -981,8 +1011,7 @@ class ReducedOrderModel:
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
                 stiffness=transposed(self.station_stiffness, dtype=float),
-                friction=float(c.friction_coefficient), regularization=float(c.speed_regularization),
-                tangential=bool(c.tangential_friction), work=ContactWork.allocate(mesh.n_nodes, len(st)),
+                tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(mesh.n_nodes, len(st)),
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
         )
@@ -1029,7 +1058,11 @@ class ReducedOrderModel:
     @property
     def lowest_lateral_eigenvalue(self) -> float:
         """ω₁² [rad²/s²] of the lowest lateral mode of the basis (signed; negative: the straight string is
-        statically buckled, :mod:`drillstring.buckling`); NaN without lateral modes."""
+        statically buckled, :mod:`drillstring.buckling`); NaN without lateral modes. When the families couple:
+        the lowest ω² of the basis's modes (the rigid axial translation left out)."""
+        if self.coupled:
+            elastic = self.omega2[(np.array(self.family) != "rigid_axial") & ~self.residual_columns]
+            return float(elastic.min()) if len(elastic) else math.nan
         y0, y1 = int(self.blocks[4]), int(self.blocks[5])
         return float(self.omega2[y0]) if y1 > y0 else math.nan
 
@@ -1061,11 +1094,12 @@ class ReducedOrderModel:
         """True when the compiled kernels hold the model's components (the package's registered ones); a
         component registered outside the package runs through :meth:`rhs_reference` only
         (:mod:`drillstring.forces.registry`)."""
-        return compiled(self.bit_rock) and compiled(self.top_drive)
+        return all(compiled(c) for c in (self.bit_rock, self.top_drive, self.hook_load, self.contact))
 
     def require_compiled(self) -> None:
         """ValueError naming the component when :attr:`compiled` is False."""
-        for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive)):
+        for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive),
+                                ("hook load", self.hook_load), ("contact law", self.contact)):
             if not compiled(component):
                 raise ValueError(
                     f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
@@ -1094,18 +1128,19 @@ class ReducedOrderModel:
             t, position, angle, bit_velocity, bit_speed, depth, self.weight_on_bit))
         st = self.stations
         spin = self.base_speed + self.phi_tx @ eta_dot
-        force_v, force_w, torque, _ = evaluate_contact(
-            st.gather(self.phi_v @ eta), st.gather(self.phi_w @ eta), st.gather(self.phi_v @ eta_dot),
-            st.gather(self.phi_w @ eta_dot), st.gather(spin), st.gap, st.outer_diameter, self.contact,
-            stiffness=self.station_stiffness,
-        )
+        lateral_velocity = self.contact.reads_lateral_velocity
+        force_v, force_w, torque = self.contact.evaluate_at(ContactContext(
+            st.gather(self.phi_v @ eta), st.gather(self.phi_w @ eta),
+            st.gather(self.phi_v @ eta_dot) if lateral_velocity else np.zeros(len(st)),
+            st.gather(self.phi_w @ eta_dot) if lateral_velocity else np.zeros(len(st)),
+            st.gather(spin), st.gap, st.outer_diameter, self.station_stiffness))
         n_nodes = self.static.mesh.n_nodes
         turning = self.basis.T @ self.turning_loads.forces(self.base_speed * t + self.phi_tx @ eta, spin)
-        lateral = np.array([f.startswith("lateral") for f in self.family])
+        lateral = self.lateral_columns
         generalized = (self.phi_v.T @ st.scatter(force_v, n_nodes) + self.phi_w.T @ st.scatter(force_w, n_nodes)
                        + self.phi_tx.T @ st.scatter(torque, n_nodes)
                        + self.bit_u * (axial_force + self.weight_on_bit) + self.bit_t * bit_torque
-                       + self.top_u * float(self.hook_load.force(t))
+                       + self.top_u * float(self.hook_load.evaluate_at(HookContext(t, self.weight_on_bit)))
                        + self.generalized_force + np.where(lateral, turning, 0.0))
         acceleration = generalized - self.damping @ eta_dot - self.omega2 * eta
         states = np.zeros(self.state_size - 2 * n)
@@ -1223,6 +1258,12 @@ class ReducedOrderModel:
         omega = self.top_speed
         weight = np.exp(1j * turning.phase) * np.where(turning.speed_squared, omega**2, 1.0)
         _, _, _, _, y0, y1, z0, z1 = self.blocks
+        if self.coupled:  # one system: both planes' loads on the whole basis, the full damping
+            block = np.diag(self.omega2) - omega**2 * np.eye(n) + 1j * omega * self.damping
+            amplitude = np.linalg.solve(block, weight @ turning.load_y - 1j * (weight @ turning.load_z))
+            y[:n] = amplitude.real
+            y[n:] = (1j * omega * amplitude).real
+            return y
         for (start, end), load, factor in (((y0, y1), turning.load_y, 1.0), ((z0, z1), turning.load_z, -1j)):
             if end == start:
                 continue
@@ -1255,7 +1296,7 @@ class ReducedOrderModel:
         if self.rigid_rotation_column is not None and not at_rest:
             r = self.rigid_rotation_column  # spinning at Ω: the rigid rotation carries it
             y0[self.size + r] = self.top_speed / self.quill_shapes[r]
-        lateral = np.array([f.startswith("lateral") for f in self.family])
+        lateral = self.lateral_columns
         if not (lateral_perturbation > 0 and lateral.any()):
             return y0
         mesh = self.static.mesh
@@ -1299,6 +1340,21 @@ class ReducedOrderModel:
         return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
 
 
+def _check_coupled(model: ReducedOrderModel) -> None:
+    """ValueError for what a model whose families couple does not support yet, naming it."""
+    if model.nonlinear == "full":
+        raise ValueError("nonlinear = 'full' with coupled families (a string out of its straight axis) is not "
+                         "supported: its mass correction is built family by family; use 'bit_and_contact'")
+    if model.top_drive.drives:
+        raise ValueError(f"top boundary {model.top_drive.name!r} with coupled families (a string out of its "
+                         "straight axis) is not supported: the rigid rotation of a bent string is not a motion of "
+                         "its global θx DOFs; use an imposed top speed")
+    if model.base_speed != 0.0:
+        raise ValueError(f"top_speed = {model.base_speed:g} rad/s with coupled families (a string out of its "
+                         "straight axis): the spin of a bent string about its centreline is not a rotation of its "
+                         "global θx DOFs (deviated-well dynamics); only 0 is supported")
+
+
 def rigid_axial_column(model: ReducedOrderModel) -> int:
     """The column of the rigid axial translation in the model's basis."""
     columns = [i for i, f in enumerate(model.family) if f == "rigid_axial"]
@@ -1318,7 +1374,7 @@ def reduced_model(
     rigid_axial_damping: float,
     top_speed: float,
     bit_rock: BitLaw,
-    contact: ContactParameters,
+    contact: ContactLaw,
     borehole_diameter: float,
     rigid_rotation_damping: float = 0.0,
     damping_basis: str = "free_free",
@@ -1327,7 +1383,7 @@ def reduced_model(
     turning_loads: TurningLoads | None = None,
     lateral_cutoff: float = 0.0,
     top_drive: TopDriveParameters | None = None,
-    hook_load: HookLoadRamp | None = None,
+    hook_load: HookLoad | None = None,
     rayleigh: tuple[float, float] = (0.0, 0.0),
     truncation_correction: str = "none",
 ) -> ReducedOrderModel:
@@ -1346,27 +1402,33 @@ def reduced_model(
             (:func:`~drillstring.forces.contact.mesh_contact_stations`).
         turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
         top_drive: the top boundary; None: the top speed imposed.
-        hook_load: the start (:class:`~drillstring.forces.hook_load.HookLoadRamp`); None: the reference start.
+        hook_load: the start (a :class:`~drillstring.forces.registry.HookLoad`); None: the reference start.
         rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
         truncation_correction: "none" (the modes alone) or "static" (each of the axial and torsional families
             followed by its residual-flexibility attachment modes at the bit, and at the top with a top drive:
             :func:`drillstring.modal.compute_modes`).
     """
     drive = top_drive is not None and top_drive.drives
-    if drive:
-        torsional_modes += 1
-    modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                          top_inertia=top_drive.top_inertia if drive else None,
-                          truncation_correction=truncation_correction)
-    families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
-    basis = np.hstack([f.shapes for f in families])
-    omega = np.concatenate([f.angular_frequencies for f in families])
-    # the family's size, its attachment modes (truncation_correction = "static") included
-    family = ["rigid_axial"] + ["axial"] * (len(modes.axial.angular_frequencies) - 1)
-    for f in families[1:]:
-        family += [f.name] * len(f.angular_frequencies)
-    residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies) - f.attachments
-                               for f in families])
+    coupled = family_coupling(system) > 0.0
+    if coupled:
+        modes, basis, omega, family, residual = _coupled_basis(
+            system, axial_modes + 1 + torsional_modes + 2 * lateral_modes, lateral_cutoff, truncation_correction,
+            damping_basis)
+    else:
+        if drive:
+            torsional_modes += 1
+        modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
+                              top_inertia=top_drive.top_inertia if drive else None,
+                              truncation_correction=truncation_correction)
+        families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
+        basis = np.hstack([f.shapes for f in families])
+        omega = np.concatenate([f.angular_frequencies for f in families])
+        # the family's size, its attachment modes (truncation_correction = "static") included
+        family = ["rigid_axial"] + ["axial"] * (len(modes.axial.angular_frequencies) - 1)
+        for f in families[1:]:
+            family += [f.name] * len(f.angular_frequencies)
+        residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies)
+                                   - f.attachments for f in families])
     structural = reduced_structural_damping(
         system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
         rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
@@ -1380,8 +1442,29 @@ def reduced_model(
         stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
-        top_drive=top_drive, hook_load=hook_load, residual_columns=residual,
+        top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled,
     )
+
+
+def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_correction: str,
+                   damping_basis: str):
+    """The one basis of a system whose families couple (:func:`~drillstring.modal.coupled_modes`: the ``count``
+    lowest modes of the whole string and every one below ``cutoff`` [rad/s], then its attachment modes):
+    ``(modes, basis, ω, labels, residual)``, labels "rigid_axial" for the rigid translation and "coupled" for
+    the others."""
+    if damping_basis != "constrained":
+        raise ValueError(f"damping.basis = {damping_basis!r} with coupled families (a string out of its straight "
+                         "axis): the free-free damping is defined family by family; use 'constrained' (and "
+                         "Rayleigh damping)")
+    found = coupled_modes(system, count, cutoff, truncation_correction)
+    empty = {name: ModeFamily(name, np.zeros(0), np.zeros((system.mesh.n_dofs, 0)))
+             for name in ("axial", "torsional", "lateral_y", "lateral_z")}
+    n = len(found.angular_frequencies)
+    family = ["coupled"] * n
+    if n and found.angular_frequencies[0] == 0.0:  # coupled_modes put the rigid axial translation first
+        family[0] = "rigid_axial"
+    residual = np.arange(n) >= n - found.attachments
+    return Modes(**empty, coupled=found), found.shapes, found.angular_frequencies, family, residual
 
 
 def _lateral_cutoff(case_value: float, lateral_modes: int | None, lateral_cutoff: float | None) -> float:
@@ -1441,11 +1524,10 @@ def case_reduced_model(
     )
 
 
-def case_hook_load(case, weight_on_bit: float) -> HookLoadRamp:
-    """The start of a :class:`~drillstring.case.Case` (``[initial]``): the ramp of ``weight_on_bit`` [N] (the
-    static one) over ``weight_ramp_time`` with the bit ``clearance`` off bottom for ``start = "ramp"``; the
-    reference start (no ramp) for ``"on_bottom"``."""
-    i = case.initial
-    if i.start == "on_bottom":
-        return HookLoadRamp()
-    return HookLoadRamp(ramp_time=i.weight_ramp_time, weight_on_bit=float(weight_on_bit), clearance=i.clearance)
+def case_hook_load(case, weight_on_bit: float) -> HookLoad:
+    """The start of a :class:`~drillstring.case.Case` (``[initial]``): the registered hook load that
+    ``initial.start`` names (:func:`~drillstring.forces.registry.hook_load`), built from the case and the static
+    ``weight_on_bit`` [N]: the ramp of it over ``weight_ramp_time`` with the bit ``clearance`` off bottom for
+    ``start = "ramp"`` (:class:`~drillstring.forces.hook_load.HookLoadRamp`); the reference start for
+    ``"on_bottom"``."""
+    return registered_hook_load(case.initial.start).from_case(case, weight_on_bit)

@@ -33,14 +33,23 @@ from drillstring.fem.element import (
     place_planar,
 )
 from drillstring.fem.fluid import FluidCoefficients, fluid_planar_matrices
+from drillstring.fem.geometry import rotate_element_matrices
 from drillstring.fem.mesh import Mesh
 
-def assemble_matrix(n_dofs: int, element_matrices: Iterable[np.ndarray]) -> sp.csr_matrix:
-    """Sum 12×12 element matrices (element e on nodes e, e+1) into a sparse n_dofs × n_dofs matrix."""
+def assemble_matrix(n_dofs: int, element_matrices: Iterable[np.ndarray],
+                    rotations: np.ndarray | None = None) -> sp.csr_matrix:
+    """Sum 12×12 element matrices (element e on nodes e, e+1) into a sparse n_dofs × n_dofs matrix;
+    ``rotations`` (n_el, 3, 3): each element's direction cosines (:mod:`drillstring.fem.geometry`), its matrix
+    turned from element to global coordinates first; None: the elements lie along x (no rotation)."""
     blocks = [np.asarray(ke) for ke in element_matrices]
     if not blocks:
         return sp.csr_matrix((n_dofs, n_dofs))
     values = np.stack(blocks)  # (n_el, 12, 12)
+    if rotations is not None:
+        if np.shape(rotations) != (len(blocks), 3, 3):
+            raise ValueError(f"rotations: must be one (3, 3) rotation per element ({len(blocks)}), got shape "
+                             f"{np.shape(rotations)}")
+        values = rotate_element_matrices(values, np.asarray(rotations, dtype=float))
     dofs = DOFS_PER_NODE * np.arange(len(blocks))[:, None] + np.arange(DOFS_PER_ELEMENT)  # (n_el, 12)
     rows = np.broadcast_to(dofs[:, :, None], values.shape)
     cols = np.broadcast_to(dofs[:, None, :], values.shape)
@@ -74,11 +83,12 @@ def stabilizer_stiffness(mesh: Mesh, stabilizers: Sequence[Stabilizer]) -> sp.cs
     return sp.diags(diag).tocsr()
 
 
-def structural_matrices(mesh: Mesh) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """Global elastic stiffness [K] and consistent mass [M] (no boundary conditions)."""
+def structural_matrices(mesh: Mesh, rotations: np.ndarray | None = None) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Global elastic stiffness [K] and consistent mass [M] (no boundary conditions); ``rotations``: the
+    elements' direction cosines (:func:`assemble_matrix`)."""
     pairs = list(zip(mesh.element_sections(), mesh.element_lengths))
-    k = assemble_matrix(mesh.n_dofs, (element_stiffness(s, h) for s, h in pairs))
-    m = assemble_matrix(mesh.n_dofs, (element_mass(s, h) for s, h in pairs))
+    k = assemble_matrix(mesh.n_dofs, (element_stiffness(s, h) for s, h in pairs), rotations)
+    m = assemble_matrix(mesh.n_dofs, (element_mass(s, h) for s, h in pairs), rotations)
     return k, m
 
 
@@ -91,27 +101,31 @@ def gyroscopic_matrix(mesh: Mesh) -> sp.csr_matrix:
     )
 
 
-def geometric_stiffness(mesh: Mesh, nodal_axial_force: np.ndarray) -> sp.csr_matrix:
-    """Global [K_g] from the axial force at the nodes [N] (tension positive), linear in each element."""
+def geometric_stiffness(mesh: Mesh, nodal_axial_force: np.ndarray,
+                        rotations: np.ndarray | None = None) -> sp.csr_matrix:
+    """Global [K_g] from the axial force at the nodes [N] (tension positive), linear in each element;
+    ``rotations``: the elements' direction cosines (:func:`assemble_matrix`)."""
     return assemble_matrix(
         mesh.n_dofs,
         (
             element_geometric_stiffness(s, h, nodal_axial_force[e], nodal_axial_force[e + 1])
             for e, (s, h) in enumerate(zip(mesh.element_sections(), mesh.element_lengths))
         ),
+        rotations,
     )
 
 
 def fluid_matrices(
-    mesh: Mesh, coefficients: Sequence[FluidCoefficients]
+    mesh: Mesh, coefficients: Sequence[FluidCoefficients], rotations: np.ndarray | None = None
 ) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
-    """Global fluid ``(M_f, C_f, K_f)``; ``coefficients`` holds one entry per mesh section."""
+    """Global fluid ``(M_f, C_f, K_f)``; ``coefficients`` holds one entry per mesh section; ``rotations``: the
+    elements' direction cosines (:func:`assemble_matrix`)."""
     per_element = [
         fluid_planar_matrices(s, h, coefficients[i])
         for s, h, i in zip(mesh.element_sections(), mesh.element_lengths, mesh.element_section)
     ]
     return tuple(  # type: ignore[return-value]
-        assemble_matrix(mesh.n_dofs, (place_planar(m[k]) for m in per_element)) for k in range(3)
+        assemble_matrix(mesh.n_dofs, (place_planar(m[k]) for m in per_element), rotations) for k in range(3)
     )
 
 

@@ -69,11 +69,15 @@ speed ``θ̇x R``, e.g. in backward whirl).
 
 The component (SPEC §11)
 ------------------------
-Borehole contact is one component of the reduced model. Its pieces: :class:`ContactParameters` (built from
-the case in one place, :func:`case_contact`), the stations where the wall acts (:class:`ContactStations`,
-:func:`mesh_contact_stations`), the compiled station law :func:`distributed_contact_forces`, the NumPy
-reference :func:`evaluate_contact` (:meth:`ContactParameters.evaluate`) and its Jacobian
-:func:`contact_jacobian` (:meth:`ContactParameters.jacobian`).
+Borehole contact is one component of the reduced model, registered on the component protocol
+(:mod:`drillstring.forces.registry`, a :class:`~drillstring.forces.registry.ContactLaw` named ``"penalty"``).
+Its pieces: :class:`ContactParameters` (its keys the case's ``[contact]``, :class:`~drillstring.case.Contact`;
+built from the case in one place, :meth:`ContactParameters.from_case`), the stations where the wall acts
+(:class:`ContactStations`, :func:`mesh_contact_stations`: the model's geometry, not the law's numbers), the
+compiled kernel :func:`penalty_contact_kernel` over the named context
+:class:`~drillstring.forces.registry.ContactContext` (the station law :func:`distributed_contact_forces`), the
+NumPy reference :func:`evaluate_contact` (:meth:`ContactParameters.evaluate_at`) and its Jacobian
+:func:`contact_jacobian` (:meth:`ContactParameters.jacobian_at`).
 
 Jacobian (closed form). With ``N = k (r − g)``, ``n = (n_v, n_w)``, ``t = (−n_w, n_v)``, ``∂n/∂(v, w) =
 t tᵀ / r`` and ``sgn_ε'(a) = ε² / (a² + ε²)^{3/2}``, the normal force ``−N n`` has the symmetric derivative
@@ -89,9 +93,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numba import njit
+
+from drillstring.case import Contact
+from drillstring.forces.registry import ContactContext, ContactLaw, register
 
 __all__ = [
     "ContactParameters",
@@ -105,6 +113,7 @@ __all__ = [
     "evaluate_contact",
     "contact_jacobian",
     "case_contact",
+    "penalty_contact_kernel",
     "JACOBIAN_INPUTS",
     "JACOBIAN_OUTPUTS",
 ]
@@ -116,9 +125,20 @@ JACOBIAN_INPUTS = ("v", "w", "v_dot", "w_dot", "spin_speed")
 JACOBIAN_OUTPUTS = ("force_v", "force_w", "torque")
 
 
+@njit(cache=True)
+def penalty_contact_kernel(args, ctx, force_v, force_w, torque):
+    """The compiled kernel of :class:`ContactParameters`: :func:`distributed_contact_forces` at the stations of
+    ``ctx`` (:class:`~drillstring.forces.registry.ContactContext`) with ``args = [μ_sh, ε, tangential (1/0)]``
+    (:meth:`ContactParameters.kernel_array`); fills ``force_v``, ``force_w`` [N] and ``torque`` [N·m]."""
+    distributed_contact_forces(ctx.v, ctx.w, ctx.v_dot, ctx.w_dot, ctx.spin_speed, ctx.gap, ctx.outer_diameter,
+                               ctx.stiffness, args[0], args[1], args[2] != 0.0, force_v, force_w, torque)
+
+
+@register
 @dataclass(frozen=True)
-class ContactParameters:
-    """String–borehole contact coefficients (SPEC §6; reference values in SPEC §9).
+class ContactParameters(ContactLaw):
+    """String–borehole contact coefficients (SPEC §6; reference values in SPEC §9): the contact law ``"penalty"``
+    of the component protocol (module docstring).
 
     Attributes
     ----------
@@ -135,6 +155,11 @@ class ContactParameters:
         Add the tangential friction force on the lateral DOFs (off by default; SPEC §6 "optionally").
     """
 
+    name: ClassVar[str] = "penalty"
+    kernel_size: ClassVar[int] = 3
+    kernel: ClassVar = penalty_contact_kernel
+    keys: ClassVar = Contact
+
     shock_stiffness: float
     friction_coefficient: float
     speed_regularization: float
@@ -145,6 +170,35 @@ class ContactParameters:
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0.0:
                 raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
+
+    @classmethod
+    def from_case(cls, case) -> "ContactParameters":
+        """The law of a :class:`~drillstring.case.Case` (``[contact]``): the wall's distributed stiffness k'_sh
+        [N/m per m], the friction coefficient, the regularisation speed and the tangential friction switch."""
+        c = case.contact
+        return cls(c.shock_stiffness, c.friction_coefficient, c.speed_regularization, c.tangential_friction)
+
+    @property
+    def reads_lateral_velocity(self) -> bool:
+        """Only the tangential friction reads the stations' lateral velocities."""
+        return bool(self.tangential_friction)
+
+    def kernel_array(self) -> np.ndarray:
+        """``[μ_sh, ε, tangential (1/0)]``, what :func:`penalty_contact_kernel` reads (the stations' stiffness
+        ``k'_sh ℓ_i`` comes with the context)."""
+        return np.array([self.friction_coefficient, self.speed_regularization,
+                         1.0 if self.tangential_friction else 0.0], dtype=np.float64)
+
+    def evaluate_at(self, ctx: ContactContext):
+        """NumPy reference of the kernel: ``(force_v [N], force_w [N], torque [N·m])`` at the stations of ``ctx``."""
+        force_v, force_w, torque, _ = evaluate_contact(ctx.v, ctx.w, ctx.v_dot, ctx.w_dot, ctx.spin_speed, ctx.gap,
+                                                       ctx.outer_diameter, self, stiffness=ctx.stiffness)
+        return force_v, force_w, torque
+
+    def jacobian_at(self, ctx: ContactContext) -> np.ndarray:
+        """:func:`contact_jacobian` at the stations of ``ctx``: (n, 3, 5)."""
+        return contact_jacobian(ctx.v, ctx.w, ctx.v_dot, ctx.w_dot, ctx.spin_speed, ctx.gap, ctx.outer_diameter,
+                                self, stiffness=ctx.stiffness)
 
     def evaluate(self, v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, stiffness=None):
         """:func:`evaluate_contact` of this law: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``."""
@@ -424,9 +478,6 @@ def contact_jacobian(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
 
 
 def case_contact(case) -> ContactParameters:
-    """The borehole contact law of a :class:`~drillstring.case.Case` (``[contact]``): the wall's distributed
-    stiffness k'_sh [N/m per m], the friction coefficient, the regularisation speed and the tangential
-    friction switch."""
-    c = case.contact
-    return ContactParameters(c.shock_stiffness, c.friction_coefficient, c.speed_regularization,
-                             c.tangential_friction)
+    """The borehole contact law of a :class:`~drillstring.case.Case` (``[contact]``,
+    :meth:`ContactParameters.from_case`)."""
+    return ContactParameters.from_case(case)

@@ -1,4 +1,4 @@
-"""The component protocol: bit–rock laws and top boundaries that register themselves (SPEC §11).
+"""The component protocol: bit–rock laws, top boundaries and hook loads that register themselves (SPEC §11).
 
 A **component** is one module holding one class. The class is its parameters (built from the case by
 ``from_case``), and declares everything the reduced model, the integrators and the stability analysis ask of
@@ -22,6 +22,29 @@ the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian(
 state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
 surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
 
+**Contact laws** (:class:`ContactLaw`): the force of the borehole wall on the string at the contact
+stations outside their clearance, from the named context :class:`ContactContext` (arrays over those stations:
+lateral displacements and velocities, spin speed, gap, outer diameter, station stiffness): ``kernel(args, ctx,
+force_v, force_w, torque)`` fills the three arrays, ``evaluate_at(ctx) -> (force_v, force_w, torque)`` is its
+NumPy reference and ``jacobian_at(ctx)`` the (n, 3, 5) partials over (v, w, v̇, ẇ, θ̇x) per station.
+``reads_lateral_velocity`` says whether the kernels must gather the stations' lateral velocities for it (they
+are left at 0 otherwise). The case's ``[contact]`` holds its keys.
+
+**Turning-load sources** (:class:`TurningLoadSource`): loads fixed to the string's sections that turn with
+them (mass imbalance, a stress-free bow, :mod:`drillstring.forces.turning_loads`). They share one compiled
+kernel (a load fixed in the rotating section, scaled by 1 or by the local spin speed squared), so a source
+declares no kernel: its ``keys``, ``from_case(case)`` and ``loads(mesh)`` (its entries, a
+:class:`~drillstring.forces.excitation.TurningLoads`); the reduced model projects the entries of every source
+on its modes once. A source from outside the package therefore runs in the compiled kernels too (passed
+explicitly: the case builds the package's sources only, in their declared ``order``).
+
+**Hook loads** (:class:`HookLoad`): the extra axial force the hook applies at the string's top relative to the
+static state (a ramped start slacks off the weight-on-bit, :mod:`drillstring.forces.hook_load`), a prescribed
+function of the named context :class:`HookContext` (time, static weight-on-bit): ``kernel(args, ctx) -> force``
+and ``evaluate_at(ctx)``; it has no Jacobian on the state (it reads none). ``active`` says whether the run
+starts off bottom (``clearance`` [m] above the rock, the string hanging from the hook). The case's
+``initial.start`` names it (``"on_bottom"``: none, code 0, the kernels add nothing; ``"ramp"``).
+
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
 (:class:`~drillstring.case.TuckerWangKeys`, ...).
 
@@ -33,7 +56,8 @@ codes of the components and where their slices start), then the bit law's number
 :func:`pack` puts it. The states of the components follow the modal coordinates in the state vector at
 the offsets :func:`pack` computes from their ``n_states``.
 
-**Compiled dispatch.** The kernels call :func:`bit_law_force` and :func:`top_boundary_torque`; when they are
+**Compiled dispatch.** The kernels call :func:`bit_law_force`, :func:`top_boundary_torque` and
+:func:`hook_load_force`; when they are
 compiled, the registry writes the dispatch over the codes of the package's registered components
 (:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
 same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
@@ -58,12 +82,22 @@ __all__ = [
     "BIT_LAW",
     "HISTORY",
     "HOOK_LOAD",
+    "HOOK_LOAD_CODE",
+    "HookContext",
+    "HookLoad",
     "TOP_BOUNDARY_CODE",
     "TOP_INERTIA",
     "HEADER",
     "BitContext",
     "BitLaw",
     "BitSteadyState",
+    "CONTACT_LAW",
+    "CONTACT_LAW_CODE",
+    "ContactContext",
+    "ContactLaw",
+    "contact_law",
+    "contact_law_forces",
+    "contact_laws",
     "Layout",
     "TopBoundary",
     "TopContext",
@@ -72,6 +106,12 @@ __all__ = [
     "bit_law_force",
     "bit_laws",
     "compiled",
+    "hook_load",
+    "hook_load_force",
+    "hook_loads",
+    "TurningLoadSource",
+    "turning_load_source",
+    "turning_load_sources",
     "pack",
     "package_components",
     "register",
@@ -83,10 +123,12 @@ __all__ = [
 #: The header of the kernels' flat array: the bit law's code, the top boundary's code (0: it does not drive
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
-#: bit's history starts.
+#: bit's history starts, the hook load's code (0: none, the kernels add nothing), the contact law's code and where
+#: its numbers start.
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
-          "history")
-BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY = range(len(HEADER))
+          "history", "hook_load_code", "contact_law_code", "contact_law")
+(BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY,
+ HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
@@ -119,6 +161,29 @@ class TopContext(NamedTuple):
     time: Any
     quill_speed: Any
     surface_torque: Any
+
+
+class ContactContext(NamedTuple):
+    """What a contact law may read, one entry per contact station outside its gap (1-D float64 arrays, SI):
+    lateral displacements ``v``, ``w`` [m] and velocities ``v_dot``, ``w_dot`` [m/s] (0 unless the law
+    ``reads_lateral_velocity``), ``spin_speed`` θ̇x [rad/s], ``gap`` [m], ``outer_diameter`` [m] and the
+    station's ``stiffness`` [N/m]."""
+
+    v: Any
+    w: Any
+    v_dot: Any
+    w_dot: Any
+    spin_speed: Any
+    gap: Any
+    outer_diameter: Any
+    stiffness: Any
+
+
+class HookContext(NamedTuple):
+    """What a hook load may read: ``time`` [s] and the static ``weight_on_bit`` [N]."""
+
+    time: Any
+    weight_on_bit: Any
 
 
 @dataclass(frozen=True)
@@ -221,15 +286,109 @@ class TopBoundary:
         return {"top_boundary": self.name}
 
 
-_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}}
-_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary"}
+class ContactLaw:
+    """Base of the contact laws (module docstring). Instances are the law's parameters (SI)."""
+
+    name: ClassVar[str]
+    kernel_size: ClassVar[int] = 0
+    #: the compiled kernel ``kernel(args, ctx, force_v, force_w, torque)``: fills the forces [N] and torques [N·m]
+    kernel: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds), read from ``[contact]``
+    keys: ClassVar[Any] = None
+    #: k'_sh [N/m per m of string], the wall's distributed stiffness: station i gets k'_sh ℓ_i (the context's
+    #: ``stiffness``, :meth:`~drillstring.forces.contact.ContactStations.stiffness`)
+    shock_stiffness: float
+
+    @classmethod
+    def from_case(cls, case) -> "ContactLaw":
+        raise NotImplementedError
+
+    @property
+    def reads_lateral_velocity(self) -> bool:
+        """Whether the law reads the stations' lateral velocities (the kernels gather them only then)."""
+        return True
+
+    def kernel_array(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def evaluate_at(self, ctx: ContactContext):
+        """NumPy reference of :attr:`kernel`: ``(force_v, force_w, torque)`` arrays, one entry per station."""
+        raise NotImplementedError
+
+    def jacobian_at(self, ctx: ContactContext) -> np.ndarray:
+        """(n, 3, 5): rows force_v, force_w, torque; columns v, w, v̇, ẇ, θ̇x; one block per station."""
+        raise NotImplementedError
+
+
+class TurningLoadSource:
+    """Base of the turning-load sources (module docstring). Instances are the source's parameters (SI)."""
+
+    name: ClassVar[str]
+    #: its case keys (a pydantic model with units and bounds)
+    keys: ClassVar[Any] = None
+    #: rank among the package's sources when the case builds them (their entries are concatenated in this order)
+    order: ClassVar[int] = 0
+    component_code: ClassVar[float] = 0.0
+
+    @classmethod
+    def from_case(cls, case) -> "TurningLoadSource":
+        raise NotImplementedError
+
+    def loads(self, mesh):
+        """Its entries on ``mesh`` (a :class:`~drillstring.forces.excitation.TurningLoads`, empty when none)."""
+        raise NotImplementedError
+
+
+class HookLoad:
+    """Base of the hook loads (module docstring). Instances are the load's parameters (SI). A load that adds
+    nothing (``adds = False``, the reference start) has code 0 and no kernel."""
+
+    name: ClassVar[str]
+    #: adds a force (False: the kernels add nothing, code 0)
+    adds: ClassVar[bool] = True
+    kernel_size: ClassVar[int] = 0
+    #: the compiled kernel ``kernel(args, ctx) -> extra axial force [N]`` on the top along +x (down)
+    kernel: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds), read from ``[initial]``
+    keys: ClassVar[Any] = None
+    #: the run starts off bottom, the string hanging from the hook, the bit ``clearance`` [m] above the rock
+    active: ClassVar[bool] = False
+    clearance: float = 0.0
+
+    @classmethod
+    def from_case(cls, case, weight_on_bit: float) -> "HookLoad":
+        """The load of a :class:`~drillstring.case.Case` whose static weight-on-bit is ``weight_on_bit`` [N]."""
+        raise NotImplementedError
+
+    def kernel_array(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def evaluate_at(self, ctx: HookContext):
+        """NumPy reference of :attr:`kernel`: the extra axial force [N] at the top (``ctx.time`` may be an array)."""
+        return np.zeros_like(np.asarray(ctx.time, dtype=float))
+
+    def force(self, t):
+        """:meth:`evaluate_at` at time(s) ``t`` [s]."""
+        return self.evaluate_at(HookContext(t, 0.0))
+
+
+_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {},
+                                          "turning_load": {}}
+_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load", ContactLaw: "contact_law",
+          TurningLoadSource: "turning_load"}
+#: whether a registered class of each kind enters the compiled dispatch (has a nonzero code)
+_DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds,
+               "contact_law": lambda c: True, "turning_load": lambda c: False}
 
 
 def _kind(cls: type) -> str:
     for base, kind in _KINDS.items():
         if issubclass(cls, base):
             return kind
-    raise TypeError(f"{cls.__name__} is neither a BitLaw nor a TopBoundary")
+    raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad, a ContactLaw or a "
+                    "TurningLoadSource")
 
 
 def _in_package(cls: type) -> bool:
@@ -247,7 +406,7 @@ def register(cls: type) -> type:
             (known.__module__, known.__qualname__) != (cls.__module__, cls.__qualname__):
         raise ValueError(f"{kind} {cls.name!r} is already registered by {known.__module__}.{known.__qualname__}")
     table[cls.name] = cls
-    inside = sorted(n for n, c in table.items() if _in_package(c) and (kind == "bit_law" or c.drives))
+    inside = sorted(n for n, c in table.items() if _in_package(c) and _DISPATCHED[kind](c))
     outside = sorted(n for n, c in table.items() if not _in_package(c))
     for name, c in table.items():
         if name in inside:
@@ -292,6 +451,42 @@ def top_boundary(name: str) -> type[TopBoundary]:
     return _lookup("top_boundary", name)
 
 
+def hook_load(name: str) -> type[HookLoad]:
+    """The registered hook load ``name`` (the case's ``initial.start``)."""
+    return _lookup("hook_load", name)
+
+
+def contact_law(name: str) -> type[ContactLaw]:
+    """The registered contact law ``name``."""
+    return _lookup("contact_law", name)
+
+
+def contact_laws() -> tuple[str, ...]:
+    """Names of the registered contact laws."""
+    package_components()
+    return tuple(sorted(_REGISTRY["contact_law"]))
+
+
+def turning_load_sources(package_only: bool = False) -> tuple[str, ...]:
+    """Names of the registered turning-load sources, in their ``order`` (then by name); ``package_only``: the
+    package's only."""
+    package_components()
+    table = _REGISTRY["turning_load"]
+    return tuple(sorted((n for n, c in table.items() if _in_package(c) or not package_only),
+                        key=lambda n: (table[n].order, n)))
+
+
+def turning_load_source(name: str) -> type[TurningLoadSource]:
+    """The registered turning-load source ``name``."""
+    return _lookup("turning_load", name)
+
+
+def hook_loads() -> tuple[str, ...]:
+    """Names of the registered hook loads."""
+    package_components()
+    return tuple(sorted(_REGISTRY["hook_load"]))
+
+
 def bit_laws() -> tuple[str, ...]:
     """Names of the registered bit–rock laws."""
     package_components()
@@ -324,17 +519,23 @@ class Layout:
     state_size: int
 
 
-def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarray,
-         modal_states: int) -> tuple[np.ndarray, Layout]:
-    """The kernels' flat array ``[header, bit law, top boundary, hook load, history]`` and its
-    :class:`Layout`; the top boundary's states follow the ``modal_states`` entries ``[η, η̇]``."""
+def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
+         modal_states: int, contact: ContactLaw | None = None) -> tuple[np.ndarray, Layout]:
+    """The kernels' flat array ``[header, bit law, top boundary, hook load, contact law, history]`` (the history
+    last: it runs to the end) and its :class:`Layout`; the top boundary's states follow the ``modal_states``
+    entries ``[η, η̇]``. ``contact`` None: no contact law (code 0, its kernel gives no force)."""
     package_components()  # every package component registered: the codes are final
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
-             "hook_load": np.asarray(hook_load, dtype=np.float64), "history": np.asarray(history, dtype=np.float64)}
-    if parts["bit_law"].shape != (type(bit).kernel_size,):
-        raise ValueError(f"bit law {bit.name!r}: kernel_array() has {parts['bit_law'].size} numbers, "
-                         f"kernel_size says {type(bit).kernel_size}")
+             "hook_load": np.asarray(hook.kernel_array(), dtype=np.float64),
+             "contact_law": np.asarray(contact.kernel_array() if contact is not None else np.zeros(0), dtype=np.float64),
+             "history": np.asarray(history, dtype=np.float64)}
+    checked = [("bit law", bit), ("hook load", hook)] + ([("contact law", contact)] if contact is not None else [])
+    for kind, component in checked:
+        values = parts[kind.replace(" ", "_")]
+        if values.shape != (type(component).kernel_size,):
+            raise ValueError(f"{kind} {component.name!r}: kernel_array() has {values.size} numbers, "
+                             f"kernel_size says {type(component).kernel_size}")
     numbers, offset = {}, BIT_LAW
     for name, values in parts.items():
         numbers[name] = offset
@@ -349,6 +550,9 @@ def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarr
     header[TOP_INERTIA] = top.top_inertia if top.drives else 0.0
     header[HOOK_LOAD] = numbers["hook_load"]
     header[HISTORY] = numbers["history"]
+    header[HOOK_LOAD_CODE] = hook.component_code if hook.adds else 0.0
+    header[CONTACT_LAW_CODE] = contact.component_code if contact is not None else 0.0
+    header[CONTACT_LAW] = numbers["contact_law"]
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -371,12 +575,35 @@ def top_boundary_torque(laws, ctx, y, out):
     raise NotImplementedError("compiled code only")
 
 
-def _dispatch_source(kind: str, signature: str, call: str, fallback: str) -> tuple[str, dict]:
+def hook_load_force(laws, ctx):
+    """The extra axial force [N] on the string's top of the hook load whose code and numbers ``laws`` holds, at
+    ``ctx`` (:class:`HookContext`): 0 for code 0 (none), NaN for a code no package hook load has. Compiled code
+    only."""
+    raise NotImplementedError("compiled code only")
+
+
+def contact_law_forces(laws, ctx, force_v, force_w, torque):
+    """Fill ``force_v``, ``force_w`` [N] and ``torque`` [N·m] at the stations of ``ctx`` (:class:`ContactContext`)
+    with the contact law whose code and numbers ``laws`` holds: 0 for code 0 (none), NaN for a code no package
+    law has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+_CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook_load": HOOK_LOAD_CODE,
+               "contact_law": CONTACT_LAW_CODE}
+
+
+def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
+                     ) -> tuple[str, dict]:
+    """The dispatch over the package's components of ``kind`` by their code; ``none``: what code 0 returns
+    (first test), when the kind has a component that adds nothing."""
     package_components()
     entries = sorted((c.component_code, c) for c in _REGISTRY[kind].values()
                      if _in_package(c) and c.component_code > 0.0)
     namespace: dict[str, Any] = {"np": np}
-    lines = [f"def dispatch({signature}):", f"    code = laws[{BIT_LAW_CODE if kind == 'bit_law' else TOP_BOUNDARY_CODE}]"]
+    lines = [f"def dispatch({signature}):", f"    code = laws[{_CODE_ENTRY[kind]}]"]
+    if none is not None:
+        lines += ["    if code == 0.0:", f"        return {none}"]
     for i, (code, cls) in enumerate(entries):
         namespace[f"kernel_{i}"] = cls.kernel
         lines.append(f"    if code == {code!r}:")
@@ -400,3 +627,32 @@ def _top_boundary_torque_compiled(laws, ctx, y, out):
         f"out[int(laws[{TOP_BOUNDARY_STATES}]):]", "np.nan")
     exec(compile(source, "<top_boundary_torque dispatch>", "exec"), namespace)
     return namespace["dispatch"]
+
+
+@overload(hook_load_force)
+def _hook_load_force_compiled(laws, ctx):
+    source, namespace = _dispatch_source("hook_load", "laws, ctx", f"laws[int(laws[{HOOK_LOAD}]):], ctx", "np.nan",
+                                         none="0.0")
+    exec(compile(source, "<hook_load_force dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+
+
+def _fill(force_v, force_w, torque, value):
+    for i in range(force_v.shape[0]):
+        force_v[i] = value
+        force_w[i] = value
+        torque[i] = value
+
+
+@overload(contact_law_forces)
+def _contact_law_forces_compiled(laws, ctx, force_v, force_w, torque):
+    from numba import njit
+
+    source, namespace = _dispatch_source(
+        "contact_law", "laws, ctx, force_v, force_w, torque",
+        f"laws[int(laws[{CONTACT_LAW}]):], ctx, force_v, force_w, torque", "fill(force_v, force_w, torque, np.nan)",
+        none="fill(force_v, force_w, torque, 0.0)")
+    namespace["fill"] = njit(_fill)
+    exec(compile(source, "<contact_law_forces dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+

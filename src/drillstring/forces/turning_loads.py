@@ -1,7 +1,10 @@
 """Loads turning with the string — mass imbalance and bow — as a component of the reduced model (SPEC §11).
 
-The physical loads (:class:`~drillstring.forces.excitation.TurningLoads`, built from the case in one place by
-:func:`case_turning_loads`) are projected once on the lateral modes (:func:`turning_load_data`). Entry ``k``
+The physical loads (:class:`~drillstring.forces.excitation.TurningLoads`) come from the registered sources of the
+component protocol (:class:`~drillstring.forces.registry.TurningLoadSource`: :class:`MassImbalance`, keys
+:class:`~drillstring.case.ImbalanceKeys` on each section, and :class:`StressFreeBow`, keys
+:class:`~drillstring.case.Bow`), built from the case in one place by :func:`case_turning_loads`, and are
+projected once on the lateral modes (:func:`turning_load_data`). Entry ``k``
 sits on node ``i_k`` and, at the node's angle ``α_k = θx(i_k) + φ_k`` [rad] and spin speed ``θ̇_k = θ̇x(i_k)``
 [rad/s], adds to the modal accelerations::
 
@@ -17,14 +20,69 @@ model once per entry with the angle and speed it reads from the modal state.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 from numba import njit
 
+from drillstring.case import Bow, ImbalanceKeys
 from drillstring.forces.excitation import TurningLoads, bow_loads, imbalance_loads
+from drillstring.forces.registry import TurningLoadSource, register, turning_load_source, turning_load_sources
 
-__all__ = ["TurningLoadData", "case_turning_loads", "turning_load", "turning_load_data"]
+__all__ = ["MassImbalance", "StressFreeBow", "TurningLoadData", "case_turning_loads", "turning_load",
+           "turning_load_data"]
+
+
+@register
+@dataclass(frozen=True)
+class MassImbalance(TurningLoadSource):
+    """The sections' mass imbalance (:func:`~drillstring.forces.excitation.imbalance_loads`): ``eccentricity``
+    e [m] and ``eccentricity_angle`` φ [rad] per section (:class:`~drillstring.case.ImbalanceKeys`)."""
+
+    name: ClassVar[str] = "imbalance"
+    keys: ClassVar = ImbalanceKeys
+    order: ClassVar[int] = 0
+
+    eccentricity: tuple = ()
+    eccentricity_angle: tuple = ()
+
+    @classmethod
+    def from_case(cls, case) -> "MassImbalance":
+        return cls(tuple(s.eccentricity for s in case.sections), tuple(s.eccentricity_angle for s in case.sections))
+
+    def loads(self, mesh) -> TurningLoads:
+        return imbalance_loads(mesh, list(self.eccentricity), list(self.eccentricity_angle))
+
+
+@register
+@dataclass(frozen=True)
+class StressFreeBow(TurningLoadSource):
+    """A stress-free bow (:func:`~drillstring.forces.excitation.bow_loads`, on the beams' elastic stiffness):
+    ``amplitude`` [m] between ``start`` and ``end`` [m] from the top, at ``angle`` [rad]
+    (:class:`~drillstring.case.Bow`); none when the amplitude is 0."""
+
+    name: ClassVar[str] = "bow"
+    keys: ClassVar = Bow
+    order: ClassVar[int] = 1
+
+    amplitude: float = 0.0
+    start: float = 0.0
+    end: float = 0.0
+    angle: float = 0.0
+
+    @classmethod
+    def from_case(cls, case) -> "StressFreeBow":
+        b = case.bow
+        return cls(b.amplitude, b.start, b.end, b.angle)
+
+    def loads(self, mesh) -> TurningLoads:
+        from drillstring.fem.assembly import structural_matrices
+
+        if not self.amplitude > 0.0:
+            return TurningLoads.empty(mesh.n_dofs)
+        stiffness, _ = structural_matrices(mesh)
+        return bow_loads(mesh, stiffness, self.amplitude, self.start, self.end, self.angle)
 
 
 class TurningLoadData(NamedTuple):
@@ -93,16 +151,19 @@ def turning_load(r, k, angle, speed, acc, y0, y1, z0, z1):
         acc[j] += cz * r.load_z[k, j - z0]
 
 
-def case_turning_loads(case, mesh) -> TurningLoads:
-    """The mass imbalance of the case's sections (``sections[i].eccentricity``, ``eccentricity_angle``)
-    and its stress-free bow (``[bow]``) as :class:`~drillstring.forces.excitation.TurningLoads` on
-    ``mesh``; empty when the case has neither."""
-    from drillstring.fem.assembly import structural_matrices
-
-    loads = imbalance_loads(mesh, [s.eccentricity for s in case.sections],
-                            [s.eccentricity_angle for s in case.sections])
-    bow = case.bow
-    if bow.amplitude > 0.0:
-        stiffness, _ = structural_matrices(mesh)
-        loads = loads + bow_loads(mesh, stiffness, bow.amplitude, bow.start, bow.end, bow.angle)
-    return loads
+def case_turning_loads(case, mesh, sources=None) -> TurningLoads:
+    """The turning loads of a :class:`~drillstring.forces.registry.TurningLoadSource` each, as
+    :class:`~drillstring.forces.excitation.TurningLoads` on ``mesh``, their entries concatenated in the sources'
+    order: by default the package's registered sources built from the case (the sections' mass imbalance,
+    ``sections[i].eccentricity``, ``eccentricity_angle``, then the stress-free bow, ``[bow]``); ``sources``:
+    instances instead (e.g. one registered outside the package). Empty when none has any."""
+    if sources is None:
+        sources = [turning_load_source(name).from_case(case) for name in turning_load_sources(package_only=True)]
+    loads = None
+    for source in sources:
+        entries = source.loads(mesh)
+        if loads is None:
+            loads = entries
+        elif len(entries):
+            loads = loads + entries
+    return loads if loads is not None else TurningLoads.empty(mesh.n_dofs)
