@@ -138,7 +138,9 @@ def _with_derived(dataset, model):
     ramped start (:class:`~drillstring.forces.hook_load.HookLoadRamp`: the static hook load plus the weight
     not yet transferred) and, for a Detournay bit, the ``wear_flat_force`` [N] (the force on bit less the
     cutting force, :meth:`~drillstring.forces.detournay.DetournayParameters.cutting_force`); the
-    ``depth_of_cut`` observable is dropped for the laws without one."""
+    ``depth_of_cut`` observable is dropped for the laws without one; with a downhole motor the
+    ``differential_pressure`` [Pa] across it (:meth:`~drillstring.forces.motor.PositiveDisplacementMotor.
+    differential_pressure`), without one its ``motor_speed`` and ``motor_torque`` observables are dropped."""
     from drillstring.quantities import LONG_NAMES, UNITS
 
     t = dataset["time"].values
@@ -154,6 +156,12 @@ def _with_derived(dataset, model):
                                                          "long_name": LONG_NAMES["wear_flat_force"]})
     elif "depth_of_cut" in dataset:
         dataset = dataset.drop_vars("depth_of_cut")
+    if model.motor is not None:  # a downhole motor: its differential pressure from its torque (its law, eq. (2))
+        pressure = model.motor.differential_pressure(dataset["motor_torque"].values)
+        dataset["differential_pressure"] = ("time", pressure, {"units": UNITS["differential_pressure"],
+                                                               "long_name": LONG_NAMES["differential_pressure"]})
+    else:
+        dataset = dataset.drop_vars([name for name in ("motor_speed", "motor_torque") if name in dataset])
     return dataset
 
 

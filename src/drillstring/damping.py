@@ -269,9 +269,18 @@ def rayleigh_damping(mass, stiffness, basis: np.ndarray, family, rayleigh: tuple
     if alpha and top_speed:
         columns = np.nonzero(np.asarray(family) == "torsional")[0]
         rigid = np.zeros(basis.shape[0])
-        rigid[dof(np.arange(basis.shape[0] // 6), THETA_X)] = 1.0
+        rigid[_family_rows(basis.shape[0], THETA_X)] = 1.0
         force[columns] = -top_speed * alpha * (basis[:, columns].T @ (mass @ rigid))
     return ReducedDamping(0.5 * (matrix + matrix.T), force)
+
+
+def _family_rows(rows: int, kind: int) -> np.ndarray:
+    """The rows of the DOF ``kind`` (U, THETA_X) of every node of a basis of ``rows`` rows: 6 per node, and for
+    THETA_X the rows past the nodes' too, the rotations a downhole motor releases (:mod:`drillstring.fem.rotor`:
+    the rotor side's θx at its station, a torsional DOF of its own)."""
+    nodes = np.arange(rows // 6)
+    found = dof(nodes, kind)
+    return np.concatenate([found, np.arange(6 * len(nodes), rows)]) if kind == THETA_X else found
 
 
 def _reduced_structural_damping(mass, stiffness, basis, family, angular_frequencies, *, damping_ratio: float,
@@ -298,7 +307,7 @@ def _reduced_structural_damping(mass, stiffness, basis, family, angular_frequenc
         columns = np.nonzero(np.isin(labels, names))[0]
         if len(columns) == 0:
             continue
-        dofs = dof(nodes, kind)
+        dofs = _family_rows(basis.shape[0], kind)
         block, rigid_force = projected_free_free_damping(
             mass[dofs][:, dofs], stiffness[dofs][:, dofs], basis[dofs][:, columns], damping_ratio, coefficient)
         matrix[np.ix_(columns, columns)] = block

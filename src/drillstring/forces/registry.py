@@ -58,6 +58,8 @@ __all__ = [
     "BIT_LAW",
     "HISTORY",
     "HOOK_LOAD",
+    "MOTOR",
+    "MOTOR_CODE",
     "TOP_BOUNDARY_CODE",
     "TOP_INERTIA",
     "HEADER",
@@ -65,6 +67,7 @@ __all__ = [
     "BitLaw",
     "BitSteadyState",
     "Layout",
+    "Motor",
     "TopBoundary",
     "TopContext",
     "bit_context",
@@ -72,6 +75,9 @@ __all__ = [
     "bit_law_force",
     "bit_laws",
     "compiled",
+    "motor",
+    "motor_torque",
+    "motors",
     "pack",
     "package_components",
     "register",
@@ -84,9 +90,11 @@ __all__ = [
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
 #: bit's history starts.
+#: the motor's code (0: no downhole motor) and where its numbers start.
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
-          "history")
-BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY = range(len(HEADER))
+          "history", "motor_code", "motor")
+(BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY, MOTOR_CODE,
+ MOTOR) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
@@ -221,15 +229,50 @@ class TopBoundary:
         return {"top_boundary": self.name}
 
 
-_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}}
-_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary"}
+class Motor:
+    """Base of the downhole motors: a rotor between two sections of the string (docs/extending.md). The string
+    below the rotor station turns relative to the string above (:mod:`drillstring.fem.rotor` releases that
+    rotation in the torsional family); the motor applies a torque ``T`` across it, ``+T`` on the rotor side and
+    ``−T`` on the stator side, from the relative speed ``ω_m`` [rad/s] (rotor minus stator). A motor declares
+    ``name``, ``keys``, ``from_case(case)`` (None when the case has no such motor), ``kernel_size``,
+    ``kernel_array()``, ``kernel(args, relative_speed) -> torque [N·m]`` (compiled), ``evaluate(relative_speed)``
+    (its NumPy reference), ``jacobian(relative_speed)`` (``dT/dω_m`` [N·m·s/rad]), ``n_states`` (0 here) and
+    ``position`` [m] (the rotor station from the top)."""
+
+    name: ClassVar[str]
+    kernel_size: ClassVar[int] = 0
+    kernel: ClassVar[Any] = None
+    keys: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    position: float
+
+    @property
+    def n_states(self) -> int:
+        return 0
+
+    def kernel_array(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def evaluate(self, relative_speed):
+        raise NotImplementedError
+
+    def jacobian(self, relative_speed) -> float:
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        """JSON-ready summary (SI)."""
+        return {"motor": self.name}
+
+
+_REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "motor": {}}
+_KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", Motor: "motor"}
 
 
 def _kind(cls: type) -> str:
     for base, kind in _KINDS.items():
         if issubclass(cls, base):
             return kind
-    raise TypeError(f"{cls.__name__} is neither a BitLaw nor a TopBoundary")
+    raise TypeError(f"{cls.__name__} is neither a BitLaw, a TopBoundary nor a Motor")
 
 
 def _in_package(cls: type) -> bool:
@@ -247,7 +290,7 @@ def register(cls: type) -> type:
             (known.__module__, known.__qualname__) != (cls.__module__, cls.__qualname__):
         raise ValueError(f"{kind} {cls.name!r} is already registered by {known.__module__}.{known.__qualname__}")
     table[cls.name] = cls
-    inside = sorted(n for n, c in table.items() if _in_package(c) and (kind == "bit_law" or c.drives))
+    inside = sorted(n for n, c in table.items() if _in_package(c) and (kind != "top_boundary" or c.drives))
     outside = sorted(n for n, c in table.items() if not _in_package(c))
     for name, c in table.items():
         if name in inside:
@@ -292,6 +335,17 @@ def top_boundary(name: str) -> type[TopBoundary]:
     return _lookup("top_boundary", name)
 
 
+def motor(name: str) -> type[Motor]:
+    """The registered downhole motor ``name``."""
+    return _lookup("motor", name)
+
+
+def motors() -> tuple[str, ...]:
+    """Names of the registered downhole motors."""
+    package_components()
+    return tuple(sorted(_REGISTRY["motor"]))
+
+
 def bit_laws() -> tuple[str, ...]:
     """Names of the registered bit–rock laws."""
     package_components()
@@ -325,13 +379,15 @@ class Layout:
 
 
 def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarray,
-         modal_states: int) -> tuple[np.ndarray, Layout]:
-    """The kernels' flat array ``[header, bit law, top boundary, hook load, history]`` and its
-    :class:`Layout`; the top boundary's states follow the ``modal_states`` entries ``[η, η̇]``."""
+         modal_states: int, motor: Motor | None = None) -> tuple[np.ndarray, Layout]:
+    """The kernels' flat array ``[header, bit law, top boundary, hook load, history, motor]`` and its
+    :class:`Layout`; the top boundary's states follow the ``modal_states`` entries ``[η, η̇]``, the motor's
+    (none for the motors of the package) the top boundary's. ``motor``: a downhole motor, None without."""
     package_components()  # every package component registered: the codes are final
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
-             "hook_load": np.asarray(hook_load, dtype=np.float64), "history": np.asarray(history, dtype=np.float64)}
+             "hook_load": np.asarray(hook_load, dtype=np.float64), "history": np.asarray(history, dtype=np.float64),
+             "motor": np.zeros(0) if motor is None else np.asarray(motor.kernel_array(), dtype=np.float64)}
     if parts["bit_law"].shape != (type(bit).kernel_size,):
         raise ValueError(f"bit law {bit.name!r}: kernel_array() has {parts['bit_law'].size} numbers, "
                          f"kernel_size says {type(bit).kernel_size}")
@@ -339,8 +395,11 @@ def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarr
     for name, values in parts.items():
         numbers[name] = offset
         offset += values.size
-    states = {"top_boundary": modal_states}
-    size = modal_states + top.n_states
+    if motor is not None and parts["motor"].shape != (type(motor).kernel_size,):
+        raise ValueError(f"motor {motor.name!r}: kernel_array() has {parts['motor'].size} numbers, "
+                         f"kernel_size says {type(motor).kernel_size}")
+    states = {"top_boundary": modal_states, "motor": modal_states + top.n_states}
+    size = modal_states + top.n_states + (0 if motor is None else motor.n_states)
     header = np.zeros(len(HEADER))
     header[BIT_LAW_CODE] = bit.component_code
     header[TOP_BOUNDARY_CODE] = top.component_code if top.drives else 0.0
@@ -349,6 +408,8 @@ def pack(bit: BitLaw, top: TopBoundary, hook_load: np.ndarray, history: np.ndarr
     header[TOP_INERTIA] = top.top_inertia if top.drives else 0.0
     header[HOOK_LOAD] = numbers["hook_load"]
     header[HISTORY] = numbers["history"]
+    header[MOTOR_CODE] = 0.0 if motor is None else motor.component_code
+    header[MOTOR] = numbers["motor"]
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -371,12 +432,21 @@ def top_boundary_torque(laws, ctx, y, out):
     raise NotImplementedError("compiled code only")
 
 
+def motor_torque(laws, relative_speed):
+    """The torque [N·m] of the downhole motor whose code and numbers ``laws`` holds at the rotor's speed
+    ``relative_speed`` [rad/s] relative to the stator; NaN for a code no package motor has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+_CODE_INDEX = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "motor": MOTOR_CODE}
+
+
 def _dispatch_source(kind: str, signature: str, call: str, fallback: str) -> tuple[str, dict]:
     package_components()
     entries = sorted((c.component_code, c) for c in _REGISTRY[kind].values()
                      if _in_package(c) and c.component_code > 0.0)
     namespace: dict[str, Any] = {"np": np}
-    lines = [f"def dispatch({signature}):", f"    code = laws[{BIT_LAW_CODE if kind == 'bit_law' else TOP_BOUNDARY_CODE}]"]
+    lines = [f"def dispatch({signature}):", f"    code = laws[{_CODE_INDEX[kind]}]"]
     for i, (code, cls) in enumerate(entries):
         namespace[f"kernel_{i}"] = cls.kernel
         lines.append(f"    if code == {code!r}:")
@@ -399,4 +469,12 @@ def _top_boundary_torque_compiled(laws, ctx, y, out):
         f"laws[int(laws[{TOP_BOUNDARY}]):], ctx, y[int(laws[{TOP_BOUNDARY_STATES}]):], "
         f"out[int(laws[{TOP_BOUNDARY_STATES}]):]", "np.nan")
     exec(compile(source, "<top_boundary_torque dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+
+
+@overload(motor_torque)
+def _motor_torque_compiled(laws, relative_speed):
+    source, namespace = _dispatch_source("motor", "laws, relative_speed",
+                                         f"laws[int(laws[{MOTOR}]):], relative_speed", "np.nan")
+    exec(compile(source, "<motor_torque dispatch>", "exec"), namespace)
     return namespace["dispatch"]
