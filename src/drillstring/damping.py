@@ -91,6 +91,11 @@ class FreeFreeDamping:
     rigid_mass: float
 
 
+#: A free–free eigenvalue ω² at most this fraction of the largest is a rigid motion's round-off (the family's
+#: other rigid motions: the rotation of the string below a downhole motor, :mod:`drillstring.rotor`), 0 exactly.
+RIGID_ROUND_OFF = 1e-12
+
+
 def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: float) -> FreeFreeDamping:
     """Damping matrix ``C = M Φ diag(c_i) Φᵀ M`` of a family with one rigid mode ``r = 1``, eq. (1).
 
@@ -108,6 +113,7 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     shapes[:, 0] = rigid / np.sqrt(rigid_mass)
     omega = np.sqrt(np.clip(omega2, 0.0, None))
     omega[0] = 0.0
+    omega[omega2 <= RIGID_ROUND_OFF * omega2.max()] = 0.0  # other rigid motions (a motor's rotor): undamped, exactly
     coefficients = 2.0 * damping_ratio * omega
     coefficients[0] = rigid_coefficient / rigid_mass
     m_phi = (sp.csr_matrix(mass) if sp.issparse(mass) else m) @ shapes  # the family's mass is banded

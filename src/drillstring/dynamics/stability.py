@@ -266,7 +266,7 @@ def _lower_rotation(model: ReducedOrderModel) -> np.ndarray:
     return out
 
 
-#: Samples of the scan for a downhole motor's steady speed in (−Ω, ω₀] (:func:`_steady_motor_speed`).
+#: Samples per ω₀ of the scan for a downhole motor's steady speed in (−Ω, 2ω₀] (:func:`_steady_motor_speed`).
 MOTOR_SCAN = 256
 
 
@@ -274,8 +274,8 @@ def _steady_motor_speed(model: ReducedOrderModel, omega: float, r: int) -> float
     """The downhole motor's steady speed ω_m [rad/s] with the string above it turning at ``omega``: the root of
     the torque balance of the string below the rotor station (the generalized load on its rigid rotation
     relative to the string above, ``cᵀ load = T(ω_m) − TOB(Ω + ω_m) − its damping torque``; the top boundary's
-    torque does no work on that motion) **nearest the no-load speed** ω₀: scanned down from ω₀ to the first sign
-    change, then Brent's method; down to a bit speed of 0. ValueError (one line) when the motor stalls (no root
+    torque does no work on that motion) **nearest the no-load speed** ω₀: scanned down from 2 ω₀ (where the motor
+    brakes with its stall torque) to the first sign change, then Brent's method; down to a bit speed of 0. ValueError (one line) when the motor stalls (no root
     with the bit turning)."""
     from scipy.optimize import brentq
 
@@ -284,8 +284,8 @@ def _steady_motor_speed(model: ReducedOrderModel, omega: float, r: int) -> float
     def residual(motor_speed: float) -> float:
         return float(lower @ _steady_load_at(model, omega, motor_speed, r)[2])
 
-    upper = model.motor.no_load_speed
-    grid = np.linspace(upper, -omega, MOTOR_SCAN + 1)[1:-1]
+    upper = 2.0 * model.motor.no_load_speed  # the motor brakes with its stall torque: the balance is < 0
+    grid = np.linspace(upper, -omega, 2 * MOTOR_SCAN + 1)[1:-1]
     last = residual(upper)
     for motor_speed in grid:
         try:
