@@ -22,6 +22,11 @@ the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian(
 state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
 surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
 
+**Downhole motors** (:class:`Motor`): a rotor between two sections (:mod:`drillstring.rotor` releases its
+rotation), ``kernel(args, relative_speed) -> torque`` (+T on the rotor side, −T on the stator side),
+``evaluate(relative_speed)``, ``jacobian(relative_speed)``, ``position`` (the rotor station [m]) and
+``n_states``; the kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0.
+
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
 (:class:`~drillstring.case.TuckerWangKeys`, ...).
 
