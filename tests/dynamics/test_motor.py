@@ -188,3 +188,15 @@ def test_the_stability_of_a_motor_case_leaves_out_only_the_rigid_angles():
     assert rigid == 3
     assert min(abs(complex(m.growth_rate, 2 * math.pi * m.frequency)) for m in result.modes) > 1e-6
     assert result.steady_state.to_dict()["motor_speed"] > 0
+
+
+def test_the_stiff_term_diagnosis_names_the_motor(model):
+    """The motor's slope across the rotor, on the small inertia below it, is a rate of its own
+    (|dT/dω_m| |φ_r − φ_k|², the damper's), not counted as contact."""
+    from drillstring.dynamics.stiffness import CONTACT, MOTOR, stiffness_rates
+
+    steady = steady_drilling(model)
+    rates = stiffness_rates(model, 0.0, steady.state)
+    expected = abs(model.motor.jacobian()) * float(model.motor_shapes @ model.motor_shapes)
+    assert rates[MOTOR] == pytest.approx(expected, rel=1e-9)
+    assert rates[CONTACT] < 1e-3 * rates[MOTOR]
