@@ -499,7 +499,10 @@ MAX_MODES = 1000
 @single_threaded_blas()
 def modes(case: Case | str | Path = "reference", *, count: int = 10):
     """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
-    of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
+    of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin. With a
+    downhole motor the torsional modes are those of the string released at its rotor
+    (:func:`drillstring.rotor.released_modes`; the first, at 0 Hz, the string below turning relative to the
+    string above).
 
     Returns ``(modes, margin)``: :class:`~drillstring.modal.Modes` (``.axial.frequencies`` [Hz], ...) and a
     :class:`~drillstring.buckling.BucklingMargin`. ``count``: an integer in [1, :data:`MAX_MODES`]."""
@@ -508,9 +511,15 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     from drillstring.modal import case_linear_system, compute_modes
     from drillstring.statics import case_static_state
 
+    from drillstring.forces.motor import case_motor
+    from drillstring.rotor import released_modes
+
     count = integer("count", count, low=1, high=MAX_MODES)
     case = as_case(case)
     system = case_linear_system(case, case_static_state(case))
+    motor = case_motor(case)
+    if motor is not None:  # the torsion released at the rotor: its first mode the rotation of the string below
+        return released_modes(system, motor.position, count, count, count)[0], buckling_margin(system)
     return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
 
 

@@ -174,3 +174,12 @@ def released_modes(system: LinearSystem, position: float, axial: int, torsional:
     release = released_torsional_modes(released, node, torsional, top_inertia)
     modes = compute_modes(system, axial, 0, lateral, lateral_cutoff)
     return replace(modes, torsional=release.family), release, released
+
+
+def first_torsional_frequency(system: LinearSystem, position: float) -> float:
+    """The lowest elastic torsional angular frequency [rad/s] of the string released at ``position`` [m], the top
+    held: the stick-slip frequency that tunes a soft-torque top drive (:func:`drillstring.forces.top_drive.
+    case_top_drive`) when a downhole motor separates the bit from the string."""
+    node = rotor_node(system.mesh, position)
+    release = released_torsional_modes(released_system(system, node), node, 2)
+    return float(release.family.angular_frequencies[1])

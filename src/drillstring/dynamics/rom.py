@@ -99,7 +99,7 @@ from drillstring.forces.registry import (
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
 from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
 from drillstring.modal import LinearSystem, Modes, case_linear_system, compute_modes, family_dofs, family_modes
-from drillstring.rotor import RotorRelease, released_modes
+from drillstring.rotor import RotorRelease, first_torsional_frequency, released_modes
 from drillstring.statics import StaticState, case_static_state
 
 #: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
@@ -1471,9 +1471,11 @@ def case_reduced_model(
     cut-off)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
+    motor = case_motor(case) if motor is None else motor
     if top_drive is None:
-        top_drive = case_top_drive(
-            case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
+        top_drive = case_top_drive(case, lambda: (
+            float(family_modes(system, "torsional", 1).angular_frequencies[0]) if motor is None
+            else first_torsional_frequency(system, motor.position)))
     r = case.reduced_model
     return reduced_model(
         static,
@@ -1497,7 +1499,7 @@ def case_reduced_model(
         top_drive=top_drive,
         hook_load=case_hook_load(case, static.weight_on_bit),
         truncation_correction=r.truncation_correction,
-        motor=case_motor(case) if motor is None else motor,
+        motor=motor,
     )
 
 
