@@ -200,3 +200,19 @@ def test_the_stiff_term_diagnosis_names_the_motor(model):
     expected = abs(model.motor.jacobian()) * float(model.motor_shapes @ model.motor_shapes)
     assert rates[MOTOR] == pytest.approx(expected, rel=1e-9)
     assert rates[CONTACT] < 1e-3 * rates[MOTOR]
+
+
+def test_a_run_outputs_the_motor_and_a_run_without_one_does_not():
+    from drillstring.api import simulate
+
+    case = _case()
+    data = simulate(case, t_end=0.05, output_step=0.01)
+    motor = case_reduced_model(case).motor
+    np.testing.assert_allclose(data["differential_pressure"].values,
+                               data["motor_torque"].values / (motor.mechanical_efficiency * motor.displacement),
+                               rtol=1e-12)
+    assert data["motor_speed"].attrs["units"] == "rad/s" and data["differential_pressure"].attrs["units"] == "Pa"
+    # started with the rotor at rest relative to the housing: the motor gives its stall torque at t = 0
+    assert data["motor_torque"].values[0] == pytest.approx(motor.stall_torque, rel=1e-6)
+    plain = simulate(load_case("reference"), t_end=0.02, output_step=0.01)
+    assert not {"motor_speed", "motor_torque", "differential_pressure"} & set(plain.data_vars)
