@@ -102,7 +102,7 @@ def part_run(out: Path) -> dict:
     ax[0].plot(t[keep], o["quill_speed"][keep] * RPM, label="quill", lw=0.8)
     ax[0].set_ylabel("speed [rpm]")
     ax[0].legend(loc="upper right", fontsize=8)
-    ax[0].set_title("motor case: 60 rpm at the top, 500 gpm, 100 kN on bit")
+    ax[0].set_title("motor case: 60 rpm at the top, 500 gpm, 90 kN on bit")
     ax[1].plot(t[keep], o["motor_torque"][keep] / 1e3, label="motor torque", lw=1.0)
     ax[1].plot(t[keep], o["torque_on_bit"][keep] / 1e3, label="torque on bit", lw=0.8)
     ax[1].set_ylabel("torque [kN·m]")

@@ -511,15 +511,13 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     from drillstring.modal import case_linear_system, compute_modes
     from drillstring.statics import case_static_state
 
-    from drillstring.forces.motor import case_motor
     from drillstring.rotor import released_modes
 
     count = integer("count", count, low=1, high=MAX_MODES)
     case = as_case(case)
     system = case_linear_system(case, case_static_state(case))
-    motor = case_motor(case)
-    if motor is not None:  # the torsion released at the rotor: its first mode the rotation of the string below
-        return released_modes(system, motor.position, count, count, count)[0], buckling_margin(system)
+    if case.motor is not None:  # the torsion released at the rotor: its first mode the string below turning
+        return released_modes(system, case.motor.position, count, count, count)[0], buckling_margin(system)
     return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
 
 

@@ -19,6 +19,9 @@ stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed
 top drive's inertia lumped at the top node), ``θx = (Φ η)_θx`` carries the whole spin, the motor torque
 ``τ_m`` adds ``φ_top τ_m`` to the torsional equations and the controller's states follow the modal
 coordinates in the state vector ``[η, η̇, s]``. ``bit_rock.law = "off_bottom"`` removes the bit–rock force.
+A downhole motor (:mod:`drillstring.forces.motor`) releases the rotation at its rotor station
+(:mod:`drillstring.rotor`: the torsional basis is that of the released string) and adds its torque ``T(ω_m)``
+along the rotor's relative row ``φ_r − φ_k``, ``ω_m = (φ_r − φ_k)ᵀ η̇``.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
 the bit node, the borehole shocks and rubbing at the contact stations
