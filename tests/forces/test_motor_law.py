@@ -23,12 +23,13 @@ def _motor_case_data():
 
 def test_the_builtin_motor_case_reads_its_motor_in_oilfield_units():
     m = case_motor(load_case("motor"))
-    # 0.28 rev/gal at 500 gpm and 90 % volumetric efficiency: 0.9 * 500 * 0.28 = 126 rpm no-load
-    assert m.no_load_speed == pytest.approx(126.0 * 2 * math.pi / 60, rel=1e-12)
-    # stall torque eta_m V dp_s / 2 pi, V = 1/0.28 gal/rev, 600 psi
-    volume = GALLON / 0.28
-    assert m.stall_torque == pytest.approx(0.85 * volume * 600 * PSI / (2 * math.pi), rel=1e-12)
-    assert m.max_differential_pressure == pytest.approx(600 * PSI, rel=1e-12)
+    # 0.2 rev/gal at 500 gpm and 90 % volumetric efficiency: 0.9 * 500 * 0.2 = 90 rpm no-load
+    assert m.no_load_speed == pytest.approx(90.0 * 2 * math.pi / 60, rel=1e-12)
+    # stall torque eta_m V dp_s / 2 pi, V = 1/0.2 = 5 gal/rev, 1000 psi: 17.65 kN*m (13.0 kft*lbf)
+    volume = 5.0 * GALLON
+    assert m.stall_torque == pytest.approx(0.85 * volume * 1000 * PSI / (2 * math.pi), rel=1e-12)
+    assert m.stall_torque / FT_LBF == pytest.approx(13.02e3, rel=1e-3)
+    assert m.max_differential_pressure == pytest.approx(1000 * PSI, rel=1e-12)
     assert m.position == pytest.approx(2999.0)  # the bottom of the motor: the bit turns with the rotor
     assert m.flow_rate == pytest.approx(500 * GALLON / 60, rel=1e-12)  # the case's pumped flow by default
 
@@ -59,7 +60,7 @@ def test_keys_in_any_unit_give_the_same_motor():
     entry = data["components"][3]
     base = case_motor(case_from_dict(data))
     entry.pop("speed_per_flow"), entry.pop("max_differential_pressure")
-    entry["displacement"] = f"{1 / 0.28 * GALLON * 1e3} L/rev"
+    entry["displacement"] = f"{5.0 * GALLON * 1e3} L/rev"
     entry["stall_torque"] = f"{base.stall_torque / FT_LBF} ft*lbf"
     entry["flow_rate"] = f"{500 * GALLON * 1e3} L/min"
     other = case_motor(case_from_dict(data))
