@@ -215,8 +215,8 @@ def test_cases_lists_reference_contact_and_stick_slip():
     result = _invoke("cases")
     assert result.exit_code == 0, result.output
     names = [line.split()[0] for line in result.stdout.splitlines()]
-    assert names == ["aarsnes2019", "aarsnes2019_paper", "contact", "deviated", "reference", "reference_components",
-                     "stick_slip"]
+    assert names == ["aarsnes2019", "aarsnes2019_paper", "contact", "deviated", "motor", "reference",
+                     "reference_components", "stick_slip"]
     assert "hits the wall" in result.stdout and "full stick-slip" in result.stdout
     assert "Aarsnes & van de Wouw (2019)" in result.stdout
 

@@ -138,7 +138,9 @@ def _with_derived(dataset, model):
     ramped start (:class:`~drillstring.forces.hook_load.HookLoadRamp`: the static hook load plus the weight
     not yet transferred) and, for a Detournay bit, the ``wear_flat_force`` [N] (the force on bit less the
     cutting force, :meth:`~drillstring.forces.detournay.DetournayParameters.cutting_force`); the
-    ``depth_of_cut`` observable is dropped for the laws without one."""
+    ``depth_of_cut`` observable is dropped for the laws without one; with a downhole motor the
+    ``differential_pressure`` [Pa] across it (:meth:`~drillstring.forces.motor.PositiveDisplacementMotor.
+    differential_pressure`), without one its ``motor_speed`` and ``motor_torque`` observables are dropped."""
     from drillstring.quantities import LONG_NAMES, UNITS
 
     t = dataset["time"].values
@@ -154,6 +156,12 @@ def _with_derived(dataset, model):
                                                          "long_name": LONG_NAMES["wear_flat_force"]})
     elif "depth_of_cut" in dataset:
         dataset = dataset.drop_vars("depth_of_cut")
+    if model.motor is not None:  # a downhole motor: its differential pressure from its torque (its law, eq. (2))
+        pressure = model.motor.differential_pressure(dataset["motor_torque"].values)
+        dataset["differential_pressure"] = ("time", pressure, {"units": UNITS["differential_pressure"],
+                                                               "long_name": LONG_NAMES["differential_pressure"]})
+    else:
+        dataset = dataset.drop_vars([name for name in ("motor_speed", "motor_torque") if name in dataset])
     return dataset
 
 
@@ -491,7 +499,10 @@ MAX_MODES = 1000
 @single_threaded_blas()
 def modes(case: Case | str | Path = "reference", *, count: int = 10):
     """The ``count`` lowest natural modes per family (axial with its rigid mode, torsional, lateral per plane)
-    of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin.
+    of the prestressed string of ``case`` with its drilling fluid, and its lateral buckling margin. With a
+    downhole motor the torsional modes are those of the string released at its rotor
+    (:func:`drillstring.rotor.released_modes`; the first, at 0 Hz, the string below turning relative to the
+    string above).
 
     Returns ``(modes, margin)``: :class:`~drillstring.modal.Modes` (``.axial.frequencies`` [Hz], ...) and a
     :class:`~drillstring.buckling.BucklingMargin`. ``count``: an integer in [1, :data:`MAX_MODES`]."""
@@ -500,9 +511,13 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     from drillstring.modal import case_linear_system, compute_modes
     from drillstring.statics import case_static_state
 
+    from drillstring.rotor import released_modes
+
     count = integer("count", count, low=1, high=MAX_MODES)
     case = as_case(case)
     system = case_linear_system(case, case_static_state(case))
+    if case.motor is not None:  # the torsion released at the rotor: its first mode the string below turning
+        return released_modes(system, case.motor.position, count, count, count)[0], buckling_margin(system)
     return compute_modes(system, axial=count, torsional=count, lateral=count), buckling_margin(system)
 
 

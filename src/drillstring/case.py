@@ -40,7 +40,7 @@ import tomllib
 import typing
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any, Literal, Mapping
+from typing import Annotated, Any, ClassVar, Literal, Mapping
 
 import tomli_w
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
@@ -53,6 +53,7 @@ from drillstring.derived import (
     mode_family_sizes,
     string_axial_load,
 )
+from drillstring.components import MOTOR_KEYS
 from drillstring.units import (
     ACCELERATION,
     ANGLE,
@@ -68,6 +69,8 @@ from drillstring.units import (
     LINEAR_DAMPING,
     MASS_PER_LENGTH,
     MOMENT_OF_INERTIA,
+    MOTOR_DISPLACEMENT,
+    MOTOR_SPEED_PER_FLOW,
     PENETRATION_PER_FORCE,
     PRESSURE,
     ROTATIONAL_DAMPING,
@@ -363,6 +366,8 @@ MassPerLength = _quantity(MASS_PER_LENGTH)  #: [kg/m]
 VolumeFlow = _quantity(VOLUME_FLOW)  #: [m^3/s]
 MomentOfInertia = _quantity(MOMENT_OF_INERTIA)  #: [kg*m^2]
 RotationalStiffness = _quantity(ROTATIONAL_STIFFNESS)  #: [N*m/rad]
+MotorDisplacement = _quantity(MOTOR_DISPLACEMENT)  #: [m^3/rad]
+MotorSpeedPerFlow = _quantity(MOTOR_SPEED_PER_FLOW)  #: [rad/m^3]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -839,7 +844,59 @@ class ToolJoint(_Base):
         return self
 
 
-class Component(_Base):
+class MotorKeys(_Base):
+    """The keys of a downhole positive-displacement (Moineau) motor (:mod:`drillstring.forces.motor`): on the
+    ``motor`` entry of ``[[components]]`` or in a ``[motor]`` table (which adds ``position``). The motor's law
+    needs its displacement, given as ``displacement`` (volume per revolution, e.g. ``"1.2 gal/rev"``) or
+    ``speed_per_flow`` (revolutions per volume, ``"0.83 rev/gal"``), and its stall torque, given as
+    ``stall_torque`` (``"9000 ft*lbf"``) or ``max_differential_pressure`` (the pressure drop across the power
+    section at stall, ``"900 psi"``). ``flow_rate``: the mud flow through the power section (default: the case's
+    pumped flow, ``fluid.flow_rate``; less when a rotor nozzle bypasses part of it)."""
+
+    flow_rate: VolumeFlow | None = Field(
+        None, gt=0, description="mud flow through the power section Q [m^3/s]; default the case's flow rate")
+    displacement: MotorDisplacement | None = Field(
+        None, gt=0, description="volume per radian of the rotor V/(2 pi) [m^3/rad] ('1.2 gal/rev')")
+    speed_per_flow: MotorSpeedPerFlow | None = Field(
+        None, gt=0, description="rotor turn per volume 2 pi/V [rad/m^3] ('0.83 rev/gal'): the displacement's inverse")
+    stall_torque: Torque | None = Field(None, gt=0, description="rotor torque at stall T_s [N*m]")
+    max_differential_pressure: Pressure | None = Field(
+        None, gt=0, description="differential pressure at stall dp_s [Pa]: T_s = eta_m V dp_s / (2 pi)")
+    volumetric_efficiency: Dimensionless = Field(
+        1.0, gt=0, le=1, description="eta_v [-]: no-load speed 2 pi eta_v Q / V")
+    mechanical_efficiency: Dimensionless = Field(
+        1.0, gt=0, le=1, description="eta_m [-]: torque eta_m V dp / (2 pi)")
+
+    #: the keys that make a powered motor (without any of them a ``motor`` component is a plain section)
+    LAW_KEYS: ClassVar[tuple[str, ...]] = MOTOR_KEYS
+
+    def motor_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
+        """Problems of the motor's keys taken together (one of each pair given)."""
+        problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        for first, second in (("displacement", "speed_per_flow"), ("stall_torque", "max_differential_pressure")):
+            a, b = getattr(self, first), getattr(self, second)
+            if a is None and b is None:
+                problems.append(((first,), _MISSING, f"give {first} or {second}"))
+            elif a is not None and b is not None:
+                problems.append(((second,), b, f"give either {first} or {second}, not both"))
+        return problems
+
+
+class DownholeMotor(MotorKeys):
+    """``[motor]``: a downhole motor whose rotor turns the string below ``position`` relative to the string
+    above (the ``motor`` entry of ``[[components]]`` writes it, ``position`` at the bottom of the motor)."""
+
+    position: Length = Field(gt=0, description="x of the rotor station from the top [m] (a mesh node)")
+
+    @model_validator(mode="after")
+    def _complete(self) -> DownholeMotor:
+        problems = self.motor_problems()
+        if problems:
+            raise _Problems(problems)
+        return self
+
+
+class Component(MotorKeys):
     """One component of the string, listed from the top to the bit in ``[[components]]``
     (:mod:`drillstring.components` says how it becomes sections and stabilizers)."""
 
@@ -869,6 +926,11 @@ class Component(_Base):
                 problems.append(((key,), getattr(self, key), f"only for a stabilizer, not a {self.type}"))
         if stabilizer and self.stiffness is None:
             problems.append((("stiffness",), _MISSING, "required for a stabilizer"))
+        powered = [key for key in MotorKeys.LAW_KEYS if key in self.model_fields_set]
+        if self.type != "motor":
+            problems += [((key,), getattr(self, key), f"only for a motor, not a {self.type}") for key in powered]
+        elif powered:
+            problems += self.motor_problems()
         if self.tool_joint is not None and self.type not in ("drill_pipe", "heavy_weight"):
             problems.append((("tool_joint",), self.tool_joint, "only for drill_pipe and heavy_weight"))
         tube = not stabilizer or self.length > 0.0
@@ -1068,6 +1130,11 @@ def _from_components(data: dict[str, Any]) -> dict[str, Any]:
     except ComponentProblem as exc:
         raise _Problems(exc.problems) from None
     data["sections"] = expansion.sections
+    if expansion.motor is not None:
+        if "motor" in data:
+            raise _Problems([(("motor",), "{...}", "give the motor on its [[components]] entry or as [motor], "
+                                                  "not both")])
+        data["motor"] = expansion.motor
     data["stabilizers"] = list(data.get("stabilizers", [])) + expansion.stabilizers
     if expansion.materials:
         data["materials"] = {**(raw_materials if raw_materials is not None else
@@ -1242,6 +1309,8 @@ class Case(_Base):
     uncertainty: UncertaintyTable | None = Field(
         None, description="optional [uncertainty] table: the laws of a study's random parameters")
     well: Well | None = Field(None, description="optional [well]: survey, casing, friction (drillstring.well)")
+    motor: DownholeMotor | None = Field(
+        None, description="optional [motor]: a downhole motor (drillstring.forces.motor), from [[components]]")
 
     # -- inputs converted with the whole case: components, flow rate -------------------------------------
 

@@ -5,6 +5,9 @@ bit, each component a drill pipe, heavy-weight drill pipe, drill collar, MWD, mo
 length and its outer and inner diameter or its weight per length (the fields are validated, units and all, by
 :class:`drillstring.case.Component`). :func:`expand` turns the list into what the model is made of:
 
+- a ``motor`` entry with motor keys (flow rate, displacement, stall torque, efficiencies:
+  :class:`drillstring.case.MotorKeys`) is also a downhole motor: ``Expansion.motor``, the case's ``[motor]``,
+  its rotor station at the motor's bottom (the string below turns with the rotor, :mod:`drillstring.forces.motor`);
 - every component but a zero-length stabilizer becomes one section (a hollow circular tube), in order, named
   after the component (``name``, else its type: ``"drill pipe"``, ``"drill collar"``, ...);
 - every stabilizer becomes a lateral spring (``stiffness``) at the middle of its length, or, with no length, at
@@ -44,6 +47,10 @@ TYPES: dict[str, str] = {
     "stabilizer": "stabilizer",
     "bit": "bit",
 }
+#: The keys of a powered motor entry (:class:`drillstring.case.MotorKeys`): given any, the motor entry is also a
+#: downhole motor whose rotor turns the string below it (``Expansion.motor``); without, a plain section.
+MOTOR_KEYS = ("flow_rate", "displacement", "speed_per_flow", "stall_torque", "max_differential_pressure",
+              "volumetric_efficiency", "mechanical_efficiency")
 #: Types that may have tool joints.
 JOINTED = ("drill_pipe", "heavy_weight")
 
@@ -64,6 +71,9 @@ class Expansion:
     sections: list[dict[str, Any]]
     stabilizers: list[dict[str, Any]]
     materials: dict[str, dict[str, float]]
+    #: the ``[motor]`` table of a powered motor entry (its keys and ``position``, the bottom of the motor:
+    #: the string below turns with the rotor), None when there is none
+    motor: dict[str, Any] | None = None
 
 
 def _tube_area(outer: float, inner: float) -> float:
@@ -81,6 +91,7 @@ def expand(components: list[Any], materials: Mapping[str, Any], borehole_diamete
     stabilizers: list[dict[str, Any]] = []
     added: dict[str, dict[str, float]] = {}
     problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+    motor: dict[str, Any] | None = None
     x = 0.0
     bit = next((i for i, c in enumerate(components) if c.type == "bit"), None)
     if bit is not None and bit != len(components) - 1:
@@ -145,6 +156,14 @@ def expand(components: list[Any], materials: Mapping[str, Any], borehole_diamete
             section["material"] = smeared
         sections.append(section)
         x += c.length
+        powered = [key for key in MOTOR_KEYS if key in c.model_fields_set]
+        if c.type == "motor" and powered:
+            if motor is not None:
+                problems.append((where + ("type",), c.type, "at most one powered motor per string"))
+            elif i == len(components) - 1:
+                problems.append((where + ("type",), c.type, "a motor must have a component below it (the bit)"))
+            motor = {key: getattr(c, key) for key in powered}
+            motor["position"] = x
     if problems:
         raise ComponentProblem(problems)
-    return Expansion(sections, stabilizers, added)
+    return Expansion(sections, stabilizers, added, motor)

@@ -91,6 +91,11 @@ class FreeFreeDamping:
     rigid_mass: float
 
 
+#: A free–free eigenvalue ω² at most this fraction of the largest is a rigid motion's round-off (the family's
+#: other rigid motions: the rotation of the string below a downhole motor, :mod:`drillstring.rotor`), 0 exactly.
+RIGID_ROUND_OFF = 1e-12
+
+
 def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: float) -> FreeFreeDamping:
     """Damping matrix ``C = M Φ diag(c_i) Φᵀ M`` of a family with one rigid mode ``r = 1``, eq. (1).
 
@@ -108,6 +113,7 @@ def free_free_damping(mass, stiffness, damping_ratio: float, rigid_coefficient: 
     shapes[:, 0] = rigid / np.sqrt(rigid_mass)
     omega = np.sqrt(np.clip(omega2, 0.0, None))
     omega[0] = 0.0
+    omega[omega2 <= RIGID_ROUND_OFF * omega2.max()] = 0.0  # other rigid motions (a motor's rotor): undamped, exactly
     coefficients = 2.0 * damping_ratio * omega
     coefficients[0] = rigid_coefficient / rigid_mass
     m_phi = (sp.csr_matrix(mass) if sp.issparse(mass) else m) @ shapes  # the family's mass is banded
@@ -269,9 +275,18 @@ def rayleigh_damping(mass, stiffness, basis: np.ndarray, family, rayleigh: tuple
     if alpha and top_speed:
         columns = np.nonzero(np.asarray(family) == "torsional")[0]
         rigid = np.zeros(basis.shape[0])
-        rigid[dof(np.arange(basis.shape[0] // 6), THETA_X)] = 1.0
+        rigid[_family_rows(basis.shape[0], THETA_X)] = 1.0
         force[columns] = -top_speed * alpha * (basis[:, columns].T @ (mass @ rigid))
     return ReducedDamping(0.5 * (matrix + matrix.T), force)
+
+
+def _family_rows(rows: int, kind: int) -> np.ndarray:
+    """The rows of the DOF ``kind`` (U, THETA_X) of every node of a basis of ``rows`` rows: 6 per node, and for
+    THETA_X the rows past the nodes' too, the rotations a downhole motor releases (:mod:`drillstring.fem.rotor`:
+    the rotor side's θx at its station, a torsional DOF of its own)."""
+    nodes = np.arange(rows // 6)
+    found = dof(nodes, kind)
+    return np.concatenate([found, np.arange(6 * len(nodes), rows)]) if kind == THETA_X else found
 
 
 def _reduced_structural_damping(mass, stiffness, basis, family, angular_frequencies, *, damping_ratio: float,
@@ -298,7 +313,7 @@ def _reduced_structural_damping(mass, stiffness, basis, family, angular_frequenc
         columns = np.nonzero(np.isin(labels, names))[0]
         if len(columns) == 0:
             continue
-        dofs = dof(nodes, kind)
+        dofs = _family_rows(basis.shape[0], kind)
         block, rigid_force = projected_free_free_damping(
             mass[dofs][:, dofs], stiffness[dofs][:, dofs], basis[dofs][:, columns], damping_ratio, coefficient)
         matrix[np.ix_(columns, columns)] = block

@@ -167,6 +167,10 @@ LENGTH_PER_ANGLE = Dimension("length per angle", "m/rad")
 FORCE_ANGLE = Dimension("force times angle", "N*rad")
 MOMENT_OF_INERTIA = Dimension("moment of inertia", "kg*m2")
 ROTATIONAL_STIFFNESS = Dimension("rotational stiffness", "N*m/rad", ("kN*m/rad",))
+# A positive-displacement motor's displacement: the volume of mud that turns the rotor by one radian ("1 gal/rev"
+# = 6.02e-4 m3/rad), or its inverse, the rotor's turn per volume ("0.3 rev/gal"); "rev" is 2 pi rad.
+MOTOR_DISPLACEMENT = Dimension("motor displacement (volume per revolution)", "m3/rad", ("L/rev", "gal/rev"))
+MOTOR_SPEED_PER_FLOW = Dimension("motor speed per flow (revolutions per volume)", "rad/m3", ("rev/L", "rev/gal"))
 
 #: Every dimension, for error messages naming the dimension a misplaced unit belongs to (the first one whose
 #: SI unit matches: a pressure before a stiffness per length, a stiffness before a stiffness per length).
@@ -174,6 +178,7 @@ DIMENSIONS: tuple[Dimension, ...] = (
     LENGTH, FORCE, ANGULAR_SPEED, VELOCITY, STIFFNESS, PRESSURE, STIFFNESS_PER_LENGTH, DENSITY, TIME, TORQUE,
     ACCELERATION, ANGLE, MASS_PER_LENGTH, VOLUME_FLOW, DIMENSIONLESS, AXIAL_DAMPING, ROTATIONAL_DAMPING,
     LINEAR_DAMPING, PENETRATION_PER_FORCE, LENGTH_PER_ANGLE, FORCE_ANGLE, MOMENT_OF_INERTIA, ROTATIONAL_STIFFNESS,
+    MOTOR_DISPLACEMENT, MOTOR_SPEED_PER_FLOW,
 )  # fmt: skip
 
 

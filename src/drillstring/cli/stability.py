@@ -60,6 +60,13 @@ def stability(
     if "delay" in steady:
         table.add_row("depth of cut per blade", f"{steady['depth_of_cut'] * 1e3:,.3f}", "mm")
         table.add_row("delay (one blade passage)", f"{steady['delay']:,.4f}", "s")
+    if "motor_speed" in steady:  # a downhole motor: the bit turns at the string's speed above it plus its own
+        pressure = display_unit("pressure", units)
+        table.add_row("string speed above the motor", f"{steady['string_speed'] * _RPM:,.2f}", "rpm")
+        table.add_row("motor speed", f"{steady['motor_speed'] * _RPM:,.2f}", "rpm")
+        table.add_row("motor torque", f"{torque(steady['motor_torque']):,.3f}", torque.label)
+        table.add_row("motor differential pressure", f"{pressure(steady['differential_pressure']):,.3f}",
+                      pressure.label)
     drive = payload.get("top_drive")
     if drive:
         tuned = set(drive["tuned"])

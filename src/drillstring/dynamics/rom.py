@@ -19,6 +19,9 @@ stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed
 top drive's inertia lumped at the top node), ``θx = (Φ η)_θx`` carries the whole spin, the motor torque
 ``τ_m`` adds ``φ_top τ_m`` to the torsional equations and the controller's states follow the modal
 coordinates in the state vector ``[η, η̇, s]``. ``bit_rock.law = "off_bottom"`` removes the bit–rock force.
+A downhole motor (:mod:`drillstring.forces.motor`) releases the rotation at its rotor station
+(:mod:`drillstring.rotor`: the torsional basis is that of the released string) and adds its torque ``T(ω_m)``
+along the rotor's relative row ``φ_r − φ_k``, ``ω_m = (φ_r − φ_k)ᵀ η̇``.
 
 ``f_NL`` (case 2, ``nonlinear = "bit_and_contact"``) is the Tucker–Wang bit–rock force and torque at
 the bit node, the borehole shocks and rubbing at the contact stations
@@ -77,8 +80,10 @@ from drillstring.forces.nonlinear import (
     nonlinear_elements,
 )
 from drillstring.forces.hook_load import OnBottomStart
+from drillstring.forces.motor import case_motor
 from drillstring.forces.registry import (
     HISTORY,
+    MOTOR_CODE,
     TOP_BOUNDARY_CODE,
     TOP_INERTIA,
     BitContext,
@@ -90,10 +95,12 @@ from drillstring.forces.registry import (
     TopBoundary,
     TopContext,
     bit_law_force,
+    Motor,
     compiled,
     contact_law_forces,
     hook_load as registered_hook_load,
     hook_load_force,
+    motor_torque,
     pack,
     top_boundary_torque,
 )
@@ -110,6 +117,7 @@ from drillstring.modal import (
     family_dofs,
     family_modes,
 )
+from drillstring.rotor import RotorRelease, first_torsional_frequency, released_modes
 from drillstring.statics import StaticState, case_static_state
 
 #: Order of the observables returned by :meth:`ReducedOrderModel.observe` before the probes.
@@ -125,6 +133,8 @@ OBSERVABLES = (
     "surface_torque",  # N·m, torque the string takes from the quill: τ_m − J_td θ̈₀ with a top drive (the quill's
                        # equation of motion); the elastic torque of the top element, (K q) at θx, with the speed imposed
     "depth_of_cut",  # m, depth of cut per blade of a delayed (Detournay) law; 0 for the other laws
+    "motor_speed",  # rad/s, a downhole motor's rotor speed relative to its stator (0 without a motor)
+    "motor_torque",  # N·m, the torque of a downhole motor's rotor on the string below it (0 without a motor)
 )
 #: Column of each observable in the observation kernel's output, derived from :data:`OBSERVABLES` (the
 #: kernel writes by these names, so reordering the tuple reorders the output consistently).
@@ -139,6 +149,8 @@ _CONTACT_FORCE = OBSERVABLE_COLUMN["contact_force"]
 _QUILL_SPEED = OBSERVABLE_COLUMN["quill_speed"]
 _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
 _DEPTH_OF_CUT = OBSERVABLE_COLUMN["depth_of_cut"]
+_MOTOR_SPEED = OBSERVABLE_COLUMN["motor_speed"]
+_MOTOR_TORQUE = OBSERVABLE_COLUMN["motor_torque"]
 #: First column of the probes' displacements: after the observables, for ``n_p`` probes, ``n_p`` columns of
 #: radial displacement r, then ``n_p`` of v (along y), then ``n_p`` of w (along z) [m]
 #: (:func:`observation_width`).
@@ -231,9 +243,10 @@ class RhsData(NamedTuple):
     blocks: np.ndarray  # (8,) int64
     axial_rows: np.ndarray  # (2, a1 − a0) columns of the axial range of: u at the bit, u at the top (where the
     #                         hook pulls)
-    torsion_rows: np.ndarray  # (3, t1 − t0) columns of the torsional range of: θx at the bit, θx at the top (the
+    torsion_rows: np.ndarray  # (4, t1 − t0) columns of the torsional range of: θx at the bit, θx at the top (the
     #                           quill, where the motor torque acts; 0 when held), the surface-torque row (K Φ) at
-    #                           the top's θx
+    #                           the top's θx, the rotation of a downhole motor's rotor relative to its stator (0
+    #                           without one)
     phi_v_t: np.ndarray  # (y1 − y0, n_nodes): v at every node, columns of the lateral-y range
     phi_w_t: np.ndarray  # (z1 − z0, n_nodes): w at every node, columns of the lateral-z range
     phi_tx_t: np.ndarray  # (t1 − t0, n_nodes): θx at every node, columns of the torsional range
@@ -492,6 +505,19 @@ def _top_drive(d, t, y, out):
         out[n + j] += d.torsion_rows[1, j - t0] * torque
 
 
+@inner_kernel()
+def _downhole_motor(d, y):
+    """A downhole motor's rotor speed relative to its stator ω_m [rad/s] (the torsional row
+    :attr:`RotorRelease.relative`) and its torque [N·m] (the registered motor,
+    :func:`~drillstring.forces.registry.motor_torque`), for the state ``y``."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.blocks[2], d.blocks[3]
+    speed = 0.0
+    for j in range(t0, t1):
+        speed += d.torsion_rows[3, j - t0] * y[n + j]
+    return speed, motor_torque(d.laws, speed)
+
+
 @njit(cache=True)
 def _rhs_kernel(d, t, y, out):
     """dy/dt of the case-2 ROM (module docstring) at time ``t`` [s] from :class:`RhsData` ``d``; contact
@@ -509,6 +535,10 @@ def _rhs_kernel(d, t, y, out):
     _block_damping(d.damping_t, d.damping_blocks, eta_dot, acc)
     if d.laws[TOP_BOUNDARY_CODE] != 0.0:
         _top_drive(d, t, y, out)
+    if d.laws[MOTOR_CODE] != 0.0:  # a downhole motor: +T on the rotor side, -T on the stator side
+        _, motor = _downhole_motor(d, y)
+        for j in range(t0, t1):
+            acc[j] += d.torsion_rows[3, j - t0] * motor
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
@@ -818,6 +848,10 @@ def observe_kernel(d, o, t, y, out):
     out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
     if d.laws[TOP_BOUNDARY_CODE] != 0.0:  # a driving boundary: the torque from the quill's equation of motion
         out[_SURFACE_TORQUE] = _surface_torque(d, t, y)
+    out[_MOTOR_SPEED] = 0.0
+    out[_MOTOR_TORQUE] = 0.0
+    if d.laws[MOTOR_CODE] != 0.0:
+        out[_MOTOR_SPEED], out[_MOTOR_TORQUE] = _downhole_motor(d, y)
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
         j = o.probe_nodes[k]
@@ -888,6 +922,9 @@ class ReducedOrderModel:
             delayed bit–rock law.
         residual_columns: (n,) True on the columns that are residual-flexibility attachment modes (the truncation
             correction, :func:`drillstring.modal.residual_flexibility_modes`), not modes; None: none are.
+        motor: a downhole motor (:mod:`drillstring.forces.motor`) or None; with one, ``rotor`` is the release of
+            its rotor's rotation (:class:`~drillstring.rotor.RotorRelease`, its rows over the torsional columns)
+            and the basis is that of the released string (:func:`~drillstring.rotor.released_modes`).
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
     and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
@@ -915,6 +952,8 @@ class ReducedOrderModel:
     history_bins: int = 2048
     residual_columns: np.ndarray | None = None
     coupled: bool = False
+    motor: Motor | None = None
+    rotor: RotorRelease | None = None
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -927,6 +966,13 @@ class ReducedOrderModel:
             raise ValueError("nonlinear = 'full' with a top drive is not supported yet: use 'bit_and_contact'")
         if self.coupled:
             _check_coupled(self)
+        if (self.motor is None) != (self.rotor is None):
+            raise ValueError("motor and rotor: give both (a downhole motor and the release of its rotor) or neither")
+        if self.motor is not None and self.nonlinear == "full":
+            raise ValueError("nonlinear = 'full' with a downhole motor is not supported yet: use 'bit_and_contact'")
+        if self.coupled and self.motor is not None:
+            raise ValueError("a downhole motor on a coupled basis (a string out of the straight axis) is not supported "
+                             "yet: its rotor is released in the torsional family of a straight string")
         mesh = self.static.mesh
         nodes = np.arange(mesh.n_nodes)
         phi = self.basis
@@ -983,12 +1029,17 @@ class ReducedOrderModel:
         self.quill_shapes = np.ascontiguousarray(phi[top_dof])
         self.surface_torque_shapes = np.zeros(n)
         self.surface_torque_shapes[t0:t1] = self.system.stiffness[top_dof] @ phi[:, t0:t1]
+        #: the rotor's rotation relative to the stator per modal coordinate (a downhole motor; zeros without)
+        self.motor_shapes = np.zeros(n)
+        if self.rotor is not None:
+            self.motor_shapes[t0:t1] = self.rotor.relative
         c = self.contact
         st = self.stations
         transposed = np.ascontiguousarray
         history = (allocate_storage(self.bit_rock.sector, self.history_bins) if self.bit_rock.delayed
                    else allocate_storage(1.0, 4))
-        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n, contact=self.contact)
+        laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n, contact=self.contact,
+                                 motor=self.motor)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -997,7 +1048,7 @@ class ReducedOrderModel:
             blocks=self.blocks,
             axial_rows=transposed(np.vstack([self.bit_u[a0:a1], self.top_u[a0:a1]])),
             torsion_rows=transposed(np.vstack([self.bit_t[t0:t1], self.quill_shapes[t0:t1],
-                                               self.surface_torque_shapes[t0:t1]])),
+                                               self.surface_torque_shapes[t0:t1], self.motor_shapes[t0:t1]])),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
@@ -1094,13 +1145,14 @@ class ReducedOrderModel:
         """True when the compiled kernels hold the model's components (the package's registered ones); a
         component registered outside the package runs through :meth:`rhs_reference` only
         (:mod:`drillstring.forces.registry`)."""
-        return all(compiled(c) for c in (self.bit_rock, self.top_drive, self.hook_load, self.contact))
+        return all(compiled(c) for c in (self.bit_rock, self.top_drive, self.hook_load, self.contact)
+                   if c is not None)
 
     def require_compiled(self) -> None:
         """ValueError naming the component when :attr:`compiled` is False."""
         for kind, component in (("bit law", self.bit_rock), ("top boundary", self.top_drive),
-                                ("hook load", self.hook_load), ("contact law", self.contact)):
-            if not compiled(component):
+                                ("hook load", self.hook_load), ("contact law", self.contact), ("motor", self.motor)):
+            if component is not None and not compiled(component):
                 raise ValueError(
                     f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
                     f"kernels do not hold it: use engine = 'reference' (docs/extending.md)")
@@ -1151,6 +1203,8 @@ class ReducedOrderModel:
                 y[first:first + self.top_drive.n_states])
             states[first - 2 * n:first - 2 * n + self.top_drive.n_states] = rates
             acceleration = acceleration + self.quill_shapes * torque
+        if self.motor is not None:  # +T on the rotor side, -T on the stator side
+            acceleration = acceleration + self.motor_shapes * float(self.motor.evaluate(self.motor_shapes @ eta_dot))
         if self.nonlinear == "full":
             q = self.basis @ eta
             qd = self.basis @ eta_dot
@@ -1386,6 +1440,7 @@ def reduced_model(
     hook_load: HookLoad | None = None,
     rayleigh: tuple[float, float] = (0.0, 0.0),
     truncation_correction: str = "none",
+    motor: Motor | None = None,
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -1407,19 +1462,31 @@ def reduced_model(
         truncation_correction: "none" (the modes alone) or "static" (each of the axial and torsional families
             followed by its residual-flexibility attachment modes at the bit, and at the top with a top drive:
             :func:`drillstring.modal.compute_modes`).
+        motor: a downhole motor (:mod:`drillstring.forces.motor`), None without: the torsional family is then that
+            of the string released at the motor's rotor station (:func:`drillstring.rotor.released_modes`;
+            ``torsional_modes`` elastic modes plus its rigid motions).
     """
     drive = top_drive is not None and top_drive.drives
     coupled = family_coupling(system) > 0.0
+    release, damped = None, system
     if coupled:
+        if motor is not None:
+            raise ValueError("a downhole motor on a coupled basis (a string out of the straight axis) is not "
+                             "supported yet: its rotor is released in the torsional family of a straight string")
         modes, basis, omega, family, residual = _coupled_basis(
             system, axial_modes + 1 + torsional_modes + 2 * lateral_modes, lateral_cutoff, truncation_correction,
             damping_basis)
+        released = basis
     else:
         if drive:
             torsional_modes += 1
-        modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                              top_inertia=top_drive.top_inertia if drive else None,
-                              truncation_correction=truncation_correction)
+        top_inertia = top_drive.top_inertia if drive else None
+        if motor is None:
+            modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
+                                  top_inertia=top_inertia, truncation_correction=truncation_correction)
+        else:
+            modes, release, damped = released_modes(system, motor.position, axial_modes + 1, torsional_modes + 1,
+                                                    lateral_modes, lateral_cutoff, top_inertia, truncation_correction)
         families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
         basis = np.hstack([f.shapes for f in families])
         omega = np.concatenate([f.angular_frequencies for f in families])
@@ -1429,8 +1496,10 @@ def reduced_model(
             family += [f.name] * len(f.angular_frequencies)
         residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies)
                                    - f.attachments for f in families])
+        released = basis if release is None else np.vstack([basis, np.concatenate(  # the rotor side's row after
+            [np.zeros(f.shapes.shape[1]) if f is not modes.torsional else release.rotor for f in families])])
     structural = reduced_structural_damping(
-        system.mass, system.stiffness, basis, family, omega, damping_ratio=modal_damping_ratio,
+        damped.mass, damped.stiffness, released, family, omega, damping_ratio=modal_damping_ratio,
         rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
         top_speed=0.0 if drive else top_speed, definition=damping_basis, rayleigh=rayleigh,
     )
@@ -1442,7 +1511,8 @@ def reduced_model(
         stations=mesh_contact_stations(static.mesh, borehole_diameter),
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
-        top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled,
+        top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled, motor=motor,
+        rotor=release,
     )
 
 
@@ -1485,19 +1555,22 @@ def case_reduced_model(
     lateral_cutoff: float | None = None,
     bit_rock: BitLaw | None = None,
     top_drive: TopBoundary | None = None,
+    motor: Motor | None = None,
 ) -> ReducedOrderModel:
     """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
-    (``bit_rock``, ``top_drive``: a bit–rock law or a top boundary instance, e.g. one registered outside the
-    package, instead of the case's)
+    (``bit_rock``, ``top_drive``, ``motor``: a bit–rock law, a top boundary or a downhole motor instance, e.g.
+    one registered outside the package, instead of the case's; the case's motor is its ``[motor]``)
     (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
     ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``). A
     ``lateral_modes`` given without ``lateral_cutoff`` asks for exactly that many lateral modes (no
     cut-off)."""
     static = case_static_state(case, weight_on_bit) if static is None else static
     system = case_linear_system(case, static)
+    motor = case_motor(case) if motor is None else motor
     if top_drive is None:
-        top_drive = case_top_drive(
-            case, lambda: float(family_modes(system, "torsional", 1).angular_frequencies[0]))
+        top_drive = case_top_drive(case, lambda: (
+            float(family_modes(system, "torsional", 1).angular_frequencies[0]) if motor is None
+            else first_torsional_frequency(system, motor.position)))
     r = case.reduced_model
     return reduced_model(
         static,
@@ -1521,6 +1594,7 @@ def case_reduced_model(
         top_drive=top_drive,
         hook_load=case_hook_load(case, static.weight_on_bit),
         truncation_correction=r.truncation_correction,
+        motor=motor,
     )
 
 

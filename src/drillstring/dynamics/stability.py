@@ -97,12 +97,16 @@ class SteadyDrilling:
     depth_of_cut: float = 0.0
     delay: float = 0.0
     note: str = ""
+    motor: dict | None = None  # a downhole motor's steady state: motor_speed [rad/s], motor_torque [N·m],
+    #                            differential_pressure [Pa], string_speed [rad/s] (of the string above it)
 
     def to_dict(self) -> dict[str, float]:
         out = {"rate_of_penetration": self.rate_of_penetration, "bit_speed": self.bit_speed,
                "torque_on_bit": self.torque_on_bit, "force_on_bit": self.force_on_bit}
         if self.delay > 0.0:
             out.update(depth_of_cut=self.depth_of_cut, delay=self.delay)
+        if self.motor is not None:
+            out.update(self.motor)
         if self.note:
             out["note"] = self.note
         return out
@@ -226,19 +230,74 @@ def _steady_law(model: ReducedOrderModel, omega: float, r: int) -> BitSteadyStat
 
 
 def _steady_load(model: ReducedOrderModel, omega: float, r: int):
-    """Steady drilling at the bit speed ``omega``: (the law's steady state, modal velocity, generalized load
-    without the motor torque, motor torque τ_m that the rigid rotation's equation asks for)."""
-    law = _steady_law(model, omega, r)
+    """Steady drilling with the string turning at ``omega`` (the bit too, without a downhole motor): (the law's
+    steady state, modal velocity, generalized load without the top boundary's motor torque, that torque τ_m
+    which the rigid rotation's equation asks for, the downhole motor's speed ω_m [rad/s], 0 without one)."""
+    motor_speed = 0.0 if model.motor is None else _steady_motor_speed(model, omega, r)
+    return _steady_load_at(model, omega, motor_speed, r) + (motor_speed,)
+
+
+def _steady_load_at(model: ReducedOrderModel, omega: float, motor_speed: float, r: int):
+    """:func:`_steady_load` for a given downhole motor speed ``motor_speed`` ω_m: the bit turns at ``omega +
+    motor_speed``, the string below the rotor station turning rigidly relative to the string above
+    (:attr:`~drillstring.rotor.RotorRelease.lower_rotation`), the motor's torque pair on the modes."""
+    law = _steady_law(model, omega + motor_speed, r)
     n = model.size
     velocity = np.zeros(n)
     velocity[r] = law.rate_of_penetration / model.bit_u[r]
     spin = model.rigid_rotation_column
     if spin is not None:
         velocity[spin] = omega / model.quill_shapes[spin]
+    if model.motor is not None:
+        velocity = velocity + motor_speed * _lower_rotation(model)
     load = (model.bit_u * (law.axial_force + model.weight_on_bit) + model.bit_t * law.torque
             + model.generalized_force - model.damping @ velocity)
+    if model.motor is not None:
+        load = load + model.motor_shapes * float(model.motor.evaluate(motor_speed))
     motor = 0.0 if spin is None else float(-load[spin] / model.quill_shapes[spin])
     return law, velocity, load, motor
+
+
+def _lower_rotation(model: ReducedOrderModel) -> np.ndarray:
+    """(n,) the modal coordinates of the unit rotation of the string below a downhole motor's rotor station
+    relative to the string above (:attr:`~drillstring.rotor.RotorRelease.lower_rotation`)."""
+    out = np.zeros(model.size)
+    out[model.blocks[2]:model.blocks[3]] = model.rotor.lower_rotation
+    return out
+
+
+#: Samples per ω₀ of the scan for a downhole motor's steady speed in (−Ω, 2ω₀] (:func:`_steady_motor_speed`).
+MOTOR_SCAN = 256
+
+
+def _steady_motor_speed(model: ReducedOrderModel, omega: float, r: int) -> float:
+    """The downhole motor's steady speed ω_m [rad/s] with the string above it turning at ``omega``: the root of
+    the torque balance of the string below the rotor station (the generalized load on its rigid rotation
+    relative to the string above, ``cᵀ load = T(ω_m) − TOB(Ω + ω_m) − its damping torque``; the top boundary's
+    torque does no work on that motion) **nearest the no-load speed** ω₀: scanned down from 2 ω₀ (where the motor
+    brakes with its stall torque) to the first sign change, then Brent's method; down to a bit speed of 0. ValueError (one line) when the motor stalls (no root
+    with the bit turning)."""
+    from scipy.optimize import brentq
+
+    lower = _lower_rotation(model)
+
+    def residual(motor_speed: float) -> float:
+        return float(lower @ _steady_load_at(model, omega, motor_speed, r)[2])
+
+    upper = 2.0 * model.motor.no_load_speed  # the motor brakes with its stall torque: the balance is < 0
+    grid = np.linspace(upper, -omega, 2 * MOTOR_SCAN + 1)[1:-1]
+    last = residual(upper)
+    for motor_speed in grid:
+        try:
+            value = residual(float(motor_speed))
+        except ValueError:  # no steady drilling at that bit speed: the scan ends
+            break
+        if (value >= 0.0) != (last >= 0.0):
+            return float(brentq(residual, float(motor_speed), upper, xtol=1e-14 * max(upper, omega), rtol=1e-13))
+        upper, last = float(motor_speed), value
+    raise ValueError(f"no steady drilling: the downhole motor stalls (the bit's torque exceeds what the motor "
+                     f"gives at every bit speed above 0; stall torque {model.motor.stall_torque:.6g} N*m at "
+                     f"weight_on_bit = {model.weight_on_bit:.6g} N)")
 
 
 #: Samples of the scan for a drooping top boundary's steady speed in (0, Ω] (:func:`boundary_steady_speed`).
@@ -290,7 +349,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     r = rigid_axial_column(model)
     drive = model.top_drive
     omega = model.top_speed
-    law, velocity, load, motor = _steady_load(model, omega, r)
+    law, velocity, load, motor, motor_speed = _steady_load(model, omega, r)
     note = ""
     if drive.drives:
         set_point = omega
@@ -303,7 +362,7 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
 
         omega = boundary_steady_speed(lambda w: _steady_load(model, w, r)[3], speed_of_boundary, set_point)
         if omega != set_point:
-            law, velocity, load, motor = _steady_load(model, omega, r)
+            law, velocity, load, motor, motor_speed = _steady_load(model, omega, r)
         if abs(omega - set_point) > SET_POINT_TOLERANCE * set_point:
             note = (f"steady drilling at {omega * 30.0 / math.pi:.4g} rpm with {model.weight_on_bit / 1e3:.4g} kN "
                     f"on bit, not the set point {set_point * 30.0 / math.pi:.4g} rpm: without integral action "
@@ -319,10 +378,18 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
     if drive.drives:
         first = model.layout.states["top_boundary"] - 2 * n
         states[first:first + drive.n_states] = drive.steady_states(motor, float(model.surface_torque_shapes @ offsets))
-    return SteadyDrilling(rate_of_penetration=law.rate_of_penetration, bit_speed=float(omega),
+    downhole = None
+    if model.motor is not None:
+        torque = float(model.motor.evaluate(motor_speed))
+        downhole = {"motor_speed": motor_speed, "motor_torque": torque,
+                    "differential_pressure": float(model.motor.differential_pressure(torque)),
+                    "string_speed": float(omega)}
+    bit_speed = float(omega + motor_speed)
+    return SteadyDrilling(rate_of_penetration=law.rate_of_penetration, bit_speed=bit_speed,
                           torque_on_bit=-law.torque, force_on_bit=-law.axial_force,
                           state=np.concatenate([offsets, velocity, states]), depth_of_cut=law.depth_of_cut,
-                          delay=model.bit_rock.sector / omega if model.bit_rock.delayed else 0.0, note=note)
+                          delay=model.bit_rock.sector / bit_speed if model.bit_rock.delayed else 0.0, note=note,
+                          motor=downhole)
 
 
 def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.ndarray:
@@ -337,6 +404,9 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     a[:n, n:2 * n] = np.eye(n)
     a[n:2 * n, :n] = -np.diag(model.omega2)
     a[n:2 * n, n:2 * n] = coupling - model.damping
+    if model.motor is not None:  # the downhole motor's torque pair: dT/dω_m (ω_m = motor_shapesᵀ η̇)
+        jac_motor = model.motor.jacobian(steady.motor["motor_speed"])
+        a[n:2 * n, n:2 * n] += jac_motor * np.outer(model.motor_shapes, model.motor_shapes)
     drive = model.top_drive
     if drive.drives:
         q, s = model.quill_shapes, model.surface_torque_shapes
@@ -370,6 +440,9 @@ def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tup
     keep[rigid_axial_column(model)] = False
     if model.rigid_rotation_column is not None:
         keep[model.rigid_rotation_column] = False
+    if model.rotor is not None:  # the rigid rotations' angles (the rotor's relative one included): likewise
+        torsional = np.array([f == "torsional" for f in model.family])
+        keep[:model.size][torsional & (model.omega2 == 0.0)] = False
     if model.top_drive.n_states and model.top_drive.integral_gain == 0.0:
         keep[2 * model.size] = False  # the integral state: with k_i = 0 no equation depends on it
     return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep

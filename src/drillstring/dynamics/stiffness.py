@@ -10,6 +10,8 @@ stability region along the axes (about 3.3 for dopri5, 2.5 for bs32; Hairer & Wa
   springs, fluid centrifugal compression, prestress);
 - ``structural damping`` and ``fluid damping`` (Coriolis and viscous, from the fluid velocity): the
   spectral radius of each part of the modal damping matrix ``D``;
+- ``downhole motor``: its torque's slope ``dT/dω_m`` along the rotor's relative row (a viscous damper across
+  the rotor, on the small inertia below it: the run's stiffest term when the rotor side is short);
 - ``bit–rock law``, ``top drive`` and ``borehole contact``: the nonlinear part of ``J`` split by where each
   force acts (:func:`stiffness_rates`): the bit–rock law along the bit's shapes, from the law's own partial
   derivatives; the top drive's controller along the quill's; the rest of the finite-difference Jacobian
@@ -36,6 +38,7 @@ def _radius(matrix: np.ndarray) -> float:
 #: The terms named by :func:`stiffness_rates` besides the linear ones.
 BIT_ROCK = "bit–rock law (the forces at the bit)"
 TOP_DRIVE = "top drive (its controller's torque at the quill)"
+MOTOR = "downhole motor (its torque's slope across the rotor, on the string below it)"
 CONTACT = "borehole contact (the lateral contact forces and their friction torque; turning loads)"
 
 
@@ -143,7 +146,12 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
     linear[:, n:2 * n] = -model.damping
     bit_rock = _bit_rock_rows(model, t, y)
     top_drive = _top_drive_rows(model, t, y, jacobian)
-    rest = jacobian[:n] - linear - bit_rock - top_drive[:n]
+    motor = np.zeros((n, size))
+    if model.motor is not None:  # its torque pair along the rotor's relative row, from the motor's own slope
+        slope = model.motor.jacobian(model.motor_shapes @ y[n:2 * n])
+        motor[:, n:2 * n] = slope * np.outer(model.motor_shapes, model.motor_shapes)
+        rates[MOTOR] = _rate(motor, n)
+    rest = jacobian[:n] - linear - bit_rock - top_drive[:n] - motor
     rates[BIT_ROCK] = _rate(bit_rock, n)
     rates[CONTACT] = _rate(np.where(np.isfinite(rest), rest, np.inf), n)
     if model.top_drive.n_states:

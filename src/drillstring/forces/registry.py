@@ -45,6 +45,11 @@ and ``evaluate_at(ctx)``; it has no Jacobian on the state (it reads none). ``act
 starts off bottom (``clearance`` [m] above the rock, the string hanging from the hook). The case's
 ``initial.start`` names it (``"on_bottom"``: none, code 0, the kernels add nothing; ``"ramp"``).
 
+**Downhole motors** (:class:`Motor`): a rotor between two sections (:mod:`drillstring.rotor` releases its
+rotation), ``kernel(args, relative_speed) -> torque`` (+T on the rotor side, −T on the stator side),
+``evaluate(relative_speed)``, ``jacobian(relative_speed)``, ``position`` (the rotor station [m]) and
+``n_states``; the kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0.
+
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
 (:class:`~drillstring.case.TuckerWangKeys`, ...).
 
@@ -85,6 +90,8 @@ __all__ = [
     "HOOK_LOAD_CODE",
     "HookContext",
     "HookLoad",
+    "MOTOR",
+    "MOTOR_CODE",
     "TOP_BOUNDARY_CODE",
     "TOP_INERTIA",
     "HEADER",
@@ -99,6 +106,7 @@ __all__ = [
     "contact_law_forces",
     "contact_laws",
     "Layout",
+    "Motor",
     "TopBoundary",
     "TopContext",
     "bit_context",
@@ -112,6 +120,9 @@ __all__ = [
     "TurningLoadSource",
     "turning_load_source",
     "turning_load_sources",
+    "motor",
+    "motor_torque",
+    "motors",
     "pack",
     "package_components",
     "register",
@@ -124,11 +135,12 @@ __all__ = [
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
 #: bit's history starts, the hook load's code (0: none, the kernels add nothing), the contact law's code and where
-#: its numbers start.
+#: its numbers start, the downhole motor's code (0: none) and where its numbers start.
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
-          "history", "hook_load_code", "contact_law_code", "contact_law")
+          "history", "hook_load_code", "contact_law_code", "contact_law",
+          "motor_code", "motor")
 (BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY,
- HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW) = range(len(HEADER))
+ HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW, MOTOR_CODE, MOTOR) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
@@ -286,6 +298,41 @@ class TopBoundary:
         return {"top_boundary": self.name}
 
 
+class Motor:
+    """Base of the downhole motors: a rotor between two sections of the string (docs/extending.md). The string
+    below the rotor station turns relative to the string above (:mod:`drillstring.fem.rotor` releases that
+    rotation in the torsional family); the motor applies a torque ``T`` across it, ``+T`` on the rotor side and
+    ``−T`` on the stator side, from the relative speed ``ω_m`` [rad/s] (rotor minus stator). A motor declares
+    ``name``, ``keys``, ``from_case(case)`` (None when the case has no such motor), ``kernel_size``,
+    ``kernel_array()``, ``kernel(args, relative_speed) -> torque [N·m]`` (compiled), ``evaluate(relative_speed)``
+    (its NumPy reference), ``jacobian(relative_speed)`` (``dT/dω_m`` [N·m·s/rad]), ``n_states`` (0 here) and
+    ``position`` [m] (the rotor station from the top)."""
+
+    name: ClassVar[str]
+    kernel_size: ClassVar[int] = 0
+    kernel: ClassVar[Any] = None
+    keys: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    position: float
+
+    @property
+    def n_states(self) -> int:
+        return 0
+
+    def kernel_array(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def evaluate(self, relative_speed):
+        raise NotImplementedError
+
+    def jacobian(self, relative_speed) -> float:
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        """JSON-ready summary (SI)."""
+        return {"motor": self.name}
+
+
 class ContactLaw:
     """Base of the contact laws (module docstring). Instances are the law's parameters (SI)."""
 
@@ -375,20 +422,21 @@ class HookLoad:
 
 
 _REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {},
-                                          "turning_load": {}}
+                                          "turning_load": {}, "motor": {}}
 _KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load", ContactLaw: "contact_law",
-          TurningLoadSource: "turning_load"}
+          TurningLoadSource: "turning_load", Motor: "motor"}
 #: whether a registered class of each kind enters the compiled dispatch (has a nonzero code)
 _DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds,
-               "contact_law": lambda c: True, "turning_load": lambda c: False}
+               "contact_law": lambda c: True, "turning_load": lambda c: False,
+               "motor": lambda c: True}
 
 
 def _kind(cls: type) -> str:
     for base, kind in _KINDS.items():
         if issubclass(cls, base):
             return kind
-    raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad, a ContactLaw or a "
-                    "TurningLoadSource")
+    raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad, a ContactLaw, a "
+                    "TurningLoadSource or a Motor")
 
 
 def _in_package(cls: type) -> bool:
@@ -487,6 +535,17 @@ def hook_loads() -> tuple[str, ...]:
     return tuple(sorted(_REGISTRY["hook_load"]))
 
 
+def motor(name: str) -> type[Motor]:
+    """The registered downhole motor ``name``."""
+    return _lookup("motor", name)
+
+
+def motors() -> tuple[str, ...]:
+    """Names of the registered downhole motors."""
+    package_components()
+    return tuple(sorted(_REGISTRY["motor"]))
+
+
 def bit_laws() -> tuple[str, ...]:
     """Names of the registered bit–rock laws."""
     package_components()
@@ -520,17 +579,21 @@ class Layout:
 
 
 def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
-         modal_states: int, contact: ContactLaw | None = None) -> tuple[np.ndarray, Layout]:
-    """The kernels' flat array ``[header, bit law, top boundary, hook load, contact law, history]`` (the history
+         modal_states: int, contact: ContactLaw | None = None,
+         motor: Motor | None = None) -> tuple[np.ndarray, Layout]:
+    """The kernels' flat array ``[header, bit law, top boundary, hook load, contact law, motor, history]`` (the history
     last: it runs to the end) and its :class:`Layout`; the top boundary's states follow the ``modal_states``
-    entries ``[η, η̇]``. ``contact`` None: no contact law (code 0, its kernel gives no force)."""
+    entries ``[η, η̇]``, the motor's (none for the package's motors) the top boundary's. ``contact`` None: no
+    contact law (code 0, its kernel gives no force); ``motor`` None: no downhole motor (code 0)."""
     package_components()  # every package component registered: the codes are final
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
              "hook_load": np.asarray(hook.kernel_array(), dtype=np.float64),
              "contact_law": np.asarray(contact.kernel_array() if contact is not None else np.zeros(0), dtype=np.float64),
+             "motor": np.zeros(0) if motor is None else np.asarray(motor.kernel_array(), dtype=np.float64),
              "history": np.asarray(history, dtype=np.float64)}
-    checked = [("bit law", bit), ("hook load", hook)] + ([("contact law", contact)] if contact is not None else [])
+    checked = [("bit law", bit), ("hook load", hook)] + ([("contact law", contact)] if contact is not None else []) + (
+        [("motor", motor)] if motor is not None else [])
     for kind, component in checked:
         values = parts[kind.replace(" ", "_")]
         if values.shape != (type(component).kernel_size,):
@@ -540,8 +603,8 @@ def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
     for name, values in parts.items():
         numbers[name] = offset
         offset += values.size
-    states = {"top_boundary": modal_states}
-    size = modal_states + top.n_states
+    states = {"top_boundary": modal_states, "motor": modal_states + top.n_states}
+    size = modal_states + top.n_states + (0 if motor is None else motor.n_states)
     header = np.zeros(len(HEADER))
     header[BIT_LAW_CODE] = bit.component_code
     header[TOP_BOUNDARY_CODE] = top.component_code if top.drives else 0.0
@@ -553,6 +616,8 @@ def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
     header[HOOK_LOAD_CODE] = hook.component_code if hook.adds else 0.0
     header[CONTACT_LAW_CODE] = contact.component_code if contact is not None else 0.0
     header[CONTACT_LAW] = numbers["contact_law"]
+    header[MOTOR_CODE] = 0.0 if motor is None else motor.component_code
+    header[MOTOR] = numbers["motor"]
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -589,8 +654,14 @@ def contact_law_forces(laws, ctx, force_v, force_w, torque):
     raise NotImplementedError("compiled code only")
 
 
+def motor_torque(laws, relative_speed):
+    """The torque [N·m] of the downhole motor whose code and numbers ``laws`` holds at the rotor's speed
+    ``relative_speed`` [rad/s] relative to the stator; NaN for a code no package motor has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
 _CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook_load": HOOK_LOAD_CODE,
-               "contact_law": CONTACT_LAW_CODE}
+               "contact_law": CONTACT_LAW_CODE, "motor": MOTOR_CODE}
 
 
 def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
@@ -656,3 +727,10 @@ def _contact_law_forces_compiled(laws, ctx, force_v, force_w, torque):
     exec(compile(source, "<contact_law_forces dispatch>", "exec"), namespace)
     return namespace["dispatch"]
 
+
+@overload(motor_torque)
+def _motor_torque_compiled(laws, relative_speed):
+    source, namespace = _dispatch_source("motor", "laws, relative_speed",
+                                         f"laws[int(laws[{MOTOR}]):], relative_speed", "np.nan")
+    exec(compile(source, "<motor_torque dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
