@@ -52,7 +52,7 @@ from drillstring.dynamics.rom import (
     observation_width,
     observe_kernel,
 )
-from drillstring.dynamics.runge_kutta import TABLEAUS, StepSizeController, error_norm, step_factor
+from drillstring.dynamics.runge_kutta import StepSizeController, error_norm, method_named, step_factor
 from drillstring.dynamics.steps import accept as step_accept
 from drillstring.dynamics.steps import attempt as step_attempt
 from drillstring.dynamics.steps import kind_of, step_data
@@ -295,8 +295,8 @@ def _compile_kernels(model, work: Workspace, step, settings: StepperSettings) ->
 
 
 def _method(method):
-    """A method given by name (:data:`~drillstring.dynamics.runge_kutta.TABLEAUS`) or as itself."""
-    return TABLEAUS[method] if isinstance(method, str) else method
+    """A method given by name (:func:`~drillstring.dynamics.runge_kutta.method_named`) or as itself."""
+    return method_named(method) if isinstance(method, str) else method
 
 
 def prepare_kernels(model, tableau="dopri5") -> tuple[float, bool]:
@@ -406,6 +406,7 @@ def integrate_compiled(
         "compile_time": compile_time,
         "compiled": compiled,
         "impacts": int(state[IMPACTS]),
+        "n_jacobians": int(getattr(step, "n_jacobians", 0)),  # a step kind with a Jacobian counts them
     }
     message = ""
     if status != SUCCESS:
