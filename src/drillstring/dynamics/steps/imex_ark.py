@@ -2,36 +2,46 @@
 the stiff part of the reduced model implicit, the rest explicit, for the compiled loop
 (:mod:`drillstring.dynamics.steps.kinds`).
 
-The split. At the start of each step the right-hand side ``f`` is split exactly as ``f = f_E + f_I`` with a
-*linear* implicit part ``f_I(Y) = J (Y − y_n)`` and ``f_E = f − f_I``: whatever ``J``, the method keeps its
-order (an additive method of the pair's order, its coupling conditions included), and ``J`` only decides
-which rates are damped implicitly. ``J`` is the model's stiff part (:func:`~drillstring.dynamics.rom.stiff_part`):
+The split. At the start of each step attempt the right-hand side ``f`` is split exactly as ``f = f_E + f_I``
+with a *linear* implicit part ``f_I(Y) = J (Y − y_n)`` and ``f_E = f − f_I``: whatever ``J``, the method keeps
+its order (an additive method of the pair's order, its coupling conditions included), and ``J`` only decides
+which rates are damped implicitly. ``J`` is the reduced model's linear part and its stiff part
+(:func:`~drillstring.dynamics.rom.stiff_part`):
 
-- the bit–rock law, ``J_bit = U G Vᵀ`` of rank ≤ 3 in the modal coordinates: its force and torque act along
-  the bit's axial and torsional mode-shape rows ``b_u``, ``b_t`` (``U``) and depend on the bit's velocity
-  ``b_uᵀη̇``, speed ``b_tᵀη̇`` and position ``b_uᵀη`` (``Vᵀ``; a delayed law's depth of cut moves with the
-  position), ``G`` (2 × 3) the law's partial derivatives by central differences of the compiled law,
-  refreshed once per step (a rejected step reuses them). Measured (``benchmarks/stiff_part_survey.py``):
-  −945…−1180 1/s on ``reference`` (the axial dashpot), −2.8e4/−3.4e4 1/s on ``aarsnes2019`` (the regularised
-  stick and the wear flats' dashpot), every other rate below 100 1/s on ``reference``;
-- the linear modal oscillators whose rate ``h (ω_i + D_ii)`` exceeds :data:`IMPLICIT_MODE_RATE` for the step
-  ``h`` being attempted: 2 × 2 blocks ``[[0, 1], [−ω_i², −D_ii]]`` (the high attachment modes of the
-  truncation-corrected basis; the off-diagonal damping stays explicit).
+- the kinematics ``η' = η̇`` and the linear modal forces ``−Ω²η − Dη̇`` (every mode, ``D`` block-diagonal by
+  its damping blocks; a block of more than :data:`MAX_DENSE_BLOCK` modes by its diagonal): the high attachment modes of the truncation-corrected basis are stiff, and a stiff
+  term driven by an *explicit* slow one suffers order reduction (the explicit part would carry the stiff
+  rate times the slow motion over the step, as on the Prothero–Robinson problem: measured, with only the bit
+  law implicit the reference realization needed 3× more steps for the same tolerance);
+- the bit–rock law, ``J_bit = U G Vᵀ`` of rank ≤ 3: its force and torque act along the bit's axial and
+  torsional mode-shape rows ``b_u``, ``b_t`` (``U``) and depend on the bit's velocity ``b_uᵀη̇``, speed
+  ``b_tᵀη̇`` and position ``b_uᵀη`` (``Vᵀ``; a delayed law's depth of cut moves with the position), ``G``
+  (2 × 3) the law's partial derivatives by central differences of the compiled law, at each attempt.
+  Measured (``benchmarks/stiff_part_survey.py``): −945…−1180 1/s on ``reference`` (the axial dashpot), up to
+  −1e5 1/s on ``aarsnes2019`` (the wear flats' dashpot, the regularised stick).
 
-Each implicit stage solves ``(I − h γ J) z = r`` by the Sherman–Morrison–Woodbury formula on the block-
-diagonal base ``A = I − hγ J_modes`` (closed-form 2 × 2 inverses): ``z = A⁻¹r + hγ A⁻¹U G w`` with
-``(I₃ − hγ (VᵀA⁻¹U) G) w = VᵀA⁻¹r``, a 3 × 3 system factored once per attempt: O(n) per stage, no dense LU.
-The stages are ``Y_i = y_n + z_i`` with ``z_i`` from ``r_i = h Σ_{j<i} (a^E_ij f_E(Y_j) + a^I_ij f_I(Y_j))``;
-since the pair shares ``b``, ``b̂`` and ``b*(θ)``, the solution ``y_n + h Σ b_i f(Y_i)``, the error estimate
-``h Σ (b_i − b̂_i) f(Y_i)`` and the dense output need only ``f(Y_i)`` (kept as the dense stages). The explicit
-part's last stage is not at the new state (it is not stiffly accurate), so the loop evaluates ``f`` there:
-an accepted step costs ``s`` right-hand sides (4 for ARK3(2)4L, 6 for ARK4(3)6L) and one Jacobian (six
-scalar bit-law evaluations and O(n) work).
+What stays explicit: the contact forces, the turning loads, the top drive's controller, the hook-load ramp,
+case 1's kinetic- and strain-energy forces and the law's curvature over a step.
+
+Each implicit stage solves ``(I − hγJ) z = r``: with ``A = I − hγJ_linear``, ``A z = r`` is
+``S z_v = r_v − hγΩ² r_p``, ``z_p = r_p + hγ z_v`` with ``S = I + hγD + (hγ)²Ω²`` LU-factored block by block
+(the damping blocks, 10–20 modes each) once per attempt; the bit law by the Sherman–Morrison–Woodbury formula,
+``z = A⁻¹r + hγ A⁻¹U G w`` with ``(I₃ − hγ (VᵀA⁻¹U) G) w = VᵀA⁻¹r`` (3 × 3). No dense LU of the state.
+The stages are ``Y_i = y_n + z_i`` with ``r_i = h Σ_{j<i} (a^E_ij f_E(Y_j) + a^I_ij f_I(Y_j))``; since the pair
+shares ``b``, ``b̂`` and ``b*(θ)``, the solution ``y_n + h Σ b_i f(Y_i)``, the error estimate and the dense
+output need only ``f(Y_i)`` (kept as the dense stages, so the observations and the delayed bit history are
+recorded as with an explicit pair). The error estimate ``h Σ (b_i − b̂_i) f(Y_i)`` is filtered by
+``(I − hγJ)⁻¹`` (Shampine's filter, Hairer & Wanner, *Solving ODEs II*, §IV.8): unfiltered, its stiff
+components (the bit's velocity) set steps 10–30× shorter on ``aarsnes2019``. The explicit part's last stage is
+not at the new state (it is not stiffly accurate), so the loop evaluates ``f`` there: an accepted step costs
+``s`` right-hand sides (4 for ARK3(2)4L, 6 for ARK4(3)6L) and one Jacobian (six scalar bit-law evaluations and
+O(n) work besides the block factorisation).
 
 :class:`ReferenceStep` is the NumPy reference of the same step for a right-hand side in Python, with a dense
 ``J``: ``rhs.stiff_jacobian(t, y)`` when the right-hand side offers it, else forward differences of ``rhs``
-(``len(y)`` evaluations, counted); it solves with a dense LU. Tests check its order of convergence on problems
-with known solutions, and the compiled step against DOPRI5 on the reference cases.
+(``len(y)`` evaluations, counted); it solves with a dense LU and does not filter the error estimate.
+``tests/dynamics/test_imex_step.py`` checks its order of convergence on problems with known solutions, the
+compiled stiff part against the law's closed-form partials, and the compiled step against DOPRI5.
 """
 
 from __future__ import annotations
@@ -45,6 +55,11 @@ from numba import njit
 from drillstring.dynamics.additive_rk import AdditiveTableau
 from drillstring.dynamics.rom import evaluate_rhs, stiff_part
 from drillstring.dynamics.steps.kinds import StepKind, register
+
+#: Damping blocks larger than this many modes enter ``J`` by their diagonal only (a dense block's LU costs
+#: k³/3 per attempt: the contact case's lateral block, coupled by the fluid's Coriolis damping, has 166 modes
+#: and made a step cost 3× DOPRI5's; its off-diagonal damping is not stiff).
+MAX_DENSE_BLOCK = 32
 
 # indices of the memo: the number of modal coordinates, how many Jacobians were computed
 _MODES, _JACOBIANS = 0, 1
@@ -156,6 +171,10 @@ def _base_solve(data, blocks, nm, x):
                 x[i] /= a[i, i]
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
+        if end - start > MAX_DENSE_BLOCK:
+            for i in range(start, end):
+                x[i] /= a[i, i]
+            continue
         for i in range(start, end):
             p = pivots[i]
             if p != i:
@@ -183,6 +202,10 @@ def _factor(data, h, omega2, damping_t, blocks):
         a[i, i] = 1.0 + hg * hg * omega2[i]
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
+        if end - start > MAX_DENSE_BLOCK:
+            for i in range(start, end):
+                a[i, i] += hg * damping_t[i, i]
+            continue
         for i in range(start, end):
             for j in range(start, end):
                 a[i, j] = (1.0 + hg * hg * omega2[i] if i == j else 0.0) + hg * damping_t[j, i]
@@ -256,6 +279,10 @@ def _apply(data, omega2, damping_t, blocks, z, out):
         v2 += sh[0, i] * z[i]
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
+        if end - start > MAX_DENSE_BLOCK:
+            for j in range(start, end):
+                out[nm + j] -= damping_t[j, j] * z[nm + j]
+            continue
         for j in range(start, end):
             x = z[nm + j]
             if x != 0.0:
