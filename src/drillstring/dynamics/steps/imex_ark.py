@@ -9,7 +9,8 @@ which rates are damped implicitly. ``J`` is the reduced model's linear part and 
 (:func:`~drillstring.dynamics.rom.stiff_part`):
 
 - the kinematics ``η' = η̇`` and the linear modal forces ``−Ω²η − Dη̇`` (every mode, ``D`` block-diagonal by
-  its damping blocks; a block of more than :data:`MAX_DENSE_BLOCK` modes by its diagonal): the high attachment modes of the truncation-corrected basis are stiff, and a stiff
+  its damping blocks; a block of more than :data:`MAX_DENSE_BLOCK` modes, or slow for the step
+  (:data:`DENSE_BLOCK_RATE`), by its diagonal): the high attachment modes of the truncation-corrected basis are stiff, and a stiff
   term driven by an *explicit* slow one suffers order reduction (the explicit part would carry the stiff
   rate times the slow motion over the step, as on the Prothero–Robinson problem: measured, with only the bit
   law implicit the reference realization needed 3× more steps for the same tolerance);
@@ -60,6 +61,9 @@ from drillstring.dynamics.steps.kinds import StepKind, register
 #: k³/3 per attempt: the contact case's lateral block, coupled by the fluid's Coriolis damping, has 166 modes
 #: and made a step cost 3× DOPRI5's; its off-diagonal damping is not stiff).
 MAX_DENSE_BLOCK = 32
+#: A damping block enters ``J`` whole only where it is fast for the step: ``h (max ω_i + max_i Σ_j |D_ij|)``
+#: above this [-]; a slow block (the reference case's lateral ones) by its diagonal, which costs no LU.
+DENSE_BLOCK_RATE = 0.05
 
 # indices of the memo: the number of modal coordinates, how many Jacobians were computed
 _MODES, _JACOBIANS = 0, 1
@@ -85,6 +89,7 @@ class ImexStep(NamedTuple):
     partials: np.ndarray  # (2, 3) the bit law's partial derivatives (G)
     base: np.ndarray  # (n, n) S = I + hγD + (hγ)²Ω², LU-factored block by block (damping blocks)
     pivots: np.ndarray  # (n,) int64, the blocks' row pivots
+    dense_blocks: np.ndarray  # (n,) bool, per damping block: entered whole (factored) or by its diagonal
     columns: np.ndarray  # (2, n) S⁻¹ b_u, S⁻¹ b_t (the velocity parts of A⁻¹U)
     small: np.ndarray  # (3, 3) (I − hγ (VᵀA⁻¹U) G)⁻¹
     memo: np.ndarray  # (2,) the number of modal coordinates, Jacobians computed
@@ -105,7 +110,7 @@ def allocate(tableau: AdditiveTableau, n: int) -> ImexStep:
         c=c(tableau.c), b=c(tableau.b), error_weights=c(tableau.error_weights), dense=c(tableau.dense),
         order=float(tableau.controller_order), k=np.zeros((s, n)), k_implicit=np.zeros((s, n)), z=np.zeros(n),
         r=np.zeros(n), v=np.zeros(n), shapes=np.zeros((2, n)), partials=np.zeros((2, 3)), base=np.zeros((n, n)),
-        pivots=np.zeros(n, dtype=np.int64), columns=np.zeros((2, n)), small=np.zeros((3, 3)), memo=np.zeros(2),
+        pivots=np.zeros(n, dtype=np.int64), dense_blocks=np.zeros(n, dtype=np.bool_), columns=np.zeros((2, n)), small=np.zeros((3, 3)), memo=np.zeros(2),
         dense_stages=np.zeros((s, n)))
 
 
@@ -171,7 +176,7 @@ def _base_solve(data, blocks, nm, x):
                 x[i] /= a[i, i]
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
-        if end - start > MAX_DENSE_BLOCK:
+        if not data.dense_blocks[b]:
             for i in range(start, end):
                 x[i] /= a[i, i]
             continue
@@ -202,7 +207,14 @@ def _factor(data, h, omega2, damping_t, blocks):
         a[i, i] = 1.0 + hg * hg * omega2[i]
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
-        if end - start > MAX_DENSE_BLOCK:
+        rate = 0.0
+        for i in range(start, end):
+            row = 0.0
+            for j in range(start, end):
+                row += abs(damping_t[j, i])
+            rate = max(rate, math.sqrt(max(omega2[i], 0.0)) + row)
+        data.dense_blocks[b] = end - start <= MAX_DENSE_BLOCK and h * rate > DENSE_BLOCK_RATE
+        if not data.dense_blocks[b]:
             for i in range(start, end):
                 a[i, i] += hg * damping_t[i, i]
             continue
@@ -279,7 +291,7 @@ def _apply(data, omega2, damping_t, blocks, z, out):
         v2 += sh[0, i] * z[i]
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
-        if end - start > MAX_DENSE_BLOCK:
+        if not data.dense_blocks[b]:
             for j in range(start, end):
                 out[nm + j] -= damping_t[j, j] * z[nm + j]
             continue
