@@ -208,12 +208,13 @@ def _factor(data, h, omega2, damping_t, blocks):
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
         rate = 0.0
-        for i in range(start, end):
-            row = 0.0
-            for j in range(start, end):
-                row += abs(damping_t[j, i])
-            rate = max(rate, math.sqrt(max(omega2[i], 0.0)) + row)
-        data.dense_blocks[b] = end - start <= MAX_DENSE_BLOCK and h * rate > DENSE_BLOCK_RATE
+        if end - start <= MAX_DENSE_BLOCK:  # (a large block is never whole: no need for its rate)
+            for i in range(start, end):
+                row = 0.0
+                for j in range(start, end):
+                    row += abs(damping_t[j, i])
+                rate = max(rate, math.sqrt(max(omega2[i], 0.0)) + row)
+        data.dense_blocks[b] = h * rate > DENSE_BLOCK_RATE
         if not data.dense_blocks[b]:
             for i in range(start, end):
                 a[i, i] += hg * damping_t[i, i]
