@@ -134,3 +134,43 @@ def test_compiled_imex_agrees_with_dopri5_on_the_reduced_model(small_case):
         for key in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
             x, ref = implicit.observables[key], explicit.observables[key]
             assert np.abs(x - ref).max() <= 1e-5 * np.abs(ref).max(), (name, key)
+
+
+def dense_jacobian(model, data, omega2, damping_t, blocks) -> np.ndarray:
+    """The ``J`` the step solves with, dense: the kinematics, −Ω² and the damping (a block whole where the step
+    factored it, else its diagonal), and the bit law's rows from the step's shapes and partials."""
+    n, size = model.size, model.state_size
+    jac = np.zeros((size, size))
+    jac[:n, n:2 * n] = np.eye(n)
+    jac[n:2 * n, :n] = -np.diag(omega2)
+    damping = damping_t.T
+    for b, (start, end) in enumerate(blocks):
+        part = damping[start:end, start:end]
+        jac[n + start:n + end, n + start:n + end] = -(part if data.dense_blocks[b] else np.diag(np.diag(part)))
+    shapes = data.shapes[:, :n]
+    jac[n:2 * n, n:2 * n] += shapes.T @ data.partials[:, :2] @ shapes
+    jac[n:2 * n, :n] += shapes.T @ data.partials[:, 2:3] @ shapes[:1]
+    return jac
+
+
+@pytest.mark.parametrize("h", [1e-4, 1e-2])
+def test_stage_solve_is_the_inverse_of_i_minus_h_gamma_j(small_case, h):
+    """The step's block LU and Woodbury solve give z with (I − hγJ) z = r for the dense J it stands for (the
+    bit law's low-rank part with a made-up position partial, so that all three columns act)."""
+    from drillstring.dynamics.steps import imex_ark
+
+    model = case_reduced_model(small_case)
+    n = model.size
+    y = model.initial_state(0.0, 0)
+    y[n:2 * n] += 1e-3 * model.bit_u / (model.bit_u @ model.bit_u)
+    data = imex_ark.allocate(ARK4_3_6L, model.state_size)
+    omega2, damping_t, blocks = _stiff_part(model.rhs_data, 0.0, y, data.shapes, data.partials)
+    data.partials[0, 2] = -1e7  # a cutting stiffness [N/m]
+    assert imex_ark._factor(data, h, omega2, damping_t, blocks)
+    r = np.random.default_rng(0).standard_normal(model.state_size)
+    z = np.zeros_like(r)
+    imex_ark._solve(data, h, omega2, blocks, r, z)
+    jac = dense_jacobian(model, data, omega2, damping_t, blocks)
+    residual = (np.eye(len(r)) - h * ARK4_3_6L.gamma * jac) @ z - r
+    assert np.abs(residual).max() < 1e-9 * np.abs(r).max()
+    assert data.dense_blocks[:len(blocks)].any() == (h == 1e-2)

@@ -273,40 +273,6 @@ def _solve(data, h, omega2, blocks, r, z):
         z[i] += hg * column
 
 
-@njit(cache=True)
-def _apply(data, omega2, damping_t, blocks, z, out):
-    """out = J z: the kinematics η' = η̇, the linear modal forces −Ω²η − Dη̇ and the bit law's low-rank
-    part; zero on the other states (a top drive's)."""
-    nm = omega2.shape[0]
-    sh, g = data.shapes, data.partials
-    for j in range(z.shape[0]):
-        out[j] = 0.0
-    v0 = 0.0
-    v1 = 0.0
-    v2 = 0.0
-    for i in range(nm):
-        out[i] = z[nm + i]
-        out[nm + i] = -omega2[i] * z[i]
-        v0 += sh[0, i] * z[nm + i]
-        v1 += sh[1, i] * z[nm + i]
-        v2 += sh[0, i] * z[i]
-    for b in range(blocks.shape[0]):
-        start, end = blocks[b, 0], blocks[b, 1]
-        if not data.dense_blocks[b]:
-            for j in range(start, end):
-                out[nm + j] -= damping_t[j, j] * z[nm + j]
-            continue
-        for j in range(start, end):
-            x = z[nm + j]
-            if x != 0.0:
-                for i in range(start, end):
-                    out[nm + i] -= damping_t[j, i] * x
-    force = g[0, 0] * v0 + g[0, 1] * v1 + g[0, 2] * v2
-    torque = g[1, 0] * v0 + g[1, 1] * v1 + g[1, 2] * v2
-    for i in range(nm):
-        out[nm + i] += sh[0, i] * force + sh[1, i] * torque
-
-
 @njit
 def attempt(data, rhs_data, t, h, y, f, y_new, err):
     """Stages from ``f`` (the first), the candidate ``y_new`` and the error estimate ``err`` (filtered by
@@ -325,14 +291,22 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
     for j in range(n):
         k[0, j] = f[j]
         ki[0, j] = 0.0
+    r = data.r
+    hg = h * data.gamma
     for i in range(1, s):
+        # r = h Σ_{m<i} (a^E_im f_E(Y_m) + a^I_im f_I(Y_m)), f_E = f − f_I: row by row, contiguous
         for j in range(n):
-            acc = 0.0
-            for m in range(i):
-                acc += ae[i, m] * (k[m, j] - ki[m, j]) + ai[i, m] * ki[m, j]
-            data.r[j] = h * acc
-        _solve(data, h, omega2, blocks, data.r, data.z)
-        _apply(data, omega2, damping_t, blocks, data.z, ki[i])
+            r[j] = 0.0
+        for m in range(i):
+            explicit = h * ae[i, m]
+            implicit = h * (ai[i, m] - ae[i, m])
+            for j in range(n):
+                r[j] += explicit * k[m, j] + implicit * ki[m, j]
+        _solve(data, h, omega2, blocks, r, data.z)
+        # f_I(Y_i) = J z = (z − r)/(hγ) from the stage equation (I − hγJ) z = r: no product with J (rounding
+        # ε|f|/γ, z and r being of size h|f|; a product cost 30 % more per attempt on the reference case)
+        for j in range(n):
+            ki[i, j] = (data.z[j] - r[j]) / hg
         for j in range(n):
             y_new[j] = y[j] + data.z[j]
         evaluate_rhs(rhs_data, t + c[i] * h, y_new, k[i])
@@ -341,13 +315,14 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
                 return i, False
     b, ew = data.b, data.error_weights
     for j in range(n):
-        acc = 0.0
-        e = 0.0
-        for m in range(s):
-            acc += b[m] * k[m, j]
-            e += ew[m] * k[m, j]
-        y_new[j] = y[j] + h * acc
-        data.r[j] = h * e
+        y_new[j] = y[j]
+        r[j] = 0.0
+    for m in range(s):
+        weight = h * b[m]
+        error = h * ew[m]
+        for j in range(n):
+            y_new[j] += weight * k[m, j]
+            r[j] += error * k[m, j]
     # the estimate filtered by (I − hγJ)⁻¹ (Shampine; Hairer & Wanner II §IV.8): its stiff components damped
     _solve(data, h, omega2, blocks, data.r, err)
     return s - 1, True
