@@ -66,7 +66,8 @@ def main() -> None:
         for m in methods[1:]:
             x = np.array(values[m][k])
             diff = x - ref
-            line += (f"; {m} {x.mean():.5g}, paired difference {diff.mean():+.2g} ± {diff.std(ddof=1) / math.sqrt(n):.2g}"
+            spread = diff.std(ddof=1) / math.sqrt(n)
+            line += (f"; {m} {x.mean():.5g}, paired difference {diff.mean():+.2g} ± {spread:.2g}"
                      f" ({abs(diff.mean()) / error if error > 0 else 0.0:.2f} MC errors)")
         print(line)
 

@@ -3,7 +3,8 @@
 The loop is split from the step. The *step* — its stages, its local error estimate and its dense output — is
 a step kind of :mod:`drillstring.dynamics.steps`, chosen by the type of the method's data when the loop is
 compiled (:mod:`drillstring.dynamics.steps.explicit_rk` for a
-:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`; an implicit or Rosenbrock step is one more kind).
+:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`, :mod:`drillstring.dynamics.steps.imex_ark` for an
+:class:`~drillstring.dynamics.additive_rk.AdditiveTableau`: the stiff part implicit).
 The *loop* (:func:`_run_chunk`) owns the rest: the step-size controller — the compiled functions
 :func:`~drillstring.dynamics.runge_kutta.error_norm` and :func:`~drillstring.dynamics.runge_kutta.step_factor`,
 shared with the reference integrator :func:`~drillstring.dynamics.runge_kutta.integrate` —, acceptance, landing

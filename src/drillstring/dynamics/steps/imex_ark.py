@@ -10,8 +10,8 @@ which rates are damped implicitly. ``J`` is the reduced model's linear part and 
 
 - the kinematics ``η' = η̇`` and the linear modal forces ``−Ω²η − Dη̇`` (every mode, ``D`` block-diagonal by
   its damping blocks; a block of more than :data:`MAX_DENSE_BLOCK` modes, or slow for the step
-  (:data:`DENSE_BLOCK_RATE`), by its diagonal): the high attachment modes of the truncation-corrected basis are stiff, and a stiff
-  term driven by an *explicit* slow one suffers order reduction (the explicit part would carry the stiff
+  (:data:`DENSE_BLOCK_RATE`), by its diagonal): the high attachment modes of the truncation-corrected basis
+  are stiff, and a stiff term driven by an *explicit* slow one suffers order reduction (the explicit part would carry the stiff
   rate times the slow motion over the step, as on the Prothero–Robinson problem: measured, with only the bit
   law implicit the reference realization needed 3× more steps for the same tolerance);
 - the bit–rock law, ``J_bit = U G Vᵀ`` of rank ≤ 3: its force and torque act along the bit's axial and
@@ -110,7 +110,8 @@ def allocate(tableau: AdditiveTableau, n: int) -> ImexStep:
         c=c(tableau.c), b=c(tableau.b), error_weights=c(tableau.error_weights), dense=c(tableau.dense),
         order=float(tableau.controller_order), k=np.zeros((s, n)), k_implicit=np.zeros((s, n)), z=np.zeros(n),
         r=np.zeros(n), v=np.zeros(n), shapes=np.zeros((2, n)), partials=np.zeros((2, 3)), base=np.zeros((n, n)),
-        pivots=np.zeros(n, dtype=np.int64), dense_blocks=np.zeros(n, dtype=np.bool_), columns=np.zeros((2, n)), small=np.zeros((3, 3)), memo=np.zeros(2),
+        pivots=np.zeros(n, dtype=np.int64), dense_blocks=np.zeros(n, dtype=np.bool_), columns=np.zeros((2, n)),
+        small=np.zeros((3, 3)), memo=np.zeros(2),
         dense_stages=np.zeros((s, n)))
 
 
