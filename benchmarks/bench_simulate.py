@@ -1,4 +1,8 @@
-"""Benchmark: one reference drilling run (case 2) on one core, against SciPy's solve_ivp(RK45).
+"""Benchmark: one reference drilling run (case 2) on one core, against SciPy's solve_ivp(RK45), and the
+implicit–explicit methods (``--imex``, default ark43 and ark32: docs/model.md §9) against compiled DOPRI5
+at the case's tolerances: ``speed-up vs dopri5: N.Nx`` per method with its right-hand-side and Jacobian
+counts and its largest relative deviation from the DOPRI5 records (``benchmarks/imex_accuracy.py`` compares
+at several tolerances, with the cycle metrics).
 
 Both integrate the same reduced-order model (same right-hand side, same rtol/atol, same output grid)
 in the same process, so the ratio is meaningful on a noisy machine. Run:
@@ -31,7 +35,10 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--nonlinear", choices=("bit_and_contact", "full"), default=None,
                         help="case 2 (default of the case) or case 1 (full nonlinear model)")
+    parser.add_argument("--imex", default="ark43,ark32", help="IMEX methods to time against DOPRI5 ('' for none)")
+    parser.add_argument("--imex-only", action="store_true", help="skip the reference path and solve_ivp")
     args = parser.parse_args()
+    imex = [m for m in args.imex.split(",") if m]
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
     case = load_case(args.case)
@@ -41,11 +48,14 @@ def main() -> None:
     build = time.perf_counter() - t0
     y0 = model.initial_state(case.initial.lateral_perturbation, case.initial.seed)
     model.rhs(0.0, y0)  # compile / load the kernels outside the timings
+    for method in ("dopri5", *imex):
+        compiled.prepare_kernels(model, method)
     kwargs = dict(t_end=s.t_end, output_step=s.output_step, rtol=s.rtol, atol=s.atol,
                   lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed)
 
     timings: dict[str, list[float]] = {k: [] for k in ("compiled", "unpaused", "reference", "ivp_numpy",
-                                                       "ivp_compiled")}
+                                                       "ivp_compiled", *imex)}
+    imex_results = {}
     for _ in range(args.repeat):
         start = time.perf_counter()
         result = simulate_model(model, engine="compiled", **kwargs)
@@ -57,6 +67,12 @@ def main() -> None:
         simulate_model(model, engine="compiled", **kwargs)
         timings["unpaused"].append(time.perf_counter() - start)
         compiled.FIRST_CALL_ATTEMPTS, compiled.CALL_SECONDS = pauses
+        for method in imex:
+            start = time.perf_counter()
+            imex_results[method] = simulate_model(model, engine="compiled", method=method, **kwargs)
+            timings[method].append(time.perf_counter() - start)
+        if args.imex_only:
+            continue
         start = time.perf_counter()
         reference = simulate_model(model, engine="reference", **kwargs)
         timings["reference"].append(time.perf_counter() - start)
@@ -69,7 +85,19 @@ def main() -> None:
         compiled_rhs = solve_ivp(model.rhs, (0.0, s.t_end), y0, method="RK45", t_eval=grid,
                                  rtol=s.rtol, atol=s.atol)
         timings["ivp_compiled"].append(time.perf_counter() - start)
-    best = {k: min(v) for k, v in timings.items()}
+    best = {k: min(v) for k, v in timings.items() if v}
+    for method in imex:
+        st = imex_results[method].stats
+        deviation = max(np.max(np.abs(imex_results[method].observables[k] - result.observables[k]))
+                        / np.max(np.abs(result.observables[k])) for k in ("rate_of_penetration", "bit_speed",
+                                                                          "torque_on_bit", "force_on_bit"))
+        print(f"{method} (compiled, case rtol): {best[method]:.3f} s; RHS evaluations {st['n_rhs']}, Jacobians "
+              f"{st['n_jacobians']}, accepted {st['n_accepted']}, rejected {st['n_rejected']}; records within "
+              f"{deviation:.1e} of DOPRI5's; speed-up vs dopri5: {best['compiled'] / best[method]:.1f}x")
+    if args.imex_only:
+        print(f"dopri5 (compiled): {best['compiled']:.3f} s; RHS evaluations {result.stats['n_rhs']}, "
+              f"accepted {result.stats['n_accepted']}, rejected {result.stats['n_rejected']}")
+        return
     rop = result.observables["rate_of_penetration"]
     ref_rop = np.array([model.observe(t, y)[0] for t, y in zip(baseline.t, baseline.y.T)])
     agreement = np.max(np.abs(rop - ref_rop)) / np.max(np.abs(ref_rop))

@@ -738,7 +738,10 @@ class Simulation(_Base):
     atol: Dimensionless = Field(1e-9, gt=0)
     max_steps: int = Field(2_000_000, gt=0, le=10**12)
     min_step: Time = Field(1e-12, gt=0, description="smallest step before giving up [s]")
-    method: Literal["dopri5", "bs32"] = "dopri5"
+    method: Literal["dopri5", "bs32", "ark43", "ark32"] = Field(
+        "dopri5", description="'dopri5' (Dormand-Prince 5(4)) or 'bs32' (Bogacki-Shampine 3(2)), explicit; 'ark43' "
+        "or 'ark32' (Kennedy-Carpenter ARK4(3)6L, ARK3(2)4L): the linear modal part and the bit law implicit "
+        "(docs/model.md)")
 
     @model_validator(mode="after")
     def _output_step_within_run(self) -> Simulation:

@@ -120,14 +120,15 @@ def test_the_motor_is_a_registered_component_packed_by_the_registry():
     assert "positive_displacement" in motors() and motor("positive_displacement") is PositiveDisplacementMotor
     m = case_motor(load_case("motor"))
     from drillstring.forces.bit_rock import case_bit_rock
+    from drillstring.forces.hook_load import OnBottomStart
     from drillstring.forces.top_drive import TopDriveParameters
 
-    laws, layout = pack(case_bit_rock(load_case("motor")), TopDriveParameters("imposed_speed", 1.0), np.zeros(3),
-                        np.zeros(4), 10, m)
+    laws, layout = pack(case_bit_rock(load_case("motor")), TopDriveParameters("imposed_speed", 1.0), OnBottomStart(),
+                        np.zeros(4), 10, motor=m)
     assert laws[MOTOR_CODE] == PositiveDisplacementMotor.component_code > 0
     start = int(laws[MOTOR])
     assert start == layout.numbers["motor"]
     np.testing.assert_array_equal(laws[start:start + 2], m.kernel_array())
-    without, _ = pack(case_bit_rock(load_case("motor")), TopDriveParameters("imposed_speed", 1.0), np.zeros(3),
+    without, _ = pack(case_bit_rock(load_case("motor")), TopDriveParameters("imposed_speed", 1.0), OnBottomStart(),
                       np.zeros(4), 10)
     assert without[MOTOR_CODE] == 0.0

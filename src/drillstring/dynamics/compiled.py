@@ -3,7 +3,8 @@
 The loop is split from the step. The *step* — its stages, its local error estimate and its dense output — is
 a step kind of :mod:`drillstring.dynamics.steps`, chosen by the type of the method's data when the loop is
 compiled (:mod:`drillstring.dynamics.steps.explicit_rk` for a
-:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`; an implicit or Rosenbrock step is one more kind).
+:class:`~drillstring.dynamics.runge_kutta.ButcherTableau`, :mod:`drillstring.dynamics.steps.imex_ark` for an
+:class:`~drillstring.dynamics.additive_rk.AdditiveTableau`: the stiff part implicit).
 The *loop* (:func:`_run_chunk`) owns the rest: the step-size controller — the compiled functions
 :func:`~drillstring.dynamics.runge_kutta.error_norm` and :func:`~drillstring.dynamics.runge_kutta.step_factor`,
 shared with the reference integrator :func:`~drillstring.dynamics.runge_kutta.integrate` —, acceptance, landing
@@ -52,7 +53,7 @@ from drillstring.dynamics.rom import (
     observation_width,
     observe_kernel,
 )
-from drillstring.dynamics.runge_kutta import TABLEAUS, StepSizeController, error_norm, step_factor
+from drillstring.dynamics.runge_kutta import StepSizeController, error_norm, method_named, step_factor
 from drillstring.dynamics.steps import accept as step_accept
 from drillstring.dynamics.steps import attempt as step_attempt
 from drillstring.dynamics.steps import kind_of, step_data
@@ -295,8 +296,8 @@ def _compile_kernels(model, work: Workspace, step, settings: StepperSettings) ->
 
 
 def _method(method):
-    """A method given by name (:data:`~drillstring.dynamics.runge_kutta.TABLEAUS`) or as itself."""
-    return TABLEAUS[method] if isinstance(method, str) else method
+    """A method given by name (:func:`~drillstring.dynamics.runge_kutta.method_named`) or as itself."""
+    return method_named(method) if isinstance(method, str) else method
 
 
 def prepare_kernels(model, tableau="dopri5") -> tuple[float, bool]:
@@ -406,6 +407,7 @@ def integrate_compiled(
         "compile_time": compile_time,
         "compiled": compiled,
         "impacts": int(state[IMPACTS]),
+        "n_jacobians": int(getattr(step, "n_jacobians", 0)),  # a step kind with a Jacobian counts them
     }
     message = ""
     if status != SUCCESS:

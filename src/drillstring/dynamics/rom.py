@@ -772,6 +772,69 @@ def _evaluate_rhs_compiled(data, t, y, out):
     return None
 
 
+#: Relative step of the central differences of the bit law in :func:`stiff_part` [-], and the floors of the
+#: differenced quantities' scales: axial velocity [m/s], bit speed [rad/s], bit position [m].
+BIT_LAW_STEP = 1e-6
+BIT_LAW_SCALES = (1e-3, 1.0, 1e-3)
+
+
+@inner_kernel()
+def _stiff_bit_law(d, t, y, shapes, partials):
+    """:func:`stiff_part` for case-2 data ``d``."""
+    n = d.omega2.shape[0]
+    a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+    for j in range(n):
+        shapes[0, j] = 0.0
+        shapes[1, j] = 0.0
+    for j in range(a0, a1):
+        shapes[0, j] = d.axial_rows[0, j - a0]
+    for j in range(t0, t1):
+        shapes[1, j] = d.torsion_rows[0, j - t0]
+    position, angle, velocity, speed = _bit_state(d, t, y)
+    depth = _depth_of_cut(d, position, angle)
+    moves_depth = 1.0 if _delayed(d) else 0.0
+    values = (velocity, speed, position)
+    for k in range(3):
+        step = BIT_LAW_STEP * max(abs(values[k]), BIT_LAW_SCALES[k])
+        force_sum = 0.0
+        torque_sum = 0.0
+        for sign in (1.0, -1.0):
+            dv = sign * step if k == 0 else 0.0
+            dw = sign * step if k == 1 else 0.0
+            du = sign * step if k == 2 else 0.0
+            force, torque = bit_law_force(d.laws, BitContext(t, position + du, angle, velocity + dv, speed + dw,
+                                                             depth + moves_depth * du, d.weight_on_bit))
+            force_sum += sign * force
+            torque_sum += sign * torque
+        partials[0, k] = force_sum / (2.0 * step)
+        partials[1, k] = torque_sum / (2.0 * step)
+    return d.omega2, d.damping_t, d.damping_blocks
+
+
+def stiff_part(data, t, y, shapes, partials):
+    """The model's stiff part, for an implicit step (:mod:`drillstring.dynamics.steps.imex_ark`), at time ``t``
+    [s] and state ``y``: writes the bit's axial and torsional mode-shape rows (u and θx at the bit over the n
+    modal coordinates, zero outside their families) into ``shapes[0, :n]``, ``shapes[1, :n]``, and into
+    ``partials`` (2, 3) the partial derivatives of the bit law's (axial force [N], torque [N·m]) in the bit's
+    (axial velocity u̇ [m/s], speed θ̇ [rad/s], position u [m]; the position moves a delayed law's depth of
+    cut with it), by central differences of the registered compiled law (six scalar evaluations of
+    :func:`~drillstring.forces.registry.bit_law_force`). The
+    bit law's part of ``∂(η̈)/∂(η, η̇)`` is then ``Bᵀ P[:, 2] b_uᵀ`` and ``Bᵀ P[:, :2] B`` (``B = shapes``,
+    ``P = partials``): the NumPy reference is :func:`drillstring.dynamics.stiffness._bit_rock_rows`. Returns the
+    linear part's ``(ω², Dᵀ, damping blocks)``. Compiled code only; case 1 (:class:`FullModelData`) reads its
+    case-2 part."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(stiff_part)
+def _stiff_part_compiled(data, t, y, shapes, partials):
+    if _is(data, FullModelData):
+        return lambda data, t, y, shapes, partials: _stiff_bit_law(data.rhs, t, y, shapes, partials)
+    if _is(data, RhsData) or _is(data, DelayedRhsData):
+        return lambda data, t, y, shapes, partials: _stiff_bit_law(data, t, y, shapes, partials)
+    return None
+
+
 @inner_kernel()
 def _contact_state(d, y, v, w, in_contact):
     """Fill ``v``, ``w`` (every node) and ``in_contact`` (nodes with a station outside its gap) for the

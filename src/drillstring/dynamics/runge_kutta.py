@@ -83,6 +83,7 @@ __all__ = [
     "DORMAND_PRINCE_54",
     "BOGACKI_SHAMPINE_32",
     "TABLEAUS",
+    "method_named",
     "dense_weights",
     "StepSizeController",
     "error_norm",
@@ -285,6 +286,18 @@ BOGACKI_SHAMPINE_32 = ButcherTableau(
 )
 
 TABLEAUS: dict[str, ButcherTableau] = {"dopri5": DORMAND_PRINCE_54, "bs32": BOGACKI_SHAMPINE_32}
+
+
+def method_named(name: str):
+    """The integration method called ``name``: an explicit pair of :data:`TABLEAUS` or an implicit–explicit
+    additive pair of :data:`drillstring.dynamics.additive_rk.IMEX_TABLEAUS` (``simulation.method``)."""
+    from drillstring.dynamics.additive_rk import IMEX_TABLEAUS
+
+    methods = {**TABLEAUS, **IMEX_TABLEAUS}
+    try:
+        return methods[name]
+    except KeyError:
+        raise ValueError(f"unknown tableau {name!r}; known: {sorted(methods)}") from None
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -815,10 +828,7 @@ def integrate(
     """
     wall0 = time.perf_counter()
     if isinstance(tableau, str):
-        try:
-            tableau = TABLEAUS[tableau]
-        except KeyError:
-            raise ValueError(f"unknown tableau {tableau!r}; known: {sorted(TABLEAUS)}") from None
+        tableau = method_named(tableau)
     if on_dense_step is not None and tableau.dense is None:
         raise ValueError(f"on_dense_step needs a tableau with dense output; {tableau.name} has none")
     t0, t_end = float(t_span[0]), float(t_span[1])
