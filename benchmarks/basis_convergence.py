@@ -1,6 +1,6 @@
 """Basis convergence and cost of the truncation correction (issue 22, item 3).
 
-    python benchmarks/basis_convergence.py [--modes 10 20 40 80] [--t-end 3]
+    python benchmarks/basis_convergence.py [--modes 10 20 40 80] [--t-end 3] [--motor]
 
 1. ``aarsnes2019``: the leading root of steady drilling with ``n`` axial + ``n`` torsional modes, plain
    (``reduced_model.truncation_correction = "none"``) and corrected (``"static"``: plus the residual-flexibility
@@ -11,6 +11,9 @@
    and wall time of the same run with and without them, in the same process, for ``reference`` (Tucker–Wang law,
    imposed speed), ``stick_slip`` (a top drive:
    two torsional attachment modes, bit and top, and one axial) and ``aarsnes2019`` (the Detournay law).
+3. ``motor`` (``--motor``): the leading root of steady drilling and the first axial root with ``n`` + ``n``
+   modes, plain and corrected (the released torsion's attachment modes at the bit, the motor's torque pair and
+   the top, :func:`drillstring.rotor.released_torsional_modes`); every root found (:func:`stability`).
 """
 
 from __future__ import annotations
@@ -90,11 +93,42 @@ def cost(t_end: float) -> None:
                   f"{wall:.2f} |", flush=True)
 
 
+def motor_convergence(modes: list[int]) -> None:
+    from drillstring.case import load_case
+    from drillstring.dynamics.rom import case_reduced_model
+    from drillstring.dynamics.stability import stability
+
+    base = load_case("motor")
+    print("\nmotor, steady drilling: leading root and first axial root (growth rate [1/s] at frequency [Hz])")
+    print("| basis | modes | size | leading root | first axial root | fastest cut-off root | time |")
+    print("|---|---|---|---|---|---|---|")
+    for correction in ("none", "static"):
+        case = _with(base, correction)
+        for n in modes:
+            t = time.perf_counter()
+            model = case_reduced_model(case, axial_modes=n, torsional_modes=n)
+            found = stability(model)
+            lead = found.leading
+            axial = min((m for m in found.modes if m.frequency > 0.1 and not m.beyond_basis
+                         and m.shares["axial"] > 0.5), key=lambda m: m.frequency)
+            cut = [m for m in found.modes if m.beyond_basis and m.frequency > 0]
+            fastest = max(cut, key=lambda m: m.growth_rate) if cut else None
+            print(f"| {correction} | {n} + {n} | {model.size} | {lead.growth_rate:+.5f} at {lead.frequency:.4f} "
+                  f"({'torsional' if lead.shares['torsional'] > 0.5 else 'axial'}) | "
+                  f"{axial.growth_rate:+.4f} at {axial.frequency:.4f} | "
+                  f"{'-' if fastest is None else f'{fastest.growth_rate:+.2f} at {fastest.frequency:.1f}'} | "
+                  f"{time.perf_counter() - t:.1f} s |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--modes", type=int, nargs="+", default=[10, 20, 40, 80])
     parser.add_argument("--t-end", type=float, default=3.0)
+    parser.add_argument("--motor", action="store_true", help="the motor case's table only")
     args = parser.parse_args()
+    if args.motor:
+        motor_convergence(args.modes)
+        return
     convergence(args.modes)
     cost(args.t_end)
 

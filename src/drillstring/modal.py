@@ -290,6 +290,38 @@ def family_modes_below(system: LinearSystem, family: str, count: int, cutoff: fl
 TRUNCATION_CORRECTIONS = ("none", "static")
 
 
+def residual_flexibility_vectors(k: sp.csc_matrix, m: sp.csr_matrix, phi: np.ndarray, load: np.ndarray,
+                                 rigid: int = 0, ground=(0,)):
+    """The residual-flexibility attachment vectors of one family on its own DOFs (the algorithm of
+    :func:`residual_flexibility_modes`, Craig & Chang 1977): ``K⁻¹ f`` for each column ``f`` of ``load`` made
+    M-orthogonal to the kept modes ``phi`` (M-orthonormal columns), then put in Rayleigh–Ritz form. ``rigid``:
+    the first ``rigid`` columns of ``phi`` are the family's rigid motions (K singular): each load is balanced by
+    their inertia, ``f − M R Rᵀ f`` (inertia relief), and the response taken with the local DOFs ``ground``
+    held (one per rigid motion, so that the rest of K is regular). Returns ``(ω̃², vectors)`` (ascending, the
+    vectors M-orthonormal up to rounding) or None when the kept modes already span every response."""
+    n = k.shape[0]
+    response = np.zeros_like(load)
+    if rigid:
+        r = phi[:, :rigid]
+        load = load - m @ (r @ (r.T @ load))
+        free = np.setdiff1d(np.arange(n), np.asarray(ground, dtype=np.int64))
+        response[free] = spla.splu(k[free][:, free]).solve(load[free])
+    else:
+        response = spla.splu(k).solve(load)
+    before = np.sqrt(np.einsum("ij,ij->j", response, m @ response))
+    for _ in range(2):  # M-orthogonal to every kept mode (twice: classical Gram–Schmidt, re-orthogonalised)
+        response -= phi @ (phi.T @ (m @ response))
+    k_r = response.T @ (k @ response)
+    m_r = response.T @ (m @ response)
+    # a response the kept modes already span (all the family's modes kept) leaves only rounding
+    keep = np.sqrt(np.maximum(np.diag(m_r), 0.0)) > 1e-8 * before
+    if not keep.any():
+        return None
+    response, k_r, m_r = response[:, keep], k_r[np.ix_(keep, keep)], m_r[np.ix_(keep, keep)]
+    values, q = sla.eigh(k_r, m_r)
+    return values, response @ q
+
+
 def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs, top_inertia: float | None = None,
                                rigid: bool = False) -> ModeFamily:
     """``kept`` with the static correction for the modes left out at ``load_dofs`` (global DOFs of the family):
@@ -323,26 +355,10 @@ def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs
         return kept
     load = np.zeros((len(dofs), len(local)))
     load[local, np.arange(len(local))] = 1.0
-    response = np.zeros_like(load)
-    if rigid:
-        r = phi[:, :1]
-        load = load - m @ (r @ (r.T @ load))
-        free = np.arange(1, len(dofs))  # grounded at the family's first DOF (the top)
-        response[free] = spla.splu(k[free][:, free]).solve(load[free])
-    else:
-        response = spla.splu(k).solve(load)
-    before = np.sqrt(np.einsum("ij,ij->j", response, m @ response))
-    for _ in range(2):  # M-orthogonal to every kept mode (twice: classical Gram–Schmidt, re-orthogonalised)
-        response -= phi @ (phi.T @ (m @ response))
-    k_r = response.T @ (k @ response)
-    m_r = response.T @ (m @ response)
-    # a response the kept modes already span (all the family's modes kept) leaves only rounding
-    keep = np.sqrt(np.maximum(np.diag(m_r), 0.0)) > 1e-8 * before
-    if not keep.any():
+    found = residual_flexibility_vectors(k, m, phi, load, 1 if rigid else 0, [0])  # grounded at the top
+    if found is None:
         return kept
-    response, k_r, m_r = response[:, keep], k_r[np.ix_(keep, keep)], m_r[np.ix_(keep, keep)]
-    values, q = sla.eigh(k_r, m_r)
-    vectors = response @ q
+    values, vectors = found
     shapes = np.zeros((system.mesh.n_dofs, vectors.shape[1]))
     shapes[dofs] = vectors
     shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, mass_global @ shapes))

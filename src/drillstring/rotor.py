@@ -29,7 +29,16 @@ import scipy.sparse as sp
 from drillstring.fem.assembly import THETA_X, dof
 from drillstring.fem.element import element_mass, element_stiffness
 from drillstring.fem.mesh import Mesh
-from drillstring.modal import LinearSystem, ModeFamily, _eigen, family_coupling, family_dofs, top_inertia_matrix
+from drillstring.modal import (
+    TRUNCATION_CORRECTIONS,
+    LinearSystem,
+    ModeFamily,
+    _eigen,
+    family_coupling,
+    family_dofs,
+    residual_flexibility_vectors,
+    top_inertia_matrix,
+)
 
 __all__ = ["RotorRelease", "released_system", "released_torsional_modes", "rotor_node"]
 
@@ -109,11 +118,22 @@ class RotorRelease:
 
 
 def released_torsional_modes(released: LinearSystem, node: int, count: int,
-                             top_inertia: float | None = None) -> RotorRelease:
+                             top_inertia: float | None = None, truncation_correction: str = "none") -> RotorRelease:
     """The ``count`` lowest torsional modes of the string ``released`` at ``node`` (:func:`released_system`),
     ``top_inertia`` [kg·m²]: the top free with that inertia (a top drive), None: held. The rigid motions come
     first, exact: with the top free the whole string's rotation, then the rotation of the string below the
-    station (M-orthogonalised to it); with the top held the latter alone. ``count`` counts them."""
+    station (M-orthogonalised to it); with the top held the latter alone. ``count`` counts them.
+
+    ``truncation_correction = "static"`` appends the residual-flexibility attachment modes of the released torsion
+    (Craig & Chang 1977, :func:`drillstring.modal.residual_flexibility_vectors`) for the loads its laws apply: a
+    torque at the bit's θx, the motor's torque pair (+1 at the rotor side ``θ_r``, −1 at the stator side: the load
+    conjugate to the rotor's relative rotation) and, with a top drive, a torque at the top's θx. Each load is
+    first balanced by the inertia of the rigid motions (inertia relief; the pair is balanced already) and solved
+    with the rotor side held (and the top, when free): one held DOF per rigid motion. The attachment modes are
+    M- and K-orthogonal to every kept mode (the rigid motions included, so ``lower_rotation`` is 0 on them)."""
+    if truncation_correction not in TRUNCATION_CORRECTIONS:
+        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
+                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
     mesh = released.mesh
     top_free = top_inertia is not None
     rigid = 2 if top_free else 1
@@ -145,13 +165,39 @@ def released_torsional_modes(released: LinearSystem, node: int, count: int,
     vectors /= np.sqrt(np.einsum("ij,ij->j", vectors, m @ vectors))
     pivot = np.argmax(np.abs(vectors), axis=0)
     vectors *= np.sign(vectors[pivot, np.arange(vectors.shape[1])])
+    attachments = 0
+    if truncation_correction == "static" and vectors.shape[1] < len(dofs):
+        values, vectors, attachments = _with_attachment_modes(k, m, values, vectors, dofs, node, rigid)
     full = np.zeros((n_dofs + 1, vectors.shape[1]))
     full[dofs] = vectors
     omega = np.sign(values) * np.sqrt(np.abs(values))
-    family = ModeFamily("torsional", omega, full[:n_dofs])
+    family = ModeFamily("torsional", omega, full[:n_dofs], attachments)
     rotor = full[n_dofs].copy()
     return RotorRelease(node=node, family=family, rotor=rotor, relative=rotor - full[dof(node, THETA_X)],
                         lower_rotation=vectors.T @ (m @ lower))
+
+
+def _with_attachment_modes(k, m, values: np.ndarray, vectors: np.ndarray, dofs: np.ndarray, node: int,
+                           rigid: int):
+    """``(ω², vectors, count)``: the released torsion's kept modes (M-orthonormal, on its DOFs ``dofs``, sorted:
+    the top's θx first when free, the rotor side's last) followed by their ``count`` attachment modes
+    (:func:`released_torsional_modes`)."""
+    n = len(dofs)
+    rotor, stator = n - 1, int(np.searchsorted(dofs, dof(node, THETA_X)))
+    load = np.zeros((n, 3 if rigid == 2 else 2))
+    load[n - 2, 0] = 1.0  # the bit's θx: the last node's, just before the rotor side's
+    load[rotor, 1], load[stator, 1] = 1.0, -1.0  # the motor's torque pair
+    if rigid == 2:
+        load[0, 2] = 1.0  # the top's θx (a top drive)
+    ground = [rotor] + ([0] if rigid == 2 else [])
+    found = residual_flexibility_vectors(sp.csc_matrix(k), sp.csr_matrix(m), vectors, load, rigid, ground)
+    if found is None:
+        return values, vectors, 0
+    extra_values, extra = found
+    extra = extra / np.sqrt(np.einsum("ij,ij->j", extra, m @ extra))
+    pivot = np.argmax(np.abs(extra), axis=0)
+    extra *= np.sign(extra[pivot, np.arange(extra.shape[1])])
+    return np.concatenate([values, extra_values]), np.hstack([vectors, extra]), extra.shape[1]
 
 
 def released_modes(system: LinearSystem, position: float, axial: int, torsional: int, lateral: int,
@@ -162,17 +208,15 @@ def released_modes(system: LinearSystem, position: float, axial: int, torsional:
     (``torsional`` counts its rigid motions). Returns ``(modes, release, released)``: the
     :class:`~drillstring.modal.Modes`, the :class:`RotorRelease` and the released system (for the damping, which
     is defined on the released string's free–free modes: :func:`drillstring.damping.reduced_structural_damping`
-    reads the rotor side's row after the mesh's). The truncation correction of the released torsion is not
-    written yet: ``"static"`` is refused (ValueError)."""
+    reads the rotor side's row after the mesh's). ``truncation_correction``: "static" appends to the axial family
+    its attachment mode at the bit (:func:`drillstring.modal.compute_modes`) and to the released torsion its own
+    (:func:`released_torsional_modes`: the bit, the motor's torque pair, the top with a top drive)."""
     from drillstring.modal import compute_modes
 
-    if truncation_correction != "none":
-        raise ValueError(f"reduced_model.truncation_correction = {truncation_correction!r} with a downhole motor: "
-                         f"not supported yet (the attachment modes of the released torsion): use 'none'")
     node = rotor_node(system.mesh, position)
     released = released_system(system, node)
-    release = released_torsional_modes(released, node, torsional, top_inertia)
-    modes = compute_modes(system, axial, 0, lateral, lateral_cutoff)
+    release = released_torsional_modes(released, node, torsional, top_inertia, truncation_correction)
+    modes = compute_modes(system, axial, 0, lateral, lateral_cutoff, truncation_correction=truncation_correction)
     return replace(modes, torsional=release.family), release, released
 
 
