@@ -118,7 +118,7 @@ def _tucker_wang_torque_on_bit(law, bit_speed, weight):
     return law.a4 * z * z * rop / bit_speed + law.a5 * z, rop
 
 
-@pytest.mark.parametrize("controller", ["imposed_speed", "pi"])
+@pytest.mark.parametrize("controller", ["imposed_speed", "pi", "soft_torque"])
 def test_steady_drilling_with_a_motor_is_the_closed_form(controller):
     """Without resistance to the rigid motions the motor's torque at its speed is the bit's torque at the bit's
     speed: T_s (1 − ω_m/ω₀) = TOB(Ω + ω_m), a scalar equation solved here with the Tucker–Wang law written out;
@@ -158,7 +158,7 @@ def test_off_bottom_the_motor_turns_at_its_no_load_speed():
     assert abs(steady.motor["motor_torque"]) < 1e-9 * model.motor.stall_torque
 
 
-@pytest.mark.parametrize("controller", ["imposed_speed", "pi"])
+@pytest.mark.parametrize("controller", ["imposed_speed", "pi", "soft_torque"])
 def test_the_linearisation_is_the_right_hand_sides_jacobian(controller):
     """The state matrix about steady drilling (bit law, top drive and motor Jacobians) against central
     differences of the NumPy right-hand side."""

@@ -11,7 +11,7 @@ import scipy.sparse.linalg as spla
 
 from drillstring.case import load_case
 from drillstring.dynamics.rom import case_reduced_model
-from drillstring.dynamics.stability import stability
+from drillstring.dynamics.stability import stability, steady_drilling
 from drillstring.fem.assembly import THETA_X, dof
 from drillstring.modal import case_linear_system, family_dofs, top_inertia_matrix
 from drillstring.rotor import released_system, released_torsional_modes, rotor_node
@@ -104,6 +104,7 @@ def test_the_motor_cases_leading_root_converges_on_the_default_basis():
     of the axial family and of the released torsion) within 2 % (growth rate) of 40 + 40, both bases; the first
     axial root (0.45 Hz), which the plain basis of 10 modes misses by 1.5 %, within 0.1 % with the correction."""
     case = load_case("motor")
+    assert case.reduced_model.truncation_correction == "static"  # the case's basis is the default one
 
     def roots(correction, modes):
         model = case_reduced_model(case.model_copy(update={"reduced_model": case.reduced_model.model_copy(
@@ -121,3 +122,31 @@ def test_the_motor_cases_leading_root_converges_on_the_default_basis():
     assert plain_lead.growth_rate == pytest.approx(large_lead.growth_rate, rel=0.02)
     assert axial.growth_rate == pytest.approx(large_axial.growth_rate, rel=1e-3)
     assert abs(plain_axial.growth_rate / large_axial.growth_rate - 1) > 5e-3
+
+
+@pytest.mark.parametrize("controller", ["pi", "soft_torque"])
+def test_a_driving_top_on_the_corrected_basis(coarse, controller):
+    """A top drive (PI, SoftTorque) with a motor on the corrected basis: the compiled right-hand side is the NumPy
+    reference's, and steady drilling is the plain basis's (the attachment modes do no work on the rigid motions
+    that set the motor's speed and the top's torque)."""
+    case = load_case("motor")
+    case = case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(update={"axial_modes": 4, "torsional_modes": 6,
+                                                               "lateral_modes": 4}),
+        "top_drive": case.top_drive.model_copy(update={"controller": controller})})
+
+    def model_with(correction):
+        return case_reduced_model(case.model_copy(update={"reduced_model": case.reduced_model.model_copy(
+            update={"truncation_correction": correction})}))
+
+    corrected, plain = model_with("static"), model_with("none")
+    assert corrected.size == plain.size + 4  # the bit's axial, and the bit, the pair and the top in torsion
+    rng = np.random.default_rng(7)
+    y = corrected.initial_state(0.0, 0) + 1e-3 * rng.standard_normal(corrected.state_size)
+    reference = corrected.rhs_reference(0.3, y)
+    np.testing.assert_allclose(corrected.rhs(0.3, y), reference, rtol=1e-10, atol=1e-12 * np.abs(reference).max())
+    steady, steady_plain = steady_drilling(corrected), steady_drilling(plain)
+    for name in ("motor_speed", "motor_torque", "string_speed"):
+        assert steady.motor[name] == pytest.approx(steady_plain.motor[name], rel=1e-9)
+    assert steady.rate_of_penetration == pytest.approx(steady_plain.rate_of_penetration, rel=1e-9)
