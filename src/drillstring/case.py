@@ -715,8 +715,9 @@ class ReducedModel(_Base):
     """Normal modes kept per family (lateral: per plane): ``lateral_modes`` at least, and every lateral mode
     whose frequency is below ``lateral_cutoff`` times the rotation frequency (all the family's modes at most);
     ``truncation_correction``: "static" (the default for new cases) appends to the axial and torsional families
-    their residual-flexibility attachment modes at the bit (and the top with a top drive), "none" keeps the modes
-    alone (:func:`drillstring.modal.compute_modes`; docs/model.md §8)."""
+    their residual-flexibility attachment modes at the bit (and the top with a top drive, and a downhole motor's
+    torque pair: :func:`drillstring.rotor.released_torsional_modes`), "none" keeps the modes alone
+    (:func:`drillstring.modal.compute_modes`; docs/model.md §8)."""
 
     axial_modes: int = Field(10, ge=0)
     torsional_modes: int = Field(10, ge=1, description="elastic torsional modes (a top drive adds the rigid rotation)")
