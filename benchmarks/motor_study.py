@@ -3,7 +3,7 @@
 
     .venv/bin/python benchmarks/motor_study.py [--part run,stability,map] [--out docs/studies]
 
-- ``run``: the case as written (60 s, 60 rpm at the top, 500 gpm, 100 kN) and the same string without the motor
+- ``run``: the case as written (60 s, 60 rpm at the top, 500 gpm, 90 kN, its default basis) and the same string without the motor
   (its motor entry a plain section: the bit turns with the string) at the top speed that gives the motor case's
   steady bit speed, summarised after 20 s: the time the string just above the motor and the bit are stuck
   (below 0.1 rad/s), the bit's speed while the string above the motor is stuck; figure ``motor_stick_slip.png``.
