@@ -36,17 +36,11 @@ from fractions import Fraction
 
 import numpy as np
 
+from drillstring.dynamics.runge_kutta import _readonly
+
 __all__ = ["AdditiveTableau", "ARK3_2_4L", "ARK4_3_6L", "IMEX_TABLEAUS"]
 
 _TOL = 1e-12
-
-
-def _readonly(x, ndim: int) -> np.ndarray:
-    arr = np.array(x, dtype=np.float64)
-    if arr.ndim != ndim:
-        raise ValueError(f"expected a {ndim}-D array, got shape {arr.shape}")
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True, eq=False)
