@@ -36,7 +36,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from drillstring.dynamics.runge_kutta import _readonly
+from drillstring.dynamics.runge_kutta import EmbeddedPair, _readonly
 
 __all__ = ["AdditiveTableau", "ARK3_2_4L", "ARK4_3_6L", "IMEX_TABLEAUS"]
 
@@ -44,7 +44,7 @@ _TOL = 1e-12
 
 
 @dataclass(frozen=True, eq=False)
-class AdditiveTableau:
+class AdditiveTableau(EmbeddedPair):
     """An additive Runge–Kutta pair (module docstring): explicit ``a_explicit`` (s, s), strictly lower
     triangular; implicit ``a_implicit`` (s, s), ESDIRK (first stage explicit, constant diagonal ``gamma``
     after it); nodes ``c`` shared; weights ``b`` and embedded ``b_hat`` shared; ``dense`` (s, p) the shared
@@ -101,14 +101,6 @@ class AdditiveTableau:
                             ("gamma", gamma), ("error_weights", ew)):
             object.__setattr__(self, name, value)
 
-    @property
-    def n_stages(self) -> int:
-        return int(self.c.shape[0])
-
-    @property
-    def controller_order(self) -> int:
-        """Order ``q`` of the error estimate (the lower of the pair's): the controller's exponents ∝ 1/(q + 1)."""
-        return min(self.order, self.error_order)
 
 
 def _fr(*xs: int | str) -> list[float]:

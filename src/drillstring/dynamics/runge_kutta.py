@@ -112,8 +112,24 @@ def _readonly(x: Any, ndim: int) -> np.ndarray:
     return arr
 
 
+class EmbeddedPair:
+    """What every embedded pair of this package's methods (explicit here, additive in
+    :mod:`drillstring.dynamics.additive_rk`) answers from its validated arrays: nodes ``c``, orders ``order`` and
+    ``error_order``."""
+
+    @property
+    def n_stages(self) -> int:
+        return int(self.c.shape[0])
+
+    @property
+    def controller_order(self) -> int:
+        """Order ``q`` of the local error estimate (the lower order of the pair); the controller uses
+        exponents ``∝ 1/(q + 1)``."""
+        return min(self.order, self.error_order)
+
+
 @dataclass(frozen=True, eq=False)
-class ButcherTableau:
+class ButcherTableau(EmbeddedPair):
     """An explicit embedded Runge–Kutta pair as data.
 
     Attributes
@@ -195,15 +211,6 @@ class ButcherTableau:
                             ("fsal", bool(self.fsal)), ("error_weights", ew)):
             object.__setattr__(self, name, value)
 
-    @property
-    def n_stages(self) -> int:
-        return int(self.c.shape[0])
-
-    @property
-    def controller_order(self) -> int:
-        """Order ``q`` of the local error estimate (the lower order of the pair); the controller uses
-        exponents ``∝ 1/(q + 1)``."""
-        return min(self.order, self.error_order)
 
     def dense_weights(self, theta: float | np.ndarray) -> np.ndarray:
         """``b_i(θ)``, shape ``(s,)`` for scalar θ or ``(m, s)`` for an array of θ."""
