@@ -20,6 +20,9 @@ constrained expected improvement ``EI(x) · Π_k Φ((b_k − μ_k(x))/s_k(x))`` 
 of Jones, Schonlau & Welch 1998 over the best feasible posterior mean). While no evaluated point is feasible in
 the posterior mean it maximises the probability of feasibility alone (the expected-feasibility phase). Both
 factors are large only near the optimum and near the constraint boundaries, where the samples go.
+Several points can be chosen at once, to be evaluated together (:func:`next_batch`): each point of a batch
+is proposed as above after the previous ones were added to the surrogates as observations equal to their
+posterior means, the Kriging believer of Ginsbourger, Le Riche & Carraro (2010).
 
 **Recommendation.** The point of largest posterior mean of ``f`` among the candidates and the evaluated points
 whose posterior means satisfy every constraint. Its constraints' confidence (:func:`constraint_confidence`)
@@ -40,7 +43,7 @@ from scipy.special import ndtr
 from scipy.stats import qmc
 
 __all__ = ["Estimates", "GaussianProcess", "Recommendation", "SearchProblem", "constraint_confidence",
-           "initial_design", "next_point", "propose", "recommend", "search"]
+           "initial_design", "next_batch", "next_point", "propose", "recommend", "search"]
 
 #: Candidates of the acquisition's search (a scrambled Sobol' set in the unit box; a power of two).
 CANDIDATES = 1024
@@ -109,10 +112,26 @@ class GaussianProcess:
             if best is None or found.fun < best.fun:
                 best = found
         self.lengths, self.variance, self.nugget = (np.exp(best.x[:d]), math.exp(best.x[d]), math.exp(best.x[d + 1]))
+        self._factorise()
+
+    def _factorise(self) -> None:
         y, noise = self._standard()
         k = self.variance * _matern52(self.x, self.x, self.lengths) + np.diag(noise + self.nugget + 1e-10)
         self._factor = cho_factor(k, lower=True)
         self._alpha = cho_solve(self._factor, y)
+
+    def believe(self, points) -> GaussianProcess:
+        """The process conditioned on noise-free observations at ``points`` (unit box) equal to its own posterior
+        mean there, the hyperparameters and standardisation kept: the Kriging believer of Ginsbourger, Le Riche &
+        Carraro (2010, "Kriging is well-suited to parallelize optimization", §4.1). The mean is unchanged
+        everywhere; the standard deviation shrinks near ``points``, so a batch's next point goes elsewhere."""
+        points = np.atleast_2d(np.asarray(points, dtype=float))
+        mean, _ = self.predict(points)
+        gp = GaussianProcess(np.vstack([self.x, points]), np.concatenate([self.y, mean]),
+                             np.concatenate([self.noise, np.zeros(len(points))]), self.lengths, self.variance,
+                             self.nugget, self._mean, self._scale)
+        gp._factorise()
+        return gp
 
     def predict(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and standard deviation of the latent function at ``points`` (unit box)."""
@@ -167,6 +186,11 @@ class Surrogates:
 
     objective: GaussianProcess | None
     constraints: list[GaussianProcess]
+
+    def believe(self, unit) -> Surrogates:
+        """Every process conditioned on its own posterior mean at ``unit`` (:meth:`GaussianProcess.believe`)."""
+        return Surrogates(None if self.objective is None else self.objective.believe(unit),
+                          [gp.believe(unit) for gp in self.constraints])
 
 
 def fit_surrogates(problem: SearchProblem, x, objective, objective_variance, constraints,
@@ -320,34 +344,63 @@ class Estimates:
                               self.constraint_variances)
 
 
-def next_point(problem: SearchProblem, x, estimates: Estimates | None, budget: int, *,
-               index: int | None = None) -> np.ndarray:
-    """Point number ``index`` (default ``len(x)``) of a search of ``budget`` points, from the ``estimates`` at
-    the points ``x`` before it (those with an estimate): the initial design first (and while fewer than 2
-    points have estimates); then :func:`propose`; the last point of the budget is the current recommendation
-    itself (so that the answer is a point with its own Monte Carlo estimate), unless it was already
-    evaluated. Deterministic: the same estimates give the same point (a resumed search repeats it)."""
-    index = (0 if x is None else len(x)) if index is None else index
-    if index < problem.initial or x is None or len(x) < 2:
-        return initial_design(problem, index + 1)[index]
+def next_batch(problem: SearchProblem, x, estimates: Estimates | None, budget: int, start: int,
+               size: int = 1) -> np.ndarray:
+    """Points number ``start`` to ``start + size − 1`` (rows; fewer where the budget ends) of a search of
+    ``budget`` points, from the ``estimates`` at the points ``x`` before ``start`` (those with an estimate),
+    to be evaluated together.
+
+    The initial design's points first (and while fewer than 2 points have estimates). Then a batch by the
+    Kriging believer (Ginsbourger, Le Riche & Carraro 2010, §4.1): :func:`propose` on the surrogates, the point
+    added to every process as an observation equal to its posterior mean (:meth:`Surrogates.believe`), the
+    next point proposed on those, and so on (each point at least :data:`MIN_DISTANCE` from the evaluated
+    and the batch's points). A batch that holds the budget's last point ends with the current recommendation
+    (from the estimates alone, so that the answer is a point with its own Monte Carlo estimate), unless it was
+    already evaluated. Deterministic: the same estimates give the same points (a resumed search repeats
+    them)."""
+    stop = min(start + size, budget)
+    if start < problem.initial or x is None or len(x) < 2:
+        return initial_design(problem, stop)[start:stop]
+    x = np.atleast_2d(np.asarray(x, dtype=float))
     surrogates = estimates.fit(problem, x)
-    if index == budget - 1:
+    last = None
+    if stop == budget:
         found = recommend(problem, x, surrogates).point
         if np.min(np.linalg.norm(problem.to_unit(x) - problem.to_unit(found), axis=1)) >= MIN_DISTANCE:
-            return found
-    return propose(problem, x, surrogates)
+            last = found
+    if last is not None:
+        surrogates = surrogates.believe(problem.to_unit(last))
+        x = np.vstack([x, last])
+    chosen = []
+    for _ in range(stop - start - (last is not None)):
+        point = propose(problem, x, surrogates)
+        chosen.append(point)
+        surrogates = surrogates.believe(problem.to_unit(point))
+        x = np.vstack([x, point])
+    return np.array(chosen + ([last] if last is not None else [])).reshape(stop - start, -1)
 
 
-def search(problem: SearchProblem, evaluate, budget: int) -> tuple[np.ndarray, Estimates, Recommendation]:
-    """Run a whole search of ``budget`` points: ``evaluate(point)`` returns ``(objective, its variance,
-    constraints (m), their variances (m))``. Returns the points, their estimates and the recommendation."""
+def next_point(problem: SearchProblem, x, estimates: Estimates | None, budget: int, *,
+               index: int | None = None) -> np.ndarray:
+    """Point number ``index`` (default ``len(x)``) of a search of ``budget`` points evaluated one at a time:
+    :func:`next_batch` of one point."""
+    index = (0 if x is None else len(x)) if index is None else index
+    return next_batch(problem, x, estimates, budget, index, 1)[0]
+
+
+def search(problem: SearchProblem, evaluate, budget: int, batch: int = 1) -> tuple[np.ndarray, Estimates,
+                                                                                    Recommendation]:
+    """Run a whole search of ``budget`` points, the initial design in one batch, then ``batch`` points at a
+    time (:func:`next_batch`): ``evaluate(point)`` returns ``(objective, its variance, constraints (m), their
+    variances (m))``. Returns the points, their estimates and the recommendation."""
     points: list[np.ndarray] = []
     rows: list[tuple] = []
     estimates = None
-    for _ in range(budget):
-        point = next_point(problem, np.array(points) if points else None, estimates, budget)
-        points.append(point)
-        rows.append(evaluate(point))
+    while len(points) < budget:
+        size = problem.initial if not points else batch
+        chosen = next_batch(problem, np.array(points) if points else None, estimates, budget, len(points), size)
+        points += list(chosen)
+        rows += [evaluate(point) for point in chosen]
         estimates = Estimates(np.array([r[0] for r in rows], dtype=float), np.array([r[1] for r in rows], dtype=float),
                               np.array([r[2] for r in rows], dtype=float).reshape(len(rows), -1),
                               np.array([r[3] for r in rows], dtype=float).reshape(len(rows), -1))
