@@ -16,7 +16,9 @@ For a case, over top speed × weight-on-bit, with the weight-on-hook Normal arou
    the points whose estimated probabilities meet the bounds.
 
 Prints and writes ``--json`` (the recommended points, their estimates, the map's best point, run counts and
-wall times; rewritten after each step); copies the figures next to it. Run:
+wall times; rewritten after each step); copies the figures next to it. ``--linear-too``: the first search
+again with a linear prior mean of the probabilities' surrogates (``probability_mean="linear"``);
+``--no-model``: without the search with model uncertainty. Run:
 
     PYTHONPATH=src python benchmarks/optimize_operating_point.py reference --map 9 --one-at-a-time \
         --json docs/studies/optimize_reference.json
@@ -83,17 +85,18 @@ def best_map_point(case, box, constraints, args, workdir: Path) -> dict:
                           "weight_on_bit_kN": float((w1 - w0) / (args.map - 1) / 1e3)}}
 
 
-def search(case, box, constraints, args, workdir: Path, model=None, batch=None) -> dict:
+def search(case, box, constraints, args, workdir: Path, model=None, batch=None, probability_mean="constant") -> dict:
     batch = args.batch if batch is None else batch
     start = time.perf_counter()
     outcome = drillstring.optimize(case, variables=box, constraints=constraints, samples=args.samples,
                                    points=args.points, initial=args.initial, batch=batch, seed=args.seed,
-                                   t_end=args.t_end,
+                                   t_end=args.t_end, probability_mean=probability_mean,
                                    sigma=5e3, model=model, out=workdir, workers=args.workers)
     wall = time.perf_counter() - start
     best = outcome.summary["recommended"]
     steps = 1 + math.ceil((args.points - args.initial) / batch)
     return {"feasible": outcome.feasible, "runs": outcome.summary["realizations"], "batch": batch,
+            "probability_mean": probability_mean,
             "engine_passes": steps, "wall_time": wall,
             "top_speed_rpm": best["values"][0] / RPM, "weight_on_bit_kN": best["values"][1] / 1e3,
             "expected_rop_m_h": best["objective"] * 3600,
@@ -114,6 +117,8 @@ def main() -> None:
     parser.add_argument("--initial", type=int, default=8)
     parser.add_argument("--batch", type=int, default=DEFAULT_BATCH)
     parser.add_argument("--one-at-a-time", action="store_true")
+    parser.add_argument("--linear-too", action="store_true")
+    parser.add_argument("--no-model", action="store_true")
     parser.add_argument("--t-end", type=float, default=10.0)
     parser.add_argument("--delta", type=float, default=0.1)
     parser.add_argument("--map", type=int, default=0)
@@ -152,6 +157,13 @@ def main() -> None:
             result["dense_map"] = best_map_point(case, box, constraints, args, workdir / "map")
             print(json.dumps(result["dense_map"], indent=1), flush=True)
             save()
+        if args.linear_too:
+            result["linear_probability_mean"] = search(case, box, constraints, args, workdir / "linear",
+                                                       probability_mean="linear")
+            print(json.dumps(result["linear_probability_mean"], indent=1, default=str), flush=True)
+            save("linear_probability_mean")
+        if args.no_model:
+            return
         model = {k: args.delta for k in ("mass_dispersion", "stiffness_dispersion", "damping_dispersion")}
         result["with_model_uncertainty"] = search(case, box, constraints, args, workdir / "model", model)
         print(json.dumps(result["with_model_uncertainty"], indent=1, default=str), flush=True)

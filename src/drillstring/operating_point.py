@@ -84,7 +84,7 @@ def parse_bounds(case: Case, name: str, text, default_unit: str = "") -> tuple[s
 
 def optimization_settings(case: Case, *, variables, objective="rate_of_penetration", constraints=None,
                           samples=DEFAULT_POINT_SAMPLES, points=None, initial=None, batch=None, seed=DEFAULT_SEED,
-                          t_end=None,
+                          t_end=None, probability_mean="constant",
                           output_step=None, transient=None, sigma=None, parameters=None, correlation=None,
                           model=None, default_units: Mapping[str, str] | None = None):
     """The validated :class:`~drillstring.stochastic.optimize.OptimizationSettings` of a search of ``case``
@@ -120,7 +120,8 @@ def optimization_settings(case: Case, *, variables, objective="rate_of_penetrati
         variables=bounded, objective=objective, constraints=tuple((constraints or {}).items()), samples=samples,
         points=points, initial=initial, batch=DEFAULT_BATCH if batch is None else batch, seed=seed,
         t_end=window.t_end, output_step=window.output_step, transient=window.transient, sigma=sigma, laws=laws,
-        correlated=correlated, correlation=matrix, model_dispersion=dispersions.as_tuple())
+        correlated=correlated, correlation=matrix, model_dispersion=dispersions.as_tuple(),
+        probability_mean=probability_mean)
     check_optimization(case.model_copy(update={"uncertainty": None}), settings)
     return settings
 
@@ -136,6 +137,7 @@ def optimize(
     points: int | None = None,
     initial: int | None = None,
     batch: int | None = None,
+    probability_mean: str = "constant",
     seed: int = DEFAULT_SEED,
     t_end: float | None = None,
     output_step: float | None = None,
@@ -164,7 +166,9 @@ def optimize(
     ``samples`` realizations per design point, ``points`` design points in all (default twice ``initial``,
     itself 4 per variable, at least 4); after the initial design, ``batch`` points (default
     :data:`~drillstring.stochastic.optimize.DEFAULT_BATCH`) are chosen together and their realizations run in
-    one pass of the engine. The uncertainty at each point is a probabilistic map's
+    one pass of the engine; ``probability_mean`` is the prior mean of the constraints' surrogates,
+    ``"constant"`` or ``"linear"`` (a fitted plane, where the processes return far from the data). The
+    uncertainty at each point is a probabilistic map's
     (:func:`~drillstring.api.operating_map` with ``samples``: ``sigma``, ``parameters``, ``correlation``,
     ``model``, ``seed``; nothing declared: the weight-on-hook with σ = 5 kN). Runs of ``t_end`` [s] (default the
     case's), outputs after ``transient``.
@@ -180,7 +184,7 @@ def optimize(
     case = as_case(case)
     settings = optimization_settings(case, variables=variables, objective=objective, constraints=constraints,
                                      samples=samples, points=points, initial=initial, batch=batch, seed=seed,
-                                     t_end=t_end,
+                                     t_end=t_end, probability_mean=probability_mean,
                                      output_step=output_step, transient=transient, sigma=sigma,
                                      parameters=parameters, correlation=correlation, model=model,
                                      default_units=default_units)

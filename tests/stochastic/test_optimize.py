@@ -41,15 +41,32 @@ def test_kriging_believer_keeps_the_mean_and_removes_the_uncertainty_at_the_beli
     assert np.all(believed.predict(grid)[1] <= gp.predict(grid)[1] + 1e-9)
 
 
-@pytest.mark.parametrize("batch", [1, 4])
-def test_deterministic_constrained_optimum(batch):
+def test_linear_trend_returns_to_the_fitted_plane_far_from_data():
+    """Noise-free samples of a plane in a corner of the unit square: with a linear trend (universal kriging)
+    the posterior mean at the far corner is the plane exactly, with a small standard deviation, where the
+    constant-mean process falls back towards the data's mean; the believer keeps its mean too."""
+    rng = np.random.default_rng(0)
+    x = rng.uniform(0.0, 0.5, (10, 2))
+    plane = lambda u: 0.3 + 0.8 * u[:, 0] - 0.4 * u[:, 1]  # noqa: E731
+    far = np.array([[1.0, 1.0], [0.9, 0.1]])
+    trend = GaussianProcess.fit(x, plane(x), np.full(10, 1e-4), trend=True)
+    mean, sd = trend.predict(far)
+    assert np.allclose(mean, plane(far), atol=1e-3) and np.all(sd < 0.05)
+    constant = GaussianProcess.fit(x, plane(x), np.full(10, 1e-4))
+    assert np.max(np.abs(constant.predict(far)[0] - plane(far))) > 0.03
+    grid = rng.uniform(size=(20, 2))
+    assert np.allclose(trend.believe([[0.7, 0.7]]).predict(grid)[0], trend.predict(grid)[0], atol=1e-6)
+
+
+@pytest.mark.parametrize("batch, trend", [(1, False), (4, False), (4, True)])
+def test_deterministic_constrained_optimum(batch, trend):
     """max −(x1 − 0.7)² − (x2 − 0.8)² s.t. (x1 + x2)/2 ≤ 0.5: the projection of (0.7, 0.8) on the line, (0.45,
     0.55); found within 0.03 in each variable from 16 points, one at a time or in batches of 4 (two batches
-    after the initial design)."""
+    after the initial design), and with a linear trend of the constraint's surrogate."""
     def evaluate(x):
         return -(x[0] - 0.7) ** 2 - (x[1] - 0.8) ** 2, 1e-8, [(x[0] + x[1]) / 2], [1e-8]
 
-    problem = SearchProblem(((0.0, 1.0), (0.0, 1.0)), (0.5,), maximize=True, initial=8, seed=1)
+    problem = SearchProblem(((0.0, 1.0), (0.0, 1.0)), (0.5,), maximize=True, initial=8, seed=1, trend=trend)
     points, _, found = search(problem, evaluate, 16, batch=batch)
     assert found.feasible
     assert np.allclose(found.point, [0.45, 0.55], atol=0.03)
@@ -171,6 +188,7 @@ def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path
     ({"points": 3}, "initial"),
     ({"batch": 0}, r"batch = 0: must be an integer >= 1"),
     ({"batch": 2.0}, "batch = 2.0: must be an integer"),
+    ({"probability_mean": "quadratic"}, "probability_mean = 'quadratic': must be one of constant, linear"),
 ])
 def test_bad_settings_are_refused_in_one_line(extra, message):
     with pytest.raises((ValueError, TypeError), match=message) as error:
@@ -200,6 +218,7 @@ def test_a_variable_the_case_cannot_vary_is_refused(small_case, extra, message):
     (["--vary", "top_speed=60:140", "-p", "uncertainty.model.stiffness_dispersion=2"], "stiffness_dispersion"),
     (["--vary", "top_speed"], "NAME=LOW:HIGH"),
     (["--vary", "top_speed=60:140", "--batch", "0"], "batch = 0: must be an integer >= 1"),
+    (["--vary", "top_speed=60:140", "--probability-mean", "cubic"], "probability_mean = 'cubic'"),
     ([], "give at least one decision variable"),
 ])
 def test_cli_refuses_bad_input_in_one_line_with_exit_2(tmp_path, argv, message):

@@ -77,6 +77,8 @@ OBJECTIVES = {"rate_of_penetration": ("mean_rate_of_penetration", True),
               "mechanical_specific_energy": ("mechanical_specific_energy", False)}
 #: Design points chosen together after the initial design, by default (docs/optimize.md, "Batches").
 DEFAULT_BATCH = 4
+#: Prior means of the constraints' surrogates.
+PROBABILITY_MEANS = ("constant", "linear")
 #: Bootstrap resamples of a quantile objective's Monte Carlo variance.
 BOOTSTRAP = 200
 
@@ -137,6 +139,8 @@ class OptimizationSettings:
         initial: points of the initial design (>= 2).
         batch: points chosen together and evaluated in one pass after the initial design (>= 1; more than
             ``points − initial``: all of them at once).
+        probability_mean: the prior mean of the constraints' surrogates, ``"constant"`` or ``"linear"`` (a
+            plane by generalised least squares: :class:`~drillstring.stochastic.surrogate.GaussianProcess`).
         seed, t_end, output_step, transient, sigma, laws, correlated, correlation, model_dispersion: as for a
             probabilistic map (:class:`~drillstring.stochastic.probabilistic_map.SampledMapSettings`).
     """
@@ -148,6 +152,7 @@ class OptimizationSettings:
     points: int = 16
     initial: int = 8
     batch: int = DEFAULT_BATCH
+    probability_mean: str = "constant"
     seed: int = 0
     t_end: float = 10.0
     output_step: float = 0.01
@@ -191,6 +196,9 @@ class OptimizationSettings:
                                                    allowed=f"an integer > initial = {self.initial}"))
         object.__setattr__(self, "batch", integer("batch", self.batch, low=1,
                                                   allowed="an integer >= 1 (design points chosen together)"))
+        if self.probability_mean not in PROBABILITY_MEANS:
+            raise ValueError(f"probability_mean = {self.probability_mean!r}: must be one of "
+                             f"{', '.join(PROBABILITY_MEANS)}")
         object.__setattr__(self, "seed", check_seed(self.seed))
         # A law of the top speed, weight-on-bit or hook load is refused by the point's map settings (sigma is
         # the hook load's uncertainty around each point's own value); any other decision variable:
@@ -203,7 +211,8 @@ class OptimizationSettings:
     def problem(self) -> SearchProblem:
         output, maximize, _ = parse_objective(self.objective)
         return SearchProblem(tuple((low, high) for _, low, high in self.variables),
-                             tuple(b for _, b in self.constraints), maximize, self.initial, self.seed)
+                             tuple(b for _, b in self.constraints), maximize, self.initial, self.seed,
+                             self.probability_mean == "linear")
 
     @property
     def realizations(self) -> int:
@@ -257,8 +266,8 @@ class OptimizationStore(TaskStore):
     kind = "optimization"
     row_dim = "realization"
     noun = "realizations"
-    differ = ("case or settings differ: variables, bounds, objective, constraints, samples, points, batch, seed, laws, "
-              "t_end")
+    differ = ("case or settings differ: variables, bounds, objective, constraints, samples, points, batch, "
+              "probability_mean, seed, laws, t_end")
 
     def __init__(self, path: str | Path, case: Case, settings: OptimizationSettings) -> None:
         at = design_case(case, settings, [0.5 * (lo + hi) for _, lo, hi in settings.variables])

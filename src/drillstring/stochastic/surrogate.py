@@ -10,7 +10,8 @@ through Monte Carlo estimates at evaluated points, each with its sampling varian
 numerics: it never runs a simulation (:mod:`drillstring.stochastic.optimize` does), so it is tested on
 analytic functions.
 
-**Surrogate.** One Gaussian process per output (:class:`GaussianProcess`): a constant mean, a Matérn-5/2
+**Surrogate.** One Gaussian process per output (:class:`GaussianProcess`): a constant mean (or, for the
+constraints with :attr:`SearchProblem.trend`, a linear one estimated by generalised least squares), a Matérn-5/2
 covariance with one length per variable (inputs scaled to the unit box, outputs standardised), the Monte Carlo
 variance of each estimate on the diagonal (heteroscedastic noise, known) plus a fitted nugget; the
 hyperparameters maximise the log marginal likelihood (Rasmussen & Williams 2006, eq. 2.30 and §5.4.1).
@@ -62,7 +63,13 @@ def _matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 class GaussianProcess:
     """A Gaussian-process regression of noisy observations ``y`` at ``x`` (unit box, ``n × d``), each with its
     known noise variance (module docstring). :meth:`fit` returns the fitted process; :meth:`predict` gives the
-    posterior mean and standard deviation of the latent function (without the noise)."""
+    posterior mean and standard deviation of the latent function (without the noise).
+
+    With ``trend`` the prior mean is linear in the inputs, ``h(x)ᵀβ`` with ``h = (1, x − ½)``, its
+    coefficients given a flat prior, i.e. estimated by generalised least squares, their uncertainty added to
+    the posterior variance, the hyperparameters by the restricted likelihood (Rasmussen & Williams 2006, §2.7,
+    eqs. 2.41, 2.42 and 2.45; universal kriging): far from the data the process returns to the fitted plane,
+    not to the data's mean. It needs ``n ≥ d + 2`` points (fewer: a constant mean)."""
 
     x: np.ndarray
     y: np.ndarray
@@ -72,9 +79,10 @@ class GaussianProcess:
     nugget: float = 1e-6
     _mean: float = 0.0
     _scale: float = 1.0
+    trend: bool = False
 
     @classmethod
-    def fit(cls, x, y, noise=None) -> GaussianProcess:
+    def fit(cls, x, y, noise=None, *, trend: bool = False) -> GaussianProcess:
         x = np.atleast_2d(np.asarray(x, dtype=float))
         y = np.asarray(y, dtype=float)
         noise = np.zeros_like(y) if noise is None else np.asarray(noise, dtype=float)
@@ -82,9 +90,19 @@ class GaussianProcess:
             raise ValueError("x, y and noise must be finite and of one length")
         mean = float(y.mean())
         scale = float(y.std()) if y.size > 1 and y.std() > 0 else 1.0
-        gp = cls(x, y, noise, np.ones(x.shape[1]), 1.0, 1e-6, mean, scale)
+        gp = cls(x, y, noise, np.ones(x.shape[1]), 1.0, 1e-6, mean, scale, bool(trend) and y.size >= x.shape[1] + 2)
         gp._optimise()
         return gp
+
+    def _basis(self, x: np.ndarray) -> np.ndarray:
+        return np.column_stack([np.ones(len(x)), x - 0.5])
+
+    def _generalised_least_squares(self, factor, y: np.ndarray):
+        """(``β``, ``K⁻¹H``, Cholesky factor of ``A = HᵀK⁻¹H``) of the linear trend (R&W eq. 2.42)."""
+        basis = self._basis(self.x)
+        solved = cho_solve(factor, basis)
+        a = cho_factor(basis.T @ solved + 1e-12 * np.eye(basis.shape[1]), lower=True)
+        return cho_solve(a, solved.T @ y), solved, a
 
     def _standard(self) -> tuple[np.ndarray, np.ndarray]:
         return (self.y - self._mean) / self._scale, self.noise / self._scale**2
@@ -99,8 +117,17 @@ class GaussianProcess:
             factor = cho_factor(k, lower=True)
         except np.linalg.LinAlgError:
             return 1e10
+        penalty = 0.0
+        if self.trend:  # the restricted likelihood (R&W eq. 2.45): residuals of the GLS plane, ½ log|A|
+            try:
+                beta, _, a = self._generalised_least_squares(factor, y)
+            except np.linalg.LinAlgError:
+                return 1e10
+            y = y - self._basis(self.x) @ beta
+            penalty = np.log(np.diag(a[0])).sum() - 0.5 * len(beta) * math.log(2 * math.pi)
         alpha = cho_solve(factor, y)
-        return float(0.5 * y @ alpha + np.log(np.diag(factor[0])).sum() + 0.5 * y.size * math.log(2 * math.pi))
+        return float(0.5 * y @ alpha + np.log(np.diag(factor[0])).sum() + 0.5 * y.size * math.log(2 * math.pi)
+                     + penalty)
 
     def _optimise(self) -> None:
         d = self.x.shape[1]
@@ -118,6 +145,9 @@ class GaussianProcess:
         y, noise = self._standard()
         k = self.variance * _matern52(self.x, self.x, self.lengths) + np.diag(noise + self.nugget + 1e-10)
         self._factor = cho_factor(k, lower=True)
+        if self.trend:
+            self._beta, self._solved_basis, self._trend_factor = self._generalised_least_squares(self._factor, y)
+            y = y - self._basis(self.x) @ self._beta
         self._alpha = cho_solve(self._factor, y)
 
     def believe(self, points) -> GaussianProcess:
@@ -129,7 +159,7 @@ class GaussianProcess:
         mean, _ = self.predict(points)
         gp = GaussianProcess(np.vstack([self.x, points]), np.concatenate([self.y, mean]),
                              np.concatenate([self.noise, np.zeros(len(points))]), self.lengths, self.variance,
-                             self.nugget, self._mean, self._scale)
+                             self.nugget, self._mean, self._scale, self.trend)
         gp._factorise()
         return gp
 
@@ -139,21 +169,29 @@ class GaussianProcess:
         cross = self.variance * _matern52(points, self.x, self.lengths)
         mean = cross @ self._alpha
         v = cho_solve(self._factor, cross.T)
-        var = np.maximum(self.variance - np.einsum("ij,ji->i", cross, v), 0.0)
-        return self._mean + self._scale * mean, self._scale * np.sqrt(var)
+        var = self.variance - np.einsum("ij,ji->i", cross, v)
+        if self.trend:  # R&W eq. 2.41: the plane, and the variance of its coefficients
+            basis = self._basis(points)
+            mean = mean + basis @ self._beta
+            r = basis.T - self._solved_basis.T @ cross.T
+            var = var + np.einsum("ij,ij->j", r, cho_solve(self._trend_factor, r))
+        return self._mean + self._scale * mean, self._scale * np.sqrt(np.maximum(var, 0.0))
 
 
 @dataclass(frozen=True)
 class SearchProblem:
     """A constrained search: ``bounds`` (``d × 2``, low and high of each variable), the constraints' upper
     ``limits`` ``b_k`` (probabilities), whether ``f`` is maximised (else minimised), the number of
-    ``initial`` points (a scrambled Sobol' design) and the ``seed`` of that design and of the candidates."""
+    ``initial`` points (a scrambled Sobol' design), the ``seed`` of that design and of the candidates, and
+    whether the constraints' processes have a linear ``trend`` (:class:`GaussianProcess`; else a constant
+    mean)."""
 
     bounds: tuple[tuple[float, float], ...]
     limits: tuple[float, ...]
     maximize: bool = True
     initial: int = 8
     seed: int = 0
+    trend: bool = False
 
     def to_unit(self, x) -> np.ndarray:
         b = np.asarray(self.bounds, dtype=float)
@@ -206,7 +244,7 @@ def fit_surrogates(problem: SearchProblem, x, objective, objective_variance, con
         if ok.sum() >= 2 else None
     constraints = np.asarray(constraints, dtype=float).reshape(len(unit), -1)
     variances = np.asarray(constraint_variances, dtype=float).reshape(len(unit), -1)
-    return Surrogates(obj, [GaussianProcess.fit(unit, constraints[:, k], variances[:, k])
+    return Surrogates(obj, [GaussianProcess.fit(unit, constraints[:, k], variances[:, k], trend=problem.trend)
                             for k in range(constraints.shape[1])])
 
 
