@@ -5,7 +5,9 @@ For a case, over top speed × weight-on-bit, with the weight-on-hook Normal arou
 (σ = 5 kN), ``--samples`` realizations per point of ``--t-end`` s (outputs after t_end/2):
 
 1. ``optimize``: maximise the expected ROP subject to the chance constraints (``--constraint``), a surrogate
-   search of ``--points`` design points;
+   search of ``--points`` design points, ``--batch`` of them chosen together after the initial design (their
+   realizations in one pass of the workers); with ``--one-at-a-time`` the same search with batches of one
+   point too, in the same run (the wall time a batch saves);
 2. the same with random reduced matrices (δ_M = δ_K = δ_D = ``--delta``) on top of the parameter
    uncertainty: how far the answer moves;
 3. with ``--map N``: a probabilistic map of N × N points over the same box, with the same seed, samples and
@@ -14,9 +16,12 @@ For a case, over top speed × weight-on-bit, with the weight-on-hook Normal arou
    the points whose estimated probabilities meet the bounds.
 
 Prints and writes ``--json`` (the recommended points, their estimates, the map's best point, run counts and
-wall times); copies the figures next to it. Run:
+wall times; rewritten after each step); copies the figures next to it. ``--linear-too``: the first search
+again with a linear prior mean of the probabilities' surrogates (``probability_mean="linear"``);
+``--no-model``: without the search with model uncertainty. Run:
 
-    PYTHONPATH=src python benchmarks/optimize_operating_point.py reference --map 9 --json docs/studies/optimize_reference.json
+    PYTHONPATH=src python benchmarks/optimize_operating_point.py reference --map 9 --one-at-a-time \
+        --json docs/studies/optimize_reference.json
     PYTHONPATH=src python benchmarks/optimize_operating_point.py stick_slip --json docs/studies/optimize_stick_slip.json \\
         --top-speed "60 rpm:180 rpm" --constraint stick_slip=0.1 --constraint buckling=0.05
 """
@@ -35,6 +40,7 @@ import numpy as np
 
 import drillstring
 from drillstring.case import load_case
+from drillstring.stochastic.optimize import DEFAULT_BATCH
 
 RPM = math.pi / 30.0
 
@@ -79,14 +85,19 @@ def best_map_point(case, box, constraints, args, workdir: Path) -> dict:
                           "weight_on_bit_kN": float((w1 - w0) / (args.map - 1) / 1e3)}}
 
 
-def search(case, box, constraints, args, workdir: Path, model=None) -> dict:
+def search(case, box, constraints, args, workdir: Path, model=None, batch=None, probability_mean="constant") -> dict:
+    batch = args.batch if batch is None else batch
     start = time.perf_counter()
     outcome = drillstring.optimize(case, variables=box, constraints=constraints, samples=args.samples,
-                                   points=args.points, initial=args.initial, seed=args.seed, t_end=args.t_end,
+                                   points=args.points, initial=args.initial, batch=batch, seed=args.seed,
+                                   t_end=args.t_end, probability_mean=probability_mean,
                                    sigma=5e3, model=model, out=workdir, workers=args.workers)
     wall = time.perf_counter() - start
     best = outcome.summary["recommended"]
-    return {"feasible": outcome.feasible, "runs": outcome.summary["realizations"], "wall_time": wall,
+    steps = 1 + math.ceil((args.points - args.initial) / batch)
+    return {"feasible": outcome.feasible, "runs": outcome.summary["realizations"], "batch": batch,
+            "probability_mean": probability_mean,
+            "engine_passes": steps, "wall_time": wall,
             "top_speed_rpm": best["values"][0] / RPM, "weight_on_bit_kN": best["values"][1] / 1e3,
             "expected_rop_m_h": best["objective"] * 3600,
             "expected_rop_standard_error_m_h": best["objective_standard_error"] * 3600,
@@ -104,6 +115,10 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=16)
     parser.add_argument("--points", type=int, default=16)
     parser.add_argument("--initial", type=int, default=8)
+    parser.add_argument("--batch", type=int, default=DEFAULT_BATCH)
+    parser.add_argument("--one-at-a-time", action="store_true")
+    parser.add_argument("--linear-too", action="store_true")
+    parser.add_argument("--no-model", action="store_true")
     parser.add_argument("--t-end", type=float, default=10.0)
     parser.add_argument("--delta", type=float, default=0.1)
     parser.add_argument("--map", type=int, default=0)
@@ -117,20 +132,46 @@ def main() -> None:
                                                                           ["buckling=0.05", "torsional_instability=0.1"])))
     workdir = Path(tempfile.mkdtemp(prefix="optimize-bench-"))
     result = {"case": args.case, "box": box, "constraints": constraints, "samples": args.samples,
-              "points": args.points, "initial": args.initial, "t_end": args.t_end, "sigma": 5e3, "delta": args.delta}
+              "points": args.points, "initial": args.initial, "batch": args.batch, "t_end": args.t_end, "sigma": 5e3,
+              "delta": args.delta, "workers": args.workers}
+
+    def save(key: str | None = None) -> None:
+        if args.json:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            if key is not None:  # the search's figure, next to the JSON file
+                target = args.json.with_name(f"{args.json.stem}_{key}.png")
+                shutil.copyfile(Path(result[key]["figure"]), target)
+                result[key]["figure"] = target.name
+            args.json.write_text(json.dumps(result, indent=1, default=str) + "\n")
+
     try:
         result["parameter_uncertainty"] = search(case, box, constraints, args, workdir / "parameters")
-        print(json.dumps(result["parameter_uncertainty"], indent=1, default=str))
+        print(json.dumps(result["parameter_uncertainty"], indent=1, default=str), flush=True)
+        save("parameter_uncertainty")
+        if args.one_at_a_time:
+            result["one_at_a_time"] = search(case, box, constraints, args, workdir / "single", batch=1)
+            result["one_at_a_time"].pop("figure")
+            print(json.dumps(result["one_at_a_time"], indent=1, default=str), flush=True)
+            save()
+        if args.map:
+            result["dense_map"] = best_map_point(case, box, constraints, args, workdir / "map")
+            print(json.dumps(result["dense_map"], indent=1), flush=True)
+            save()
+        if args.linear_too:
+            result["linear_probability_mean"] = search(case, box, constraints, args, workdir / "linear",
+                                                       probability_mean="linear")
+            print(json.dumps(result["linear_probability_mean"], indent=1, default=str), flush=True)
+            save("linear_probability_mean")
+        if args.no_model:
+            return
         model = {k: args.delta for k in ("mass_dispersion", "stiffness_dispersion", "damping_dispersion")}
         result["with_model_uncertainty"] = search(case, box, constraints, args, workdir / "model", model)
-        print(json.dumps(result["with_model_uncertainty"], indent=1, default=str))
+        print(json.dumps(result["with_model_uncertainty"], indent=1, default=str), flush=True)
+        save("with_model_uncertainty")
         a, b = result["parameter_uncertainty"], result["with_model_uncertainty"]
         result["moved"] = {"top_speed_rpm": b["top_speed_rpm"] - a["top_speed_rpm"],
                            "weight_on_bit_kN": b["weight_on_bit_kN"] - a["weight_on_bit_kN"],
                            "expected_rop_m_h": b["expected_rop_m_h"] - a["expected_rop_m_h"]}
-        if args.map:
-            result["dense_map"] = best_map_point(case, box, constraints, args, workdir / "map")
-            print(json.dumps(result["dense_map"], indent=1))
         if "buckling" in constraints:
             from drillstring.buckling import case_buckling_margin
             from scipy.special import ndtri
@@ -139,14 +180,7 @@ def main() -> None:
             result["closed_form_buckling_limit_kN"] = (critical - 5e3 * float(ndtri(1 - constraints["buckling"]))) / 1e3
             result["critical_weight_on_bit_kN"] = critical / 1e3
         print(json.dumps(result["moved"], indent=1))
-        if args.json:
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            for key in ("parameter_uncertainty", "with_model_uncertainty"):
-                figure = Path(result[key].pop("figure"))
-                target = args.json.with_name(f"{args.json.stem}_{key}.png")
-                shutil.copyfile(figure, target)
-                result[key]["figure"] = target.name
-            args.json.write_text(json.dumps(result, indent=1) + "\n")
+        save()
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
 

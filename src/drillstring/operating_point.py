@@ -83,13 +83,14 @@ def parse_bounds(case: Case, name: str, text, default_unit: str = "") -> tuple[s
 
 
 def optimization_settings(case: Case, *, variables, objective="rate_of_penetration", constraints=None,
-                          samples=DEFAULT_POINT_SAMPLES, points=None, initial=None, seed=DEFAULT_SEED, t_end=None,
+                          samples=DEFAULT_POINT_SAMPLES, points=None, initial=None, batch=None, seed=DEFAULT_SEED,
+                          t_end=None, probability_mean="constant",
                           output_step=None, transient=None, sigma=None, parameters=None, correlation=None,
                           model=None, default_units: Mapping[str, str] | None = None):
     """The validated :class:`~drillstring.stochastic.optimize.OptimizationSettings` of a search of ``case``
     (arguments as :func:`optimize`)."""
     from drillstring.stochastic import DEFAULT_SIGMA
-    from drillstring.stochastic.optimize import OptimizationSettings, check_optimization
+    from drillstring.stochastic.optimize import DEFAULT_BATCH, OptimizationSettings, check_optimization
     from drillstring.stochastic.random_matrices import ModelDispersion
     from drillstring.stochastic.uncertainty import declared_uncertainty
 
@@ -117,9 +118,10 @@ def optimization_settings(case: Case, *, variables, objective="rate_of_penetrati
     points = 2 * initial if points is None else points
     settings = OptimizationSettings(
         variables=bounded, objective=objective, constraints=tuple((constraints or {}).items()), samples=samples,
-        points=points, initial=initial, seed=seed, t_end=window.t_end, output_step=window.output_step,
-        transient=window.transient, sigma=sigma, laws=laws, correlated=correlated, correlation=matrix,
-        model_dispersion=dispersions.as_tuple())
+        points=points, initial=initial, batch=DEFAULT_BATCH if batch is None else batch, seed=seed,
+        t_end=window.t_end, output_step=window.output_step, transient=window.transient, sigma=sigma, laws=laws,
+        correlated=correlated, correlation=matrix, model_dispersion=dispersions.as_tuple(),
+        probability_mean=probability_mean)
     check_optimization(case.model_copy(update={"uncertainty": None}), settings)
     return settings
 
@@ -134,6 +136,8 @@ def optimize(
     samples: int = DEFAULT_POINT_SAMPLES,
     points: int | None = None,
     initial: int | None = None,
+    batch: int | None = None,
+    probability_mean: str = "constant",
     seed: int = DEFAULT_SEED,
     t_end: float | None = None,
     output_step: float | None = None,
@@ -160,7 +164,11 @@ def optimize(
     maximised) or ``mechanical_specific_energy`` (expected, minimised). ``constraints``: event -> bound,
     ``P(event) ≤ bound`` (``{"stick_slip": 0.05, "buckling": 0.01, "surface_torque_amplitude>8000": 0.01}``).
     ``samples`` realizations per design point, ``points`` design points in all (default twice ``initial``,
-    itself 4 per variable, at least 4). The uncertainty at each point is a probabilistic map's
+    itself 4 per variable, at least 4); after the initial design, ``batch`` points (default
+    :data:`~drillstring.stochastic.optimize.DEFAULT_BATCH`) are chosen together and their realizations run in
+    one pass of the engine; ``probability_mean`` is the prior mean of the constraints' surrogates,
+    ``"constant"`` or ``"linear"`` (a fitted plane, where the processes return far from the data). The
+    uncertainty at each point is a probabilistic map's
     (:func:`~drillstring.api.operating_map` with ``samples``: ``sigma``, ``parameters``, ``correlation``,
     ``model``, ``seed``; nothing declared: the weight-on-hook with σ = 5 kN). Runs of ``t_end`` [s] (default the
     case's), outputs after ``transient``.
@@ -175,7 +183,8 @@ def optimize(
     units = unit_system(units, "units")
     case = as_case(case)
     settings = optimization_settings(case, variables=variables, objective=objective, constraints=constraints,
-                                     samples=samples, points=points, initial=initial, seed=seed, t_end=t_end,
+                                     samples=samples, points=points, initial=initial, batch=batch, seed=seed,
+                                     t_end=t_end, probability_mean=probability_mean,
                                      output_step=output_step, transient=transient, sigma=sigma,
                                      parameters=parameters, correlation=correlation, model=model,
                                      default_units=default_units)

@@ -28,25 +28,62 @@ def test_gaussian_process_interpolates_and_knows_its_noise():
     assert np.all(noisy.predict(x)[1] < 0.05)
 
 
-def test_deterministic_constrained_optimum():
+def test_kriging_believer_keeps_the_mean_and_removes_the_uncertainty_at_the_believed_point():
+    """Conditioning on the posterior mean at a point (Ginsbourger et al. 2010) leaves the mean unchanged
+    everywhere and the standard deviation ~0 there, and no larger anywhere."""
+    rng = np.random.default_rng(1)
+    x = rng.uniform(size=(7, 2))
+    gp = GaussianProcess.fit(x, np.sin(3 * x[:, 0]) + x[:, 1], np.full(7, 1e-3))
+    point, grid = np.array([[0.5, 0.5]]), rng.uniform(size=(50, 2))
+    believed = gp.believe(point)
+    assert np.allclose(believed.predict(grid)[0], gp.predict(grid)[0], atol=1e-6)
+    assert believed.predict(point)[1][0] < 0.05 * gp.predict(point)[1][0]
+    assert np.all(believed.predict(grid)[1] <= gp.predict(grid)[1] + 1e-9)
+
+
+def test_linear_trend_returns_to_the_fitted_plane_far_from_data():
+    """Noise-free samples of a plane in a corner of the unit square: with a linear trend (universal kriging)
+    the posterior mean at the far corner is the plane exactly, with a small standard deviation, where the
+    constant-mean process falls back towards the data's mean; the believer keeps its mean too."""
+    rng = np.random.default_rng(0)
+    x = rng.uniform(0.0, 0.5, (10, 2))
+    plane = lambda u: 0.3 + 0.8 * u[:, 0] - 0.4 * u[:, 1]  # noqa: E731
+    far = np.array([[1.0, 1.0], [0.9, 0.1]])
+    trend = GaussianProcess.fit(x, plane(x), np.full(10, 1e-4), trend=True)
+    mean, sd = trend.predict(far)
+    assert np.allclose(mean, plane(far), atol=1e-3) and np.all(sd < 0.05)
+    constant = GaussianProcess.fit(x, plane(x), np.full(10, 1e-4))
+    assert np.max(np.abs(constant.predict(far)[0] - plane(far))) > 0.03
+    grid = rng.uniform(size=(20, 2))
+    assert np.allclose(trend.believe([[0.7, 0.7]]).predict(grid)[0], trend.predict(grid)[0], atol=1e-6)
+
+
+@pytest.mark.parametrize("batch, trend", [(1, False), (4, False), (4, True)])
+def test_deterministic_constrained_optimum(batch, trend):
     """max −(x1 − 0.7)² − (x2 − 0.8)² s.t. (x1 + x2)/2 ≤ 0.5: the projection of (0.7, 0.8) on the line, (0.45,
-    0.55); found within 0.03 in each variable from 16 points."""
+    0.55); found within 0.03 in each variable from 16 points, one at a time or in batches of 4 (two batches
+    after the initial design), and with a linear trend of the constraint's surrogate."""
     def evaluate(x):
         return -(x[0] - 0.7) ** 2 - (x[1] - 0.8) ** 2, 1e-8, [(x[0] + x[1]) / 2], [1e-8]
 
-    problem = SearchProblem(((0.0, 1.0), (0.0, 1.0)), (0.5,), maximize=True, initial=8, seed=1)
-    _, _, found = search(problem, evaluate, 16)
+    problem = SearchProblem(((0.0, 1.0), (0.0, 1.0)), (0.5,), maximize=True, initial=8, seed=1, trend=trend)
+    points, _, found = search(problem, evaluate, 16, batch=batch)
     assert found.feasible
     assert np.allclose(found.point, [0.45, 0.55], atol=0.03)
+    # a batch's points are distinct (the believer moves each next one away from the others)
+    unit = problem.to_unit(points)
+    assert np.min(np.linalg.norm(unit[:, None] - unit[None], axis=2) + np.eye(16)) >= 0.02
 
 
-def test_chance_constrained_optimum_from_monte_carlo_estimates():
+@pytest.mark.parametrize("batch", [1, 4])
+def test_chance_constrained_optimum_from_monte_carlo_estimates(batch):
     """max E[x1 + x2 + 0.1 Z'] s.t. P(x1² + x2 + 0.3 Z > 2) ≤ 0.05, Z, Z' standard normal, each point estimated
     from the same n = 2000 draws (common random numbers) with its binomial variance. The constraint is
     x2 ≤ 2 − 0.3 z₀.₉₅ − x1², so the optimum is x1 = 1/2, x2 = 1.75 − 0.3 z₀.₉₅ = 1.2565, objective 1.7565.
     The objective is flat along the boundary there (a shift δ in x1 costs δ²), so the tolerance is stated on
     what matters: the exact probability at the answer within 2.5 binomial standard errors of 0.05 (±0.012),
-    the objective within 0.03 of the optimum, and the point within 0.06 of it in each variable."""
+    the objective within 0.03 of the optimum, and the point within 0.06 of it in each variable; one point at a
+    time (14 steps) or 4 at a time (4 steps), the same budget."""
     draws = np.random.default_rng(5).standard_normal((2000, 2))
     z95 = float(ndtri(0.95))
 
@@ -58,7 +95,7 @@ def test_chance_constrained_optimum_from_monte_carlo_estimates():
         return value.mean(), value.var() / n, [p], [tilde * (1 - tilde) / n]
 
     problem = SearchProblem(((0.0, 2.0), (0.0, 2.0)), (0.05,), maximize=True, initial=8, seed=0)
-    points, estimates, found = search(problem, evaluate, 22)
+    points, estimates, found = search(problem, evaluate, 22, batch=batch)
     assert found.feasible
     x1, x2 = found.point
     exact = float(ndtr((x1**2 + x2 - 2.0) / 0.3))
@@ -103,9 +140,10 @@ def _settings(**extra):
 
 
 def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path):
-    """drillstring.optimize writes its results file, dataset and figure; a search whose last point's
-    realizations are set back to pending reruns only those and ends with the same design and answer; a store
-    of other settings is refused by its fingerprint."""
+    """drillstring.optimize writes its results file, dataset and figure; a search whose last batch (of 2
+    points) was interrupted after its first point (the second's realizations set back to pending) reruns only
+    those and ends with the same design and answer; a store of other settings (samples, batch) is refused by
+    its fingerprint."""
     import json
 
     import zarr
@@ -115,29 +153,30 @@ def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path
     from drillstring.stochastic.execution import Engine
 
     arguments = dict(variables={"top_speed": "80 rpm:120 rpm", "weight_on_bit": "80 kN:100 kN"},
-                     constraints={"buckling": 0.05, "stick_slip": 0.5}, samples=2, points=4, initial=3, t_end=0.6,
-                     output_step=0.05, sigma=5e3, out=tmp_path, workers=1)
+                     constraints={"buckling": 0.05, "stick_slip": 0.5}, samples=2, points=5, initial=3, batch=2,
+                     t_end=0.6, output_step=0.05, sigma=5e3, out=tmp_path, workers=1)
     first = drillstring.optimize(small_case, **arguments)
     summary = first.summary
-    assert summary["realizations"] == 8 and not summary["failures"]
+    assert summary["realizations"] == 10 and not summary["failures"]
     assert summary["recommended"]["values"] in summary["design"]
     assert json.loads((tmp_path / "optimize.json").read_text())["recommended"] == summary["recommended"]
     assert (tmp_path / "optimize.png").stat().st_size > 20_000
-    assert first.dataset.mean_rate_of_penetration.shape == (4, 2)
+    assert first.dataset.mean_rate_of_penetration.shape == (5, 2)
     point = summary["recommended"]["point"]
     assert first.dataset.objective_estimate[point] == pytest.approx(
         float(first.dataset.mean_rate_of_penetration[point].mean()))
-    zarr.open_group(str(tmp_path / "optimize.zarr"), mode="a")["status"][6:8] = 0
+    zarr.open_group(str(tmp_path / "optimize.zarr"), mode="a")["status"][8:10] = 0
     settings = optimization_settings(small_case, **{k: v for k, v in arguments.items() if k not in ("out", "workers")})
     again = opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1),
                                  finish=lambda run: opt.optimization_result(run.store))
     assert again.computed == 2
     for key in ("design", "estimates", "recommended"):
         assert again.result[key] == summary[key]
-    with pytest.raises(ValueError, match="holds a different optimization"):
-        opt.run_optimization(small_case, optimization_settings(small_case, **(
-            {k: v for k, v in arguments.items() if k not in ("out", "workers")} | {"samples": 3})),
-            tmp_path / "optimize.zarr", Engine(workers=1))
+    for change in ({"samples": 3}, {"batch": 1}):
+        with pytest.raises(ValueError, match="holds a different optimization"):
+            opt.run_optimization(small_case, optimization_settings(small_case, **(
+                {k: v for k, v in arguments.items() if k not in ("out", "workers")} | change)),
+                tmp_path / "optimize.zarr", Engine(workers=1))
 
 
 @pytest.mark.parametrize("extra, message", [
@@ -147,6 +186,9 @@ def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path
     ({"model_dispersion": (0.0, 1.2, 0.0)}, "stiffness_dispersion"),
     ({"variables": (("weight_on_bit", 8e4, 9e4), ("weight_on_hook", 1e5, 2e5))}, "give one of them"),
     ({"points": 3}, "initial"),
+    ({"batch": 0}, r"batch = 0: must be an integer >= 1"),
+    ({"batch": 2.0}, "batch = 2.0: must be an integer"),
+    ({"probability_mean": "quadratic"}, "probability_mean = 'quadratic': must be one of constant, linear"),
 ])
 def test_bad_settings_are_refused_in_one_line(extra, message):
     with pytest.raises((ValueError, TypeError), match=message) as error:
@@ -175,6 +217,8 @@ def test_a_variable_the_case_cannot_vary_is_refused(small_case, extra, message):
     (["--vary", "top_speed=60:140", "-c", "buckling<=1.5"], "probability in (0, 1)"),
     (["--vary", "top_speed=60:140", "-p", "uncertainty.model.stiffness_dispersion=2"], "stiffness_dispersion"),
     (["--vary", "top_speed"], "NAME=LOW:HIGH"),
+    (["--vary", "top_speed=60:140", "--batch", "0"], "batch = 0: must be an integer >= 1"),
+    (["--vary", "top_speed=60:140", "--probability-mean", "cubic"], "probability_mean = 'cubic'"),
     ([], "give at least one decision variable"),
 ])
 def test_cli_refuses_bad_input_in_one_line_with_exit_2(tmp_path, argv, message):

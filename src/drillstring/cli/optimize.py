@@ -48,6 +48,15 @@ def optimize_command(
     initial: Annotated[
         int | None, typer.Option("--initial", help="Points of the initial design (default 4 per variable, >= 4).")
     ] = None,
+    batch: Annotated[
+        int | None,
+        typer.Option("--batch", help="Design points chosen together after the initial design, their realizations "
+                                     "run in one pass of the workers (>= 1; default 4).")
+    ] = None,
+    probability_mean: Annotated[
+        str, typer.Option("--probability-mean", help="Prior mean of the probabilities' surrogates: constant, or "
+                                                      "linear (a fitted plane, where they return far from data).")
+    ] = "constant",
     sigma: Annotated[
         float | None,
         typer.Option("--sigma", help="Standard deviation [N] of the weight-on-hook, Normal around each point's hook "
@@ -103,8 +112,9 @@ def optimize_command(
 
     bare = {name: _BARE_UNITS.get(name, "") for name in variables}
     arguments = dict(variables=variables, objective=objective, constraints=constraints, samples=samples,
-                     points=points, initial=initial, seed=seed, t_end=t_end, transient=transient, sigma=sigma,
-                     parameters=laws, correlation=correlated, model=model, default_units=bare)
+                     points=points, initial=initial, batch=batch, probability_mean=probability_mean, seed=seed,
+                     t_end=t_end, transient=transient, sigma=sigma, parameters=laws, correlation=correlated,
+                     model=model, default_units=bare)
     try:  # refused before the engine starts
         settings = optimization_settings(the_case, **arguments)
     except (TypeError, ValueError) as error:

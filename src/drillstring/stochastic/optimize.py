@@ -23,9 +23,11 @@ probabilistic_map.PROBABILITIES`: ``stick_slip``, ``buckling``, ``bounce``, ``im
 output, ``OUTPUT>VALUE`` or ``OUTPUT<VALUE`` [SI] (``surface_torque_amplitude>8000``: the surface torque's
 amplitude stays below 8 kN·m with probability ≥ 1 − bound).
 
-**Search** (:mod:`~drillstring.stochastic.surrogate`): an initial scrambled Sobol' design, then one point at a
-time where a Gaussian-process surrogate of each output gives the largest constrained expected improvement;
-the last point of the budget is the surrogate's recommendation itself. The answer is the evaluated point of
+**Search** (:mod:`~drillstring.stochastic.surrogate`): an initial scrambled Sobol' design, then ``batch``
+points at a time where a Gaussian-process surrogate of each output gives the largest constrained expected
+improvement (a batch by the Kriging believer: :func:`~drillstring.stochastic.surrogate.next_batch`); the
+realizations of a batch's points run in one pass of the study engine (one pool of workers); the last point of
+the budget is the surrogate's recommendation itself. The answer is the evaluated point of
 largest posterior objective whose posterior constraint means hold (none: the least-infeasible point,
 flagged), with its Monte Carlo estimates, their binomial errors, the surrogate's error there and the
 confidence of each constraint (:func:`~drillstring.stochastic.surrogate.constraint_confidence`).
@@ -33,7 +35,8 @@ confidence of each constraint (:func:`~drillstring.stochastic.surrogate.constrai
 **Resumable**: the realizations go to a Zarr store (:class:`OptimizationStore`, the study engine's
 :class:`~drillstring.stochastic.store.TaskStore`) with the design values of each; a resumed search reads the
 points already chosen from the store and chooses the next ones as the first run did (the choice is a
-deterministic function of the estimates). A store of another case or settings is refused by its fingerprint.
+deterministic function of the estimates before the batch, so an interrupted batch is completed with the
+points it had). A store of another case or settings is refused by its fingerprint.
 """
 
 from __future__ import annotations
@@ -59,12 +62,11 @@ from drillstring.stochastic.probabilistic_map import (PROBABILITIES, SAMPLE_OUTP
 from drillstring.stochastic.random_matrices import ModelDispersion
 from drillstring.stochastic.runs import TOP_DRIVE_OUTPUTS, compile_kernels, with_top_drive_outputs
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, TaskStore
-from drillstring.stochastic.surrogate import (Estimates, SearchProblem, constraint_confidence, next_point,
-                                              recommend)
+from drillstring.stochastic.surrogate import Estimates, SearchProblem, constraint_confidence, next_batch, recommend
 from drillstring.stochastic.uncertainty import input_attributes
 
-__all__ = ["DECISION_ALIASES", "OBJECTIVES", "OptimizationSettings", "OptimizationStore", "point_estimates",
-           "optimization_result", "run_optimization"]
+__all__ = ["DECISION_ALIASES", "DEFAULT_BATCH", "OBJECTIVES", "OptimizationSettings", "OptimizationStore",
+           "point_estimates", "optimization_result", "run_optimization"]
 
 #: Short names of decision variables -> case parameter path.
 DECISION_ALIASES = {"top_speed": "operation.top_speed", "weight_on_bit": "operation.weight_on_bit",
@@ -73,6 +75,10 @@ DECISION_ALIASES = {"top_speed": "operation.top_speed", "weight_on_bit": "operat
 #: Objectives: name -> (per-realization output, maximised?); ``rate_of_penetration_qNN`` adds quantiles.
 OBJECTIVES = {"rate_of_penetration": ("mean_rate_of_penetration", True),
               "mechanical_specific_energy": ("mechanical_specific_energy", False)}
+#: Design points chosen together after the initial design, by default (docs/optimize.md, "Batches").
+DEFAULT_BATCH = 4
+#: Prior means of the constraints' surrogates.
+PROBABILITY_MEANS = ("constant", "linear")
 #: Bootstrap resamples of a quantile objective's Monte Carlo variance.
 BOOTSTRAP = 200
 
@@ -131,6 +137,10 @@ class OptimizationSettings:
         samples: realizations per design point (>= 2).
         points: design points of the search (budget), more than ``initial``.
         initial: points of the initial design (>= 2).
+        batch: points chosen together and evaluated in one pass after the initial design (>= 1; more than
+            ``points − initial``: all of them at once).
+        probability_mean: the prior mean of the constraints' surrogates, ``"constant"`` or ``"linear"`` (a
+            plane by generalised least squares: :class:`~drillstring.stochastic.surrogate.GaussianProcess`).
         seed, t_end, output_step, transient, sigma, laws, correlated, correlation, model_dispersion: as for a
             probabilistic map (:class:`~drillstring.stochastic.probabilistic_map.SampledMapSettings`).
     """
@@ -141,6 +151,8 @@ class OptimizationSettings:
     samples: int = 8
     points: int = 16
     initial: int = 8
+    batch: int = DEFAULT_BATCH
+    probability_mean: str = "constant"
     seed: int = 0
     t_end: float = 10.0
     output_step: float = 0.01
@@ -182,6 +194,11 @@ class OptimizationSettings:
         object.__setattr__(self, "initial", integer("initial", self.initial, low=2))
         object.__setattr__(self, "points", integer("points", self.points, low=self.initial + 1,
                                                    allowed=f"an integer > initial = {self.initial}"))
+        object.__setattr__(self, "batch", integer("batch", self.batch, low=1,
+                                                  allowed="an integer >= 1 (design points chosen together)"))
+        if self.probability_mean not in PROBABILITY_MEANS:
+            raise ValueError(f"probability_mean = {self.probability_mean!r}: must be one of "
+                             f"{', '.join(PROBABILITY_MEANS)}")
         object.__setattr__(self, "seed", check_seed(self.seed))
         # A law of the top speed, weight-on-bit or hook load is refused by the point's map settings (sigma is
         # the hook load's uncertainty around each point's own value); any other decision variable:
@@ -194,7 +211,8 @@ class OptimizationSettings:
     def problem(self) -> SearchProblem:
         output, maximize, _ = parse_objective(self.objective)
         return SearchProblem(tuple((low, high) for _, low, high in self.variables),
-                             tuple(b for _, b in self.constraints), maximize, self.initial, self.seed)
+                             tuple(b for _, b in self.constraints), maximize, self.initial, self.seed,
+                             self.probability_mean == "linear")
 
     @property
     def realizations(self) -> int:
@@ -248,7 +266,8 @@ class OptimizationStore(TaskStore):
     kind = "optimization"
     row_dim = "realization"
     noun = "realizations"
-    differ = "case or settings differ: variables, bounds, objective, constraints, samples, points, seed, laws, t_end"
+    differ = ("case or settings differ: variables, bounds, objective, constraints, samples, points, batch, "
+              "probability_mean, seed, laws, t_end")
 
     def __init__(self, path: str | Path, case: Case, settings: OptimizationSettings) -> None:
         at = design_case(case, settings, [0.5 * (lo + hi) for _, lo, hi in settings.variables])
@@ -368,14 +387,16 @@ def run_optimization(case: Case, settings: OptimizationSettings, store_path: str
                 notify(engine.note, repair)
             point = 0
             while point < settings.points:
-                batch = range(point, settings.initial) if point < settings.initial else range(point, point + 1)
+                batch = range(point, settings.initial) if point < settings.initial else range(
+                    point, min(point + settings.batch, settings.points))
+                stored = [_stored_design(store, settings, p) for p in batch]
+                if any(values is None for values in stored):
+                    x, estimates = _history(store, settings, outputs, batch.start)
+                    chosen = next_batch(problem, x, estimates, settings.points, batch.start, len(batch))
+                    stored = [chosen[k] if values is None else values for k, values in enumerate(stored)]
                 items = []
-                for p in batch:
-                    values = _stored_design(store, settings, p)
-                    if values is None:
-                        x, estimates = _history(store, settings, outputs, p)
-                        values = next_point(problem, x, estimates, settings.points, index=p)
-                    status = store.status()
+                status = store.status()
+                for p, values in zip(batch, stored):
                     items += [(r, (r, tuple(float(v) for v in values))) for r in
                               range(p * settings.samples, (p + 1) * settings.samples) if status[r] == PENDING]
                 if items:

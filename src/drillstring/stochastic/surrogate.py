@@ -10,7 +10,8 @@ through Monte Carlo estimates at evaluated points, each with its sampling varian
 numerics: it never runs a simulation (:mod:`drillstring.stochastic.optimize` does), so it is tested on
 analytic functions.
 
-**Surrogate.** One Gaussian process per output (:class:`GaussianProcess`): a constant mean, a Matérn-5/2
+**Surrogate.** One Gaussian process per output (:class:`GaussianProcess`): a constant mean (or, for the
+constraints with :attr:`SearchProblem.trend`, a linear one estimated by generalised least squares), a Matérn-5/2
 covariance with one length per variable (inputs scaled to the unit box, outputs standardised), the Monte Carlo
 variance of each estimate on the diagonal (heteroscedastic noise, known) plus a fitted nugget; the
 hyperparameters maximise the log marginal likelihood (Rasmussen & Williams 2006, eq. 2.30 and §5.4.1).
@@ -20,6 +21,9 @@ constrained expected improvement ``EI(x) · Π_k Φ((b_k − μ_k(x))/s_k(x))`` 
 of Jones, Schonlau & Welch 1998 over the best feasible posterior mean). While no evaluated point is feasible in
 the posterior mean it maximises the probability of feasibility alone (the expected-feasibility phase). Both
 factors are large only near the optimum and near the constraint boundaries, where the samples go.
+Several points can be chosen at once, to be evaluated together (:func:`next_batch`): each point of a batch
+is proposed as above after the previous ones were added to the surrogates as observations equal to their
+posterior means, the Kriging believer of Ginsbourger, Le Riche & Carraro (2010).
 
 **Recommendation.** The point of largest posterior mean of ``f`` among the candidates and the evaluated points
 whose posterior means satisfy every constraint. Its constraints' confidence (:func:`constraint_confidence`)
@@ -40,7 +44,7 @@ from scipy.special import ndtr
 from scipy.stats import qmc
 
 __all__ = ["Estimates", "GaussianProcess", "Recommendation", "SearchProblem", "constraint_confidence",
-           "initial_design", "next_point", "propose", "recommend", "search"]
+           "initial_design", "next_batch", "next_point", "propose", "recommend", "search"]
 
 #: Candidates of the acquisition's search (a scrambled Sobol' set in the unit box; a power of two).
 CANDIDATES = 1024
@@ -59,7 +63,13 @@ def _matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 class GaussianProcess:
     """A Gaussian-process regression of noisy observations ``y`` at ``x`` (unit box, ``n × d``), each with its
     known noise variance (module docstring). :meth:`fit` returns the fitted process; :meth:`predict` gives the
-    posterior mean and standard deviation of the latent function (without the noise)."""
+    posterior mean and standard deviation of the latent function (without the noise).
+
+    With ``trend`` the prior mean is linear in the inputs, ``h(x)ᵀβ`` with ``h = (1, x − ½)``, its
+    coefficients given a flat prior, i.e. estimated by generalised least squares, their uncertainty added to
+    the posterior variance, the hyperparameters by the restricted likelihood (Rasmussen & Williams 2006, §2.7,
+    eqs. 2.41, 2.42 and 2.45; universal kriging): far from the data the process returns to the fitted plane,
+    not to the data's mean. It needs ``n ≥ d + 2`` points (fewer: a constant mean)."""
 
     x: np.ndarray
     y: np.ndarray
@@ -69,9 +79,10 @@ class GaussianProcess:
     nugget: float = 1e-6
     _mean: float = 0.0
     _scale: float = 1.0
+    trend: bool = False
 
     @classmethod
-    def fit(cls, x, y, noise=None) -> GaussianProcess:
+    def fit(cls, x, y, noise=None, *, trend: bool = False) -> GaussianProcess:
         x = np.atleast_2d(np.asarray(x, dtype=float))
         y = np.asarray(y, dtype=float)
         noise = np.zeros_like(y) if noise is None else np.asarray(noise, dtype=float)
@@ -79,9 +90,19 @@ class GaussianProcess:
             raise ValueError("x, y and noise must be finite and of one length")
         mean = float(y.mean())
         scale = float(y.std()) if y.size > 1 and y.std() > 0 else 1.0
-        gp = cls(x, y, noise, np.ones(x.shape[1]), 1.0, 1e-6, mean, scale)
+        gp = cls(x, y, noise, np.ones(x.shape[1]), 1.0, 1e-6, mean, scale, bool(trend) and y.size >= x.shape[1] + 2)
         gp._optimise()
         return gp
+
+    def _basis(self, x: np.ndarray) -> np.ndarray:
+        return np.column_stack([np.ones(len(x)), x - 0.5])
+
+    def _generalised_least_squares(self, factor, y: np.ndarray):
+        """(``β``, ``K⁻¹H``, Cholesky factor of ``A = HᵀK⁻¹H``) of the linear trend (R&W eq. 2.42)."""
+        basis = self._basis(self.x)
+        solved = cho_solve(factor, basis)
+        a = cho_factor(basis.T @ solved + 1e-12 * np.eye(basis.shape[1]), lower=True)
+        return cho_solve(a, solved.T @ y), solved, a
 
     def _standard(self) -> tuple[np.ndarray, np.ndarray]:
         return (self.y - self._mean) / self._scale, self.noise / self._scale**2
@@ -96,8 +117,17 @@ class GaussianProcess:
             factor = cho_factor(k, lower=True)
         except np.linalg.LinAlgError:
             return 1e10
+        penalty = 0.0
+        if self.trend:  # the restricted likelihood (R&W eq. 2.45): residuals of the GLS plane, ½ log|A|
+            try:
+                beta, _, a = self._generalised_least_squares(factor, y)
+            except np.linalg.LinAlgError:
+                return 1e10
+            y = y - self._basis(self.x) @ beta
+            penalty = np.log(np.diag(a[0])).sum() - 0.5 * len(beta) * math.log(2 * math.pi)
         alpha = cho_solve(factor, y)
-        return float(0.5 * y @ alpha + np.log(np.diag(factor[0])).sum() + 0.5 * y.size * math.log(2 * math.pi))
+        return float(0.5 * y @ alpha + np.log(np.diag(factor[0])).sum() + 0.5 * y.size * math.log(2 * math.pi)
+                     + penalty)
 
     def _optimise(self) -> None:
         d = self.x.shape[1]
@@ -109,10 +139,29 @@ class GaussianProcess:
             if best is None or found.fun < best.fun:
                 best = found
         self.lengths, self.variance, self.nugget = (np.exp(best.x[:d]), math.exp(best.x[d]), math.exp(best.x[d + 1]))
+        self._factorise()
+
+    def _factorise(self) -> None:
         y, noise = self._standard()
         k = self.variance * _matern52(self.x, self.x, self.lengths) + np.diag(noise + self.nugget + 1e-10)
         self._factor = cho_factor(k, lower=True)
+        if self.trend:
+            self._beta, self._solved_basis, self._trend_factor = self._generalised_least_squares(self._factor, y)
+            y = y - self._basis(self.x) @ self._beta
         self._alpha = cho_solve(self._factor, y)
+
+    def believe(self, points) -> GaussianProcess:
+        """The process conditioned on noise-free observations at ``points`` (unit box) equal to its own posterior
+        mean there, the hyperparameters and standardisation kept: the Kriging believer of Ginsbourger, Le Riche &
+        Carraro (2010, "Kriging is well-suited to parallelize optimization", §4.1). The mean is unchanged
+        everywhere; the standard deviation shrinks near ``points``, so a batch's next point goes elsewhere."""
+        points = np.atleast_2d(np.asarray(points, dtype=float))
+        mean, _ = self.predict(points)
+        gp = GaussianProcess(np.vstack([self.x, points]), np.concatenate([self.y, mean]),
+                             np.concatenate([self.noise, np.zeros(len(points))]), self.lengths, self.variance,
+                             self.nugget, self._mean, self._scale, self.trend)
+        gp._factorise()
+        return gp
 
     def predict(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and standard deviation of the latent function at ``points`` (unit box)."""
@@ -120,21 +169,29 @@ class GaussianProcess:
         cross = self.variance * _matern52(points, self.x, self.lengths)
         mean = cross @ self._alpha
         v = cho_solve(self._factor, cross.T)
-        var = np.maximum(self.variance - np.einsum("ij,ji->i", cross, v), 0.0)
-        return self._mean + self._scale * mean, self._scale * np.sqrt(var)
+        var = self.variance - np.einsum("ij,ji->i", cross, v)
+        if self.trend:  # R&W eq. 2.41: the plane, and the variance of its coefficients
+            basis = self._basis(points)
+            mean = mean + basis @ self._beta
+            r = basis.T - self._solved_basis.T @ cross.T
+            var = var + np.einsum("ij,ij->j", r, cho_solve(self._trend_factor, r))
+        return self._mean + self._scale * mean, self._scale * np.sqrt(np.maximum(var, 0.0))
 
 
 @dataclass(frozen=True)
 class SearchProblem:
     """A constrained search: ``bounds`` (``d × 2``, low and high of each variable), the constraints' upper
     ``limits`` ``b_k`` (probabilities), whether ``f`` is maximised (else minimised), the number of
-    ``initial`` points (a scrambled Sobol' design) and the ``seed`` of that design and of the candidates."""
+    ``initial`` points (a scrambled Sobol' design), the ``seed`` of that design and of the candidates, and
+    whether the constraints' processes have a linear ``trend`` (:class:`GaussianProcess`; else a constant
+    mean)."""
 
     bounds: tuple[tuple[float, float], ...]
     limits: tuple[float, ...]
     maximize: bool = True
     initial: int = 8
     seed: int = 0
+    trend: bool = False
 
     def to_unit(self, x) -> np.ndarray:
         b = np.asarray(self.bounds, dtype=float)
@@ -168,6 +225,11 @@ class Surrogates:
     objective: GaussianProcess | None
     constraints: list[GaussianProcess]
 
+    def believe(self, unit) -> Surrogates:
+        """Every process conditioned on its own posterior mean at ``unit`` (:meth:`GaussianProcess.believe`)."""
+        return Surrogates(None if self.objective is None else self.objective.believe(unit),
+                          [gp.believe(unit) for gp in self.constraints])
+
 
 def fit_surrogates(problem: SearchProblem, x, objective, objective_variance, constraints,
                    constraint_variances) -> Surrogates:
@@ -182,7 +244,7 @@ def fit_surrogates(problem: SearchProblem, x, objective, objective_variance, con
         if ok.sum() >= 2 else None
     constraints = np.asarray(constraints, dtype=float).reshape(len(unit), -1)
     variances = np.asarray(constraint_variances, dtype=float).reshape(len(unit), -1)
-    return Surrogates(obj, [GaussianProcess.fit(unit, constraints[:, k], variances[:, k])
+    return Surrogates(obj, [GaussianProcess.fit(unit, constraints[:, k], variances[:, k], trend=problem.trend)
                             for k in range(constraints.shape[1])])
 
 
@@ -320,34 +382,63 @@ class Estimates:
                               self.constraint_variances)
 
 
-def next_point(problem: SearchProblem, x, estimates: Estimates | None, budget: int, *,
-               index: int | None = None) -> np.ndarray:
-    """Point number ``index`` (default ``len(x)``) of a search of ``budget`` points, from the ``estimates`` at
-    the points ``x`` before it (those with an estimate): the initial design first (and while fewer than 2
-    points have estimates); then :func:`propose`; the last point of the budget is the current recommendation
-    itself (so that the answer is a point with its own Monte Carlo estimate), unless it was already
-    evaluated. Deterministic: the same estimates give the same point (a resumed search repeats it)."""
-    index = (0 if x is None else len(x)) if index is None else index
-    if index < problem.initial or x is None or len(x) < 2:
-        return initial_design(problem, index + 1)[index]
+def next_batch(problem: SearchProblem, x, estimates: Estimates | None, budget: int, start: int,
+               size: int = 1) -> np.ndarray:
+    """Points number ``start`` to ``start + size − 1`` (rows; fewer where the budget ends) of a search of
+    ``budget`` points, from the ``estimates`` at the points ``x`` before ``start`` (those with an estimate),
+    to be evaluated together.
+
+    The initial design's points first (and while fewer than 2 points have estimates). Then a batch by the
+    Kriging believer (Ginsbourger, Le Riche & Carraro 2010, §4.1): :func:`propose` on the surrogates, the point
+    added to every process as an observation equal to its posterior mean (:meth:`Surrogates.believe`), the
+    next point proposed on those, and so on (each point at least :data:`MIN_DISTANCE` from the evaluated
+    and the batch's points). A batch that holds the budget's last point ends with the current recommendation
+    (from the estimates alone, so that the answer is a point with its own Monte Carlo estimate), unless it was
+    already evaluated. Deterministic: the same estimates give the same points (a resumed search repeats
+    them)."""
+    stop = min(start + size, budget)
+    if start < problem.initial or x is None or len(x) < 2:
+        return initial_design(problem, stop)[start:stop]
+    x = np.atleast_2d(np.asarray(x, dtype=float))
     surrogates = estimates.fit(problem, x)
-    if index == budget - 1:
+    last = None
+    if stop == budget:
         found = recommend(problem, x, surrogates).point
         if np.min(np.linalg.norm(problem.to_unit(x) - problem.to_unit(found), axis=1)) >= MIN_DISTANCE:
-            return found
-    return propose(problem, x, surrogates)
+            last = found
+    if last is not None:
+        surrogates = surrogates.believe(problem.to_unit(last))
+        x = np.vstack([x, last])
+    chosen = []
+    for _ in range(stop - start - (last is not None)):
+        point = propose(problem, x, surrogates)
+        chosen.append(point)
+        surrogates = surrogates.believe(problem.to_unit(point))
+        x = np.vstack([x, point])
+    return np.array(chosen + ([last] if last is not None else [])).reshape(stop - start, -1)
 
 
-def search(problem: SearchProblem, evaluate, budget: int) -> tuple[np.ndarray, Estimates, Recommendation]:
-    """Run a whole search of ``budget`` points: ``evaluate(point)`` returns ``(objective, its variance,
-    constraints (m), their variances (m))``. Returns the points, their estimates and the recommendation."""
+def next_point(problem: SearchProblem, x, estimates: Estimates | None, budget: int, *,
+               index: int | None = None) -> np.ndarray:
+    """Point number ``index`` (default ``len(x)``) of a search of ``budget`` points evaluated one at a time:
+    :func:`next_batch` of one point."""
+    index = (0 if x is None else len(x)) if index is None else index
+    return next_batch(problem, x, estimates, budget, index, 1)[0]
+
+
+def search(problem: SearchProblem, evaluate, budget: int, batch: int = 1) -> tuple[np.ndarray, Estimates,
+                                                                                    Recommendation]:
+    """Run a whole search of ``budget`` points, the initial design in one batch, then ``batch`` points at a
+    time (:func:`next_batch`): ``evaluate(point)`` returns ``(objective, its variance, constraints (m), their
+    variances (m))``. Returns the points, their estimates and the recommendation."""
     points: list[np.ndarray] = []
     rows: list[tuple] = []
     estimates = None
-    for _ in range(budget):
-        point = next_point(problem, np.array(points) if points else None, estimates, budget)
-        points.append(point)
-        rows.append(evaluate(point))
+    while len(points) < budget:
+        size = problem.initial if not points else batch
+        chosen = next_batch(problem, np.array(points) if points else None, estimates, budget, len(points), size)
+        points += list(chosen)
+        rows += [evaluate(point) for point in chosen]
         estimates = Estimates(np.array([r[0] for r in rows], dtype=float), np.array([r[1] for r in rows], dtype=float),
                               np.array([r[2] for r in rows], dtype=float).reshape(len(rows), -1),
                               np.array([r[3] for r in rows], dtype=float).reshape(len(rows), -1))
