@@ -933,17 +933,13 @@ def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, 
     return ds, summary, files
 
 
-def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, model, seed,
-                 units) -> MapOutcome:
-    """A probabilistic map (:func:`operating_map` with ``samples``), its figures and report in ``units``."""
+def _point_uncertainty(case, parameters, correlation, model, sigma):
+    """What the realizations at each point of a map or a search draw: ``(sigma, laws, correlated, correlation
+    matrix, model dispersions)`` for the settings of :mod:`drillstring.stochastic.probabilistic_map` and
+    :mod:`drillstring.stochastic.optimize`; the weight-on-hook's default σ when no parameter is declared."""
     from drillstring.stochastic import DEFAULT_SIGMA
-    from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
-    from drillstring.stochastic.uncertainty import declared_uncertainty
-
-    _mapping("parameters", parameters)
-    _mapping("correlation", correlation)
-    _mapping("model", model)
     from drillstring.stochastic.random_matrices import ModelDispersion
+    from drillstring.stochastic.uncertainty import declared_uncertainty
 
     dispersions = ModelDispersion.declared(case, model)
     declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
@@ -954,6 +950,18 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
         laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters)
         if declared.correlation is not None:
             correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    return sigma, laws, correlated, matrix, dispersions
+
+
+def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, model, seed,
+                 units) -> MapOutcome:
+    """A probabilistic map (:func:`operating_map` with ``samples``), its figures and report in ``units``."""
+    from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
+
+    _mapping("parameters", parameters)
+    _mapping("correlation", correlation)
+    _mapping("model", model)
+    sigma, laws, correlated, matrix, dispersions = _point_uncertainty(case, parameters, correlation, model, sigma)
     settings = SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, laws=laws, correlated=correlated,
                                   correlation=matrix, model_dispersion=dispersions.as_tuple())
     case = case.model_copy(update={"uncertainty": None})

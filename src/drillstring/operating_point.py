@@ -9,7 +9,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from drillstring.api import _engine, _mapping, _output_folder, _run_record, _window, as_case
+from drillstring.api import _engine, _mapping, _output_folder, _point_uncertainty, _run_record, _window, as_case
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
 from drillstring.stochastic import DEFAULT_SEED
@@ -89,10 +89,7 @@ def optimization_settings(case: Case, *, variables, objective="rate_of_penetrati
                           model=None, default_units: Mapping[str, str] | None = None):
     """The validated :class:`~drillstring.stochastic.optimize.OptimizationSettings` of a search of ``case``
     (arguments as :func:`optimize`)."""
-    from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.optimize import DEFAULT_BATCH, OptimizationSettings, check_optimization
-    from drillstring.stochastic.random_matrices import ModelDispersion
-    from drillstring.stochastic.uncertainty import declared_uncertainty
 
     _mapping("variables", variables)
     _mapping("constraints", constraints)
@@ -104,15 +101,7 @@ def optimization_settings(case: Case, *, variables, objective="rate_of_penetrati
                          "{'top_speed': '60 rpm:140 rpm'}")
     units = dict(default_units or {})
     bounded = tuple(parse_bounds(case, name, text, units.get(name, "")) for name, text in variables.items())
-    dispersions = ModelDispersion.declared(case, model)
-    declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
-    if declared is None and sigma is None:
-        sigma = DEFAULT_SIGMA
-    laws, correlated, matrix = (), (), ()
-    if declared is not None:
-        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters)
-        if declared.correlation is not None:
-            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    sigma, laws, correlated, matrix, dispersions = _point_uncertainty(case, parameters, correlation, model, sigma)
     window = _window(case, t_end, output_step, transient)
     initial = max(4, 4 * len(bounded)) if initial is None else initial
     points = 2 * initial if points is None else points
