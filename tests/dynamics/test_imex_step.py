@@ -233,7 +233,6 @@ def test_compiled_imex_agrees_with_dopri5_with_a_downhole_motor(motor_model):
     kwargs = dict(t_end=0.5, output_step=0.01, rtol=1e-8, atol=1e-11, lateral_perturbation=1e-4, seed=0)
     explicit = simulate_model(motor_model, method="dopri5", **kwargs)
     implicit = simulate_model(motor_model, method="ark43", **kwargs)
-    assert implicit.stats["n_jacobians"] >= implicit.stats["n_steps"]
     for key in ("bit_speed", "motor_speed", "motor_torque", "torque_on_bit", "rate_of_penetration"):
         x, ref = implicit.observables[key], explicit.observables[key]
         assert np.abs(x - ref).max() <= 1e-5 * np.abs(ref).max(), key

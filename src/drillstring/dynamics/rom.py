@@ -836,8 +836,8 @@ def stiff_part(data, t, y, shapes, partials):
     ``shapes`` and ``partials`` have a third row, it gets a downhole motor's: the rotor's relative torsional row
     (:attr:`ReducedOrderModel.motor_shapes`) in ``shapes[2, :n]`` and ``dT/dω_m`` [N·m·s/rad] of the registered
     compiled motor by a central difference in ``partials[2, 0]`` (its part of ``∂(η̈)/∂η̇`` is
-    ``m (dT/dω_m) mᵀ``; zeros without a motor). Returns the linear part's ``(ω², Dᵀ, damping blocks)``. Compiled code only; case 1 (:class:`FullModelData`) reads its
-    case-2 part."""
+    ``m (dT/dω_m) mᵀ``; zeros without a motor). Returns the linear part's ``(ω², Dᵀ, damping blocks)``.
+    Compiled code only; case 1 (:class:`FullModelData`) reads its case-2 part."""
     raise NotImplementedError("compiled code only")
 
 

@@ -271,7 +271,8 @@ def _factor(data, h, omega2, damping_t, blocks):
 
 @njit(cache=True)
 def _solve(data, h, omega2, blocks, r, z):
-    """z = (I − hγ J)⁻¹ r (module docstring): the linear part's block solve, then Woodbury for the bit law and the motor."""
+    """z = (I − hγ J)⁻¹ r (module docstring): the linear part's block solve, then Woodbury for the bit law and
+    the motor."""
     hg = h * data.gamma
     nm = omega2.shape[0]
     sh, g, small, cols, x = data.shapes, data.partials, data.small, data.columns, data.v
