@@ -644,7 +644,7 @@ def test_aarsnes2019_has_the_published_numbers(tmp_path):
     # the implicit-explicit step where it is faster at equal statistics (docs/model.md §9); the reference
     # study's method stays DOPRI5
     assert case.simulation.method == "ark43" and load_case("aarsnes2019_paper").simulation.method == "ark43"
-    assert load_case("reference").simulation.method == "dopri5"
+    assert load_case("motor").simulation.method == "ark43" and load_case("reference").simulation.method == "dopri5"
 
 
 def test_aarsnes2019_weight_on_bit_is_the_steady_state_of_30_m_per_h_at_30_rpm():
