@@ -10,6 +10,7 @@ machine is shared), and the indices with their largest change from N/2 to N. Goa
 machine. Run:
 
     .venv/bin/python benchmarks/bench_sensitivity.py [--samples 1024] [--t-end 20] [--dask] [--sample 8]
+        [--method ark43]
 """
 
 from __future__ import annotations
@@ -41,8 +42,11 @@ def main() -> None:
     parser.add_argument("--sample", type=int, default=8, help="runs made serially for the baseline")
     parser.add_argument("--dask", action="store_true", help="also time a local Dask cluster (2 workers)")
     parser.add_argument("--keep", type=Path, default=None, help="copy the local run's files to this folder")
+    parser.add_argument("--method", default=None, help="simulation.method for every run (default: the case's)")
     args = parser.parse_args()
     case = load_case("reference")
+    if args.method is not None:
+        case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"method": args.method})})
     print(load_average("start"))
     settings = SensitivitySettings(args.samples, tuple(LAWS.items()), t_end=args.t_end)
     design = sensitivity_design(case, settings)
@@ -50,7 +54,8 @@ def main() -> None:
     per_run, sampled = serial_cost(lambda i: _row_task(case, paths, settings, (i, design.values[i])),
                                    design.runs, args.sample)
     serial = per_run * design.runs
-    print(f"Sobol' study: 3 parameters, N = {args.samples}, {design.runs} runs of {args.t_end:g} s, {cores()} cores;"
+    print(f"Sobol' study: 3 parameters, N = {args.samples}, {design.runs} runs of {args.t_end:g} s, {cores()} cores,"
+          f" method {case.simulation.method};"
           f" serial cost {per_run:.3f} s per run (sample of {sampled}) -> {serial / 60:.1f} min projected serially")
     rows = [("local processes (one per core)", *timed(case, args.samples, args.t_end, args.keep))]
     if args.dask:

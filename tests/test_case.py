@@ -641,6 +641,10 @@ def test_aarsnes2019_has_the_published_numbers(tmp_path):
     assert (case.reduced_model.lateral_modes, case.reduced_model.lateral_cutoff) == (0, 0.0)
     assert (case.simulation.t_end, case.simulation.output_step) == (30.0, 0.01)
     assert (case.initial.start, case.initial.weight_ramp_time) == ("ramp", 10.0)
+    # the implicit-explicit step where it is faster at equal statistics (docs/model.md §9); the reference
+    # study's method stays DOPRI5
+    assert case.simulation.method == "ark43" and load_case("aarsnes2019_paper").simulation.method == "ark43"
+    assert load_case("motor").simulation.method == "ark43" and load_case("reference").simulation.method == "dopri5"
 
 
 def test_aarsnes2019_weight_on_bit_is_the_steady_state_of_30_m_per_h_at_30_rpm():

@@ -148,8 +148,9 @@ def dense_jacobian(model, data, omega2, damping_t, blocks) -> np.ndarray:
         part = damping[start:end, start:end]
         jac[n + start:n + end, n + start:n + end] = -(part if data.dense_blocks[b] else np.diag(np.diag(part)))
     shapes = data.shapes[:, :n]
-    jac[n:2 * n, n:2 * n] += shapes.T @ data.partials[:, :2] @ shapes
-    jac[n:2 * n, :n] += shapes.T @ data.partials[:, 2:3] @ shapes[:1]
+    jac[n:2 * n, n:2 * n] += shapes[:2].T @ data.partials[:2, :2] @ shapes[:2]
+    jac[n:2 * n, :n] += shapes[:2].T @ data.partials[:2, 2:3] @ shapes[:1]
+    jac[n:2 * n, n:2 * n] += data.partials[2, 0] * np.outer(shapes[2], shapes[2])  # a downhole motor's
     return jac
 
 
@@ -174,3 +175,64 @@ def test_stage_solve_is_the_inverse_of_i_minus_h_gamma_j(small_case, h):
     residual = (np.eye(len(r)) - h * ARK4_3_6L.gamma * jac) @ z - r
     assert np.abs(residual).max() < 1e-9 * np.abs(r).max()
     assert data.dense_blocks[:len(blocks)].any() == (h == 1e-2)
+
+
+def _small_motor_case():
+    """The built-in motor case on a 50 m mesh with a small basis (as tests/dynamics/test_motor.py)."""
+    from drillstring.case import load_case
+
+    case = load_case("motor")
+    return case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 50.0}),
+        "reduced_model": case.reduced_model.model_copy(update={"axial_modes": 3, "torsional_modes": 4,
+                                                               "lateral_modes": 2})})
+
+
+@pytest.fixture(scope="module")
+def motor_model():
+    return case_reduced_model(_small_motor_case())
+
+
+def test_stage_solve_with_a_downhole_motor(motor_model):
+    """With a downhole motor the stiff part carries its torque slope across the rotor: the rotor's relative
+    row (``motor_shapes``) and dT/dω_m equal to the law's closed form −T_s/ω₀; the Woodbury solve with this
+    fourth low-rank term still inverts I − hγJ (the motor's term in the dense J), at a short and a long step."""
+    from drillstring.dynamics.steps import imex_ark
+
+    model = motor_model
+    n = model.size
+    y = model.initial_state(0.0, 0)
+    data = imex_ark.allocate(ARK4_3_6L, model.state_size)
+    omega2, damping_t, blocks = _stiff_part(model.rhs_data, 0.0, y, data.shapes, data.partials)
+    np.testing.assert_array_equal(data.shapes[2, :n], model.motor_shapes)
+    assert np.abs(model.motor_shapes).max() > 0.0
+    slope = model.motor.jacobian()
+    assert data.partials[2, 0] == pytest.approx(slope, rel=1e-8) and slope < 0.0
+    np.testing.assert_array_equal(data.partials[2, 1:], 0.0)
+    rate = slope * (model.motor_shapes @ model.motor_shapes)  # the motor's rate on its own mode [1/s]
+    r = np.random.default_rng(1).standard_normal(model.state_size)
+    for h in (1e-4, 10.0 / abs(rate)):
+        assert imex_ark._factor(data, h, omega2, damping_t, blocks)
+        z = np.zeros_like(r)
+        imex_ark._solve(data, h, omega2, blocks, r, z)
+        jac = dense_jacobian(model, data, omega2, damping_t, blocks)
+        residual = (np.eye(len(r)) - h * ARK4_3_6L.gamma * jac) @ z - r
+        assert np.abs(residual).max() < 1e-9 * np.abs(r).max(), h
+        # without the motor's term the same z is not the solution once hγ|rate| is not small
+        partial = data.partials[2, 0]
+        data.partials[2, 0] = 0.0
+        off = (np.eye(len(r)) - h * ARK4_3_6L.gamma * dense_jacobian(model, data, omega2, damping_t, blocks)) @ z - r
+        data.partials[2, 0] = partial
+        if h > 1e-3:
+            assert np.abs(off).max() > 1e-3 * np.abs(r).max()
+
+
+def test_compiled_imex_agrees_with_dopri5_with_a_downhole_motor(motor_model):
+    """A drilling run of the small motor string: ARK4(3)6L (the motor's slope implicit) and DOPRI5 at tight
+    tolerance give the same bit speed, motor speed and torque within the tolerance."""
+    kwargs = dict(t_end=0.5, output_step=0.01, rtol=1e-8, atol=1e-11, lateral_perturbation=1e-4, seed=0)
+    explicit = simulate_model(motor_model, method="dopri5", **kwargs)
+    implicit = simulate_model(motor_model, method="ark43", **kwargs)
+    for key in ("bit_speed", "motor_speed", "motor_torque", "torque_on_bit", "rate_of_penetration"):
+        x, ref = implicit.observables[key], explicit.observables[key]
+        assert np.abs(x - ref).max() <= 1e-5 * np.abs(ref).max(), key

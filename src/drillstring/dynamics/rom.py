@@ -808,6 +808,18 @@ def _stiff_bit_law(d, t, y, shapes, partials):
             torque_sum += sign * torque
         partials[0, k] = force_sum / (2.0 * step)
         partials[1, k] = torque_sum / (2.0 * step)
+    if shapes.shape[0] > 2:  # a third row: the downhole motor's (zero without one)
+        for j in range(n):
+            shapes[2, j] = 0.0
+        for k in range(partials.shape[1]):
+            partials[2, k] = 0.0
+        if d.laws[MOTOR_CODE] != 0.0:
+            for j in range(t0, t1):
+                shapes[2, j] = d.torsion_rows[3, j - t0]
+            relative_speed, _ = _downhole_motor(d, y)
+            step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
+            partials[2, 0] = (motor_torque(d.laws, relative_speed + step)
+                              - motor_torque(d.laws, relative_speed - step)) / (2.0 * step)
     return d.omega2, d.damping_t, d.damping_blocks
 
 
@@ -820,9 +832,12 @@ def stiff_part(data, t, y, shapes, partials):
     cut with it), by central differences of the registered compiled law (six scalar evaluations of
     :func:`~drillstring.forces.registry.bit_law_force`). The
     bit law's part of ``∂(η̈)/∂(η, η̇)`` is then ``Bᵀ P[:, 2] b_uᵀ`` and ``Bᵀ P[:, :2] B`` (``B = shapes``,
-    ``P = partials``): the NumPy reference is :func:`drillstring.dynamics.stiffness._bit_rock_rows`. Returns the
-    linear part's ``(ω², Dᵀ, damping blocks)``. Compiled code only; case 1 (:class:`FullModelData`) reads its
-    case-2 part."""
+    ``P = partials``): the NumPy reference is :func:`drillstring.dynamics.stiffness._bit_rock_rows`. When
+    ``shapes`` and ``partials`` have a third row, it gets a downhole motor's: the rotor's relative torsional row
+    (:attr:`ReducedOrderModel.motor_shapes`) in ``shapes[2, :n]`` and ``dT/dω_m`` [N·m·s/rad] of the registered
+    compiled motor by a central difference in ``partials[2, 0]`` (its part of ``∂(η̈)/∂η̇`` is
+    ``m (dT/dω_m) mᵀ``; zeros without a motor). Returns the linear part's ``(ω², Dᵀ, damping blocks)``.
+    Compiled code only; case 1 (:class:`FullModelData`) reads its case-2 part."""
     raise NotImplementedError("compiled code only")
 
 

@@ -19,7 +19,11 @@ which rates are damped implicitly. ``J`` is the reduced model's linear part and 
   ``b_tᵀη̇`` and position ``b_uᵀη`` (``Vᵀ``; a delayed law's depth of cut moves with the position), ``G``
   (2 × 3) the law's partial derivatives by central differences of the compiled law, at each attempt.
   Measured (``benchmarks/stiff_part_survey.py``): −945…−1180 1/s on ``reference`` (the axial dashpot), up to
-  −1e5 1/s on ``aarsnes2019`` (the wear flats' dashpot, the regularised stick).
+  −1e5 1/s on ``aarsnes2019`` (the wear flats' dashpot, the regularised stick);
+- a downhole motor's torque slope across its rotor, ``m (dT/dω_m) mᵀ`` of rank 1: the rotor's relative
+  torsional row ``m`` (:attr:`~drillstring.dynamics.rom.ReducedOrderModel.motor_shapes`) is a fourth column of
+  ``V`` and a third of ``U``, ``dT/dω_m`` by a central difference of the registered compiled motor (about
+  −1530 1/s on the 1.2 kg·m² below the rotor of the ``motor`` case, the model's fastest rate there).
 
 What stays explicit: the contact forces, the turning loads, the top drive's controller, the hook-load ramp,
 case 1's kinetic- and strain-energy forces and the law's curvature over a step.
@@ -27,7 +31,8 @@ case 1's kinetic- and strain-energy forces and the law's curvature over a step.
 Each implicit stage solves ``(I − hγJ) z = r``: with ``A = I − hγJ_linear``, ``A z = r`` is
 ``S z_v = r_v − hγΩ² r_p``, ``z_p = r_p + hγ z_v`` with ``S = I + hγD + (hγ)²Ω²`` LU-factored block by block
 (the damping blocks, 10–20 modes each) once per attempt; the bit law by the Sherman–Morrison–Woodbury formula,
-``z = A⁻¹r + hγ A⁻¹U G w`` with ``(I₃ − hγ (VᵀA⁻¹U) G) w = VᵀA⁻¹r`` (3 × 3). No dense LU of the state.
+``z = A⁻¹r + hγ A⁻¹U G w`` with ``(I₄ − hγ (VᵀA⁻¹U) G) w = VᵀA⁻¹r`` (4 × 4; ``U`` n × 3, ``G`` 3 × 4, the
+motor's column not solved without a motor). No dense LU of the state.
 The stages are ``Y_i = y_n + z_i`` with ``r_i = h Σ_{j<i} (a^E_ij f_E(Y_j) + a^I_ij f_I(Y_j))``; since the pair
 shares ``b``, ``b̂`` and ``b*(θ)``, the solution ``y_n + h Σ b_i f(Y_i)``, the error estimate and the dense
 output need only ``f(Y_i)`` (kept as the dense stages, so the observations and the delayed bit history are
@@ -85,13 +90,13 @@ class ImexStep(NamedTuple):
     z: np.ndarray  # (n,) scratch: the stage increment
     r: np.ndarray  # (n,) scratch: the stage's right side
     v: np.ndarray  # (n,) scratch: a velocity-sized vector
-    shapes: np.ndarray  # (2, n) the bit's axial and torsional rows (first n_modal entries)
-    partials: np.ndarray  # (2, 3) the bit law's partial derivatives (G)
+    shapes: np.ndarray  # (3, n) the bit's axial and torsional rows, the motor's (first n_modal entries)
+    partials: np.ndarray  # (3, 3) the bit law's partial derivatives; [2, 0] the motor's dT/dω_m (G)
     base: np.ndarray  # (n, n) S = I + hγD + (hγ)²Ω², LU-factored block by block (damping blocks)
     pivots: np.ndarray  # (n,) int64, the blocks' row pivots
     dense_blocks: np.ndarray  # (n,) bool, per damping block: entered whole (factored) or by its diagonal
-    columns: np.ndarray  # (2, n) S⁻¹ b_u, S⁻¹ b_t (the velocity parts of A⁻¹U)
-    small: np.ndarray  # (3, 3) (I − hγ (VᵀA⁻¹U) G)⁻¹
+    columns: np.ndarray  # (3, n) S⁻¹ b_u, S⁻¹ b_t, S⁻¹ m (the velocity parts of A⁻¹U)
+    small: np.ndarray  # (4, 4) (I − hγ (VᵀA⁻¹U) G)⁻¹
     memo: np.ndarray  # (2,) the number of modal coordinates, Jacobians computed
     dense_stages: np.ndarray  # (s, n) f(Y_i) of the last accepted step (dense output)
 
@@ -109,30 +114,40 @@ def allocate(tableau: AdditiveTableau, n: int) -> ImexStep:
         a_explicit=c(tableau.a_explicit), a_implicit=c(tableau.a_implicit), gamma=float(tableau.gamma),
         c=c(tableau.c), b=c(tableau.b), error_weights=c(tableau.error_weights), dense=c(tableau.dense),
         order=float(tableau.controller_order), k=np.zeros((s, n)), k_implicit=np.zeros((s, n)), z=np.zeros(n),
-        r=np.zeros(n), v=np.zeros(n), shapes=np.zeros((2, n)), partials=np.zeros((2, 3)), base=np.zeros((n, n)),
-        pivots=np.zeros(n, dtype=np.int64), dense_blocks=np.zeros(n, dtype=np.bool_), columns=np.zeros((2, n)),
-        small=np.zeros((3, 3)), memo=np.zeros(2),
+        r=np.zeros(n), v=np.zeros(n), shapes=np.zeros((3, n)), partials=np.zeros((3, 3)), base=np.zeros((n, n)),
+        pivots=np.zeros(n, dtype=np.int64), dense_blocks=np.zeros(n, dtype=np.bool_), columns=np.zeros((3, n)),
+        small=np.zeros((4, 4)), memo=np.zeros(2),
         dense_stages=np.zeros((s, n)))
 
 
 @njit(cache=True)
-def _invert3(m, out):
-    """out = m⁻¹ for a 3 × 3 matrix (cofactors); returns False when m is singular."""
-    c00 = m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1]
-    c01 = m[1, 2] * m[2, 0] - m[1, 0] * m[2, 2]
-    c02 = m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0]
-    det = m[0, 0] * c00 + m[0, 1] * c01 + m[0, 2] * c02
-    if det == 0.0 or not math.isfinite(det):
-        return False
-    out[0, 0] = c00 / det
-    out[1, 0] = c01 / det
-    out[2, 0] = c02 / det
-    out[0, 1] = (m[0, 2] * m[2, 1] - m[0, 1] * m[2, 2]) / det
-    out[1, 1] = (m[0, 0] * m[2, 2] - m[0, 2] * m[2, 0]) / det
-    out[2, 1] = (m[0, 1] * m[2, 0] - m[0, 0] * m[2, 1]) / det
-    out[0, 2] = (m[0, 1] * m[1, 2] - m[0, 2] * m[1, 1]) / det
-    out[1, 2] = (m[0, 2] * m[1, 0] - m[0, 0] * m[1, 2]) / det
-    out[2, 2] = (m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]) / det
+def _invert_small(m, out):
+    """out = m⁻¹ for a small square matrix (Gauss–Jordan with partial pivoting; ``m`` is overwritten);
+    returns False when m is singular or not finite."""
+    k = m.shape[0]
+    for i in range(k):
+        for j in range(k):
+            out[i, j] = 1.0 if i == j else 0.0
+    for col in range(k):
+        best = col
+        for row in range(col + 1, k):
+            if abs(m[row, col]) > abs(m[best, col]):
+                best = row
+        pivot = m[best, col]
+        if pivot == 0.0 or not math.isfinite(pivot):
+            return False
+        for j in range(k):
+            m[col, j], m[best, j] = m[best, j], m[col, j]
+            out[col, j], out[best, j] = out[best, j], out[col, j]
+        for j in range(k):
+            m[col, j] /= pivot
+            out[col, j] /= pivot
+        for row in range(k):
+            if row != col and m[row, col] != 0.0:
+                factor = m[row, col]
+                for j in range(k):
+                    m[row, j] -= factor * m[col, j]
+                    out[row, j] -= factor * out[col, j]
     return True
 
 
@@ -199,7 +214,7 @@ def _base_solve(data, blocks, nm, x):
 
 @njit(cache=True)
 def _factor(data, h, omega2, damping_t, blocks):
-    """Factor ``S = I + hγD + (hγ)²Ω²`` by damping blocks, then ``A⁻¹U`` and the 3 × 3 Woodbury matrix's
+    """Factor ``S = I + hγD + (hγ)²Ω²`` by damping blocks, then ``A⁻¹U`` and the 4 × 4 Woodbury matrix's
     inverse for the step ``h``. Returns False when either is singular."""
     hg = h * data.gamma
     nm = omega2.shape[0]
@@ -225,27 +240,39 @@ def _factor(data, h, omega2, damping_t, blocks):
                 a[i, j] = (1.0 + hg * hg * omega2[i] if i == j else 0.0) + hg * damping_t[j, i]
         if not _lu_block(a, data.pivots, start, end):
             return False
-    for k in range(2):
+    # U = [b_u, b_t, m] (velocity rows; m the motor's, zero without one: its column is then not solved)
+    rank = 3 if g[2, 0] != 0.0 else 2
+    for k in range(3):
         for i in range(nm):
-            cols[k, i] = data.shapes[k, i]
-        _base_solve(data, blocks, nm, cols[k])
-    # P = Vᵀ A⁻¹ U, rows: velocity along b_u, along b_t, position along b_u (A⁻¹U's position part: hγ S⁻¹ b)
-    p = np.zeros((3, 2))
-    for k in range(2):
+            cols[k, i] = data.shapes[k, i] if k < rank else 0.0
+        if k < rank:
+            _base_solve(data, blocks, nm, cols[k])
+    # P = Vᵀ A⁻¹ U, rows: velocity along b_u, along b_t, position along b_u (A⁻¹U's position part: hγ S⁻¹ b),
+    # velocity along m
+    p = np.zeros((4, 3))
+    for k in range(rank):
         for i in range(nm):
             p[0, k] += data.shapes[0, i] * cols[k, i]
             p[1, k] += data.shapes[1, i] * cols[k, i]
             p[2, k] += hg * data.shapes[0, i] * cols[k, i]
-    m = np.eye(3)
-    for i in range(3):
-        for j in range(3):
-            m[i, j] -= hg * (p[i, 0] * g[0, j] + p[i, 1] * g[1, j])
-    return _invert3(m, data.small)
+            p[3, k] += data.shapes[2, i] * cols[k, i]
+    # G (3 × 4): the bit law's force and torque in (u̇, θ̇, u), the motor's torque in ω_m = mᵀη̇
+    gm = np.zeros((3, 4))
+    for j in range(3):
+        gm[0, j] = g[0, j]
+        gm[1, j] = g[1, j]
+    gm[2, 3] = g[2, 0]
+    m = np.eye(4)
+    for i in range(4):
+        for j in range(4):
+            m[i, j] -= hg * (p[i, 0] * gm[0, j] + p[i, 1] * gm[1, j] + p[i, 2] * gm[2, j])
+    return _invert_small(m, data.small)
 
 
 @njit(cache=True)
 def _solve(data, h, omega2, blocks, r, z):
-    """z = (I − hγ J)⁻¹ r (module docstring): the linear part's block solve, then Woodbury for the bit law."""
+    """z = (I − hγ J)⁻¹ r (module docstring): the linear part's block solve, then Woodbury for the bit law and
+    the motor."""
     hg = h * data.gamma
     nm = omega2.shape[0]
     sh, g, small, cols, x = data.shapes, data.partials, data.small, data.columns, data.v
@@ -257,19 +284,23 @@ def _solve(data, h, omega2, blocks, r, z):
     v0 = 0.0
     v1 = 0.0
     v2 = 0.0
+    v3 = 0.0
     for i in range(nm):
         z[nm + i] = x[i]
         z[i] = r[i] + hg * x[i]
         v0 += sh[0, i] * z[nm + i]
         v1 += sh[1, i] * z[nm + i]
         v2 += sh[0, i] * z[i]
-    w0 = small[0, 0] * v0 + small[0, 1] * v1 + small[0, 2] * v2
-    w1 = small[1, 0] * v0 + small[1, 1] * v1 + small[1, 2] * v2
-    w2 = small[2, 0] * v0 + small[2, 1] * v1 + small[2, 2] * v2
+        v3 += sh[2, i] * z[nm + i]
+    w0 = small[0, 0] * v0 + small[0, 1] * v1 + small[0, 2] * v2 + small[0, 3] * v3
+    w1 = small[1, 0] * v0 + small[1, 1] * v1 + small[1, 2] * v2 + small[1, 3] * v3
+    w2 = small[2, 0] * v0 + small[2, 1] * v1 + small[2, 2] * v2 + small[2, 3] * v3
+    w3 = small[3, 0] * v0 + small[3, 1] * v1 + small[3, 2] * v2 + small[3, 3] * v3
     gw0 = hg * (g[0, 0] * w0 + g[0, 1] * w1 + g[0, 2] * w2)
     gw1 = hg * (g[1, 0] * w0 + g[1, 1] * w1 + g[1, 2] * w2)
+    gw2 = hg * g[2, 0] * w3
     for i in range(nm):
-        column = gw0 * cols[0, i] + gw1 * cols[1, i]
+        column = gw0 * cols[0, i] + gw1 * cols[1, i] + gw2 * cols[2, i]
         z[nm + i] += column
         z[i] += hg * column
 
@@ -285,7 +316,8 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
     data.memo[_MODES] = omega2.shape[0]
     data.memo[_JACOBIANS] += 1.0
     for j in range(3):
-        if not (math.isfinite(data.partials[0, j]) and math.isfinite(data.partials[1, j])):
+        if not (math.isfinite(data.partials[0, j]) and math.isfinite(data.partials[1, j])
+                and math.isfinite(data.partials[2, j])):
             return 0, False
     if not _factor(data, h, omega2, damping_t, blocks):
         return 0, False
