@@ -343,8 +343,9 @@ class ContactLaw:
     component_code: ClassVar[float] = 0.0
     #: its case keys (a pydantic model with units and bounds), read from ``[contact]``
     keys: ClassVar[Any] = None
-    #: k'_sh [N/m per m of string], the wall's distributed stiffness: station i gets k'_sh ℓ_i (the context's
-    #: ``stiffness``, :meth:`~drillstring.forces.contact.ContactStations.stiffness`)
+    # k'_sh [N/m per m of string], the wall's distributed stiffness: station i gets k'_sh ℓ_i (the context's
+    # ``stiffness``, ContactStations.stiffness); a plain comment, not a documented attribute: each law documents
+    # its own field (a second description of the same attribute is a documentation-build error)
     shock_stiffness: float
 
     @classmethod
