@@ -48,10 +48,12 @@ from numba.core import event
 
 from drillstring.dynamics.rom import (
     accepted_step_kernel,
+    _rhs_kernel,
     evaluate_rhs,
     impacts_kernel,
     observation_width,
     observe_kernel,
+    observes_rate,
 )
 from drillstring.dynamics.runge_kutta import StepSizeController, error_norm, method_named, step_factor
 from drillstring.dynamics.steps import accept as step_accept
@@ -117,6 +119,7 @@ class Workspace(NamedTuple):
     y_old: np.ndarray  # (n,)
     y_new: np.ndarray  # (n,) scratch: the candidate solution, then dense output
     error: np.ndarray  # (n,) scratch: local error estimate
+    rate: np.ndarray  # (n,) dy/dt of the case-2 model at an observed state, where the observation reads it
     grid: np.ndarray  # (n_out,) output times [s]
     out: np.ndarray  # (n_out, n_columns) observations
 
@@ -125,15 +128,9 @@ class Workspace(NamedTuple):
         n = y0.shape[0]
         return cls(
             state=np.zeros(N_STATE), y=np.array(y0, dtype=float), f=np.zeros(n), y_old=np.zeros(n),
-            y_new=np.zeros(n), error=np.zeros(n), grid=np.ascontiguousarray(grid, dtype=float),
+            y_new=np.zeros(n), error=np.zeros(n), rate=np.zeros(n), grid=np.ascontiguousarray(grid, dtype=float),
             out=np.full((len(grid), n_columns), np.nan),
         )
-
-
-@njit(cache=True)
-def _observe(work, row, t, y, case2, observe_data):
-    """Observe ``y`` at time ``t`` [s] into output row ``row``."""
-    observe_kernel(case2, observe_data, t, y, work.out[row])
 
 
 def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
@@ -201,7 +198,9 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
         while row < n_grid and grid[row] <= t_new:
             tg = grid[row]
             if tg == t_new:
-                _observe(work, row, tg, y, case2, observe_data)
+                if observes_rate(case2):  # the observation reads dy/dt: evaluated here, not in it
+                    _rhs_kernel(case2, tg, y, work.rate)
+                observe_kernel(case2, observe_data, tg, y, work.rate, work.out[row])
             else:
                 theta = (tg - t) / h
                 for j in range(n):
@@ -214,7 +213,9 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
                             power *= theta
                         acc += bm * kept[m, j]
                     y_new[j] = y_old[j] + h * acc
-                _observe(work, row, tg, y_new, case2, observe_data)
+                if observes_rate(case2):
+                    _rhs_kernel(case2, tg, y_new, work.rate)
+                observe_kernel(case2, observe_data, tg, y_new, work.rate, work.out[row])
             row += 1
             state[N_OUT] = row
         if last:
@@ -289,7 +290,7 @@ def _compile_kernels(model, work: Workspace, step, settings: StepperSettings) ->
     monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
     with event.install_listener("numba:compile", monitor):
         _prepare(_loop(step), work, 0.0, step, settings, model.rhs_data, model.case2_data, model.observe_data)
-        _prepare(_observe, work, 0, 0.0, work.y, model.case2_data, model.observe_data)
+        _prepare(observe_kernel, model.case2_data, model.observe_data, 0.0, work.y, work.rate, work.out[0])
         _prepare(impacts_kernel, model.case2_data, model.observe_data, work.y)
         model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
     return _time.perf_counter() - start, monitor.compiled
@@ -361,7 +362,9 @@ def integrate_compiled(
     status = SUCCESS
     state[IMPACTS] = model.start_impacts(work.y)
     if grid[0] == 0.0:
-        _observe(work, 0, 0.0, work.y, case2, observe_data)
+        if observes_rate.py_func(case2):
+            _rhs_kernel(case2, 0.0, work.y, work.rate)
+        observe_kernel(case2, observe_data, 0.0, work.y, work.rate, work.out[0])
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
     output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])

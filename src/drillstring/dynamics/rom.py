@@ -603,17 +603,22 @@ def _rhs_kernel(d, t, y, out):
 
 
 @inner_kernel()
-def _surface_torque(d, t, y):
+def observes_rate(d):
+    """Whether :func:`observe_kernel` reads dy/dt (its ``rate``) for the case-2 data ``d``: a driving top
+    boundary's surface torque does. Compiled code; from Python, ``observes_rate.py_func(d)``."""
+    return d.laws[TOP_BOUNDARY_CODE] != 0.0
+
+
+@inner_kernel()
+def _surface_torque(d, t, y, rate):
     """The surface torque T_s [N·m] of a driving top boundary from the quill's equation of motion, ``J_td θ̈₀ =
     τ_m − T_s``: the boundary's motor torque (:func:`~drillstring.forces.registry.top_boundary_torque`) minus the
-    quill's inertial torque, with ``θ̈₀ = qᵀη̈`` from the model's right-hand side at ``(t, y)`` and ``J_td`` the
-    inertia the boundary lumps at the quill (the registry's header). For the same quill and bit motion it does
-    not depend on ``J_td`` (the elastic torque of the top element, read from a truncated basis, does: the
-    basis's shapes depend on ``J_td``)."""
+    quill's inertial torque, with ``θ̈₀ = qᵀη̈`` from ``rate``, the case-2 model's right-hand side at ``(t, y)``
+    (:func:`observe_kernel`), and ``J_td`` the inertia the boundary lumps at the quill (the registry's header).
+    For the same quill and bit motion it does not depend on ``J_td`` (the elastic torque of the top element,
+    read from a truncated basis, does: the basis's shapes depend on ``J_td``)."""
     n = d.omega2.shape[0]
     t0, t1 = d.blocks[2], d.blocks[3]
-    rate = np.empty(y.shape[0])
-    _rhs_kernel(d, t, y, rate)
     quill, elastic = _top_motion(d, y)
     states_rate = np.empty(y.shape[0])  # the boundary writes its states' rates: not needed here
     torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
@@ -906,10 +911,16 @@ def impacts_kernel(d, o, y):
 
 
 @njit(cache=True)
-def observe_kernel(d, o, t, y, out):
+def observe_kernel(d, o, t, y, rate, out):
     """Observables (:data:`OBSERVABLES`, by their columns) and the radial displacement at the probes for
     the state ``y`` at time ``t`` [s], from the case-2 data ``d`` (:class:`RhsData`) and ``o``
-    (:class:`ObserveData`, whose contact mask it fills). Returns the number of nodes in contact."""
+    (:class:`ObserveData`, whose contact mask it fills). Returns the number of nodes in contact.
+
+    ``rate``: where the top boundary drives the string (:func:`observes_rate`), dy/dt of the case-2 model at
+    ``(t, y)`` (:func:`_rhs_kernel`), which the surface torque reads; not read otherwise. The caller evaluates
+    it rather than this kernel: every compiled function that calls the right-hand side carries a copy of its
+    whole call tree, which Numba optimizes and generates again (three such callers here cost a third more
+    first compilation, measured, docs/performance.md)."""
     axial_force, bit_torque, depth_of_cut, depth, bit_velocity, bit_speed = _bit_rock(d, t, y)
     force = _contact_state(d, y, o.v, o.w, o.in_contact)
     count = 0
@@ -924,8 +935,8 @@ def observe_kernel(d, o, t, y, out):
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
     out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
-    if d.laws[TOP_BOUNDARY_CODE] != 0.0:  # a driving boundary: the torque from the quill's equation of motion
-        out[_SURFACE_TORQUE] = _surface_torque(d, t, y)
+    if observes_rate(d):  # a driving boundary: the torque from the quill's equation of motion
+        out[_SURFACE_TORQUE] = _surface_torque(d, t, y, rate)
     out[_MOTOR_SPEED] = 0.0
     out[_MOTOR_TORQUE] = 0.0
     if d.laws[MOTOR_CODE] != 0.0:
@@ -1299,7 +1310,11 @@ class ReducedOrderModel:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
         its v and w [m] (:func:`observation_width` columns)."""
         out = np.empty(observation_width(len(self.probe_nodes)))
-        observe_kernel(self.case2_data, self.observe_data, float(t), np.ascontiguousarray(y, dtype=float), out)
+        y = np.ascontiguousarray(y, dtype=float)
+        rate = np.zeros_like(y)
+        if observes_rate.py_func(self.case2_data):
+            _rhs_kernel(self.case2_data, float(t), y, rate)
+        observe_kernel(self.case2_data, self.observe_data, float(t), y, rate, out)
         if not compiled(self.bit_rock):  # a law from outside the package: its force from its NumPy reference
             n = self.size
             position, angle = self.bit_position(t, y)
