@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import sys
 import time as _time
+from types import FunctionType
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -222,14 +223,29 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
             return SUCCESS
 
 
-#: The loop compiled for the package's step kinds (cached on disk), and for kinds defined elsewhere (not
-#: cached: the kernel cache's source hash does not cover them, :mod:`drillstring.dynamics.steps.kinds`).
-_run_chunk_cached = njit(cache=True)(_run_chunk)
-_run_chunk_uncached = njit(cache=False)(_run_chunk)
+_LOOPS: dict = {}  # StepKind -> its compiled loop
 
 
 def _loop(step) -> Callable:
-    return _run_chunk_cached if kind_of_data(step).cacheable else _run_chunk_uncached
+    """The loop compiled for the kind of ``step`` (its data): :func:`_run_chunk` with ``step_attempt`` and
+    ``step_accept`` bound to the kind's own functions, which Numba inlines into it (IR level); cached on disk
+    for the package's kinds, not for kinds defined elsewhere (the kernel cache's source hash does not cover
+    them, :mod:`drillstring.dynamics.steps.kinds`). One loop per kind, sharing the source and the cache index
+    (their signatures differ by the step's data type). Why not the loop calling the kind's functions through
+    the ``overload`` of :func:`drillstring.dynamics.steps.attempt`: each compiled function that calls the
+    right-hand side carries a copy of its call tree, which Numba generates again — the attempt compiled on its
+    own cost 2–2.4 s of the reference case's first compilation (docs/performance.md)."""
+    kind = kind_of_data(step)
+    loop = _LOOPS.get(kind)
+    if loop is None:
+        def inlined(function):
+            return njit(inline="always")(getattr(function, "py_func", function))
+
+        namespace = dict(_run_chunk.__globals__, step_attempt=inlined(kind.attempt), step_accept=inlined(kind.accept))
+        function = FunctionType(_run_chunk.__code__, namespace, _run_chunk.__name__)
+        function.__qualname__, function.__doc__ = _run_chunk.__qualname__, _run_chunk.__doc__
+        loop = _LOOPS[kind] = njit(cache=kind.cacheable)(function)
+    return loop
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -28,11 +28,11 @@ A kind is one module that registers one :class:`StepKind` (:func:`register`):
   evaluations, cause)`` and ``accept(rhs, t_new, y_new) -> (f, evaluations)``.
 
 The right-hand side is :func:`~drillstring.dynamics.rom.evaluate_rhs` of ``rhs_data`` (an implicit or
-Rosenbrock kind reads its Jacobian from the model's data the same way). :func:`attempt` and :func:`accept`
-are resolved by the type of ``data`` when the loop is compiled (Numba ``overload``), so the loop never names
-a kind and compiles only the one it runs. The two functions are Numba-compilable Python functions (or ``njit``
-dispatchers, whose Python function is used), their parameters named as those of :func:`attempt` and
-:func:`accept` (Numba checks the names). A kind defined outside the package is not covered by the kernel
+Rosenbrock kind reads its Jacobian from the model's data the same way). The loop is compiled once per kind,
+with the kind's ``attempt`` and ``accept`` in place of :func:`attempt` and :func:`accept` and inlined into it
+at Numba's IR level (:func:`drillstring.dynamics.compiled._loop`), so the loop never names a kind and compiles
+only the one it runs. The two functions are Numba-compilable Python functions (or ``njit`` dispatchers, whose
+Python function is used), their parameters named as those of :func:`attempt` and :func:`accept`. A kind defined outside the package is not covered by the kernel
 cache's source hash (:mod:`drillstring.kernel_cache`), so the loop runs it compiled without the disk cache
 (``cacheable = False``, the default for a module outside ``drillstring``).
 """
@@ -42,8 +42,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from numba import types
-from numba.extending import overload
 
 __all__ = ["StepKind", "register", "kind_of", "kind_of_data", "step_data", "attempt", "accept"]
 
@@ -97,53 +95,16 @@ def step_data(method: Any, n: int) -> Any:
     return kind_of(method).allocate(method, n)
 
 
-def _registered(data_type) -> StepKind | None:
-    if isinstance(data_type, types.BaseNamedTuple):
-        return _BY_DATA.get(data_type.instance_class)
-    return None
-
-
 def attempt(data, rhs_data, t, h, y, f, y_new, err):
-    """One step attempt of the kind of ``data`` (module docstring). Compiled code only."""
-    raise NotImplementedError("compiled code only: resolved by the type of the step's data")
+    """One step attempt of the kind of ``data`` (module docstring): the contract of a kind's ``attempt``. The
+    compiled loop calls the kind's own function in its place (:func:`drillstring.dynamics.compiled._loop`)."""
+    raise NotImplementedError("compiled code only: the loop is compiled with the kind's own attempt")
 
 
 def accept(data, y, f):
-    """What the kind of ``data`` keeps of an accepted step (module docstring). Compiled code only."""
-    raise NotImplementedError("compiled code only: resolved by the type of the step's data")
-
-
-def _implementation(function):
-    """The Python function of a step's ``attempt`` or ``accept`` (given plain or as a Numba dispatcher), which
-    the overload compiles as its implementation: one compiled function per kind and signature, not a wrapper
-    calling a dispatcher. Measured on the reference case (CPU time of the first compilation, fresh cache;
-    docs/performance.md): a wrapper calling the kind's dispatcher cost about 30 % more than before the split,
-    the same functions inlined into the loop at Numba's IR level (``inline="always"``) 4–25 % more, this 3–12 %
-    (``benchmarks/bench_step_loop.py``)."""
-    return getattr(function, "py_func", function)
-
-
-#: The step's functions compiled with the loop's flags (a CPython wrapper, as the loop has): Numba keys the
-#: implementations of an ``overload`` on the caller's flags, so a step compiled without the wrapper would compile
-#: the right-hand side's call (:func:`~drillstring.dynamics.rom.evaluate_rhs`) a second time for the loop's own
-#: call (1.4 s of the reference case's first compilation, measured).
-_LOOP_FLAGS = {"no_cpython_wrapper": False}
-
-
-@overload(attempt, jit_options=_LOOP_FLAGS)
-def _attempt_compiled(data, rhs_data, t, h, y, f, y_new, err):
-    kind = _registered(data)
-    if kind is None:
-        return None
-    return _implementation(kind.attempt)
-
-
-@overload(accept, jit_options=_LOOP_FLAGS)
-def _accept_compiled(data, y, f):
-    kind = _registered(data)
-    if kind is None:
-        return None
-    return _implementation(kind.accept)
+    """What the kind of ``data`` keeps of an accepted step (module docstring): the contract of a kind's
+    ``accept``, called in its place as :func:`attempt` is."""
+    raise NotImplementedError("compiled code only: the loop is compiled with the kind's own accept")
 
 
 def kind_of_data(data: Any) -> StepKind:
