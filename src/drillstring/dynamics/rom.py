@@ -609,7 +609,7 @@ def observes_rate(d):
     return d.laws[TOP_BOUNDARY_CODE] != 0.0
 
 
-@inner_kernel()
+@inner_kernel(inline="always")  # its one caller: no compiled function of its own (docs/performance.md)
 def _surface_torque(d, t, y, rate):
     """The surface torque T_s [N·m] of a driving top boundary from the quill's equation of motion, ``J_td θ̈₀ =
     τ_m − T_s``: the boundary's motor torque (:func:`~drillstring.forces.registry.top_boundary_torque`) minus the
