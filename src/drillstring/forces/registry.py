@@ -665,6 +665,13 @@ _CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook
                "contact_law": CONTACT_LAW_CODE, "motor": MOTOR_CODE}
 
 
+def _inlined(kernel):
+    """``kernel`` (a Numba dispatcher or a plain function) inlined into the dispatch at Numba's IR level."""
+    from numba import njit
+
+    return njit(inline="always")(getattr(kernel, "py_func", kernel))
+
+
 def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
                      ) -> tuple[str, dict]:
     """The dispatch over the package's components of ``kind`` by their code; ``none``: what code 0 returns
@@ -677,7 +684,7 @@ def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: 
     if none is not None:
         lines += ["    if code == 0.0:", f"        return {none}"]
     for i, (code, cls) in enumerate(entries):
-        namespace[f"kernel_{i}"] = cls.kernel
+        namespace[f"kernel_{i}"] = _inlined(cls.kernel)
         lines.append(f"    if code == {code!r}:")
         lines.append(f"        return kernel_{i}({call})")
     lines.append(f"    return {fallback}")
