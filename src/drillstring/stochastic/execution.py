@@ -39,7 +39,7 @@ import multiprocessing
 import os
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 from drillstring.stochastic.store import DONE, FAILED
 
@@ -214,10 +214,11 @@ class StoreRun:
 def run_locked(
     store_path,
     open_store: Callable[[], Any],
-    pending: Callable[[Any], Sequence[tuple[int, Any]]],
+    pending: Callable[[Any], Sequence[tuple[int, Any]]] | None,
     task: Callable[[Any], Any],
     engine: Engine = Engine(),
     *,
+    passes: Callable[[Any], Iterable[Sequence[tuple[int, Any]]]] | None = None,
     lost: LostOutcome = bare_failure,
     prepare: Callable[[], None] | None = None,
     finish: Callable[["StoreRun"], Any] | None = None,
@@ -232,7 +233,11 @@ def run_locked(
     items with ``task`` (:func:`run_tasks`), then ``finish(run)`` (reading the store and writing the
     result files, still under the lock; its value is the run's ``result``) and release everything.
     ``prepare()`` runs once before local worker processes start (compiling the kernels in this process,
-    so the workers load them)."""
+    so the workers load them).
+
+    ``passes`` instead of ``pending``: a run in passes, each choosing its items from what the previous ones
+    wrote (the optimiser's batches of design points): ``passes(store)`` yields the items of each pass, run in
+    turn, an empty pass skipped."""
     from drillstring.stochastic.locks import StudyLock
 
     scheduler = engine.scheduler
@@ -245,14 +250,24 @@ def run_locked(
             store = open_store()
             for repair in getattr(store, "repairs", ()):  # damaged chunks found: their rows run again
                 notify(engine.note, repair)
-            items = list(pending(store))
-            if items and client is None and prepare is not None:
-                prepare()
-            report = run_tasks(store, task, items, workers=engine.workers, client=client, address=address,
-                               progress=engine.progress, worker_timeout=engine.worker_timeout, lost=lost,
-                               what=what, noun=noun, note=engine.note)
-            run = StoreRun(store, report.completed, report.failed, report.wall_time, report.workers,
-                           report.computed, guard.note)
+            if (pending is None) == (passes is None):
+                raise TypeError("run_locked: give pending or passes, not both")
+            single = passes is None
+            computed, wall, used, prepared, counts = 0, 0.0, 1, False, None
+            for items in ([list(pending(store))] if single else passes(store)):
+                items = list(items)
+                if not items and not single:
+                    continue
+                if items and client is None and prepare is not None and not prepared:
+                    prepare()
+                    prepared = True
+                report = run_tasks(store, task, items, workers=engine.workers, client=client, address=address,
+                                   progress=engine.progress, worker_timeout=engine.worker_timeout, lost=lost,
+                                   what=what, noun=noun, note=engine.note)
+                computed, wall, used = computed + report.computed, wall + report.wall_time, report.workers
+                counts = report.completed, report.failed  # the whole store's
+            done, failed = store.counts() if counts is None else counts
+            run = StoreRun(store, done, failed, wall, used, computed, guard.note)
             if finish is not None:
                 run.result = finish(run)
             return run

@@ -53,8 +53,7 @@ from drillstring.case import Case
 from drillstring.checks import integer, real_number
 from drillstring.checks import seed as check_seed
 from drillstring.dynamics.indicators import has_top_drive
-from drillstring.stochastic.execution import (Engine, StoreRun, TaskOutcome, connect_scheduler, close_client,
-                                              notify, run_tasks)
+from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.operating_map import MapSettings
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, case_parameter, with_parameters
 from drillstring.stochastic.probabilistic_map import (PROBABILITIES, SAMPLE_OUTPUTS, SampledMapSettings,
@@ -367,57 +366,31 @@ def _stored_design(store: OptimizationStore, settings: OptimizationSettings, poi
 def run_optimization(case: Case, settings: OptimizationSettings, store_path: str | Path, engine: Engine = Engine(),
                      *, finish: Callable[[StoreRun], Any] | None = None) -> StoreRun:
     """Run (or resume) the search into its Zarr store on ``engine`` (module docstring), then ``finish(run)``
-    under the store's lock (checked first: :func:`check_optimization`)."""
-    from drillstring.stochastic.locks import StudyLock
-
+    under the store's lock (checked first: :func:`check_optimization`): one pass of the study engine
+    (:func:`~drillstring.stochastic.execution.run_locked`) per batch of design points, each batch chosen from
+    the realizations the previous ones wrote (a batch already in the store, from an interrupted run, is kept)."""
     check_optimization(case, settings)
     outputs = tuple(with_top_drive_outputs(SAMPLE_OUTPUTS, has_top_drive(case)))
     problem = settings.problem
-    scheduler = engine.scheduler
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
-    address = None if client is None else str(getattr(client.scheduler, "address", scheduler))
-    task = partial(_task, case, settings)
-    computed, wall, used, prepared = 0, 0.0, 1, False
-    try:
-        with StudyLock(store_path, what="optimization") as guard:
-            if guard.note:
-                notify(engine.note, guard.note)
-            store = OptimizationStore(Path(store_path), case, settings)
-            for repair in store.repairs:
-                notify(engine.note, repair)
-            point = 0
-            while point < settings.points:
-                batch = range(point, settings.initial) if point < settings.initial else range(
-                    point, min(point + settings.batch, settings.points))
-                stored = [_stored_design(store, settings, p) for p in batch]
-                if any(values is None for values in stored):
-                    x, estimates = _history(store, settings, outputs, batch.start)
-                    chosen = next_batch(problem, x, estimates, settings.points, batch.start, len(batch))
-                    stored = [chosen[k] if values is None else values for k, values in enumerate(stored)]
-                items = []
-                status = store.status()
-                for p, values in zip(batch, stored):
-                    items += [(r, (r, tuple(float(v) for v in values))) for r in
-                              range(p * settings.samples, (p + 1) * settings.samples) if status[r] == PENDING]
-                if items:
-                    if client is None and not prepared:
-                        compile_kernels(case)
-                        prepared = True
-                    report = run_tasks(store, task, items, workers=engine.workers, client=client, address=address,
-                                       progress=engine.progress, worker_timeout=engine.worker_timeout,
-                                       what="optimization", noun="realizations", note=engine.note)
-                    computed += report.computed
-                    wall += report.wall_time
-                    used = report.workers
-                point = batch.stop
-            done, failed = store.counts()
-            run = StoreRun(store, done, failed, wall, used, computed, guard.note)
-            if finish is not None:
-                run.result = finish(run)
-            return run
-    finally:
-        if isinstance(scheduler, str) and client is not None:
-            close_client(client)
+
+    def batches(store: OptimizationStore):
+        point = 0
+        while point < settings.points:
+            batch = range(point, settings.initial) if point < settings.initial else range(
+                point, min(point + settings.batch, settings.points))
+            stored = [_stored_design(store, settings, p) for p in batch]
+            if any(values is None for values in stored):
+                x, estimates = _history(store, settings, outputs, batch.start)
+                chosen = next_batch(problem, x, estimates, settings.points, batch.start, len(batch))
+                stored = [chosen[k] if values is None else values for k, values in enumerate(stored)]
+            status = store.status()
+            yield [(r, (r, tuple(float(v) for v in values))) for p, values in zip(batch, stored)
+                   for r in range(p * settings.samples, (p + 1) * settings.samples) if status[r] == PENDING]
+            point = batch.stop
+
+    return run_locked(store_path, lambda: OptimizationStore(Path(store_path), case, settings), None,
+                      partial(_task, case, settings), engine, passes=batches, prepare=partial(compile_kernels, case),
+                      finish=finish, what="optimization")
 
 
 def optimization_result(store: OptimizationStore) -> dict[str, Any]:
