@@ -63,7 +63,8 @@ the offsets :func:`pack` computes from their ``n_states``.
 
 **Compiled dispatch.** The kernels call :func:`bit_law_force`, :func:`top_boundary_torque` and
 :func:`hook_load_force`; when they are
-compiled, the registry writes the dispatch over the codes of the package's registered components
+compiled, the registry writes the dispatch over the codes of the package's registered components, each
+component's kernel inlined into it at Numba's IR level (one compiled function per kind, not one per kernel)
 (:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
 same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
 component registered from **outside the package** (a test, a user's script) runs through the NumPy
