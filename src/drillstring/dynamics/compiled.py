@@ -253,7 +253,7 @@ def _loop(step) -> Callable:
 # ---------------------------------------------------------------------------------------------------------
 
 #: About how long the first compilation takes on a 2-core machine [s], per nonlinear model.
-COMPILE_ESTIMATE = {"bit_and_contact": 12, "full": 17}
+COMPILE_ESTIMATE = {"bit_and_contact": 17, "full": 24}
 
 
 def _notify_stderr(message: str) -> None:
