@@ -84,3 +84,27 @@ def test_bad_engine_options(kwargs, error, message):
 def test_engine_takes_numpy_integers():
     engine = execution.Engine(workers=np.int64(2))
     assert type(engine.workers) is int and engine.workers == 2
+
+
+def test_run_locked_in_passes_each_choosing_from_what_the_previous_wrote(tmp_path):
+    """A run in passes (the optimiser's batches): the second pass reads the first's outcomes from the store;
+    an empty pass is skipped, the run's counts are the whole store's, and ``prepare`` runs once."""
+    store = Memory(4)
+    seen, prepared = [], []
+
+    def passes(memory):
+        yield [(0, (0, 2.0)), (1, (1, 4.0))]
+        yield []  # nothing to run: skipped
+        first = [memory.rows[i].values["y"] for i in (0, 1)]
+        seen.append(first)
+        yield [(2, (2, first[0] + first[1])), (3, (3, 1.0))]
+
+    run = execution.run_locked(tmp_path / "store", lambda: store, None, square, execution.Engine(workers=1),
+                               passes=passes, prepare=lambda: prepared.append(1))
+    assert seen == [[4.0, 16.0]]
+    assert store.rows[2].values["y"] == 20.0 ** 2
+    assert (run.completed, run.failed, run.computed) == (4, 0, 4)
+    assert prepared == [1]
+    assert len(store.sessions) == 2  # the empty pass recorded no session
+    with pytest.raises(TypeError, match="pending or passes"):
+        execution.run_locked(tmp_path / "other", lambda: store, lambda s: [], square, passes=passes)
