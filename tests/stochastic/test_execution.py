@@ -106,5 +106,5 @@ def test_run_locked_in_passes_each_choosing_from_what_the_previous_wrote(tmp_pat
     assert (run.completed, run.failed, run.computed) == (4, 0, 4)
     assert prepared == [1]
     assert len(store.sessions) == 2  # the empty pass recorded no session
-    with pytest.raises(TypeError, match="pending or passes"):
+    with pytest.raises(TypeError, match="one of pending and passes"):
         execution.run_locked(tmp_path / "other", lambda: store, lambda s: [], square, passes=passes)

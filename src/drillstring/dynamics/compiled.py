@@ -54,6 +54,7 @@ from drillstring.dynamics.rom import (
     impacts_kernel,
     observation_width,
     observe_kernel,
+    observe_row,
     observes_rate,
 )
 from drillstring.dynamics.runge_kutta import StepSizeController, error_norm, method_named, step_factor
@@ -61,6 +62,7 @@ from drillstring.dynamics.steps import accept as step_accept
 from drillstring.dynamics.steps import attempt as step_attempt
 from drillstring.dynamics.steps import kind_of, step_data
 from drillstring.dynamics.steps.kinds import kind_of_data
+from drillstring.forces.registry import inlined
 from drillstring.dynamics.stiffness import stiffness_diagnosis
 
 SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE, PAUSED, COLLAPSED = 0, 1, 2, 3, 4, 5
@@ -198,11 +200,8 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
         # outputs inside (t, t_new]: y(t + θh) = y_old + h Σ_m Σ_p dense[m, p] θ^(p+1) kept[m]
         while row < n_grid and grid[row] <= t_new:
             tg = grid[row]
-            if tg == t_new:
-                if observes_rate(case2):  # the observation reads dy/dt: evaluated here, not in it
-                    _rhs_kernel(case2, tg, y, work.rate)
-                observe_kernel(case2, observe_data, tg, y, work.rate, work.out[row])
-            else:
+            observed = y
+            if tg != t_new:
                 theta = (tg - t) / h
                 for j in range(n):
                     acc = 0.0
@@ -214,9 +213,10 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
                             power *= theta
                         acc += bm * kept[m, j]
                     y_new[j] = y_old[j] + h * acc
-                if observes_rate(case2):
-                    _rhs_kernel(case2, tg, y_new, work.rate)
-                observe_kernel(case2, observe_data, tg, y_new, work.rate, work.out[row])
+                observed = y_new
+            if observes_rate(case2):  # the observation reads dy/dt: evaluated here, not in it (observe_row)
+                _rhs_kernel(case2, tg, observed, work.rate)
+            observe_kernel(case2, observe_data, tg, observed, work.rate, work.out[row])
             row += 1
             state[N_OUT] = row
         if last:
@@ -238,9 +238,6 @@ def _loop(step) -> Callable:
     kind = kind_of_data(step)
     loop = _LOOPS.get(kind)
     if loop is None:
-        def inlined(function):
-            return njit(inline="always")(getattr(function, "py_func", function))
-
         namespace = dict(_run_chunk.__globals__, step_attempt=inlined(kind.attempt), step_accept=inlined(kind.accept))
         function = FunctionType(_run_chunk.__code__, namespace, _run_chunk.__name__)
         function.__qualname__, function.__doc__ = _run_chunk.__qualname__, _run_chunk.__doc__
@@ -378,9 +375,7 @@ def integrate_compiled(
     status = SUCCESS
     state[IMPACTS] = model.start_impacts(work.y)
     if grid[0] == 0.0:
-        if observes_rate.py_func(case2):
-            _rhs_kernel(case2, 0.0, work.y, work.rate)
-        observe_kernel(case2, observe_data, 0.0, work.y, work.rate, work.out[0])
+        observe_row(case2, observe_data, 0.0, work.y, work.rate, work.out[0])
         state[N_OUT] = 1
     stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
     output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])

@@ -950,6 +950,14 @@ def observe_kernel(d, o, t, y, rate, out):
     return count
 
 
+def observe_row(d, o, t, y, rate, out):
+    """:func:`observe_kernel` called from Python: ``rate`` (scratch, like ``y``) filled with dy/dt first where
+    the observation reads it (:func:`observes_rate`). The compiled loop does the same in its own code."""
+    if observes_rate.py_func(d):
+        _rhs_kernel(d, t, y, rate)
+    return observe_kernel(d, o, t, y, rate, out)
+
+
 @njit(cache=True)
 def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     """What the model does after each accepted step ``[t_old, t_old + h]`` of the integrator (never after a
@@ -1311,10 +1319,7 @@ class ReducedOrderModel:
         its v and w [m] (:func:`observation_width` columns)."""
         out = np.empty(observation_width(len(self.probe_nodes)))
         y = np.ascontiguousarray(y, dtype=float)
-        rate = np.zeros_like(y)
-        if observes_rate.py_func(self.case2_data):
-            _rhs_kernel(self.case2_data, float(t), y, rate)
-        observe_kernel(self.case2_data, self.observe_data, float(t), y, rate, out)
+        observe_row(self.case2_data, self.observe_data, float(t), y, np.zeros_like(y), out)
         if not compiled(self.bit_rock):  # a law from outside the package: its force from its NumPy reference
             n = self.size
             position, angle = self.bit_position(t, y)

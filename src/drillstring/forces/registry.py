@@ -666,11 +666,13 @@ _CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook
                "contact_law": CONTACT_LAW_CODE, "motor": MOTOR_CODE}
 
 
-def _inlined(kernel):
-    """``kernel`` (a Numba dispatcher or a plain function) inlined into the dispatch at Numba's IR level."""
+def inlined(function):
+    """``function`` (a Numba dispatcher or a plain function) as a dispatcher that Numba inlines into its compiled
+    callers at the IR level, before typing: no compiled function of its own (the registry's dispatch inlines each
+    component's kernel; the step loop, its step kind's functions)."""
     from numba import njit
 
-    return njit(inline="always")(getattr(kernel, "py_func", kernel))
+    return njit(inline="always")(getattr(function, "py_func", function))
 
 
 def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
@@ -685,7 +687,7 @@ def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: 
     if none is not None:
         lines += ["    if code == 0.0:", f"        return {none}"]
     for i, (code, cls) in enumerate(entries):
-        namespace[f"kernel_{i}"] = _inlined(cls.kernel)
+        namespace[f"kernel_{i}"] = inlined(cls.kernel)
         lines.append(f"    if code == {code!r}:")
         lines.append(f"        return kernel_{i}({call})")
     lines.append(f"    return {fallback}")

@@ -240,6 +240,8 @@ def run_locked(
     turn, an empty pass skipped."""
     from drillstring.stochastic.locks import StudyLock
 
+    if (pending is None) == (passes is None):
+        raise TypeError("run_locked: give one of pending and passes")
     scheduler = engine.scheduler
     client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
     try:
@@ -250,8 +252,6 @@ def run_locked(
             store = open_store()
             for repair in getattr(store, "repairs", ()):  # damaged chunks found: their rows run again
                 notify(engine.note, repair)
-            if (pending is None) == (passes is None):
-                raise TypeError("run_locked: give pending or passes, not both")
             single = passes is None
             computed, wall, used, prepared, counts = 0, 0.0, 1, False, None
             for items in ([list(pending(store))] if single else passes(store)):

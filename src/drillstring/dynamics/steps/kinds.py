@@ -32,8 +32,8 @@ Rosenbrock kind reads its Jacobian from the model's data the same way). The loop
 with the kind's ``attempt`` and ``accept`` in place of :func:`attempt` and :func:`accept` and inlined into it
 at Numba's IR level (:func:`drillstring.dynamics.compiled._loop`), so the loop never names a kind and compiles
 only the one it runs. The two functions are Numba-compilable Python functions (or ``njit`` dispatchers, whose
-Python function is used), their parameters named as those of :func:`attempt` and :func:`accept`. A kind defined outside the package is not covered by the kernel
-cache's source hash (:mod:`drillstring.kernel_cache`), so the loop runs it compiled without the disk cache
+Python function is used), their parameters named as those of :func:`attempt` and :func:`accept`. A kind
+defined outside the package is not covered by the kernel cache's source hash (:mod:`drillstring.kernel_cache`), so the loop runs it compiled without the disk cache
 (``cacheable = False``, the default for a module outside ``drillstring``).
 """
 
@@ -41,7 +41,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any, Callable
-
 
 __all__ = ["StepKind", "register", "kind_of", "kind_of_data", "step_data", "attempt", "accept"]
 
