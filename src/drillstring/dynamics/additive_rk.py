@@ -36,7 +36,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from drillstring.dynamics.runge_kutta import EmbeddedPair, _readonly
+from drillstring.dynamics.tableaus import EmbeddedPair, _readonly
 
 __all__ = ["AdditiveTableau", "ARK3_2_4L", "ARK4_3_6L", "IMEX_TABLEAUS"]
 

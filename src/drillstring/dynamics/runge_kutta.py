@@ -71,12 +71,21 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from fractions import Fraction
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
+
+from drillstring.dynamics.additive_rk import IMEX_TABLEAUS
+from drillstring.dynamics.step_control import RHS, StepSizeController, error_norm, step_factor
+from drillstring.dynamics.steps import kind_of
+from drillstring.dynamics.tableaus import (
+    BOGACKI_SHAMPINE_32,
+    DORMAND_PRINCE_54,
+    TABLEAUS,
+    ButcherTableau,
+    dense_weights,
+)
 
 __all__ = [
     "ButcherTableau",
@@ -94,211 +103,11 @@ __all__ = [
     "integrate",
 ]
 
-RHS = Callable[[float, np.ndarray], np.ndarray]
-
-_TABLEAU_TOL = 1e-12
-
-
-# ---------------------------------------------------------------------------------------------------------
-# Butcher tableaus
-# ---------------------------------------------------------------------------------------------------------
-
-
-def _readonly(x: Any, ndim: int) -> np.ndarray:
-    arr = np.array(x, dtype=np.float64)  # always a private copy
-    if arr.ndim != ndim:
-        raise ValueError(f"expected a {ndim}-D array, got shape {arr.shape}")
-    arr.setflags(write=False)
-    return arr
-
-
-class EmbeddedPair:
-    """What every embedded pair of this package's methods (explicit here, additive in
-    :mod:`drillstring.dynamics.additive_rk`) answers from its validated arrays: nodes ``c``, orders ``order`` and
-    ``error_order``."""
-
-    @property
-    def n_stages(self) -> int:
-        return int(self.c.shape[0])
-
-    @property
-    def controller_order(self) -> int:
-        """Order ``q`` of the local error estimate (the lower order of the pair); the controller uses
-        exponents ``∝ 1/(q + 1)``."""
-        return min(self.order, self.error_order)
-
-
-@dataclass(frozen=True, eq=False)
-class ButcherTableau(EmbeddedPair):
-    """An explicit embedded Runge–Kutta pair as data.
-
-    Attributes
-    ----------
-    name:
-        Short name.
-    c:
-        Nodes, shape ``(s,)``.
-    a:
-        Stage coefficients, shape ``(s, s)``, strictly lower triangular.
-    b:
-        Weights of the propagated solution (the higher-order one, "local extrapolation").
-    b_hat:
-        Weights of the embedded solution; ``b − b_hat`` gives the error estimate.
-    order:
-        Order of ``b``.
-    error_order:
-        Order of ``b_hat``.
-    fsal:
-        "First same as last": the last stage is evaluated at the new solution (``c[-1] = 1`` and
-        ``a[-1] = b``), so it is the next step's first stage.
-    dense:
-        Continuous-extension coefficients, shape ``(s, p)``: ``b_i(θ) = Σ_{j=1..p} dense[i, j−1] θ^j`` and
-        ``y(t + θh) ≈ y + h Σ_i b_i(θ) k_i``; ``None`` when the tableau has none (the stepper then uses
-        cubic Hermite interpolation).
-
-    Construction checks the shapes, strict lower triangularity, ``Σ_j a_ij = c_i``, ``Σ b = Σ b_hat = 1``,
-    the FSAL structure when claimed, and ``b_i(1) = b_i`` for the dense output. Arrays are stored as
-    read-only copies.
-    """
-
-    name: str
-    c: np.ndarray
-    a: np.ndarray
-    b: np.ndarray
-    b_hat: np.ndarray
-    order: int
-    error_order: int
-    fsal: bool = False
-    dense: np.ndarray | None = None
-    # derived (not init arguments)
-    error_weights: np.ndarray = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        c = _readonly(self.c, 1)
-        a = _readonly(self.a, 2)
-        b = _readonly(self.b, 1)
-        b_hat = _readonly(self.b_hat, 1)
-        s = c.shape[0]
-        if s < 1 or a.shape != (s, s) or b.shape != (s,) or b_hat.shape != (s,):
-            raise ValueError(
-                f"{self.name}: inconsistent shapes c{c.shape}, a{a.shape}, b{b.shape}, b_hat{b_hat.shape}"
-            )
-        if np.any(np.triu(a) != 0.0):
-            raise ValueError(f"{self.name}: `a` must be strictly lower triangular (explicit method)")
-        if not np.allclose(a.sum(axis=1), c, rtol=0.0, atol=_TABLEAU_TOL):
-            raise ValueError(f"{self.name}: row sums of `a` must equal `c`")
-        if c[0] != 0.0:
-            raise ValueError(f"{self.name}: c[0] must be 0 for an explicit method")
-        if abs(b.sum() - 1.0) > _TABLEAU_TOL or abs(b_hat.sum() - 1.0) > _TABLEAU_TOL:
-            raise ValueError(f"{self.name}: `b` and `b_hat` must each sum to 1 (consistency)")
-        if np.array_equal(b, b_hat):
-            raise ValueError(f"{self.name}: `b_hat` equals `b`; no error estimate")
-        if not (int(self.order) >= 1 and int(self.error_order) >= 1):
-            raise ValueError(f"{self.name}: orders must be positive integers")
-        if self.fsal and (abs(c[-1] - 1.0) > _TABLEAU_TOL or not np.allclose(a[-1], b, rtol=0, atol=_TABLEAU_TOL)):
-            raise ValueError(f"{self.name}: FSAL requires c[-1] = 1 and a[-1] = b")
-        dense = None
-        if self.dense is not None:
-            dense = _readonly(self.dense, 2)
-            if dense.shape[0] != s or dense.shape[1] < 1:
-                raise ValueError(f"{self.name}: `dense` must have shape (s, p), got {dense.shape}")
-            if not np.allclose(dense.sum(axis=1), b, rtol=0.0, atol=_TABLEAU_TOL):
-                raise ValueError(f"{self.name}: dense output must reproduce `b` at θ = 1")
-        ew = b - b_hat
-        ew.setflags(write=False)
-        for name, value in (("c", c), ("a", a), ("b", b), ("b_hat", b_hat), ("dense", dense),
-                            ("order", int(self.order)), ("error_order", int(self.error_order)),
-                            ("fsal", bool(self.fsal)), ("error_weights", ew)):
-            object.__setattr__(self, name, value)
-
-
-    def dense_weights(self, theta: float | np.ndarray) -> np.ndarray:
-        """``b_i(θ)``, shape ``(s,)`` for scalar θ or ``(m, s)`` for an array of θ."""
-        if self.dense is None:
-            raise ValueError(f"{self.name} has no dense-output coefficients")
-        return dense_weights(self.dense, theta)
-
-
-def dense_weights(dense: np.ndarray, theta: float | np.ndarray) -> np.ndarray:
-    """``b_i(θ) = Σ_p dense[i, p] θ^(p+1)`` of a continuous extension ``dense`` (s, p): shape ``(s,)`` for
-    scalar θ or ``(m, s)`` for an array of θ."""
-    th = np.asarray(theta, dtype=np.float64)
-    powers = th[..., None] ** np.arange(1, dense.shape[1] + 1)
-    return powers @ dense.T
-
-
-def _fr(*xs: int | str) -> list[float]:
-    return [float(Fraction(x)) for x in xs]
-
-
-def _lower(rows: list[list[float]]) -> np.ndarray:
-    s = len(rows)
-    a = np.zeros((s, s))
-    for i, r in enumerate(rows):
-        a[i, : len(r)] = r
-    return a
-
-
-#: Dormand & Prince (1980) 5(4), FSAL, with Shampine's (1986) 4th-order continuous extension.
-DORMAND_PRINCE_54 = ButcherTableau(
-    name="dopri5",
-    c=_fr(0, "1/5", "3/10", "4/5", "8/9", 1, 1),
-    a=_lower(
-        [
-            [],
-            _fr("1/5"),
-            _fr("3/40", "9/40"),
-            _fr("44/45", "-56/15", "32/9"),
-            _fr("19372/6561", "-25360/2187", "64448/6561", "-212/729"),
-            _fr("9017/3168", "-355/33", "46732/5247", "49/176", "-5103/18656"),
-            _fr("35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84"),
-        ]
-    ),
-    b=_fr("35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84", 0),
-    b_hat=_fr("5179/57600", 0, "7571/16695", "393/640", "-92097/339200", "187/2100", "1/40"),
-    order=5,
-    error_order=4,
-    fsal=True,
-    dense=np.array(
-        [
-            _fr(1, "-8048581381/2820520608", "8663915743/2820520608", "-12715105075/11282082432"),
-            _fr(0, 0, 0, 0),
-            _fr(0, "131558114200/32700410799", "-68118460800/10900136933", "87487479700/32700410799"),
-            _fr(0, "-1754552775/470086768", "14199869525/1410260304", "-10690763975/1880347072"),
-            _fr(0, "127303824393/49829197408", "-318862633887/49829197408", "701980252875/199316789632"),
-            _fr(0, "-282668133/205662961", "2019193451/616988883", "-1453857185/822651844"),
-            _fr(0, "40617522/29380423", "-110615467/29380423", "69997945/29380423"),
-        ]
-    ),
-)
-
-#: Bogacki & Shampine (1989) 3(2), FSAL, with its cubic Hermite continuous extension (module docstring).
-BOGACKI_SHAMPINE_32 = ButcherTableau(
-    name="bs32",
-    c=_fr(0, "1/2", "3/4", 1),
-    a=_lower([[], _fr("1/2"), _fr(0, "3/4"), _fr("2/9", "1/3", "4/9")]),
-    b=_fr("2/9", "1/3", "4/9", 0),
-    b_hat=_fr("7/24", "1/4", "1/3", "1/8"),
-    order=3,
-    error_order=2,
-    fsal=True,
-    dense=np.array(
-        [
-            _fr(1, "-4/3", "5/9"),
-            _fr(0, 1, "-2/3"),
-            _fr(0, "4/3", "-8/9"),
-            _fr(0, -1, 1),
-        ]
-    ),
-)
-
-TABLEAUS: dict[str, ButcherTableau] = {"dopri5": DORMAND_PRINCE_54, "bs32": BOGACKI_SHAMPINE_32}
 
 
 def method_named(name: str):
     """The integration method called ``name``: an explicit pair of :data:`TABLEAUS` or an implicit–explicit
     additive pair of :data:`drillstring.dynamics.additive_rk.IMEX_TABLEAUS` (``simulation.method``)."""
-    from drillstring.dynamics.additive_rk import IMEX_TABLEAUS
 
     methods = {**TABLEAUS, **IMEX_TABLEAUS}
     try:
@@ -357,146 +166,6 @@ def _describe_nonfinite(x: np.ndarray) -> str:
         return "NaN"
     return "inf"
 
-
-# ---------------------------------------------------------------------------------------------------------
-# Step-size controller
-# ---------------------------------------------------------------------------------------------------------
-
-#: Floor of the previous error norm remembered by the PI controller (HNW's DOPRI5 code).
-ERROR_NORM_FLOOR = 1e-4
-
-
-@njit(cache=True)
-def error_norm(y, y_new, err, rtol, atol):
-    """``‖err / (atol + rtol·max(|y|, |y_new|))‖_RMS`` (HNW I, eq. II.4.11); ``atol`` has one entry per
-    component. 0 for an empty state. One implementation for both integrators (module docstring)."""
-    n = y.shape[0]
-    if n == 0:
-        return 0.0
-    total = 0.0
-    for j in range(n):
-        ratio = abs(err[j]) / (atol[j] + rtol * max(abs(y[j]), abs(y_new[j])))
-        total += ratio * ratio
-    return math.sqrt(total / n)
-
-
-@njit(cache=True)
-def step_factor(norm, err_prev, rejected_last, order, safety, min_factor, max_factor, beta1, beta2):
-    """The PI controller's decision on a step whose error norm is ``norm`` (module docstring).
-
-    ``err_prev``: the previous accepted step's (floored) error norm; ``rejected_last``: whether the
-    previous attempt was rejected; ``order``: ``q``, that of the error estimate (exponents ∝ 1/(q + 1)).
-    Returns ``(accepted, factor, err_prev_next)``: the step is accepted when ``norm ≤ 1``; the next step
-    size is ``factor · h``; a non-finite norm is a rejection by ``min_factor``. The caller keeps
-    ``err_prev_next`` and ``rejected_last = not accepted`` for the next decision."""
-    k = order + 1.0
-    if not math.isfinite(norm):
-        return False, min_factor, err_prev
-    if norm > 1.0:
-        return False, max(min_factor, safety * norm ** (-1.0 / k)), err_prev
-    if norm == 0.0:
-        factor = max_factor
-    else:
-        factor = safety * norm ** (-beta1 / k) * err_prev ** (beta2 / k)
-        factor = min(max_factor, max(min_factor, factor))
-    if rejected_last:
-        factor = min(1.0, factor)
-    return True, factor, max(norm, ERROR_NORM_FLOOR)
-
-
-
-@dataclass
-class StepSizeController:
-    """PI step-size controller (Gustafsson 1991; Hairer–Nørsett–Wanner I §II.4, II §IV.2).
-
-    ``beta1`` and ``beta2`` are the gains in units of ``1/k`` (``k = order + 1``, ``order`` being that of
-    the error estimate): the exponents are ``β1/k`` on the current error and ``β2/k`` on the previous
-    accepted error. The defaults ``β1 = 0.85, β2 = 0.2`` are those of Hairer's DOPRI5 code
-    (HNW I §II.4: ``α = 1/k − 0.75 β``, ``β = 0.04`` for ``k = 5``) scaled by ``k``; Gustafsson's own gains
-    ``k_I = 0.3, k_P = 0.4`` give ``β1 = k_I + k_P = 0.7, β2 = k_P = 0.4`` (smoother but ~30 % more steps:
-    with ``safety`` the PI loop settles at an error norm ``safety^(k/(β1−β2))``, 0.44 with the defaults,
-    0.17 with Gustafsson's); ``β1 = 1, β2 = 0`` is the classical integral (I) controller (0.59).
-
-    The controller keeps the previous accepted error norm and whether the last attempt was rejected;
-    call :meth:`reset` before reusing it for another integration.
-    """
-
-    rtol: float = 1e-6
-    atol: float | np.ndarray = 1e-9
-    safety: float = 0.9
-    min_factor: float = 0.2
-    max_factor: float = 10.0
-    beta1: float = 0.85
-    beta2: float = 0.2
-    max_step: float = math.inf
-    _err_prev: float = field(default=1.0, init=False, repr=False)
-    _rejected_last: bool = field(default=False, init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        if np.any(np.asarray(self.rtol) < 0) or np.any(np.asarray(self.atol) < 0):
-            raise ValueError("rtol and atol must be non-negative")
-        if not np.all(np.asarray(self.atol) + np.asarray(self.rtol) > 0):
-            raise ValueError("atol + rtol must be positive")
-        if not (0 < self.safety <= 1 and 0 < self.min_factor < 1 < self.max_factor):
-            raise ValueError("need 0 < safety <= 1 and 0 < min_factor < 1 < max_factor")
-        if not self.max_step > 0:
-            raise ValueError("max_step must be positive")
-        if not isinstance(self.atol, float | int):
-            self.atol = np.asarray(self.atol, dtype=np.float64)
-
-    def reset(self) -> None:
-        self._err_prev = 1.0
-        self._rejected_last = False
-
-    def atol_vector(self, n: int) -> np.ndarray:
-        """``atol`` as a contiguous array of ``n`` entries (what :func:`error_norm` takes)."""
-        return np.ascontiguousarray(np.broadcast_to(np.asarray(self.atol, dtype=np.float64), (n,)))
-
-    def error_norm(self, y: np.ndarray, y_new: np.ndarray, err: np.ndarray) -> float:
-        """RMS of ``err / (atol + rtol·max(|y|, |y_new|))`` (HNW I, eq. II.4.11; :func:`error_norm`)."""
-        return float(error_norm(y, y_new, err, float(self.rtol), self.atol_vector(y.shape[0])))
-
-    def _norm(self, x: np.ndarray, scale: np.ndarray) -> float:
-        r = np.abs(x) / scale
-        return float(np.sqrt(np.mean(r * r))) if r.size else 0.0
-
-    def initial_step(self, rhs: RHS, t0: float, y0: np.ndarray, f0: np.ndarray, order: int,
-                     direction: float = 1.0) -> float:
-        """Starting step size, HNW I §II.4 (makes exactly one extra ``rhs`` call). Returns ``|h|``.
-
-        ``order`` is that of the error estimate (``q``); the exponent is ``1/(q + 1)``."""
-        scale = self.atol + self.rtol * np.abs(y0)
-        scale = np.broadcast_to(scale, np.shape(y0))
-        d0 = self._norm(y0, scale)
-        d1 = self._norm(f0, scale)
-        h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-        h0 = min(h0, self.max_step)
-        with np.errstate(all="ignore"):
-            try:
-                y1 = y0 + direction * h0 * f0
-                f1 = np.asarray(rhs(t0 + direction * h0, y1))
-                d2 = self._norm(f1 - f0, scale) / h0
-            except (FloatingPointError, OverflowError):
-                d2 = math.nan
-        if not math.isfinite(d2):
-            return h0
-        dmax = max(d1, d2)
-        h1 = max(1e-6, h0 * 1e-3) if dmax <= 1e-15 else (0.01 / dmax) ** (1.0 / (order + 1))
-        return float(min(100.0 * h0, h1, self.max_step))
-
-    def accept(self, error_norm: float, h: float, order: int) -> tuple[bool, float]:
-        """Decide on a step with error norm ``error_norm`` taken with size ``h`` (signed).
-
-        Returns ``(accepted, h_next)``; a non-finite ``error_norm`` is a rejection by ``min_factor``
-        (:func:`step_factor`)."""
-        accepted, factor, self._err_prev = step_factor(
-            float(error_norm), self._err_prev, self._rejected_last, float(order), self.safety,
-            self.min_factor, self.max_factor, self.beta1, self.beta2)
-        self._rejected_last = not accepted
-        return bool(accepted), self._limit(h * factor)
-
-    def _limit(self, h: float) -> float:
-        return math.copysign(min(abs(h), self.max_step), h)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -566,8 +235,6 @@ class RungeKuttaStepper:
         self.f = f
 
         # the step itself: the NumPy reference of the method's step kind (drillstring.dynamics.steps)
-        from drillstring.dynamics.steps import kind_of
-
         kind = kind_of(tableau)
         if kind.reference is None:
             raise TypeError(f"the step kind of {tableau.name} has no NumPy reference: compiled path only")

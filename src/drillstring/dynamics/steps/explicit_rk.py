@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from drillstring.dynamics.rom import evaluate_rhs
-from drillstring.dynamics.runge_kutta import ButcherTableau
+from drillstring.dynamics.tableaus import ButcherTableau
 from drillstring.dynamics.steps.kinds import StepKind, register
 
 
