@@ -25,7 +25,8 @@ from drillstring._version import __version__
 from drillstring.files import write_text_atomic
 from drillstring.units import display_unit
 
-__all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
+__all__ = ["write_map_report", "write_report", "write_sensitivity_report",
+           "write_torque_drag_page"]
 
 _RPM = 60.0 / (2.0 * math.pi)
 #: The interactive page written beside a report when it has interactive figures.
@@ -379,6 +380,18 @@ def _figure_html(name: str, path: str | Path) -> str:
 # ---------------------------------------------------------------------------------------------------------
 
 
+def _head(title: str) -> str:
+    """The ``<head>`` content of every page: charset, viewport, title, the report's style."""
+    return "\n".join(['<meta charset="utf-8">', '<meta name="viewport" content="width=device-width, initial-scale=1">',
+                      f"<title>{_esc(title)}</title>", f"<style>{_CSS}</style>"])
+
+
+def _heading(title: str) -> list[str]:
+    """The title and the line under it (version, time written)."""
+    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
+    return [f"<h1>{_esc(title)}</h1>", f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>']
+
+
 def _page(path: str | Path, title: str, case_toml: str, sections: list[str], figures: Mapping[str, str | Path],
           run_info: Mapping[str, Any], interactive: Sequence[Mapping[str, Any]] | None = None,
           units: str | None = None) -> Path:
@@ -386,16 +399,9 @@ def _page(path: str | Path, title: str, case_toml: str, sections: list[str], fig
     table and the figures. With ``interactive`` figures (:mod:`drillstring.interactive`), the same page with
     them, zoomable, is written beside it as ``interactive.html``, and this page links to it."""
     path = Path(path)
-    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
-    head = "\n".join([
-        '<meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_esc(title)}</title>",
-        f"<style>{_CSS}</style>",
-    ])
+    head = _head(title)
     body = [
-        f"<h1>{_esc(title)}</h1>",
-        f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
+        *_heading(title),
         _case_section(case_toml, units),
         *sections,
         _run_section(run_info),
@@ -622,3 +628,65 @@ def write_probability_map_report(path: str | Path, *, title: str, case_toml: str
     the unit system ``units``."""
     return _page(path, title, case_toml, [_probability_map_section(summary, units)], figures, run_info, interactive,
                  units)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Torque and drag
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _scaled(unit, value: float | None) -> float | None:
+    return None if value is None else unit(value)
+
+
+def _intervals(pairs: Sequence[Sequence[float]], length) -> str:
+    return ", ".join(f"{length(a):,.0f}–{length(b):,.0f}" for a, b in pairs) or "none"
+
+
+def _torque_drag_section(payload: Mapping[str, Any], units: str | None = None) -> str:
+    """The operations table (hook load, surface torque, buckled intervals), the well and, when measured hook
+    loads were given, the calibrated friction factors, in the unit system ``units``."""
+    force, length, torque = (display_unit(k, units) for k in ("force", "length", "torque"))
+    head = (f"<tr><th>operation</th><th>hook load [{_esc(force.label)}]</th><th>surface torque "
+            f"[{_esc(torque.label)}]</th><th>sinusoidal buckling [{_esc(length.label)} MD]</th>"
+            f"<th>helical buckling [{_esc(length.label)} MD]</th></tr>")
+    body = []
+    for op, row in payload["operations"].items():
+        hook = "locked up" if row["locked_up"] else _num(_scaled(force, row["hook_load"]), 5)
+        body.append(f"<tr><td>{_esc(op.replace('_', ' '))}</td><td class=\"num\">{hook}</td>"
+                    f'<td class="num">{_num(_scaled(torque, row["surface_torque"]), 4)}</td>'
+                    f"<td>{_esc(_intervals(row['sinusoidal_buckling'], length))}</td>"
+                    f"<td>{_esc(_intervals(row['helical_buckling'], length))}</td></tr>")
+    well = payload["well"]
+    lockup = payload.get("lockup_depth")
+    rows = [("measured depth", f"{_num(length(well['depth']), 6)} {_esc(length.label)}"),
+            ("true vertical depth", f"{_num(length(well['true_vertical_depth']), 6)} {_esc(length.label)}"),
+            ("survey stations", _num(well["stations"])),
+            ("friction factors: cased hole, open hole",
+             f"{_num(well['cased_hole_friction'])}, {_num(well['open_hole_friction'])}"),
+            ("lock-up when sliding", "none" if lockup is None else
+             f"bit at {_num(length(lockup), 6)} {_esc(length.label)}")]
+    out = ("<h2>Loads</h2><p>Soft-string model (Johancsik et al. 1984): hook load and surface torque of each "
+           f"operation, and the intervals where the string buckles.</p><table>{head}{''.join(body)}</table>"
+           "<h2>Well</h2>" + _kv_table(rows))
+    calibration = payload.get("calibration")
+    if calibration:
+        rows = [(f"{name.replace('_', ' ')}: posterior mean ± std (90 % interval)",
+                 f"{_num(calibration[name]['mean'], 3)} ± {_num(calibration[name]['std'], 2)} "
+                 f"({_num(calibration[name]['interval_90'][0], 3)}–{_num(calibration[name]['interval_90'][1], 3)})")
+                for name in ("cased_hole_friction", "open_hole_friction")]
+        rows.append(("residual of the hook loads", f"{_num(force(calibration['residual_sigma']))} "
+                                                   f"{_esc(force.label)} ({_esc(calibration['noise'])})"))
+        out += "<h2>Friction factors calibrated from measured hook loads</h2>" + _kv_table(rows)
+    return out
+
+
+def write_torque_drag_page(path: str | Path, *, title: str, case_toml: str, payload: Mapping[str, Any],
+                           interactive: Sequence[Mapping[str, Any]], units: str | None = None) -> Path:
+    """Write the interactive torque-and-drag page (one self-contained HTML file, the report's style): the case,
+    the loads of each operation and the well (``payload``: :attr:`drillstring.well.analysis.TorqueDragAnalysis.
+    payload`), then the ``interactive`` figures (:func:`drillstring.torque_drag_plots.well_figures`)."""
+    from drillstring.interactive import write_interactive_page
+
+    body = [*_heading(title), _case_section(case_toml, units), _torque_drag_section(payload, units)]
+    return write_interactive_page(path, _head(title), "\n".join(body), interactive)
