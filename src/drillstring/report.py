@@ -25,7 +25,7 @@ from drillstring._version import __version__
 from drillstring.files import write_text_atomic
 from drillstring.units import display_unit
 
-__all__ = ["write_map_report", "write_report", "write_sensitivity_report",
+__all__ = ["write_map_report", "write_optimization_report", "write_report", "write_sensitivity_report",
            "write_torque_drag_page"]
 
 _RPM = 60.0 / (2.0 * math.pi)
@@ -628,6 +628,77 @@ def write_probability_map_report(path: str | Path, *, title: str, case_toml: str
     the unit system ``units``."""
     return _page(path, title, case_toml, [_probability_map_section(summary, units)], figures, run_info, interactive,
                  units)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Robust operating point
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _optimization_section(summary: Mapping[str, Any], variable_units: Sequence[Any], objective_unit: Any) -> str:
+    """The search (variables and bounds, objective, constraints, budget), the answer with its chance
+    constraints, and every design point's estimates; ``variable_units`` and ``objective_unit``: display units
+    (:class:`~drillstring.units.DisplayUnit`) of the decision variables and of the objective."""
+    best = summary["recommended"]
+    names = [path.rsplit(".", 1)[-1] for path in summary["variables"]]
+    constraints = best["constraints"]
+    rows = [(f"{name} ({path})", f"{_num(unit(lo))} to {_num(unit(hi))} {_esc(unit.label)}")
+            for name, path, unit, (lo, hi) in zip(names, summary["variables"], variable_units, summary["bounds"])]
+    rows += [("objective", f"{_esc(summary['objective'])} ({'maximised' if summary['maximize'] else 'minimised'})"),
+             ("chance constraints", _esc(", ".join(f"P({c['event']}) ≤ {c['bound']:g}" for c in constraints))
+              or "none"),
+             ("design points (initial design, chosen by the surrogates)",
+              f"{_num(summary['points'])} ({_num(summary['initial'])}, "
+              f"{_num(summary['points'] - summary['initial'])})"),
+             ("realizations per point, in all", f"{_num(summary['samples'])}, {_num(summary['realizations'])}")]
+    state = "recommended point" if summary["feasible"] else "least-infeasible point (the constraints cannot be met)"
+    shown = ", ".join(f"{name} = {_num(unit(v))} {unit.label}"
+                      for name, unit, v in zip(names, variable_units, best["values"]))
+    answer = [(state, _esc(f"{shown} (design point {best['point']})")),
+              (f"objective [{objective_unit.label}]: Monte Carlo ± standard error",
+               f"{_num(_scaled(objective_unit, best['objective']))} ± "
+               f"{_num(_scaled(objective_unit, best['objective_standard_error']), 2)} "
+               f"({_num(best['realizations'])} realizations)"),
+              (f"objective [{objective_unit.label}]: surrogate ± standard deviation",
+               f"{_num(_scaled(objective_unit, best['surrogate_objective']))} ± "
+               f"{_num(_scaled(objective_unit, best['surrogate_objective_standard_deviation']), 2)}")]
+    out = ("<h2>Search</h2><p>Gaussian-process surrogates of the objective and of each constraint's probability, "
+           "fitted to the Monte Carlo estimates at the design points; after the initial design, points where the "
+           "constrained expected improvement is largest.</p>" + _kv_table(rows)
+           + "<h2>Answer</h2>" + _kv_table(answer))
+    if constraints:
+        head = "".join(f"<th>{h}</th>" for h in ("event", "bound", "P (Monte Carlo)", "binomial s.e.", "surrogate",
+                                                 "surrogate s.d.", "combined s.d.", "confidence", "met"))
+        body = "".join(
+            f"<tr><td>{_esc(c['event'])}</td>" + "".join(f'<td class="num">{_num(c[k], 3)}</td>' for k in (
+                "bound", "probability", "binomial_standard_error", "surrogate_mean", "surrogate_standard_deviation",
+                "combined_standard_deviation", "confidence")) + f"<td>{'yes' if c['met'] else 'no'}</td></tr>"
+            for c in constraints)
+        out += ("<h3>Chance constraints at the answer</h3><p>Confidence: P(probability ≤ bound) from the binomial "
+                f"and surrogate errors together.</p><table><tr>{head}</tr>{body}</table>")
+    head = ("<tr><th>point</th>" + "".join(f"<th>{_esc(n)} [{_esc(u.label)}]</th>" for n, u in zip(names,
+                                                                                                   variable_units))
+            + "<th>realizations</th>" + f"<th>objective [{_esc(objective_unit.label)}]</th>"
+            + "".join(f"<th>P({_esc(c['event'])})</th>" for c in constraints) + "</tr>")
+    estimates = summary["estimates"]
+    body = []
+    for k, values in enumerate(summary["design"]):
+        mark = ' style="font-weight: bold"' if k == best["point"] else ""
+        cells = [_num(k)] + [_num(u(v)) for u, v in zip(variable_units, values)] + [
+            _num(estimates["count"][k]), _num(_scaled(objective_unit, estimates["objective"][k]))]
+        cells += [_num(p, 3) for p in estimates["probabilities"][k]]
+        body.append(f"<tr{mark}>" + "".join(f'<td class="num">{c}</td>' for c in cells) + "</tr>")
+    return out + f"<h2>Design points</h2><p>The answer in bold.</p><table>{head}{''.join(body)}</table>"
+
+
+def write_optimization_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
+                              figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                              variable_units: Sequence[Any], objective_unit: Any, units: str | None = None) -> Path:
+    """Write the report of a robust operating point (one self-contained HTML page): the case, the search, the
+    answer and its chance constraints, the design points (``summary``: as ``optimize.json``, SI), the run table
+    and the figures, the variables in ``variable_units`` and the objective in ``objective_unit``."""
+    return _page(path, title, case_toml, [_optimization_section(summary, variable_units, objective_unit)], figures,
+                 run_info, None, units)
 
 
 # ---------------------------------------------------------------------------------------------------------
