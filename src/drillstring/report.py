@@ -500,6 +500,12 @@ def _sobol_tables(indices: Mapping[str, Any]) -> str:
                         f'<td class="num">{_num(entry["ST"].get(parameter), 3)}</td>'
                         f'<td class="num">{_interval(entry["ST_ci"].get(parameter))}</td></tr>')
     parts.append(f"<table>{head}{''.join(body)}</table>")
+    notes = {name: entry.get("sample_notes") for name, entry in indices["outputs"].items() if entry.get("sample_notes")}
+    if notes:
+        parts.append(f"<p><b>The sample is too small</b> (N = {_num(indices.get('base_samples'))}): an index is known "
+                     "to about its interval's half-width; increase N.</p><ul>"
+                     + "".join(f"<li>{_esc(OUTPUT_NAMES.get(name, name))}: {_esc('; '.join(text))}</li>"
+                               for name, text in notes.items()) + "</ul>")
     return "".join(parts)
 
 
