@@ -265,14 +265,21 @@ def test_points_equal_to_initial_runs_the_initial_design_and_writes_a_report(sma
     assert page.count("<tr") - page.count("<tr><th") >= 3  # a row per design point
 
 
-def test_a_search_notes_each_batch_the_surrogates_choose(small_case, tmp_path):
+def test_a_search_notes_each_batch_the_surrogates_choose_and_resumes_after_ctrl_c(small_case, tmp_path):
     """Between the passes of the engine, a note says which design points the surrogates are choosing (the
-    progress of a search whose surrogates take long)."""
+    progress of a search whose surrogates take long). Ctrl-C there (a KeyboardInterrupt from the note) stops the
+    search with the initial design kept: the rerun computes only the two points left."""
     from drillstring.stochastic.execution import Engine
 
-    notes: list[str] = []
+    def interrupt(text: str) -> None:
+        raise KeyboardInterrupt
+
     settings = _settings(variables=(("top_speed", 80 * RPM, 120 * RPM),), points=5, initial=3, batch=1)
-    opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1, note=notes.append))
+    with pytest.raises(KeyboardInterrupt):
+        opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1, note=interrupt))
+    notes: list[str] = []
+    run = opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1, note=notes.append))
+    assert run.computed == 2 * settings.samples
     assert notes == ["design point 4 of 5: chosen by the surrogates fitted to 3 points",
                      "design point 5 of 5: chosen by the surrogates fitted to 4 points"]
 
