@@ -114,9 +114,8 @@ def _print_sample_notes(console, payload: dict[str, Any]) -> None:
     flagged = {name: entry["sample_notes"] for name, entry in payload["outputs"].items()
                if entry.get("sample_notes")}
     for name, notes in flagged.items():
-        console.print(escape(f"note: {OUTPUT_TITLES.get(name, name)}: {'; '.join(notes)}"), soft_wrap=True)
+        console.print(escape(f"note: {OUTPUT_TITLES.get(name, name)}: {'; '.join(notes)}"))  # wrapped at words
     if flagged:
         console.print(escape(f"note: N = {payload['base_samples']} base samples are too few for these indices: "
                              f"run again with --samples {2 * payload['base_samples']} or more, in another --out "
-                             "folder; the reference study needed N = 512"),
-                      soft_wrap=True)
+                             "folder; the reference study needed N = 512"))
