@@ -49,6 +49,17 @@ nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
 
+# The notebooks' kernels get CurveZMQ keys from the kernel manager (jupyter_client's transport encryption,
+# "auto": where the kernel spec declares it, as ipykernel's does), so the build's traffic with them is encrypted and
+# ipykernel has no "Kernel is running over TCP without encryption" warning to print, once per notebook, into the
+# build's output. myst-nb creates the kernel manager without a configuration: it takes the policy's default.
+import zmq
+from jupyter_client.manager import KernelManager
+
+_traits = KernelManager.class_traits()
+if "transport_encryption" in _traits and zmq.has("curve"):  # jupyter_client 8.10 on; pyzmq with libsodium
+    _traits["transport_encryption"].default_value = "auto"
+
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_default_options = {"members": True, "show-inheritance": False}

@@ -1048,6 +1048,9 @@ def test_sensitivity_command(torsional_case_file, tmp_path):
     assert table.exit_code == 0, table.output
     for text in ("Sobol' indices", "mean ROP", "top_speed", "weight_on_bit", "S1", "ST"):
         assert text in table.stdout, text
+    flagged = [name for name, entry in payload["outputs"].items() if entry["sample_notes"]]
+    assert flagged  # N = 8: intervals wider than the indices, at least
+    assert "note: N = 8 base samples are too few for these indices: run again with --samples 16" in table.stdout
     refused = _invoke("sensitivity", str(torsional_case_file), "--out", str(tmp_path / "none"))
     assert refused.exit_code == 2 and "no uncertain parameter" in refused.stderr
     assert not (tmp_path / "none").exists()

@@ -59,6 +59,21 @@ def test_a_site_with_sound_links_and_a_sound_notebook_builds(tmp_path):
     code, log = _run(tmp_path, GOOD_PAGE, ["x = 6 * 7\nprint(x)"])
     assert code == 0, log
     assert "42" in (tmp_path / "html" / "notebook.html").read_text(encoding="utf-8")  # executed, output shown
+    # the kernel gets CurveZMQ keys (docs/conf.py): no "Kernel is running over TCP without encryption" per notebook
+    assert "without encryption" not in log and "IPKernelApp" not in log, log
+
+
+def test_a_tutorial_runs_by_hand_with_the_docs_extra(tmp_path):
+    """docs/tutorials/index.md's command (nbconvert, in the docs extra) executes a notebook outside the build."""
+    import subprocess
+    import sys
+
+    source = _site(tmp_path, GOOD_PAGE, ["print(6 * 7)"]) / "notebook.ipynb"
+    done = subprocess.run([sys.executable, "-m", "jupyter", "nbconvert", "--to", "notebook", "--execute", str(source),
+                           "--output-dir", str(tmp_path / "out")], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    executed = json.loads((tmp_path / "out" / "notebook.ipynb").read_text(encoding="utf-8"))
+    assert "".join(executed["cells"][1]["outputs"][0]["text"]) == "42\n"
 
 
 BROKEN = {"missing.md": "[a page]", "#no-such-heading": "[a heading here]",

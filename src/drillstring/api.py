@@ -79,7 +79,7 @@ def simulate(
     progress: Callable[[float], None] | None = None,
     raise_on_failure: bool = True,
 ) -> xr.Dataset:
-    """Simulate one drilling run of ``case`` (SPEC §7) and return its observables as a Dataset.
+    """Simulate one drilling run of ``case`` (docs/model.md §9) and return its observables as a Dataset.
 
     Arguments left as None take the case's ``[simulation]`` values; ``weight_on_bit`` [N] overrides
     the static weight-on-bit. A run that stops early raises :class:`~drillstring.dynamics.simulate.SimulationError` whose
@@ -318,7 +318,7 @@ def monte_carlo_study(
     worker_timeout: float | None = None,
     units: str | None = None,
 ) -> StudyOutcome:
-    """Monte Carlo study of random case parameters (SPEC §8; by default a random weight-on-hook), with
+    """Monte Carlo study of random case parameters (docs/model.md §11; by default a random weight-on-hook), with
     its files.
 
     The random parameters (:func:`study_settings`): each of ``parameters`` (case-parameter path -> law
@@ -607,7 +607,7 @@ def study(
     transient: float | None = None,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> xr.Dataset:
-    """Monte Carlo study of random case parameters (SPEC §8); returns the statistics Dataset.
+    """Monte Carlo study of random case parameters (docs/model.md §11); returns the statistics Dataset.
 
     The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): laws of
     ``parameters`` (or the case's ``[uncertainty]`` table), at most one of ``sigma`` [N] or
@@ -671,7 +671,7 @@ def compare(
     progress: Callable[[str, float], None] | None = None,
 ) -> tuple[xr.Dataset, xr.Dataset, dict]:
     """Run ``case`` with the full nonlinear model (case 1: kinetic- and strain-energy forces added) and with
-    the bit–rock and contact forces only (case 2), everything else equal (SPEC §6), and compare them.
+    the bit–rock and contact forces only (case 2), everything else equal (docs/model.md §5), and compare them.
 
     Returns ``(full, bit_and_contact, differences)``: the two run Datasets and a JSON-ready dict (SI
     units) with, under ``observables``, for the rate of penetration, bit speed, torque- and force-on-bit

@@ -8,7 +8,7 @@ The lateral stiffness of the prestressed string (one bending plane; the other is
 
 with the elastic stiffness ``K``, the stabilizer springs ``K_stab``, the fluid stiffness ``K_f``
 (centrifugal compression of the mud), and the geometric stiffness
-``K_g(N) = ∫ N(x) N_v'ᵀ N_v' dx`` (SPEC §3), on the lateral DOFs left free by the dynamic boundary
+``K_g(N) = ∫ N(x) N_v'ᵀ N_v' dx`` (docs/model.md §2), on the lateral DOFs left free by the dynamic boundary
 conditions (:func:`drillstring.modal.family_dofs`: top and bit pinned, ``v = 0``). The axial problem
 is linear and its top is held, so a bit reaction ``wob`` adds the same compression ``wob`` to every
 section: ``N_0`` is the axial force at ``wob = 0`` and (1) is exact for the finite-element static
@@ -192,7 +192,7 @@ def case_buckling_margin(case, static: StaticState | None = None) -> BucklingMar
 def buckling_probability(weight_on_hook_law, weight: float, critical_weight_on_bit: float) -> float:
     """Probability that a random weight-on-hook draw buckles the string.
 
-    A draw ``woh`` gives ``wob = weight − woh`` (SPEC §4), beyond the margin when
+    A draw ``woh`` gives ``wob = weight − woh`` (docs/model.md §3), beyond the margin when
     ``wob > wob_cr``, i.e. ``woh < weight − wob_cr``. Returns ``P(woh < weight − wob_cr)``.
 
     Args:

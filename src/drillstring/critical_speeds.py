@@ -3,7 +3,7 @@ speed, the excitation lines and the critical speeds.
 
 Layer: after :mod:`drillstring.modal` (uses its linear system and modes only).
 
-Linear model (SPEC §3–§5, the system of :func:`drillstring.modal.case_linear_system`): mass ``M + M_f``
+Linear model (docs/model.md §2–§4, the system of :func:`drillstring.modal.case_linear_system`): mass ``M + M_f``
 (structure and the mud's added mass), stiffness ``K + K_stab + K_g(q_S) + K_f`` (elastic, stabilizers,
 prestress by the string's weight and the weight-on-bit, centrifugal compression of the mud), plus, for a
 string turning at ``Ω`` [rad/s], the gyroscopic matrix ``Ω G``

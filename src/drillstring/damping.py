@@ -1,4 +1,4 @@
-"""Structural damping of the string, defined on its modes (SPEC §7).
+"""Structural damping of the string, defined on its modes (docs/model.md §7).
 
 The reference data give ``c1``, the "friction coefficient for the axial rigid body motion", ``c2``, the
 "friction coefficient for the rotation rigid body motion", and ``ξ``, the damping ratio of "the i-th

@@ -11,6 +11,7 @@ A figure is a plain mapping ``{"title", "caption", "data", "layout"}`` (plotly.j
 already in display units): :func:`study_figures`, :func:`map_figures`, :func:`probability_map_figures` and
 :func:`sensitivity_figures` build them from the package's results (SI), axes and values in the unit system
 ``units`` (``"si"``, ``"field"``; None: ``$DRILLSTRING_UNITS``, else si; :func:`drillstring.units.display_unit`).
+A layout ``height`` [px] sets the height of the figure's element too (default 480 px).
 The page sets ``data-plots-rendered`` on ``<body>`` to the number of figures drawn once plotly.js has drawn them
 all, and ``data-plot-error`` if drawing one failed.
 """
@@ -314,7 +315,9 @@ def figures_html(figures: Sequence[Mapping[str, Any]]) -> str:
     for k, fig in enumerate(figures):
         target = f"figure-{k}"
         spec = {"data": list(fig["data"]), "layout": dict(fig["layout"]), "config": _CONFIG}
-        parts.append(f'<figure><div class="plot" id="{target}"></div>'
+        height = spec["layout"].get("height")  # a taller figure gets a taller element, else it is cut off
+        style = f' style="height: {int(height)}px"' if height else ""
+        parts.append(f'<figure><div class="plot" id="{target}"{style}></div>'
                      f'<figcaption>{html.escape(str(fig.get("caption", "")))}</figcaption></figure>'
                      f'<script type="application/json" class="figure-spec" data-target="{target}">'
                      f"{_json(spec)}</script>")

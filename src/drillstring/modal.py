@@ -1,6 +1,6 @@
-"""Natural modes of the prestressed linear system with the dynamic boundary conditions (SPEC §7).
+"""Natural modes of the prestressed linear system with the dynamic boundary conditions (docs/model.md §6).
 
-Linear system (SPEC §3–§5): mass ``M + M_f``, stiffness ``K + K_stab + K_g(q_S) + K_f``.
+Linear system (docs/model.md §2–§4): mass ``M + M_f``, stiffness ``K + K_stab + K_g(q_S) + K_f``.
 Dynamic boundary conditions: top ``v = w = 0`` and ``θx`` imposed (so its relative rotation is 0),
 top axially free; bit ``v = w = 0``, ``u`` and ``θx`` free; bending rotations free at both ends.
 

@@ -163,8 +163,9 @@ def optimize(
     case's), outputs after ``transient``.
 
     Writes ``out``/optimize.zarr (resumable), optimize.json (the summary), optimize.nc (the realizations and
-    per-point estimates) and optimize.png (the feasible region over the first two variables, the answer
-    marked; axes in the unit system ``units``). Infeasible constraints are not an exception: the outcome's
+    per-point estimates), optimize.png (the feasible region over the first two variables, the answer
+    marked; axes in the unit system ``units``) and report.html (the search, the answer, every design point).
+    Infeasible constraints are not an exception: the outcome's
     ``feasible`` is False and its recommended point is the least-infeasible one.
     """
     from drillstring.stochastic.optimize import run_optimization
@@ -188,8 +189,10 @@ def optimize(
 
 def _finish(case, settings, folder, units, run):
     """Under the store's lock: the summary, the dataset and (in ``folder`` unless None) the files."""
+    from drillstring.api import _run_table
     from drillstring.files import strict_json, write_text_atomic
-    from drillstring.optimize_plots import plot_optimization
+    from drillstring.optimize_plots import decision_unit, objective_unit, plot_optimization
+    from drillstring.report import write_optimization_report
     from drillstring.results import write_netcdf
     from drillstring.stochastic.optimize import optimization_result
 
@@ -200,11 +203,18 @@ def _finish(case, settings, folder, units, run):
     files: dict[str, Path] = {}
     if folder is not None:
         files = {"store": run.store.path, "summary": folder / "optimize.json", "results": folder / "optimize.nc",
-                 "figure": folder / "optimize.png"}
+                 "figure": folder / "optimize.png", "report": folder / "report.html"}
         write_netcdf(dataset, files["results"])
         plot_optimization(case, result, files["figure"], units=units)
         summary["files"] = {k: str(v) for k, v in files.items()}
         write_text_atomic(files["summary"], strict_json(summary) + "\n")
+        write_optimization_report(
+            files["report"], title=f"Robust operating point: case '{case.name}'", case_toml=case.to_toml(),
+            summary=summary, units=units, variable_units=[decision_unit(case, v, units) for v in summary["variables"]],
+            objective_unit=objective_unit(summary["objective"], units)[0],
+            figures={"The surrogate's objective over the decision variables, each chance constraint's boundary, "
+                     "the region where one fails hatched, the design points and the answer": files["figure"]},
+            run_info={**_run_table(summary, "realizations"), "store": str(run.store.path)})
     return summary, dataset, files
 
 

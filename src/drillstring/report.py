@@ -25,7 +25,8 @@ from drillstring._version import __version__
 from drillstring.files import write_text_atomic
 from drillstring.units import display_unit
 
-__all__ = ["write_map_report", "write_report", "write_sensitivity_report"]
+__all__ = ["write_map_report", "write_optimization_report", "write_report", "write_sensitivity_report",
+           "write_torque_drag_page"]
 
 _RPM = 60.0 / (2.0 * math.pi)
 #: The interactive page written beside a report when it has interactive figures.
@@ -379,6 +380,18 @@ def _figure_html(name: str, path: str | Path) -> str:
 # ---------------------------------------------------------------------------------------------------------
 
 
+def _head(title: str) -> str:
+    """The ``<head>`` content of every page: charset, viewport, title, the report's style."""
+    return "\n".join(['<meta charset="utf-8">', '<meta name="viewport" content="width=device-width, initial-scale=1">',
+                      f"<title>{_esc(title)}</title>", f"<style>{_CSS}</style>"])
+
+
+def _heading(title: str) -> list[str]:
+    """The title and the line under it (version, time written)."""
+    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
+    return [f"<h1>{_esc(title)}</h1>", f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>']
+
+
 def _page(path: str | Path, title: str, case_toml: str, sections: list[str], figures: Mapping[str, str | Path],
           run_info: Mapping[str, Any], interactive: Sequence[Mapping[str, Any]] | None = None,
           units: str | None = None) -> Path:
@@ -386,16 +399,9 @@ def _page(path: str | Path, title: str, case_toml: str, sections: list[str], fig
     table and the figures. With ``interactive`` figures (:mod:`drillstring.interactive`), the same page with
     them, zoomable, is written beside it as ``interactive.html``, and this page links to it."""
     path = Path(path)
-    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
-    head = "\n".join([
-        '<meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_esc(title)}</title>",
-        f"<style>{_CSS}</style>",
-    ])
+    head = _head(title)
     body = [
-        f"<h1>{_esc(title)}</h1>",
-        f'<p class="meta">drillstring {_esc(__version__)}, written {_esc(stamp)}</p>',
+        *_heading(title),
         _case_section(case_toml, units),
         *sections,
         _run_section(run_info),
@@ -494,6 +500,12 @@ def _sobol_tables(indices: Mapping[str, Any]) -> str:
                         f'<td class="num">{_num(entry["ST"].get(parameter), 3)}</td>'
                         f'<td class="num">{_interval(entry["ST_ci"].get(parameter))}</td></tr>')
     parts.append(f"<table>{head}{''.join(body)}</table>")
+    notes = {name: entry.get("sample_notes") for name, entry in indices["outputs"].items() if entry.get("sample_notes")}
+    if notes:
+        parts.append(f"<p><b>The sample is too small</b> (N = {_num(indices.get('base_samples'))}): an index is known "
+                     "to about its interval's half-width; increase N.</p><ul>"
+                     + "".join(f"<li>{_esc(OUTPUT_NAMES.get(name, name))}: {_esc('; '.join(text))}</li>"
+                               for name, text in notes.items()) + "</ul>")
     return "".join(parts)
 
 
@@ -622,3 +634,136 @@ def write_probability_map_report(path: str | Path, *, title: str, case_toml: str
     the unit system ``units``."""
     return _page(path, title, case_toml, [_probability_map_section(summary, units)], figures, run_info, interactive,
                  units)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Robust operating point
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _optimization_section(summary: Mapping[str, Any], variable_units: Sequence[Any], objective_unit: Any) -> str:
+    """The search (variables and bounds, objective, constraints, budget), the answer with its chance
+    constraints, and every design point's estimates; ``variable_units`` and ``objective_unit``: display units
+    (:class:`~drillstring.units.DisplayUnit`) of the decision variables and of the objective."""
+    best = summary["recommended"]
+    names = [path.rsplit(".", 1)[-1] for path in summary["variables"]]
+    constraints = best["constraints"]
+    rows = [(f"{name} ({path})", f"{_num(unit(lo))} to {_num(unit(hi))} {_esc(unit.label)}")
+            for name, path, unit, (lo, hi) in zip(names, summary["variables"], variable_units, summary["bounds"])]
+    rows += [("objective", f"{_esc(summary['objective'])} ({'maximised' if summary['maximize'] else 'minimised'})"),
+             ("chance constraints", _esc(", ".join(f"P({c['event']}) ≤ {c['bound']:g}" for c in constraints))
+              or "none"),
+             ("design points (initial design, chosen by the surrogates)",
+              f"{_num(summary['points'])} ({_num(summary['initial'])}, "
+              f"{_num(summary['points'] - summary['initial'])})"),
+             ("realizations per point, in all", f"{_num(summary['samples'])}, {_num(summary['realizations'])}")]
+    state = "recommended point" if summary["feasible"] else "least-infeasible point (the constraints cannot be met)"
+    shown = ", ".join(f"{name} = {_num(unit(v))} {unit.label}"
+                      for name, unit, v in zip(names, variable_units, best["values"]))
+    answer = [(state, _esc(f"{shown} (design point {best['point']})")),
+              (f"objective [{objective_unit.label}]: Monte Carlo ± standard error",
+               f"{_num(_scaled(objective_unit, best['objective']))} ± "
+               f"{_num(_scaled(objective_unit, best['objective_standard_error']), 2)} "
+               f"({_num(best['realizations'])} realizations)"),
+              (f"objective [{objective_unit.label}]: surrogate ± standard deviation",
+               f"{_num(_scaled(objective_unit, best['surrogate_objective']))} ± "
+               f"{_num(_scaled(objective_unit, best['surrogate_objective_standard_deviation']), 2)}")]
+    out = ("<h2>Search</h2><p>Gaussian-process surrogates of the objective and of each constraint's probability, "
+           "fitted to the Monte Carlo estimates at the design points; after the initial design, points where the "
+           "constrained expected improvement is largest.</p>" + _kv_table(rows)
+           + "<h2>Answer</h2>" + _kv_table(answer))
+    if constraints:
+        head = "".join(f"<th>{h}</th>" for h in ("event", "bound", "P (Monte Carlo)", "binomial s.e.", "surrogate",
+                                                 "surrogate s.d.", "combined s.d.", "confidence", "met"))
+        body = "".join(
+            f"<tr><td>{_esc(c['event'])}</td>" + "".join(f'<td class="num">{_num(c[k], 3)}</td>' for k in (
+                "bound", "probability", "binomial_standard_error", "surrogate_mean", "surrogate_standard_deviation",
+                "combined_standard_deviation", "confidence")) + f"<td>{'yes' if c['met'] else 'no'}</td></tr>"
+            for c in constraints)
+        out += ("<h3>Chance constraints at the answer</h3><p>Confidence: P(probability ≤ bound) from the binomial "
+                f"and surrogate errors together.</p><table><tr>{head}</tr>{body}</table>")
+    head = ("<tr><th>point</th>" + "".join(f"<th>{_esc(n)} [{_esc(u.label)}]</th>" for n, u in zip(names,
+                                                                                                   variable_units))
+            + "<th>realizations</th>" + f"<th>objective [{_esc(objective_unit.label)}]</th>"
+            + "".join(f"<th>P({_esc(c['event'])})</th>" for c in constraints) + "</tr>")
+    estimates = summary["estimates"]
+    body = []
+    for k, values in enumerate(summary["design"]):
+        mark = ' style="font-weight: bold"' if k == best["point"] else ""
+        cells = [_num(k)] + [_num(u(v)) for u, v in zip(variable_units, values)] + [
+            _num(estimates["count"][k]), _num(_scaled(objective_unit, estimates["objective"][k]))]
+        cells += [_num(p, 3) for p in estimates["probabilities"][k]]
+        body.append(f"<tr{mark}>" + "".join(f'<td class="num">{c}</td>' for c in cells) + "</tr>")
+    return out + f"<h2>Design points</h2><p>The answer in bold.</p><table>{head}{''.join(body)}</table>"
+
+
+def write_optimization_report(path: str | Path, *, title: str, case_toml: str, summary: Mapping[str, Any],
+                              figures: Mapping[str, str | Path], run_info: Mapping[str, Any],
+                              variable_units: Sequence[Any], objective_unit: Any, units: str | None = None) -> Path:
+    """Write the report of a robust operating point (one self-contained HTML page): the case, the search, the
+    answer and its chance constraints, the design points (``summary``: as ``optimize.json``, SI), the run table
+    and the figures, the variables in ``variable_units`` and the objective in ``objective_unit``."""
+    return _page(path, title, case_toml, [_optimization_section(summary, variable_units, objective_unit)], figures,
+                 run_info, None, units)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Torque and drag
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _scaled(unit, value: float | None) -> float | None:
+    return None if value is None else unit(value)
+
+
+def _intervals(pairs: Sequence[Sequence[float]], length) -> str:
+    return ", ".join(f"{length(a):,.0f}–{length(b):,.0f}" for a, b in pairs) or "none"
+
+
+def _torque_drag_section(payload: Mapping[str, Any], units: str | None = None) -> str:
+    """The operations table (hook load, surface torque, buckled intervals), the well and, when measured hook
+    loads were given, the calibrated friction factors, in the unit system ``units``."""
+    force, length, torque = (display_unit(k, units) for k in ("force", "length", "torque"))
+    head = (f"<tr><th>operation</th><th>hook load [{_esc(force.label)}]</th><th>surface torque "
+            f"[{_esc(torque.label)}]</th><th>sinusoidal buckling [{_esc(length.label)} MD]</th>"
+            f"<th>helical buckling [{_esc(length.label)} MD]</th></tr>")
+    body = []
+    for op, row in payload["operations"].items():
+        hook = "locked up" if row["locked_up"] else _num(_scaled(force, row["hook_load"]), 5)
+        body.append(f"<tr><td>{_esc(op.replace('_', ' '))}</td><td class=\"num\">{hook}</td>"
+                    f'<td class="num">{_num(_scaled(torque, row["surface_torque"]), 4)}</td>'
+                    f"<td>{_esc(_intervals(row['sinusoidal_buckling'], length))}</td>"
+                    f"<td>{_esc(_intervals(row['helical_buckling'], length))}</td></tr>")
+    well = payload["well"]
+    lockup = payload.get("lockup_depth")
+    rows = [("measured depth", f"{_num(length(well['depth']), 6)} {_esc(length.label)}"),
+            ("true vertical depth", f"{_num(length(well['true_vertical_depth']), 6)} {_esc(length.label)}"),
+            ("survey stations", _num(well["stations"])),
+            ("friction factors: cased hole, open hole",
+             f"{_num(well['cased_hole_friction'])}, {_num(well['open_hole_friction'])}"),
+            ("lock-up when sliding", "none" if lockup is None else
+             f"bit at {_num(length(lockup), 6)} {_esc(length.label)}")]
+    out = ("<h2>Loads</h2><p>Soft-string model (Johancsik et al. 1984): hook load and surface torque of each "
+           f"operation, and the intervals where the string buckles.</p><table>{head}{''.join(body)}</table>"
+           "<h2>Well</h2>" + _kv_table(rows))
+    calibration = payload.get("calibration")
+    if calibration:
+        rows = [(f"{name.replace('_', ' ')}: posterior mean ± std (90 % interval)",
+                 f"{_num(calibration[name]['mean'], 3)} ± {_num(calibration[name]['std'], 2)} "
+                 f"({_num(calibration[name]['interval_90'][0], 3)}–{_num(calibration[name]['interval_90'][1], 3)})")
+                for name in ("cased_hole_friction", "open_hole_friction")]
+        rows.append(("residual of the hook loads", f"{_num(force(calibration['residual_sigma']))} "
+                                                   f"{_esc(force.label)} ({_esc(calibration['noise'])})"))
+        out += "<h2>Friction factors calibrated from measured hook loads</h2>" + _kv_table(rows)
+    return out
+
+
+def write_torque_drag_page(path: str | Path, *, title: str, case_toml: str, payload: Mapping[str, Any],
+                           interactive: Sequence[Mapping[str, Any]], units: str | None = None) -> Path:
+    """Write the interactive torque-and-drag page (one self-contained HTML file, the report's style): the case,
+    the loads of each operation and the well (``payload``: :attr:`drillstring.well.analysis.TorqueDragAnalysis.
+    payload`), then the ``interactive`` figures (:func:`drillstring.torque_drag_plots.well_figures`)."""
+    from drillstring.interactive import write_interactive_page
+
+    body = [*_heading(title), _case_section(case_toml, units), _torque_drag_section(payload, units)]
+    return write_interactive_page(path, _head(title), "\n".join(body), interactive)

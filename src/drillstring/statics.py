@@ -1,4 +1,4 @@
-"""The prestressed static state of the hanging string (SPEC §4).
+"""The prestressed static state of the hanging string (docs/model.md §3).
 
 The string hangs from the hook (top axial DOF held), carries its weight, and rests on the bit with the
 weight-on-bit ``wob`` (a concentrated upward force at the bit). Solving ``[K] q_S = f_g + f_c`` gives the

@@ -55,6 +55,14 @@ def plot_well_path(trajectory, path: str | Path, *, casing_shoe: float = 0.0, ti
     return _save(fig, path)
 
 
+def _axial_range(results: Mapping[str, Any]) -> tuple[float, float]:
+    """The axial-force axis [N] of the loads: the largest compression with a margin, to the largest tension
+    (the critical compressions of buckling, often far larger, are cut)."""
+    low = min(float(np.min(r.axial_force)) for r in results.values())
+    high = max(float(np.max(r.axial_force)) for r in results.values())
+    return min(low * 1.3, -0.05 * high), high * 1.05
+
+
 def plot_torque_drag(results: Mapping[str, Any], path: str | Path, *, critical: Mapping[str, np.ndarray] | None = None,
                      title: str = "Torque and drag", units: str | None = None) -> Path:
     """Effective axial force, torque and side force per length against measured depth for each operation;
@@ -71,9 +79,7 @@ def plot_torque_drag(results: Mapping[str, Any], path: str | Path, *, critical: 
         depth = next(iter(results.values())).measured_depth * length.scale
         axial.plot(-critical["sinusoidal"] * force.scale, depth, "k--", lw=1, label="sinusoidal buckling")
         axial.plot(-critical["helical"] * force.scale, depth, "k:", lw=1, label="helical buckling")
-        low = min(float(np.min(r.axial_force)) for r in results.values())
-        axial.set_xlim(left=min(low * 1.3, -0.05 * max(float(r.axial_force[0]) for r in results.values()))
-                       * force.scale)
+        axial.set_xlim(left=_axial_range(results)[0] * force.scale)
     axial.axvline(0.0, color="0.6", lw=0.8)
     for ax, label in ((axial, f"effective axial force [{force.label}] (tension > 0)"),
                       (twist, f"torque [{torque.label}]"), (side, f"side force [{force.label}/{length.label}]")):
@@ -123,39 +129,94 @@ def plot_broomstick(bit_depths, chart: Mapping[str, np.ndarray], frictions: Sequ
     return _save(fig, path)
 
 
-def well_figures(trajectory, results: Mapping[str, Any] | None = None, *, units: str | None = None) -> list[dict]:
-    """Interactive figures (plotly specs): the 3-D well path (north, east, TVD down), coloured by the side
-    force of rotating off bottom when ``results`` are given, and the hook-load profiles."""
-    length, force = display_unit("length", units), display_unit("force", units)
+def _hex(color: str) -> str:
+    """A Matplotlib colour (``"C3"``: the current cycle's) as ``#rrggbb``, so the page draws what the PNG does."""
+    from matplotlib.colors import to_hex
+
+    return to_hex(color)
+
+
+def _profile_figure(title: str, caption: str, data: list[dict], xlabel: str, ylabel: str) -> dict:
+    """A plotly figure of profiles against measured depth (downwards), like one panel of :func:`plot_torque_drag`."""
+    return {"title": title, "caption": caption, "data": data,
+            "layout": {"title": {"text": title}, "hovermode": "closest", "margin": {"t": 50, "r": 20},
+                       "xaxis": {"title": {"text": xlabel}, "zeroline": True},
+                       "yaxis": {"title": {"text": ylabel}, "autorange": "reversed"}}}
+
+
+def _profiles(results: Mapping[str, Any], quantity: str, scale: float, depth_scale: float, *,
+              skip_zero: bool = False) -> list[dict]:
+    """One line per operation of ``results``: its ``quantity`` × ``scale`` against the measured depth ×
+    ``depth_scale``, coloured as in the PNG (:data:`_COLORS`); ``skip_zero``: operations where it is 0
+    throughout left out."""
+    traces = []
+    for op, r in results.items():
+        values = np.asarray(getattr(r, quantity), dtype=float)
+        if skip_zero and not np.any(values):
+            continue
+        traces.append({"type": "scatter", "mode": "lines", "name": _LABELS.get(op, op),
+                       "line": {"color": _hex(_COLORS.get(op, "k")), "width": 1.8},
+                       "x": np.nan_to_num(values * scale).tolist(),
+                       "y": (np.asarray(r.measured_depth) * depth_scale).tolist()})
+    return traces
+
+
+def well_figures(trajectory, results: Mapping[str, Any] | None = None, *,
+                 critical: Mapping[str, np.ndarray] | None = None, units: str | None = None) -> list[dict]:
+    """Interactive figures (plotly specs, values in the display units of ``units``): the 3-D well path (north,
+    east, TVD down), coloured by the side force of rotating off bottom when ``results`` are given, then the
+    three panels of :func:`plot_torque_drag` in its colours: the effective axial force (with the ``critical``
+    compressions of sinusoidal and helical buckling), the torque and the side force per length, against
+    measured depth."""
+    length, force, torque = (display_unit(k, units) for k in ("length", "force", "torque"))
     s = np.linspace(0.0, trajectory.depth, max(200, len(trajectory.measured_depth) * 5))
     points = trajectory.locate(s)[0] * length.scale
     trace: dict[str, Any] = {"type": "scatter3d", "mode": "lines", "x": points[:, 1].tolist(),
                              "y": points[:, 0].tolist(), "z": points[:, 2].tolist(), "name": "well path",
-                             "line": {"width": 6, "color": "#1f77b4"},
+                             "line": {"width": 6, "color": _hex("C0")},
                              "text": [f"MD {v:.1f} {length.label}" for v in s * length.scale]}
+    caption = "Minimum-curvature path; drag to rotate, scroll to zoom."
     if results is not None and "rotating_off_bottom" in results:
         r = results["rotating_off_bottom"]
         side = np.interp(s, r.measured_depth, r.side_force, right=np.nan) * force.scale / length.scale
+        # A line coloured by values has no legend entry (plotly.js cannot draw its swatch): the colour bar names it.
+        trace["showlegend"] = False
         trace["line"] = {"width": 6, "color": np.nan_to_num(side).tolist(), "colorscale": "Viridis",
-                         "colorbar": {"title": {"text": f"side force [{force.label}/{length.label}]"}}}
+                         "colorbar": {"title": {"text": f"side force [{force.label}/{length.label}]",
+                                                "side": "right"}}}
+        caption += " Colour: the side force per length when rotating off bottom."
     stations = trajectory.position * length.scale
-    figures = [{"title": "Well path (3-D)",
-                "caption": "Minimum-curvature path; drag to rotate. Colour: side force rotating off bottom.",
+    figures = [{"title": "Well path (3-D)", "caption": caption,
                 "data": [trace, {"type": "scatter3d", "mode": "markers", "x": stations[:, 1].tolist(),
                                  "y": stations[:, 0].tolist(), "z": stations[:, 2].tolist(),
                                  "marker": {"size": 2, "color": "black"}, "name": "survey stations"}],
-                "layout": {"title": {"text": "Well path"}, "height": 600, "scene": {
-                    "xaxis": {"title": {"text": f"east [{length.label}]"}},
-                    "yaxis": {"title": {"text": f"north [{length.label}]"}},
-                    "zaxis": {"title": {"text": f"TVD [{length.label}]"}, "autorange": "reversed"},
-                    "aspectmode": "data"}}}]
-    if results:
-        data = [{"type": "scatter", "mode": "lines", "name": _LABELS.get(op, op),
-                 "x": (r.axial_force * force.scale).tolist(), "y": (r.measured_depth * length.scale).tolist()}
-                for op, r in results.items()]
-        figures.append({"title": "Axial force", "caption": "Effective axial force along the string.", "data": data,
-                        "layout": {"title": {"text": "Effective axial force"},
-                                   "xaxis": {"title": {"text": f"axial force [{force.label}]"}},
-                                   "yaxis": {"title": {"text": f"measured depth [{length.label}]"},
-                                             "autorange": "reversed"}}})
+                "layout": {"title": {"text": "Well path"}, "height": 640, "margin": {"l": 0, "r": 0, "t": 50, "b": 0},
+                           "legend": {"x": 0, "y": 1}, "scene": {
+                               "xaxis": {"title": {"text": f"east [{length.label}]"}},
+                               "yaxis": {"title": {"text": f"north [{length.label}]"}},
+                               "zaxis": {"title": {"text": f"TVD [{length.label}]"}, "autorange": "reversed"},
+                               "aspectmode": "data", "camera": {"eye": {"x": 1.9, "y": 1.9, "z": 0.9}}}}}]
+    if not results:
+        return figures
+    depth_label = f"measured depth [{length.label}]"
+    panels = (("axial_force", force.scale, False, "Effective axial force",
+               f"effective axial force [{force.label}] (tension > 0)",
+               "Effective axial force along the string for each operation"),
+              ("torque", torque.scale, True, "Torque", f"torque [{torque.label}]",
+               "Torque along the string (the operations that rotate)"),
+              ("side_force", force.scale / length.scale, False, "Side force",
+               f"side force [{force.label}/{length.label}]", "Side force per length between string and hole wall"))
+    for quantity, scale, skip_zero, title, xlabel, caption in panels:
+        data = _profiles(results, quantity, scale, length.scale, skip_zero=skip_zero)
+        if quantity == "axial_force" and critical is not None:
+            depth = (next(iter(results.values())).measured_depth * length.scale).tolist()
+            for kind, dash in (("sinusoidal", "dash"), ("helical", "dot")):
+                data.append({"type": "scatter", "mode": "lines", "name": f"{kind} buckling",
+                             "line": {"color": "black", "width": 1, "dash": dash},
+                             "x": np.nan_to_num(-np.asarray(critical[kind]) * force.scale).tolist(), "y": depth})
+            caption += "; dashed and dotted: the critical compressions of sinusoidal and helical buckling"
+        figure = _profile_figure(title, caption + ".", data, xlabel, depth_label)
+        if quantity == "axial_force" and critical is not None:
+            figure["layout"]["xaxis"]["range"] = [v * force.scale for v in _axial_range(results)]
+        figures.append(figure)
     return figures

@@ -185,8 +185,11 @@ def test_search_on_the_simulator_resumes_to_the_same_answer(small_case, tmp_path
     ({"objective": "rate_of_penetration_q0"}, "rate_of_penetration_qNN"),
     ({"model_dispersion": (0.0, 1.2, 0.0)}, "stiffness_dispersion"),
     ({"variables": (("weight_on_bit", 8e4, 9e4), ("weight_on_hook", 1e5, 2e5))}, "give one of them"),
-    ({"points": 3}, "initial"),
-    ({"batch": 0}, r"batch = 0: must be an integer >= 1"),
+    ({"points": 2}, r"points = 2: must be an integer from initial = 3 to 200"),
+    ({"points": 100_000_000}, r"points = 100000000: must be an integer from initial = 3 to 200"),
+    ({"initial": 100_000}, r"initial = 100000: must be an integer from 2 to 200"),
+    ({"samples": 10**9}, r"samples = 1000000000: must be an integer from 2 to 1000"),
+    ({"batch": 0}, r"batch = 0: must be an integer from 1 to 200"),
     ({"batch": 2.0}, "batch = 2.0: must be an integer"),
     ({"probability_mean": "quadratic"}, "probability_mean = 'quadratic': must be one of constant, linear"),
 ])
@@ -217,8 +220,13 @@ def test_a_variable_the_case_cannot_vary_is_refused(small_case, extra, message):
     (["--vary", "top_speed=60:140", "-c", "buckling<=1.5"], "probability in (0, 1)"),
     (["--vary", "top_speed=60:140", "-p", "uncertainty.model.stiffness_dispersion=2"], "stiffness_dispersion"),
     (["--vary", "top_speed"], "NAME=LOW:HIGH"),
-    (["--vary", "top_speed=60:140", "--batch", "0"], "batch = 0: must be an integer >= 1"),
-    (["--vary", "top_speed=60:140", "--probability-mean", "cubic"], "probability_mean = 'cubic'"),
+    (["--vary", "top_speed=60:140", "--batch", "0"], "--batch = 0: must be an integer from 1 to 200"),
+    (["--vary", "top_speed=60:140", "--points", "100000000"], "--points = 100000000: must be an integer from "
+                                                               "--initial = 4 to 200"),
+    (["--vary", "top_speed=60:140", "--initial", "100000"], "--initial = 100000: must be an integer from 2 to 200"),
+    (["--vary", "top_speed=60:140", "--samples", "100000000"], "--samples = 100000000: must be an integer from 2 "
+                                                                "to 1000"),
+    (["--vary", "top_speed=60:140", "--probability-mean", "cubic"], "--probability-mean = 'cubic'"),
     ([], "give at least one decision variable"),
 ])
 def test_cli_refuses_bad_input_in_one_line_with_exit_2(tmp_path, argv, message):
@@ -230,6 +238,50 @@ def test_cli_refuses_bad_input_in_one_line_with_exit_2(tmp_path, argv, message):
     assert result.exit_code == 2, result.output
     assert message in result.stderr and "Traceback" not in result.output
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_points_equal_to_initial_runs_the_initial_design_and_writes_a_report(small_case, tmp_path):
+    """``--points`` equal to ``--initial`` is accepted (the initial design alone, its best point the answer); with
+    no ``--constraint`` no constraints table is printed; the run writes report.html (the search, the answer, the
+    design points, the figure inline)."""
+    from typer.testing import CliRunner
+
+    from drillstring.cli import app
+
+    case = tmp_path / "small.toml"
+    case.write_text(small_case.to_toml(), encoding="utf-8")
+    out = tmp_path / "o"
+    result = CliRunner().invoke(app, ["optimize", str(case), "--vary", "top_speed=80:120", "--initial", "3",
+                                      "--points", "3", "--samples", "2", "--t-end", "0.6", "--workers", "1",
+                                      "--out", str(out)], env={"COLUMNS": "120", "DRILLSTRING_UNITS": None})
+    assert result.exit_code == 0, result.output
+    assert "Chance constraints" not in result.stdout and "event" not in result.stdout
+    assert f"report: {out / 'report.html'}" in result.stdout
+    page = (out / "report.html").read_text(encoding="utf-8")
+    for part in ("<h2>Search</h2>", "<h2>Answer</h2>", "<h2>Design points</h2>", "data:image/png;base64,",
+                 "top_speed (operation.top_speed)"):
+        assert part in page
+    assert "Chance constraints at the answer" not in page
+    assert page.count("<tr") - page.count("<tr><th") >= 3  # a row per design point
+
+
+def test_a_search_notes_each_batch_the_surrogates_choose_and_resumes_after_ctrl_c(small_case, tmp_path):
+    """Between the passes of the engine, a note says which design points the surrogates are choosing (the
+    progress of a search whose surrogates take long). Ctrl-C there (a KeyboardInterrupt from the note) stops the
+    search with the initial design kept: the rerun computes only the two points left."""
+    from drillstring.stochastic.execution import Engine
+
+    def interrupt(text: str) -> None:
+        raise KeyboardInterrupt
+
+    settings = _settings(variables=(("top_speed", 80 * RPM, 120 * RPM),), points=5, initial=3, batch=1)
+    with pytest.raises(KeyboardInterrupt):
+        opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1, note=interrupt))
+    notes: list[str] = []
+    run = opt.run_optimization(small_case, settings, tmp_path / "optimize.zarr", Engine(workers=1, note=notes.append))
+    assert run.computed == 2 * settings.samples
+    assert notes == ["design point 4 of 5: chosen by the surrogates fitted to 3 points",
+                     "design point 5 of 5: chosen by the surrogates fitted to 4 points"]
 
 
 def test_point_estimates_from_realizations():

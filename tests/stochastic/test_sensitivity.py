@@ -230,3 +230,18 @@ def test_bad_inputs(case, uniform3):
         sobol_analysis(uniform3, lambda v: v[:, 0], 8)
     with pytest.raises(ValueError, match="returned 3 values of 'y' for a batch of 40 rows"):
         sobol_analysis(uniform3, lambda v: {"y": np.zeros(3)}, 8)
+
+
+def test_too_small_a_sample_is_flagged(uniform3, ishigami):
+    """N = 8 (allowed): the Ishigami indices have intervals wider than themselves, negative values or totals
+    below first-order ones, and the notes say so; at N = 4096 (each index within ±0.064 of the exact one) there
+    is no note for either output."""
+    small = sobol_analysis(uniform3, analytic_model, 8, seed=1, resamples=200)
+    notes = small.sample_notes("ishigami")
+    assert notes and any("interval wider than the index" in n for n in notes)
+    o = small.outputs.index("ishigami")
+    flawed = (np.any(small.S1_conf[o] > np.maximum(np.abs(small.S1[o]), 0.05))
+              or np.any(small.ST[o] < small.S1[o] - 0.05) or np.any(small.S1[o] < -0.05))
+    assert flawed  # what the notes report is there
+    assert small.to_dict()["outputs"]["ishigami"]["sample_notes"] == notes
+    assert ishigami.sample_notes("ishigami") == [] and ishigami.sample_notes("linear") == []

@@ -83,3 +83,50 @@ def test_bad_sigma(tmp_path, sigma):
     result = runner.invoke(app, ["torque-drag", str(_case_file(tmp_path, _WELL)), "--measurements", str(measured),
                                  "--sigma", sigma], env=_ENV)
     assert result.exit_code == 2 and "--sigma" in result.output and "Traceback" not in result.output
+
+
+def _html_specs(page):
+    import re
+
+    text = page.read_text(encoding="utf-8")
+    specs = [json.loads(s) for s in re.findall(r'class="figure-spec"[^>]*>(.*?)</script>', text, re.S)]
+    return text, specs
+
+
+def test_html_page_is_the_report_with_every_panel_of_the_png(tmp_path):
+    """The page has the report's style and sections, the 3-D path at full height, the three panels of the PNG
+    (axial force, torque, side force) in its colours, no legend entry plotly.js cannot draw; the command names
+    its files one a line."""
+    from matplotlib.colors import to_hex
+
+    from drillstring.torque_drag_plots import _COLORS
+
+    case = _case_file(tmp_path, _WELL)
+    page = tmp_path / "td.html"
+    result = runner.invoke(app, ["torque-drag", str(case), "--html", str(page), "--plot", str(tmp_path / "td.png")],
+                           env=_ENV)
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert f"figure: {tmp_path / 'td.png'}" in lines and f"figure: {tmp_path / 'td-broomstick.png'}" in lines
+    assert f"interactive page: {page}" in lines
+    assert "[" not in "".join(line for line in lines if "figure" in line)  # no Python list
+    text, specs = _html_specs(page)
+    assert "font-family: system-ui" in text and "<h2>Case</h2>" in text and "<h2>Loads</h2>" in text
+    assert [s["layout"]["title"]["text"] for s in specs] == ["Well path", "Effective axial force", "Torque",
+                                                             "Side force"]
+    height = specs[0]["layout"]["height"]
+    assert f'id="figure-0" style="height: {height}px"' in text  # the element as tall as the 3-D figure
+    for spec in specs:
+        for trace in spec["data"]:
+            if isinstance(trace.get("line", {}).get("color"), list):
+                assert trace["showlegend"] is False  # an array colour in a legend: "Invalid color specifier"
+    names = {"trip out": "trip_out", "trip in": "trip_in", "rotating off bottom": "rotating_off_bottom",
+             "sliding": "sliding", "drilling": "drilling"}
+    for spec in specs[1:]:
+        for trace in spec["data"]:
+            if trace["name"] in names:
+                assert trace["line"]["color"] == to_hex(_COLORS[names[trace["name"]]])
+    axial, torque, side = specs[1:]
+    assert {t["name"] for t in torque["data"]} == {"rotating off bottom", "drilling"}  # the PNG's torque panel
+    assert {"sinusoidal buckling", "helical buckling"} <= {t["name"] for t in axial["data"]}
+    assert len(side["data"]) == 5

@@ -15,9 +15,22 @@ from drillstring.cli.options import (CaseArg, CorrelationOption, JsonOpt, OutOpt
                                      _console, _fail, _load, _note_resumed, _print_json, app)
 from drillstring.cli.tables import print_table
 from drillstring.stochastic import DEFAULT_SEED
+from drillstring.stochastic import MAX_OPTIMIZE_POINTS as MAX_POINTS
+from drillstring.stochastic import MAX_OPTIMIZE_SAMPLES as MAX_SAMPLES
 
 #: Bare numbers of --vary: rpm for the top speed, N for forces.
 _BARE_UNITS = {"top_speed": "rpm", "operation.top_speed": "rpm"}
+#: The settings a refusal names -> the options that set them.
+_OPTIONS = {"samples": "--samples", "points": "--points", "initial": "--initial", "batch": "--batch",
+            "seed": "--seed", "objective": "--objective", "probability_mean": "--probability-mean"}
+
+
+def _option_message(message: str) -> str:
+    """A refusal of the settings (``"points = 5: must be ..."``) in the options' names (``"--points = 5: ..."``)."""
+    name, sep, rest = message.partition(" = ")
+    if not (sep and name in _OPTIONS):
+        return message
+    return f"{_OPTIONS[name]} = {rest.replace('from initial = ', 'from --initial = ')}"
 
 
 @app.command("optimize")
@@ -42,16 +55,20 @@ def optimize_command(
                           "instability, torsional_instability, axial_instability, coexistence, or OUTPUT>VALUE / "
                           "OUTPUT<VALUE (SI), e.g. 'surface_torque_amplitude>8000<=0.01'; repeat for several.")
     ] = None,
-    samples: Annotated[int, typer.Option("--samples", "-n", help="Realizations per design point (>= 2).")] = 8,
+    samples: Annotated[int, typer.Option("--samples", "-n", help=f"Realizations per design point (2 to "
+                                                                 f"{MAX_SAMPLES}).")] = 8,
     points: Annotated[
-        int | None, typer.Option("--points", help="Design points in all (default twice --initial).")] = None,
+        int | None, typer.Option("--points", help=f"Design points in all, from --initial (the initial design alone: "
+                                                  f"no point chosen by the surrogates) to {MAX_POINTS} (default "
+                                                  "twice --initial).")] = None,
     initial: Annotated[
-        int | None, typer.Option("--initial", help="Points of the initial design (default 4 per variable, >= 4).")
+        int | None, typer.Option("--initial", help=f"Points of the initial design, 2 to {MAX_POINTS} (default 4 per "
+                                                   "variable, at least 4).")
     ] = None,
     batch: Annotated[
         int | None,
         typer.Option("--batch", help="Design points chosen together after the initial design, their realizations "
-                                     "run in one pass of the workers (>= 1; default 4).")
+                                     f"run in one pass of the workers (1 to {MAX_POINTS}; default 4).")
     ] = None,
     probability_mean: Annotated[
         str, typer.Option("--probability-mean", help="Prior mean of the probabilities' surrogates: constant, or "
@@ -80,8 +97,9 @@ def optimize_command(
     A Gaussian-process surrogate of each output is fitted to probabilistic-map runs (--samples realizations
     of the declared uncertainty per design point) and the points are chosen where the constrained expected
     improvement is largest. Writes OUT/optimize.zarr (resumable), OUT/optimize.json, OUT/optimize.nc and
-    OUT/optimize.png (the feasible region, the answer marked). Infeasible constraints: exit code 2 with the
-    least-infeasible point.
+    OUT/optimize.png (the feasible region, the answer marked) and OUT/report.html. Notes on stderr say when
+    the surrogates choose the next points; Ctrl-C stops, and the same command resumes. Infeasible constraints:
+    exit code 2 with the least-infeasible point.
     """
     the_case = _load(case)
     if not vary:
@@ -118,7 +136,7 @@ def optimize_command(
     try:  # refused before the engine starts
         settings = optimization_settings(the_case, **arguments)
     except (TypeError, ValueError) as error:
-        _fail(str(error))
+        _fail(_option_message(str(error)))
     _check_output("--out", out, folder=True)
     outcome = _engine_command(
         out, "optimize.zarr", "optimization", "realizations",
@@ -171,20 +189,25 @@ def _print_answer(case, summary: dict[str, Any], units) -> None:
         f"{shown(best['objective_standard_error']):.2g} {shown.label} (Monte Carlo, {best['realizations']} "
         f"realizations); surrogate {shown(best['surrogate_objective']):.4g} ± "
         f"{shown(best['surrogate_objective_standard_deviation']):.2g}"), soft_wrap=True)
+    if best["constraints"]:
+        _print_constraints(console, best["constraints"])
+    files = summary.get("files") or {}
+    if files:
+        console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
+        console.print(escape(f"Results: {files['summary']}, {files['results']}, figure: {files['figure']}, "
+                             f"report: {files['report']}"), soft_wrap=True)
+
+
+def _print_constraints(console, constraints: list[dict[str, Any]]) -> None:
     table = Table(title="Chance constraints at the answer", title_justify="left",
                   caption="confidence: P(probability <= bound) from the binomial and surrogate errors together",
                   caption_justify="left")
     for header in ("event", "bound", "P (Monte Carlo)", "binomial s.e.", "surrogate", "surrogate s.d.",
                    "combined s.d.", "confidence", "met"):
         table.add_column(escape(header), justify="right")
-    for c in best["constraints"]:
+    for c in constraints:
         table.add_row(escape(c["event"]), f"{c['bound']:g}", f"{c['probability']:.3f}",
                       f"{c['binomial_standard_error']:.3f}", f"{c['surrogate_mean']:.3f}",
                       f"{c['surrogate_standard_deviation']:.3f}", f"{c['combined_standard_deviation']:.3f}",
                       f"{c['confidence']:.2f}", "yes" if c["met"] else "no")
     print_table(console, table)
-    files = summary.get("files") or {}
-    if files:
-        console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
-        console.print(escape(f"Results: {files['summary']}, {files['results']}, figure: {files['figure']}"),
-                      soft_wrap=True)

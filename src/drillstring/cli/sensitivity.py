@@ -22,7 +22,10 @@ def sensitivity_command(
     param: ParamOption = None,
     samples: Annotated[
         int, typer.Option("--samples", "-n", help="Base samples N, a power of 2 (>= 8): N(k + 2) runs for k "
-                                                   "parameters; indices also at N/4 and N/2 (convergence).")
+                                                   "parameters; indices also at N/4 and N/2 (convergence). Adequate "
+                                                   "when each index's interval is narrower than the index: the "
+                                                   "reference study's 8 parameters need N = 512 (each index to "
+                                                   "about ±0.05); a note says when N is too small.")
     ] = DEFAULT_BASE_SAMPLES,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the Sobol' sequence and the bootstrap (>= 0).")] = 0,
     t_end: RunTEndOption = None,
@@ -95,8 +98,24 @@ def _print_sensitivity(name: str, payload: dict[str, Any]) -> None:
                           cell(entry["ST"][parameter], entry["ST_ci"][parameter]),
                           (", ".join("–" if c is None else f"{c:.3f}" for c in change)) if k == 0 else "")
     print_table(console, table)
+    _print_sample_notes(console, payload)
     files = payload.get("files") or {}
     if files:
         console.print(escape(f"Store (rerun to resume): {files['store']}"), soft_wrap=True)
         console.print(escape(f"Indices: {files['indices']}, figures: {files['figure']}, report: "
                              f"{files['report']}, interactive: {files['interactive']}"), soft_wrap=True)
+
+
+def _print_sample_notes(console, payload: dict[str, Any]) -> None:
+    """One note per output whose indices say the sample is too small (intervals wider than the indices, negative
+    indices, ST below S1, large changes from N/2 to N), then what to do."""
+    from drillstring.plots import OUTPUT_TITLES
+
+    flagged = {name: entry["sample_notes"] for name, entry in payload["outputs"].items()
+               if entry.get("sample_notes")}
+    for name, notes in flagged.items():
+        console.print(escape(f"note: {OUTPUT_TITLES.get(name, name)}: {'; '.join(notes)}"))  # wrapped at words
+    if flagged:
+        console.print(escape(f"note: N = {payload['base_samples']} base samples are too few for these indices: "
+                             f"run again with --samples {2 * payload['base_samples']} or more, in another --out "
+                             "folder; the reference study needed N = 512"))

@@ -63,12 +63,13 @@ def torque_drag_command(
         payload["figures"] = [str(plot), str(plot.with_name(plot.stem + "-path.png")),
                               str(plot.with_name(plot.stem + "-broomstick.png"))]
     if html_page is not None:
-        from drillstring.interactive import write_interactive_page
+        from drillstring.report import write_torque_drag_page
         from drillstring.torque_drag_plots import well_figures
 
-        head = f"<meta charset='utf-8'><title>Torque and drag: {escape(the_case.name)}</title>"
-        write_interactive_page(html_page, head, f"<h1>Torque and drag: case {the_case.name}</h1>",
-                               well_figures(analysis.trajectory, analysis.results, units=units))
+        write_torque_drag_page(html_page, title=f"Torque and drag: case {the_case.name}",
+                               case_toml=the_case.to_toml(), payload=payload, units=units,
+                               interactive=well_figures(analysis.trajectory, analysis.results,
+                                                        critical=analysis.critical, units=units))
         payload["interactive"] = str(html_page)
     if as_json:
         _print_json(payload)
@@ -99,9 +100,10 @@ def torque_drag_command(
             f"[{cal[name]['interval_90'][0]:.3f}, {cal[name]['interval_90'][1]:.3f}]"
             for name in ("cased_hole_friction", "open_hole_friction"))
             + f"; residual {force(cal['residual_sigma']):,.2f} {force.label} ({cal['noise']})"), soft_wrap=True)
-    for key in ("figures", "interactive"):
-        if key in payload:
-            console.print(escape(f"{key}: {payload[key]}"), soft_wrap=True)
+    for figure in payload.get("figures", []):
+        console.print(escape(f"figure: {figure}"), soft_wrap=True)
+    if "interactive" in payload:
+        console.print(escape(f"interactive page: {payload['interactive']}"), soft_wrap=True)
 
 
 def _torque_drag_figures(case: Case, analysis, plot: Path, measurements, units: str | None) -> None:

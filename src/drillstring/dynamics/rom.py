@@ -1,4 +1,4 @@
-"""The reduced-order model (ROM) of the drill-string and its right-hand side (SPEC §6–§7).
+"""The reduced-order model (ROM) of the drill-string and its right-hand side (docs/model.md §5–§9).
 
 The response about the prestressed static state, ``q = q_S + q̄``, is projected on mass-normalised
 normal modes of the prestressed linear system (:mod:`drillstring.modal`):
@@ -13,7 +13,7 @@ imposed top rotation (:mod:`drillstring.damping`: by default ξ, c1 and c2 defin
 modes, giving a dense torsional block; or ``2 ξ ω_i`` on every basis mode;
 :attr:`ReducedOrderModel.generalized_force`, zero when not given), ``C_f`` the fluid (Coriolis + viscous)
 damping, and ``wob e_bit,u`` removes the static bit reaction that ``q_S`` already balances (the hook force
-stays equal to the static weight-on-hook, SPEC §7). The top rotation is imposed:
+stays equal to the static weight-on-hook, docs/model.md §6). The top rotation is imposed:
 ``θx(x, t) = Ω t + (Φ η)_θx``, so the total spin speed is ``Ω + (Φ η̇)_θx``; or, with a top drive
 (:mod:`drillstring.forces.top_drive`), the torsional family is free at the top (rigid rotation first, the
 top drive's inertia lumped at the top node), ``θx = (Φ η)_θx`` carries the whole spin, the motor torque
@@ -1428,7 +1428,7 @@ class ReducedOrderModel:
         return y
 
     def initial_state(self, lateral_perturbation: float, seed: int) -> np.ndarray:
-        """Initial state (SPEC §7): the static state, the whole string spinning at Ω, zero axial
+        """Initial state (docs/model.md §9): the static state, the whole string spinning at Ω, zero axial
         speed (η̇ = 0), in the steady whirl of its turning loads (:meth:`turning_whirl`; none without
         imbalance or bow: a string that has been spinning at Ω whirls so, and starting it straight would
         give it the impulse of a load switched on at t = 0), plus a seeded lateral perturbation defined

@@ -1,4 +1,4 @@
-"""Explicit embedded Runge–Kutta integration with adaptive step size and dense output (SPEC §7).
+"""Explicit embedded Runge–Kutta integration with adaptive step size and dense output (docs/model.md §9).
 
 Design (after SciPy's ``solve_ivp`` and diffrax): the *method* is data — a :class:`ButcherTableau` —, the
 *step-size controller* is a separate object (:class:`StepSizeController`), the *stepper*
@@ -58,7 +58,7 @@ ends of the step (Bogacki & Shampine 1989, §3), written in the stages: FSAL mak
 ``tests/dynamics/test_runge_kutta.py`` checks all the order conditions, the continuity conditions, and the
 observed convergence order of both methods and both continuous extensions.
 
-Failures (SPEC §7: stick and impacts must not crash or hang)
+Failures (docs/model.md §9: stick and impacts must not crash or hang)
 -----------------------------------------------------------
 A stage with non-finite values (NaN, ±inf, overflow; NumPy floating-point warnings are silenced inside a
 step) counts as a rejected step and shrinks the step by ``min_factor``. :class:`IntegrationError` is raised

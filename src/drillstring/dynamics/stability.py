@@ -1,4 +1,4 @@
-"""Steady drilling and its linear stability (SPEC §6–§7).
+"""Steady drilling and its linear stability (docs/model.md §5, §7).
 
 **Steady drilling** is the equilibrium of the reduced model in which the whole string turns at the top
 speed Ω and advances at a constant rate of penetration: the rigid axial coordinate moves at a constant
@@ -6,12 +6,12 @@ speed, every other coordinate sits at a constant offset. The rigid axial equatio
 ``b_r (f + wob) + g_r = D_rr η̇_r``, ``u̇ = b_r η̇_r`` is ``−f(V, Ω) = W − c V`` with ``W = wob + g_r/b_r``
 and ``c = D_rr/b_r²``: the bit–rock law solves it itself (its ``steady_drilling``,
 :mod:`drillstring.forces.registry`; the analysis never samples the law). For a law affine in the bit's axial
-speed at a fixed bit speed, ``f(u̇, Ω) = f0 + f1 u̇`` (Tucker & Wang, SPEC §6; Detournay), that is
+speed at a fixed bit speed, ``f(u̇, Ω) = f0 + f1 u̇`` (Tucker & Wang, docs/model.md §5; Detournay), that is
 
     ROP = (b_r (f0 + wob) + g_r) / (D_rr / b_r − b_r f1)                                        (1)
 
 which is ``ROP = Z² (a2 wob − a1 + a3 √(Ω² + e²)) / (1 + a2 c1 Z²)`` for the reference model (``c1`` the
-rigid axial resistance; with ``c1 = 0`` it is SPEC §6's ``Z²(a2 wob − a1) + Z a3 Ω``). The bit speed is
+rigid axial resistance; with ``c1 = 0`` it is docs/model.md §5's ``Z²(a2 wob − a1) + Z a3 Ω``). The bit speed is
 Ω, ``TOB = −t(ROP, Ω)``, ``FOB = −f(ROP, Ω)``, and the elastic offsets follow from ``ω_j² η_j`` = the
 constant generalised forces.
 

@@ -1,7 +1,7 @@
 """DOF numbering, generic sparse assembly, and the global linear matrices of the string.
 
 Global DOF numbering (defined in :mod:`drillstring.fem.dofs`, re-exported here): node ``i`` (0 at the
-top) owns DOFs ``6 i + k`` with ``k = U, V, W, THETA_X, THETA_Y, THETA_Z`` (SPEC §2).
+top) owns DOFs ``6 i + k`` with ``k = U, V, W, THETA_X, THETA_Y, THETA_Z`` (docs/model.md §1).
 """
 
 from __future__ import annotations

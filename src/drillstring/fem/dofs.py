@@ -1,4 +1,4 @@
-"""Degree-of-freedom numbering of the beam model (SPEC §2): the one module that names DOF offsets.
+"""Degree-of-freedom numbering of the beam model (docs/model.md §1): the one module that names DOF offsets.
 
 Every node carries six DOFs, in this order: axial ``u``, lateral ``v`` (y), lateral ``w`` (z), torsion
 ``θx``, bending rotations ``θy`` and ``θz``. Node ``i`` (0 at the top) owns the global DOFs

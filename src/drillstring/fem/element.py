@@ -1,10 +1,10 @@
 """The 2-node, 12-DOF Timoshenko beam element (pure functions of a section and a length).
 
-Nodal DOFs, in this order at each node (SPEC §2; numbered in :mod:`drillstring.fem.dofs`): axial
+Nodal DOFs, in this order at each node (docs/model.md §1; numbered in :mod:`drillstring.fem.dofs`): axial
 ``u``, lateral ``v`` (y), lateral ``w`` (z), torsion ``θx``, bending rotations ``θy``, ``θz``. Element
 DOFs 0–5 belong to the first (upper) node, 6–11 to the second.
 
-Interpolation (SPEC §3):
+Interpolation (docs/model.md §2):
 
 - ``u`` and ``θx``: linear.
 - bending: the shear-locking-free *interdependent* interpolation of Friedman & Kosmatka,
@@ -170,7 +170,7 @@ def bending_mass(section: BeamSection, length: float) -> np.ndarray:
 def bending_geometric_stiffness(
     section: BeamSection, length: float, axial_force_start: float, axial_force_end: float
 ) -> np.ndarray:
-    """Planar geometric stiffness ∫ N(x) N_v'ᵀ N_v' dx (SPEC §3), 4×4.
+    """Planar geometric stiffness ∫ N(x) N_v'ᵀ N_v' dx (docs/model.md §2), 4×4.
 
     ``N(x)`` [N], tension positive, varies linearly from ``axial_force_start`` (upper node) to
     ``axial_force_end`` (lower node), as it does under gravity. Being linear in N, it is

@@ -1,6 +1,6 @@
 """Drilling-fluid (mud) element matrices: a pipe conveying fluid inside a confining annulus.
 
-Model (SPEC §5), after Païdoussis, *Fluid–Structure Interactions: Slender Structures and Axial Flow*,
+Model (docs/model.md §4), after Païdoussis, *Fluid–Structure Interactions: Slender Structures and Axial Flow*,
 vol. 1 (2nd ed., 2014), ch. 3–4, and Païdoussis, Luu & Prabhakar, J. Fluids Struct. 24 (2008) 111–128
 (tubular cantilevers conveying fluid with annular backflow), as used by Ritto, Soize & Sampaio (2009).
 Mud flows **down** the bore at ``U_i`` and returns **up** the annulus at ``U_o``; for a volume flow

@@ -1,17 +1,17 @@
-"""Bit–rock interaction law (SPEC §6, ``f_br``).
+"""Bit–rock interaction law (docs/model.md §5, ``f_br``).
 
 The law couples the axial and torsional motion of the bit node. It is the model of Tucker & Wang
 (R. W. Tucker, C. Wang, "An integrated model for drill-string dynamics", J. Sound Vib. 224(1), 1999;
 "Torsional vibration control and Cosserat dynamics of a drill-rig assembly", Meccanica 38, 2003) in the
 regularised form used by Ritto, Soize & Sampaio (T. G. Ritto, C. Soize, R. Sampaio, "Non-linear dynamics
 of a drill-string with uncertain model of the bit–rock interaction", Int. J. Non-Linear Mech. 44, 2009),
-written exactly as in SPEC §6::
+written exactly as in docs/model.md §5::
 
     f_xbit = − u̇_bit / (a2 Z²) + a3 θ̇_bit / (a2 Z) − a1/a2            [N]
     t_xbit = − u̇_bit a4 Z² / θ̇_bit − a5 Z                              [N·m]
     Z(θ̇) = θ̇ / sqrt(θ̇² + e²)                                          [-]
 
-Sign conventions (SPEC §2, §6): ``x`` points down, ``u̇_bit > 0`` is drilling (the bit moves down into the
+Sign conventions (docs/model.md §1, §5): ``x`` points down, ``u̇_bit > 0`` is drilling (the bit moves down into the
 rock), ``θ̇_bit > 0`` turns with the top. ``f_xbit`` and ``t_xbit`` are the force and torque exerted **on the
 string** at the bit node, along / about ``+x``: in steady drilling ``f_xbit = −wob < 0`` (the rock pushes
 the bit up) and ``t_xbit = −TOB`` opposes the rotation.
@@ -40,8 +40,8 @@ the axial time scale ``m a2 Z²``, which collapses at stick) use :func:`bit_rock
 
 If ``e = 0`` (unregularised law, ``Z = sgn θ̇``) the kernels return ``Z = 0`` and ``1/Z² = 1`` at ``θ̇ = 0``.
 
-The component (SPEC §11)
-------------------------
+The component (docs/extending.md)
+---------------------------------
 The law is one component of the reduced model (:mod:`drillstring.forces.registry`), registered as
 ``"tucker_wang"``: :class:`BitRockParameters` is its parameters (built from the case in one place,
 :meth:`BitRockParameters.from_case`), the numbers its compiled kernel reads
@@ -95,8 +95,8 @@ STICK_SPEED_FLOOR_RATIO = 1.0e-6
 @register
 @dataclass(frozen=True)
 class BitRockParameters(BitLaw):
-    """The Tucker–Wang bit–rock law, registered as ``"tucker_wang"`` (SPEC §6, values for the reference case
-    in SPEC §9).
+    """The Tucker–Wang bit–rock law, registered as ``"tucker_wang"`` (docs/model.md §5, values for the reference case
+    in §12).
 
     Attributes
     ----------
@@ -143,7 +143,7 @@ class BitRockParameters(BitLaw):
 
     @classmethod
     def reference(cls) -> "BitRockParameters":
-        """Reference-case coefficients (SPEC §9)."""
+        """Reference-case coefficients (docs/model.md §12)."""
         return cls(a1=3.429e-3, a2=5.672e-8, a3=1.374e-4, a4=9.537e6, a5=1.475e3, e=2.0)
 
     @classmethod
@@ -247,7 +247,7 @@ def regularizer(bit_speed, e):
     """``Z = θ̇ / sqrt(θ̇² + e²)`` [-], odd in ``θ̇``, ``|Z| < 1``, ``Z -> ±1`` for ``|θ̇| >> e``.
 
     ``bit_speed`` θ̇ [rad/s], ``e`` [rad/s]. Evaluated with ``hypot`` (no overflow); ``Z(0) = 0`` also
-    when ``e = 0``. Ritto, Soize & Sampaio (2009); SPEC §6.
+    when ``e = 0``. Ritto, Soize & Sampaio (2009); docs/model.md §5.
     """
     h = math.hypot(bit_speed, e)
     if h == 0.0:
@@ -259,7 +259,7 @@ def regularizer(bit_speed, e):
 def bit_rock_force_floored(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e, speed_floor):
     """Bit–rock force and torque on the string, with an explicit stick floor ``speed_floor`` [rad/s].
 
-    Same as :func:`bit_rock_force` (SPEC §6, Tucker & Wang 1999/2003, Ritto et al. 2009) except that
+    Same as :func:`bit_rock_force` (docs/model.md §5, Tucker & Wang 1999/2003, Ritto et al. 2009) except that
     ``1/Z²`` uses ``max(|θ̇|, speed_floor)``. Returns ``(axial_force [N], torque [N·m])``.
     """
     h = math.hypot(bit_speed, e)
@@ -286,7 +286,7 @@ def bit_rock_force_floored(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e,
 
 @njit(cache=True)
 def bit_rock_force(bit_axial_velocity, bit_speed, a1, a2, a3, a4, a5, e):
-    """Bit–rock axial force [N] and torque [N·m] exerted on the string (SPEC §6).
+    """Bit–rock axial force [N] and torque [N·m] exerted on the string (docs/model.md §5).
 
     ``f = −u̇/(a2 Z²) + a3 θ̇/(a2 Z) − a1/a2``, ``t = −u̇ a4 Z²/θ̇ − a5 Z``, ``Z = θ̇/sqrt(θ̇² + e²)``
     (Tucker & Wang 1999, 2003; regularised by Ritto, Soize & Sampaio 2009).
@@ -350,7 +350,7 @@ def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
 def steady_state(weight_on_bit, bit_speed, params: BitRockParameters, allow_negative_rop: bool = False):
     """Steady drilling state of the bit–rock law: ``(rate_of_penetration [m/s], torque_on_bit [N·m])``.
 
-    Closed forms from SPEC §6 (Tucker & Wang 1999/2003 with the regularisation of Ritto et al. 2009),
+    Closed forms from docs/model.md §5 (Tucker & Wang 1999/2003 with the regularisation of Ritto et al. 2009),
     obtained by setting ``f_xbit = −wob`` and solving for ``u̇_bit``::
 
         ROP = Z² (a2 · wob − a1) + Z a3 ω,        TOB = a4 · ROP · Z²/ω + a5 Z,     Z = Z(ω)
@@ -383,7 +383,7 @@ def steady_state(weight_on_bit, bit_speed, params: BitRockParameters, allow_nega
 
 def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRockParameters) -> np.ndarray:
     """``[[f_u, f_θ], [t_u, t_θ]]``: partial derivatives of the bit–rock force f [N] and torque t [N·m]
-    on the string (SPEC §6) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
+    on the string (docs/model.md §5) with respect to ``u̇_bit`` [m/s] and ``θ̇_bit`` [rad/s], in closed form.
 
     With ``h = √(θ̇² + e²)``: ``f = −u̇ (1 + e²/θ̇²)/a2 + (a3 h − a1)/a2``, ``t = −a4 u̇ θ̇/h² − a5 θ̇/h``::
 

@@ -1,9 +1,9 @@
-"""Shocks and rubbing of the string against the borehole wall (SPEC §6, ``f_sh``).
+"""Shocks and rubbing of the string against the borehole wall (docs/model.md §5, ``f_sh``).
 
 At every node the string section (outer diameter ``D_o``) sits in the borehole (diameter ``D_ch``) with a
 radial clearance ``g = (D_ch − D_o)/2``. With the lateral displacements ``v`` (along y) and ``w`` (along z)
 of the section centre, the radial displacement is ``r = sqrt(v² + w²)`` and the outward unit normal is
-``n = (v, w)/r``. When ``r > g`` the wall is penetrated by ``δ = r − g`` and (SPEC §6, the penalty model of
+``n = (v, w)/r``. When ``r > g`` the wall is penetrated by ``δ = r − g`` and (docs/model.md §5, the penalty model of
 Ritto, Soize & Sampaio 2009)::
 
     normal force        F_n = k_sh δ                          [N]    on the string, along −n
@@ -62,13 +62,13 @@ Stabilizers stay point springs (:func:`drillstring.fem.assembly.stabilizer_stiff
 uses this law (:mod:`drillstring.dynamics.rom`); the per-node :func:`contact_forces` remains for
 comparison (the convergence benchmark shows its mesh dependence).
 
-Decision: as written in SPEC §6, the friction torque uses the sign of the spin ``θ̇x`` (not of ``s``), so with
-``tangential=False`` the model is exactly the SPEC's; with ``tangential=True`` the lateral force is added
+Decision: as written in docs/model.md §5, the friction torque uses the sign of the spin ``θ̇x`` (not of ``s``), so with
+``tangential=False`` the model is exactly that one; with ``tangential=True`` the lateral force is added
 and the torque is unchanged (the two differ only when the whirl velocity is comparable with the surface
 speed ``θ̇x R``, e.g. in backward whirl).
 
-The component (SPEC §11)
-------------------------
+The component (docs/extending.md)
+---------------------------------
 Borehole contact is one component of the reduced model, registered on the component protocol
 (:mod:`drillstring.forces.registry`, a :class:`~drillstring.forces.registry.ContactLaw` named ``"penalty"``).
 Its pieces: :class:`ContactParameters` (its keys the case's ``[contact]``, :class:`~drillstring.case.Contact`;
@@ -137,7 +137,7 @@ def penalty_contact_kernel(args, ctx, force_v, force_w, torque):
 @register
 @dataclass(frozen=True)
 class ContactParameters(ContactLaw):
-    """String–borehole contact coefficients (SPEC §6; reference values in SPEC §9): the contact law ``"penalty"``
+    """String–borehole contact coefficients (docs/model.md §5; reference values in §12): the contact law ``"penalty"``
     of the component protocol (module docstring).
 
     Attributes
@@ -152,7 +152,7 @@ class ContactParameters(ContactLaw):
     speed_regularization : float
         ``ε`` [rad/s], regularisation of the sign of the spin speed, ``sgn_ε(s) = s/sqrt(s² + ε²)``.
     tangential_friction : bool
-        Add the tangential friction force on the lateral DOFs (off by default; SPEC §6 "optionally").
+        Add the tangential friction force on the lateral DOFs (off by default; docs/model.md §5).
     """
 
     name: ClassVar[str] = "penalty"
@@ -336,7 +336,7 @@ def contact_forces(
     node: the mesh-dependent per-node law; see :func:`distributed_contact_forces`), ``mu`` [-], ``eps``
     [rad/s], ``tangential`` (bool). Outputs (overwritten, no allocation): ``force_v``, ``force_w`` [N]
     along y and z, ``torque`` [N·m] about +x. Model and slip-velocity derivation in the module docstring
-    (SPEC §6).
+    (docs/model.md §5).
     """
     n_contacts = 0
     for i in range(v.shape[0]):
@@ -389,7 +389,7 @@ def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
     """Contact forces for arrays of nodes or stations: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``.
 
     Array-likes are broadcast together to 1-D (``gap`` [m] and ``outer_diameter`` [m] may be scalars);
-    see :func:`contact_forces` for units and the model (SPEC §6). Without ``stiffness`` every entry has
+    see :func:`contact_forces` for units and the model (docs/model.md §5). Without ``stiffness`` every entry has
     ``params.shock_stiffness`` [N/m] (per-node law); with ``stiffness`` [N/m] (one per entry, e.g.
     :meth:`ContactStations.stiffness`) it replaces it (:func:`distributed_contact_forces`).
     """

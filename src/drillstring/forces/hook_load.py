@@ -1,7 +1,7 @@
 """The hook load during a realistic start: the bit lowered to the rock and the weight-on-bit ramped up.
 
 The reduced model is written about the static state in which the rock carries the weight-on-bit ``W``
-and the hook the rest of the string's weight (SPEC §7). In the reference start the bit sits on that
+and the hook the rest of the string's weight (docs/model.md §6). In the reference start the bit sits on that
 state from t = 0 and the bit–rock law is switched on at once. The **realistic start** (a case option,
 ``initial.start = "ramp"``) instead begins as a driller does: the string turning off bottom, the hook
 carrying the whole string (the bit carries nothing), then the hook load slacked off linearly so that the

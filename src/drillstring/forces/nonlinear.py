@@ -1,6 +1,6 @@
 """Case-1 nonlinear forces of the beam model: strain-energy forces ``f_se`` and kinetic-energy forces ``f_ke``.
 
-SPEC §6 (``f_NL = f_ke + f_se + f_sh + f_br``); the model is that of Ritto, Soize & Sampaio, "Non-linear
+docs/model.md §5 (``f_NL = f_ke + f_se + f_sh + f_br``); the model is that of Ritto, Soize & Sampaio, "Non-linear
 dynamics of a drill-string with uncertain model of the bit–rock interaction", Int. J. Non-Linear Mech. 44
 (2009) 865–876, whose axial–lateral coupling through the strain ``u' + ½(v'² + w'²)`` follows Sampaio,
 Piovan & Venero Lozano, "Coupled axial/torsional vibrations of drill-strings by means of non-linear model",
@@ -19,7 +19,7 @@ strain energy has degree 8 in ``x``, 5 points suffice).
 Strain-energy forces ``f_se`` — no double counting of the prestress
 --------------------------------------------------------------------
 The axial strain is ``ε = u' + ½(v'² + w'²)`` (moderate rotations) and the axial strain energy
-``U = ½ ∫ EA ε² dx``. The response is written about the prestressed, straight static state (SPEC §2, §4):
+``U = ½ ∫ EA ε² dx``. The response is written about the prestressed, straight static state (docs/model.md §1, §3):
 ``u = u_S + ū``, ``v = v̄``, ``w = w̄`` (static ``v = w = 0``), with static axial force ``N(x) = EA u_S'``.
 With ``s = v'² + w'²``::
 
@@ -55,7 +55,7 @@ Linearised at the spin ``θ̇x = Ω`` its forces are ``−Ω G q̇``, ``G`` the 
 shaft and the rate of spin angular momentum); the opposite sign would stiffen backward instead of forward
 whirl (tested).
 
-Reasons: (i) SPEC §6 calls ``f_ke`` *quadratic*; the quartic term would add cubic forces of the same order
+Reasons: (i) docs/model.md §5 calls ``f_ke`` *quadratic*; the quartic term would add cubic forces of the same order
 as the terms already discarded by the small-angle expansion itself (e.g. the ``O(θ²θ̇²)`` corrections of the
 bending rotary inertia), so keeping it would not improve consistency; (ii) it keeps ``T_nl`` linear in
 ``q``, so ``f_vel`` depends on ``q̇`` only and the projected mass correction is linear in the modal
@@ -198,7 +198,7 @@ def _as_element_vector(q, name: str) -> np.ndarray:
 
 
 def element_strain_energy(q_e, section: BeamSection, length: float) -> float:
-    """Nonlinear strain energy ``U_nl`` [J] of one element (module docstring; SPEC §6).
+    """Nonlinear strain energy ``U_nl`` [J] of one element (module docstring; docs/model.md §5).
 
     ``U_nl = ∫ [½ EA ū' (v'² + w'²) + ⅛ EA (v'² + w'²)²] dx`` — the part of ``½∫EA ε²`` not in ``[K]`` and
     ``[K_g]`` (Ritto, Soize & Sampaio 2009; Sampaio, Piovan & Venero Lozano 2007).

@@ -1,4 +1,4 @@
-"""The bit off bottom: no bit–rock force, registered as the bit–rock law ``"off_bottom"`` (SPEC §11).
+"""The bit off bottom: no bit–rock force, registered as the bit–rock law ``"off_bottom"`` (docs/extending.md).
 
 The bit hangs free above the rock: the rock exerts neither force nor torque on it, the weight-on-bit is 0 and
 the hook carries the whole string. Its steady state is rotation without penetration (rate of penetration 0)

@@ -1,4 +1,4 @@
-"""The component protocol: bit–rock laws, top boundaries and hook loads that register themselves (SPEC §11).
+"""The component protocol: bit–rock laws, top boundaries and hook loads that register themselves (docs/extending.md).
 
 A **component** is one module holding one class. The class is its parameters (built from the case by
 ``from_case``), and declares everything the reduced model, the integrators and the stability analysis ask of

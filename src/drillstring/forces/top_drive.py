@@ -1,4 +1,4 @@
-"""The top boundary of the torsion: imposed speed or a top drive under a speed controller (SPEC §11).
+"""The top boundary of the torsion: imposed speed or a top drive under a speed controller (docs/model.md §6).
 
 **Imposed speed** (the reference study): ``θx(0, t) = Ω t``. Seen from the string the top is infinitely
 stiff; every torsional wave is reflected with ``r = −1``.

@@ -1,4 +1,4 @@
-"""Loads turning with the string — mass imbalance and bow — as a component of the reduced model (SPEC §11).
+"""Loads turning with the string — mass imbalance and bow — as a component of the reduced model (docs/extending.md).
 
 The physical loads (:class:`~drillstring.forces.excitation.TurningLoads`) come from the registered sources of the
 component protocol (:class:`~drillstring.forces.registry.TurningLoadSource`: :class:`MassImbalance`, keys

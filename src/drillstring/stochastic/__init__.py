@@ -20,3 +20,9 @@ DEFAULT_MAP_TOP_SPEED = "40 rpm:200 rpm:17"
 DEFAULT_MAP_WEIGHT_ON_BIT = "40 kN:160 kN:13"
 #: Default number of base samples N of a sensitivity analysis (N(k + 2) runs for k parameters).
 DEFAULT_BASE_SAMPLES = 128
+
+#: The robust operating point (:mod:`.optimize`): the largest budget of design points (the surrogates are
+#: refitted to every evaluated point before each batch, at a cost growing as the cube of their number) and of
+#: realizations per design point.
+MAX_OPTIMIZE_POINTS = 200
+MAX_OPTIMIZE_SAMPLES = 1000

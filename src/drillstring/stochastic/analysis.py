@@ -1,4 +1,4 @@
-"""From a study's Zarr store to statistics and a JSON-ready summary (SPEC §8)."""
+"""From a study's Zarr store to statistics and a JSON-ready summary (docs/model.md §11)."""
 
 from __future__ import annotations
 

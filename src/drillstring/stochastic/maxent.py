@@ -1,4 +1,4 @@
-"""Maximum-Entropy probability densities from the available information (SPEC §8).
+"""Maximum-Entropy probability densities from the available information (docs/model.md §11).
 
 The Maximum Entropy Principle (E. T. Jaynes, "Information theory and statistical mechanics", Phys. Rev. 106,
 1957; J. N. Kapur, *Maximum-Entropy Models in Science and Engineering*, Wiley, 1989; C. Soize,

@@ -1,4 +1,4 @@
-"""Monte Carlo study of random case parameters (SPEC §8): realizations, their Zarr store and resume.
+"""Monte Carlo study of random case parameters (docs/model.md §11): realizations, their Zarr store and resume.
 
 Each realization ``s`` draws the values of the study's random parameters from their Maximum-Entropy laws
 with its own random stream (:meth:`~drillstring.stochastic.uncertainty.Uncertainty.draw`, keyed by

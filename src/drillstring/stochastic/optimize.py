@@ -53,6 +53,7 @@ from drillstring.case import Case
 from drillstring.checks import integer, real_number
 from drillstring.checks import seed as check_seed
 from drillstring.dynamics.indicators import has_top_drive
+from drillstring.stochastic import MAX_OPTIMIZE_POINTS, MAX_OPTIMIZE_SAMPLES
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.operating_map import MapSettings
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, case_parameter, with_parameters
@@ -64,7 +65,7 @@ from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, TaskS
 from drillstring.stochastic.surrogate import Estimates, SearchProblem, constraint_confidence, next_batch, recommend
 from drillstring.stochastic.uncertainty import input_attributes
 
-__all__ = ["DECISION_ALIASES", "DEFAULT_BATCH", "OBJECTIVES", "OptimizationSettings", "OptimizationStore",
+__all__ = ["DECISION_ALIASES", "DEFAULT_BATCH", "MAX_POINTS", "MAX_SAMPLES", "OBJECTIVES", "OptimizationSettings", "OptimizationStore",
            "point_estimates", "optimization_result", "run_optimization"]
 
 #: Short names of decision variables -> case parameter path.
@@ -80,6 +81,8 @@ DEFAULT_BATCH = 4
 PROBABILITY_MEANS = ("constant", "linear")
 #: Bootstrap resamples of a quantile objective's Monte Carlo variance.
 BOOTSTRAP = 200
+#: Largest budget of design points (docs/optimize.md, "Limits") and realizations per design point.
+MAX_POINTS, MAX_SAMPLES = MAX_OPTIMIZE_POINTS, MAX_OPTIMIZE_SAMPLES
 
 
 def decision_path(name: str) -> str:
@@ -133,8 +136,9 @@ class OptimizationSettings:
         variables: ``((path, low, high), ...)`` decision variables and bounds [SI], ``low < high``.
         objective: see :func:`parse_objective`.
         constraints: ``((event, bound), ...)``: ``P(event) ≤ bound``, bound in (0, 1).
-        samples: realizations per design point (>= 2).
-        points: design points of the search (budget), more than ``initial``.
+        samples: realizations per design point, 2 to :data:`MAX_SAMPLES`.
+        points: design points of the search (budget), ``initial`` to :data:`MAX_POINTS` (equal to
+            ``initial``: the initial design alone, the answer its best point).
         initial: points of the initial design (>= 2).
         batch: points chosen together and evaluated in one pass after the initial design (>= 1; more than
             ``points − initial``: all of them at once).
@@ -188,13 +192,18 @@ class OptimizationSettings:
                                 high_open=True, allowed="a probability in (0, 1)")
             constraints.append((str(event).strip(), bound))
         object.__setattr__(self, "constraints", tuple(constraints))
-        object.__setattr__(self, "samples", integer("samples", self.samples, low=2,
-                                                    allowed="an integer >= 2 (realizations per point)"))
-        object.__setattr__(self, "initial", integer("initial", self.initial, low=2))
-        object.__setattr__(self, "points", integer("points", self.points, low=self.initial + 1,
-                                                   allowed=f"an integer > initial = {self.initial}"))
-        object.__setattr__(self, "batch", integer("batch", self.batch, low=1,
-                                                  allowed="an integer >= 1 (design points chosen together)"))
+        object.__setattr__(self, "samples", integer(
+            "samples", self.samples, low=2, high=MAX_SAMPLES,
+            allowed=f"an integer from 2 to {MAX_SAMPLES} (realizations per design point)"))
+        object.__setattr__(self, "initial", integer(
+            "initial", self.initial, low=2, high=MAX_POINTS,
+            allowed=f"an integer from 2 to {MAX_POINTS} (points of the initial design)"))
+        object.__setattr__(self, "points", integer(
+            "points", self.points, low=self.initial, high=MAX_POINTS,
+            allowed=f"an integer from initial = {self.initial} to {MAX_POINTS} (design points in all)"))
+        object.__setattr__(self, "batch", integer("batch", self.batch, low=1, high=MAX_POINTS,
+                                                  allowed=f"an integer from 1 to {MAX_POINTS} (design points "
+                                                          "chosen together)"))
         if self.probability_mean not in PROBABILITY_MEANS:
             raise ValueError(f"probability_mean = {self.probability_mean!r}: must be one of "
                              f"{', '.join(PROBABILITY_MEANS)}")
@@ -381,6 +390,10 @@ def run_optimization(case: Case, settings: OptimizationSettings, store_path: str
             stored = [_stored_design(store, settings, p) for p in batch]
             if any(values is None for values in stored):
                 x, estimates = _history(store, settings, outputs, batch.start)
+                if engine.note is not None and x is not None and batch.start >= settings.initial:
+                    which = (f"design point {batch.stop}" if len(batch) == 1 else
+                             f"design points {batch.start + 1}–{batch.stop}")
+                    engine.note(f"{which} of {settings.points}: chosen by the surrogates fitted to {len(x)} points")
                 chosen = next_batch(problem, x, estimates, settings.points, batch.start, len(batch))
                 stored = [chosen[k] if values is None else values for k, values in enumerate(stored)]
             status = store.status()

@@ -22,6 +22,12 @@ Design and estimators
 * **Convergence in N**: the first ``n(k + 2)`` rows of the design for ``N`` are the design for ``n`` (a prefix
   of the Sobol' sequence), so the indices at ``N/4``, ``N/2`` and ``N`` come from the same runs;
   :attr:`SobolResult.convergence_change` is the largest change of any index between successive levels.
+* **Too small a sample** (:meth:`SobolResult.sample_notes`): an index is known to about its interval's
+  half-width, so a result is flagged, per output, when a half-width exceeds both the index it qualifies and
+  :data:`RESOLUTION`, an index is below −:data:`RESOLUTION` or a total index below its first-order one by more
+  than :data:`RESOLUTION` (impossible for the exact indices: sampling error), or an index changed by more
+  than 2 :data:`RESOLUTION` from N/2 to N. The reference study (8 parameters, N = 512) has none of these
+  (docs/sensitivity.md: each index known to about ±0.05); N = 8 has them all.
 * **Failed runs**: a base sample whose block holds a non-finite output is left out of that output's
   estimate (a block is self-contained in both estimators); the count is reported (``dropped``). Failures that
   depend on the parameters bias the indices: keep the count near zero.
@@ -69,6 +75,9 @@ __all__ = [
 BatchModel = Callable[[np.ndarray], Mapping[str, Any]]
 
 _LEVELS = (4, 2, 1)  # convergence check at N/4, N/2, N
+#: The resolution of an index below which differences are not read: half-widths, negative values and ST < S1
+#: smaller than this are sampling noise of no consequence (the reference study's indices are known to ±0.05).
+RESOLUTION = 0.05
 
 
 def _problem(k: int, names: tuple[str, ...]) -> dict[str, Any]:
@@ -223,6 +232,29 @@ class SobolResult:
         s = np.concatenate([self.S1_convergence[:, o, :], self.ST_convergence[:, o, :]], axis=1)
         return np.max(np.abs(np.diff(s, axis=0)), axis=1)
 
+    def sample_notes(self, output: str) -> list[str]:
+        """What says the sample is too small for one output's indices (module docstring, "Too small a sample"):
+        intervals wider than their indices, negative indices, total indices below first-order ones, large
+        changes from N/2 to N; empty when none."""
+        o = self._row(output)
+        notes = []
+        for kind, values, half in (("S1", self.S1[o], self.S1_conf[o]), ("ST", self.ST[o], self.ST_conf[o])):
+            with np.errstate(invalid="ignore"):
+                wide = [p for p, v, c in zip(self.parameters, values, half) if c > max(abs(v), RESOLUTION)]
+                negative = [p for p, v in zip(self.parameters, values) if v < -RESOLUTION]
+            if wide:
+                notes.append(f"{kind} interval wider than the index for {', '.join(wide)}")
+            if negative:
+                notes.append(f"{kind} negative for {', '.join(negative)}")
+        with np.errstate(invalid="ignore"):
+            below = [p for p, s1, st in zip(self.parameters, self.S1[o], self.ST[o]) if st < s1 - RESOLUTION]
+        if below:
+            notes.append(f"ST below S1 for {', '.join(below)}")
+        change = self.convergence_change(output)
+        if change.size and np.isfinite(change[-1]) and change[-1] > 2 * RESOLUTION:
+            notes.append(f"indices changed by up to {change[-1]:.2f} from N/2 to N")
+        return notes
+
     def indices(self, output: str) -> dict[str, dict[str, Any]]:
         """The indices of one output by kind and parameter: ``{"S1": {path: value}, "S1_ci": {path: [lo, hi]},
         "ST": ..., "ST_ci": ...}``."""
@@ -242,6 +274,7 @@ class SobolResult:
         for o, name in enumerate(self.outputs):
             entry: dict[str, Any] = self.indices(name)
             entry["dropped_base_samples"] = int(self.dropped.get(name, 0))
+            entry["sample_notes"] = self.sample_notes(name)
             levels = {"S1": self.S1_convergence, "ST": self.ST_convergence}
             entry["convergence"] = {
                 "base_samples": list(self.convergence_samples),

@@ -1,4 +1,4 @@
-"""Statistics over Monte Carlo realizations (SPEC §8).
+"""Statistics over Monte Carlo realizations (docs/model.md §11).
 
 NumPy core functions, plus xarray wrappers that keep coordinates and units.
 
