@@ -54,6 +54,7 @@ from drillstring.derived import (
     string_axial_load,
 )
 from drillstring.components import MOTOR_KEYS
+from drillstring.constants import STANDARD_GRAVITY
 from drillstring.units import (
     ACCELERATION,
     ANGLE,
@@ -452,6 +453,16 @@ class Material(_Base):
     young_modulus: Pressure = Field(gt=0, description="Young's modulus E [Pa]")
     density: Density = Field(gt=0, description="mass density rho [kg/m^3]")
     poisson_ratio: Dimensionless = Field(gt=0, lt=0.5, description="Poisson's ratio nu [-]")
+    solid_density: Density | None = Field(
+        None, gt=0, description="density of the solid itself when ``density`` smears extra parts (tool joints) "
+        "over the section's area [kg/m^3]: the section's steel then occupies, and displaces, mass / solid_density "
+        "per length; left out: ``density`` (the section is all solid)")
+
+    @property
+    def solid_fraction(self) -> float:
+        """Volume of solid per volume of section [-]: ``density / solid_density`` (1 for a plain material; above 1
+        when tool joints are smeared: their steel lies outside the pipe body's area)."""
+        return 1.0 if self.solid_density is None else self.density / self.solid_density
 
     @property
     def shear_modulus(self) -> float:
@@ -693,7 +704,8 @@ class Damping(_Base):
 
 
 class Environment(_Base):
-    gravity: Acceleration = Field(9.81, ge=0, description="gravitational acceleration g [m/s^2]")
+    gravity: Acceleration = Field(
+        STANDARD_GRAVITY, ge=0, description="gravitational acceleration g [m/s^2]; standard gravity by default")
 
 
 class Model(_Base):
@@ -1359,7 +1371,8 @@ class Case(_Base):
 
     @property
     def axial_load_per_length(self) -> tuple[float, ...]:
-        """Distributed axial load q of each section [N/m], along +x (down): ``(rho - rho_b) A g``, with
+        """Distributed axial load q of each section [N/m], along +x (down): ``(rho A - rho_b A_s) g``, with
+        ``A_s`` the section's solid area (tool joints' steel included: :attr:`Material.solid_fraction`),
         ``rho_b`` the mud density when ``model.buoyancy`` is on (else 0) and ``g`` 0 when ``model.gravity``
         is off, plus the mud's skin friction when ``fluid.axial_loads`` is on
         (:func:`drillstring.derived.axial_load_per_length`; the statics uses the same values)."""
@@ -1372,8 +1385,10 @@ class Case(_Base):
                 friction = fluid_skin_friction(s.outer_diameter, s.inner_diameter, self.borehole.diameter,
                                                self.fluid.density, self.flow_rate,
                                                self.fluid.friction_coefficient)
-            loads.append(axial_load_per_length(steel_density=self.material_of(s).density, area=s.area,
-                                               gravity=g, buoyancy_density=buoyancy, skin_friction=friction))
+            material = self.material_of(s)
+            loads.append(axial_load_per_length(steel_density=material.density, area=s.area, gravity=g,
+                                               buoyancy_density=buoyancy, skin_friction=friction,
+                                               solid_area=material.solid_fraction * s.area))
         return tuple(loads)
 
     @property
