@@ -382,9 +382,9 @@ def test_measurements_bounded_before_any_work(tmp_path, rows, fragment):
 
 
 def test_survey_with_more_stations_than_allowed_refused_before_parsing(tmp_path):
-    rows = ["measured_depth [m],inclination [deg],azimuth [deg]"] + [f"{k * 0.3:.1f},0,0" for k in range(10_001)]
+    rows = ["measured_depth [m],inclination [deg],azimuth [deg]"] + [f"{k * 0.3:.1f},0,0" for k in range(20_001)]
     path = _case_file(tmp_path, "deviated", survey="\n".join(rows) + "\n")
-    assert "more than the 10,000 stations allowed" in _quickly_refused("torque-drag", str(path))
+    assert "more than the 20,000 stations allowed" in _quickly_refused("torque-drag", str(path))
 
 
 @pytest.mark.parametrize("sigma", ["1e300 kN", "1e-300 N"])

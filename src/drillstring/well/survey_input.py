@@ -37,12 +37,13 @@ __all__ = ["COLUMNS", "MAX_STATIONS", "SurveyProblem", "read_survey_csv", "surve
 COLUMNS = ("measured_depth", "inclination", "azimuth")
 _ALIASES = {"md": 0, "measured_depth": 0, "depth": 0, "inc": 1, "incl": 1, "inclination": 1,
             "azi": 2, "az": 2, "azimuth": 2}
-#: Most stations a survey may have (a 10 km well surveyed every metre; directional surveys are taken every
-#: 10-30 m). Every station is an element end of the soft-string analysis, whose time grows with their number
-#: (10,000 stations: about 20 s for every operation and the lock-up search; 100,000: 3 minutes).
-MAX_STATIONS = 10_000
-#: Largest CSV file read [bytes] (10,000 rows of three numbers with room to spare).
-MAX_SURVEY_FILE_BYTES = 2_000_000
+#: Most stations a survey may have (a 10 km well surveyed every half metre; directional surveys are taken
+#: every 10-30 m). Every station is an element end of the soft-string analysis, whose time grows with their
+#: number (`drillstring torque-drag`, every operation and the lock-up search: about 20 s at 10,000 stations,
+#: 3 minutes at 100,000).
+MAX_STATIONS = 20_000
+#: Largest CSV file read [bytes] (20,000 rows of three numbers with room to spare).
+MAX_SURVEY_FILE_BYTES = 4_000_000
 
 
 class SurveyProblem(ValueError):
