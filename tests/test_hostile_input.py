@@ -370,7 +370,7 @@ def test_measurements_and_survey_that_are_not_regular_files_refused_unread(tmp_p
 @pytest.mark.parametrize(("rows", "fragment"), [
     (300_000, "more than the 1,000,000 allowed"),      # 300,000 rows: 8.3 GiB of predictions before
     (20_000, "more than the 2,000 allowed"),           # rows within the byte limit, beyond the count
-    (1_000, "distinct bit depths, more than the 300"),  # 1,000 depths: minutes of work before
+    (1_000, "distinct bit depths, more than the 200"),  # 1,000 depths: minutes of work before
 ])
 def test_measurements_bounded_before_any_work(tmp_path, rows, fragment):
     path = tmp_path / "measured.csv"
