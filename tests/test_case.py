@@ -119,9 +119,12 @@ def test_reference_tables_equal_defaults(reference):
     """Every optional table in reference.toml is written with its default values (the file documents them),
     except the lateral cut-off, which the reference case switches off (its string never reaches the wall),
     the start, which the reference study makes on bottom (new cases ramp the weight on bit up), and the truncation
-    correction, which the reference study leaves out (its paper's plain modal basis; new cases take "static")."""
+    correction, which the reference study leaves out (its paper's plain modal basis; new cases take "static"),
+    and gravity, the paper's 9.81 m/s^2 (new cases take standard gravity, the g of the pound-force)."""
+    from drillstring.constants import STANDARD_GRAVITY
+
     minimal = Case(name="m", sections=reference.sections, borehole=reference.borehole)
-    for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "environment", "model",
+    for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "model",
                   "mesh", "simulation"):  # fmt: skip
         assert getattr(minimal, table) == getattr(reference, table), table
     assert minimal.initial.model_copy(update={"start": "on_bottom"}) == reference.initial
@@ -130,6 +133,7 @@ def test_reference_tables_equal_defaults(reference):
         update={"lateral_cutoff": 0.0, "truncation_correction": "none"}) == reference.reduced_model
     assert minimal.reduced_model.lateral_cutoff == 1.5
     assert minimal.reduced_model.truncation_correction == "static"
+    assert (minimal.environment.gravity, reference.environment.gravity) == (STANDARD_GRAVITY, 9.81)
 
 
 def test_models_are_frozen(reference):

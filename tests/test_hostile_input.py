@@ -302,3 +302,121 @@ def test_laws_the_case_refuses_at_their_extremes(reference_case, laws, fragment)
         uncertainty(reference_case, laws)
     assert fragment in str(info.value) and "\n" not in str(info.value)
     assert uncertainty(reference_case, {"sections[1].outer_diameter": "uniform 0.2 0.25 m"}).size == 1
+
+
+# --- issue 37: torque and drag, its input files, the downhole motor ------------------------------------------
+
+
+def _case_file(folder, name: str, old: str = "", new: str = "", survey: str | None = None):
+    """The built-in case ``name`` copied into ``folder`` (with its survey file), ``old`` replaced by ``new``."""
+    cases = resources.files("drillstring").joinpath("cases")
+    text = cases.joinpath(f"{name}.toml").read_text(encoding="utf-8")
+    if name == "deviated":
+        (folder / "deviated_survey.csv").write_text(cases.joinpath("deviated_survey.csv").read_text(), "utf-8")
+    if survey is not None:
+        (folder / "survey.csv").write_text(survey, encoding="utf-8")
+        old, new = 'survey_file = "deviated_survey.csv"', 'survey_file = "survey.csv"'
+    assert old in text, old
+    path = folder / f"{name}_hostile.toml"
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    return path
+
+
+def _quickly_refused(*args: str, seconds: float = 3.0) -> str:
+    start = time.perf_counter()
+    line = _refused(*args)
+    assert time.perf_counter() - start < seconds, line
+    return line
+
+
+def test_torque_on_bit_beyond_any_rig_refused(tmp_path):
+    path = _case_file(tmp_path, "deviated", 'torque_on_bit = "4 kN*m"', "torque_on_bit = 1e14")
+    line = _quickly_refused("torque-drag", str(path))
+    assert "well.torque_on_bit" in line and "[0, 1e+06] N*m" in line
+
+
+def test_corkscrew_survey_loads_unbounded_not_a_traceback(tmp_path):
+    """A survey turning ~170 deg every 10 m: the capstan law multiplies the tension beyond any number; the table
+    says "unbounded", the JSON null."""
+    rows = ["measured_depth [m],inclination [deg],azimuth [deg]", "0,0,0"]
+    rows += [f"{10 * k},90,{170 * k % 360}" for k in range(1, 301)]
+    path = _case_file(tmp_path, "deviated", survey="\n".join(rows) + "\n")
+    result = runner.invoke(app, ["torque-drag", str(path)], env=_ENV)
+    assert result.exit_code == 0, result.output
+    assert "unbounded" in result.stdout
+    result = runner.invoke(app, ["torque-drag", str(path), "--json"], env=_ENV)
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["operations"]["trip_out"]["hook_load"] is None
+
+
+def _fifo(tmp_path):
+    import os
+
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    return str(fifo)
+
+
+@pytest.mark.parametrize("source", ["/dev/zero", "/dev/urandom", "fifo"])
+def test_measurements_and_survey_that_are_not_regular_files_refused_unread(tmp_path, source):
+    name = _fifo(tmp_path) if source == "fifo" else source
+    line = _quickly_refused("torque-drag", "deviated", "--measurements", name)
+    assert line.startswith(f"error: --measurements = {name}:") and "not a regular file" in line
+    path = _case_file(tmp_path, "deviated", 'survey_file = "deviated_survey.csv"', f'survey_file = "{name}"')
+    line = _quickly_refused("torque-drag", str(path))
+    assert "well.survey_file" in line and "not a regular file" in line
+
+
+@pytest.mark.parametrize(("rows", "fragment"), [
+    (300_000, "more than the 1,000,000 allowed"),      # 300,000 rows: 8.3 GiB of predictions before
+    (20_000, "more than the 2,000 allowed"),           # rows within the byte limit, beyond the count
+    (1_000, "distinct bit depths, more than the 200"),  # 1,000 depths: minutes of work before
+])
+def test_measurements_bounded_before_any_work(tmp_path, rows, fragment):
+    path = tmp_path / "measured.csv"
+    step = 0.001 if rows > 1_000 else 2.0
+    path.write_text("bit_depth [m],operation,hook_load [kN]\n"
+                    + "".join(f"{500 + k * step:.3f},trip_out,500\n" for k in range(rows)), encoding="utf-8")
+    line = _quickly_refused("torque-drag", "deviated", "--measurements", str(path))
+    assert line.startswith(f"error: --measurements = {path}:") and fragment in line
+
+
+def test_survey_with_more_stations_than_allowed_refused_before_parsing(tmp_path):
+    rows = ["measured_depth [m],inclination [deg],azimuth [deg]"] + [f"{k * 0.3:.1f},0,0" for k in range(20_001)]
+    path = _case_file(tmp_path, "deviated", survey="\n".join(rows) + "\n")
+    assert "more than the 20,000 stations allowed" in _quickly_refused("torque-drag", str(path))
+
+
+@pytest.mark.parametrize("sigma", ["1e300 kN", "1e-300 N"])
+def test_calibration_noise_outside_its_range_refused(tmp_path, sigma):
+    path = tmp_path / "measured.csv"
+    path.write_text("bit_depth [m],operation,hook_load [kN]\n1000,trip_out,500\n", encoding="utf-8")
+    line = _quickly_refused("torque-drag", "deviated", "--measurements", str(path), "--sigma", sigma)
+    assert line == f"error: --sigma = {sigma}: must be a force within [0.001, 1e+08] N (e.g. '20 kN')"
+
+
+def test_plot_whose_sibling_figure_is_a_folder_refused_before_work(tmp_path):
+    (tmp_path / "sib" / "x-path.png").mkdir(parents=True)
+    plot = tmp_path / "sib" / "x.png"
+    line = _quickly_refused("torque-drag", "deviated", "--plot", str(plot))
+    assert line == f"error: --plot = {tmp_path / 'sib' / 'x-path.png'}: is a folder; give a file name"
+
+
+@pytest.mark.parametrize(("old", "new", "fragment"), [
+    ('speed_per_flow = "0.2 rev/gal"', "speed_per_flow = 1e-300", "components[3].speed_per_flow = 1e-300: must be "
+     "within [10, 1e+06] rad/m3"),
+    ('speed_per_flow = "0.2 rev/gal"', 'displacement = "1e-12 m^3/rev"', "components[3].displacement"),
+    ("volumetric_efficiency = 0.9 ", "volumetric_efficiency = 1e-9 ", "components[3].volumetric_efficiency = 1e-09: "
+     "must be within [0.1, 1]"),
+    ("mechanical_efficiency = 0.85", "mechanical_efficiency = 1e-12", "components[3].mechanical_efficiency"),
+    ('max_differential_pressure = "1000 psi"', "max_differential_pressure = 1e-300",
+     "components[3].max_differential_pressure"),
+    ('flow_rate = "500 gpm"', 'flow_rate = "1e-6 gpm"', "fluid.flow_rate = 6.30901964e-11: gives the motor a no-load "
+     "speed"),
+])
+def test_motor_keys_outside_a_motors_range_refused_naming_the_key(tmp_path, old, new, fragment):
+    path = _case_file(tmp_path, "motor", old, new)
+    with pytest.raises(CaseError) as caught:
+        load_case(path)
+    assert fragment in str(caught.value), str(caught.value)
+    assert fragment in _quickly_refused("stability", str(path))

@@ -94,3 +94,27 @@ def test_the_guide_shows_the_readme_examples_unchanged():
         shown = [code for _, code in _blocks(language)][:2]
         in_guide = re.findall(rf"```{language}\n(.*?)```", guide, re.S)[:2]
         assert in_guide == shown
+
+
+def test_readme_is_short_and_keeps_both_quick_start_commands():
+    """At most 250 lines (the developers' guide), with the two commands a newcomer runs first."""
+    text = README.read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= 250
+    quick_start = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    commands = [code.strip() for code in re.findall(r"```bash\n(.*?)```", quick_start, re.S)]
+    assert commands == [
+        "python3 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/drillstring study reference --out study",
+        'python3 -m venv .venv && .venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest -q']
+
+
+def test_module_references_in_docstrings_and_docs_name_modules_that_exist():
+    """Every :mod:`drillstring...` reference of the sources and the Markdown docs names an importable module."""
+    import importlib.util
+
+    root = README.parent
+    files = [*root.joinpath("src", "drillstring").rglob("*.py"), *root.joinpath("docs").rglob("*.md"), README]
+    names = {name for path in files
+             for name in re.findall(r":mod:`~?(drillstring(?:\.\w+)*)`", path.read_text(encoding="utf-8"))}
+    assert len(names) > 20
+    missing = sorted(name for name in names if importlib.util.find_spec(name) is None)
+    assert not missing, missing

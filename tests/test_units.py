@@ -253,3 +253,14 @@ def test_uncertainty_laws_accept_field_units():
     assert law.density.std() == pytest.approx(0.25 * PPG_EXACT, rel=1e-12)
     law = parse_law("uniform 20 30 klbf", units.FORCE)
     assert law.support == pytest.approx((20 * KLBF, 30 * KLBF), rel=1e-15)
+
+
+def test_one_gravity_the_cases_and_the_pound_force():
+    """The case default g is standard gravity, the same g that defines the pound-force and the kilogram-force:
+    a string of w lb/ft weighs w lbf per foot in air."""
+    from drillstring.case import Environment
+    from drillstring.constants import STANDARD_GRAVITY
+
+    assert Environment().gravity == STANDARD_GRAVITY == 9.80665
+    assert units.to_si("1 lbf", units.FORCE) == pytest.approx(0.45359237 * STANDARD_GRAVITY, rel=1e-15)
+    assert units.to_si("1 kgf", units.FORCE) == pytest.approx(STANDARD_GRAVITY, rel=1e-15)

@@ -54,6 +54,7 @@ from drillstring.derived import (
     string_axial_load,
 )
 from drillstring.components import MOTOR_KEYS
+from drillstring.constants import STANDARD_GRAVITY
 from drillstring.units import (
     ACCELERATION,
     ANGLE,
@@ -452,6 +453,16 @@ class Material(_Base):
     young_modulus: Pressure = Field(gt=0, description="Young's modulus E [Pa]")
     density: Density = Field(gt=0, description="mass density rho [kg/m^3]")
     poisson_ratio: Dimensionless = Field(gt=0, lt=0.5, description="Poisson's ratio nu [-]")
+    solid_density: Density | None = Field(
+        None, gt=0, description="density of the solid itself when ``density`` smears extra parts (tool joints) "
+        "over the section's area [kg/m^3]: the section's steel then occupies, and displaces, mass / solid_density "
+        "per length; left out: ``density`` (the section is all solid)")
+
+    @property
+    def solid_fraction(self) -> float:
+        """Volume of solid per volume of section [-]: ``density / solid_density`` (1 for a plain material; above 1
+        when tool joints are smeared: their steel lies outside the pipe body's area)."""
+        return 1.0 if self.solid_density is None else self.density / self.solid_density
 
     @property
     def shear_modulus(self) -> float:
@@ -693,7 +704,8 @@ class Damping(_Base):
 
 
 class Environment(_Base):
-    gravity: Acceleration = Field(9.81, ge=0, description="gravitational acceleration g [m/s^2]")
+    gravity: Acceleration = Field(
+        STANDARD_GRAVITY, ge=0, description="gravitational acceleration g [m/s^2]; standard gravity by default")
 
 
 class Model(_Base):
@@ -874,9 +886,28 @@ class MotorKeys(_Base):
     #: the keys that make a powered motor (without any of them a ``motor`` component is a plain section)
     LAW_KEYS: ClassVar[tuple[str, ...]] = MOTOR_KEYS
 
+    #: Physical range of each key [SI]: (low, high, unit, what the range spans). Positive-displacement motors run
+    #: from 1 11/16 in (about 0.03 gal/rev) to 11 1/4 in (about 15 gal/rev), at 10 to 3000 gpm, their
+    #: efficiencies 0.5-0.95 new (a worn one lower); the ranges leave a margin and keep the law's steps finite.
+    RANGES: ClassVar[dict[str, tuple[float, float, str, str]]] = {
+        "flow_rate": (1e-4, 1.0, "m3/s", "1.6 to 15,900 gpm"),
+        "displacement": (1e-6, 0.1, "m3/rad", "0.0017 to 166 gal/rev"),
+        "speed_per_flow": (10.0, 1e6, "rad/m3", "0.006 to 600 rev/gal"),
+        "stall_torque": (1.0, 1e6, "N*m", "0.74 to 738,000 ft*lbf"),
+        "max_differential_pressure": (1e4, 1e9, "Pa", "1.5 to 145,000 psi"),
+        "volumetric_efficiency": (0.1, 1.0, "", "10 to 100 %"),
+        "mechanical_efficiency": (0.1, 1.0, "", "10 to 100 %"),
+    }
+
     def motor_problems(self) -> list[tuple[tuple[str | int, ...], Any, str]]:
-        """Problems of the motor's keys taken together (one of each pair given)."""
+        """Problems of the motor's keys: each within its physical range (:attr:`RANGES`), and taken together
+        (one of each pair given)."""
         problems: list[tuple[tuple[str | int, ...], Any, str]] = []
+        for key, (low, high, unit, span) in self.RANGES.items():
+            value = getattr(self, key)
+            if value is not None and not low <= value <= high:
+                problems.append(((key,), value, f"must be within [{low:g}, {high:g}] {unit}".rstrip()
+                                 + f" ({span}: a downhole motor's range)"))
         for first, second in (("displacement", "speed_per_flow"), ("stall_torque", "max_differential_pressure")):
             a, b = getattr(self, first), getattr(self, second)
             if a is None and b is None:
@@ -1073,6 +1104,30 @@ class Well(_Base):
         return self.measured_depth[-1]
 
 
+#: No-load speed of a downhole motor, 2 pi eta_v Q / V [rpm]: its allowed range (motors turn the bit at
+#: 50-1000 rpm; below 1 rpm the rotor's damping T_s/omega_0 makes the motor a stiff lock, no longer a motor).
+MOTOR_SPEED_RANGE = (1.0, 5000.0)
+
+
+def _motor_problems(case: Any) -> list[tuple[tuple[str | int, ...], Any, str]]:
+    """The motor's no-load speed from its keys and the flow it gets (the case's pumped flow by default) within
+    :data:`MOTOR_SPEED_RANGE` (docs/model.md §6, "Downhole motor", eq. (1))."""
+    motor = case.motor
+    if motor is None:
+        return []
+    flow = case.flow_rate if motor.flow_rate is None else motor.flow_rate
+    per_radian = motor.displacement if motor.displacement is not None else 1.0 / motor.speed_per_flow
+    rpm = motor.volumetric_efficiency * flow / per_radian / _RPM
+    low, high = MOTOR_SPEED_RANGE
+    if low <= rpm <= high:
+        return []
+    key, value = (("motor", "flow_rate"), motor.flow_rate) if motor.flow_rate is not None else \
+        (("fluid", "flow_rate"), flow)
+    return [(key, value, f"gives the motor a no-load speed 2 pi eta_v Q / V of {rpm:.3g} rpm (Q {flow:.4g} m3/s, "
+                         f"V {2 * math.pi * per_radian:.4g} m3/rev, eta_v {motor.volumetric_efficiency:g}): must be "
+                         f"within [{low:g}, {high:g}] rpm")]
+
+
 def _well_problems(case: Any) -> list[tuple[tuple[str | int, ...], Any, str]]:
     """Cross-field rules of ``[well]``: the string fits in the well, the shoe is in it, tool joints name
     sections and are at most the hole's diameter."""
@@ -1217,6 +1272,11 @@ PHYSICAL_BOUNDS: tuple[tuple[tuple[str, ...], float, float, str], ...] = (
     (("damping", "rigid_axial"), 0.0, 1e12, "N*s/m"),
     (("damping", "rigid_rotation"), 0.0, 1e12, "N*m*s/rad"),
     (("environment", "gravity"), 0.0, 100.0, "m/s2"),
+    (("well", "casing_shoe"), 0.0, 1e5, "m"),
+    (("well", "casing_inner_diameter"), 1e-3, 10.0, "m"),
+    (("well", "torque_on_bit"), 0.0, 1e6, "N*m"),  # top drives deliver up to about 150 kN*m
+    (("well", "inner_fluid_density"), 0.0, 1e5, "kg/m3"),
+    (("well", "tool_joints", "*"), 1e-3, 10.0, "m"),
     (("sections", "*", "eccentricity_angle"), -1e4, 1e4, "rad"),
     (("bow", "angle"), -1e4, 1e4, "rad"),
     (("top_drive", "inertia"), 1e-3, 1e9, "kg*m2"),
@@ -1238,6 +1298,8 @@ def _bound_problems(case: BaseModel) -> list[tuple[tuple[str | int, ...], Any, s
 
     def visit(node: Any, rest: tuple[str, ...], loc: tuple[str | int, ...], low: float, high: float,
               unit: str) -> None:
+        if node is None:  # an optional table or key left out
+            return
         if not rest:
             if isinstance(node, float) and not low <= node <= high:
                 overflow = " (it overflows to infinity)" if math.isinf(node) else ""
@@ -1359,7 +1421,8 @@ class Case(_Base):
 
     @property
     def axial_load_per_length(self) -> tuple[float, ...]:
-        """Distributed axial load q of each section [N/m], along +x (down): ``(rho - rho_b) A g``, with
+        """Distributed axial load q of each section [N/m], along +x (down): ``(rho A - rho_b A_s) g``, with
+        ``A_s`` the section's solid area (tool joints' steel included: :attr:`Material.solid_fraction`),
         ``rho_b`` the mud density when ``model.buoyancy`` is on (else 0) and ``g`` 0 when ``model.gravity``
         is off, plus the mud's skin friction when ``fluid.axial_loads`` is on
         (:func:`drillstring.derived.axial_load_per_length`; the statics uses the same values)."""
@@ -1372,8 +1435,10 @@ class Case(_Base):
                 friction = fluid_skin_friction(s.outer_diameter, s.inner_diameter, self.borehole.diameter,
                                                self.fluid.density, self.flow_rate,
                                                self.fluid.friction_coefficient)
-            loads.append(axial_load_per_length(steel_density=self.material_of(s).density, area=s.area,
-                                               gravity=g, buoyancy_density=buoyancy, skin_friction=friction))
+            material = self.material_of(s)
+            loads.append(axial_load_per_length(steel_density=material.density, area=s.area, gravity=g,
+                                               buoyancy_density=buoyancy, skin_friction=friction,
+                                               solid_area=material.solid_fraction * s.area))
         return tuple(loads)
 
     @property
@@ -1452,6 +1517,7 @@ class Case(_Base):
             raise _Problems(problems)
         problems.extend(self._offset_problems())
         problems.extend(_well_problems(self))
+        problems.extend(_motor_problems(self))
 
         problems.extend(self._mesh_problems())
 

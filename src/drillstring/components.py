@@ -23,7 +23,9 @@ length and its outer and inner diameter or its weight per length (the fields are
   pipe body's diameter);
 - a mass per length other than the tube's is carried by a material of its own, the component's material with
   the density m / A (name ``"<material> (<section name>)"``), so the weight, the inertia (translation and
-  rotation) and the imbalance follow the smeared mass, every other property the base material.
+  rotation) and the imbalance follow the smeared mass, every other property the base material; its
+  ``solid_density`` is the base material's, so the mud displaced (buoyancy) is the steel's volume m / ρ,
+  tool joints included.
 
 A string written so builds exactly the model of the same string written as sections: the built-in case
 ``reference_components`` is ``reference`` written as components. Everything here is in SI units.
@@ -152,7 +154,9 @@ def expand(components: list[Any], materials: Mapping[str, Any], borehole_diamete
             if smeared in added or smeared in materials:
                 smeared = f"{c.material} ({name}, component {i})"
             added[smeared] = {"young_modulus": material.young_modulus, "density": mass / area,
-                              "poisson_ratio": material.poisson_ratio}
+                              "poisson_ratio": material.poisson_ratio,
+                              "solid_density": material.density if material.solid_density is None
+                              else material.solid_density}
             section["material"] = smeared
         sections.append(section)
         x += c.length

@@ -282,7 +282,7 @@ def rayleigh_damping(mass, stiffness, basis: np.ndarray, family, rayleigh: tuple
 
 def _family_rows(rows: int, kind: int) -> np.ndarray:
     """The rows of the DOF ``kind`` (U, THETA_X) of every node of a basis of ``rows`` rows: 6 per node, and for
-    THETA_X the rows past the nodes' too, the rotations a downhole motor releases (:mod:`drillstring.fem.rotor`:
+    THETA_X the rows past the nodes' too, the rotations a downhole motor releases (:mod:`drillstring.rotor`:
     the rotor side's θx at its station, a torsional DOF of its own)."""
     nodes = np.arange(rows // 6)
     found = dof(nodes, kind)

@@ -101,11 +101,14 @@ def fluid_skin_friction(outer_diameter: float, inner_diameter: float, borehole_d
 
 
 def axial_load_per_length(*, steel_density: float, area: float, gravity: float, buoyancy_density: float,
-                          skin_friction: float) -> float:
-    """Distributed axial load on a section [N/m] along +x (down): its weight ``(ρ − ρ_b) A g`` with
-    ``ρ_b`` the fluid density when buoyancy is on (else 0) and ``g`` 0 when gravity is off, plus the
-    fluid's skin friction (0 when fluid axial loads are off)."""
-    return (steel_density - buoyancy_density) * area * gravity + skin_friction
+                          skin_friction: float, solid_area: float | None = None) -> float:
+    """Distributed axial load on a section [N/m] along +x (down): its buoyed weight ``(ρ A − ρ_b A_s) g``
+    (Archimedes: the fluid displaced is the steel's volume ``A_s`` per length, ``area`` unless tool joints
+    smeared over the section add steel outside it), with ``ρ_b`` the fluid density when buoyancy is on
+    (else 0) and ``g`` 0 when gravity is off, plus the fluid's skin friction (0 when fluid axial loads are
+    off). ``ρ A`` is the mass per length."""
+    solid = area if solid_area is None else solid_area
+    return (steel_density * area - buoyancy_density * solid) * gravity + skin_friction
 
 
 def string_axial_load(loads_per_length: Sequence[float], lengths: Sequence[float]) -> float:

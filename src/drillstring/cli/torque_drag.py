@@ -9,10 +9,12 @@ from typing import Annotated
 import numpy as np
 import typer
 from rich.markup import escape
+from rich.progress import Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from drillstring.case import Case
-from drillstring.cli.options import CaseArg, JsonOpt, UnitsOpt, _check_output, _console, _fail, _load, _print_json, app
+from drillstring.cli.options import (EXIT_INTERRUPTED, CaseArg, JsonOpt, UnitsOpt, _check_output, _console,
+                                     _err_console, _fail, _load, _print_json, app)
 from drillstring.cli.tables import print_table
 from drillstring.units import display_unit
 
@@ -34,12 +36,12 @@ def torque_drag_command(
     axial and side forces for tripping out and in, rotating off bottom, sliding and drilling; sinusoidal and
     helical buckling; lock-up when sliding; friction factors calibrated from measured hook loads."""
     the_case = _load(case)
-    for option, path in (("--plot", plot), ("--html", html_page)):
+    for option, path in [("--plot", p) for p in _figure_paths(plot)] + [("--html", html_page)]:
         if path is not None:
             _check_output(option, path)
     from drillstring.units import FORCE, to_si
     from drillstring.well.analysis import analyse
-    from drillstring.well.calibration import read_measurements
+    from drillstring.well.calibration import SIGMA_RANGE, read_measurements
 
     noise = None
     if sigma is not None:
@@ -47,14 +49,22 @@ def torque_drag_command(
             noise = to_si(sigma, FORCE)
         except ValueError as error:
             _fail(f"--sigma = {sigma}: {error}")
-        if not (math.isfinite(noise) and noise > 0.0):
-            _fail(f"--sigma = {sigma}: must be a force > 0 (e.g. '20 kN')")
+        low, high = SIGMA_RANGE
+        if not (math.isfinite(noise) and low <= noise <= high):
+            _fail(f"--sigma = {sigma}: must be a force within [{low:g}, {high:g}] N (e.g. '20 kN')")
     try:
         data = read_measurements(measurements) if measurements is not None else None
     except (OSError, ValueError) as error:
         _fail(f"--measurements = {measurements}: {error}")
+    columns = (TextColumn("Calibrating the friction factors: bit depth {task.completed} of {task.total}"),
+               TimeElapsedColumn())
     try:
-        analysis = analyse(the_case, measurements=data, sigma=noise)
+        with Progress(*columns, console=_err_console(), transient=True, disable=data is None) as bar:
+            task = bar.add_task("calibration", total=None)
+            analysis = analyse(the_case, measurements=data, sigma=noise,
+                               progress=lambda done, total: bar.update(task, completed=done, total=total))
+    except KeyboardInterrupt:
+        _fail("interrupted", EXIT_INTERRUPTED)
     except ValueError as error:
         _fail(str(error))
     payload = analysis.payload
@@ -82,8 +92,9 @@ def torque_drag_command(
     for op, row in payload["operations"].items():
         intervals = [", ".join(f"{length(a):,.0f}–{length(b):,.0f}" for a, b in row[key]) or "none"
                      for key in ("sinusoidal_buckling", "helical_buckling")]
-        hook = "locked up" if row["locked_up"] else f"{force(row['hook_load']):,.1f}"
-        table.add_row(op.replace("_", " "), hook, f"{torque(row['surface_torque']):,.2f}", *map(escape, intervals))
+        hook = "locked up" if row["locked_up"] else _shown(row["hook_load"], force, ",.1f")
+        table.add_row(op.replace("_", " "), hook, _shown(row["surface_torque"], torque, ",.2f"),
+                      *map(escape, intervals))
     console = _console()
     print_table(console, table)
     well = payload["well"]
@@ -106,18 +117,32 @@ def torque_drag_command(
         console.print(escape(f"interactive page: {payload['interactive']}"), soft_wrap=True)
 
 
+def _figure_paths(plot: Path | None) -> tuple[Path, ...]:
+    """The figures ``--plot FILE`` writes: FILE, FILE-path.png and FILE-broomstick.png beside it."""
+    if plot is None:
+        return ()
+    return plot, plot.with_name(plot.stem + "-path.png"), plot.with_name(plot.stem + "-broomstick.png")
+
+
+def _shown(value: float | None, unit, spec: str) -> str:
+    """A load in display units; None (JSON null: beyond 1e14 in SI, the friction round the well's bends
+    multiplying the tension without bound, as the capstan law says) as "unbounded"."""
+    return "unbounded" if value is None else format(unit(value), spec)
+
+
 def _torque_drag_figures(case: Case, analysis, plot: Path, measurements, units: str | None) -> None:
     from drillstring.torque_drag_plots import plot_broomstick, plot_torque_drag, plot_well_path
     from drillstring.well.calibration import broomstick, posterior_bands
 
     shoe = 0.0 if case.well is None else case.well.casing_shoe
+    _, path_figure, broomstick_figure = _figure_paths(plot)
     plot_torque_drag(analysis.results, plot, critical=analysis.critical, units=units,
                      title=f"Torque and drag: case {case.name!r}")
-    plot_well_path(analysis.trajectory, plot.with_name(plot.stem + "-path.png"), casing_shoe=shoe, units=units,
+    plot_well_path(analysis.trajectory, path_figure, casing_shoe=shoe, units=units,
                    title=f"Well path: case {case.name!r}")
     depths = np.linspace(case.length / 30.0, case.length, 30)
     frictions = (0.1, 0.2, 0.3, 0.4)
     bands = None if analysis.posterior is None else posterior_bands(case, analysis.posterior, depths)
     plot_broomstick(depths, broomstick(case, depths, frictions), frictions,
-                    plot.with_name(plot.stem + "-broomstick.png"), measurements=measurements, bands=bands,
+                    broomstick_figure, measurements=measurements, bands=bands,
                     units=units, title=f"Broomstick chart: case {case.name!r}")

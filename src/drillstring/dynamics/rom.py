@@ -40,10 +40,10 @@ the type of that argument when it is compiled.
 nothing else of this module): the model's data ``rhs_data``, ``case2_data`` and ``observe_data`` and four
 public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel` (one observation row),
 :func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
-The components are called inside these kernels, so the loop never names a law: the bit–rock law, the top
-boundary, the hook load and the contact law through the registry's compiled dispatch
-(:mod:`drillstring.forces.registry`, their numbers in ``RhsData.laws``); the turning loads of every registered
-source through their one shared kernel (:mod:`drillstring.forces.turning_loads`).
+The components are called inside these kernels, so the loop never names a law: every kind the registry
+dispatches through its compiled dispatch (:mod:`drillstring.forces.registry`, their numbers in
+``RhsData.laws``); the turning loads of every registered source through their one shared kernel
+(:mod:`drillstring.forces.turning_loads`).
 
 Impacts: a *contact zone* is a run of consecutive nodes in contact; an impact is a zone that appears
 with no node in contact within one node of it at the previous accepted step

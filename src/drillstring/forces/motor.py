@@ -32,7 +32,7 @@ of the string below it.
 In the reduced model (:mod:`drillstring.dynamics.rom`) the motor is a component
 (:mod:`drillstring.forces.registry`, registered as ``"positive_displacement"``): ``+T`` on the rotor side
 of the rotor station and ``−T`` on the stator side, through the mode shapes of the torsional family in which
-:mod:`drillstring.fem.rotor` released the rotor's rotation; ``ω_m`` is the rotor's speed less the stator's.
+:mod:`drillstring.rotor` released the rotor's rotation; ``ω_m`` is the rotor's speed less the stator's.
 The bit's speed is then the string's speed above the motor plus ``ω_m``. SI units throughout.
 """
 

@@ -1,4 +1,5 @@
-"""The component protocol: bit–rock laws, top boundaries and hook loads that register themselves (docs/extending.md).
+"""The component protocol: the model's laws are components that register themselves (docs/extending.md); the
+kinds, each described below, are the registry's (``_REGISTRY``).
 
 A **component** is one module holding one class. The class is its parameters (built from the case by
 ``from_case``), and declares everything the reduced model, the integrators and the stability analysis ask of
@@ -61,9 +62,8 @@ codes of the components and where their slices start), then the bit law's number
 :func:`pack` puts it. The states of the components follow the modal coordinates in the state vector at
 the offsets :func:`pack` computes from their ``n_states``.
 
-**Compiled dispatch.** The kernels call :func:`bit_law_force`, :func:`top_boundary_torque` and
-:func:`hook_load_force`; when they are
-compiled, the registry writes the dispatch over the codes of the package's registered components, each
+**Compiled dispatch.** The kernels call one dispatch function per kind whose components have kernels of their
+own (``_DISPATCHED`` says which; the turning-load sources share one kernel instead); when they are compiled, the registry writes the dispatch over the codes of the package's registered components, each
 component's kernel inlined into it at Numba's IR level (one compiled function per kind, not one per kernel)
 (:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
 same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
@@ -301,7 +301,7 @@ class TopBoundary:
 
 class Motor:
     """Base of the downhole motors: a rotor between two sections of the string (docs/extending.md). The string
-    below the rotor station turns relative to the string above (:mod:`drillstring.fem.rotor` releases that
+    below the rotor station turns relative to the string above (:mod:`drillstring.rotor` releases that
     rotation in the torsional family); the motor applies a torque ``T`` across it, ``+T`` on the rotor side and
     ``−T`` on the stator side, from the relative speed ``ω_m`` [rad/s] (rotor minus stator). A motor declares
     ``name``, ``keys``, ``from_case(case)`` (None when the case has no such motor), ``kernel_size``,

@@ -37,17 +37,17 @@ def _finite(x: float) -> float | None:
 
 
 def analyse(case, *, measurements: HookLoadMeasurements | None = None, sigma: float | None = None,
-            max_step: float = MAX_STEP) -> TorqueDragAnalysis:
+            max_step: float = MAX_STEP, progress=None) -> TorqueDragAnalysis:
     """Torque and drag of every operation of ``case``, buckled intervals, lock-up depth when sliding
     (bit depths every :data:`LOCKUP_STEP`), and the friction posterior when ``measurements`` are given
-    (``sigma`` [N] the noise, None: estimated)."""
+    (``sigma`` [N] the noise, None: estimated; ``progress(done, total)`` after each of their bit depths)."""
     path = case_trajectory(case)
     string = string_in_well(case, path, max_step=max_step)
     critical = critical_loads(string)
     results = case_torque_drag(case, string=string)
     depths = np.arange(LOCKUP_STEP, case.length, LOCKUP_STEP).tolist() + [case.length]
     lockup = lockup_depth(case, depths)
-    posterior = None if measurements is None else calibrate(case, measurements, sigma=sigma)
+    posterior = None if measurements is None else calibrate(case, measurements, sigma=sigma, progress=progress)
     well = case.well
     operations = {}
     for op, r in results.items():

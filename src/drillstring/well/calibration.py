@@ -37,8 +37,21 @@ from pathlib import Path
 
 import numpy as np
 
+from drillstring.files import read_input_text
 from drillstring.units import FORCE, LENGTH, to_si
 from drillstring.well.torque_drag import OPERATIONS, case_trajectory, string_in_well, torque_drag
+
+#: Most measurements (rows) calibrated at once, and most distinct bit depths among them (each costs one
+#: soft-string pass per operation over the whole friction grid: about 0.06 s on the built-in deviated case, so
+#: 200 depths tripping out and in take about 25 s; a rig's trip records one depth per stand, about 110 in 3 km).
+MAX_MEASUREMENTS = 2_000
+MAX_BIT_DEPTHS = 200
+#: Largest measurements file [bytes].
+MAX_MEASUREMENTS_FILE_BYTES = 1_000_000
+#: Range of the hook-load noise sigma [N]: beyond it the posterior's exponent under- or overflows.
+SIGMA_RANGE = (1e-3, 1e8)
+#: Most grid points per friction factor (the predictions hold n x points^2 numbers).
+MAX_GRID_POINTS = 201
 
 __all__ = ["FrictionPosterior", "HookLoadMeasurements", "broomstick", "calibrate", "posterior_bands",
            "posterior_from_predictions", "predicted_hook_loads", "read_measurements", "torque_drag_draws"]
@@ -55,12 +68,19 @@ class HookLoadMeasurements:
     def __post_init__(self) -> None:
         if not len(self.bit_depth) == len(self.operation) == len(self.hook_load):
             raise ValueError("bit_depth, operation and hook_load must have the same length")
+        if len(self.bit_depth) > MAX_MEASUREMENTS:
+            raise ValueError(f"measurements: {len(self.bit_depth):,}, more than the {MAX_MEASUREMENTS:,} allowed")
         for i, (d, op, h) in enumerate(zip(self.bit_depth, self.operation, self.hook_load)):
             if op not in OPERATIONS:
                 raise ValueError(f"measurement {i}: operation = {op!r}: must be one of {', '.join(OPERATIONS)}")
             if not (math.isfinite(d) and d > 0.0 and math.isfinite(h)):
                 raise ValueError(f"measurement {i}: bit_depth = {d!r} m, hook_load = {h!r} N: must be finite, "
                                  "depth > 0")
+        depths = len(np.unique(self.bit_depth))
+        if depths > MAX_BIT_DEPTHS:
+            raise ValueError(f"measurements: {depths:,} distinct bit depths, more than the {MAX_BIT_DEPTHS:,} "
+                             "allowed (each is one soft-string solution per grid point: round the depths, e.g. "
+                             "to the stand)")
 
     def to_csv(self) -> str:
         """CSV text in SI units (the format :func:`read_measurements` reads)."""
@@ -70,11 +90,15 @@ class HookLoadMeasurements:
 
 
 def read_measurements(path: str | Path) -> HookLoadMeasurements:
-    """Measurements from a CSV file (module docstring). Raises ValueError naming the line at fault."""
-    text = Path(path).read_text(encoding="utf-8-sig")
+    """Measurements from a CSV file (module docstring): a regular file of at most
+    :data:`MAX_MEASUREMENTS_FILE_BYTES` and :data:`MAX_MEASUREMENTS` rows (a FIFO or a device is refused
+    unread). Raises ValueError naming the line at fault or the limit."""
+    text = read_input_text(path, what="measurements file", max_bytes=MAX_MEASUREMENTS_FILE_BYTES)
     rows = [r for r in csv.reader(io.StringIO(text)) if r and not r[0].lstrip().startswith("#")]
     if not rows:
         raise ValueError(f"{path}: no header")
+    if len(rows) - 1 > MAX_MEASUREMENTS:
+        raise ValueError(f"{path}: {len(rows) - 1:,} measurements, more than the {MAX_MEASUREMENTS:,} allowed")
     names, units = [], []
     for cell in rows[0]:
         name, _, unit = cell.partition("[")
@@ -84,12 +108,15 @@ def read_measurements(path: str | Path) -> HookLoadMeasurements:
         i_d, i_op, i_h = names.index("bit_depth"), names.index("operation"), names.index("hook_load")
     except ValueError:
         raise ValueError(f"{path}: the header must name bit_depth, operation and hook_load") from None
-    depth_unit, load_unit = units[i_d] or "m", units[i_h] or "N"
+    try:
+        metre, newton = to_si(f"1 {units[i_d] or 'm'}", LENGTH), to_si(f"1 {units[i_h] or 'N'}", FORCE)
+    except ValueError as exc:
+        raise ValueError(f"{path}: the header's unit: {exc}") from None
     depth, ops, load = [], [], []
     for line, row in enumerate(rows[1:], start=2):
         try:
-            depth.append(to_si(f"{float(row[i_d])} {depth_unit}", LENGTH))
-            load.append(to_si(f"{float(row[i_h])} {load_unit}", FORCE))
+            depth.append(float(row[i_d]) * metre)
+            load.append(float(row[i_h]) * newton)
             ops.append(row[i_op].strip())
         except (IndexError, ValueError) as exc:
             raise ValueError(f"{path}, line {line}: {row!r}: {exc}") from None
@@ -97,15 +124,17 @@ def read_measurements(path: str | Path) -> HookLoadMeasurements:
 
 
 def predicted_hook_loads(case, measurements: HookLoadMeasurements, cased_friction, open_hole_friction, *,
-                         max_step: float = 5.0) -> np.ndarray:
+                         max_step: float = 5.0, progress=None) -> np.ndarray:
     """Soft-string hook loads [N] of every measurement for G pairs of friction factors (arrays broadcast to
-    G): shape (n, G). One string per distinct bit depth, all G pairs in one pass."""
+    G): shape (n, G). One string per distinct bit depth, all G pairs in one pass; ``progress(done, total)``
+    is called after each bit depth."""
     path = case_trajectory(case)
     mu_c, mu_o = np.broadcast_arrays(np.atleast_1d(np.asarray(cased_friction, float)),
                                      np.atleast_1d(np.asarray(open_hole_friction, float)))
     out = np.empty((len(measurements.hook_load), mu_c.size))
     tob = 0.0 if case.well is None else case.well.torque_on_bit
-    for depth in np.unique(measurements.bit_depth):
+    depths = np.unique(measurements.bit_depth)
+    for done, depth in enumerate(depths, start=1):
         string = string_in_well(case, path, bit_depth=float(depth), max_step=max_step)
         here = np.nonzero(measurements.bit_depth == depth)[0]
         for op in {measurements.operation[i] for i in here}:
@@ -114,6 +143,8 @@ def predicted_hook_loads(case, measurements: HookLoadMeasurements, cased_frictio
             for i in here:
                 if measurements.operation[i] == op:
                     out[i] = result.hook_load
+        if progress is not None:
+            progress(done, len(depths))
     return out
 
 
@@ -177,6 +208,12 @@ class FrictionPosterior:
         return mu_c, mu_o
 
 
+def _check_sigma(sigma: float) -> None:
+    if not (math.isfinite(sigma) and SIGMA_RANGE[0] <= sigma <= SIGMA_RANGE[1]):
+        raise ValueError(f"sigma = {sigma!r} N: must be within [{SIGMA_RANGE[0]:g}, {SIGMA_RANGE[1]:g}] N "
+                         "(or None: estimated)")
+
+
 def posterior_from_predictions(predictions: np.ndarray, measured: np.ndarray, cased: np.ndarray,
                                open_hole: np.ndarray, sigma: float | None) -> FrictionPosterior:
     """The grid posterior from the hook loads predicted at every grid point, shape (n, len(cased) *
@@ -187,8 +224,7 @@ def posterior_from_predictions(predictions: np.ndarray, measured: np.ndarray, ca
     if sigma is None:
         log_density = -0.5 * n * np.log(np.maximum(ssr, 1e-300))
     else:
-        if not (math.isfinite(sigma) and sigma > 0.0):
-            raise ValueError(f"sigma = {sigma!r} N: must be > 0 (or None: estimated)")
+        _check_sigma(sigma)
         log_density = -ssr / (2.0 * sigma**2)
     p = np.exp(log_density - log_density.max())
     p /= p.sum()
@@ -197,16 +233,20 @@ def posterior_from_predictions(predictions: np.ndarray, measured: np.ndarray, ca
 
 
 def calibrate(case, measurements: HookLoadMeasurements, *, sigma: float | None = None, maximum: float = 0.6,
-              points: int = 61, max_step: float = 5.0) -> FrictionPosterior:
+              points: int = 61, max_step: float = 5.0, progress=None) -> FrictionPosterior:
     """The posterior of (mu_c, mu_o) on a ``points`` x ``points`` grid over [0, maximum]^2 (module
-    docstring); ``sigma`` [N] the noise standard deviation, or None to integrate it out."""
+    docstring); ``sigma`` [N] the noise standard deviation, or None to integrate it out; ``progress(done,
+    total)`` after each bit depth (:func:`predicted_hook_loads`)."""
     if not (math.isfinite(maximum) and maximum > 0.0):
         raise ValueError(f"maximum = {maximum!r}: must be > 0")
-    if points < 2:
-        raise ValueError(f"points = {points!r}: must be >= 2")
+    if not 2 <= points <= MAX_GRID_POINTS:
+        raise ValueError(f"points = {points!r}: must be within [2, {MAX_GRID_POINTS}]")
+    if sigma is not None:
+        _check_sigma(sigma)
     grid = np.linspace(0.0, maximum, points)
     mu_c, mu_o = np.meshgrid(grid, grid, indexing="ij")
-    predictions = predicted_hook_loads(case, measurements, mu_c.ravel(), mu_o.ravel(), max_step=max_step)
+    predictions = predicted_hook_loads(case, measurements, mu_c.ravel(), mu_o.ravel(), max_step=max_step,
+                                       progress=progress)
     return posterior_from_predictions(predictions, measurements.hook_load, grid, grid, sigma)
 
 

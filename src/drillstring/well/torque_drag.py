@@ -21,8 +21,11 @@ bit up by Heun's method on elements of at most ``max_step`` (each element lies o
 for straight sections and second order in the element length otherwise.
 
 Buoyancy (Lubinski 1950; the effective-tension concept): with mud of density rho_i inside and rho_o outside,
-``w = g (rho_s A + rho_i A_i - rho_o A_o)`` and (1) holds for the effective tension F; the true (steel) tension
-is ``F - p_o A_o + p_i A_i`` with the hydrostatic pressures ``p = rho g TVD``. With ``model.buoyancy`` off the
+``w = g (m + rho_i A_i - rho_o A_o)`` and (1) holds for the effective tension F; the true (steel) tension
+is ``F - p_o A_o + p_i A_i`` with the hydrostatic pressures ``p = rho g TVD``. ``m`` is the mass per length,
+tool joints smeared in (:mod:`drillstring.components`); their steel outside the pipe body's area is counted in
+``A_o`` (it displaces annulus mud), so that with one mud, ``w = g (m - rho A_s)``: the steel's weight less the
+mud its volume ``A_s = m / rho_s`` displaces (Archimedes), as in the statics. With ``model.buoyancy`` off the
 mud is ignored (w = rho_s A g, as the statics does), so that a vertical well reproduces
 :func:`drillstring.statics.solve_statics` exactly.
 
@@ -41,6 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drillstring.derived import axial_load_per_length
 from drillstring.fem.sections import hollow_circle
 from drillstring.well.survey import Trajectory, trajectory
 
@@ -112,7 +116,9 @@ def case_trajectory(case) -> Trajectory:
 
 
 def _section_table(case):
-    """Per section: top, bottom [m], buoyed weight, skin friction [N/m], EI, contact radius, A_o, A_i."""
+    """Per section: top, bottom [m], buoyed weight, skin friction [N/m], EI, contact radius, outer diameter, and
+    the pressure areas rho_o g A_o', rho_i g A_i [N/m] (A_o' the outer area plus the smeared tool joints' steel
+    outside the body, which displaces annulus mud)."""
     g = case.environment.gravity if case.model.gravity else 0.0
     well = case.well
     rho_o = case.fluid.density if case.model.buoyancy else 0.0
@@ -124,12 +130,15 @@ def _section_table(case):
         material = case.material_of(s)
         beam = hollow_circle(s.outer_diameter, s.inner_diameter, material.young_modulus, material.density,
                              material.poisson_ratio)
-        gravity_load = material.density * s.area * g
-        skin = q - (material.density - (case.fluid.density if case.model.buoyancy else 0.0)) * s.area * g
-        weight = gravity_load + g * (rho_i * s.inner_area - rho_o * s.outer_area)
+        # q = (m - rho_o A_s) g + skin (drillstring.derived.axial_load_per_length): the skin friction is the rest
+        skin = q - axial_load_per_length(steel_density=material.density, area=s.area, gravity=g,
+                                         buoyancy_density=rho_o, skin_friction=0.0,
+                                         solid_area=material.solid_fraction * s.area)
+        outer_area = s.outer_area + (material.solid_fraction - 1.0) * s.area
+        weight = g * (material.density * s.area + rho_i * s.inner_area - rho_o * outer_area)
         radius = joints.get(s.name, s.outer_diameter) / 2.0
         rows.append((top, top + s.length, weight, skin, beam.bending_stiffness, radius, s.outer_diameter,
-                     rho_o * g * s.outer_area, rho_i * g * s.inner_area))
+                     rho_o * g * outer_area, rho_i * g * s.inner_area))
         top += s.length
     return rows
 
