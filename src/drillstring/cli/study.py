@@ -195,7 +195,7 @@ def study(
         lambda progress, note: _api().monte_carlo_study(
             the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
             correlation=correlated, model=model, samples=samples, seed=seed, workers=workers,
-            scheduler=scheduler, t_end=t_end, transient=transient, units=units))
+            scheduler=scheduler, t_end=t_end, transient=transient, units=units, stage=progress.stage))
     _note_resumed(outcome.already, samples, "realizations", out / "study.zarr")
 
     payload = outcome.summary

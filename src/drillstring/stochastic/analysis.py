@@ -427,3 +427,52 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, bou
         "realizations": realizations_summary(stats),
         "stability": stability_summary(stats, boundary),
     }
+
+
+#: The file in a study's folder that says what its figures were drawn from (:func:`figures_key`).
+FIGURES_KEY = ".figures-key.json"
+
+
+def figures_key(payload: dict, settings, t_transient: float, units: str | None) -> str:
+    """What a study's figures are drawn from: the realizations in the store (the summary ``payload``'s
+    ``n_samples``, ``n_failed`` and ``sessions``, the runs that computed them), the ``settings``, the window
+    ``t_transient`` [s], the unit system and the plotting code (the package's version, the size and time stamp
+    of :mod:`drillstring.plots`). Equal keys: the figures on disk are current, and a rerun that computed
+    nothing need not draw them again (:func:`current_figures`)."""
+    import hashlib
+    import importlib.util
+    import json
+
+    from drillstring._version import __version__
+
+    origin = Path(importlib.util.find_spec("drillstring.plots").origin).stat()
+    items = [__version__, origin.st_size, origin.st_mtime_ns, units, t_transient, repr(settings),
+             payload["n_samples"], payload["n_failed"], payload["sessions"]]
+    return hashlib.sha256(json.dumps(items, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def current_figures(folder: str | Path, key: str) -> dict[str, Path] | None:
+    """The figures in ``folder`` (name -> path) if :func:`record_figures` recorded them with ``key`` and they
+    are all there; None otherwise."""
+    import json
+
+    folder = Path(folder)
+    try:
+        record = json.loads((folder / FIGURES_KEY).read_text(encoding="utf-8"))
+        figures = {name: folder / file for name, file in record["figures"].items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+    if record.get("key") != key or not figures or not all(path.is_file() for path in figures.values()):
+        return None
+    return figures
+
+
+def record_figures(folder: str | Path, key: str, figures: dict[str, Path]) -> None:
+    """Record (atomically, in :data:`FIGURES_KEY`) that ``figures`` (name -> path in ``folder``) were drawn
+    from ``key``."""
+    import json
+
+    from drillstring.files import write_text_atomic
+
+    record = {"key": key, "figures": {name: Path(path).name for name, path in figures.items()}}
+    write_text_atomic(Path(folder) / FIGURES_KEY, json.dumps(record) + "\n")
