@@ -76,3 +76,25 @@ def test_simulate_summaries_of_a_ramped_start_begin_when_the_oscillation_settled
     assert start == 10.0 and "has not settled by t = 19.99 s" in notes[1]
     start, notes = _start_window(reference, ds, 10.0, "si")  # on bottom: the window stays
     assert start == 10.0 and len(notes) == 1
+
+
+def test_study_summary_says_when_the_nominal_run_settles_after_the_window_starts():
+    """A study keeps one window for every realization; after a ramped start whose nominal bit-speed
+    oscillation settles later than it (or never), the summary's ``start`` says so, naming --transient."""
+    from drillstring.stochastic.analysis import start_summary
+
+    t = np.arange(0.0, 60.0, 0.01)
+
+    def stats(start, speed):
+        case = f'[initial]\nstart = "{start}"\nweight_ramp_time = 10.0\n[operation]\ntop_speed = {OMEGA}\n'
+        return xr.Dataset({"bit_speed_nominal": ("time", speed)}, coords={"time": t}, attrs={"case": case})
+
+    ramped = start_summary(stats("ramp", _growing_then_steady(t, 30.0)), 10.0)
+    assert ramped["ramp_end"] == 10.0 and 30.0 - 2 * PERIOD <= ramped["settled"] <= 30.0
+    assert f"settles at t = {ramped['settled']:.1f} s" in ramped["warning"]
+    assert f"--transient {math.ceil(ramped['settled'])}" in ramped["warning"]
+    assert start_summary(stats("ramp", _growing_then_steady(t, 30.0)), 35.0)["warning"] is None
+    short = start_summary(stats("ramp", _growing_then_steady(t, 30.0)).isel(time=slice(0, 2500)), 10.0)
+    assert short["settled"] is None and "has not settled by t = 24.99 s" in short["warning"]
+    on_bottom = start_summary(stats("on_bottom", _growing_then_steady(t, 30.0)), 10.0)
+    assert on_bottom["ramp_end"] == 0.0 and on_bottom["warning"] is None

@@ -233,6 +233,9 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path], uni
     warning = (payload.get("time_convergence") or {}).get("warning")
     if warning:
         console.print(escape(f"warning: {warning}"), soft_wrap=True)
+    start = (payload.get("start") or {}).get("warning")
+    if start:
+        console.print(escape(f"note: {start}"), soft_wrap=True)
     console.print(escape(_buckling_line(payload, units)), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),

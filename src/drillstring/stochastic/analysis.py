@@ -424,6 +424,7 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, bou
         "observables": per_variable,
         "convergence_change_second_half": convergence,
         "time_convergence": time_convergence(stats, t_transient),
+        "start": start_summary(stats, t_transient),
         "realizations": realizations_summary(stats),
         "stability": stability_summary(stats, boundary),
     }
@@ -476,3 +477,36 @@ def record_figures(folder: str | Path, key: str, figures: dict[str, Path]) -> No
 
     record = {"key": key, "figures": {name: Path(path).name for name, path in figures.items()}}
     write_text_atomic(Path(folder) / FIGURES_KEY, json.dumps(record) + "\n")
+
+
+def start_summary(stats: xr.Dataset, t_transient: float) -> dict:
+    """When the nominal run's start-up has settled, against the summaries' window ``t_transient`` [s]
+    (docs/model.md §8): ``settled``, :func:`~drillstring.dynamics.simulate.settling_time` of its bit speed
+    from the end of the case's ramps (``ramp_end`` [s]: the weight ramp of ``initial.start = "ramp"`` and the
+    top drive's set-point ramp; None: not settled by the end of the run) and, after a ramped start whose
+    oscillation settles after ``t_transient`` or not at all, a ``warning``."""
+    import tomllib
+
+    from drillstring.dynamics.simulate import settling_time
+
+    try:
+        case = tomllib.loads(str(stats.attrs["case"]))
+        speed = stats["bit_speed_nominal"].values
+    except (KeyError, ValueError):
+        return {"settled": None, "ramp_end": None, "warning": None}
+    initial, top_drive = case.get("initial", {}), case.get("top_drive", {})
+    ramp = initial.get("start") == "ramp"
+    ramp_end = max(float(initial.get("weight_ramp_time", 0.0)) if ramp else 0.0,
+                   float(top_drive.get("ramp_time", 0.0)))
+    settled = settling_time(stats.time.values, speed, float(case.get("operation", {}).get("top_speed", 0.0)),
+                            start=ramp_end)
+    warning = None
+    if ramp and not settled <= t_transient + 1e-9:
+        when = (f"settles at t = {settled:.1f} s" if math.isfinite(settled) else
+                f"has not settled by t = {float(stats.time.values[-1]):g} s")
+        warning = (f"the nominal run's bit-speed oscillation {when} (measured: each period's range within 15 % of "
+                   f"the last's), after the window's start t = {t_transient:g} s and the {ramp_end:g} s ramp: the "
+                   "summaries mix the start-up with what follows" +
+                   (f"; --transient {math.ceil(settled):g} starts them after it" if math.isfinite(settled) else
+                    "; a longer --t-end shows where it goes"))
+    return {"settled": settled if math.isfinite(settled) else None, "ramp_end": ramp_end, "warning": warning}
