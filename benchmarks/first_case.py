@@ -18,8 +18,9 @@ below is timed in this process, kernels compiled (or loaded) beforehand so that 
 For each: the model's build time and the solve's time, both in CPU time of this process (one thread: on
 a shared machine wall times vary with the load, CPU times much less; the solver's wall time is printed too),
 accepted and rejected steps, right-hand sides and the time per right-hand side, the impacts, and the RMS
-relative difference of the bit speed, ROP and torque on bit records from the baseline's (the baseline's own error, at rtol/10, in the last line). ``--study``
-also times the README's 20-sample study both ways (``drillstring.api.monte_carlo_study``, local workers).
+relative difference of the bit speed, ROP and torque on bit records from the baseline's (the baseline's own
+error, at rtol/10, in the last line). ``--study`` also times the README's 20-sample study both ways
+(``drillstring.api.monte_carlo_study``, local workers).
 Ratios are against the baseline measured in the same run.
 """
 
