@@ -37,6 +37,32 @@ def test_study_files_defaults_and_rerun(small_case, tmp_path):
     np.testing.assert_array_equal(stats.bit_speed_std.values, first.statistics.bit_speed_std.values)
 
 
+def test_study_stages_and_a_rerun_that_computes_nothing_keeps_its_figures(small_case, tmp_path):
+    """After the realizations, ``stage`` is told what runs (the store, the statistics, the figures, the
+    report); a rerun that computes nothing finds its figures current and does not draw them again; another
+    unit system (or window) draws them again."""
+    out = tmp_path / "s"
+    stages = []
+    first = api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out, stage=stages.append)
+    assert stages == ["reading the store", "statistics", "figures", "report"]
+    figures = {name: first.files[name] for name in ("convergence", "envelopes", "dispersion", "realizations")}
+    drawn = {name: path.stat().st_mtime_ns for name, path in figures.items()}
+    stages.clear()
+    again = api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out, stage=stages.append)
+    assert stages == ["reading the store", "statistics", "report"]
+    assert {name: again.files[name] for name in figures} == figures
+    assert {name: path.stat().st_mtime_ns for name, path in figures.items()} == drawn
+    assert again.summary["observables"] == first.summary["observables"]
+    for changed in (dict(units="field"), dict(transient=0.4)):
+        stages.clear()
+        api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out, stage=stages.append, **changed)
+        assert "figures" in stages, changed
+    (out / "envelopes.png").unlink()  # a figure gone: drawn again
+    stages.clear()
+    api.monte_carlo_study(small_case, samples=3, t_end=0.6, workers=1, out=out, stage=stages.append, transient=0.4)
+    assert "figures" in stages and (out / "envelopes.png").is_file()
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(samples=1), "^samples = 1: must be an integer >= 2"),
     (dict(sigma=1e6), r"^sigma = 1e\+06 N: .*probability"),

@@ -120,13 +120,17 @@ def test_reference_tables_equal_defaults(reference):
     except the lateral cut-off, which the reference case switches off (its string never reaches the wall),
     the start, which the reference study makes on bottom (new cases ramp the weight on bit up), and the truncation
     correction, which the reference study leaves out (its paper's plain modal basis; new cases take "static"),
-    and gravity, the paper's 9.81 m/s^2 (new cases take standard gravity, the g of the pound-force)."""
+    and gravity, the paper's 9.81 m/s^2 (new cases take standard gravity, the g of the pound-force), and the
+    method, which the reference study keeps DOPRI5 (new cases take "ark43": the attachment modes of their basis
+    would set DOPRI5's step, benchmarks/first_case.py)."""
     from drillstring.constants import STANDARD_GRAVITY
 
     minimal = Case(name="m", sections=reference.sections, borehole=reference.borehole)
     for table in ("materials", "fluid", "bit_rock", "contact", "operation", "damping", "model",
-                  "mesh", "simulation"):  # fmt: skip
+                  "mesh"):  # fmt: skip
         assert getattr(minimal, table) == getattr(reference, table), table
+    assert minimal.simulation.method == "ark43"
+    assert minimal.simulation.model_copy(update={"method": "dopri5"}) == reference.simulation
     assert minimal.initial.model_copy(update={"start": "on_bottom"}) == reference.initial
     assert minimal.initial.start == "ramp"
     assert minimal.reduced_model.model_copy(
@@ -649,6 +653,9 @@ def test_aarsnes2019_has_the_published_numbers(tmp_path):
     # study's method stays DOPRI5
     assert case.simulation.method == "ark43" and load_case("aarsnes2019_paper").simulation.method == "ark43"
     assert load_case("motor").simulation.method == "ark43" and load_case("reference").simulation.method == "dopri5"
+    # the cases whose documented numbers are DOPRI5's name it (the default for new cases is "ark43")
+    for name in ("reference", "reference_components", "contact", "stick_slip", "deviated"):
+        assert load_case(name).simulation.method == "dopri5", name
 
 
 def test_aarsnes2019_weight_on_bit_is_the_steady_state_of_30_m_per_h_at_30_rpm():

@@ -754,7 +754,7 @@ def test_two_studies_on_one_folder(coarse_case, tmp_path):
         np.testing.assert_allclose(mean, nominal, rtol=0.2, err_msg=name)  # around the nominal run
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["study.zarr", "summary.json", "statistics.nc", "report.html", "interactive.html", "convergence.png",
-         "envelopes.png", "dispersion.png", "realizations.png"])  # no lock, no temporary file left
+         "envelopes.png", "dispersion.png", "realizations.png", ".figures-key.json"])  # no lock, no temporary file left
 
 
 def test_simulate_output_paths_checked_before_running(coarse_case, tmp_path, unwritable_folder, nothing_runs):

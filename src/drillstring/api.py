@@ -317,6 +317,7 @@ def monte_carlo_study(
     note: Callable[[str], None] | None = None,
     worker_timeout: float | None = None,
     units: str | None = None,
+    stage: Callable[[str], None] | None = None,
 ) -> StudyOutcome:
     """Monte Carlo study of random case parameters (docs/model.md §11; by default a random weight-on-hook), with
     its files.
@@ -334,7 +335,8 @@ def monte_carlo_study(
     run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
     (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
     ``min(10 s, t_end/2)``; in [0, t_end)). ``progress(done, failed, total)`` follows the realizations;
-    ``note(text)`` receives notes (a stale lock taken over).
+    ``note(text)`` receives notes (a stale lock taken over); ``stage(text)``, what runs after the realizations
+    ("reading the store", "statistics", "figures", "report").
 
     Everything is checked before anything runs (TypeError or ValueError naming the argument): the
     arguments, the run window and the study's size (:data:`~drillstring.stochastic.montecarlo.
@@ -367,17 +369,20 @@ def monte_carlo_study(
     if buckling["warning"]:
         notify(note, buckling["warning"])
     finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None,
-                     units)
+                     units, stage or (lambda text: None))
     run = run_study(case, settings, folder / "study.zarr", engine, finish=finish)
     return StudyOutcome(*run.result, run.already, run.note)
 
 
-def _finish_study(case, settings, t_transient, buckling, folder, units, run):
-    """Under the study's lock: its statistics, summary and (in ``folder``, unless None) files."""
+def _finish_study(case, settings, t_transient, buckling, folder, units, stage, run):
+    """Under the study's lock: its statistics, summary and (in ``folder``, unless None) files; ``stage(text)``
+    is told each step."""
+    stage("reading the store")
     from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
     from drillstring.stochastic.execution import computation_time
 
     raw = load_study(run.store.path)
+    stage("statistics")
     failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
     try:
         stats = study_statistics(raw, t_transient=t_transient)
@@ -405,7 +410,7 @@ def _finish_study(case, settings, t_transient, buckling, folder, units, run):
     })
     files: dict[str, Path] = {}
     if folder is not None:
-        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units)
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units, stage)
     return stats, payload, files
 
 
@@ -418,17 +423,17 @@ def _stability_boundary(case: Case) -> dict | None:
 
 
 def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
-                       raw=None, units: str | None = None) -> dict[str, Path]:
+                       raw=None, units: str | None = None, stage=lambda text: None) -> dict[str, Path]:
     """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
     statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
     finished realizations of ``raw``, the study's raw Dataset); figures and report in the unit system ``units``."""
 
     from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
-    from drillstring.plots import plot_study
     from drillstring.quantities import stored_observables
     from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
+    from drillstring.stochastic.analysis import current_figures, figures_key, record_figures
     from drillstring.stochastic.store import DONE
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
@@ -440,7 +445,15 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         shown = raw[list(stored_observables(raw))].isel(realization=finished)
     force = display_unit("force", units)
     write_netcdf(stats, paths["statistics"])
-    figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)
+    key = figures_key(payload, settings, t_transient, units)
+    figures = current_figures(folder, key)
+    if figures is None:  # drawn again (importing Matplotlib only then)
+        from drillstring.plots import plot_study
+
+        stage("figures")
+        figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)
+        record_figures(folder, key, figures)
+    stage("report")
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
     write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
     run_info = {

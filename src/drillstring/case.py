@@ -743,7 +743,7 @@ class ReducedModel(_Base):
 
 
 class Simulation(_Base):
-    """Time integration (adaptive explicit Runge-Kutta)."""
+    """Time integration: adaptive Runge-Kutta, explicit or implicit-explicit (``method``)."""
 
     t_end: Time = Field(30.0, gt=0, description="end time [s]")
     output_step: Time = Field(0.01, gt=0, description="output sampling step [s]; <= t_end")
@@ -752,9 +752,10 @@ class Simulation(_Base):
     max_steps: int = Field(2_000_000, gt=0, le=10**12)
     min_step: Time = Field(1e-12, gt=0, description="smallest step before giving up [s]")
     method: Literal["dopri5", "bs32", "ark43", "ark32"] = Field(
-        "dopri5", description="'dopri5' (Dormand-Prince 5(4)) or 'bs32' (Bogacki-Shampine 3(2)), explicit; 'ark43' "
-        "or 'ark32' (Kennedy-Carpenter ARK4(3)6L, ARK3(2)4L): the linear modal part and the bit law implicit "
-        "(docs/model.md)")
+        "ark43", description="'dopri5' (Dormand-Prince 5(4)) or 'bs32' (Bogacki-Shampine 3(2)), explicit; 'ark43' "
+        "(the default for new cases) or 'ark32' (Kennedy-Carpenter ARK4(3)6L, ARK3(2)4L): the linear modal part "
+        "and the bit law implicit, so that the attachment modes of the default basis (truncation_correction = "
+        "'static') do not set the step (docs/model.md §9)")
 
     @model_validator(mode="after")
     def _output_step_within_run(self) -> Simulation:

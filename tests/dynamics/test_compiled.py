@@ -53,8 +53,8 @@ def test_fast_and_reference_paths_agree_without_contact(coarse_case, method):
 
 
 def test_first_compilation_is_announced_once_and_timed(monkeypatch):
-    """The compile monitor announces the first compilation of the process on one line and counts
-    the time spent compiling (a cache load fires no compile event)."""
+    """The compile monitor announces the first compilation of each kernel set in the process on one line,
+    naming the set, and counts the time spent compiling (a cache load fires no compile event)."""
     from numba import njit
     from numba.core import event
 
@@ -62,22 +62,55 @@ def test_first_compilation_is_announced_once_and_timed(monkeypatch):
 
     messages = []
     monkeypatch.setattr(compiled, "compile_notice", messages.append)
-    monkeypatch.setattr(compiled, "_announced", False)
+    monkeypatch.setattr(compiled, "_announced", set())
 
     def fresh(x):  # a new function each time: compiling it cannot hit any cache
         return x + 1.0
 
-    for expected in (1, 1):
-        monitor = compiled._CompileMonitor(estimate=7)
+    for what, expected in (("the loop A", 1), ("the loop A", 1), ("the loop B", 2)):
+        monitor = compiled._CompileMonitor(estimate=7, what=what)
         with event.install_listener("numba:compile", monitor):
             njit(cache=False)(fresh)(1.0)
         assert monitor.compiled and monitor.seconds > 0
         assert len(messages) == expected
-    assert messages == ["drillstring: compiling the simulation kernels (first run only, about 7 s)..."]
+    assert messages == [f"drillstring: compiling the simulation kernels for the loop {x} (first run of this kind "
+                        "only, cached afterwards; up to about 7 s)..." for x in "AB"]
     monitor = compiled._CompileMonitor(estimate=7)
     with event.install_listener("numba:compile", monitor):
         pass
     assert not monitor.compiled and monitor.seconds == 0.0
+
+
+def test_kernel_set_names_what_the_loop_is_compiled_for():
+    """The announcement's kernel set is the key of the compiled loop: the types of the step's data and of the
+    model's data are equal where the set's words are, and differ where they differ (aarsnes2019's ``ark43``
+    with its delayed law is a set of its own: its first run compiles once more, legitimately)."""
+    from numba import typeof
+
+    from drillstring.case import load_case
+    from drillstring.dynamics.compiled import kernel_set
+    from drillstring.dynamics.runge_kutta import method_named
+    from drillstring.dynamics.steps import step_data
+
+    def coarse(name, method):
+        case = load_case(name)
+        case = case.model_copy(update={
+            "mesh": case.mesh.model_copy(update={"max_element_length": 100.0}),
+            "reduced_model": case.reduced_model.model_copy(update={
+                "axial_modes": 2, "torsional_modes": 2, "lateral_modes": 2, "lateral_cutoff": 0.0})})
+        model = case_reduced_model(case)
+        tableau = method_named(method)
+        return kernel_set(model, tableau), (typeof(step_data(tableau, model.state_size)), typeof(model.rhs_data))
+
+    runs = [coarse(name, method) for name, method in
+            (("aarsnes2019", "ark43"), ("aarsnes2019_paper", "ark43"), ("aarsnes2019", "dopri5"),
+             ("reference", "ark43"), ("motor", "ark43"), ("reference", "dopri5"), ("stick_slip", "dopri5"))]
+    assert runs[0][0] == "the implicit-explicit step (ark43) of the case 2 model with a delayed bit-rock law"
+    assert runs[2][0] == "the explicit Runge-Kutta step (dopri5) of the case 2 model with a delayed bit-rock law"
+    assert runs[3][0] == "the implicit-explicit step (ark43) of the case 2 model"
+    for words, types in runs:
+        for other_words, other_types in runs:
+            assert (words == other_words) == (str(types) == str(other_types)), (words, other_words)
 
 
 def test_fast_and_reference_paths_agree_within_integration_error_with_impacts(coarse_case):

@@ -62,21 +62,35 @@ class _StudyProgress:
         self.noun = noun
         self.bar: Progress | None = None
         self.task = None
+        self.status = None
 
     def __call__(self, done: int, failed: int, total: int) -> None:
         if self.bar is None:
-            columns = (TextColumn(escape(self.noun)), BarColumn(), MofNCompleteColumn(),
+            columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                        TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TextColumn("left"),
                        TimeRemainingColumn())
             self.bar = Progress(*columns, console=self.console)
             self.bar.start()
-            self.task = self.bar.add_task(self.noun, total=total, completed=done + failed, failed=failed)
+            self.task = self.bar.add_task(escape(self.noun), total=total, completed=done + failed, failed=failed)
         else:
             self.bar.update(self.task, completed=done + failed, failed=failed)
+
+    def stage(self, text: str) -> None:
+        """Show what runs after the last task (``text``: "statistics", "figures", ...): in place of the noun on
+        the bar, or on a spinner of its own when no task ran (a rerun that computes nothing)."""
+        if self.bar is not None:
+            self.bar.update(self.task, description=escape(f"{text}…"))
+        elif self.status is None:
+            self.status = self.console.status(escape(f"{text}…"))
+            self.status.start()
+        else:
+            self.status.update(escape(f"{text}…"))
 
     def stop(self) -> None:
         if self.bar is not None:
             self.bar.stop()
+        if self.status is not None:
+            self.status.stop()
 
 
 def _api():

@@ -70,6 +70,40 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
     }
 
 
+def _start_window(case, ds, default: float, units: str | None) -> tuple[float, list[str]]:
+    """The start of the summaries' window [s] and the notes on the run's start (docs/model.md §8). A ramped
+    start's window begins when the bit speed's oscillation has settled, measured on the run
+    (:func:`~drillstring.dynamics.simulate.settling_time`), if that is after ``default`` (min(10 s, t_end/2));
+    a note says so, or that it never settled; another says when the rate of penetration was negative."""
+    from drillstring.dynamics.simulate import start_facts
+
+    t = np.asarray(ds["time"].values, dtype=float)
+    if t.size < 3:
+        return default, []
+    ramp = case.initial.start == "ramp"
+    ramp_end = max(case.initial.weight_ramp_time if ramp else 0.0, case.top_drive.ramp_time)
+    facts = start_facts(t, {k: ds[k].values for k in ("rate_of_penetration", "force_on_bit", "bit_speed")},
+                        default, ramp_end, case.operation.top_speed)
+    notes, start = [], default
+    if facts.negative_rop_until == facts.negative_rop_until:  # not NaN
+        force = display_unit("force", units)
+        why = (" the Tucker–Wang law, a law of rates, has the bit back off the rock under a light weight on bit"
+               if case.bit_rock.law == "tucker_wang" else " the bit moved up")
+        notes.append(f"the rate of penetration is negative until t = {facts.negative_rop_until:.2f} s (force on "
+                     f"bit {force(facts.force_on_bit_then):,.3g} {force.label} then):{why} (docs/model.md §8)")
+    if ramp and facts.window_before_settled:
+        if facts.settled == facts.settled and facts.settled < t[-1]:
+            start = facts.settled
+            notes.append(f"summaries from t = {start:.2f} s, when the bit speed's oscillation settled after the "
+                         f"{ramp_end:g} s ramp (each period's range within 15 % of the last's), not from "
+                         f"t = {default:g} s")
+        else:
+            notes.append(f"the bit speed's oscillation has not settled by t = {t[-1]:g} s (its range per period "
+                         f"still changes after the {ramp_end:g} s ramp): the summaries from t = {default:g} s mix "
+                         "the start-up with what follows; a longer --t-end shows where it goes")
+    return start, notes
+
+
 def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
     t_tr = numbers["t_transient"]
     rop, force, small, length = (display_unit(k, units)
@@ -134,7 +168,8 @@ def simulate(
 
     Writes the observables to NetCDF and a six-panel figure (with the whirl orbit at the probe and the
     contact force), then prints a summary: impacts on the borehole and contact forces too. After the transient
-    (t >= min(10 s, t_end/2)): the bit-speed oscillation (max − min)/(2 × top speed) and the fraction of the time
+    (t >= min(10 s, t_end/2); after a ramped start, from when the bit speed's oscillation has settled if that
+    is later, measured on the run, with a note): the bit-speed oscillation (max − min)/(2 × top speed) and the fraction of the time
     the bit turns slower than 10 % of the top speed (stick). A run
     that stops early still writes what it computed, reports where it stopped and exits with code 1.
     """
@@ -178,7 +213,9 @@ def simulate(
         _fail(write_error_message(error), EXIT_RUN_FAILED)
     except NotARegularFile as error:  # an output that became a device or FIFO during the run
         _fail(str(error), EXIT_RUN_FAILED)
-    numbers = _run_numbers(ds, window.transient)
+    t_summary, notes = _start_window(the_case, ds, window.transient, units)
+    numbers = _run_numbers(ds, t_summary)
+    numbers["start_notes"] = notes
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
     if failure is not None:
@@ -188,6 +225,8 @@ def simulate(
     else:
         console = _console()
         print_table(console, _simulation_table(the_case.name, numbers, units))
+        for text in notes:
+            console.print(escape(f"note: {text}"), soft_wrap=True)
         written = f"NetCDF: {netcdf}" + ("" if figure is None else f", figure: {figure}")
         console.print(escape(written), soft_wrap=True)
     if failure is not None:

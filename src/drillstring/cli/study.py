@@ -195,7 +195,7 @@ def study(
         lambda progress, note: _api().monte_carlo_study(
             the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
             correlation=correlated, model=model, samples=samples, seed=seed, workers=workers,
-            scheduler=scheduler, t_end=t_end, transient=transient, units=units))
+            scheduler=scheduler, t_end=t_end, transient=transient, units=units, stage=progress.stage))
     _note_resumed(outcome.already, samples, "realizations", out / "study.zarr")
 
     payload = outcome.summary
@@ -233,6 +233,9 @@ def _print_study(name: str, payload: dict[str, Any], files: dict[str, Path], uni
     warning = (payload.get("time_convergence") or {}).get("warning")
     if warning:
         console.print(escape(f"warning: {warning}"), soft_wrap=True)
+    start = (payload.get("start") or {}).get("warning")
+    if start:
+        console.print(escape(f"note: {start}"), soft_wrap=True)
     console.print(escape(_buckling_line(payload, units)), soft_wrap=True)
     if payload["failures"]:
         console.print(escape(f"{len(payload['failures'])} failure(s), causes in {files['summary']}"),

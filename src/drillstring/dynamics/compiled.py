@@ -22,7 +22,8 @@ and buffers, :meth:`Workspace.allocate`), the step's data (:func:`~drillstring.d
 and ``observe_data`` (:class:`~drillstring.dynamics.rom.ReducedOrderModel`). It is compiled once per type of
 ``rhs_data`` (case 2 or case 1) and of the step's data, and cached on disk (a step kind defined outside the
 package runs uncached); the first compilation in a fresh cache is announced on stderr and its duration is
-reported as ``compile_time``, apart from the solver's ``wall_time``.
+reported as ``compile_time``, apart from the solver's ``wall_time``; the announcement names the kernel set
+(:func:`kernel_set`: the step kind and the model's data type), each announced once per process.
 
 The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
 step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
@@ -259,28 +260,54 @@ def _notify_stderr(message: str) -> None:
 
 #: Called with a one-line message when kernels start compiling (first run in a fresh cache only).
 compile_notice: Callable[[str], None] = _notify_stderr
-_announced = False
+#: The kernel sets (:func:`kernel_set`) announced in this process.
+_announced: set = set()
+
+
+def kernel_set(model, method) -> str:
+    """What the step loop is compiled for, in words: the kind of step of ``method`` (explicit Runge–Kutta,
+    or implicit–explicit for an :class:`~drillstring.dynamics.additive_rk.AdditiveTableau`; its name) and the
+    type of the model's data — case 2 or case 1 (``model.nonlinear``), with or without a delayed bit–rock law
+    (its depth-of-cut history). One loop is compiled per such set (the kernels depend on the types of their
+    data, not on sizes or values: :func:`prepare_kernels`), so a case that adds a set (the first ``ark43`` run
+    of a delayed law, say) compiles once more, then loads it from the cache."""
+    from drillstring.dynamics.additive_rk import AdditiveTableau
+    from drillstring.dynamics.runge_kutta import ButcherTableau
+
+    if isinstance(method, AdditiveTableau):
+        kind = "implicit-explicit step"
+    elif isinstance(method, ButcherTableau):
+        kind = "explicit Runge-Kutta step"
+    else:
+        kind = f"{type(method).__name__} step"
+    name = getattr(method, "name", "")
+    model_kind = "case 1 (full) model" if model.nonlinear == "full" else "case 2 model"
+    if model.bit_rock.delayed:
+        model_kind += " with a delayed bit-rock law"
+    return f"the {kind}{f' ({name})' if name else ''} of the {model_kind}"
 
 
 class _CompileMonitor(event.Listener):
     """Counts the time Numba spends compiling (cache misses only: loading a cached kernel fires no
-    compile event) and announces the first compilation of the process."""
+    compile event) and announces, once per process, the first compilation of each kernel set (``what``,
+    :func:`kernel_set`)."""
 
-    def __init__(self, estimate: float) -> None:
+    def __init__(self, estimate: float, what: str = "") -> None:
         self.estimate = estimate
+        self.what = what
         self.depth = 0
         self.started = 0.0
         self.seconds = 0.0
         self.compiled = False
 
     def on_start(self, ev) -> None:
-        global _announced
         if self.depth == 0:
             self.started = _time.perf_counter()
-            if not _announced:
-                _announced = True
-                compile_notice(f"drillstring: compiling the simulation kernels (first run only, "
-                               f"about {self.estimate:g} s)...")
+            if self.what not in _announced:
+                _announced.add(self.what)
+                what = f" for {self.what}" if self.what else ""
+                compile_notice(f"drillstring: compiling the simulation kernels{what} (first run of this kind "
+                               f"only, cached afterwards; up to about {self.estimate:g} s)...")
         self.depth += 1
         self.compiled = True
 
@@ -295,12 +322,13 @@ def _prepare(dispatcher, *args) -> None:
     dispatcher.compile(tuple(typeof(a) for a in args))
 
 
-def _compile_kernels(model, work: Workspace, step, settings: StepperSettings) -> tuple[float, bool]:
-    """Compile (or load from the cache) every kernel the integration of ``model`` with the step ``step``
-    calls. Returns the time it took [s] and whether anything was compiled; the first compilation is
-    announced."""
+def _compile_kernels(model, work: Workspace, step, settings: StepperSettings, method=None) -> tuple[float, bool]:
+    """Compile (or load from the cache) every kernel the integration of ``model`` with the step ``step`` (the
+    data of ``method``) calls. Returns the time it took [s] and whether anything was compiled; the first
+    compilation of each kernel set (:func:`kernel_set`) in the process is announced, naming it."""
     start = _time.perf_counter()
-    monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20))
+    monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20),
+                              "" if method is None else kernel_set(model, method))
     with event.install_listener("numba:compile", monitor):
         _prepare(_loop(step), work, 0.0, step, settings, model.rhs_data, model.case2_data, model.observe_data)
         _prepare(observe_kernel, model.case2_data, model.observe_data, 0.0, work.y, work.rate, work.out[0])
@@ -325,7 +353,7 @@ def prepare_kernels(model, tableau="dopri5") -> tuple[float, bool]:
     n = model.state_size
     settings = StepperSettings.create(StepSizeController(), n, min_step=1e-12, max_steps=1)
     work = Workspace.allocate(np.zeros(n), np.zeros(2), observation_width(len(model.probe_nodes)))
-    return _compile_kernels(model, work, step_data(method, n), settings)
+    return _compile_kernels(model, work, step_data(method, n), settings, method)
 
 
 def integrate_compiled(
@@ -362,7 +390,7 @@ def integrate_compiled(
     work = Workspace.allocate(y0, grid, observation_width(len(model.probe_nodes)))
     grid = work.grid
     rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
-    compile_time, compiled = _compile_kernels(model, work, step, settings)
+    compile_time, compiled = _compile_kernels(model, work, step, settings, method)
     run_chunk = _loop(step)
 
     start = _time.perf_counter()

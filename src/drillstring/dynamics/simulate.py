@@ -244,3 +244,85 @@ def _simulate_compiled(model, y0, *, t_end, output_step, rtol, atol, method, max
     )
     impacts = int(stats.pop("impacts"))
     return _result(model, grid[: len(values)], values, impacts, message, stats, raise_on_failure)
+
+
+#: Relative tolerance of :func:`settling_time`: the bit speed's range per oscillation period is settled once
+#: it stays within this fraction of the last period's range (plus :data:`SETTLED_FLOOR` of the top speed).
+SETTLED_TOLERANCE = 0.15
+#: Absolute part of the settling tolerance, as a fraction of the top speed (steady drilling's range is ~0).
+SETTLED_FLOOR = 0.01
+
+
+def settling_time(time, bit_speed, top_speed: float, start: float = 0.0) -> float:
+    """When the bit speed's oscillation has settled [s], measured on the run: the record from ``start`` [s]
+    is cut into blocks of one oscillation period (:func:`~drillstring.dynamics.indicators.oscillation_period`
+    of the last half of the record; 1 s without one), and the answer is the start of the first block from
+    which every block's range (max − min) is within :data:`SETTLED_TOLERANCE` of the last block's, plus
+    :data:`SETTLED_FLOOR` × ``top_speed`` [rad/s]. NaN when fewer than three blocks fit, or when only the
+    last two agree (the oscillation still grows or decays at the end of the run)."""
+    from drillstring.dynamics.indicators import oscillation_period
+
+    t = np.asarray(time, dtype=float)
+    speed = np.asarray(bit_speed, dtype=float)
+    keep = np.isfinite(t) & np.isfinite(speed) & (t >= start)
+    t, speed = t[keep], speed[keep]
+    if t.size < 3:
+        return math.nan
+    late = t >= 0.5 * (t[0] + t[-1])
+    period = oscillation_period(t[late], speed[late])
+    period = 1.0 if not math.isfinite(period) else period
+    edges = np.arange(t[0], t[-1] + 1e-9 * period, period)
+    if edges.size < 4:
+        return math.nan
+    ranges = np.array([np.ptp(speed[(t >= a) & (t < b)]) if np.any((t >= a) & (t < b)) else np.nan
+                       for a, b in zip(edges[:-1], edges[1:])])
+    final = ranges[-1]
+    close = np.abs(ranges - final) <= SETTLED_TOLERANCE * final + SETTLED_FLOOR * abs(top_speed)
+    first = len(close)
+    while first > 0 and close[first - 1]:
+        first -= 1
+    return math.nan if first >= len(ranges) - 2 else float(edges[first])
+
+
+@dataclass(frozen=True)
+class StartFacts:
+    """What the start of a run leaves in its summaries, measured on the run (:func:`start_facts`).
+
+    Attributes:
+        negative_rop_until: the last time [s] the rate of penetration was below 0 before it first
+            became positive (NaN when it never was below 0); ``force_on_bit_then``: the force on bit [N] at
+            that time (the Tucker–Wang law, a law of rates, gives ROP < 0 under a light weight on bit:
+            docs/model.md §8).
+        window_start: the start of the summaries' window [s]; ``settled``: :func:`settling_time` from
+            ``ramp_end`` (NaN: not settled by the end of the run); ``ramp_end``: the end of the weight ramp [s]
+            (0 for a start on bottom).
+    """
+
+    negative_rop_until: float
+    force_on_bit_then: float
+    window_start: float
+    settled: float
+    ramp_end: float
+
+    @property
+    def window_before_settled(self) -> bool:
+        """Whether the window starts before the oscillation has settled (or it never settles)."""
+        return not (self.settled <= self.window_start + 1e-9)
+
+
+def start_facts(time, observables: Mapping[str, np.ndarray], window_start: float, ramp_end: float,
+                top_speed: float) -> StartFacts:
+    """The :class:`StartFacts` of a run on the output ``time`` [s] with its ``observables`` (SI), the
+    summaries' ``window_start`` [s], the end of its weight ramp ``ramp_end`` [s] (0 for a start on bottom) and
+    the top speed [rad/s]."""
+    t = np.asarray(time, dtype=float)
+    rop = np.asarray(observables["rate_of_penetration"], dtype=float)
+    force = np.asarray(observables["force_on_bit"], dtype=float)
+    negative, until, then = np.flatnonzero(rop < 0.0), math.nan, math.nan
+    if negative.size:
+        positive = np.flatnonzero(rop > 0.0)
+        later = negative[negative < positive[0]] if positive.size else negative
+        if later.size:
+            until, then = float(t[later[-1]]), float(force[later[-1]])
+    settled = settling_time(t, observables["bit_speed"], top_speed, start=ramp_end)
+    return StartFacts(until, then, float(window_start), settled, float(ramp_end))

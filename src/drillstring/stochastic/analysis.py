@@ -424,6 +424,89 @@ def study_summary(stats: xr.Dataset, t_transient: float = DEFAULT_TRANSIENT, bou
         "observables": per_variable,
         "convergence_change_second_half": convergence,
         "time_convergence": time_convergence(stats, t_transient),
+        "start": start_summary(stats, t_transient),
         "realizations": realizations_summary(stats),
         "stability": stability_summary(stats, boundary),
     }
+
+
+#: The file in a study's folder that says what its figures were drawn from (:func:`figures_key`).
+FIGURES_KEY = ".figures-key.json"
+
+
+def figures_key(payload: dict, settings, t_transient: float, units: str | None) -> str:
+    """What a study's figures are drawn from: the realizations in the store (the summary ``payload``'s
+    ``n_samples``, ``n_failed`` and ``sessions``, the runs that computed them), the ``settings``, the window
+    ``t_transient`` [s], the unit system and the plotting code (the package's version, the size and time stamp
+    of :mod:`drillstring.plots`). Equal keys: the figures on disk are current, and a rerun that computed
+    nothing need not draw them again (:func:`current_figures`)."""
+    import hashlib
+    import importlib.util
+    import json
+
+    from drillstring._version import __version__
+
+    origin = Path(importlib.util.find_spec("drillstring.plots").origin).stat()
+    items = [__version__, origin.st_size, origin.st_mtime_ns, units, t_transient, repr(settings),
+             payload["n_samples"], payload["n_failed"], payload["sessions"]]
+    return hashlib.sha256(json.dumps(items, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def current_figures(folder: str | Path, key: str) -> dict[str, Path] | None:
+    """The figures in ``folder`` (name -> path) if :func:`record_figures` recorded them with ``key`` and they
+    are all there; None otherwise."""
+    import json
+
+    folder = Path(folder)
+    try:
+        record = json.loads((folder / FIGURES_KEY).read_text(encoding="utf-8"))
+        figures = {name: folder / file for name, file in record["figures"].items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+    if record.get("key") != key or not figures or not all(path.is_file() for path in figures.values()):
+        return None
+    return figures
+
+
+def record_figures(folder: str | Path, key: str, figures: dict[str, Path]) -> None:
+    """Record (atomically, in :data:`FIGURES_KEY`) that ``figures`` (name -> path in ``folder``) were drawn
+    from ``key``."""
+    import json
+
+    from drillstring.files import write_text_atomic
+
+    record = {"key": key, "figures": {name: Path(path).name for name, path in figures.items()}}
+    write_text_atomic(Path(folder) / FIGURES_KEY, json.dumps(record) + "\n")
+
+
+def start_summary(stats: xr.Dataset, t_transient: float) -> dict:
+    """When the nominal run's start-up has settled, against the summaries' window ``t_transient`` [s]
+    (docs/model.md §8): ``settled``, :func:`~drillstring.dynamics.simulate.settling_time` of its bit speed
+    from the end of the case's ramps (``ramp_end`` [s]: the weight ramp of ``initial.start = "ramp"`` and the
+    top drive's set-point ramp; None: not settled by the end of the run) and, after a ramped start whose
+    oscillation settles after ``t_transient`` or not at all, a ``warning``."""
+    import tomllib
+
+    from drillstring.dynamics.simulate import settling_time
+
+    try:
+        case = tomllib.loads(str(stats.attrs["case"]))
+        speed = stats["bit_speed_nominal"].values
+    except (KeyError, ValueError):
+        return {"settled": None, "ramp_end": None, "warning": None}
+    initial, top_drive = case.get("initial", {}), case.get("top_drive", {})
+    ramp = initial.get("start") == "ramp"
+    ramp_end = max(float(initial.get("weight_ramp_time", 0.0)) if ramp else 0.0,
+                   float(top_drive.get("ramp_time", 0.0)))
+    settled = settling_time(stats.time.values, speed, float(case.get("operation", {}).get("top_speed", 0.0)),
+                            start=ramp_end)
+    warning = None
+    if ramp and not settled <= t_transient + 1e-9:
+        when = (f"settles at t = {settled:.1f} s" if math.isfinite(settled) else
+                f"has not settled by t = {float(stats.time.values[-1]):g} s")
+        warning = (f"the nominal run's bit-speed oscillation {when} (measured: each period's range within 15 % of "
+                   f"the last's), after the window's start t = {t_transient:g} s and the {ramp_end:g} s ramp: the "
+                   "summaries mix the start-up with what follows" +
+                   (f"; --transient {math.ceil(settled):g} starts them after it" if math.isfinite(settled) else
+                    "; a longer --t-end shows where it goes"))
+    return {"settled": settled if math.isfinite(settled) else None, "ramp_end": ramp_end, "warning": warning}

@@ -513,7 +513,8 @@ def run_study(case: Case, settings: StudySettings, store_path: str | Path, engin
 
     return run_locked(store_path, partial(StudyStore, Path(store_path), case, settings), pending,
                       partial(_realization_task, case, settings), engine, lost=partial(_worker_died, case, settings),
-                      prepare=partial(compile_kernels, case), finish=finish, what="study", noun="realizations")
+                      prepare=partial(compile_kernels, case, note=engine.note), finish=finish, what="study",
+                      noun="realizations")
 
 
 def _realization_task(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:

@@ -194,17 +194,41 @@ def simulation_options(case: Case, t_end: float, output_step: float) -> dict[str
                 lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed)
 
 
-def compile_kernels(case: Case) -> None:
+def compile_kernels(case: Case, note=None) -> None:
     """Compile the simulation kernels once, in the driver, before local worker processes start (announced
     on stderr the first time), so that the workers only load them from Numba's cache and no run's time
-    includes compiling."""
+    includes compiling. ``note(text)``, when given, is told what makes each run of ``case`` costly
+    (:func:`cost_notes`) before the runs start."""
     from drillstring.dynamics.compiled import prepare_kernels
 
     try:
         model = case_reduced_model(case)
     except Exception:  # the runs record why; the kernels then compile in the first of them
         return
+    if note is not None:
+        for text in cost_notes(case, model.family.count("lateral_y")):
+            note(text)
     prepare_kernels(model, case.simulation.method)
+
+
+def cost_notes(case: Case, lateral_per_plane: int) -> list[str]:
+    """What makes each run of ``case`` costly, and the keys that trade accuracy for time (docs/performance.md,
+    "The README's first case"): a lateral basis that the cut-off made larger than ``lateral_modes`` (the time
+    per step grows with it), and an explicit method on the basis with attachment modes (their fast motion
+    sets the step)."""
+    r = case.reduced_model
+    notes = []
+    if lateral_per_plane > r.lateral_modes:
+        notes.append(f"each run keeps {lateral_per_plane} lateral modes per plane (every one below "
+                     f"{r.lateral_cutoff:g}× the rotation frequency: reduced_model.lateral_cutoff), not "
+                     f"{r.lateral_modes} (lateral_modes); the time per step grows with them: lateral_cutoff = 0 "
+                     "is faster, and right while the string stays off the wall (docs/performance.md)")
+    if case.simulation.method in ("dopri5", "bs32") and r.truncation_correction == "static":
+        notes.append(f"with the attachment modes of truncation_correction = \"static\" the explicit method "
+                     f"{case.simulation.method!r} takes steps as short as their fast motion (4.3× the steps on "
+                     "the README's first case); simulation.method = \"ark43\" is not limited by it "
+                     "(docs/model.md §9)")
+    return notes
 
 
 def _steady(values: np.ndarray, steady: np.ndarray) -> np.ndarray:
