@@ -55,6 +55,7 @@ from drillstring.derived import (
 )
 from drillstring.components import MOTOR_KEYS
 from drillstring.units import (
+    quantity_text,
     ACCELERATION,
     ANGLE,
     ANGULAR_SPEED,
@@ -82,6 +83,7 @@ from drillstring.units import (
     VELOCITY,
     VOLUME_FLOW,
     Dimension,
+    quantity_text,
     to_si,
 )
 
@@ -1406,8 +1408,8 @@ class Case(_Base):
             return f"must be within [0, {high:g}] N"
         w = self.weight
         if self.model.gravity and weight_on_bit >= w:
-            return (f"must be less than the string's weight: weight_on_bit {weight_on_bit / 1e3:.4g} kN"
-                    f" >= weight {w / 1e3:.6g} kN")
+            return (f"must be less than the string's weight: weight_on_bit {quantity_text(weight_on_bit, 'force')}"
+                    f" >= weight {quantity_text(w, 'force')}")
         return None
 
     # -- cross-field validation --------------------------------------------------------------------------

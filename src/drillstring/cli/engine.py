@@ -100,7 +100,7 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     err = _err_console()
 
     def note(text: str) -> None:
-        err.print(escape(f"note: {text}"), soft_wrap=True)
+        err.print(escape(f"note: {text}"))
 
     created = not out.exists()
     lock = StudyLock(out / store_name, what=what)
