@@ -57,16 +57,21 @@ def test_every_cell_and_header_word_stays_whole_at_any_width(width):
 
 
 def test_layouts_from_wide_to_vertical():
-    """Wide: the table as rich draws it; narrower: chosen widths (text and number cells wrap between words),
-    then no borders (columns one space apart), then one block of 'header: value' lines per row. The longest
-    words of this table take 76 columns (104 unwrapped), with 22 of borders and padding, or 6 of spaces."""
-    wide = _render(_table(), 200)
+    """Wide: the table as rich draws it; narrower: no borders (columns one space apart) with every cell on one
+    line, rather than borders with cells wrapped over two or three lines (issue 38); narrower still: no
+    borders and chosen widths (text cells wrap between words); then one block of 'header: value' lines per
+    row. The table takes 104 columns unwrapped and its longest words 76, with 22 of borders and padding, or 6
+    of spaces."""
+    wide = _render(_table(), 126)
     assert wide.splitlines()[1].startswith("┏") and "│ rate of penetration " in wide
-    fixed = _render(_table(), 98)
-    assert fixed.splitlines()[1].startswith("┏") and "│ rate of penetration " not in fixed
-    for width in (97, 82):
-        borderless = _render(_table(), width)
-        assert "┏" not in borderless and "│" not in borderless and "─" * width in borderless
+    for width in (125, 110):
+        unwrapped = _render(_table(), width)
+        assert "┏" not in unwrapped and "─" * 104 in unwrapped and "rate of penetration " in unwrapped
+        assert len(unwrapped.splitlines()) == 1 + 1 + 1 + 3 + 1  # title, header, rule, one line per row, caption
+    for width in (109, 82):
+        wrapped = _render(_table(), width)
+        assert "┏" not in wrapped and "│" not in wrapped and "─" * width in wrapped
+        assert len(wrapped.splitlines()) > 7
     vertical = _render(_table(), 81)
     assert "observable: rate of penetration\n  mean δ [%]: 0.64213\n" in vertical
     assert "0.123 ± 0.045\n  mean δ [%]: 12,345,678.9\n" in vertical  # a row without a first cell: indented

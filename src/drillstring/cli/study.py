@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -189,12 +190,15 @@ def _convergence_line(summary: dict[str, Any]) -> str | None:
 
 def _inputs_line(path: str, entry: dict[str, Any], units: str | None = None) -> str:
     """One random parameter: its law's kind, mean, standard deviation and dispersion, in the unit system
-    ``units`` (:func:`drillstring.units.display_unit_of`) — the law as declared is in ``--json``."""
+    ``units`` (:func:`drillstring.units.display_unit_of`); the law as declared too when it was declared with
+    its own unit (``normal 100 5 rpm``), else in ``--json`` (an SI law: ``normal 686960.95 5000``)."""
     from drillstring.units import display_unit_of
 
     unit = display_unit_of(entry.get("unit") or "", units)
     label = f" {unit.label}" if unit.label else ""
-    kind = str(entry["law"]).split()[0] if entry.get("law") else "law"
+    words = str(entry.get("law") or "law").split()
+    declared = len(words) > 1 and not re.fullmatch(r"[-+.\w]*=?[-+.\deE]+|inf", words[-1])  # with its own unit
+    kind = " ".join(words) if declared else words[0]
     return (f"  {path}: {kind}, mean {_sig(entry['mean'], unit.scale)}{label}, std "
             f"{_sig(entry['std'], unit.scale)}{label} (dispersion {_fmt(entry['dispersion'], '.3g', 100.0)} %)")
 

@@ -135,7 +135,11 @@ def _natural_fits(console: Console, table: Table) -> bool:
 
 
 def print_table(console: Console, table: Table) -> None:
-    """Print ``table`` on ``console`` with no number, cell or header word cut (module docstring)."""
+    """Print ``table`` on ``console`` with no number, cell or header word cut (module docstring). A title
+    justified left is printed on its own, wrapped at the console's width rather than the table's."""
+    if table.title and table.title_justify == "left":
+        console.print(table.title)
+        table.title = None
     if not _natural_fits(console, table):
         _compact(table)
         if not fits(console, table):
