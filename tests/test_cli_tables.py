@@ -311,3 +311,26 @@ def test_errors_in_the_unit_system_of_the_command(tmp_path):
         reason = line.split("must be less than the string's weight: ", 1)[1]
         assert f" {unit}" in reason and f" {other}" not in reason, line
         assert units == "si" or reason == "weight_on_bit 250.0 klbf >= weight 179.4 klbf", line
+
+
+def test_a_warning_without_notes_points_at_the_callers_code():
+    """A note given as a RuntimeWarning (no ``note`` callback: a stale lock taken over) names the caller's
+    file and line, not ``contextlib.py`` of the decorator of the API functions (issue 38)."""
+    import contextlib
+    import warnings
+
+    from drillstring.stochastic.execution import notify
+
+    @contextlib.contextmanager
+    def decorator():
+        yield
+
+    @decorator()
+    def api_function():
+        notify(None, "a stale lock was taken over")
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        api_function()
+    (warning,) = caught
+    assert warning.filename == __file__ and issubclass(warning.category, RuntimeWarning)
