@@ -1408,8 +1408,8 @@ class Case(_Base):
             return f"must be within [0, {high:g}] N"
         w = self.weight
         if self.model.gravity and weight_on_bit >= w:
-            return (f"must be less than the string's weight: weight_on_bit {quantity_text(weight_on_bit, 'force')}"
-                    f" >= weight {quantity_text(w, 'force')}")
+            return (f"must be less than the string's weight: weight_on_bit "
+                    f"{quantity_text(weight_on_bit, 'force', digits=6)} >= weight {quantity_text(w, 'force', digits=6)}")
         return None
 
     # -- cross-field validation --------------------------------------------------------------------------

@@ -507,12 +507,13 @@ def reset_message_units(token) -> None:
         _MESSAGE_UNITS.set(None)
 
 
-def quantity_text(value_si: float, kind: str, system: str | None = None) -> str:
-    """``value_si`` [SI] of the output kind ``kind`` as a message shows it, in the unit system ``system``
-    (None: the running command's ``--units``, else ``$DRILLSTRING_UNITS``, else si; an unusable
-    ``$DRILLSTRING_UNITS`` is refused elsewhere and reads si here): ``"26.39 klbf"``, ``"117.4 kN"``."""
+def quantity_text(value_si: float, kind: str, system: str | None = None, digits: int = 4) -> str:
+    """``value_si`` [SI] of the output kind ``kind`` as a message shows it, with ``digits`` significant digits
+    (``g`` format), in the unit system ``system`` (None: the running command's ``--units``, else
+    ``$DRILLSTRING_UNITS``, else si; an unusable ``$DRILLSTRING_UNITS`` is refused elsewhere and reads si
+    here): ``"26.39 klbf"``, ``"117.4 kN"``."""
     try:
         unit = display_unit(kind, system or _MESSAGE_UNITS.get())
     except ValueError:
         unit = display_unit(kind, "si")
-    return f"{significant(unit(value_si))} {unit.label}"
+    return f"{unit(value_si):.{digits}g} {unit.label}"

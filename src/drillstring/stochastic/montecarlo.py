@@ -329,8 +329,8 @@ def check_study(case: Case, settings: StudySettings) -> None:
         if p > OUT_OF_RANGE_PROBABILITY:
             raise ValueError(
                 f"sigma = {sigma:.6g} N: with the weight-on-hook Normal around "
-                f"{quantity_text(nominal_weight_on_hook(case), 'force')}, the weight-on-bit falls outside (0, "
-                f"{quantity_text(case.weight, 'force')}) (the string's weight) with probability {p:.3g}, above "
+                f"{quantity_text(nominal_weight_on_hook(case), 'force', digits=6)}, the weight-on-bit falls outside (0, "
+                f"{quantity_text(case.weight, 'force', digits=6)}) (the string's weight) with probability {p:.3g}, above "
                 f"{OUT_OF_RANGE_PROBABILITY:g}: such realizations cannot run; sigma must be at most "
                 f"{largest_accepted_sigma(case):,.0f} N ({quantity_text(largest_accepted_sigma(case), 'force')}) "
                 "for this case"
