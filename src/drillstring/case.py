@@ -55,7 +55,6 @@ from drillstring.derived import (
 )
 from drillstring.components import MOTOR_KEYS
 from drillstring.units import (
-    quantity_text,
     ACCELERATION,
     ANGLE,
     ANGULAR_SPEED,
@@ -1408,8 +1407,8 @@ class Case(_Base):
             return f"must be within [0, {high:g}] N"
         w = self.weight
         if self.model.gravity and weight_on_bit >= w:
-            return (f"must be less than the string's weight: weight_on_bit "
-                    f"{quantity_text(weight_on_bit, 'force', digits=6)} >= weight {quantity_text(w, 'force', digits=6)}")
+            shown = [quantity_text(f, "force", digits=6) for f in (weight_on_bit, w)]
+            return f"must be less than the string's weight: weight_on_bit {shown[0]} >= weight {shown[1]}"
         return None
 
     # -- cross-field validation --------------------------------------------------------------------------

@@ -72,8 +72,12 @@ TITLES: dict[str, str] = {
     "wear_flat_force": "wear-flat force",
     "motor_speed": "motor speed",
     "motor_torque": "motor torque",
-    "differential_pressure": "motor differential pressure",
+    "differential_pressure": "differential pressure",
 }
+#: The run figure's panels of one observable: panel -> (observable, title or "").
+_LINE_PANELS = {"hook_load": ("hook_load", ""),
+                "motor_speed": ("motor_speed", "downhole motor: rotor speed relative to its stator"),
+                "motor_pressure": ("differential_pressure", "downhole motor: differential pressure")}
 
 #: The four observables of the study figures, in panel order (a study of a case with a top drive adds the
 #: quill speed and the surface torque: :func:`~drillstring.quantities.stored_observables`).
@@ -247,19 +251,11 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set_ylabel(_label("depth_of_cut", units))
         ax.set_title("depth of cut per blade (≤ 0: the bit off the rock)", fontsize="medium")
-    if "hook_load" in axes:
-        ax = axes["hook_load"]
-        ax.plot(t, _scaled(ds["hook_load"].values, "hook_load", units), lw=0.9)
-        ax.set_ylabel(_label("hook_load", units))
-    if "motor_speed" in axes:
-        ax = axes["motor_speed"]
-        ax.plot(t, _scaled(ds["motor_speed"].values, "motor_speed", units), lw=0.9)
-        ax.set_ylabel(_label("motor_speed", units))
-        ax.set_title("downhole motor: rotor speed relative to its stator", fontsize="medium")
-        ax = axes["motor_pressure"]
-        ax.plot(t, _scaled(ds["differential_pressure"].values, "differential_pressure", units), lw=0.9)
-        ax.set_ylabel(_label("differential_pressure", units).replace("motor differential pressure", "Δp"))
-        ax.set_title("downhole motor: differential pressure", fontsize="medium")
+    for panel, (name, title) in _LINE_PANELS.items():
+        if panel in axes:
+            axes[panel].plot(t, _scaled(ds[name].values, name, units), lw=0.9)
+            axes[panel].set_ylabel(_label(name, units))
+            axes[panel].set_title(title, fontsize="medium")
     for name, ax in axes.items():
         if name != "orbit":
             ax.set_xlabel("time [s]")
