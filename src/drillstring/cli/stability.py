@@ -115,7 +115,7 @@ def stability(
     if hidden:
         console.print(escape(f"+ {hidden} more (decaying) roots: drillstring stability {case} --all (or --json)"))
     if result.steady_state.note:
-        console.print(escape(f"Warning: {result.steady_state.note}."))
+        console.print(escape(f"Note: {result.steady_state.note}."))
     leading = result.leading
     if result.stable:
         console.print(escape(f"Steady drilling is stable: slowest decay {leading.growth_rate:.4g} 1/s "
