@@ -117,7 +117,7 @@ def test_study_counts_buckled_realizations_and_warns_before_running(small_case, 
     assert buckling["critical_weight_on_bit"] == pytest.approx(critical, rel=1e-9)
     assert buckling["probability"] == pytest.approx(norm.cdf(-0.4), rel=1e-6)
     assert buckling["expected"] == pytest.approx(8 * buckling["probability"])
-    assert len(notes) == 1 and "buckled" in notes[0] and buckling["warning"] == notes[0]
+    assert len(notes) == 1 and "buckles" in notes[0] and buckling["warning"] == notes[0]
     stats = outcome.statistics
     lowest = stats.lowest_lateral_eigenvalue.values
     saved = json.loads((tmp_path / "b" / "summary.json").read_text())["buckling"]

@@ -348,3 +348,22 @@ def test_probability_and_quantile_maps_follow_the_unit_system(sampled_map, tmp_p
     levels = drawn[1].axes[0].collections[0].levels  # the 2.5 % ROP quantile panel: its first and last band
     low, high = 1e-3 / rop_factor, 10e-3 / rop_factor  # hold the smallest and largest values
     assert levels[0] <= low <= levels[1] and levels[-2] <= high <= levels[-1]
+
+
+def test_plot_run_shows_a_downhole_motor(run_dataset, tmp_path, drawn):
+    """A case with a downhole motor (issue 38): a panel of its speed, its torque beside the torque on bit,
+    and a panel of its differential pressure, each in the unit system's unit (field: rpm, kft·lbf, psi)."""
+    t = run_dataset.time.values
+    ds = run_dataset.assign(motor_speed=("time", 7.0 + np.sin(t)), motor_torque=("time", 6e3 + 1e3 * np.cos(t)),
+                            differential_pressure=("time", 3e6 + 1e5 * np.sin(t)))
+    assert plots.run_panels(ds)[-2:] == ("motor_speed", "motor_pressure")
+    assert "motor_speed" not in plots.run_panels(run_dataset)
+    _assert_png(plots.plot_run(ds, tmp_path / "motor.png", units="field"))
+    (fig,) = drawn
+    axes = fig.axes
+    torque, motor_speed, pressure = axes[3], axes[6], axes[7]
+    np.testing.assert_allclose(_lines(torque)[-1][1], ds.motor_torque.values / 1355.8179483314004, rtol=1e-9)
+    np.testing.assert_allclose(_lines(motor_speed)[0][1], ds.motor_speed.values * 60 / (2 * math.pi))
+    np.testing.assert_allclose(_lines(pressure)[0][1], ds.differential_pressure.values / 6894.757293168361,
+                               rtol=1e-9)
+    assert "[rpm]" in motor_speed.get_ylabel() and "[psi]" in pressure.get_ylabel()

@@ -342,7 +342,8 @@ def monte_carlo_study(
     arguments, the run window and the study's size (:data:`~drillstring.stochastic.montecarlo.
     MAX_STUDY_BYTES`), the settings (a law that puts a probability above 1e-3 outside its parameter's
     range, e.g. a sigma that would put a weight-on-bit outside (0, string weight), included; a
-    weight-on-hook law that buckles more than one draw in a thousand is only noted, through ``note``),
+    law that buckles more than one draw in a thousand is a result, not an error: ``summary["buckling"]``
+    counts the buckled realizations, and ``note`` is told before the run when at least one is expected),
     ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.execution.
     SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
     StudyLocked` while another study runs there; held until every file is written).
@@ -355,8 +356,7 @@ def monte_carlo_study(
     :class:`StudyFailed`.
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
-    from drillstring.stochastic.execution import notify
-    from drillstring.stochastic.montecarlo import run_study, study_buckling_margin
+    from drillstring.stochastic.montecarlo import buckling_note, run_study, study_buckling_margin
 
     units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
@@ -366,8 +366,11 @@ def monte_carlo_study(
     engine = _engine(workers, scheduler, progress, note, worker_timeout)
     folder = _output_folder(out, "drillstring-study-")
     buckling = study_buckling_margin(case, settings)
-    if buckling["warning"]:
-        notify(note, buckling["warning"])
+    if note is not None and buckling["warning"] and buckling["expected"] >= 1.0:
+        # a result, not a misuse: said before the run only when a buckled realization is expected, and only
+        # to a caller that takes notes (the summary counts them in any case)
+        note(buckling_note(buckling, settings.samples, units))
+    buckling = {k: v for k, v in buckling.items() if k not in ("lateral", "source")}
     finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None,
                      units, stage or (lambda text: None))
     run = run_study(case, settings, folder / "study.zarr", engine, finish=finish)

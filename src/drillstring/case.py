@@ -83,6 +83,7 @@ from drillstring.units import (
     VELOCITY,
     VOLUME_FLOW,
     Dimension,
+    quantity_text,
     to_si,
 )
 
@@ -1472,8 +1473,8 @@ class Case(_Base):
             return f"must be within [0, {high:g}] N"
         w = self.weight
         if self.model.gravity and weight_on_bit >= w:
-            return (f"must be less than the string's weight: weight_on_bit {weight_on_bit / 1e3:.4g} kN"
-                    f" >= weight {w / 1e3:.6g} kN")
+            shown = [quantity_text(f, "force", digits=6) for f in (weight_on_bit, w)]
+            return f"must be less than the string's weight: weight_on_bit {shown[0]} >= weight {shown[1]}"
         return None
 
     # -- cross-field validation --------------------------------------------------------------------------

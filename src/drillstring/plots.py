@@ -70,7 +70,14 @@ TITLES: dict[str, str] = {
     "depth_of_cut": "depth of cut",
     "hook_load": "hook load",
     "wear_flat_force": "wear-flat force",
+    "motor_speed": "motor speed",
+    "motor_torque": "motor torque",
+    "differential_pressure": "differential pressure",
 }
+#: The run figure's panels of one observable: panel -> (observable, title or "").
+_LINE_PANELS = {"hook_load": ("hook_load", ""),
+                "motor_speed": ("motor_speed", "downhole motor: rotor speed relative to its stator"),
+                "motor_pressure": ("differential_pressure", "downhole motor: differential pressure")}
 
 #: The four observables of the study figures, in panel order (a study of a case with a top drive adds the
 #: quill speed and the surface torque: :func:`~drillstring.quantities.stored_observables`).
@@ -142,7 +149,9 @@ def run_panels(ds: xr.Dataset) -> tuple[str, ...]:
     """The panels of :func:`plot_run` that fit the run's case, in order: ``rop``, ``speed`` (bit, and the
     quill with a top drive), ``radial`` (lateral modes only), ``torque`` (on bit, and at the surface with a
     top drive), ``orbit`` and ``contact`` (lateral modes only), ``force`` (a Detournay bit: the force on bit
-    and its wear-flat part), ``depth_of_cut`` (a Detournay bit) and ``hook_load`` (a ramped start). The case
+    and its wear-flat part), ``depth_of_cut`` (a Detournay bit), ``hook_load`` (a ramped start), and with a
+    downhole motor ``motor_speed`` (its rotor relative to its stator) and ``motor_pressure`` (its differential
+    pressure; its torque is drawn in the ``torque`` panel). The case
     has lateral modes unless the Dataset's ``lateral_modes`` attribute says 0 (a Dataset without it is taken
     to have them, as runs written before)."""
     lateral = int(ds.attrs.get("lateral_modes", 1)) > 0
@@ -154,6 +163,8 @@ def run_panels(ds: xr.Dataset) -> tuple[str, ...]:
         panels.append("depth_of_cut")
     if "hook_load" in ds:
         panels.append("hook_load")
+    if "motor_speed" in ds:
+        panels += ["motor_speed", "motor_pressure"]
     return tuple(panels)
 
 
@@ -163,7 +174,8 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
     drive, the quill speed; with lateral modes the radial displacement [mm] at the probe nearest ``probe_x``
     [m] with its gap (coordinate ``gap``) dashed; the torque on bit [kN·m] and the surface torque; with lateral modes the whirl orbit at that probe (w against v [mm], the borehole wall a
     circle of radius the gap) and the wall's contact force [kN]; for a Detournay bit the force on bit with its
-    wear-flat part [kN] and the depth of cut per blade [mm]; during a ramped start the hook load [kN], all
+    wear-flat part [kN] and the depth of cut per blade [mm]; during a ramped start the hook load [kN]; with a
+    downhole motor its speed [rpm], its torque (in the torque panel) and its differential pressure [MPa], all
     vs time [s]. A failed (partial) run is plotted as far as it went, with its status in the title. Units
     of ``units`` (see the module docstring).
     """
@@ -217,6 +229,9 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
     ax_tob.plot(t, _scaled(ds["torque_on_bit"].values, "torque_on_bit", units), lw=0.9, label="on bit")
     if "surface_torque" in ds:
         ax_tob.plot(t, _scaled(ds["surface_torque"].values, "surface_torque", units), lw=0.9, label="surface")
+    if "motor_torque" in ds:
+        ax_tob.plot(t, _scaled(ds["motor_torque"].values, "motor_torque", units), lw=0.9, label="motor")
+    if "surface_torque" in ds or "motor_torque" in ds:
         ax_tob.legend(loc="best", fontsize="small")
     ax_tob.set_ylabel(_label("torque_on_bit", units).replace("torque-on-bit", "torque"))
 
@@ -236,10 +251,11 @@ def plot_run(ds: xr.Dataset, path: str | Path, probe_x: float = 1560.0, *, units
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set_ylabel(_label("depth_of_cut", units))
         ax.set_title("depth of cut per blade (≤ 0: the bit off the rock)", fontsize="medium")
-    if "hook_load" in axes:
-        ax = axes["hook_load"]
-        ax.plot(t, _scaled(ds["hook_load"].values, "hook_load", units), lw=0.9)
-        ax.set_ylabel(_label("hook_load", units))
+    for panel, (name, title) in _LINE_PANELS.items():
+        if panel in axes:
+            axes[panel].plot(t, _scaled(ds[name].values, name, units), lw=0.9)
+            axes[panel].set_ylabel(_label(name, units))
+            axes[panel].set_title(title, fontsize="medium")
     for name, ax in axes.items():
         if name != "orbit":
             ax.set_xlabel("time [s]")

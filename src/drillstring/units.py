@@ -47,6 +47,7 @@ import math
 import os
 import re
 import sys
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -466,3 +467,53 @@ def _display_unit(kind: str, system: str) -> DisplayUnit:
     dim, si_unit, field_unit = _DISPLAY[kind]
     unit = field_unit if system == "field" else si_unit
     return DisplayUnit(_LABELS.get(unit, unit), 1.0 / unit_factor(unit, dim))
+
+
+def display_unit_of(si_unit: str, system: str | None = None) -> DisplayUnit:
+    """The unit in which ``system`` shows a quantity whose SI unit is ``si_unit`` (as case files write it:
+    ``"N"``, ``"m"``, ``"rad/s"``): that of the first output kind of its dimension (:func:`display_unit`;
+    a length in m or ft, a velocity in m/h or ft/h); a unit of no output kind (a coefficient) as it is, and
+    ``""`` (a plain number) as a plain number."""
+    for kind, (dim, _, _) in _DISPLAY.items():
+        if dim.si == si_unit:
+            return display_unit(kind, system)
+    return DisplayUnit(si_unit, 1.0)
+
+
+def significant(value: float, digits: int = 4) -> str:
+    """``value`` with ``digits`` significant digits and thousands separators, without an exponent from 0.001
+    to a million (``59,860``, ``0.09439``, ``26.39``), with one outside it (``1.234e-05``)."""
+    if value == 0.0 or not math.isfinite(value) or not 1e-3 <= abs(value) < 1e6:
+        return format(value, f".{digits}g")
+    return format(value, f",.{max(0, digits - 1 - math.floor(math.log10(abs(value))))}f")
+
+
+#: The unit system of the messages (errors, notes) of the running command: set by the command line's
+#: ``--units`` (:func:`message_units`), else :func:`unit_system`'s default.
+_MESSAGE_UNITS: ContextVar[str | None] = ContextVar("drillstring_message_units", default=None)
+
+
+def message_units(system: str | None):
+    """Make ``system`` the unit system of :func:`quantity_text` in this context; returns the token that
+    ``_MESSAGE_UNITS.reset`` takes to undo it."""
+    return _MESSAGE_UNITS.set(system)
+
+
+def reset_message_units(token) -> None:
+    """Undo :func:`message_units` (back to the default where the token belongs to another context)."""
+    try:
+        _MESSAGE_UNITS.reset(token)
+    except ValueError:
+        _MESSAGE_UNITS.set(None)
+
+
+def quantity_text(value_si: float, kind: str, system: str | None = None, digits: int = 4) -> str:
+    """``value_si`` [SI] of the output kind ``kind`` as a message shows it, with ``digits`` significant digits
+    (``g`` format), in the unit system ``system`` (None: the running command's ``--units``, else
+    ``$DRILLSTRING_UNITS``, else si; an unusable ``$DRILLSTRING_UNITS`` is refused elsewhere and reads si
+    here): ``"26.39 klbf"``, ``"117.4 kN"``."""
+    try:
+        unit = display_unit(kind, system or _MESSAGE_UNITS.get())
+    except ValueError:
+        unit = display_unit(kind, "si")
+    return f"{unit(value_si):.{digits}g} {unit.label}"

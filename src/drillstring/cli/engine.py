@@ -114,7 +114,8 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     err = _err_console()
 
     def note(text: str) -> None:
-        err.print(escape(f"note: {text}"), soft_wrap=True)
+        # wrapped between words on a terminal; one line per note in a log (grep finds it whole)
+        err.print(escape(f"note: {text}"), soft_wrap=not err.is_terminal)
 
     created = not out.exists()
     lock = StudyLock(out / store_name, what=what)

@@ -15,7 +15,7 @@ from rich.markup import escape
 
 from drillstring._version import __version__
 from drillstring.case import Case, CaseError, load_case
-from drillstring.units import unit_system
+from drillstring.units import message_units, reset_message_units, unit_system
 
 #: Exit code for an invalid case or bad input data (same as Click's usage errors).
 EXIT_INVALID_INPUT = 2
@@ -55,12 +55,15 @@ def _unit_system_option(ctx: typer.Context, value: str | None) -> str:
     except an unusable ``$DRILLSTRING_UNITS`` under ``--json`` (SI whatever the unit system): then a note on
     stderr and ``si`` for any figure or report the command also writes."""
     try:
-        return unit_system(value)
+        system = unit_system(value)
     except ValueError as error:
         if value is None and ctx.params.get("as_json"):
             typer.echo(f"note: {error}; ignored, --json output is SI", err=True)
             return "si"
         raise typer.BadParameter(str(error)) from None
+    token = message_units(system)  # the command's messages (errors, notes) in its unit system
+    ctx.call_on_close(lambda: reset_message_units(token))
+    return system
 
 
 #: The output unit system of tables, figures and reports: one definition for every command.

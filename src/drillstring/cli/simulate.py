@@ -16,7 +16,7 @@ from drillstring.cli.options import (EXIT_INTERRUPTED, EXIT_RUN_FAILED, _RPM, Ca
                                      _run_window, app)
 from drillstring.cli.tables import _fmt, print_table
 from drillstring.dynamics.indicators import STICK_SPEED_RATIO
-from drillstring.units import display_unit
+from drillstring.units import DisplayUnit, display_unit
 
 def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
     """Summary numbers of one run (SI): the drilling indicators after the transient
@@ -45,11 +45,12 @@ def _run_numbers(ds, t_transient: float) -> dict[str, Any]:
     contact = np.asarray(ds["contact_force"].values, dtype=float) if "contact_force" in ds else np.zeros(0)
     indicators = drilling_indicators(t, ds["rate_of_penetration"].values, ds["bit_speed"].values, top,
                                      t_transient, ds["force_on_bit"].values)
+    ranges = {f"{name}_{end}": value for name in ("quill_speed", "surface_torque", *(r[0] for r in _MOTOR_ROWS))
+              if name in ds or name in ("quill_speed", "surface_torque")
+              for end, value in zip(("min", "max"), steady_range(name))}
     return {
         **indicators,
-        "quill_speed_min": steady_range("quill_speed")[0], "quill_speed_max": steady_range("quill_speed")[1],
-        "surface_torque_min": steady_range("surface_torque")[0],
-        "surface_torque_max": steady_range("surface_torque")[1],
+        **ranges,
         "max_radial_displacement": radial_max,
         "gap": [float(g) for g in gap],
         "probe_x": [float(v) for v in x],
@@ -104,50 +105,58 @@ def _start_window(case, ds, default: float, units: str | None) -> tuple[float, l
     return start, notes
 
 
+#: The observables of a downhole motor: (key in the run's numbers, row label, display kind).
+_MOTOR_ROWS = (("motor_speed", "motor speed min / max", "angular_speed"),
+               ("motor_torque", "motor torque min / max", "torque"),
+               ("differential_pressure", "motor Δp min / max", "pressure"))
+
+
+def _min_max(numbers: dict[str, Any], key: str, unit, spec: str = ",.2f") -> str:
+    """``min / max`` of ``numbers[key + "_min"]``, ``numbers[key + "_max"]`` in the display unit ``unit``."""
+    return f"{_fmt(numbers[key + '_min'], spec, unit.scale)} / {_fmt(numbers[key + '_max'], spec, unit.scale)}"
+
+
 def _simulation_table(name: str, numbers: dict[str, Any], units: str) -> Table:
-    t_tr = numbers["t_transient"]
-    rop, force, small, length = (display_unit(k, units)
-                                 for k in ("rate_of_penetration", "force", "small_length", "length"))
-    table = Table(
-        title=escape(f"Simulation: case {name!r}, t = 0 to {numbers['t_end']:g} s"), title_justify="left"
-    )
+    """The run's summary for a terminal of 80 columns: three columns (quantity, value, unit), every row after
+    the transient (the title says from when); the solver's counts are in :func:`_solver_line`."""
+    rpm = DisplayUnit("rpm", _RPM)
+    rop, force, small, length, torque = (display_unit(k, units) for k in
+                                         ("rate_of_penetration", "force", "small_length", "length", "torque"))
+    table = Table(title=escape(f"Simulation: case {name!r}, t = 0 to {numbers['t_end']:g} s; summaries over "
+                               f"t ≥ {numbers['t_transient']:g} s"), title_justify="left")
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_column("unit")
-    table.add_row(escape(f"mean rate of penetration (t ≥ {t_tr:g} s)"),
-                  _fmt(numbers["mean_rate_of_penetration"], ",.3f", rop.scale), rop.label)
-    table.add_row(escape(f"bit speed min / max (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['bit_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['bit_speed_max'], ',.2f', _RPM)}",
-                  "rpm")
-    table.add_row(escape(f"bit speed oscillation (max − min) / 2Ω (t ≥ {t_tr:g} s)"),
-                  _fmt(numbers["bit_speed_oscillation"], ".3f"), "")
-    table.add_row(
-        escape(f"stick time fraction (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
-        _fmt(numbers["stick_time_fraction"], ".1%"), "",
-    )
-    table.add_row(escape(f"bit bounce fraction (off the rock, t ≥ {t_tr:g} s)"),
-                  _fmt(numbers["bit_bounce_fraction"], ".1%"), "")
-    table.add_row(escape(f"quill speed min / max (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['quill_speed_min'], ',.2f', _RPM)} / {_fmt(numbers['quill_speed_max'], ',.2f', _RPM)}",
-                  "rpm")
-    torque = display_unit("torque", units)
-    table.add_row(escape(f"surface torque min / max (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['surface_torque_min'], ',.2f', torque.scale)} / "
-                  f"{_fmt(numbers['surface_torque_max'], ',.2f', torque.scale)}", torque.label)
+    table.add_row("mean rate of penetration", _fmt(numbers["mean_rate_of_penetration"], ",.3f", rop.scale),
+                  rop.label)
+    table.add_row("bit speed min / max", _min_max(numbers, "bit_speed", rpm), "rpm")
+    table.add_row(escape("bit speed oscillation (max − min)/2Ω"), _fmt(numbers["bit_speed_oscillation"], ".3f"), "")
+    table.add_row(escape(f"stick time (bit below {STICK_SPEED_RATIO:.0%} of {numbers['top_speed'] * _RPM:g} rpm)"),
+                  _fmt(numbers["stick_time_fraction"], ".1%"), "")
+    table.add_row("bit bounce time (bit off the rock)", _fmt(numbers["bit_bounce_fraction"], ".1%"), "")
+    table.add_row("quill speed min / max", _min_max(numbers, "quill_speed", rpm), "rpm")
+    table.add_row("surface torque min / max", _min_max(numbers, "surface_torque", torque), torque.label)
+    for key, label, kind in _MOTOR_ROWS:
+        if numbers.get(key + "_min") is not None:
+            unit = rpm if kind == "angular_speed" else display_unit(kind, units)
+            table.add_row(escape(label), _min_max(numbers, key, unit), unit.label)
     for x, r, gap in zip(numbers["probe_x"], numbers["max_radial_displacement"], numbers["gap"]):
-        table.add_row(escape(f"max radial displacement at x = {length(x):g} {length.label} / gap"),
+        table.add_row(escape(f"max radial displacement / gap at {length(x):,.0f} {length.label}"),
                       f"{_fmt(r, ',.3f', small.scale)} / {small(gap):,.1f}", small.label)
-    table.add_row("impacts on the borehole", f"{numbers['impacts']:,}", "")
+    table.add_row("impacts on the borehole wall", f"{numbers['impacts']:,}", "")
     table.add_row("largest contact force", _fmt(numbers["max_contact_force"], ",.1f", force.scale), force.label)
-    table.add_row(escape(f"mean contact force / time in contact (t ≥ {t_tr:g} s)"),
-                  f"{_fmt(numbers['mean_contact_force'], ',.3f', force.scale)} {force.label} / "
-                  f"{_fmt(numbers['contact_time_fraction'], '.1%')}", "")
-    table.add_row("right-hand-side evaluations", f"{numbers['n_rhs']:,}", "")
-    table.add_row("steps accepted / rejected", f"{numbers['n_accepted']:,} / {numbers['n_rejected']:,}", "")
-    table.add_row("solver wall time", f"{numbers['wall_time']:,.2f}", "s")
-    if numbers["compiled"]:
-        table.add_row("kernel compilation (first run only)", f"{numbers['compile_time']:,.2f}", "s")
+    table.add_row("mean contact force", _fmt(numbers["mean_contact_force"], ",.3f", force.scale), force.label)
+    table.add_row("time in contact", _fmt(numbers["contact_time_fraction"], ".1%"), "")
     return table
+
+
+def _solver_line(numbers: dict[str, Any]) -> str:
+    """One line on the solver: right-hand sides, steps, its wall time and, on a first run, the compilation."""
+    line = (f"Solver: {numbers['n_rhs']:,} right-hand sides, {numbers['n_accepted']:,} steps "
+            f"({numbers['n_rejected']:,} rejected), {numbers['wall_time']:,.2f} s")
+    if numbers["compiled"]:
+        line += f"; kernels compiled in {numbers['compile_time']:,.2f} s (first run only)"
+    return line + "."
 
 
 @app.command()
@@ -225,10 +234,11 @@ def simulate(
     else:
         console = _console()
         print_table(console, _simulation_table(the_case.name, numbers, units))
+        console.print(escape(_solver_line(numbers)))
         for text in notes:
-            console.print(escape(f"note: {text}"), soft_wrap=True)
+            console.print(escape(f"note: {text}"))
         written = f"NetCDF: {netcdf}" + ("" if figure is None else f", figure: {figure}")
-        console.print(escape(written), soft_wrap=True)
+        console.print(escape(written))
     if failure is not None:
         _fail(f"{failure} (the partial run is in {netcdf})", EXIT_RUN_FAILED)
 
@@ -351,4 +361,4 @@ def compare(
     console = _console()
     print_table(console, _compare_table(the_case.name, differences, units))
     print_table(console, _compare_times(differences))
-    console.print(escape(f"Figure: {figure}"), soft_wrap=True)
+    console.print(escape(f"Figure: {figure}"))

@@ -12,8 +12,9 @@ from drillstring.cli.options import _RPM, CaseArg, JsonOpt, UnitsOpt, _console, 
 from drillstring.cli.tables import print_table
 from drillstring.units import display_unit
 
-#: Lateral modes listed in the stability table (all of them in --json).
-_STABILITY_LATERAL_ROWS = 4
+#: Roots of each family listed in the stability table, the lowest in frequency, besides every growing one
+#: (all of them with --all and in --json): with the two other tables the output fits a screen.
+_STABILITY_ROWS_PER_FAMILY = 4
 
 
 @app.command()
@@ -22,6 +23,9 @@ def stability(
     boundary: Annotated[bool, typer.Option(
         "--boundary", help="Also find the stability boundary along the weight-on-bit at the case's top speed "
                            "(the weight-on-bit where the leading growth rate crosses 0).")] = False,
+    every_root: Annotated[bool, typer.Option(
+        "--all", help=f"List every root, not only the {_STABILITY_ROWS_PER_FAMILY} lowest of each family and the "
+                      "growing ones.")] = False,
     as_json: JsonOpt = False,
     units: UnitsOpt = None,
 ) -> None:
@@ -86,14 +90,13 @@ def stability(
     for column in ("family", "frequency [Hz]", "damping ratio [%]", "growth rate [1/s]",
                    "energy a/t/l [%]", "note"):
         modes_table.add_column(column, justify="left" if column in ("family", "note") else "right")
-    lateral_shown = 0
+    shown: dict[str, int] = {}
     hidden = 0
     for mode in result.modes:
-        if mode.family == "lateral":
-            if lateral_shown >= _STABILITY_LATERAL_ROWS and mode.growth_rate < 0:
-                hidden += 1
-                continue
-            lateral_shown += 1
+        if not every_root and shown.get(mode.family, 0) >= _STABILITY_ROWS_PER_FAMILY and mode.growth_rate < 0:
+            hidden += 1
+            continue
+        shown[mode.family] = shown.get(mode.family, 0) + 1
         modes_table.add_row(mode.family, f"{mode.frequency:.4f}", f"{100 * mode.damping_ratio:.2f}",
                             f"{mode.growth_rate:.4g}", _shares_text(mode.shares),
                             ", ".join(n for n, on in (("UNSTABLE", mode.growth_rate > 0), ("mixed", mode.mixed),
@@ -110,21 +113,20 @@ def stability(
                          "yes" if result.family_stable(family) else "NO")
     print_table(console, families)
     if hidden:
-        console.print(escape(f"+ {hidden} more (stable) lateral modes: drillstring stability {case} --json"),
-                      soft_wrap=True)
+        console.print(escape(f"+ {hidden} more (decaying) roots: drillstring stability {case} --all (or --json)"))
     if result.steady_state.note:
-        console.print(escape(f"Warning: {result.steady_state.note}."), soft_wrap=True)
+        console.print(escape(f"Note: {result.steady_state.note}."))
     leading = result.leading
     if result.stable:
         console.print(escape(f"Steady drilling is stable: slowest decay {leading.growth_rate:.4g} 1/s "
-                             f"({leading.family}, {leading.frequency:.4f} Hz)."), soft_wrap=True)
+                             f"({leading.family}, {leading.frequency:.4f} Hz)."))
     else:
         console.print(escape(
             f"Steady drilling is UNSTABLE: the {leading.family} mode at {leading.frequency:.4f} Hz grows at "
             f"{leading.growth_rate:.4g} 1/s (e-folding time {1 / leading.growth_rate:.3g} s); the string "
-            f"settles into a self-excited vibration."), soft_wrap=True)
+            f"settles into a self-excited vibration."))
     if boundary:
-        console.print(escape(_boundary_line(found, units)), soft_wrap=True)
+        console.print(escape(_boundary_line(found, units)))
 
 
 def _shares_text(shares: dict | None) -> str:

@@ -100,7 +100,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
                     f"{force(margin.critical_weight_on_bit):,.2f}", force.label)
     summary.add_row("string length", f"{length(state.mesh.length):,.1f}", length.label)
     print_table(console, summary)
-    console.print(escape(_buckling_note(margin, units)), soft_wrap=True)
+    console.print(escape(_buckling_note(margin, units)))
 
     forces = Table(title="Axial force N (tension > 0)", title_justify="left")
     forces.add_column("where")
@@ -113,7 +113,7 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
         height = state.mesh.length - position
         forces.add_row(escape(label), f"{length(position):,.1f}", f"{length(height):,.1f}", f"{force(value):,.2f}")
     print_table(console, forces)
-    console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"), soft_wrap=True)
+    console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"))
 
 
 def _buckling_note(margin: BucklingMargin, units: str) -> str:
@@ -175,4 +175,4 @@ def modes(
         "mode, -sqrt(|ω²|)/2π.",
         _buckling_note(margin, units),
     ):
-        console.print(escape(note), soft_wrap=True)
+        console.print(escape(note))

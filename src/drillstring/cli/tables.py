@@ -5,12 +5,17 @@ rich fits a table that is too wide by shrinking its columns and, as a last resor
 every cell and every word of a header stays whole:
 
 1. the table at its natural width, when it fits;
-2. else the same table with column widths chosen here: each column at least as wide as its longest word (a
-   number has no space, so it is never split), the space left going first to the right-justified (number)
+2. else the same in a narrower frame (no borders or padding: columns one space apart, a rule under the
+   header), when every cell then stays on one line: a row that wraps over two or three lines reads worse than
+   a table without borders;
+3. else, in that narrower frame, column widths chosen here: each column at least as wide as its longest word
+   (a number has no space, so it is never split), the space left going first to the right-justified (number)
    columns so that their cells stay on one line, then to keeping the cells of as many other columns on one
    line as it can (headers wrap first), then to the columns that still wrap (between words);
-3. else the same in a narrower frame (no borders or padding: columns one space apart, a rule under the header);
 4. else, when even that does not fit, one block per row of ``header: value`` lines (a vertical layout).
+
+The commands choose their columns for a terminal of 80 columns (what a table leaves out is in ``--json`` and
+the report), so that the first layouts are the ones seen.
 
 Numbers are formatted by each command, with the significant digits of their column (:func:`_fmt`).
 """
@@ -123,9 +128,19 @@ def fits(console: Console, table: Table) -> bool:
     return natural is None or sum(floor) <= console.width - _frame_width(table)
 
 
+def _natural_fits(console: Console, table: Table) -> bool:
+    """Whether ``table`` fits the console's width with no cell wrapped (rich's natural widths)."""
+    natural, _, _ = _width_ranges(console, table)
+    return natural is None or sum(natural) <= console.width - _frame_width(table)
+
+
 def print_table(console: Console, table: Table) -> None:
-    """Print ``table`` on ``console`` with no number, cell or header word cut (module docstring)."""
-    if not fits(console, table):
+    """Print ``table`` on ``console`` with no number, cell or header word cut (module docstring). A title
+    justified left is printed on its own, wrapped at the console's width rather than the table's."""
+    if table.title and table.title_justify == "left":
+        console.print(table.title)
+        table.title = None
+    if not _natural_fits(console, table):
         _compact(table)
         if not fits(console, table):
             _print_vertical(console, table)

@@ -73,6 +73,7 @@ import scipy.linalg as sla
 from drillstring.dynamics.delay_stability import DelayRoots, characteristic_roots, regenerative_coupling
 from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
 from drillstring.forces.registry import BitContext, BitSteadyState
+from drillstring.units import quantity_text
 
 #: Families reported for the eigenvalues (lateral y and z together).
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
@@ -223,7 +224,8 @@ def _steady_law(model: ReducedOrderModel, omega: float, r: int) -> BitSteadyStat
                                             model.damping[r, r] / b_r**2)
     if steady is None:
         raise ValueError(
-            f"no steady drilling at weight_on_bit = {model.weight_on_bit:.6g} N, top_speed = {omega:.6g} rad/s:"
+            f"no steady drilling at weight_on_bit = {quantity_text(model.weight_on_bit, 'force')}, top_speed = "
+            f"{quantity_text(omega, 'angular_speed')}:"
             f" the bit-rock law {model.bit_rock.name!r} gives no rate_of_penetration > 0 (rate_of_penetration <= 0)"
         )
     return steady
@@ -324,8 +326,8 @@ def boundary_steady_speed(motor_torque, boundary_speed, set_point: float) -> flo
     if at_set_point == 0.0:
         return float(set_point)
     if at_set_point < 0.0:
-        raise ValueError(f"no steady rotation below the set point {set_point:.6g} rad/s: the load torque "
-                         f"{motor_torque(set_point):.6g} N*m drives the string")
+        raise ValueError(f"no steady rotation below the set point {quantity_text(set_point, 'angular_speed')}: "
+                         f"the load torque {quantity_text(motor_torque(set_point), 'torque')} drives the string")
     grid = np.linspace(set_point, 0.0, DROOP_SCAN + 1)[1:-1]
     upper = set_point
     for omega in grid:
@@ -364,8 +366,9 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
         if omega != set_point:
             law, velocity, load, motor, motor_speed = _steady_load(model, omega, r)
         if abs(omega - set_point) > SET_POINT_TOLERANCE * set_point:
-            note = (f"steady drilling at {omega * 30.0 / math.pi:.4g} rpm with {model.weight_on_bit / 1e3:.4g} kN "
-                    f"on bit, not the set point {set_point * 30.0 / math.pi:.4g} rpm: without integral action "
+            note = (f"steady drilling at {omega * 30.0 / math.pi:.4g} rpm with "
+                    f"{quantity_text(model.weight_on_bit, 'force')} on bit, not the set point "
+                    f"{set_point * 30.0 / math.pi:.4g} rpm: without integral action "
                     f"the top boundary's speed droops with the load torque")
         drive.check_steady_torque(motor)
     n = model.size

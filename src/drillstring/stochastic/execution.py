@@ -153,13 +153,31 @@ def local_workers(workers: int | None) -> int:
 
 
 def notify(note: Callable[[str], None] | None, text: str) -> None:
-    """Give ``text`` to ``note``, or issue it as a RuntimeWarning when there is no ``note``."""
+    """Give ``text`` to ``note``, or issue it as a RuntimeWarning when there is no ``note``, attributed to the
+    caller's own code (the first frame outside this package and the standard library's decorators), not to a
+    file of the standard library."""
     if note is None:
         import warnings
 
-        warnings.warn(text, RuntimeWarning, stacklevel=3)
+        warnings.warn(text, RuntimeWarning, stacklevel=_caller_level())
     else:
         note(text)
+
+
+def _caller_level() -> int:
+    """The ``stacklevel`` of :func:`notify`'s warning: the first frame, from :func:`notify`'s caller out, whose
+    file is neither in this package nor ``contextlib`` (the decorators of the API functions)."""
+    import contextlib
+    import sys
+
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    frame, level = sys._getframe(2), 2  # notify's caller is level 2 of warnings.warn
+    while frame is not None:
+        name = frame.f_code.co_filename
+        if not name.startswith(package) and name != contextlib.__file__:
+            return level
+        frame, level = frame.f_back, level + 1
+    return 2
 
 
 def computation_time(sessions: list[dict]) -> tuple[float, int | str | None]:

@@ -68,6 +68,7 @@ from drillstring.stochastic.runs import (
 )
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
+from drillstring.units import display_unit, quantity_text
 
 
 
@@ -273,8 +274,9 @@ def study_buckling_margin(case: Case, settings: StudySettings) -> dict:
     ``probability`` that a draw buckles the string — from the law of the weight-on-hook
     (:func:`drillstring.buckling.buckling_probability`) or of the weight-on-bit when one of them is random,
     else 0 or 1 as the nominal string is straight or buckled —, ``expected`` buckled realizations
-    (probability × samples) and ``warning``: a one-line note when the probability is above
-    :data:`BUCKLING_WARNING_PROBABILITY`, else None."""
+    (probability × samples), ``warning``: the note of :func:`buckling_note` (SI) when the probability is above
+    :data:`BUCKLING_WARNING_PROBABILITY`, else None, and for that note ``lateral`` (whether the case has lateral
+    modes) and ``source`` (which law or value gives the probability)."""
     from drillstring.buckling import buckling_probability, case_buckling_margin
 
     margin = case_buckling_margin(case)
@@ -288,18 +290,27 @@ def study_buckling_margin(case: Case, settings: StudySettings) -> dict:
         probability, what = 1.0 - float(density.cdf(critical)), "the weight-on-bit law"
     else:
         probability, what = float(case.operation.weight_on_bit > critical), "the case's weight-on-bit"
-    warning = None
-    if probability > BUCKLING_WARNING_PROBABILITY:
-        # without lateral modes the model has no lateral motion: a buckled string stays on the axis
-        lateral = case.reduced_model.lateral_modes > 0 or case.reduced_model.lateral_cutoff > 0
-        consequence = ("bowed to the wall" if lateral
-                       else "the model has no lateral modes, so they stay on the hole's axis")
-        warning = (f"{what} puts the weight-on-bit above the critical {critical / 1e3:.5g} kN (lateral "
-                   f"buckling) with probability {probability:.3g}: about {probability * settings.samples:.3g} "
-                   f"of the {settings.samples} realizations will be buckled strings ({consequence}); "
-                   f"their count is in the summary")
-    return {"critical_weight_on_bit": float(critical), "probability": float(probability),
-            "expected": float(probability * settings.samples), "warning": warning}
+    # without lateral modes the model has no lateral motion: a buckled string stays on the axis
+    lateral = case.reduced_model.lateral_modes > 0 or case.reduced_model.lateral_cutoff > 0
+    out = {"critical_weight_on_bit": float(critical), "probability": float(probability),
+           "expected": float(probability * settings.samples), "lateral": lateral, "source": what}
+    out["warning"] = buckling_note(out, settings.samples) if probability > BUCKLING_WARNING_PROBABILITY else None
+    return out
+
+
+def buckling_note(buckling: dict, samples: int, units: str | None = "si") -> str:
+    """The note a study gives on its draws' buckling (``buckling`` from :func:`study_buckling_margin`), a plain
+    sentence with the critical weight-on-bit in the unit system ``units``: what puts the weight-on-bit above
+    it, with what probability, about how many of the ``samples`` realizations that makes, and what happens to
+    their string."""
+    force = display_unit("force", units)
+    critical, probability = force(buckling["critical_weight_on_bit"]), buckling["probability"]
+    consequence = ("their string buckles laterally near the bit and bows to the borehole wall"
+                   if buckling["lateral"] else
+                   "their string buckles, but the case has no lateral modes, so it stays on the hole's axis")
+    return (f"{buckling['source']} puts the weight-on-bit above the critical {critical:,.2f} {force.label} "
+            f"(lateral buckling) with probability {100 * probability:.3g} %, about "
+            f"{probability * samples:.2g} of the {samples} realizations: {consequence}; the study counts them")
 
 
 def check_study(case: Case, settings: StudySettings) -> None:
@@ -318,10 +329,11 @@ def check_study(case: Case, settings: StudySettings) -> None:
         if p > OUT_OF_RANGE_PROBABILITY:
             raise ValueError(
                 f"sigma = {sigma:.6g} N: with the weight-on-hook Normal around "
-                f"{nominal_weight_on_hook(case) / 1e3:.6g} kN, the weight-on-bit falls outside (0, "
-                f"{case.weight / 1e3:.6g} kN) (the string's weight) with probability {p:.3g}, above "
+                f"{quantity_text(nominal_weight_on_hook(case), 'force', digits=6)}, the weight-on-bit falls outside (0, "
+                f"{quantity_text(case.weight, 'force', digits=6)}) (the string's weight) with probability {p:.3g}, above "
                 f"{OUT_OF_RANGE_PROBABILITY:g}: such realizations cannot run; sigma must be at most "
-                f"{largest_accepted_sigma(case) / 1e3:.4g} kN for this case"
+                f"{largest_accepted_sigma(case):,.0f} N ({quantity_text(largest_accepted_sigma(case), 'force')}) "
+                "for this case"
             )
     study_uncertainty(case, settings, check=True)
     if settings.model.active:
