@@ -883,7 +883,8 @@ def test_simulate_reports_solver_and_compile_time_apart(tmp_path):
 
 def test_stability_json_and_table(coarse_case):
     data = _json("stability", str(coarse_case), "--json")
-    assert set(data) == {"stable", "steady_state", "modes", "leading_by_family", "mixed_roots"}
+    assert set(data) == {"stable", "steady_state", "leading", "modes", "leading_by_family", "mixed_roots",
+                         "convergence"}
     assert data["stable"] is False  # free–free damping: the first torsional mode grows
     steady = data["steady_state"]
     assert steady["bit_speed"] == pytest.approx(100 * 3.141592653589793 / 30)
@@ -911,7 +912,8 @@ def test_stability_with_the_delayed_law(tmp_path):
     path = tmp_path / "published.toml"
     path.write_text(case.to_toml(), encoding="utf-8")
     data = _json("stability", str(path), "--json")
-    assert set(data) == {"stable", "steady_state", "modes", "delay", "leading_by_family", "mixed_roots"}
+    assert set(data) == {"stable", "steady_state", "leading", "modes", "delay", "leading_by_family", "mixed_roots",
+                         "convergence"}
     steady = data["steady_state"]
     assert steady["rate_of_penetration"] == pytest.approx(30 / 3600, rel=1e-6)
     assert steady["delay"] == pytest.approx(0.5) and steady["depth_of_cut"] == pytest.approx(30 / 3600 * 0.5, rel=1e-6)

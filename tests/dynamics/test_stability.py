@@ -113,7 +113,8 @@ def test_reference_modes_and_json(reference_case):
     assert len(unstable) == 1 and unstable[0].family == "torsional"
     assert -0.02 < unstable[0].damping_ratio < 0
     payload = result.to_dict()
-    assert set(payload) == {"stable", "steady_state", "modes", "leading_by_family", "mixed_roots"}
+    assert set(payload) == {"stable", "steady_state", "leading", "modes", "leading_by_family", "mixed_roots",
+                            "convergence"}
     assert set(payload["steady_state"]) == {"rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"}
     frequencies = [m["frequency"] for m in payload["modes"]]
     assert frequencies == sorted(frequencies)

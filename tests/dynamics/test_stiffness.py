@@ -93,3 +93,30 @@ def test_bit_rock_rows_are_the_delayed_laws_own_partials():
     np.testing.assert_allclose(rows[:, n:2 * n], shapes @ partials[:, 1:] @ shapes.T, rtol=0, atol=1e-6 * scale)
     np.testing.assert_allclose(rows[:, :n], shapes @ partials[:, :1] @ model.bit_u[None, :], rtol=0,
                                atol=1e-6 * np.abs(shapes @ partials[:, :1] @ model.bit_u[None, :]).max())
+
+
+def test_the_bit_landing_is_named_as_the_bit_rock_laws_jump_not_contact():
+    """``aarsnes2019`` (no lateral modes) with the bit landing on its helical bottom (depth of cut 1e-10 m, at the
+    rate of penetration of steady drilling): the wear flats' contact force aσl = 71.28 kN switches on at d = 0, a
+    jump the finite differences see. It was named "borehole contact" in a case that has none (issue 37); now the
+    bit–rock law's jump across the depth of cut, by aσl, and the contact is not a term of this model at all."""
+    from drillstring.case import load_case
+    from drillstring.dynamics.delay import delayed_difference, start
+    from drillstring.dynamics.stiffness import BIT_ROCK_JUMP
+
+    model = case_reduced_model(load_case("aarsnes2019"))
+    law, n = model.bit_rock, model.size
+    steady = steady_drilling(model)
+    position, angle = model.bit_position(0.0, steady.state)
+    start(model.history, angle, position, steady.depth_of_cut / law.sector)
+    y = steady.state.copy()
+    y[:n] -= (steady.depth_of_cut - 1e-10) * model.bit_u / (model.bit_u @ model.bit_u)  # lift it to d = 1e-10 m
+    position, angle = model.bit_position(0.0, y)
+    assert delayed_difference(model.history, angle, position) == pytest.approx(1e-10, rel=1e-3)
+    rates = stiffness_rates(model, 0.0, y)
+    assert CONTACT not in rates and next(iter(rates)) == BIT_ROCK_JUMP
+    line = stiffness_diagnosis(model, 0.0, y)
+    assert line.startswith(f"likely stiff term: {BIT_ROCK_JUMP}: its force on bit changes by ")
+    jump = float(line.split("changes by ")[1].split(" kN")[0])
+    assert jump == pytest.approx(law.contact_force / 1e3, rel=1e-3)  # aσl, in kN
+    assert "across depth of cut = 1e-10 m (law 'detournay')" in line

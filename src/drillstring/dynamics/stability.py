@@ -65,12 +65,18 @@ neutral root at 0, reported apart (``neutral_roots``), never as a mode.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
 
-from drillstring.dynamics.delay_stability import DelayRoots, characteristic_roots, regenerative_coupling
+from drillstring.dynamics.delay_stability import (
+    DelayRoots,
+    _newton,
+    _residuals,
+    characteristic_roots,
+    regenerative_coupling,
+)
 from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
 from drillstring.forces.registry import BitContext, BitSteadyState
 from drillstring.units import quantity_text
@@ -79,8 +85,18 @@ from drillstring.units import quantity_text
 STABILITY_FAMILIES = ("axial", "torsional", "lateral")
 #: A root is *mixed* when no family holds at least this share of its modal energy (:attr:`ModeStability.shares`).
 MIXED_SHARE = 0.8
-#: A root is *beyond the basis* when its attachment modes hold at least this share of its modal energy.
+#: Without the convergence check (a model alone, e.g. a study's realization): a root is *beyond the basis* when
+#: its attachment modes hold at least this share of its modal energy.
 RESIDUAL_SHARE = 0.5
+#: The convergence check (:func:`check_convergence`): a root ``s`` of the basis is *converged* when the basis with
+#: twice the modes of every family has a root ``s'`` with ``|s' − s| ≤ CONVERGENCE_GROWTH |Re s| +
+#: CONVERGENCE_DAMPING |s|``: its growth rate within 5 % or its damping ratio within 0.001.
+CONVERGENCE_GROWTH = 0.05
+CONVERGENCE_DAMPING = 1e-3
+#: Newton steps on the larger basis's ``det Δ`` from a root (a root that persists is found in a few).
+CONVERGENCE_NEWTON_STEPS = 12
+#: Roots refined at once on the larger basis (in decreasing growth rate).
+CONVERGENCE_BATCH = 8
 
 
 @dataclass(frozen=True)
@@ -122,7 +138,9 @@ class ModeStability:
     share of each family (:data:`STABILITY_FAMILIES`) in that energy, ``½ Σ (|δη̇_j|² + |ω_j²| |δη_j|²)``
     over the family's modal coordinates j of the root's eigenvector (they add up to 1). ``residual_share``: the
     share of that energy in the basis's residual-flexibility attachment modes (``reduced_model.
-    truncation_correction = "static"``); a root with at least :data:`RESIDUAL_SHARE` of it is :attr:`beyond_basis`.
+    truncation_correction = "static"``). ``converged``: whether the root persists when the basis grows
+    (:func:`check_convergence`: True, False, or None when not checked) and ``basis_change`` [1/s] how far it
+    moved, ``|s' − s|`` (None when not checked or no root of the larger basis was found near it).
     """
 
     family: str
@@ -131,13 +149,22 @@ class ModeStability:
     growth_rate: float
     shares: dict[str, float] | None = None
     residual_share: float = 0.0
+    converged: bool | None = None
+    basis_change: float | None = None
 
     @property
     def beyond_basis(self) -> bool:
-        """The root lives mostly in the attachment modes: a root of the basis's cut-off (at the attachment
-        modes' Rayleigh-quotient frequency, above every kept mode), not of the string; it is listed but not
-        counted by :attr:`StabilityResult.leading` and :attr:`StabilityResult.stable`."""
+        """A root of the basis's cut-off, not of the string: it does not persist when the basis grows
+        (``converged`` False); a root not checked (``converged`` None) when it lives mostly in the attachment
+        modes (:data:`RESIDUAL_SHARE`). Listed but not counted by :attr:`StabilityResult.leading` and
+        :attr:`StabilityResult.stable`."""
+        if self.converged is not None:
+            return not self.converged
         return self.residual_share >= RESIDUAL_SHARE
+
+    def to_dict(self) -> dict:
+        """JSON-ready: the fields and ``beyond_basis``."""
+        return {**asdict(self), "beyond_basis": self.beyond_basis}
 
     @property
     def eigenvalue(self) -> complex:
@@ -154,14 +181,16 @@ class StabilityResult:
     """Steady drilling and the eigenvalues of the reduced model linearised about it.
 
     ``modes`` are sorted by frequency; ``stable`` is True when every growth rate is negative. The roots
-    :attr:`ModeStability.beyond_basis` (of a basis with attachment modes) stay in ``modes`` but are left out
-    of ``stable``, ``leading`` and the per-family results: the basis does not resolve their frequency.
+    :attr:`ModeStability.beyond_basis` (that do not persist when the basis grows) stay in ``modes`` but are left
+    out of ``stable``, ``leading`` and the per-family results: the basis does not resolve them. ``convergence``:
+    the check's facts (:func:`check_convergence`), None when not checked.
     """
 
     steady_state: SteadyDrilling
     modes: list[ModeStability]
     top_drive: dict | None = None  # the top drive's controller and gains (TopDriveParameters.describe)
     delay: dict | None = None  # a delayed law: the delay system's roots (:func:`delay_roots_summary`)
+    convergence: dict | None = None  # the convergence check (:func:`check_convergence`)
 
     @property
     def resolved(self) -> list[ModeStability]:
@@ -199,14 +228,17 @@ class StabilityResult:
         return [m for m in self.modes if m.mixed]
 
     def to_dict(self) -> dict:
-        """JSON-ready (SI): ``stable``, ``steady_state``, ``modes`` (list sorted by frequency, each with its
-        family's energy ``shares``), ``leading_by_family`` (per family: the leading root or None, and
-        ``stable``) and ``mixed_roots``."""
+        """JSON-ready (SI): ``stable``, ``steady_state``, ``leading`` (the leading resolved root), ``modes``
+        (list sorted by frequency, each with its family's energy ``shares``, ``converged``, ``basis_change`` and
+        ``beyond_basis``), ``leading_by_family`` (per family: the leading root or None, and ``stable``),
+        ``mixed_roots`` and ``convergence`` (the check's facts, None when not checked)."""
         out = {"stable": self.stable, "steady_state": self.steady_state.to_dict(),
-               "modes": [asdict(m) for m in self.modes],
-               "leading_by_family": {f: (None if m is None else {**asdict(m), "stable": self.family_stable(f)})
+               "leading": self.leading.to_dict() if self.resolved else None,
+               "modes": [m.to_dict() for m in self.modes],
+               "leading_by_family": {f: (None if m is None else {**m.to_dict(), "stable": self.family_stable(f)})
                                      for f, m in self.leading_by_family.items()},
-               "mixed_roots": [asdict(m) for m in self.mixed_roots]}
+               "mixed_roots": [m.to_dict() for m in self.mixed_roots],
+               "convergence": self.convergence}
         if self.top_drive is not None:
             out["top_drive"] = self.top_drive
         if self.delay is not None:
@@ -483,13 +515,14 @@ def delay_roots_summary(roots: DelayRoots) -> dict:
             "neutral_roots": [float(v) for v in roots.neutral], "unconverged": int(len(roots.unconverged))}
 
 
-def leading_growth_rate(model: ReducedOrderModel) -> float:
+def leading_growth_rate(model: ReducedOrderModel, larger: ReducedOrderModel | None = None) -> float:
     """The largest real part [1/s] of the eigenvalues of ``model`` linearised about steady drilling (> 0:
     steady drilling is unstable): :func:`stability`'s ``leading.growth_rate`` from the eigenvalues alone
     (no eigenvectors, no families), for a study's every realization; for a delayed law the leading
-    characteristic root's (:func:`delay_roots`). ValueError when there is no steady drilling."""
-    if model.residual_columns.any():  # the roots beyond the basis are told apart by their eigenvectors
-        return float(stability(model).leading.growth_rate)
+    characteristic root's (:func:`delay_roots`). With ``larger`` (:func:`larger_basis`) or attachment modes, that
+    of :func:`stability` (the roots beyond the basis left out). ValueError when there is no steady drilling."""
+    if larger is not None or model.residual_columns.any():  # roots beyond the basis: told apart by stability
+        return float(stability(model, larger).leading.growth_rate)
     steady = steady_drilling(model)
     if model.bit_rock.delayed:
         return float(delay_roots(model, steady).growth_rate)
@@ -509,9 +542,11 @@ def family_growth_rates(model: ReducedOrderModel) -> dict[str, float]:
     return out
 
 
-def stability(model: ReducedOrderModel) -> StabilityResult:
+def stability(model: ReducedOrderModel, larger: ReducedOrderModel | None = None) -> StabilityResult:
     """Steady drilling of ``model`` and the eigenvalues of the model linearised about it (for a delayed law
-    the characteristic roots of eq. (3) and, for each, the null vector of ``sI − A0 − A1 e^{−sτ0}``)."""
+    the characteristic roots of eq. (3) and, for each, the null vector of ``sI − A0 − A1 e^{−sτ0}``); with
+    ``larger`` (the same model on a larger basis, :func:`larger_basis`) each root that matters checked for
+    convergence (:func:`check_convergence`)."""
     steady = steady_drilling(model)
     n = model.size
     delay = None
@@ -549,15 +584,97 @@ def stability(model: ReducedOrderModel) -> StabilityResult:
             residual_share=residual / total if total > 0 else 0.0,
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
-    return StabilityResult(steady, modes, model.top_drive.describe() if model.top_drive.drives else None, delay)
+    convergence = None
+    if larger is not None:
+        modes, convergence = check_convergence(modes, larger)
+    return StabilityResult(steady, modes, model.top_drive.describe() if model.top_drive.drives else None, delay,
+                           convergence)
 
 
-def case_stability(case, *, weight_on_bit: float | None = None) -> StabilityResult:
-    """:func:`stability` of a :class:`~drillstring.case.Case`'s reduced model (``weight_on_bit`` [N]
-    overrides the case's)."""
+def _root_distance_ok(root: complex, partner: complex) -> bool:
+    """``|s' − s| ≤ CONVERGENCE_GROWTH |Re s| + CONVERGENCE_DAMPING |s|`` (:data:`CONVERGENCE_GROWTH`)."""
+    return bool(abs(partner - root) <= CONVERGENCE_GROWTH * abs(root.real) + CONVERGENCE_DAMPING * abs(root))
+
+
+def _partners(larger: ReducedOrderModel, roots: np.ndarray, steady: SteadyDrilling, eigenvalues) -> np.ndarray:
+    """The root of ``larger`` that each of ``roots`` [1/s] persists as (NaN where none): for a delayed law
+    Newton's method on the larger basis's ``det Δ`` from the root itself (:data:`CONVERGENCE_NEWTON_STEPS`
+    steps, relative residual ≤ 1e-10); otherwise the nearest of the larger basis's ``eigenvalues``."""
+    if not larger.bit_rock.delayed:
+        return np.array([eigenvalues[np.argmin(np.abs(eigenvalues - r))] for r in roots], dtype=complex)
+    a0, a1 = delay_matrices(larger, steady)
+    found = _newton(a0, a1, steady.delay, roots, maxiter=CONVERGENCE_NEWTON_STEPS)
+    found[~(_residuals(a0, a1, steady.delay, found) <= 1e-10)] = complex(math.nan, math.nan)
+    return found
+
+
+def check_convergence(modes: list[ModeStability], larger: ReducedOrderModel) -> tuple[list[ModeStability], dict]:
+    """Whether the roots ``modes`` of a basis persist on ``larger``, the same model with twice the modes of every
+    family (:func:`larger_basis`): a root ``s`` is converged when ``larger`` has a root ``s'`` with
+    ``|s' − s| ≤ CONVERGENCE_GROWTH |Re s| + CONVERGENCE_DAMPING |s|`` (:data:`CONVERGENCE_GROWTH`), the root
+    ``s'`` that Newton's method on the larger basis's ``det Δ`` reaches from ``s`` (a delayed law) or the nearest
+    eigenvalue of the larger basis. A root of the basis's cut-off moves with the cut-off (to the larger basis's
+    highest frequencies) or changes its growth rate: it is not converged, :attr:`ModeStability.beyond_basis`.
+
+    Without a delay every root is checked (the larger basis's eigenvalues cost one dense eigenproblem). With a
+    delay the roots are checked in decreasing growth rate, :data:`CONVERGENCE_BATCH` at a time, until every
+    root that grows and, in each family, the root of largest growth rate that converges are checked; the roots
+    below are left unchecked (``converged`` None): they decide neither :attr:`StabilityResult.leading`,
+    :attr:`StabilityResult.stable` nor the per-family results. Returns the modes with ``converged`` and
+    ``basis_change`` set, and the check's facts (JSON-ready): the larger basis's modes per family, the
+    tolerances, how many roots were checked and how many did not converge."""
+    steady = steady_drilling(larger)
+    eigenvalues = None
+    if not larger.bit_rock.delayed:
+        eigenvalues = sla.eigvals(_informative_matrix(larger, steady)[0])
+    order = sorted(range(len(modes)), key=lambda k: -modes[k].growth_rate)
+    out = list(modes)
+    families = {m.family for m in modes}
+    settled: set[str] = set()
+    checked = 0
+    while checked < len(order):
+        batch = order[checked:] if eigenvalues is not None else order[checked:checked + CONVERGENCE_BATCH]
+        roots = np.array([modes[k].eigenvalue for k in batch])
+        for k, root, partner in zip(batch, roots, _partners(larger, roots, steady, eigenvalues)):
+            ok = bool(np.isfinite(partner) and _root_distance_ok(root, partner))
+            out[k] = replace(modes[k], converged=ok,
+                             basis_change=float(abs(partner - root)) if np.isfinite(partner) else None)
+            if ok:
+                settled.add(modes[k].family)
+        checked += len(batch)
+        rest = order[checked:]
+        if settled >= families and (not rest or modes[rest[0]].growth_rate < 0.0):
+            break
+    facts = {"larger_basis": {"axial": int(sum(f == "axial" for f in larger.family)),
+                              "torsional": int(sum(f == "torsional" for f in larger.family)),
+                              "lateral": int(sum(f.startswith("lateral") for f in larger.family))},
+             "growth_tolerance": CONVERGENCE_GROWTH, "damping_tolerance": CONVERGENCE_DAMPING,
+             "checked": checked, "unconverged": int(sum(m.converged is False for m in out))}
+    return out, facts
+
+
+def larger_basis(case, model: ReducedOrderModel) -> ReducedOrderModel | None:
+    """``case``'s reduced model on twice the modes of every family of its ``reduced_model`` (the lateral cut-off
+    kept), on ``model``'s static state; None when the mesh has too few modes for it."""
     from drillstring.dynamics.rom import case_reduced_model
 
-    return stability(case_reduced_model(case, weight_on_bit=weight_on_bit))
+    r = case.reduced_model
+    try:
+        return case_reduced_model(case, static=model.static, axial_modes=2 * r.axial_modes,
+                                  torsional_modes=2 * r.torsional_modes, lateral_modes=2 * r.lateral_modes,
+                                  lateral_cutoff=r.lateral_cutoff)
+    except ValueError:
+        return None
+
+
+def case_stability(case, *, weight_on_bit: float | None = None, check: bool = True) -> StabilityResult:
+    """:func:`stability` of a :class:`~drillstring.case.Case`'s reduced model (``weight_on_bit`` [N]
+    overrides the case's), with the convergence check on twice the basis (:func:`check_convergence`) unless
+    ``check`` is False."""
+    from drillstring.dynamics.rom import case_reduced_model
+
+    model = case_reduced_model(case, weight_on_bit=weight_on_bit)
+    return stability(model, larger_basis(case, model) if check else None)
 
 
 #: Relative step of the bracket search of :func:`growth_rate_root` (multiplied by 1.5 at each step).
@@ -628,7 +745,8 @@ def weight_on_bit_boundary(case) -> dict:
     """The stability boundary of steady drilling of ``case`` along the weight-on-bit at its top speed (SI):
     ``weight_on_bit`` [N] where the leading growth rate of :func:`case_stability` crosses 0 nearest the
     case's weight-on-bit (:func:`growth_rate_root`, searched on both sides over (0, string weight), to the
-    edge of steady drilling), None when it does not in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
+    edge of steady drilling; each leading root checked for convergence on twice the basis), None when it does
+    not in that range; ``top_speed`` [rad/s]; the case's ``nominal_weight_on_bit`` [N] and its
     ``nominal_growth_rate`` [1/s]. Above the boundary steady drilling is unstable (a Hopf bifurcation: the
     torsional mode's damping turns negative through the velocity-weakening bit torque)."""
     from functools import lru_cache
@@ -636,8 +754,9 @@ def weight_on_bit_boundary(case) -> dict:
     from drillstring.dynamics.rom import case_reduced_model
 
     @lru_cache(maxsize=None)
-    def growth(weight_on_bit: float) -> float:
-        return leading_growth_rate(case_reduced_model(case, weight_on_bit=weight_on_bit))
+    def growth(weight_on_bit: float) -> float:  # the leading root that persists on twice the basis
+        model = case_reduced_model(case, weight_on_bit=weight_on_bit)
+        return leading_growth_rate(model, larger_basis(case, model))
 
     wob = float(case.operation.weight_on_bit)
     nominal = growth(wob)

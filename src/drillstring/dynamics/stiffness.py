@@ -40,6 +40,7 @@ BIT_ROCK = "bit–rock law (the forces at the bit)"
 TOP_DRIVE = "top drive (its controller's torque at the quill)"
 MOTOR = "downhole motor (its torque's slope across the rotor, on the string below it)"
 CONTACT = "borehole contact (the lateral contact forces and their friction torque; turning loads)"
+BIT_ROCK_JUMP = "bit–rock law's jump (its force changes between neighbouring states faster than its derivatives)"
 
 
 def _partials(function, point: np.ndarray) -> np.ndarray:
@@ -55,11 +56,14 @@ def _partials(function, point: np.ndarray) -> np.ndarray:
     return np.column_stack(columns)
 
 
-def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
-    """The bit–rock law's part of ``∂(η̈)/∂y`` (n rows), from the law's own partial derivatives (its NumPy
-    reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named context, so any registered
-    law): its force and torque act along the bit's shapes ``b_u``, ``b_t`` and depend on the bit's velocity
-    ``b_uᵀη̇``, speed ``Ω + b_tᵀη̇`` and (delayed laws) depth of cut through the bit's position ``b_uᵀη``."""
+#: The bit law's inputs in :func:`_bit_law_at`'s point, with their units.
+BIT_INPUTS = (("axial velocity", "m/s"), ("bit speed", "rad/s"), ("depth of cut", "m"))
+
+
+def _bit_law_at(model, t: float, y: np.ndarray):
+    """The bit's inputs ``(u̇ [m/s], θ̇ [rad/s], d [m])`` at ``(t, y)`` and the law's ``(force, torque)`` as a
+    function of them (its NumPy reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named
+    context, the bit's position and angle held)."""
     from drillstring.dynamics.delay import delayed_difference
     from drillstring.forces.registry import bit_context
 
@@ -74,6 +78,36 @@ def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
                           weight_on_bit=model.weight_on_bit)
         return np.array(model.bit_rock.evaluate_at(ctx), dtype=float).ravel()
 
+    return point, forces
+
+
+def bit_rock_jump(model, t: float, y: np.ndarray) -> str:
+    """Where the bit–rock law jumps at ``(t, y)``: the input of the law (:data:`BIT_INPUTS`) whose step of the
+    finite differences (``1e-7`` relative, at least ``1e-7`` absolute) each side changes the force on bit most, its value
+    and the change of the force [kN] and torque [kN·m] across it, e.g. ``its force jumps by 71.3 kN across
+    depth of cut = 1e-10 m (law 'detournay')``."""
+    point, forces = _bit_law_at(model, t, y)
+    best = None
+    for k, (name, unit) in enumerate(BIT_INPUTS):
+        step = 1e-7 * max(1.0, abs(point[k]))  # the steps of the finite differences that saw the jump
+        plus, minus = point.copy(), point.copy()
+        plus[k] += step
+        minus[k] -= step
+        change = np.abs(forces(plus) - forces(minus))
+        if best is None or change[0] > best[0][0]:
+            best = (change, name, unit, point[k])
+    change, name, unit, value = best
+    return (f"its force on bit changes by {change[0] / 1e3:.4g} kN and its torque by {change[1] / 1e3:.4g} kN·m "
+            f"across {name} = {value:.3g} {unit} (law {model.bit_rock.name!r})")
+
+
+def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
+    """The bit–rock law's part of ``∂(η̈)/∂y`` (n rows), from the law's own partial derivatives (its NumPy
+    reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named context, so any registered
+    law): its force and torque act along the bit's shapes ``b_u``, ``b_t`` and depend on the bit's velocity
+    ``b_uᵀη̇``, speed ``Ω + b_tᵀη̇`` and (delayed laws) depth of cut through the bit's position ``b_uᵀη``."""
+    n = model.size
+    point, forces = _bit_law_at(model, t, y)
     law = _partials(forces, point)
     shapes = np.column_stack([model.bit_u, model.bit_t])  # (n, 2): force along b_u, torque along b_t
     rows = np.zeros((n, len(y)))
@@ -115,6 +149,14 @@ def _rate(rows: np.ndarray, n: int) -> float:
     return _radius(matrix)
 
 
+def _has_contact(model) -> bool:
+    """Whether ``model`` has forces besides the bit's that the rest of the Jacobian could hold: lateral
+    coordinates (the borehole contact acts on them) or loads turning with the string."""
+    lateral = any(f.startswith("lateral") for f in model.family)
+    turning = model.turning_loads is not None and bool(np.size(model.turning_loads.node))
+    return lateral or turning
+
+
 def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
     """The largest rate ``λ`` [1/s] each term of ``model`` (a
     :class:`~drillstring.dynamics.rom.ReducedOrderModel`) contributes at time ``t`` [s] and state ``y``
@@ -123,9 +165,12 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
     The nonlinear terms are told apart by where their forces act, not by which coordinates they move: the
     bit–rock law's part of the Jacobian comes from the law's own derivatives along the bit's shapes, the top
     drive's from its controller's along the quill's, and the rest of the nonlinear Jacobian (finite
-    differences of the right-hand side, minus the linear part and those two) is the borehole contact's (its
-    forces and their friction torque, which also acts on the torsion), with the turning loads. Each term's
-    rate is the spectral radius of its part with the kinematic rows ``η' = η̇``."""
+    differences of the right-hand side, minus the linear part and those two) is split by where it acts: along the
+    bit's shapes a jump of the bit–rock law (:data:`BIT_ROCK_JUMP`), elsewhere the borehole contact's (its
+    forces and their friction torque, which also acts on the torsion) with the turning loads (:data:`CONTACT`,
+    named only for a model with lateral coordinates or turning loads). Each term's rate is the spectral radius
+    of its part with the kinematic rows ``η' = η̇`` (a jump's "rate" grows as the difference step shrinks: it
+    says the term is discontinuous there, not how stiff)."""
     n = model.size
     y = np.asarray(y, dtype=float)
     size = len(y)
@@ -138,7 +183,7 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
     }
     base = model.rhs(t, y)
     if not np.all(np.isfinite(base)):
-        rates.update({BIT_ROCK: np.inf, CONTACT: np.inf})
+        rates.update({BIT_ROCK: np.inf, **({CONTACT: np.inf} if _has_contact(model) else {})})
         return dict(sorted(rates.items(), key=lambda item: -item[1]))
     jacobian = _partials(lambda x: model.rhs(t, x), y)[n:]  # the rows of η̈ and of the controller's states
     linear = np.zeros((n, size))
@@ -152,8 +197,15 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
         motor[:, n:2 * n] = slope * np.outer(model.motor_shapes, model.motor_shapes)
         rates[MOTOR] = _rate(motor, n)
     rest = jacobian[:n] - linear - bit_rock - top_drive[:n] - motor
+    rest = np.where(np.isfinite(rest), rest, np.inf)
     rates[BIT_ROCK] = _rate(bit_rock, n)
-    rates[CONTACT] = _rate(np.where(np.isfinite(rest), rest, np.inf), n)
+    shapes = np.column_stack([model.bit_u, model.bit_t])
+    if np.all(np.isfinite(rest)) and np.any(shapes):  # the rest along the bit's shapes: the law's jump
+        along_bit = shapes @ np.linalg.lstsq(shapes, rest, rcond=None)[0]
+        rates[BIT_ROCK_JUMP] = _rate(along_bit, n)
+        rest = rest - along_bit
+    if _has_contact(model):
+        rates[CONTACT] = _rate(rest, n)
     if model.top_drive.n_states:
         rates[TOP_DRIVE] = _rate(top_drive, n)
     return dict(sorted(rates.items(), key=lambda item: -item[1]))
@@ -171,5 +223,7 @@ def stiffness_diagnosis(model, t: float, y: np.ndarray, method: str = "dopri5") 
     (name, rate), (second, second_rate) = list(rates.items())[:2]
     radius = STABILITY_RADIUS.get(method, 3.3)
     allowed = radius / rate if rate > 0 else float("inf")
+    if name == BIT_ROCK_JUMP:  # a discontinuity: say where, not a step size it allows
+        return f"likely stiff term: {name}: {bit_rock_jump(model, t, y)} (next: {second}, λ = {second_rate:.3g} 1/s)"
     return (f"likely stiff term: {name}, λ = {rate:.3g} 1/s, stable steps ≲ {allowed:.3g} s "
             f"(next: {second}, λ = {second_rate:.3g} 1/s)")
