@@ -103,7 +103,7 @@ def stability(
                                                       ("beyond the basis", mode.beyond_basis)) if on))
     print_table(console, modes_table)
     if any(mode.beyond_basis for mode in result.modes):
-        console.print(escape(_beyond_line(result.convergence)), soft_wrap=True)
+        console.print(escape(_beyond_line(result.convergence)))
     families = Table(title="Leading root of each family", title_justify="left")
     for column in ("family", "frequency [Hz]", "growth rate [1/s]", "energy a/t/l [%]", "family stable"):
         families.add_column(column, justify="left" if column in ("family", "family stable") else "right")
