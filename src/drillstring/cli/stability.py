@@ -100,7 +100,7 @@ def stability(
                                                       ("beyond the basis", mode.beyond_basis)) if on))
     print_table(console, modes_table)
     if any(mode.beyond_basis for mode in result.modes):
-        console.print(escape(_beyond_line(result.convergence)), soft_wrap=True)
+        console.print(escape(_beyond_line(result.convergence, len(result.modes))), soft_wrap=True)
     families = Table(title="Leading root of each family", title_justify="left")
     for column in ("family", "frequency [Hz]", "growth rate [1/s]", "energy a/t/l [%]", "family stable"):
         families.add_column(column, justify="left" if column in ("family", "family stable") else "right")
@@ -129,7 +129,7 @@ def stability(
         console.print(escape(_boundary_line(found, units)), soft_wrap=True)
 
 
-def _beyond_line(convergence: dict | None) -> str:
+def _beyond_line(convergence: dict | None, roots: int) -> str:
     """What "beyond the basis" means in the table: the convergence check's rule, or the share rule without it."""
     if convergence is None:
         return ("beyond the basis: a root with half or more of its modal energy in the basis's attachment modes "
@@ -139,8 +139,9 @@ def _beyond_line(convergence: dict | None) -> str:
             f"{larger['torsional']} torsional, {larger['lateral']} lateral columns): no root there within "
             f"{100 * convergence['growth_tolerance']:.0f} % of its growth rate + {convergence['damping_tolerance']:g}"
             f" of its modulus (a root of the basis's cut-off); left out of the leading root and the verdict. "
-            f"Checked: the {convergence['checked']} roots of largest growth rate; the others, which decide nothing, "
-            f"are beyond the basis when half or more of their modal energy is in the attachment modes.")
+            + ("Every root checked." if convergence["checked"] >= roots else
+               f"Checked: the {convergence['checked']} roots of largest growth rate; the others, which decide "
+               f"nothing, are beyond the basis when half or more of their modal energy is in the attachment modes."))
 
 
 def _shares_text(shares: dict | None) -> str:
