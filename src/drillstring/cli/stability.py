@@ -103,7 +103,7 @@ def stability(
                                                       ("beyond the basis", mode.beyond_basis)) if on))
     print_table(console, modes_table)
     if any(mode.beyond_basis for mode in result.modes):
-        console.print(escape(_beyond_line(result.convergence)))
+        console.print(escape(_beyond_line(result.convergence, len(result.modes))))
     families = Table(title="Leading root of each family", title_justify="left")
     for column in ("family", "frequency [Hz]", "growth rate [1/s]", "energy a/t/l [%]", "family stable"):
         families.add_column(column, justify="left" if column in ("family", "family stable") else "right")
@@ -131,14 +131,14 @@ def stability(
         console.print(escape(_boundary_line(found, units)))
 
 
-def _beyond_line(convergence: dict | None) -> str:
+def _beyond_line(convergence: dict | None, roots: int) -> str:
     """What "beyond the basis" means in the table: the convergence check's rule, or the share rule without it."""
     if convergence is None:
         return ("beyond the basis: a root with half or more of its modal energy in the basis's attachment modes "
                 "(a root of the basis's cut-off); left out of the leading root and the verdict.")
+    unchecked = "" if convergence["checked"] >= roots else "; unchecked roots by their energy in the attachment modes"
     return (f"beyond the basis: no root within {100 * convergence['growth_tolerance']:.0f} % of its growth rate on "
-            f"twice the basis (a root of the cut-off), left out of the verdict; unchecked roots by their energy in "
-            f"the attachment modes (--json: convergence).")
+            f"twice the basis (a root of the cut-off), left out of the verdict{unchecked} (--json: convergence).")
 
 
 def _shares_text(shares: dict | None) -> str:

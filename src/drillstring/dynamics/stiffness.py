@@ -83,8 +83,8 @@ def _bit_law_at(model, t: float, y: np.ndarray):
 
 def bit_rock_jump(model, t: float, y: np.ndarray) -> str:
     """Where the bit–rock law jumps at ``(t, y)``: the input of the law (:data:`BIT_INPUTS`) whose step of the
-    finite differences (``1e-7`` relative, at least ``1e-7`` absolute) each side changes the force on bit most, its value
-    and the change of the force [kN] and torque [kN·m] across it, e.g. ``its force jumps by 71.3 kN across
+    finite differences (``1e-7`` relative, at least ``1e-7`` absolute) each side changes the force on bit most,
+    its value and the change of the force [kN] and torque [kN·m] across it, e.g. ``its force jumps by 71.3 kN across
     depth of cut = 1e-10 m (law 'detournay')``."""
     point, forces = _bit_law_at(model, t, y)
     best = None
