@@ -320,6 +320,23 @@ class ObserveData(NamedTuple):
     previous: np.ndarray  # (n_nodes,) bool: nodes in contact at the previous accepted step (impacts)
     dense: np.ndarray  # (2, _DENSE_ORDER_MAX) scratch: the bit's angle and position polynomials of a step
 
+    @classmethod
+    def allocate(cls, probe_nodes: np.ndarray, n_nodes: int) -> ObserveData:
+        """Fresh scratch for ``n_nodes`` nodes, no node in contact."""
+        return cls(probe_nodes=probe_nodes, v=np.zeros(n_nodes), w=np.zeros(n_nodes),
+                   in_contact=np.zeros(n_nodes, dtype=np.bool_), current=np.zeros(n_nodes, dtype=np.bool_),
+                   previous=np.zeros(n_nodes, dtype=np.bool_), dense=np.zeros((2, _DENSE_ORDER_MAX)))
+
+
+class KernelData(NamedTuple):
+    """The compiled kernels' arguments for one run (:meth:`ReducedOrderModel.kernel_data`): the model's data,
+    read only, with the run's own scratch (contact work, the case-1 buffers, the observation's) and the run's
+    own copy of the bit's history, so that nothing a run writes is held by the model."""
+
+    rhs: object  # RhsData, DelayedRhsData or FullModelData: what evaluate_rhs reads
+    case2: object  # its case-2 part (RhsData or DelayedRhsData): what the observation kernels read
+    observe: ObserveData
+
 
 # ---------------------------------------------------------------------------------------------------------
 # Kernels
@@ -1159,15 +1176,9 @@ class ReducedOrderModel:
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
                 stiffness=transposed(self.station_stiffness, dtype=float),
-                tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(mesh.n_nodes, len(st)),
+                tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(0, 0),  # kernel_data's
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
-        )
-        self.observe_data = ObserveData(
-            probe_nodes=self.probe_nodes, v=np.zeros(mesh.n_nodes), w=np.zeros(mesh.n_nodes),
-            in_contact=np.zeros(mesh.n_nodes, dtype=np.bool_),
-            current=np.zeros(mesh.n_nodes, dtype=np.bool_), previous=np.zeros(mesh.n_nodes, dtype=np.bool_),
-            dense=np.zeros((2, _DENSE_ORDER_MAX)),
         )
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | DelayedRhsData | FullModelData = (
@@ -1198,10 +1209,34 @@ class ReducedOrderModel:
             weights=c(e.weights, dtype=float), slope=c(e.slope, dtype=float),
             rotation=c(e.rotation, dtype=float), axial_stiffness=c(e.axial_stiffness, dtype=float),
             polar_inertia=c(e.polar_inertia, dtype=float), coupling_tensor=c(tensor, dtype=float),
-            q=np.zeros(n_dofs), qd=np.zeros(n_dofs), f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs),
-            coupling=np.zeros((e.n_elements, 2, 4)), block=np.zeros((n_t, n_y)), schur=np.zeros((n_t, n_t)),
-            torsion_rhs=np.zeros(n_t), acceleration=np.zeros(len(self.angular_frequencies)),
+            **_full_model_scratch(0, 0, 0, 0, 0),  # each run's own: kernel_data
         )
+
+    def kernel_data(self, history: np.ndarray | None = None) -> KernelData:
+        """The compiled kernels' arguments for one run or one call (:class:`KernelData`): the model's data,
+        which no kernel writes, with scratch of their own, and ``history`` (a storage of
+        :mod:`drillstring.dynamics.delay`, e.g. :meth:`start_history`'s; copied in) as the bit's history of a
+        delayed law (None: the model's own prehistory, :attr:`history`, read only). Two runs of one model
+        with their own kernel data do not share a written array."""
+        template = self.case2_data
+        laws = template.laws
+        if history is not None:
+            offset = self.layout.numbers["history"]
+            history = np.asarray(history, dtype=float)
+            if history.shape != (laws.shape[0] - offset,):
+                raise ValueError(f"history has shape {history.shape}: must be ({laws.shape[0] - offset},), a "
+                                 f"storage of this model's bit history (ReducedOrderModel.start_history)")
+            laws = laws.copy()
+            laws[offset:] = history
+        mesh = self.static.mesh
+        case2 = template._replace(laws=laws, contact=template.contact._replace(
+            work=ContactWork.allocate(mesh.n_nodes, len(self.stations))))
+        rhs = case2
+        if self.full:
+            t0, t1, y0, y1 = (int(b) for b in self.blocks[2:6])
+            rhs = self.rhs_data._replace(rhs=case2, **_full_model_scratch(
+                mesh.n_dofs, self.elements.n_elements, t1 - t0, y1 - y0, self.size))
+        return KernelData(rhs, case2, ObserveData.allocate(self.probe_nodes, mesh.n_nodes))
 
     @property
     def lowest_lateral_eigenvalue(self) -> float:
@@ -1254,17 +1289,19 @@ class ReducedOrderModel:
                     f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
                     f"kernels do not hold it: use engine = 'reference' (docs/extending.md)")
 
-    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+    def rhs(self, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
         """dy/dt for y = [η, η̇] at time ``t`` [s] (t enters through the rotation Ω t that turns the
-        turning loads)."""
+        turning loads); ``history``: the bit's history of a delayed law (a storage of
+        :mod:`drillstring.dynamics.delay`; None: the model's prehistory, :attr:`history`)."""
         self.require_compiled()
         out = np.empty_like(y)
-        evaluate_rhs(self.rhs_data, float(t), np.ascontiguousarray(y, dtype=float), out)
+        evaluate_rhs(self.kernel_data(history).rhs, float(t), np.ascontiguousarray(y, dtype=float), out)
         return out
 
-    def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:
+    def rhs_reference(self, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
         """The straightforward NumPy right-hand side (full basis, every node): the reference
-        implementation that the compiled :meth:`rhs` is tested against; same equations."""
+        implementation that the compiled :meth:`rhs` is tested against; same equations (``history`` as
+        there)."""
         n = self.size
         eta, eta_dot = y[:n], y[n:2 * n]
         bit_velocity = self.bit_u @ eta_dot
@@ -1272,7 +1309,7 @@ class ReducedOrderModel:
         position, angle = self.bit_position(t, y)
         depth = 0.0
         if self.bit_rock.delayed:  # u minus the hole bottom one blade sector behind the bit
-            depth = delayed_difference(self.history, angle, position)
+            depth = delayed_difference(self._history(history), angle, position)
         axial_force, bit_torque = self.bit_rock.evaluate_at(BitContext(
             t, position, angle, bit_velocity, bit_speed, depth, self.weight_on_bit))
         st = self.stations
@@ -1314,16 +1351,17 @@ class ReducedOrderModel:
             acceleration = np.linalg.solve(mass, acceleration + self.basis.T @ (f_se + f_vel))
         return np.concatenate([eta_dot, acceleration, states])
 
-    def observe(self, t: float, y: np.ndarray) -> np.ndarray:
+    def observe(self, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
-        its v and w [m] (:func:`observation_width` columns)."""
+        its v and w [m] (:func:`observation_width` columns); ``history`` as in :meth:`rhs`."""
         out = np.empty(observation_width(len(self.probe_nodes)))
         y = np.ascontiguousarray(y, dtype=float)
-        observe_row(self.case2_data, self.observe_data, float(t), y, np.zeros_like(y), out)
+        data = self.kernel_data(history)
+        observe_row(data.case2, data.observe, float(t), y, np.zeros_like(y), out)
         if not compiled(self.bit_rock):  # a law from outside the package: its force from its NumPy reference
             n = self.size
             position, angle = self.bit_position(t, y)
-            depth = delayed_difference(self.history, angle, position) if self.bit_rock.delayed else 0.0
+            depth = delayed_difference(self._history(history), angle, position) if self.bit_rock.delayed else 0.0
             force, torque = self.bit_rock.evaluate_at(BitContext(
                 t, position, angle, out[_ROP], self.base_speed + self.bit_t @ y[n:2 * n], depth, self.weight_on_bit))
             out[_TOB], out[_FOB] = -float(torque), -float(force)
@@ -1331,31 +1369,32 @@ class ReducedOrderModel:
             n, first = self.size, self.layout.states["top_boundary"]
             torque, _ = self.top_drive.evaluate_at(TopContext(t, out[_QUILL_SPEED], self.surface_torque_shapes @ y[:n]),
                                                    y[first:first + self.top_drive.n_states])
-            quill_acceleration = self.quill_shapes @ self.rhs_reference(t, y)[n:2 * n]
+            quill_acceleration = self.quill_shapes @ self.rhs_reference(t, y, history)[n:2 * n]
             out[_SURFACE_TORQUE] = float(torque) - self.top_drive.top_inertia * quill_acceleration
         return out
 
-    def contact_mask(self) -> np.ndarray:
-        """Nodes in contact at the last :meth:`observe` call (a copy)."""
-        return self.observe_data.in_contact.copy()
+    def contact_mask(self, y: np.ndarray) -> np.ndarray:
+        """(n_nodes,) bool: the nodes in contact with the borehole (a station outside its gap) at the state
+        ``y``."""
+        observe = ObserveData.allocate(self.probe_nodes, self.static.mesh.n_nodes)
+        impacts_kernel(self.case2_data, observe, np.ascontiguousarray(y, dtype=float))
+        return observe.current
 
-    def start_impacts(self, y: np.ndarray) -> int:
-        """Start counting impacts from the state ``y`` (the start of a run): returns its contact zones,
-        each an impact (:func:`new_contact_zones`)."""
-        self.observe_data.previous[:] = False
-        return self.track_impacts(y)
-
-    def track_impacts(self, y: np.ndarray) -> int:
-        """Impacts at the accepted state ``y`` since the previous call (or :meth:`start_impacts`): the
-        contact zones that appeared (:func:`new_contact_zones`). Both integrators call it after every
-        accepted step."""
-        return int(impacts_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
+    def impact_counter(self, in_contact: np.ndarray | None = None) -> ImpactCounter:
+        """A counter of the impacts of one run (:class:`ImpactCounter`), from the nodes ``in_contact`` at its
+        start (None: none, so that the contact zones of the first state counted are impacts)."""
+        return ImpactCounter(self, in_contact)
 
     @property
     def history(self):
-        """The bit's history (:class:`~drillstring.dynamics.delay.AngleHistory`): views into the kernels' law
-        numbers, so what is set or recorded here is what the compiled kernels read."""
+        """The model's own bit history (:class:`~drillstring.dynamics.delay.AngleHistory`): the flat
+        prehistory that :meth:`rhs` and :meth:`observe` read when given none. A run reads and records its own
+        (:meth:`start_history`, :meth:`kernel_data`); nothing of a run writes this one."""
         return view(self.case2_data.laws[self.layout.numbers["history"]:])
+
+    def _history(self, history: np.ndarray | None):
+        """The :class:`~drillstring.dynamics.delay.AngleHistory` of a storage, or the model's own for None."""
+        return self.history if history is None else view(np.asarray(history, dtype=float))
 
     def bit_position(self, t: float, y: np.ndarray) -> tuple[float, float]:
         """The bit's axial position u [m] (from the static state, down) and angle θ [rad] at time ``t``
@@ -1363,38 +1402,43 @@ class ReducedOrderModel:
         n = self.size
         return float(self.bit_u @ y[:n]), float(self.base_speed * t + self.bit_t @ y[:n])
 
-    def start_history(self, y: np.ndarray, depth_of_cut: float | None = None) -> None:
-        """Set the hole bottom under the bit at the start of a run from the state ``y`` at t = 0 (a delayed
-        bit–rock law only; nothing otherwise): with a ramped start (:attr:`hook_load`) a flat bottom
-        ``clearance`` below the bit; else the helical bottom of steady drilling with the depth of cut
-        ``depth_of_cut`` [m] per blade under the bit — by default the law's own at the static weight-on-bit
-        and the top speed (its ``start_depth_of_cut``; for the Detournay law the closed-form steady state,
-        0 when that weight does not exceed the wear flats' contact force)."""
+    def start_history(self, y: np.ndarray, depth_of_cut: float | None = None) -> np.ndarray:
+        """The bit's history at the start of a run from the state ``y`` at t = 0, a new storage of
+        :mod:`drillstring.dynamics.delay` (the model's own is not changed): for a delayed bit–rock law, with a
+        ramped start (:attr:`hook_load`) a flat bottom ``clearance`` below the bit; else the helical bottom of
+        steady drilling with the depth of cut ``depth_of_cut`` [m] per blade under the bit — by default the
+        law's own at the static weight-on-bit and the top speed (its ``start_depth_of_cut``; for the Detournay
+        law the closed-form steady state, 0 when that weight does not exceed the wear flats' contact force).
+        For a law without history: a copy of the model's (never read)."""
+        storage = self.case2_data.laws[self.layout.numbers["history"]:].copy()
         if not self.bit_rock.delayed:
-            return
+            return storage
         position, angle = self.bit_position(0.0, y)
         law = self.bit_rock
         if self.hook_load.active:
-            start_history(self.history, angle, position + self.hook_load.clearance, 0.0)
-            return
+            start_history(view(storage), angle, position + self.hook_load.clearance, 0.0)
+            return storage
         if depth_of_cut is None:
             speed = self.top_speed
             depth_of_cut = law.start_depth_of_cut(self.weight_on_bit, speed)
-        start_history(self.history, angle, position, depth_of_cut / law.sector)
+        start_history(view(storage), angle, position, depth_of_cut / law.sector)
+        return storage
 
-    def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:
-        """Record the bit's position by angle over an accepted step from its dense-output polynomial
-        ``y(t_old + σh) = y_old + Σ_p coef[p] σ^(p+1)`` (``coef`` (p, len(y)): what
-        :meth:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper.dense_polynomial` gives): the NumPy
-        path's counterpart of :func:`accepted_step_kernel`. Nothing for a law without history."""
+    def record_history(self, history: np.ndarray, t_old: float, h: float, y_old: np.ndarray,
+                       coef: np.ndarray) -> None:
+        """Record into ``history`` (a storage, :meth:`start_history`) the bit's position by angle over an
+        accepted step from its dense-output polynomial ``y(t_old + σh) = y_old + Σ_p coef[p] σ^(p+1)``
+        (``coef`` (p, len(y)): what :meth:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper.dense_polynomial`
+        gives): the NumPy path's counterpart of :func:`accepted_step_kernel`. Nothing for a law without
+        history."""
         if not self.bit_rock.delayed:
             return
         n = self.size
         position, angle = self.bit_position(t_old, y_old)
         angle_coef = coef[:, :n] @ self.bit_t
         angle_coef[0] += self.base_speed * h
-        record_bottom(self.history, angle, np.ascontiguousarray(angle_coef), position,
-                    np.ascontiguousarray(coef[:, :n] @ self.bit_u))
+        record_bottom(view(history), angle, np.ascontiguousarray(angle_coef), position,
+                      np.ascontiguousarray(coef[:, :n] @ self.bit_u))
 
     def turning_whirl(self) -> np.ndarray:
         """The steady lateral whirl [η, η̇] at t = 0 of the linear model spinning at Ω under the turning
@@ -1490,6 +1534,35 @@ class ReducedOrderModel:
         """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
         n = self.size
         return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
+
+
+class ImpactCounter:
+    """The impacts of one run, counted state by state (:func:`new_contact_zones`): it holds the nodes in
+    contact at the last state counted (:attr:`in_contact`), not the model."""
+
+    def __init__(self, model: ReducedOrderModel, in_contact: np.ndarray | None = None) -> None:
+        self._data = model.case2_data
+        self._observe = ObserveData.allocate(model.probe_nodes, model.static.mesh.n_nodes)
+        if in_contact is not None:
+            self._observe.previous[:] = in_contact
+
+    def __call__(self, y: np.ndarray) -> int:
+        """The impacts at the accepted state ``y`` since the previous call: the contact zones that
+        appeared."""
+        return int(impacts_kernel(self._data, self._observe, np.ascontiguousarray(y, dtype=float)))
+
+    @property
+    def in_contact(self) -> np.ndarray:
+        """The nodes in contact at the last state counted (a copy)."""
+        return self._observe.previous.copy()
+
+
+def _full_model_scratch(n_dofs: int, n_elements: int, n_t: int, n_y: int, n: int) -> dict:
+    """The scratch fields of :class:`FullModelData` for ``n_dofs`` DOFs, ``n_elements`` elements, ``n_t``
+    torsional and ``n_y`` lateral-y modes of ``n`` modal coordinates."""
+    return dict(q=np.zeros(n_dofs), qd=np.zeros(n_dofs), f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs),
+                coupling=np.zeros((n_elements, 2, 4)), block=np.zeros((n_t, n_y)), schur=np.zeros((n_t, n_t)),
+                torsion_rhs=np.zeros(n_t), acceleration=np.zeros(n))
 
 
 def _check_coupled(model: ReducedOrderModel) -> None:
