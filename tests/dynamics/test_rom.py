@@ -313,3 +313,22 @@ def test_contact_bound_never_skips_a_touching_node(coarse_case):
         else:
             searched += 1
     assert cleared and searched
+
+
+def test_the_kernels_data_is_named(coarse_case):
+    """The compiled kernels read the model's data by name: the columns of each family (ModalRanges) and each
+    mode-shape row the laws act along (AxialRows, TorsionRows), each equal to the shape it names."""
+    rom = case_reduced_model(coarse_case, lateral_modes=5)
+    d = rom.case2_data
+    assert list(d.ranges) == [int(b) for b in rom.blocks]
+    r = d.ranges
+    (a0, a1), (t0, t1) = (r.axial_start, r.axial_end), (r.torsion_start, r.torsion_end)
+    assert (r.lateral_y_end - r.lateral_y_start, r.lateral_z_end - r.lateral_z_start) == (5, 5)
+    assert d.axial._fields == ("bit", "top") and d.torsion._fields == ("bit", "quill", "surface_torque", "motor")
+    np.testing.assert_array_equal(d.axial.bit, rom.bit_u[a0:a1])
+    np.testing.assert_array_equal(d.axial.top, rom.top_u[a0:a1])
+    np.testing.assert_array_equal(d.torsion.bit, rom.bit_t[t0:t1])
+    np.testing.assert_array_equal(d.torsion.quill, rom.quill_shapes[t0:t1])
+    np.testing.assert_array_equal(d.torsion.surface_torque, rom.surface_torque_shapes[t0:t1])
+    np.testing.assert_array_equal(d.torsion.motor, rom.motor_shapes[t0:t1])
+    assert not any(name in d._fields for name in ("blocks", "axial_rows", "torsion_rows"))

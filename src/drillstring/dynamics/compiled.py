@@ -16,16 +16,26 @@ model's public interface to the loop, see :mod:`drillstring.dynamics.rom`) direc
 no Python runs inside the step loop; the loop is generic over the model's components and over the step kinds.
 Tests check that the compiled and the reference paths agree to within the integration tolerance.
 
+**State in, state out.** :func:`advance` integrates a run from a :class:`RunState` (time, state, the bit's
+history, the nodes in contact, the step-size controller's state, dy/dt) to a time ``t1`` and returns an
+:class:`AdvanceResult` (the state where it stopped, the outputs it observed, statistics): after diffrax's
+``diffeqsolve`` and SciPy's ``OdeSolver``. Every array a run writes is created for the call (the workspace,
+the step's buffers, and the model's :meth:`~drillstring.dynamics.rom.ReducedOrderModel.kernel_data`: the
+model's data, which nothing writes, with the run's own scratch and bit history), so a run can be continued,
+restarted from a modified state (a filter's update) or interleaved with another run of the same model.
+:func:`drillstring.dynamics.simulate.simulate_model` is one :func:`advance` from t = 0.
+
 The compiled loop takes five structured arguments built in one place each: :class:`Workspace` (state
 and buffers, :meth:`Workspace.allocate`), the step's data (:func:`~drillstring.dynamics.steps.step_data`),
-:class:`StepperSettings` (controller and limits, :meth:`StepperSettings.create`), and the model's ``rhs_data``
-and ``observe_data`` (:class:`~drillstring.dynamics.rom.ReducedOrderModel`). It is compiled once per type of
-``rhs_data`` (case 2 or case 1) and of the step's data, and cached on disk (a step kind defined outside the
-package runs uncached); the first compilation in a fresh cache is announced on stderr and its duration is
-reported as ``compile_time``, apart from the solver's ``wall_time``.
+:class:`StepperSettings` (controller and limits, :meth:`StepperSettings.create`), and the run's kernel data
+(``rhs``, ``case2`` and ``observe`` of :class:`~drillstring.dynamics.rom.KernelData`). It is compiled once per
+type of the right-hand side's data (case 2 or case 1) and of the step's data, and cached on disk (a step kind
+defined outside the package runs uncached); the first compilation in a fresh cache is announced on stderr and
+its duration is reported as ``compile_time``, apart from the solver's ``wall_time``.
 
-The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
-step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
+The loop runs in chunks so a progress callback can be called between chunks; the step sequence does not
+depend on the chunking (steps never land on chunk boundaries, only on ``t1``, or, with ``land=False``, on
+none).
 A chunk also pauses after a bounded number of step attempts (about :data:`CALL_SECONDS` of work), so the
 loop returns to Python often: Ctrl-C (``KeyboardInterrupt``) takes effect within a fraction of a second
 even when the step size has collapsed, and the collapse itself is detected early: a run whose mean step

@@ -37,7 +37,8 @@ built once by :class:`ReducedOrderModel`), and :func:`evaluate_rhs` picks the ca
 the type of that argument when it is compiled.
 
 **The model's interface to the compiled step loop** (:mod:`drillstring.dynamics.compiled`, which names
-nothing else of this module): the model's data ``rhs_data``, ``case2_data`` and ``observe_data`` and four
+nothing else of this module): the run's :class:`KernelData` (:meth:`ReducedOrderModel.kernel_data`: the
+model's data ``rhs_data``, ``case2_data``, read only, with the run's own scratch and bit history) and four
 public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel` (one observation row),
 :func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
 The components are called inside these kernels, so the loop never names a law: the bit–rock law, the top
@@ -55,7 +56,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
@@ -63,6 +63,19 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
+from drillstring.dynamics.kernel_data import (  # the kernels' data, by name
+    _DENSE_ORDER_MAX,
+    AxialRows,
+    ContactData,
+    ContactWork,
+    DelayedRhsData,
+    FullModelData,
+    KernelData,
+    ModalRanges,
+    ObserveData,
+    RhsData,
+    TorsionRows,
+)
 from drillstring.dynamics.delay import allocate_storage, delayed_difference, record_bottom, view
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import case_bit_rock
@@ -105,7 +118,7 @@ from drillstring.forces.registry import (
     top_boundary_torque,
 )
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
-from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
+from drillstring.forces.turning_loads import case_turning_loads, turning_load, turning_load_data
 from drillstring.modal import (
     LinearSystem,
     ModeFamily,
@@ -162,14 +175,6 @@ def observation_width(n_probes: int) -> int:
     return PROBE_COLUMN + 3 * n_probes
 
 
-#: The boundary components' numbers sit in ``RhsData.laws``, one flat array laid out by the registry
-#: (:func:`~drillstring.forces.registry.pack`: a header with the components' codes and offsets, then the bit
-#: law's numbers, the top boundary's, the hook load's and the bit's history, the hole bottom by angle). One
-#: array, not a field each: every field of RhsData is an argument of each inner kernel, and four more fields
-#: made the reference realization 30 % slower (measured; LLVM inlines less).
-#: Coefficients of a dense-output polynomial the scratch of :class:`ObserveData` holds (dopri5: 4).
-_DENSE_ORDER_MAX = 8
-
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
 VECTOR_MATH = {"reassoc", "contract"}
@@ -182,160 +187,6 @@ def inner_kernel(**options):
     return njit(cache=True, no_cpython_wrapper=True, **options)
 
 
-# ---------------------------------------------------------------------------------------------------------
-# Kernel data: everything a compiled kernel reads, built once per model by ReducedOrderModel
-# ---------------------------------------------------------------------------------------------------------
-
-
-class ContactWork(NamedTuple):
-    """Scratch arrays of the contact search: ``v``, ``w`` at every node, the rest one entry per contact
-    station (the first ``n_c``, the stations in contact, used)."""
-
-    v: np.ndarray  # (n_nodes,) lateral displacement v [m]
-    w: np.ndarray  # (n_nodes,) lateral displacement w [m]
-    stations: np.ndarray  # (n_stations,) int64, indices of the stations in contact
-    v_c: np.ndarray  # the same quantities at the stations in contact ...
-    w_c: np.ndarray
-    v_dot: np.ndarray
-    w_dot: np.ndarray
-    spin: np.ndarray
-    gap: np.ndarray
-    outer_diameter: np.ndarray
-    stiffness: np.ndarray
-    force_v: np.ndarray  # ... and the contact forces [N] and torque [N·m] there
-    force_w: np.ndarray
-    torque: np.ndarray
-
-    @classmethod
-    def allocate(cls, n_nodes: int, n_stations: int) -> ContactWork:
-        sizes = {"v": n_nodes, "w": n_nodes}
-        return cls(*(np.zeros(sizes.get(name, n_stations), dtype=np.int64 if name == "stations" else np.float64)
-                     for name in cls._fields))
-
-
-class ContactData(NamedTuple):
-    """The wall as the kernels read it: one entry per contact station
-    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node. The contact law's numbers are in
-    the kernels' flat array (:func:`~drillstring.forces.registry.pack`), not here."""
-
-    node: np.ndarray  # (n_stations,) int64
-    gap: np.ndarray  # (n_stations,) radial clearance [m]
-    outer_diameter: np.ndarray  # (n_stations,) [m]
-    stiffness: np.ndarray  # (n_stations,) k_i = k'_sh ℓ_i [N/m]
-    tangential: bool  # gather the stations' lateral velocities: the contact law reads them
-    work: ContactWork
-
-
-class RhsData(NamedTuple):
-    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from the columns
-    that can move it: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
-    lateral z start, end] column ranges; ``axial_rows``, ``torsion_rows`` hold the columns of their range and
-    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (range columns × nodes) and ``damping_t`` are stored
-    transposed so that products run column by column. For a straight string each range is its family's
-    (the fast path: a quantity reads only its family's columns); when the families couple
-    (:attr:`ReducedOrderModel.coupled`) every range is the whole basis ``[0, n)``, every row holds every
-    column and the damping is one full block."""
-
-    omega2: np.ndarray  # (n,) signed ω² [1/s²]
-    damping_t: np.ndarray  # (n, n) Dᵀ [1/s]
-    damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
-    generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
-    blocks: np.ndarray  # (8,) int64
-    axial_rows: np.ndarray  # (2, a1 − a0) columns of the axial range of: u at the bit, u at the top (where the
-    #                         hook pulls)
-    torsion_rows: np.ndarray  # (4, t1 − t0) columns of the torsional range of: θx at the bit, θx at the top (the
-    #                           quill, where the motor torque acts; 0 when held), the surface-torque row (K Φ) at
-    #                           the top's θx, the rotation of a downhole motor's rotor relative to its stator (0
-    #                           without one)
-    phi_v_t: np.ndarray  # (y1 − y0, n_nodes): v at every node, columns of the lateral-y range
-    phi_w_t: np.ndarray  # (z1 − z0, n_nodes): w at every node, columns of the lateral-z range
-    phi_tx_t: np.ndarray  # (t1 − t0, n_nodes): θx at every node, columns of the torsional range
-    smallest_gap: float  # min of the stations' gaps [m]
-    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral-y range's columns), then |φ_w| (z range's)
-    top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
-    weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # the components' numbers (drillstring.forces.registry.pack): header, the bit law's, the
-    #                   top boundary's, the hook load's, the contact law's, the bit's history (the hole bottom)
-    contact: ContactData
-    turning: TurningLoadData
-
-
-#: The case-2 data of a model whose bit–rock law reads the bit's history (the Detournay law): the same fields
-#: as :class:`RhsData`, a type of its own so that the kernels compiled for it read the history and those
-#: compiled for the other laws hold no code for it (the depth-of-cut lookup in the right-hand side, never
-#: run with those laws, made the reference realization 15 % slower: it changed how the kernel compiles).
-DelayedRhsData = NamedTuple("DelayedRhsData", list(RhsData.__annotations__.items()))
-DelayedRhsData.__doc__ = """:class:`RhsData` of a model with a delayed bit–rock law (same fields)."""
-
-
-class FullModelData(NamedTuple):
-    """What the case-1 right-hand side reads in addition to the case-2 data (``rhs``): the basis by family
-    (each family's modes live on its own DOFs only: ``*_dofs`` the global DOFs of the family,
-    ``*_shapes_t`` its mode shapes there, transposed), the element data of
-    :class:`~drillstring.forces.nonlinear.NonlinearElements`, the modal coupling tensor of the mass
-    correction, and scratch arrays.
-
-    The projected mass correction ``Φᵀ M_nl(Φη) Φ`` has only a torsion × lateral-y block
-    ``B(η) = Σ_k η_z,k T_k`` (and its transpose): ``M_nl`` couples θx with the (v, θz) plane with a
-    coefficient linear in θy, which only the lateral-z modes carry
-    (:func:`~drillstring.forces.nonlinear.modal_mass_coupling`)."""
-
-    rhs: RhsData  # or DelayedRhsData
-    axial_dofs: np.ndarray  # int64
-    axial_shapes_t: np.ndarray  # (n_a, len(axial_dofs))
-    torsion_dofs: np.ndarray
-    torsion_shapes_t: np.ndarray
-    bending_y_dofs: np.ndarray
-    bending_y_shapes_t: np.ndarray
-    bending_z_dofs: np.ndarray
-    bending_z_shapes_t: np.ndarray
-    theta_x_dofs: np.ndarray  # int64, the θx DOF of every node
-    inv_length: np.ndarray
-    xi: np.ndarray
-    weights: np.ndarray
-    slope: np.ndarray
-    rotation: np.ndarray
-    axial_stiffness: np.ndarray
-    polar_inertia: np.ndarray
-    coupling_tensor: np.ndarray  # (n_z, n_t, n_y) T_k
-    q: np.ndarray  # (n_dofs,) scratch: q̄ = Φη
-    qd: np.ndarray  # (n_dofs,) scratch: q̇
-    f_se: np.ndarray  # (n_dofs,) scratch
-    f_vel: np.ndarray  # (n_dofs,) scratch
-    coupling: np.ndarray  # (n_el, 2, 4) scratch
-    block: np.ndarray  # (n_t, n_y) scratch: B(η)
-    schur: np.ndarray  # (n_t, n_t) scratch: I − B Bᵀ
-    torsion_rhs: np.ndarray  # (n_t,) scratch
-    acceleration: np.ndarray  # (n,) scratch
-
-
-class ObserveData(NamedTuple):
-    """What the observation kernel reads besides the right-hand-side data, and fills."""
-
-    probe_nodes: np.ndarray  # (n_probes,) int64
-    v: np.ndarray  # (n_nodes,) scratch
-    w: np.ndarray  # (n_nodes,) scratch
-    in_contact: np.ndarray  # (n_nodes,) bool: which nodes touch the borehole (filled)
-    current: np.ndarray  # (n_nodes,) bool: nodes in contact at the accepted step being counted (impacts)
-    previous: np.ndarray  # (n_nodes,) bool: nodes in contact at the previous accepted step (impacts)
-    dense: np.ndarray  # (2, _DENSE_ORDER_MAX) scratch: the bit's angle and position polynomials of a step
-
-    @classmethod
-    def allocate(cls, probe_nodes: np.ndarray, n_nodes: int) -> ObserveData:
-        """Fresh scratch for ``n_nodes`` nodes, no node in contact."""
-        return cls(probe_nodes=probe_nodes, v=np.zeros(n_nodes), w=np.zeros(n_nodes),
-                   in_contact=np.zeros(n_nodes, dtype=np.bool_), current=np.zeros(n_nodes, dtype=np.bool_),
-                   previous=np.zeros(n_nodes, dtype=np.bool_), dense=np.zeros((2, _DENSE_ORDER_MAX)))
-
-
-class KernelData(NamedTuple):
-    """The compiled kernels' arguments for one run (:meth:`ReducedOrderModel.kernel_data`): the model's data,
-    read only, with the run's own scratch (contact work, the case-1 buffers, the observation's) and the run's
-    own copy of the bit's history, so that nothing a run writes is held by the model."""
-
-    rhs: object  # RhsData, DelayedRhsData or FullModelData: what evaluate_rhs reads
-    case2: object  # its case-2 part (RhsData or DelayedRhsData): what the observation kernels read
-    observe: ObserveData
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -403,17 +254,18 @@ def _bit_state(d, t, y):
     """Axial position u [m] (from the static state, down), angle θ [rad], axial velocity u̇ [m/s] and spin
     speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇]."""
     n = d.omega2.shape[0]
-    a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+    ranges = d.ranges
+    a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
     position = 0.0
     velocity = 0.0
     for j in range(a0, a1):
-        position += d.axial_rows[0, j - a0] * y[j]
-        velocity += d.axial_rows[0, j - a0] * y[n + j]
+        position += d.axial.bit[j - a0] * y[j]
+        velocity += d.axial.bit[j - a0] * y[n + j]
     angle = d.top_speed * t
     speed = d.top_speed
     for j in range(t0, t1):
-        angle += d.torsion_rows[0, j - t0] * y[j]
-        speed += d.torsion_rows[0, j - t0] * y[n + j]
+        angle += d.torsion.bit[j - t0] * y[j]
+        speed += d.torsion.bit[j - t0] * y[n + j]
     return position, angle, velocity, speed
 
 
@@ -460,8 +312,8 @@ def _lateral_displacements(d, y, v, w):
     """v and w [m] at every node for the state ``y``."""
     v[:] = 0.0
     w[:] = 0.0
-    _columns_matvec(d.phi_v_t, y, d.blocks[4], v, 1.0)
-    _columns_matvec(d.phi_w_t, y, d.blocks[6], w, 1.0)
+    _columns_matvec(d.phi_v_t, y, d.ranges.lateral_y_start, v, 1.0)
+    _columns_matvec(d.phi_w_t, y, d.ranges.lateral_z_start, w, 1.0)
 
 
 @njit(cache=True)
@@ -470,11 +322,12 @@ def _surely_clear(d, eta):
     both lateral families (triangle inequality) is below the smallest gap. Costs one pass over the
     lateral coordinates instead of the mode shapes at every node."""
     bound = 0.0
-    for j in range(d.blocks[4], d.blocks[5]):
-        bound += d.lateral_shape_max[j - d.blocks[4]] * abs(eta[j])
-    offset = d.blocks[5] - d.blocks[4]
-    for j in range(d.blocks[6], d.blocks[7]):
-        bound += d.lateral_shape_max[offset + j - d.blocks[6]] * abs(eta[j])
+    ranges = d.ranges
+    for j in range(ranges.lateral_y_start, ranges.lateral_y_end):
+        bound += d.lateral_shape_max[j - ranges.lateral_y_start] * abs(eta[j])
+    offset = ranges.lateral_y_end - ranges.lateral_y_start
+    for j in range(ranges.lateral_z_start, ranges.lateral_z_end):
+        bound += d.lateral_shape_max[offset + j - ranges.lateral_z_start] * abs(eta[j])
     return bound < d.smallest_gap
 
 
@@ -484,7 +337,9 @@ def _turning_loads(d, t, y, acc):
     to ``acc``, each at the angle and spin speed of its node."""
     r = d.turning
     n = d.omega2.shape[0]
-    t0, t1, y0, y1, z0, z1 = d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], d.blocks[7]
+    ranges = d.ranges
+    t0, t1, y0, y1, z0, z1 = (ranges.torsion_start, ranges.torsion_end, ranges.lateral_y_start, ranges.lateral_y_end,
+                              ranges.lateral_z_start, ranges.lateral_z_end)
     for k in range(r.node.shape[0]):
         i = r.node[k]
         angle = d.top_speed * t + r.phase[k]
@@ -499,12 +354,12 @@ def _turning_loads(d, t, y, acc):
 def _top_motion(d, y):
     """Quill speed θ̇₀ [rad/s] and surface torque T_s [N·m] for the state ``y``."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill = d.top_speed
     torque = 0.0
     for j in range(t0, t1):
-        quill += d.torsion_rows[1, j - t0] * y[n + j]
-        torque += d.torsion_rows[2, j - t0] * y[j]
+        quill += d.torsion.quill[j - t0] * y[n + j]
+        torque += d.torsion.surface_torque[j - t0] * y[j]
     return quill, torque
 
 
@@ -515,11 +370,11 @@ def _top_drive(d, t, y, out):
     :class:`~drillstring.forces.registry.TopContext`) reads its states in ``y`` and writes their rates in
     ``out`` where the registry put them."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill, surface = _top_motion(d, y)
     torque = top_boundary_torque(d.laws, TopContext(t, quill, surface), y, out)
     for j in range(t0, t1):
-        out[n + j] += d.torsion_rows[1, j - t0] * torque
+        out[n + j] += d.torsion.quill[j - t0] * torque
 
 
 @inner_kernel()
@@ -528,10 +383,10 @@ def _downhole_motor(d, y):
     :attr:`RotorRelease.relative`) and its torque [N·m] (the registered motor,
     :func:`~drillstring.forces.registry.motor_torque`), for the state ``y``."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     speed = 0.0
     for j in range(t0, t1):
-        speed += d.torsion_rows[3, j - t0] * y[n + j]
+        speed += d.torsion.motor[j - t0] * y[n + j]
     return speed, motor_torque(d.laws, speed)
 
 
@@ -540,8 +395,10 @@ def _rhs_kernel(d, t, y, out):
     """dy/dt of the case-2 ROM (module docstring) at time ``t`` [s] from :class:`RhsData` ``d``; contact
     work is done only at the stations that touch the borehole."""
     n = d.omega2.shape[0]
-    a0, a1, t0, t1, y0, y1, z0, z1 = (d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3], d.blocks[4],
-                                      d.blocks[5], d.blocks[6], d.blocks[7])
+    ranges = d.ranges
+    a0, a1, t0, t1, y0, y1, z0, z1 = (ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end,
+                                      ranges.lateral_y_start, ranges.lateral_y_end, ranges.lateral_z_start,
+                                      ranges.lateral_z_end)
     eta = y[:n]
     eta_dot = y[n:]
     acc = out[n:]
@@ -555,15 +412,15 @@ def _rhs_kernel(d, t, y, out):
     if d.laws[MOTOR_CODE] != 0.0:  # a downhole motor: +T on the rotor side, -T on the stator side
         _, motor = _downhole_motor(d, y)
         for j in range(t0, t1):
-            acc[j] += d.torsion_rows[3, j - t0] * motor
+            acc[j] += d.torsion.motor[j - t0] * motor
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
     hook = hook_load_force(d.laws, HookContext(t, d.weight_on_bit))
     for j in range(a0, a1):
-        acc[j] += d.axial_rows[0, j - a0] * axial_force + d.axial_rows[1, j - a0] * hook
+        acc[j] += d.axial.bit[j - a0] * axial_force + d.axial.top[j - a0] * hook
     for j in range(t0, t1):
-        acc[j] += d.torsion_rows[0, j - t0] * bit_torque
+        acc[j] += d.torsion.bit[j - t0] * bit_torque
     if y1 == y0 and z1 == z0:
         return
     _turning_loads(d, t, y, acc)
@@ -635,13 +492,13 @@ def _surface_torque(d, t, y, rate):
     For the same quill and bit motion it does not depend on ``J_td`` (the elastic torque of the top element,
     read from a truncated basis, does: the basis's shapes depend on ``J_td``)."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill, elastic = _top_motion(d, y)
     states_rate = np.empty(y.shape[0])  # the boundary writes its states' rates: not needed here
     torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
     acceleration = 0.0
     for j in range(t0, t1):
-        acceleration += d.torsion_rows[1, j - t0] * rate[n + j]
+        acceleration += d.torsion.quill[j - t0] * rate[n + j]
     return torque - d.laws[TOP_INERTIA] * acceleration
 
 
@@ -712,8 +569,10 @@ def _rhs_full_kernel(f, t, y, out):
     _rhs_kernel(f.rhs, t, y, out)
     d = f.rhs
     n = d.omega2.shape[0]
-    a0, t0, t1, y0, y1, z0, z1 = d.blocks[0], d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], \
-        d.blocks[7]
+    ranges = d.ranges
+    a0, t0, t1, y0, y1, z0, z1 = (ranges.axial_start, ranges.torsion_start, ranges.torsion_end,
+                                  ranges.lateral_y_start, ranges.lateral_y_end, ranges.lateral_z_start,
+                                  ranges.lateral_z_end)
     f.q[:] = 0.0
     f.qd[:] = 0.0
     for shapes_t, dofs, offset in ((f.axial_shapes_t, f.axial_dofs, a0), (f.torsion_shapes_t, f.torsion_dofs, t0),
@@ -804,14 +663,15 @@ BIT_LAW_SCALES = (1e-3, 1.0, 1e-3)
 def _stiff_bit_law(d, t, y, shapes, partials):
     """:func:`stiff_part` for case-2 data ``d``."""
     n = d.omega2.shape[0]
-    a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+    ranges = d.ranges
+    a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
     for j in range(n):
         shapes[0, j] = 0.0
         shapes[1, j] = 0.0
     for j in range(a0, a1):
-        shapes[0, j] = d.axial_rows[0, j - a0]
+        shapes[0, j] = d.axial.bit[j - a0]
     for j in range(t0, t1):
-        shapes[1, j] = d.torsion_rows[0, j - t0]
+        shapes[1, j] = d.torsion.bit[j - t0]
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = _depth_of_cut(d, position, angle)
     moves_depth = 1.0 if _delayed(d) else 0.0
@@ -837,7 +697,7 @@ def _stiff_bit_law(d, t, y, shapes, partials):
             partials[2, k] = 0.0
         if d.laws[MOTOR_CODE] != 0.0:
             for j in range(t0, t1):
-                shapes[2, j] = d.torsion_rows[3, j - t0]
+                shapes[2, j] = d.torsion.motor[j - t0]
             relative_speed, _ = _downhole_motor(d, y)
             step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
             partials[2, 0] = (motor_torque(d.laws, relative_speed + step)
@@ -918,7 +778,8 @@ def new_contact_zones(in_contact, previous):
 def impacts_kernel(d, o, y):
     """Impacts at the accepted state ``y`` since the previous call (:func:`new_contact_zones`); keeps
     the nodes in contact in ``o.previous`` for the next call."""
-    if d.blocks[5] == d.blocks[4] and d.blocks[7] == d.blocks[6]:
+    ranges = d.ranges
+    if ranges.lateral_y_end == ranges.lateral_y_start and ranges.lateral_z_end == ranges.lateral_z_start:
         return 0
     _contact_state(d, y, o.v, o.w, o.current)
     new = new_contact_zones(o.current, o.previous)
@@ -984,7 +845,8 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     ``k_old`` (s, len(y)) and the tableau's ``dense`` (s, p) coefficients, ``y(t_old + σh) = y_old +
     h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
     if _delayed(d):
-        a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+        ranges = d.ranges
+        a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
         order = dense.shape[1]
         angle_coef = o.dense[0, :order]
         position_coef = o.dense[1, :order]
@@ -993,10 +855,10 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
         for i in range(k_old.shape[0]):
             rate = 0.0  # the bit's axial velocity at stage i (k holds dη/dt = η̇ first)
             for j in range(a0, a1):
-                rate += d.axial_rows[0, j - a0] * k_old[i, j]
+                rate += d.axial.bit[j - a0] * k_old[i, j]
             spin = 0.0
             for j in range(t0, t1):
-                spin += d.torsion_rows[0, j - t0] * k_old[i, j]
+                spin += d.torsion.bit[j - t0] * k_old[i, j]
             for p in range(order):
                 position_coef[p] += h * dense[i, p] * rate
                 angle_coef[p] += h * dense[i, p] * spin
@@ -1040,9 +902,12 @@ class ReducedOrderModel:
             its rotor's rotation (:class:`~drillstring.rotor.RotorRelease`, its rows over the torsional columns)
             and the basis is that of the released string (:func:`~drillstring.rotor.released_modes`).
 
-    Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
-    and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
-    shared by :meth:`rhs`, :meth:`observe` and the compiled integrator.
+    Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1) and its
+    case-2 part ``case2_data``, the model's data as the compiled kernels read it, by name. The model holds no
+    run's state: nothing of a run writes its arrays. Each run, and each call of :meth:`rhs` or :meth:`observe`,
+    takes :meth:`kernel_data` — that data with scratch of its own (contact work, the observation's, case 1's)
+    and its own bit history — and the run's state (time, state vector, bit history, contact, controller) is
+    passed in and returned by :func:`drillstring.dynamics.compiled.advance`.
     """
 
     static: StaticState
@@ -1159,10 +1024,11 @@ class ReducedOrderModel:
             damping_t=transposed(self.damping.T),
             damping_blocks=diagonal_blocks(self.damping),
             generalized_force=self.generalized_force,
-            blocks=self.blocks,
-            axial_rows=transposed(np.vstack([self.bit_u[a0:a1], self.top_u[a0:a1]])),
-            torsion_rows=transposed(np.vstack([self.bit_t[t0:t1], self.quill_shapes[t0:t1],
-                                               self.surface_torque_shapes[t0:t1], self.motor_shapes[t0:t1]])),
+            ranges=ModalRanges(*(int(b) for b in self.blocks)),
+            axial=AxialRows(bit=transposed(self.bit_u[a0:a1]), top=transposed(self.top_u[a0:a1])),
+            torsion=TorsionRows(bit=transposed(self.bit_t[t0:t1]), quill=transposed(self.quill_shapes[t0:t1]),
+                                surface_torque=transposed(self.surface_torque_shapes[t0:t1]),
+                                motor=transposed(self.motor_shapes[t0:t1])),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
