@@ -317,18 +317,22 @@ def test_contact_bound_never_skips_a_touching_node(coarse_case):
 
 def test_the_kernels_data_is_named(coarse_case):
     """The compiled kernels read the model's data by name: the columns of each family (ModalRanges) and each
-    mode-shape row the laws act along (AxialRows, TorsionRows), each equal to the shape it names."""
+    mode-shape row the laws act along by its name (AXIAL_ROWS, TORSION_ROWS), each equal to the shape it names."""
+    from drillstring.dynamics.kernel_data import AXIAL_ROW, TORSION_ROW
+
     rom = case_reduced_model(coarse_case, lateral_modes=5)
     d = rom.case2_data
     assert list(d.ranges) == [int(b) for b in rom.blocks]
     r = d.ranges
     (a0, a1), (t0, t1) = (r.axial_start, r.axial_end), (r.torsion_start, r.torsion_end)
     assert (r.lateral_y_end - r.lateral_y_start, r.lateral_z_end - r.lateral_z_start) == (5, 5)
-    assert d.axial._fields == ("bit", "top") and d.torsion._fields == ("bit", "quill", "surface_torque", "motor")
-    np.testing.assert_array_equal(d.axial.bit, rom.bit_u[a0:a1])
-    np.testing.assert_array_equal(d.axial.top, rom.top_u[a0:a1])
-    np.testing.assert_array_equal(d.torsion.bit, rom.bit_t[t0:t1])
-    np.testing.assert_array_equal(d.torsion.quill, rom.quill_shapes[t0:t1])
-    np.testing.assert_array_equal(d.torsion.surface_torque, rom.surface_torque_shapes[t0:t1])
-    np.testing.assert_array_equal(d.torsion.motor, rom.motor_shapes[t0:t1])
-    assert not any(name in d._fields for name in ("blocks", "axial_rows", "torsion_rows"))
+    named = {("axial", "bit"): rom.bit_u[a0:a1], ("axial", "top"): rom.top_u[a0:a1],
+             ("torsion", "bit"): rom.bit_t[t0:t1], ("torsion", "quill"): rom.quill_shapes[t0:t1],
+             ("torsion", "surface_torque"): rom.surface_torque_shapes[t0:t1],
+             ("torsion", "motor"): rom.motor_shapes[t0:t1]}
+    rows = {"axial": (d.axial_rows, AXIAL_ROW), "torsion": (d.torsion_rows, TORSION_ROW)}
+    assert {(group, name) for group, (_, index) in rows.items() for name in index} == set(named)
+    for (group, name), shape in named.items():
+        array, index = rows[group]
+        np.testing.assert_array_equal(array[index[name]], shape, err_msg=f"{group} {name}")
+    assert "blocks" not in d._fields

@@ -65,7 +65,10 @@ from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
 from drillstring.dynamics.kernel_data import (  # the kernels' data, by name
     _DENSE_ORDER_MAX,
-    AxialRows,
+    AXIAL_ROW,
+    AXIAL_ROWS,
+    TORSION_ROW,
+    TORSION_ROWS,
     ContactData,
     ContactWork,
     DelayedRhsData,
@@ -74,7 +77,6 @@ from drillstring.dynamics.kernel_data import (  # the kernels' data, by name
     ModalRanges,
     ObserveData,
     RhsData,
-    TorsionRows,
 )
 from drillstring.dynamics.delay import allocate_storage, delayed_difference, record_bottom, view
 from drillstring.dynamics.delay import start as start_history
@@ -175,6 +177,11 @@ def observation_width(n_probes: int) -> int:
     return PROBE_COLUMN + 3 * n_probes
 
 
+# the mode-shape rows the kernels read, by name (kernel_data.AXIAL_ROWS, TORSION_ROWS)
+_AXIAL_BIT, _AXIAL_TOP = AXIAL_ROW["bit"], AXIAL_ROW["top"]
+_TORSION_BIT, _TORSION_QUILL = TORSION_ROW["bit"], TORSION_ROW["quill"]
+_TORSION_SURFACE_TORQUE, _TORSION_MOTOR = TORSION_ROW["surface_torque"], TORSION_ROW["motor"]
+
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
 VECTOR_MATH = {"reassoc", "contract"}
@@ -259,13 +266,13 @@ def _bit_state(d, t, y):
     position = 0.0
     velocity = 0.0
     for j in range(a0, a1):
-        position += d.axial.bit[j - a0] * y[j]
-        velocity += d.axial.bit[j - a0] * y[n + j]
+        position += d.axial_rows[_AXIAL_BIT, j - a0] * y[j]
+        velocity += d.axial_rows[_AXIAL_BIT, j - a0] * y[n + j]
     angle = d.top_speed * t
     speed = d.top_speed
     for j in range(t0, t1):
-        angle += d.torsion.bit[j - t0] * y[j]
-        speed += d.torsion.bit[j - t0] * y[n + j]
+        angle += d.torsion_rows[_TORSION_BIT, j - t0] * y[j]
+        speed += d.torsion_rows[_TORSION_BIT, j - t0] * y[n + j]
     return position, angle, velocity, speed
 
 
@@ -358,8 +365,8 @@ def _top_motion(d, y):
     quill = d.top_speed
     torque = 0.0
     for j in range(t0, t1):
-        quill += d.torsion.quill[j - t0] * y[n + j]
-        torque += d.torsion.surface_torque[j - t0] * y[j]
+        quill += d.torsion_rows[_TORSION_QUILL, j - t0] * y[n + j]
+        torque += d.torsion_rows[_TORSION_SURFACE_TORQUE, j - t0] * y[j]
     return quill, torque
 
 
@@ -374,7 +381,7 @@ def _top_drive(d, t, y, out):
     quill, surface = _top_motion(d, y)
     torque = top_boundary_torque(d.laws, TopContext(t, quill, surface), y, out)
     for j in range(t0, t1):
-        out[n + j] += d.torsion.quill[j - t0] * torque
+        out[n + j] += d.torsion_rows[_TORSION_QUILL, j - t0] * torque
 
 
 @inner_kernel()
@@ -386,7 +393,7 @@ def _downhole_motor(d, y):
     t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     speed = 0.0
     for j in range(t0, t1):
-        speed += d.torsion.motor[j - t0] * y[n + j]
+        speed += d.torsion_rows[_TORSION_MOTOR, j - t0] * y[n + j]
     return speed, motor_torque(d.laws, speed)
 
 
@@ -412,15 +419,15 @@ def _rhs_kernel(d, t, y, out):
     if d.laws[MOTOR_CODE] != 0.0:  # a downhole motor: +T on the rotor side, -T on the stator side
         _, motor = _downhole_motor(d, y)
         for j in range(t0, t1):
-            acc[j] += d.torsion.motor[j - t0] * motor
+            acc[j] += d.torsion_rows[_TORSION_MOTOR, j - t0] * motor
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
     hook = hook_load_force(d.laws, HookContext(t, d.weight_on_bit))
     for j in range(a0, a1):
-        acc[j] += d.axial.bit[j - a0] * axial_force + d.axial.top[j - a0] * hook
+        acc[j] += d.axial_rows[_AXIAL_BIT, j - a0] * axial_force + d.axial_rows[_AXIAL_TOP, j - a0] * hook
     for j in range(t0, t1):
-        acc[j] += d.torsion.bit[j - t0] * bit_torque
+        acc[j] += d.torsion_rows[_TORSION_BIT, j - t0] * bit_torque
     if y1 == y0 and z1 == z0:
         return
     _turning_loads(d, t, y, acc)
@@ -498,7 +505,7 @@ def _surface_torque(d, t, y, rate):
     torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
     acceleration = 0.0
     for j in range(t0, t1):
-        acceleration += d.torsion.quill[j - t0] * rate[n + j]
+        acceleration += d.torsion_rows[_TORSION_QUILL, j - t0] * rate[n + j]
     return torque - d.laws[TOP_INERTIA] * acceleration
 
 
@@ -669,9 +676,9 @@ def _stiff_bit_law(d, t, y, shapes, partials):
         shapes[0, j] = 0.0
         shapes[1, j] = 0.0
     for j in range(a0, a1):
-        shapes[0, j] = d.axial.bit[j - a0]
+        shapes[0, j] = d.axial_rows[_AXIAL_BIT, j - a0]
     for j in range(t0, t1):
-        shapes[1, j] = d.torsion.bit[j - t0]
+        shapes[1, j] = d.torsion_rows[_TORSION_BIT, j - t0]
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = _depth_of_cut(d, position, angle)
     moves_depth = 1.0 if _delayed(d) else 0.0
@@ -697,7 +704,7 @@ def _stiff_bit_law(d, t, y, shapes, partials):
             partials[2, k] = 0.0
         if d.laws[MOTOR_CODE] != 0.0:
             for j in range(t0, t1):
-                shapes[2, j] = d.torsion.motor[j - t0]
+                shapes[2, j] = d.torsion_rows[_TORSION_MOTOR, j - t0]
             relative_speed, _ = _downhole_motor(d, y)
             step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
             partials[2, 0] = (motor_torque(d.laws, relative_speed + step)
@@ -855,10 +862,10 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
         for i in range(k_old.shape[0]):
             rate = 0.0  # the bit's axial velocity at stage i (k holds dη/dt = η̇ first)
             for j in range(a0, a1):
-                rate += d.axial.bit[j - a0] * k_old[i, j]
+                rate += d.axial_rows[_AXIAL_BIT, j - a0] * k_old[i, j]
             spin = 0.0
             for j in range(t0, t1):
-                spin += d.torsion.bit[j - t0] * k_old[i, j]
+                spin += d.torsion_rows[_TORSION_BIT, j - t0] * k_old[i, j]
             for p in range(order):
                 position_coef[p] += h * dense[i, p] * rate
                 angle_coef[p] += h * dense[i, p] * spin
@@ -1025,10 +1032,10 @@ class ReducedOrderModel:
             damping_blocks=diagonal_blocks(self.damping),
             generalized_force=self.generalized_force,
             ranges=ModalRanges(*(int(b) for b in self.blocks)),
-            axial=AxialRows(bit=transposed(self.bit_u[a0:a1]), top=transposed(self.top_u[a0:a1])),
-            torsion=TorsionRows(bit=transposed(self.bit_t[t0:t1]), quill=transposed(self.quill_shapes[t0:t1]),
-                                surface_torque=transposed(self.surface_torque_shapes[t0:t1]),
-                                motor=transposed(self.motor_shapes[t0:t1])),
+            axial_rows=_named_rows(AXIAL_ROWS, {"bit": self.bit_u, "top": self.top_u}, a0, a1),
+            torsion_rows=_named_rows(TORSION_ROWS, {"bit": self.bit_t, "quill": self.quill_shapes,
+                                                    "surface_torque": self.surface_torque_shapes,
+                                                    "motor": self.motor_shapes}, t0, t1),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
@@ -1400,6 +1407,15 @@ class ReducedOrderModel:
         """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
         n = self.size
         return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
+
+
+def _named_rows(names: tuple[str, ...], shapes: dict[str, np.ndarray], start: int, end: int) -> np.ndarray:
+    """The rows ``names`` (:data:`~drillstring.dynamics.kernel_data.AXIAL_ROWS`, ...) of the kernels' data: each
+    named shape over the columns ``[start, end)``, in the names' order; a name without a shape is refused."""
+    missing = [name for name in names if name not in shapes]
+    if missing:
+        raise ValueError(f"no shape for the rows {missing}: the reduced model builds {sorted(shapes)}")
+    return np.ascontiguousarray(np.vstack([shapes[name][start:end] for name in names]))
 
 
 class ImpactCounter:
