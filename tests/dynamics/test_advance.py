@@ -171,3 +171,16 @@ def test_advance_refuses_bad_times(detournay_model):
         advance(detournay_model, SolverSettings(), RunState(0.5, start.y, start.history), 1.0, output_times=[0.0])
     with pytest.raises(ValueError, match="history"):
         advance(detournay_model, SolverSettings(), RunState(0.0, start.y, np.zeros(3)), 1.0)
+
+
+def test_a_copy_of_the_model_reads_a_runs_history(detournay_model):
+    """with_history: code that takes a model (the stiffness diagnosis of a failed run) reads the run's bit
+    history through a shallow copy; the model itself keeps its own."""
+    model = detournay_model
+    run = advance(model, SolverSettings(), _start(model), 0.5)
+    own = model.history.values.copy()
+    other = model.with_history(run.state.history)
+    t, y = run.state.t, run.state.y
+    np.testing.assert_array_equal(other.rhs(t, y), model.rhs(t, y, run.state.history))
+    assert not np.array_equal(other.rhs(t, y), model.rhs(t, y))  # the delay reads the history
+    np.testing.assert_array_equal(model.history.values, own)

@@ -499,8 +499,9 @@ def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output
         "impacts": int(state[IMPACTS]),
         "n_jacobians": int(getattr(step, "n_jacobians", 0)),  # a step kind with a Jacobian counts them
     }
-    message = "" if status == SUCCESS else _failure(model, work, status, collapse, solver, method.name)
     history = case2.laws[model.layout.numbers["history"]:].copy()
+    message = "" if status == SUCCESS else _failure(model.with_history(history), work, status, collapse, solver,
+                                                    method.name)
     end = RunState(float(state[T]), work.y.copy(), history, observe_data.previous.copy(),
                    ControllerState(float(state[H]), float(state[ERR_PREV]), bool(state[REJECTED_LAST] > 0.0)),
                    work.f.copy())

@@ -54,6 +54,7 @@ grow as the mesh is refined.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -1264,6 +1265,16 @@ class ReducedOrderModel:
         prehistory that :meth:`rhs` and :meth:`observe` read when given none. A run reads and records its own
         (:meth:`start_history`, :meth:`kernel_data`); nothing of a run writes this one."""
         return view(self.case2_data.laws[self.layout.numbers["history"]:])
+
+    def with_history(self, history: np.ndarray) -> ReducedOrderModel:
+        """A shallow copy of this model whose own bit history (:attr:`history`, what :meth:`rhs` and
+        :meth:`observe` read when given none) is a copy of ``history``: e.g. to analyse a run's state with code
+        that takes a model (:mod:`drillstring.dynamics.stiffness`). This model is not changed."""
+        data = self.kernel_data(history)
+        other = copy.copy(self)
+        other.case2_data = data.case2._replace(contact=self.case2_data.contact)
+        other.rhs_data = self.rhs_data._replace(rhs=other.case2_data) if self.full else other.case2_data
+        return other
 
     def _history(self, history: np.ndarray | None):
         """The :class:`~drillstring.dynamics.delay.AngleHistory` of a storage, or the model's own for None."""
