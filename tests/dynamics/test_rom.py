@@ -145,7 +145,7 @@ def test_observables_are_written_by_name(coarse_case):
     np.testing.assert_allclose(out[PROBE_COLUMN + n_p:PROBE_COLUMN + 2 * n_p], (rom.phi_v @ eta)[rom.probe_nodes],
                                rtol=1e-10)
     np.testing.assert_allclose(out[PROBE_COLUMN + 2 * n_p:], (rom.phi_w @ eta)[rom.probe_nodes], rtol=1e-10)
-    np.testing.assert_array_equal(rom.contact_mask(), radius > rom.gap)
+    np.testing.assert_array_equal(rom.contact_mask(y), radius > rom.gap)
 
 
 def test_generalized_force_is_added_to_the_modal_acceleration(coarse_case):
@@ -261,10 +261,11 @@ def test_energy_is_conserved_through_impacts_without_damping_and_friction(coarse
     y0[n:][lateral] = np.random.default_rng(1).normal(size=lateral.sum()) * 10.0
     drifts = {}
     for rtol in (1e-6, 1e-9):
-        impacts = [rom.start_impacts(y0)]
+        counter = rom.impact_counter()
+        impacts = [counter(y0)]
         run = integrate(rom.rhs, (0.0, 10.0), y0, output_step=0.01, rtol=rtol, atol=rtol * 1e-3,
                         observe=lambda t, y: np.array([energy(y), rom.observe(t, y)[OBSERVABLE_COLUMN["contact_force"]]]),
-                        on_step=lambda t, y: impacts.append(rom.track_impacts(y)))
+                        on_step=lambda t, y: impacts.append(counter(y)))
         e, force = run.y[:, 0], run.y[:, 1]
         assert sum(impacts) >= 2 and force.max() > 0
         drifts[rtol] = np.abs(e / e[0] - 1).max()
@@ -312,3 +313,26 @@ def test_contact_bound_never_skips_a_touching_node(coarse_case):
         else:
             searched += 1
     assert cleared and searched
+
+
+def test_the_kernels_data_is_named(coarse_case):
+    """The compiled kernels read the model's data by name: the columns of each family (ModalRanges) and each
+    mode-shape row the laws act along by its name (AXIAL_ROWS, TORSION_ROWS), each equal to the shape it names."""
+    from drillstring.dynamics.kernel_data import AXIAL_ROW, TORSION_ROW
+
+    rom = case_reduced_model(coarse_case, lateral_modes=5)
+    d = rom.case2_data
+    assert list(d.ranges) == [int(b) for b in rom.blocks]
+    r = d.ranges
+    (a0, a1), (t0, t1) = (r.axial_start, r.axial_end), (r.torsion_start, r.torsion_end)
+    assert (r.lateral_y_end - r.lateral_y_start, r.lateral_z_end - r.lateral_z_start) == (5, 5)
+    named = {("axial", "bit"): rom.bit_u[a0:a1], ("axial", "top"): rom.top_u[a0:a1],
+             ("torsion", "bit"): rom.bit_t[t0:t1], ("torsion", "quill"): rom.quill_shapes[t0:t1],
+             ("torsion", "surface_torque"): rom.surface_torque_shapes[t0:t1],
+             ("torsion", "motor"): rom.motor_shapes[t0:t1]}
+    rows = {"axial": (d.axial_rows, AXIAL_ROW), "torsion": (d.torsion_rows, TORSION_ROW)}
+    assert {(group, name) for group, (_, index) in rows.items() for name in index} == set(named)
+    for (group, name), shape in named.items():
+        array, index = rows[group]
+        np.testing.assert_array_equal(array[index[name]], shape, err_msg=f"{group} {name}")
+    assert "blocks" not in d._fields

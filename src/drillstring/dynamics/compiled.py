@@ -16,17 +16,27 @@ model's public interface to the loop, see :mod:`drillstring.dynamics.rom`) direc
 no Python runs inside the step loop; the loop is generic over the model's components and over the step kinds.
 Tests check that the compiled and the reference paths agree to within the integration tolerance.
 
+**State in, state out.** :func:`advance` integrates a run from a :class:`RunState` (time, state, the bit's
+history, the nodes in contact, the step-size controller's state, dy/dt) to a time ``t1`` and returns an
+:class:`AdvanceResult` (the state where it stopped, the outputs it observed, statistics): after diffrax's
+``diffeqsolve`` and SciPy's ``OdeSolver``. Every array a run writes is created for the call (the workspace,
+the step's buffers, and the model's :meth:`~drillstring.dynamics.rom.ReducedOrderModel.kernel_data`: the
+model's data, which nothing writes, with the run's own scratch and bit history), so a run can be continued,
+restarted from a modified state (a filter's update) or interleaved with another run of the same model.
+:func:`drillstring.dynamics.simulate.simulate_model` is one :func:`advance` from t = 0.
+
 The compiled loop takes five structured arguments built in one place each: :class:`Workspace` (state
 and buffers, :meth:`Workspace.allocate`), the step's data (:func:`~drillstring.dynamics.steps.step_data`),
-:class:`StepperSettings` (controller and limits, :meth:`StepperSettings.create`), and the model's ``rhs_data``
-and ``observe_data`` (:class:`~drillstring.dynamics.rom.ReducedOrderModel`). It is compiled once per type of
-``rhs_data`` (case 2 or case 1) and of the step's data, and cached on disk (a step kind defined outside the
-package runs uncached); the first compilation in a fresh cache is announced on stderr and its duration is
-reported as ``compile_time``, apart from the solver's ``wall_time``; the announcement names the kernel set
-(:func:`kernel_set`: the step kind and the model's data type), each announced once per process.
+:class:`StepperSettings` (controller and limits, :meth:`StepperSettings.create`), and the run's kernel data
+(``rhs``, ``case2`` and ``observe`` of :class:`~drillstring.dynamics.rom.KernelData`). It is compiled once per
+type of the right-hand side's data (case 2 or case 1) and of the step's data, and cached on disk (a step kind
+defined outside the package runs uncached); the first compilation in a fresh cache is announced on stderr and
+its duration is reported as ``compile_time``, apart from the solver's ``wall_time``; the announcement names
+the kernel set (:func:`kernel_set`: the step kind and the model's data type), each announced once per process.
 
-The loop runs in chunks of the output grid so a progress callback can be called between chunks; the
-step sequence does not depend on the chunking (steps never land on chunk boundaries, only on t_end).
+The loop runs in chunks so a progress callback can be called between chunks; the step sequence does not
+depend on the chunking (steps never land on chunk boundaries, only on ``t1``, or, with ``land=False``, on
+none).
 A chunk also pauses after a bounded number of step attempts (about :data:`CALL_SECONDS` of work), so the
 loop returns to Python often: Ctrl-C (``KeyboardInterrupt``) takes effect within a fraction of a second
 even when the step size has collapsed, and the collapse itself is detected early: a run whose mean step
@@ -41,6 +51,7 @@ from __future__ import annotations
 import math
 import sys
 import time as _time
+from dataclasses import dataclass, replace
 from types import FunctionType
 from typing import Callable, NamedTuple
 
@@ -68,8 +79,11 @@ from drillstring.dynamics.stiffness import stiffness_diagnosis
 
 SUCCESS, MIN_STEP, MAX_STEPS, NON_FINITE, PAUSED, COLLAPSED = 0, 1, 2, 3, 4, 5
 # indices into the integrator's scalar state array (PAUSE_AT: step attempts after which a chunk pauses)
-T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE, PAUSE_AT = range(11)
-N_STATE = 11
+# T_END: where the run ends; LANDS: 1 when its last step lands on T_END, 0 when it ends with the first step that
+# reaches T_END (advance's ``land``)
+T, H, ERR_PREV, REJECTED_LAST, N_RHS, N_ACCEPTED, N_REJECTED, IMPACTS, N_OUT, LAST_CAUSE, PAUSE_AT, T_END, LANDS = \
+    range(13)
+N_STATE = 13
 #: Wall time [s] one call of the compiled loop aims at before it returns to Python (Ctrl-C, progress).
 CALL_SECONDS = 0.1
 #: Step attempts of the first call (then adapted to take about CALL_SECONDS each).
@@ -138,7 +152,8 @@ class Workspace(NamedTuple):
 
 
 def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
-    """Advance until the output grid is filled up to ``t_stop`` (or t_end). Returns a status code.
+    """Step until the time reaches ``t_stop`` (at most ``state[T_END]``), observing every output time of
+    ``work.grid`` that the steps pass. Returns a status code.
     ``step`` is the step kind's data (:mod:`drillstring.dynamics.steps`: its type chooses the step),
     ``rhs_data`` the model's right-hand-side data (case 2 or case 1), ``case2`` its case-2 part
     (what the observation kernel reads)."""
@@ -147,11 +162,12 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
     grid = work.grid
     n = y.shape[0]
     n_grid = grid.shape[0]
-    t_end = grid[n_grid - 1]
+    t_end = state[T_END]
+    lands = state[LANDS] > 0.0
     while True:
         t = state[T]
         row = int(state[N_OUT])
-        if row >= n_grid or grid[row] > t_stop:
+        if t >= t_stop:
             return SUCCESS
         if state[N_ACCEPTED] + state[N_REJECTED] >= st.max_steps:
             return MAX_STEPS
@@ -160,7 +176,7 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
         h = state[H]
         remaining = t_end - t
         last = False
-        if h * (1.0 + st.stretch) >= remaining:
+        if lands and h * (1.0 + st.stretch) >= remaining:
             h = remaining
             last = True
         elif h < st.min_step:
@@ -220,8 +236,6 @@ def _run_chunk(work, t_stop, step, settings, rhs_data, case2, observe_data):
             observe_kernel(case2, observe_data, tg, observed, work.rate, work.out[row])
             row += 1
             state[N_OUT] = row
-        if last:
-            return SUCCESS
 
 
 _LOOPS: dict = {}  # StepKind -> its compiled loop
@@ -322,18 +336,20 @@ def _prepare(dispatcher, *args) -> None:
     dispatcher.compile(tuple(typeof(a) for a in args))
 
 
-def _compile_kernels(model, work: Workspace, step, settings: StepperSettings, method=None) -> tuple[float, bool]:
-    """Compile (or load from the cache) every kernel the integration of ``model`` with the step ``step`` (the
-    data of ``method``) calls. Returns the time it took [s] and whether anything was compiled; the first
-    compilation of each kernel set (:func:`kernel_set`) in the process is announced, naming it."""
+def _compile_kernels(model, data, work: Workspace, step, settings: StepperSettings,
+                     method=None) -> tuple[float, bool]:
+    """Compile (or load from the cache) every kernel the integration of ``model`` (its kernel data ``data``,
+    :class:`~drillstring.dynamics.rom.KernelData`) with the step ``step`` (the data of ``method``) calls.
+    Returns the time it took [s] and whether anything was compiled; the first compilation of each kernel set
+    (:func:`kernel_set`) in the process is announced, naming it."""
     start = _time.perf_counter()
     monitor = _CompileMonitor(COMPILE_ESTIMATE.get(model.nonlinear, 20),
                               "" if method is None else kernel_set(model, method))
     with event.install_listener("numba:compile", monitor):
-        _prepare(_loop(step), work, 0.0, step, settings, model.rhs_data, model.case2_data, model.observe_data)
-        _prepare(observe_kernel, model.case2_data, model.observe_data, 0.0, work.y, work.rate, work.out[0])
-        _prepare(impacts_kernel, model.case2_data, model.observe_data, work.y)
-        model.rhs(0.0, work.y)  # the right-hand side as called from Python (initial step size)
+        _prepare(_loop(step), work, 0.0, step, settings, data.rhs, data.case2, data.observe)
+        _prepare(observe_kernel, data.case2, data.observe, 0.0, work.y, work.rate, work.rate)
+        _prepare(impacts_kernel, data.case2, data.observe, work.y)
+        evaluate_rhs(data.rhs, 0.0, work.y, work.rate)  # the right-hand side as called from Python
     return _time.perf_counter() - start, monitor.compiled
 
 
@@ -353,90 +369,152 @@ def prepare_kernels(model, tableau="dopri5") -> tuple[float, bool]:
     n = model.state_size
     settings = StepperSettings.create(StepSizeController(), n, min_step=1e-12, max_steps=1)
     work = Workspace.allocate(np.zeros(n), np.zeros(2), observation_width(len(model.probe_nodes)))
-    return _compile_kernels(model, work, step_data(method, n), settings, method)
+    return _compile_kernels(model, model.kernel_data(), work, step_data(method, n), settings, method)
 
 
-def integrate_compiled(
-    model,
-    y0: np.ndarray,
-    grid: np.ndarray,
-    *,
-    tableau="dopri5",
-    rtol: float = 1e-6,
-    atol: float = 1e-9,
-    max_step: float = math.inf,
-    min_step: float = 1e-12,
-    max_steps: int = 2_000_000,
-    progress: Callable[[float], None] | None = None,
-    chunks: int = 100,
-):
-    """Integrate ``model`` (a :class:`~drillstring.dynamics.rom.ReducedOrderModel`) from ``y0`` at t = 0
-    over the output ``grid`` (starting at 0, ending at t_end) in compiled code, with the method ``tableau``:
-    a name of :data:`~drillstring.dynamics.runge_kutta.TABLEAUS`, a
-    :class:`~drillstring.dynamics.runge_kutta.ButcherTableau`, or a method of any registered step kind
-    (:mod:`drillstring.dynamics.steps`), whose type chooses the step.
+@dataclass(frozen=True)
+class SolverSettings:
+    """How a run is integrated: the method (a name of :data:`~drillstring.dynamics.runge_kutta.TABLEAUS`, a
+    :class:`~drillstring.dynamics.runge_kutta.ButcherTableau`, or a method of any registered step kind,
+    :mod:`drillstring.dynamics.steps`, whose type chooses the step), the step-size controller's tolerances
+    ``rtol`` [-] and ``atol`` (the state's units), the largest and smallest step [s] and the most step attempts
+    (accepted and rejected) of one :func:`advance`."""
 
-    Returns ``(outputs, stats, message)``: outputs (n_written, n_observables) rows for the first
-    n_written grid times, a dict of solver statistics — ``wall_time`` the solver's own time [s],
-    ``compile_time`` the time spent compiling or loading the kernels before it [s] (``compiled``: whether
-    anything had to be compiled) —, and an empty message or the cause of failure.
-    """
-    method = _method(tableau)
+    method: object = "dopri5"
+    rtol: float = 1e-6
+    atol: float = 1e-9
+    max_step: float = math.inf
+    min_step: float = 1e-12
+    max_steps: int = 2_000_000
+
+
+class ControllerState(NamedTuple):
+    """The step-size controller after a run's last step: what it needs to go on as if never stopped."""
+
+    step: float  # [s] the step size it proposes for the next attempt
+    error: float  # the previous accepted step's error norm (the proportional–integral controller's memory)
+    rejected: bool  # whether the last attempt was rejected (the step does not grow on the next acceptance)
+
+
+@dataclass(frozen=True)
+class RunState:
+    """Where a run stands, all that continuing it needs (:func:`advance`): the time ``t`` [s], the state
+    ``y`` = [η, η̇, s] (:attr:`~drillstring.dynamics.rom.ReducedOrderModel.state_size`), the bit's ``history``
+    (a storage of :mod:`drillstring.dynamics.delay`: the hole bottom of the Detournay law's state-dependent
+    delay; :meth:`~drillstring.dynamics.rom.ReducedOrderModel.start_history` at a start), the nodes
+    ``in_contact`` with the wall (the impacts count the contact zones that appear; None: none), the step-size
+    ``controller``'s state (None: the initial step size is chosen, Hairer–Nørsett–Wanner I §II.4) and ``rate``,
+    dy/dt at ``(t, y)`` as the last step computed it (None: evaluated). :meth:`start` builds one at the start of
+    a run, :meth:`updated` one from a modified state (a filter's update)."""
+
+    t: float
+    y: np.ndarray
+    history: np.ndarray
+    in_contact: np.ndarray | None = None
+    controller: ControllerState | None = None
+    rate: np.ndarray | None = None
+
+    @classmethod
+    def start(cls, model, y0: np.ndarray, t0: float = 0.0, depth_of_cut: float | None = None) -> RunState:
+        """The start of a run of ``model`` from ``y0`` at ``t0`` [s]: the bit's history of
+        :meth:`~drillstring.dynamics.rom.ReducedOrderModel.start_history` (``depth_of_cut`` [m] per blade), no
+        node in contact before, the initial step size to be chosen."""
+        y0 = np.array(y0, dtype=float)
+        if y0.shape != (model.state_size,):
+            raise ValueError(f"y0 has shape {y0.shape}: must be ({model.state_size},), the model's state")
+        return cls(float(t0), y0, model.start_history(y0, depth_of_cut))
+
+    def updated(self, y: np.ndarray) -> RunState:
+        """This state with ``y`` in place of its state vector (e.g. a filter's analysis): the history, the
+        contact and the controller kept, dy/dt evaluated anew."""
+        y = np.array(y, dtype=float)
+        if y.shape != self.y.shape:
+            raise ValueError(f"y has shape {y.shape}: must be {self.y.shape}")
+        return replace(self, y=y, rate=None)
+
+
+@dataclass
+class AdvanceResult:
+    """What :func:`advance` returns: the ``state`` where the run stopped (at ``t1`` when it succeeded and
+    landed there), the output ``time`` [s] it observed and the ``outputs`` there (rows of
+    :func:`~drillstring.dynamics.rom.observation_width` columns, :data:`~drillstring.dynamics.rom.OBSERVABLES`
+    first), solver statistics (``stats``, this call's: right-hand sides, steps, ``wall_time`` and
+    ``compile_time`` [s], ``compiled``, ``impacts``) and ``message``, empty or why the run stopped early."""
+
+    state: RunState
+    time: np.ndarray
+    outputs: np.ndarray
+    stats: dict
+    message: str
+
+    @property
+    def success(self) -> bool:
+        return not self.message
+
+
+def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output_times=(), land: bool = True,
+            progress: Callable[[float], None] | None = None, chunks: int = 100) -> AdvanceResult:
+    """Integrate ``model`` (a :class:`~drillstring.dynamics.rom.ReducedOrderModel`, only read) from the state
+    ``start`` (a :class:`RunState`) to ``t1`` [s] with ``solver`` (:class:`SolverSettings`), in compiled code;
+    state in, state out, after diffrax's ``diffeqsolve`` and SciPy's ``OdeSolver``. Every array a run writes —
+    the bit's history, the contact work, the workspace — is this call's own (the model's
+    :meth:`~drillstring.dynamics.rom.ReducedOrderModel.kernel_data`), so two runs of one model may be
+    interleaved, continued or restarted from a modified state.
+
+    ``output_times``: ascending times [s] at which to observe, none before ``start.t`` (one equal to it is
+    observed at the start); those the steps reach are observed (the rest, beyond a failure or beyond the last
+    step, are left to the next call). ``land``: the last step lands on ``t1`` exactly (the returned state is at
+    ``t1``); False: the run stops after the first step that reaches ``t1`` (the state at that step's time, at
+    or after ``t1``) — continuing from it with the same settings repeats one run to the end bit for bit,
+    where landing at an intermediate time changes the steps that follow (by the integration tolerance).
+    ``progress``: called with the time reached, about every ``CALL_SECONDS`` of work; ``chunks``: the number of
+    stops, evenly spaced, at which it is called at least."""
+    method = _method(solver.method)
     kind_of(method)  # a clear TypeError for a method of no registered kind
-    y0 = np.array(y0, dtype=float)
-    ctrl = StepSizeController(rtol=rtol, atol=atol, max_step=max_step)
-    settings = StepperSettings.create(ctrl, y0.shape[0], min_step=min_step, max_steps=max_steps)
+    y0 = np.array(start.y, dtype=float)
+    t0, t1 = float(start.t), float(t1)
+    if not t1 >= t0:
+        raise ValueError(f"t1 = {t1!r} s: must be at or after the state's time {t0:g} s")
+    grid = np.ascontiguousarray(output_times, dtype=float).reshape(-1)
+    if len(grid) and (grid[0] < t0 or np.any(np.diff(grid) <= 0.0)):
+        raise ValueError(f"output_times: must be increasing and at or after the state's time {t0:g} s")
+    ctrl = StepSizeController(rtol=solver.rtol, atol=solver.atol, max_step=solver.max_step)
+    settings = StepperSettings.create(ctrl, y0.shape[0], min_step=solver.min_step, max_steps=solver.max_steps)
     step = step_data(method, y0.shape[0])
     work = Workspace.allocate(y0, grid, observation_width(len(model.probe_nodes)))
-    grid = work.grid
-    rhs_data, case2, observe_data = model.rhs_data, model.case2_data, model.observe_data
-    compile_time, compiled = _compile_kernels(model, work, step, settings, method)
+    data = model.kernel_data(start.history)
+    rhs_data, case2, observe_data = data.rhs, data.case2, data.observe
+    if start.in_contact is not None:
+        observe_data.previous[:] = start.in_contact
+    compile_time, compiled = _compile_kernels(model, data, work, step, settings, method)
     run_chunk = _loop(step)
 
-    start = _time.perf_counter()
-    work.f[:] = model.rhs(0.0, work.y)
-    h0 = ctrl.initial_step(model.rhs, 0.0, work.y, work.f, step.order)
+    def rhs(t, y):
+        out = np.empty_like(y)
+        evaluate_rhs(rhs_data, float(t), y, out)
+        return out
+
+    begin = _time.perf_counter()
     state = work.state
-    state[H] = h0
-    state[ERR_PREV] = 1.0
-    state[N_RHS] = 2
-    status = SUCCESS
-    state[IMPACTS] = model.start_impacts(work.y)
-    if grid[0] == 0.0:
-        observe_row(case2, observe_data, 0.0, work.y, work.rate, work.out[0])
+    state[T], state[T_END], state[LANDS] = t0, t1, 1.0 if land else 0.0
+    if start.rate is not None:
+        work.f[:] = start.rate
+    else:
+        work.f[:] = rhs(t0, work.y)
+        state[N_RHS] = 1
+    if start.controller is None:
+        state[H] = ctrl.initial_step(rhs, t0, work.y, work.f, step.order)
+        state[ERR_PREV] = 1.0
+        state[N_RHS] += 1
+    else:
+        state[H], state[ERR_PREV] = start.controller.step, start.controller.error
+        state[REJECTED_LAST] = 1.0 if start.controller.rejected else 0.0
+    state[IMPACTS] = impacts_kernel(case2, observe_data, work.y)
+    if len(grid) and grid[0] == t0:
+        observe_row(case2, observe_data, t0, work.y, work.rate, work.out[0])
         state[N_OUT] = 1
-    stops = grid[np.linspace(0, len(grid) - 1, min(chunks, len(grid)) + 1).astype(int)[1:]]
-    output_step = float(grid[1] - grid[0]) if len(grid) > 1 else float(grid[-1])
-    # step attempts per call; (attempts, t) at the start of the window of the collapse check
-    budget, window = float(FIRST_CALL_ATTEMPTS), (0.0, float(state[T]))
-    for t_stop in stops:
-        while True:
-            attempts = state[N_ACCEPTED] + state[N_REJECTED]
-            state[PAUSE_AT] = attempts + budget
-            called = _time.perf_counter()
-            status = run_chunk(work, float(t_stop), step, settings, rhs_data, case2, observe_data)
-            elapsed = _time.perf_counter() - called  # Ctrl-C is raised here, between calls
-            if progress is not None:
-                progress(float(state[T]))
-            if status == PAUSED:
-                budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
-            attempts = state[N_ACCEPTED] + state[N_REJECTED]
-            if status in (PAUSED, SUCCESS) and state[T] < grid[-1] and attempts - window[0] >= COLLAPSE_WINDOW:
-                recent = (state[T] - window[1]) / (attempts - window[0])  # mean step of the window [s]
-                average = state[T] / attempts  # mean step of the whole run [s]
-                remaining = grid[-1] - state[T]
-                # the attempts reaching t_end would take: at the recent mean step when it is below the floor,
-                # else at the larger of the recent and the whole run's (both must say it cannot finish)
-                rate = recent if recent < COLLAPSE_RATIO * output_step else max(recent, average)
-                needed = attempts + remaining / max(rate, 1e-300)
-                if needed > max_steps:
-                    status = COLLAPSED
-                    break
-                window = (attempts, float(state[T]))
-            if status != PAUSED:
-                break
-        if status != SUCCESS:
-            break
+    status, collapse = _drive(run_chunk, work, step, settings, data, t0, t1, grid, chunks, solver.max_steps,
+                              progress)
     n_written = int(state[N_OUT])
     stats = {
         "status": "success" if status == SUCCESS else "failed",
@@ -445,29 +523,79 @@ def integrate_compiled(
         "n_accepted": int(state[N_ACCEPTED]),
         "n_rejected": int(state[N_REJECTED]),
         "n_steps": int(state[N_ACCEPTED] + state[N_REJECTED]),
-        "wall_time": _time.perf_counter() - start,
+        "wall_time": _time.perf_counter() - begin,
         "compile_time": compile_time,
         "compiled": compiled,
         "impacts": int(state[IMPACTS]),
         "n_jacobians": int(getattr(step, "n_jacobians", 0)),  # a step kind with a Jacobian counts them
     }
-    message = ""
-    if status != SUCCESS:
-        t, h = state[T], state[H]
-        if status == COLLAPSED:
-            cause = (f"step size collapsed: mean step {recent:.3g} s over the last {attempts - window[0]:,.0f} "
-                     f"attempts ({average:.3g} s since t = 0); reaching t_end would take about {needed:.3g} "
-                     f"attempts, more than max_steps = {max_steps:,}")
-        else:
-            cause = {
-                MIN_STEP: f"step size fell below min_step = {min_step:.3g} s",
-                MAX_STEPS: f"maximum number of steps ({max_steps}) exceeded",
-                NON_FINITE: "non-finite state after an accepted step",
-            }[status]
-        last = CAUSES.get(int(state[LAST_CAUSE]), "")
-        if last and status != NON_FINITE:
-            cause += f"; last rejection: {last}"
-        if status != NON_FINITE:
-            cause += "; " + stiffness_diagnosis(model, t, work.y, method.name)
-        message = f"integration failed at t = {t:.10g} s (h = {h:.3g} s): {cause}"
-    return work.out[:n_written], stats, message
+    history = case2.laws[model.layout.numbers["history"]:].copy()
+    message = "" if status == SUCCESS else _failure(model.with_history(history), work, status, collapse, solver,
+                                                    method.name)
+    end = RunState(float(state[T]), work.y.copy(), history, observe_data.previous.copy(),
+                   ControllerState(float(state[H]), float(state[ERR_PREV]), bool(state[REJECTED_LAST] > 0.0)),
+                   work.f.copy())
+    return AdvanceResult(end, grid[:n_written].copy(), work.out[:n_written], stats, message)
+
+
+def _drive(run_chunk, work, step, settings, data, t0, t1, grid, chunks, max_steps, progress):
+    """Call the compiled loop until ``t1`` or a stop, pausing at ``chunks`` evenly spaced times and about
+    every :data:`CALL_SECONDS` (Ctrl-C, ``progress``), and stop a run whose step has collapsed. Returns the
+    status and, for a collapse, ``(recent mean step, attempts in the window, mean step, attempts needed)``."""
+    state = work.state
+    status, collapse = SUCCESS, None
+    stops = np.linspace(t0, t1, max(int(chunks), 1) + 1)[1:]
+    stops[-1] = t1
+    output_step = float(grid[1] - grid[0]) if len(grid) > 1 else t1 - t0
+    # step attempts per call; (attempts, t) at the start of the window of the collapse check
+    budget, window = float(FIRST_CALL_ATTEMPTS), (0.0, t0)
+    for t_stop in stops:
+        while True:
+            attempts = state[N_ACCEPTED] + state[N_REJECTED]
+            state[PAUSE_AT] = attempts + budget
+            called = _time.perf_counter()
+            status = run_chunk(work, float(t_stop), step, settings, data.rhs, data.case2, data.observe)
+            elapsed = _time.perf_counter() - called  # Ctrl-C is raised here, between calls
+            if progress is not None:
+                progress(float(state[T]))
+            if status == PAUSED:
+                budget = min(max(budget * CALL_SECONDS / max(elapsed, 1e-6), 10.0), 1e7)
+            attempts = state[N_ACCEPTED] + state[N_REJECTED]
+            if status in (PAUSED, SUCCESS) and state[T] < t1 and attempts - window[0] >= COLLAPSE_WINDOW:
+                recent = (state[T] - window[1]) / (attempts - window[0])  # mean step of the window [s]
+                average = (state[T] - t0) / attempts  # mean step of the whole call [s]
+                # the attempts reaching t1 would take: at the recent mean step when it is below the floor,
+                # else at the larger of the recent and the whole call's (both must say it cannot finish)
+                rate = recent if recent < COLLAPSE_RATIO * output_step else max(recent, average)
+                needed = attempts + (t1 - state[T]) / max(rate, 1e-300)
+                if needed > max_steps:
+                    return COLLAPSED, (recent, attempts - window[0], average, needed, t0)
+                window = (attempts, float(state[T]))
+            if status != PAUSED:
+                break
+        if status != SUCCESS:
+            break
+    return status, collapse
+
+
+def _failure(model, work, status, collapse, solver, method_name) -> str:
+    """The message of a run stopped by ``status``: where, why, and the likely stiff term."""
+    state = work.state
+    t, h = state[T], state[H]
+    if status == COLLAPSED:
+        recent, window, average, needed, t0 = collapse
+        cause = (f"step size collapsed: mean step {recent:.3g} s over the last {window:,.0f} "
+                 f"attempts ({average:.3g} s since t = {t0:g}); reaching t_end would take about {needed:.3g} "
+                 f"attempts, more than max_steps = {solver.max_steps:,}")
+    else:
+        cause = {
+            MIN_STEP: f"step size fell below min_step = {solver.min_step:.3g} s",
+            MAX_STEPS: f"maximum number of steps ({solver.max_steps}) exceeded",
+            NON_FINITE: "non-finite state after an accepted step",
+        }[status]
+    last = CAUSES.get(int(state[LAST_CAUSE]), "")
+    if last and status != NON_FINITE:
+        cause += f"; last rejection: {last}"
+    if status != NON_FINITE:
+        cause += "; " + stiffness_diagnosis(model, t, work.y, method_name)
+    return f"integration failed at t = {t:.10g} s (h = {h:.3g} s): {cause}"

@@ -37,7 +37,8 @@ built once by :class:`ReducedOrderModel`), and :func:`evaluate_rhs` picks the ca
 the type of that argument when it is compiled.
 
 **The model's interface to the compiled step loop** (:mod:`drillstring.dynamics.compiled`, which names
-nothing else of this module): the model's data ``rhs_data``, ``case2_data`` and ``observe_data`` and four
+nothing else of this module): the run's :class:`KernelData` (:meth:`ReducedOrderModel.kernel_data`: the
+model's data ``rhs_data``, ``case2_data``, read only, with the run's own scratch and bit history) and four
 public functions of them — :func:`evaluate_rhs` (dy/dt), :func:`observe_kernel` (one observation row),
 :func:`impacts_kernel` (impacts at an accepted step) and :func:`observation_width` (the row's columns).
 The components are called inside these kernels, so the loop never names a law: every kind the registry
@@ -53,9 +54,9 @@ grow as the mesh is refined.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
@@ -63,6 +64,21 @@ from numba.extending import overload
 
 from drillstring.damping import reduced_structural_damping
 from drillstring.fem.dofs import THETA_X, THETA_Y, THETA_Z, U, V, W, dof
+from drillstring.dynamics.kernel_data import (  # the kernels' data, by name
+    _DENSE_ORDER_MAX,
+    AXIAL_ROW,
+    AXIAL_ROWS,
+    TORSION_ROW,
+    TORSION_ROWS,
+    ContactData,
+    ContactWork,
+    DelayedRhsData,
+    FullModelData,
+    KernelData,
+    ModalRanges,
+    ObserveData,
+    RhsData,
+)
 from drillstring.dynamics.delay import allocate_storage, delayed_difference, record_bottom, view
 from drillstring.dynamics.delay import start as start_history
 from drillstring.forces.bit_rock import case_bit_rock
@@ -105,7 +121,7 @@ from drillstring.forces.registry import (
     top_boundary_torque,
 )
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
-from drillstring.forces.turning_loads import TurningLoadData, case_turning_loads, turning_load, turning_load_data
+from drillstring.forces.turning_loads import case_turning_loads, turning_load, turning_load_data
 from drillstring.modal import (
     LinearSystem,
     ModeFamily,
@@ -162,13 +178,10 @@ def observation_width(n_probes: int) -> int:
     return PROBE_COLUMN + 3 * n_probes
 
 
-#: The boundary components' numbers sit in ``RhsData.laws``, one flat array laid out by the registry
-#: (:func:`~drillstring.forces.registry.pack`: a header with the components' codes and offsets, then the bit
-#: law's numbers, the top boundary's, the hook load's and the bit's history, the hole bottom by angle). One
-#: array, not a field each: every field of RhsData is an argument of each inner kernel, and four more fields
-#: made the reference realization 30 % slower (measured; LLVM inlines less).
-#: Coefficients of a dense-output polynomial the scratch of :class:`ObserveData` holds (dopri5: 4).
-_DENSE_ORDER_MAX = 8
+# the mode-shape rows the kernels read, by name (kernel_data.AXIAL_ROWS, TORSION_ROWS)
+_AXIAL_BIT, _AXIAL_TOP = AXIAL_ROW["bit"], AXIAL_ROW["top"]
+_TORSION_BIT, _TORSION_QUILL = TORSION_ROW["bit"], TORSION_ROW["quill"]
+_TORSION_SURFACE_TORQUE, _TORSION_MOTOR = TORSION_ROW["surface_torque"], TORSION_ROW["motor"]
 
 #: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
 #: is still detected. Deterministic for a given build: same results for any worker count.
@@ -182,143 +195,6 @@ def inner_kernel(**options):
     return njit(cache=True, no_cpython_wrapper=True, **options)
 
 
-# ---------------------------------------------------------------------------------------------------------
-# Kernel data: everything a compiled kernel reads, built once per model by ReducedOrderModel
-# ---------------------------------------------------------------------------------------------------------
-
-
-class ContactWork(NamedTuple):
-    """Scratch arrays of the contact search: ``v``, ``w`` at every node, the rest one entry per contact
-    station (the first ``n_c``, the stations in contact, used)."""
-
-    v: np.ndarray  # (n_nodes,) lateral displacement v [m]
-    w: np.ndarray  # (n_nodes,) lateral displacement w [m]
-    stations: np.ndarray  # (n_stations,) int64, indices of the stations in contact
-    v_c: np.ndarray  # the same quantities at the stations in contact ...
-    w_c: np.ndarray
-    v_dot: np.ndarray
-    w_dot: np.ndarray
-    spin: np.ndarray
-    gap: np.ndarray
-    outer_diameter: np.ndarray
-    stiffness: np.ndarray
-    force_v: np.ndarray  # ... and the contact forces [N] and torque [N·m] there
-    force_w: np.ndarray
-    torque: np.ndarray
-
-    @classmethod
-    def allocate(cls, n_nodes: int, n_stations: int) -> ContactWork:
-        sizes = {"v": n_nodes, "w": n_nodes}
-        return cls(*(np.zeros(sizes.get(name, n_stations), dtype=np.int64 if name == "stations" else np.float64)
-                     for name in cls._fields))
-
-
-class ContactData(NamedTuple):
-    """The wall as the kernels read it: one entry per contact station
-    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node. The contact law's numbers are in
-    the kernels' flat array (:func:`~drillstring.forces.registry.pack`), not here."""
-
-    node: np.ndarray  # (n_stations,) int64
-    gap: np.ndarray  # (n_stations,) radial clearance [m]
-    outer_diameter: np.ndarray  # (n_stations,) [m]
-    stiffness: np.ndarray  # (n_stations,) k_i = k'_sh ℓ_i [N/m]
-    tangential: bool  # gather the stations' lateral velocities: the contact law reads them
-    work: ContactWork
-
-
-class RhsData(NamedTuple):
-    """What the case-2 right-hand side reads (SI units). Each physical quantity is read from the columns
-    that can move it: ``blocks`` = [axial start, end, torsional start, end, lateral y start, end,
-    lateral z start, end] column ranges; ``axial_rows``, ``torsion_rows`` hold the columns of their range and
-    ``phi_v_t``, ``phi_w_t``, ``phi_tx_t`` (range columns × nodes) and ``damping_t`` are stored
-    transposed so that products run column by column. For a straight string each range is its family's
-    (the fast path: a quantity reads only its family's columns); when the families couple
-    (:attr:`ReducedOrderModel.coupled`) every range is the whole basis ``[0, n)``, every row holds every
-    column and the damping is one full block."""
-
-    omega2: np.ndarray  # (n,) signed ω² [1/s²]
-    damping_t: np.ndarray  # (n, n) Dᵀ [1/s]
-    damping_blocks: np.ndarray  # (k, 2) int64: diagonal blocks [start, end) holding every nonzero of D
-    generalized_force: np.ndarray  # (n,) constant modal force added to the modal acceleration
-    blocks: np.ndarray  # (8,) int64
-    axial_rows: np.ndarray  # (2, a1 − a0) columns of the axial range of: u at the bit, u at the top (where the
-    #                         hook pulls)
-    torsion_rows: np.ndarray  # (4, t1 − t0) columns of the torsional range of: θx at the bit, θx at the top (the
-    #                           quill, where the motor torque acts; 0 when held), the surface-torque row (K Φ) at
-    #                           the top's θx, the rotation of a downhole motor's rotor relative to its stator (0
-    #                           without one)
-    phi_v_t: np.ndarray  # (y1 − y0, n_nodes): v at every node, columns of the lateral-y range
-    phi_w_t: np.ndarray  # (z1 − z0, n_nodes): w at every node, columns of the lateral-z range
-    phi_tx_t: np.ndarray  # (t1 − t0, n_nodes): θx at every node, columns of the torsional range
-    smallest_gap: float  # min of the stations' gaps [m]
-    lateral_shape_max: np.ndarray  # max over nodes of |φ_v| (lateral-y range's columns), then |φ_w| (z range's)
-    top_speed: float  # base spin speed [rad/s]: Ω with an imposed top speed, 0 with a top drive
-    weight_on_bit: float  # static bit reaction [N]
-    laws: np.ndarray  # the components' numbers (drillstring.forces.registry.pack): header, the bit law's, the
-    #                   top boundary's, the hook load's, the contact law's, the bit's history (the hole bottom)
-    contact: ContactData
-    turning: TurningLoadData
-
-
-#: The case-2 data of a model whose bit–rock law reads the bit's history (the Detournay law): the same fields
-#: as :class:`RhsData`, a type of its own so that the kernels compiled for it read the history and those
-#: compiled for the other laws hold no code for it (the depth-of-cut lookup in the right-hand side, never
-#: run with those laws, made the reference realization 15 % slower: it changed how the kernel compiles).
-DelayedRhsData = NamedTuple("DelayedRhsData", list(RhsData.__annotations__.items()))
-DelayedRhsData.__doc__ = """:class:`RhsData` of a model with a delayed bit–rock law (same fields)."""
-
-
-class FullModelData(NamedTuple):
-    """What the case-1 right-hand side reads in addition to the case-2 data (``rhs``): the basis by family
-    (each family's modes live on its own DOFs only: ``*_dofs`` the global DOFs of the family,
-    ``*_shapes_t`` its mode shapes there, transposed), the element data of
-    :class:`~drillstring.forces.nonlinear.NonlinearElements`, the modal coupling tensor of the mass
-    correction, and scratch arrays.
-
-    The projected mass correction ``Φᵀ M_nl(Φη) Φ`` has only a torsion × lateral-y block
-    ``B(η) = Σ_k η_z,k T_k`` (and its transpose): ``M_nl`` couples θx with the (v, θz) plane with a
-    coefficient linear in θy, which only the lateral-z modes carry
-    (:func:`~drillstring.forces.nonlinear.modal_mass_coupling`)."""
-
-    rhs: RhsData  # or DelayedRhsData
-    axial_dofs: np.ndarray  # int64
-    axial_shapes_t: np.ndarray  # (n_a, len(axial_dofs))
-    torsion_dofs: np.ndarray
-    torsion_shapes_t: np.ndarray
-    bending_y_dofs: np.ndarray
-    bending_y_shapes_t: np.ndarray
-    bending_z_dofs: np.ndarray
-    bending_z_shapes_t: np.ndarray
-    theta_x_dofs: np.ndarray  # int64, the θx DOF of every node
-    inv_length: np.ndarray
-    xi: np.ndarray
-    weights: np.ndarray
-    slope: np.ndarray
-    rotation: np.ndarray
-    axial_stiffness: np.ndarray
-    polar_inertia: np.ndarray
-    coupling_tensor: np.ndarray  # (n_z, n_t, n_y) T_k
-    q: np.ndarray  # (n_dofs,) scratch: q̄ = Φη
-    qd: np.ndarray  # (n_dofs,) scratch: q̇
-    f_se: np.ndarray  # (n_dofs,) scratch
-    f_vel: np.ndarray  # (n_dofs,) scratch
-    coupling: np.ndarray  # (n_el, 2, 4) scratch
-    block: np.ndarray  # (n_t, n_y) scratch: B(η)
-    schur: np.ndarray  # (n_t, n_t) scratch: I − B Bᵀ
-    torsion_rhs: np.ndarray  # (n_t,) scratch
-    acceleration: np.ndarray  # (n,) scratch
-
-
-class ObserveData(NamedTuple):
-    """What the observation kernel reads besides the right-hand-side data, and fills."""
-
-    probe_nodes: np.ndarray  # (n_probes,) int64
-    v: np.ndarray  # (n_nodes,) scratch
-    w: np.ndarray  # (n_nodes,) scratch
-    in_contact: np.ndarray  # (n_nodes,) bool: which nodes touch the borehole (filled)
-    current: np.ndarray  # (n_nodes,) bool: nodes in contact at the accepted step being counted (impacts)
-    previous: np.ndarray  # (n_nodes,) bool: nodes in contact at the previous accepted step (impacts)
-    dense: np.ndarray  # (2, _DENSE_ORDER_MAX) scratch: the bit's angle and position polynomials of a step
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -386,17 +262,18 @@ def _bit_state(d, t, y):
     """Axial position u [m] (from the static state, down), angle θ [rad], axial velocity u̇ [m/s] and spin
     speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇]."""
     n = d.omega2.shape[0]
-    a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+    ranges = d.ranges
+    a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
     position = 0.0
     velocity = 0.0
     for j in range(a0, a1):
-        position += d.axial_rows[0, j - a0] * y[j]
-        velocity += d.axial_rows[0, j - a0] * y[n + j]
+        position += d.axial_rows[_AXIAL_BIT, j - a0] * y[j]
+        velocity += d.axial_rows[_AXIAL_BIT, j - a0] * y[n + j]
     angle = d.top_speed * t
     speed = d.top_speed
     for j in range(t0, t1):
-        angle += d.torsion_rows[0, j - t0] * y[j]
-        speed += d.torsion_rows[0, j - t0] * y[n + j]
+        angle += d.torsion_rows[_TORSION_BIT, j - t0] * y[j]
+        speed += d.torsion_rows[_TORSION_BIT, j - t0] * y[n + j]
     return position, angle, velocity, speed
 
 
@@ -443,8 +320,8 @@ def _lateral_displacements(d, y, v, w):
     """v and w [m] at every node for the state ``y``."""
     v[:] = 0.0
     w[:] = 0.0
-    _columns_matvec(d.phi_v_t, y, d.blocks[4], v, 1.0)
-    _columns_matvec(d.phi_w_t, y, d.blocks[6], w, 1.0)
+    _columns_matvec(d.phi_v_t, y, d.ranges.lateral_y_start, v, 1.0)
+    _columns_matvec(d.phi_w_t, y, d.ranges.lateral_z_start, w, 1.0)
 
 
 @njit(cache=True)
@@ -453,11 +330,12 @@ def _surely_clear(d, eta):
     both lateral families (triangle inequality) is below the smallest gap. Costs one pass over the
     lateral coordinates instead of the mode shapes at every node."""
     bound = 0.0
-    for j in range(d.blocks[4], d.blocks[5]):
-        bound += d.lateral_shape_max[j - d.blocks[4]] * abs(eta[j])
-    offset = d.blocks[5] - d.blocks[4]
-    for j in range(d.blocks[6], d.blocks[7]):
-        bound += d.lateral_shape_max[offset + j - d.blocks[6]] * abs(eta[j])
+    ranges = d.ranges
+    for j in range(ranges.lateral_y_start, ranges.lateral_y_end):
+        bound += d.lateral_shape_max[j - ranges.lateral_y_start] * abs(eta[j])
+    offset = ranges.lateral_y_end - ranges.lateral_y_start
+    for j in range(ranges.lateral_z_start, ranges.lateral_z_end):
+        bound += d.lateral_shape_max[offset + j - ranges.lateral_z_start] * abs(eta[j])
     return bound < d.smallest_gap
 
 
@@ -467,7 +345,9 @@ def _turning_loads(d, t, y, acc):
     to ``acc``, each at the angle and spin speed of its node."""
     r = d.turning
     n = d.omega2.shape[0]
-    t0, t1, y0, y1, z0, z1 = d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], d.blocks[7]
+    ranges = d.ranges
+    t0, t1, y0, y1, z0, z1 = (ranges.torsion_start, ranges.torsion_end, ranges.lateral_y_start, ranges.lateral_y_end,
+                              ranges.lateral_z_start, ranges.lateral_z_end)
     for k in range(r.node.shape[0]):
         i = r.node[k]
         angle = d.top_speed * t + r.phase[k]
@@ -482,12 +362,12 @@ def _turning_loads(d, t, y, acc):
 def _top_motion(d, y):
     """Quill speed θ̇₀ [rad/s] and surface torque T_s [N·m] for the state ``y``."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill = d.top_speed
     torque = 0.0
     for j in range(t0, t1):
-        quill += d.torsion_rows[1, j - t0] * y[n + j]
-        torque += d.torsion_rows[2, j - t0] * y[j]
+        quill += d.torsion_rows[_TORSION_QUILL, j - t0] * y[n + j]
+        torque += d.torsion_rows[_TORSION_SURFACE_TORQUE, j - t0] * y[j]
     return quill, torque
 
 
@@ -498,11 +378,11 @@ def _top_drive(d, t, y, out):
     :class:`~drillstring.forces.registry.TopContext`) reads its states in ``y`` and writes their rates in
     ``out`` where the registry put them."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill, surface = _top_motion(d, y)
     torque = top_boundary_torque(d.laws, TopContext(t, quill, surface), y, out)
     for j in range(t0, t1):
-        out[n + j] += d.torsion_rows[1, j - t0] * torque
+        out[n + j] += d.torsion_rows[_TORSION_QUILL, j - t0] * torque
 
 
 @inner_kernel()
@@ -511,10 +391,10 @@ def _downhole_motor(d, y):
     :attr:`RotorRelease.relative`) and its torque [N·m] (the registered motor,
     :func:`~drillstring.forces.registry.motor_torque`), for the state ``y``."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     speed = 0.0
     for j in range(t0, t1):
-        speed += d.torsion_rows[3, j - t0] * y[n + j]
+        speed += d.torsion_rows[_TORSION_MOTOR, j - t0] * y[n + j]
     return speed, motor_torque(d.laws, speed)
 
 
@@ -523,8 +403,10 @@ def _rhs_kernel(d, t, y, out):
     """dy/dt of the case-2 ROM (module docstring) at time ``t`` [s] from :class:`RhsData` ``d``; contact
     work is done only at the stations that touch the borehole."""
     n = d.omega2.shape[0]
-    a0, a1, t0, t1, y0, y1, z0, z1 = (d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3], d.blocks[4],
-                                      d.blocks[5], d.blocks[6], d.blocks[7])
+    ranges = d.ranges
+    a0, a1, t0, t1, y0, y1, z0, z1 = (ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end,
+                                      ranges.lateral_y_start, ranges.lateral_y_end, ranges.lateral_z_start,
+                                      ranges.lateral_z_end)
     eta = y[:n]
     eta_dot = y[n:]
     acc = out[n:]
@@ -538,15 +420,15 @@ def _rhs_kernel(d, t, y, out):
     if d.laws[MOTOR_CODE] != 0.0:  # a downhole motor: +T on the rotor side, -T on the stator side
         _, motor = _downhole_motor(d, y)
         for j in range(t0, t1):
-            acc[j] += d.torsion_rows[3, j - t0] * motor
+            acc[j] += d.torsion_rows[_TORSION_MOTOR, j - t0] * motor
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
     axial_force, bit_torque, _, _, _, _ = _bit_rock(d, t, y)
     axial_force += d.weight_on_bit
     hook = hook_load_force(d.laws, HookContext(t, d.weight_on_bit))
     for j in range(a0, a1):
-        acc[j] += d.axial_rows[0, j - a0] * axial_force + d.axial_rows[1, j - a0] * hook
+        acc[j] += d.axial_rows[_AXIAL_BIT, j - a0] * axial_force + d.axial_rows[_AXIAL_TOP, j - a0] * hook
     for j in range(t0, t1):
-        acc[j] += d.torsion_rows[0, j - t0] * bit_torque
+        acc[j] += d.torsion_rows[_TORSION_BIT, j - t0] * bit_torque
     if y1 == y0 and z1 == z0:
         return
     _turning_loads(d, t, y, acc)
@@ -618,13 +500,13 @@ def _surface_torque(d, t, y, rate):
     For the same quill and bit motion it does not depend on ``J_td`` (the elastic torque of the top element,
     read from a truncated basis, does: the basis's shapes depend on ``J_td``)."""
     n = d.omega2.shape[0]
-    t0, t1 = d.blocks[2], d.blocks[3]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill, elastic = _top_motion(d, y)
     states_rate = np.empty(y.shape[0])  # the boundary writes its states' rates: not needed here
     torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
     acceleration = 0.0
     for j in range(t0, t1):
-        acceleration += d.torsion_rows[1, j - t0] * rate[n + j]
+        acceleration += d.torsion_rows[_TORSION_QUILL, j - t0] * rate[n + j]
     return torque - d.laws[TOP_INERTIA] * acceleration
 
 
@@ -695,8 +577,10 @@ def _rhs_full_kernel(f, t, y, out):
     _rhs_kernel(f.rhs, t, y, out)
     d = f.rhs
     n = d.omega2.shape[0]
-    a0, t0, t1, y0, y1, z0, z1 = d.blocks[0], d.blocks[2], d.blocks[3], d.blocks[4], d.blocks[5], d.blocks[6], \
-        d.blocks[7]
+    ranges = d.ranges
+    a0, t0, t1, y0, y1, z0, z1 = (ranges.axial_start, ranges.torsion_start, ranges.torsion_end,
+                                  ranges.lateral_y_start, ranges.lateral_y_end, ranges.lateral_z_start,
+                                  ranges.lateral_z_end)
     f.q[:] = 0.0
     f.qd[:] = 0.0
     for shapes_t, dofs, offset in ((f.axial_shapes_t, f.axial_dofs, a0), (f.torsion_shapes_t, f.torsion_dofs, t0),
@@ -787,14 +671,15 @@ BIT_LAW_SCALES = (1e-3, 1.0, 1e-3)
 def _stiff_bit_law(d, t, y, shapes, partials):
     """:func:`stiff_part` for case-2 data ``d``."""
     n = d.omega2.shape[0]
-    a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+    ranges = d.ranges
+    a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
     for j in range(n):
         shapes[0, j] = 0.0
         shapes[1, j] = 0.0
     for j in range(a0, a1):
-        shapes[0, j] = d.axial_rows[0, j - a0]
+        shapes[0, j] = d.axial_rows[_AXIAL_BIT, j - a0]
     for j in range(t0, t1):
-        shapes[1, j] = d.torsion_rows[0, j - t0]
+        shapes[1, j] = d.torsion_rows[_TORSION_BIT, j - t0]
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = _depth_of_cut(d, position, angle)
     moves_depth = 1.0 if _delayed(d) else 0.0
@@ -820,7 +705,7 @@ def _stiff_bit_law(d, t, y, shapes, partials):
             partials[2, k] = 0.0
         if d.laws[MOTOR_CODE] != 0.0:
             for j in range(t0, t1):
-                shapes[2, j] = d.torsion_rows[3, j - t0]
+                shapes[2, j] = d.torsion_rows[_TORSION_MOTOR, j - t0]
             relative_speed, _ = _downhole_motor(d, y)
             step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
             partials[2, 0] = (motor_torque(d.laws, relative_speed + step)
@@ -901,7 +786,8 @@ def new_contact_zones(in_contact, previous):
 def impacts_kernel(d, o, y):
     """Impacts at the accepted state ``y`` since the previous call (:func:`new_contact_zones`); keeps
     the nodes in contact in ``o.previous`` for the next call."""
-    if d.blocks[5] == d.blocks[4] and d.blocks[7] == d.blocks[6]:
+    ranges = d.ranges
+    if ranges.lateral_y_end == ranges.lateral_y_start and ranges.lateral_z_end == ranges.lateral_z_start:
         return 0
     _contact_state(d, y, o.v, o.w, o.current)
     new = new_contact_zones(o.current, o.previous)
@@ -967,7 +853,8 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     ``k_old`` (s, len(y)) and the tableau's ``dense`` (s, p) coefficients, ``y(t_old + σh) = y_old +
     h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
     if _delayed(d):
-        a0, a1, t0, t1 = d.blocks[0], d.blocks[1], d.blocks[2], d.blocks[3]
+        ranges = d.ranges
+        a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
         order = dense.shape[1]
         angle_coef = o.dense[0, :order]
         position_coef = o.dense[1, :order]
@@ -976,10 +863,10 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
         for i in range(k_old.shape[0]):
             rate = 0.0  # the bit's axial velocity at stage i (k holds dη/dt = η̇ first)
             for j in range(a0, a1):
-                rate += d.axial_rows[0, j - a0] * k_old[i, j]
+                rate += d.axial_rows[_AXIAL_BIT, j - a0] * k_old[i, j]
             spin = 0.0
             for j in range(t0, t1):
-                spin += d.torsion_rows[0, j - t0] * k_old[i, j]
+                spin += d.torsion_rows[_TORSION_BIT, j - t0] * k_old[i, j]
             for p in range(order):
                 position_coef[p] += h * dense[i, p] * rate
                 angle_coef[p] += h * dense[i, p] * spin
@@ -1023,9 +910,12 @@ class ReducedOrderModel:
             its rotor's rotation (:class:`~drillstring.rotor.RotorRelease`, its rows over the torsional columns)
             and the basis is that of the released string (:func:`~drillstring.rotor.released_modes`).
 
-    Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1)
-    and ``observe_data`` (:class:`ObserveData`), the one structured argument of each compiled kernel,
-    shared by :meth:`rhs`, :meth:`observe` and the compiled integrator.
+    Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1) and its
+    case-2 part ``case2_data``, the model's data as the compiled kernels read it, by name. The model holds no
+    run's state: nothing of a run writes its arrays. Each run, and each call of :meth:`rhs` or :meth:`observe`,
+    takes :meth:`kernel_data` — that data with scratch of its own (contact work, the observation's, case 1's)
+    and its own bit history — and the run's state (time, state vector, bit history, contact, controller) is
+    passed in and returned by :func:`drillstring.dynamics.compiled.advance`.
     """
 
     static: StaticState
@@ -1142,10 +1032,11 @@ class ReducedOrderModel:
             damping_t=transposed(self.damping.T),
             damping_blocks=diagonal_blocks(self.damping),
             generalized_force=self.generalized_force,
-            blocks=self.blocks,
-            axial_rows=transposed(np.vstack([self.bit_u[a0:a1], self.top_u[a0:a1]])),
-            torsion_rows=transposed(np.vstack([self.bit_t[t0:t1], self.quill_shapes[t0:t1],
-                                               self.surface_torque_shapes[t0:t1], self.motor_shapes[t0:t1]])),
+            ranges=ModalRanges(*(int(b) for b in self.blocks)),
+            axial_rows=_named_rows(AXIAL_ROWS, {"bit": self.bit_u, "top": self.top_u}, a0, a1),
+            torsion_rows=_named_rows(TORSION_ROWS, {"bit": self.bit_t, "quill": self.quill_shapes,
+                                                    "surface_torque": self.surface_torque_shapes,
+                                                    "motor": self.motor_shapes}, t0, t1),
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
@@ -1159,15 +1050,9 @@ class ReducedOrderModel:
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
                 stiffness=transposed(self.station_stiffness, dtype=float),
-                tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(mesh.n_nodes, len(st)),
+                tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(0, 0),  # kernel_data's
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
-        )
-        self.observe_data = ObserveData(
-            probe_nodes=self.probe_nodes, v=np.zeros(mesh.n_nodes), w=np.zeros(mesh.n_nodes),
-            in_contact=np.zeros(mesh.n_nodes, dtype=np.bool_),
-            current=np.zeros(mesh.n_nodes, dtype=np.bool_), previous=np.zeros(mesh.n_nodes, dtype=np.bool_),
-            dense=np.zeros((2, _DENSE_ORDER_MAX)),
         )
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | DelayedRhsData | FullModelData = (
@@ -1198,10 +1083,34 @@ class ReducedOrderModel:
             weights=c(e.weights, dtype=float), slope=c(e.slope, dtype=float),
             rotation=c(e.rotation, dtype=float), axial_stiffness=c(e.axial_stiffness, dtype=float),
             polar_inertia=c(e.polar_inertia, dtype=float), coupling_tensor=c(tensor, dtype=float),
-            q=np.zeros(n_dofs), qd=np.zeros(n_dofs), f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs),
-            coupling=np.zeros((e.n_elements, 2, 4)), block=np.zeros((n_t, n_y)), schur=np.zeros((n_t, n_t)),
-            torsion_rhs=np.zeros(n_t), acceleration=np.zeros(len(self.angular_frequencies)),
+            **_full_model_scratch(0, 0, 0, 0, 0),  # each run's own: kernel_data
         )
+
+    def kernel_data(self, history: np.ndarray | None = None) -> KernelData:
+        """The compiled kernels' arguments for one run or one call (:class:`KernelData`): the model's data,
+        which no kernel writes, with scratch of their own, and ``history`` (a storage of
+        :mod:`drillstring.dynamics.delay`, e.g. :meth:`start_history`'s; copied in) as the bit's history of a
+        delayed law (None: the model's own prehistory, :attr:`history`, read only). Two runs of one model
+        with their own kernel data do not share a written array."""
+        template = self.case2_data
+        laws = template.laws
+        if history is not None:
+            offset = self.layout.numbers["history"]
+            history = np.asarray(history, dtype=float)
+            if history.shape != (laws.shape[0] - offset,):
+                raise ValueError(f"history has shape {history.shape}: must be ({laws.shape[0] - offset},), a "
+                                 f"storage of this model's bit history (ReducedOrderModel.start_history)")
+            laws = laws.copy()
+            laws[offset:] = history
+        mesh = self.static.mesh
+        case2 = template._replace(laws=laws, contact=template.contact._replace(
+            work=ContactWork.allocate(mesh.n_nodes, len(self.stations))))
+        rhs = case2
+        if self.full:
+            t0, t1, y0, y1 = (int(b) for b in self.blocks[2:6])
+            rhs = self.rhs_data._replace(rhs=case2, **_full_model_scratch(
+                mesh.n_dofs, self.elements.n_elements, t1 - t0, y1 - y0, self.size))
+        return KernelData(rhs, case2, ObserveData.allocate(self.probe_nodes, mesh.n_nodes))
 
     @property
     def lowest_lateral_eigenvalue(self) -> float:
@@ -1254,17 +1163,19 @@ class ReducedOrderModel:
                     f"{kind} {component.name!r} is registered outside the drillstring package, so the compiled "
                     f"kernels do not hold it: use engine = 'reference' (docs/extending.md)")
 
-    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+    def rhs(self, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
         """dy/dt for y = [η, η̇] at time ``t`` [s] (t enters through the rotation Ω t that turns the
-        turning loads)."""
+        turning loads); ``history``: the bit's history of a delayed law (a storage of
+        :mod:`drillstring.dynamics.delay`; None: the model's prehistory, :attr:`history`)."""
         self.require_compiled()
         out = np.empty_like(y)
-        evaluate_rhs(self.rhs_data, float(t), np.ascontiguousarray(y, dtype=float), out)
+        evaluate_rhs(self.kernel_data(history).rhs, float(t), np.ascontiguousarray(y, dtype=float), out)
         return out
 
-    def rhs_reference(self, t: float, y: np.ndarray) -> np.ndarray:
+    def rhs_reference(self, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
         """The straightforward NumPy right-hand side (full basis, every node): the reference
-        implementation that the compiled :meth:`rhs` is tested against; same equations."""
+        implementation that the compiled :meth:`rhs` is tested against; same equations (``history`` as
+        there)."""
         n = self.size
         eta, eta_dot = y[:n], y[n:2 * n]
         bit_velocity = self.bit_u @ eta_dot
@@ -1272,7 +1183,7 @@ class ReducedOrderModel:
         position, angle = self.bit_position(t, y)
         depth = 0.0
         if self.bit_rock.delayed:  # u minus the hole bottom one blade sector behind the bit
-            depth = delayed_difference(self.history, angle, position)
+            depth = delayed_difference(self._history(history), angle, position)
         axial_force, bit_torque = self.bit_rock.evaluate_at(BitContext(
             t, position, angle, bit_velocity, bit_speed, depth, self.weight_on_bit))
         st = self.stations
@@ -1314,16 +1225,17 @@ class ReducedOrderModel:
             acceleration = np.linalg.solve(mass, acceleration + self.basis.T @ (f_se + f_vel))
         return np.concatenate([eta_dot, acceleration, states])
 
-    def observe(self, t: float, y: np.ndarray) -> np.ndarray:
+    def observe(self, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
         """Observables (:data:`OBSERVABLES`) followed by the radial displacement r at each probe, then
-        its v and w [m] (:func:`observation_width` columns)."""
+        its v and w [m] (:func:`observation_width` columns); ``history`` as in :meth:`rhs`."""
         out = np.empty(observation_width(len(self.probe_nodes)))
         y = np.ascontiguousarray(y, dtype=float)
-        observe_row(self.case2_data, self.observe_data, float(t), y, np.zeros_like(y), out)
+        data = self.kernel_data(history)
+        observe_row(data.case2, data.observe, float(t), y, np.zeros_like(y), out)
         if not compiled(self.bit_rock):  # a law from outside the package: its force from its NumPy reference
             n = self.size
             position, angle = self.bit_position(t, y)
-            depth = delayed_difference(self.history, angle, position) if self.bit_rock.delayed else 0.0
+            depth = delayed_difference(self._history(history), angle, position) if self.bit_rock.delayed else 0.0
             force, torque = self.bit_rock.evaluate_at(BitContext(
                 t, position, angle, out[_ROP], self.base_speed + self.bit_t @ y[n:2 * n], depth, self.weight_on_bit))
             out[_TOB], out[_FOB] = -float(torque), -float(force)
@@ -1331,31 +1243,42 @@ class ReducedOrderModel:
             n, first = self.size, self.layout.states["top_boundary"]
             torque, _ = self.top_drive.evaluate_at(TopContext(t, out[_QUILL_SPEED], self.surface_torque_shapes @ y[:n]),
                                                    y[first:first + self.top_drive.n_states])
-            quill_acceleration = self.quill_shapes @ self.rhs_reference(t, y)[n:2 * n]
+            quill_acceleration = self.quill_shapes @ self.rhs_reference(t, y, history)[n:2 * n]
             out[_SURFACE_TORQUE] = float(torque) - self.top_drive.top_inertia * quill_acceleration
         return out
 
-    def contact_mask(self) -> np.ndarray:
-        """Nodes in contact at the last :meth:`observe` call (a copy)."""
-        return self.observe_data.in_contact.copy()
+    def contact_mask(self, y: np.ndarray) -> np.ndarray:
+        """(n_nodes,) bool: the nodes in contact with the borehole (a station outside its gap) at the state
+        ``y``."""
+        observe = ObserveData.allocate(self.probe_nodes, self.static.mesh.n_nodes)
+        impacts_kernel(self.case2_data, observe, np.ascontiguousarray(y, dtype=float))
+        return observe.current
 
-    def start_impacts(self, y: np.ndarray) -> int:
-        """Start counting impacts from the state ``y`` (the start of a run): returns its contact zones,
-        each an impact (:func:`new_contact_zones`)."""
-        self.observe_data.previous[:] = False
-        return self.track_impacts(y)
-
-    def track_impacts(self, y: np.ndarray) -> int:
-        """Impacts at the accepted state ``y`` since the previous call (or :meth:`start_impacts`): the
-        contact zones that appeared (:func:`new_contact_zones`). Both integrators call it after every
-        accepted step."""
-        return int(impacts_kernel(self.case2_data, self.observe_data, np.ascontiguousarray(y, dtype=float)))
+    def impact_counter(self, in_contact: np.ndarray | None = None) -> ImpactCounter:
+        """A counter of the impacts of one run (:class:`ImpactCounter`), from the nodes ``in_contact`` at its
+        start (None: none, so that the contact zones of the first state counted are impacts)."""
+        return ImpactCounter(self, in_contact)
 
     @property
     def history(self):
-        """The bit's history (:class:`~drillstring.dynamics.delay.AngleHistory`): views into the kernels' law
-        numbers, so what is set or recorded here is what the compiled kernels read."""
+        """The model's own bit history (:class:`~drillstring.dynamics.delay.AngleHistory`): the flat
+        prehistory that :meth:`rhs` and :meth:`observe` read when given none. A run reads and records its own
+        (:meth:`start_history`, :meth:`kernel_data`); nothing of a run writes this one."""
         return view(self.case2_data.laws[self.layout.numbers["history"]:])
+
+    def with_history(self, history: np.ndarray) -> ReducedOrderModel:
+        """A shallow copy of this model whose own bit history (:attr:`history`, what :meth:`rhs` and
+        :meth:`observe` read when given none) is a copy of ``history``: e.g. to analyse a run's state with code
+        that takes a model (:mod:`drillstring.dynamics.stiffness`). This model is not changed."""
+        data = self.kernel_data(history)
+        other = copy.copy(self)
+        other.case2_data = data.case2._replace(contact=self.case2_data.contact)
+        other.rhs_data = self.rhs_data._replace(rhs=other.case2_data) if self.full else other.case2_data
+        return other
+
+    def _history(self, history: np.ndarray | None):
+        """The :class:`~drillstring.dynamics.delay.AngleHistory` of a storage, or the model's own for None."""
+        return self.history if history is None else view(np.asarray(history, dtype=float))
 
     def bit_position(self, t: float, y: np.ndarray) -> tuple[float, float]:
         """The bit's axial position u [m] (from the static state, down) and angle θ [rad] at time ``t``
@@ -1363,38 +1286,43 @@ class ReducedOrderModel:
         n = self.size
         return float(self.bit_u @ y[:n]), float(self.base_speed * t + self.bit_t @ y[:n])
 
-    def start_history(self, y: np.ndarray, depth_of_cut: float | None = None) -> None:
-        """Set the hole bottom under the bit at the start of a run from the state ``y`` at t = 0 (a delayed
-        bit–rock law only; nothing otherwise): with a ramped start (:attr:`hook_load`) a flat bottom
-        ``clearance`` below the bit; else the helical bottom of steady drilling with the depth of cut
-        ``depth_of_cut`` [m] per blade under the bit — by default the law's own at the static weight-on-bit
-        and the top speed (its ``start_depth_of_cut``; for the Detournay law the closed-form steady state,
-        0 when that weight does not exceed the wear flats' contact force)."""
+    def start_history(self, y: np.ndarray, depth_of_cut: float | None = None) -> np.ndarray:
+        """The bit's history at the start of a run from the state ``y`` at t = 0, a new storage of
+        :mod:`drillstring.dynamics.delay` (the model's own is not changed): for a delayed bit–rock law, with a
+        ramped start (:attr:`hook_load`) a flat bottom ``clearance`` below the bit; else the helical bottom of
+        steady drilling with the depth of cut ``depth_of_cut`` [m] per blade under the bit — by default the
+        law's own at the static weight-on-bit and the top speed (its ``start_depth_of_cut``; for the Detournay
+        law the closed-form steady state, 0 when that weight does not exceed the wear flats' contact force).
+        For a law without history: a copy of the model's (never read)."""
+        storage = self.case2_data.laws[self.layout.numbers["history"]:].copy()
         if not self.bit_rock.delayed:
-            return
+            return storage
         position, angle = self.bit_position(0.0, y)
         law = self.bit_rock
         if self.hook_load.active:
-            start_history(self.history, angle, position + self.hook_load.clearance, 0.0)
-            return
+            start_history(view(storage), angle, position + self.hook_load.clearance, 0.0)
+            return storage
         if depth_of_cut is None:
             speed = self.top_speed
             depth_of_cut = law.start_depth_of_cut(self.weight_on_bit, speed)
-        start_history(self.history, angle, position, depth_of_cut / law.sector)
+        start_history(view(storage), angle, position, depth_of_cut / law.sector)
+        return storage
 
-    def record_history(self, t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:
-        """Record the bit's position by angle over an accepted step from its dense-output polynomial
-        ``y(t_old + σh) = y_old + Σ_p coef[p] σ^(p+1)`` (``coef`` (p, len(y)): what
-        :meth:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper.dense_polynomial` gives): the NumPy
-        path's counterpart of :func:`accepted_step_kernel`. Nothing for a law without history."""
+    def record_history(self, history: np.ndarray, t_old: float, h: float, y_old: np.ndarray,
+                       coef: np.ndarray) -> None:
+        """Record into ``history`` (a storage, :meth:`start_history`) the bit's position by angle over an
+        accepted step from its dense-output polynomial ``y(t_old + σh) = y_old + Σ_p coef[p] σ^(p+1)``
+        (``coef`` (p, len(y)): what :meth:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper.dense_polynomial`
+        gives): the NumPy path's counterpart of :func:`accepted_step_kernel`. Nothing for a law without
+        history."""
         if not self.bit_rock.delayed:
             return
         n = self.size
         position, angle = self.bit_position(t_old, y_old)
         angle_coef = coef[:, :n] @ self.bit_t
         angle_coef[0] += self.base_speed * h
-        record_bottom(self.history, angle, np.ascontiguousarray(angle_coef), position,
-                    np.ascontiguousarray(coef[:, :n] @ self.bit_u))
+        record_bottom(view(history), angle, np.ascontiguousarray(angle_coef), position,
+                      np.ascontiguousarray(coef[:, :n] @ self.bit_u))
 
     def turning_whirl(self) -> np.ndarray:
         """The steady lateral whirl [η, η̇] at t = 0 of the linear model spinning at Ω under the turning
@@ -1490,6 +1418,44 @@ class ReducedOrderModel:
         """Linear mechanical energy ½ η̇ᵀη̇ + ½ Σ ω² η² [J] (conserved without damping and forcing)."""
         n = self.size
         return 0.5 * float(y[n:2 * n] @ y[n:2 * n] + self.omega2 @ (y[:n] ** 2))
+
+
+def _named_rows(names: tuple[str, ...], shapes: dict[str, np.ndarray], start: int, end: int) -> np.ndarray:
+    """The rows ``names`` (:data:`~drillstring.dynamics.kernel_data.AXIAL_ROWS`, ...) of the kernels' data: each
+    named shape over the columns ``[start, end)``, in the names' order; a name without a shape is refused."""
+    missing = [name for name in names if name not in shapes]
+    if missing:
+        raise ValueError(f"no shape for the rows {missing}: the reduced model builds {sorted(shapes)}")
+    return np.ascontiguousarray(np.vstack([shapes[name][start:end] for name in names]))
+
+
+class ImpactCounter:
+    """The impacts of one run, counted state by state (:func:`new_contact_zones`): it holds the nodes in
+    contact at the last state counted (:attr:`in_contact`), not the model."""
+
+    def __init__(self, model: ReducedOrderModel, in_contact: np.ndarray | None = None) -> None:
+        self._data = model.case2_data
+        self._observe = ObserveData.allocate(model.probe_nodes, model.static.mesh.n_nodes)
+        if in_contact is not None:
+            self._observe.previous[:] = in_contact
+
+    def __call__(self, y: np.ndarray) -> int:
+        """The impacts at the accepted state ``y`` since the previous call: the contact zones that
+        appeared."""
+        return int(impacts_kernel(self._data, self._observe, np.ascontiguousarray(y, dtype=float)))
+
+    @property
+    def in_contact(self) -> np.ndarray:
+        """The nodes in contact at the last state counted (a copy)."""
+        return self._observe.previous.copy()
+
+
+def _full_model_scratch(n_dofs: int, n_elements: int, n_t: int, n_y: int, n: int) -> dict:
+    """The scratch fields of :class:`FullModelData` for ``n_dofs`` DOFs, ``n_elements`` elements, ``n_t``
+    torsional and ``n_y`` lateral-y modes of ``n`` modal coordinates."""
+    return dict(q=np.zeros(n_dofs), qd=np.zeros(n_dofs), f_se=np.zeros(n_dofs), f_vel=np.zeros(n_dofs),
+                coupling=np.zeros((n_elements, 2, 4)), block=np.zeros((n_t, n_y)), schur=np.zeros((n_t, n_t)),
+                torsion_rhs=np.zeros(n_t), acceleration=np.zeros(n))
 
 
 def _check_coupled(model: ReducedOrderModel) -> None:

@@ -37,6 +37,9 @@ class SimulationResult:
             (:func:`~drillstring.dynamics.rom.new_contact_zones`; a zone that moves along the string or
             grows is the same contact, not a new impact).
         status: "success" or "failed"; ``message`` says where and why a failed run stopped.
+        state: where the run ended (:class:`~drillstring.dynamics.compiled.RunState`: the time, the state,
+            the bit's history, the contact, the step-size controller), from which
+            :func:`~drillstring.dynamics.compiled.advance` continues it; None with the reference engine.
         stats: solver statistics (right-hand-side evaluations, accepted/rejected steps, the solver's
             wall time ``wall_time`` [s]; with the compiled engine also ``compile_time`` [s], the time
             spent compiling the kernels or loading them from Numba's cache before solving, and
@@ -53,6 +56,7 @@ class SimulationResult:
     status: str
     message: str
     stats: dict = field(default_factory=dict)
+    state: object = None
 
     @property
     def success(self) -> bool:
@@ -108,25 +112,35 @@ def simulate_model(
         y0 = np.array(initial_state, dtype=float)
         if y0.shape != (model.state_size,):
             raise ValueError(f"initial_state has shape {y0.shape}: must be ({model.state_size},)")
-    model.start_history(y0, initial_depth_of_cut)
+    history = model.start_history(y0, initial_depth_of_cut)  # the run's own, as every array it writes
     if engine == "compiled":
         model.require_compiled()
-        return _simulate_compiled(model, y0, t_end=t_end, output_step=output_step, rtol=rtol,
-                                  atol=atol, method=method, max_steps=max_steps, min_step=min_step,
-                                  progress=progress, raise_on_failure=raise_on_failure)
-    impacts = model.start_impacts(y0)
+        from drillstring.dynamics.compiled import RunState, SolverSettings, advance
+
+        grid = output_grid(t_end, output_step)
+        run = advance(model, SolverSettings(method, rtol, atol, min_step=min_step, max_steps=max_steps),
+                      RunState(0.0, y0, history), t_end, output_times=grid, progress=progress)
+        stats = run.stats
+        impacts = int(stats.pop("impacts"))
+        return _result(model, run.time, run.outputs, impacts, run.message, stats, raise_on_failure, run.state)
+    counter = model.impact_counter()
+    impacts = counter(y0)
 
     def count_impacts(t: float, y: np.ndarray) -> None:
         nonlocal impacts
-        impacts += model.track_impacts(y)
+        impacts += counter(y)
+
+    def record(t_old: float, h: float, y_old: np.ndarray, coef: np.ndarray) -> None:
+        model.record_history(history, t_old, h, y_old, coef)
 
     start = _time.perf_counter()
     failure = None
     try:
         solution = integrate(
-            model.rhs_reference, (0.0, t_end), y0, output_step=output_step, tableau=method, rtol=rtol,
-            atol=atol, max_steps=max_steps, min_step=min_step, progress=progress, observe=model.observe,
-            on_step=count_impacts, on_dense_step=model.record_history if model.bit_rock.delayed else None,
+            lambda t, y: model.rhs_reference(t, y, history), (0.0, t_end), y0, output_step=output_step,
+            tableau=method, rtol=rtol, atol=atol, max_steps=max_steps, min_step=min_step, progress=progress,
+            observe=lambda t, y: model.observe(t, y, history), on_step=count_impacts,
+            on_dense_step=record if model.bit_rock.delayed else None,
         )
     except IntegrationError as error:
         failure = error
@@ -141,7 +155,7 @@ def simulate_model(
                    raise_on_failure)
 
 
-def _result(model, times, values, impacts, message, stats, raise_on_failure) -> SimulationResult:
+def _result(model, times, values, impacts, message, stats, raise_on_failure, state=None) -> SimulationResult:
     """Split the observed rows into a :class:`SimulationResult`; raise if the run failed."""
     stats["status"] = "failed" if message else "success"
     n_p = len(model.probe_nodes)
@@ -157,6 +171,7 @@ def _result(model, times, values, impacts, message, stats, raise_on_failure) -> 
         status=stats["status"],
         message=message,
         stats=stats,
+        state=state,
     )
     if message and raise_on_failure:
         raise SimulationError(f"simulation stopped early: {message}", result)
@@ -231,19 +246,6 @@ def output_grid(t_end: float, output_step: float) -> np.ndarray:
         grid = np.append(grid, t_end)
     grid[-1] = min(grid[-1], t_end)
     return grid
-
-
-def _simulate_compiled(model, y0, *, t_end, output_step, rtol, atol, method, max_steps, min_step,
-                       progress, raise_on_failure) -> SimulationResult:
-    from drillstring.dynamics.compiled import integrate_compiled
-
-    grid = output_grid(t_end, output_step)
-    values, stats, message = integrate_compiled(
-        model, y0, grid, tableau=method, rtol=rtol, atol=atol, min_step=min_step,
-        max_steps=max_steps, progress=progress,
-    )
-    impacts = int(stats.pop("impacts"))
-    return _result(model, grid[: len(values)], values, impacts, message, stats, raise_on_failure)
 
 
 #: Relative tolerance of :func:`settling_time`: the bit speed's range per oscillation period is settled once
