@@ -313,7 +313,7 @@ class TopBoundary:
     keys: ClassVar[Any] = None
     #: the run starts from rest (a ramped set point) instead of spinning at the top speed
     starts_at_rest: ClassVar[bool] = False
-    #: J_td [kg·m²] lumped at the quill (a driving boundary)
+    # J_td [kg·m²] lumped at the quill by a driving boundary; a plain comment: each boundary documents its own
     top_inertia: float = 0.0
 
     @classmethod
