@@ -60,8 +60,7 @@ def test_the_package_checks_its_table_against_its_cache_folder():
     import json
     import os
 
-    from drillstring.forces.registry import pack, registry_table  # noqa: F401 (pack runs the check)
-    from drillstring.forces.registry import _check_cache_table
+    from drillstring.forces.registry import _check_cache_table, registry_table
 
     _check_cache_table()
     written = json.loads((Path(os.environ["NUMBA_CACHE_DIR"]) / kernel_cache.MANIFEST).read_text())
