@@ -49,7 +49,7 @@ model = case_reduced_model(case)
 start = time.process_time()
 result = simulate_model(model, t_end=0.5, output_step=0.05, lateral_perturbation=0.0)
 cpu = time.process_time() - start
-folders = sorted(p.name for p in Path(os.environ["NUMBA_CACHE_DIR"]).glob("kernels-*"))
+folders = sorted(p.name for p in Path(os.environ["NUMBA_CACHE_DIR"]).parent.glob("kernels-*"))
 print(json.dumps({"force_on_bit_kN": float(result.observables["force_on_bit"].mean()) / 1e3, "cpu_s": cpu,
                   "cache_folders": folders}))
 '''
