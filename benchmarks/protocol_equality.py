@@ -4,8 +4,8 @@ and every eigenvalue of the stability analysis of the built-in cases, saved by e
     python benchmarks/protocol_equality.py save OUT.npz          # run with PYTHONPATH=<tree>/src
     python benchmarks/protocol_equality.py compare A.npz B.npz    # the largest relative difference
 
-The cases: ``reference``, ``stick_slip``, ``contact`` and ``aarsnes2019`` as written (their bases of today,
-their own run length), and, for the top boundaries, the stick-slip case under each controller
+The cases: ``reference``, ``stick_slip``, ``contact``, ``aarsnes2019`` and ``motor`` as written (their bases of
+today, their own run length), and, for the top boundaries, the stick-slip case under each controller
 (``pi``, ``soft_torque``, ``z_torque``, 3 s), and off bottom.
 """
 
@@ -20,7 +20,7 @@ import sys  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-CASES = ("reference", "stick_slip", "contact", "aarsnes2019")
+CASES = ("reference", "stick_slip", "contact", "aarsnes2019", "motor")
 CONTROLLERS = {"pi": {"controller": "pi", "proportional_gain": 2000.0, "integral_gain": 4000.0},
                "soft_torque": {"controller": "soft_torque"}, "z_torque": {"controller": "z_torque"}}
 

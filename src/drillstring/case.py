@@ -605,8 +605,28 @@ class DetournayKeys(_Base):
         "speed goes from 0 to omega_r (a stuck bit turns at most omega_r) [rad/s]")
 
 
-class _BitRockLaw(_Base):
-    law: Literal["tucker_wang", "off_bottom", "detournay"] = Field("tucker_wang", description="bit-rock law")
+class _ComponentTables(_Base):
+    """A kind's case table (``[bit_rock]``, ``[top_drive]``, ``[contact]``, ``[motor]``): besides its own keys,
+    one sub-table per component, ``[bit_rock.<name>]``, holding that component's keys; the component reads and
+    validates it itself (its ``keys`` model, :func:`drillstring.forces.registry.case_keys`), so a component
+    added to the package or registered by a script needs no edit here, and two components may use the same
+    key name."""
+
+    model_config = ConfigDict(frozen=True, extra="allow")
+
+    @model_validator(mode="after")
+    def _tables_only(self) -> Any:
+        wrong = [(name, value) for name, value in (self.model_extra or {}).items() if not isinstance(value, Mapping)]
+        if wrong:
+            name, value = wrong[0]
+            raise _Problems([((name,), value, f"unknown key; allowed keys here: {', '.join(type(self).model_fields)}"
+                                              f", or a component's table of keys ([...{name}])")])
+        return self
+
+
+class _BitRockLaw(_ComponentTables):
+    law: str = Field("tucker_wang", min_length=1, description="bit-rock law: a registered law's name "
+                     "(tucker_wang, off_bottom, detournay, or one added to the package or by a script)")
 
 
 class BitRock(DetournayKeys, TuckerWangKeys, _BitRockLaw):
@@ -625,13 +645,16 @@ class BitRock(DetournayKeys, TuckerWangKeys, _BitRockLaw):
 
     Each law reads its own keys only; the others keep their defaults and are not used.
     A law's keys are its own model (:class:`TuckerWangKeys`, :class:`DetournayKeys`; the law declares it as
-    its ``keys``, :mod:`drillstring.forces.registry`); this table is their union, as a case file writes it."""
+    its ``keys``, :mod:`drillstring.forces.registry`); the built-in laws' keys are written in this table itself,
+    as case files always have; any other law's in its own sub-table, ``[bit_rock.<law>]``."""
 
 
-class Contact(_Base):
+class Contact(_ComponentTables):
     """String-borehole shocks and rubbing. The wall is a distributed stiffness: a length ℓ of string pressed
-    δ into it is pushed back by ``shock_stiffness`` ℓ δ, whatever the mesh."""
+    δ into it is pushed back by ``shock_stiffness`` ℓ δ, whatever the mesh. ``law``: the registered contact law
+    (``"penalty"``, whose keys are this table's; another law's keys in ``[contact.<law>]``)."""
 
+    law: str = Field("penalty", min_length=1, description="contact law: a registered law's name")
     shock_stiffness: StiffnessPerLength = Field(
         1e8, ge=0, description="k_sh, per metre of string [N/m per m]")
     friction_coefficient: Dimensionless = Field(0.0005, ge=0, description="mu_sh [-]")
@@ -650,15 +673,17 @@ class Operation(_Base):
     weight_on_bit: Force = Field(1e5, gt=0, description="initial (static) weight-on-bit [N]")
 
 
-class TopDrive(_Base):
+class TopDrive(_ComponentTables):
     """The top boundary of the torsion (:mod:`drillstring.forces.top_drive`). ``controller =
     "imposed_speed"``: the top turns at ``operation.top_speed`` exactly (the reference study); ``"pi"``,
     ``"soft_torque"``, ``"z_torque"``: a top drive of rotary inertia ``inertia`` at the quill, driven by a
     motor whose torque, saturated at ``max_torque``, a controller sets from the quill speed (and the
     surface torque for ``z_torque``), with ``operation.top_speed`` as set point, reached after
     ``ramp_time`` from rest when that is > 0. ``pi`` needs both gains; the tuned controllers compute the
-    gains left out (docs/model.md, "Top drive")."""
+    gains left out (docs/model.md, "Top drive"). ``boundary``: the registered top boundary (``"top_drive"``,
+    whose keys are this table's; another boundary drives the string, its keys in ``[top_drive.<boundary>]``)."""
 
+    boundary: str = Field("top_drive", min_length=1, description="top boundary: a registered boundary's name")
     controller: Literal["imposed_speed", "pi", "soft_torque", "z_torque"] = Field(
         "imposed_speed", description="top boundary of the torsion")
     inertia: MomentOfInertia = Field(
@@ -919,15 +944,18 @@ class MotorKeys(_Base):
         return problems
 
 
-class DownholeMotor(MotorKeys):
+class DownholeMotor(MotorKeys, _ComponentTables):
     """``[motor]``: a downhole motor whose rotor turns the string below ``position`` relative to the string
-    above (the ``motor`` entry of ``[[components]]`` writes it, ``position`` at the bottom of the motor)."""
+    above (the ``motor`` entry of ``[[components]]`` writes it, ``position`` at the bottom of the motor).
+    ``law``: the registered motor (``"positive_displacement"``, whose keys are this table's; another motor's
+    keys in ``[motor.<law>]``)."""
 
     position: Length = Field(gt=0, description="x of the rotor station from the top [m] (a mesh node)")
+    law: str = Field("positive_displacement", min_length=1, description="downhole motor: a registered motor's name")
 
     @model_validator(mode="after")
     def _complete(self) -> DownholeMotor:
-        problems = self.motor_problems()
+        problems = self.motor_problems() if self.law == "positive_displacement" else []
         if problems:
             raise _Problems(problems)
         return self
@@ -1397,6 +1425,12 @@ class Case(_Base):
     # -- derived quantities ------------------------------------------------------------------------------
 
     @property
+    def top_driven(self) -> bool:
+        """Whether a top boundary drives the string (the quill free, its first torsional mode the rigid rotation):
+        the top drive under a controller, or any other registered boundary (``top_drive.boundary``)."""
+        return self.top_drive.boundary != "top_drive" or self.top_drive.controller != "imposed_speed"
+
+    @property
     def length(self) -> float:
         """Total string length L [m]."""
         return math.fsum(s.length for s in self.sections)
@@ -1544,7 +1578,7 @@ class Case(_Base):
 
     @model_validator(mode="after")
     def _top_drive_model(self) -> Case:
-        if self.top_drive.controller != "imposed_speed" and self.model.nonlinear == "full":
+        if self.top_driven and self.model.nonlinear == "full":
             raise _Problems([(("top_drive", "controller"), self.top_drive.controller,
                               'a top drive needs model.nonlinear = "bit_and_contact" (case 1 with a top drive '
                               'is not supported yet); use "imposed_speed" for case 1')])
@@ -1584,7 +1618,7 @@ class Case(_Base):
                                f"(about max_element_length >= {length / MAX_ELEMENTS:.3g} m for this "
                                f"{length:g} m string)")]
         nodes = elements + 1
-        top_free = self.top_drive.controller != "imposed_speed"
+        top_free = self.top_driven
         sizes = mode_family_sizes(nodes, top_free)
         problems = []
         for key, family, rigid in (("axial_modes", "axial", 1), ("torsional_modes", "torsional", int(top_free)),

@@ -5,9 +5,17 @@ function. The package's kernels call kernels of other files — the step loop (:
 compiled`) compiles in the reduced model's right-hand side (:mod:`drillstring.dynamics.rom`), which compiles in
 the force laws (:mod:`drillstring.forces`) — so after an edit or an in-place upgrade that changed a law but not
 the loop's file, the cached loop would still run the old law: silently wrong results. The cache therefore
-lives in a folder named after a hash of every source file of the package that uses Numba
-(:func:`kernel_cache_dir`): any change to any of them starts a fresh cache (one compilation, about 12–20 s),
-and the stale one is never read.
+lives in a folder named after a hash of **every** source file of the package (:func:`kernel_cache_dir`), not
+only those that import Numba: a module that compiles nothing can still change what the compiled kernels run (a
+component registered in it changes the registry's table, which the compiled dispatch is written from). Any
+change to any of them starts a fresh cache (one compilation, about 12–20 s), and the stale one is never read.
+
+**The registry's table.** The compiled dispatch of each kind of component (:mod:`drillstring.forces.registry`)
+is written from the table of the package's components, their names and codes. The first process that packs a
+model into a cache folder writes that table there (:data:`MANIFEST`, :func:`check_registry`); every later one
+compares its own table with it and refuses a mismatch (a component registered as part of the package at run
+time, a folder reused under another version), naming the components that differ, instead of running cached
+kernels written for another table.
 
 The folder is ``$NUMBA_CACHE_DIR/kernels-<hash>`` when the user sets ``NUMBA_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/drillstring/kernels-<hash>`` (``~/.cache/drillstring/...``). :func:`configure` is called when
@@ -18,14 +26,17 @@ package and find the same folder. Numba falls back to its own locations if the f
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import sys
 from pathlib import Path
 
-__all__ = ["configure", "kernel_cache_dir", "kernel_sources"]
+__all__ = ["MANIFEST", "check_registry", "configure", "kernel_cache_dir", "kernel_sources"]
 
 #: Prefix of the cache folder's name; the rest is the sources' hash.
 PREFIX = "kernels-"
+#: The registry's table written in the cache folder (:func:`check_registry`).
+MANIFEST = "registry.json"
 
 
 def _package_root(package: Path | None) -> Path:
@@ -33,20 +44,18 @@ def _package_root(package: Path | None) -> Path:
 
 
 def _kernel_files(root: Path) -> list[tuple[Path, bytes]]:
-    """``(path, contents)`` of the source files under ``root`` that import Numba, sorted, each read once."""
+    """``(path, contents)`` of every source file (``*.py``) under ``root``, sorted, each read once."""
     files = []
     for path in sorted(root.rglob("*.py")):
         try:
-            data = path.read_bytes()
+            files.append((path, path.read_bytes()))
         except OSError:
             continue
-        if b"from numba" in data or b"import numba" in data:
-            files.append((path, data))
     return files
 
 
 def kernel_sources(package: Path | None = None) -> list[Path]:
-    """The package's source files that use Numba (they import it), sorted."""
+    """The package's source files the cache is keyed on: every one of them (module docstring), sorted."""
     return [path for path, _ in _kernel_files(_package_root(package))]
 
 
@@ -81,3 +90,40 @@ def configure() -> Path:
     if numba is not None:  # imported before the package: its configuration was read already
         numba.config.CACHE_DIR = str(folder)
     return folder
+
+
+def check_registry(table: dict, folder: Path | None = None) -> None:
+    """Compare the registry's ``table`` (kind -> {name: code} of the package's compiled components) with the one
+    written in the cache ``folder`` (Numba's cache folder by default): write it when there is none, RuntimeError
+    naming the differing components when it differs (module docstring). Nothing is checked when the folder
+    cannot be read or written (Numba then compiles afresh: nothing stale is read either)."""
+    if folder is None:
+        given = os.environ.get("NUMBA_CACHE_DIR", "")  # set by configure() when the package is imported
+        if not given:
+            return
+        folder = Path(given)
+    path = Path(folder) / MANIFEST
+    mine = {kind: {name: float(code) for name, code in sorted(entries.items())}
+            for kind, entries in sorted(table.items())}
+    try:
+        written = json.loads(path.read_text())
+    except FileNotFoundError:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            temporary = path.with_name(f"{MANIFEST}.{os.getpid()}")
+            temporary.write_text(json.dumps(mine, indent=1))
+            os.replace(temporary, path)  # atomic: a concurrent reader sees the whole table or none
+        except OSError:
+            pass
+        return
+    except (OSError, ValueError):
+        return
+    if written != mine:
+        differ = []
+        for kind in sorted(set(written) | set(mine)):
+            theirs, ours = written.get(kind, {}), mine.get(kind, {})
+            differ += [f"{kind} {name!r}: code {theirs.get(name)} in the cache, {ours.get(name)} here"
+                       for name in sorted(set(theirs) | set(ours)) if theirs.get(name) != ours.get(name)]
+        raise RuntimeError(f"the compiled kernels in {folder} were written for another table of components "
+                           f"({'; '.join(differ)}): refusing to run them; remove that folder or register "
+                           f"components from outside the package (docs/extending.md)")

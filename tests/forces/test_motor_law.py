@@ -10,7 +10,7 @@ import pytest
 
 from drillstring.case import CaseError, case_from_dict, load_case
 from drillstring.forces.motor import PositiveDisplacementMotor, case_motor, positive_displacement_kernel
-from drillstring.forces.registry import MOTOR, MOTOR_CODE, motor, motors, pack
+from drillstring.forces.registry import MOTOR, MOTOR_CODE, MotorContext, motor, motors, pack
 
 GALLON = 3.785411784e-3  # m³
 PSI = 6894.757293168361  # Pa
@@ -43,7 +43,9 @@ def test_the_law_is_the_line_from_no_load_speed_to_stall():
     torque = m.evaluate(speeds)
     np.testing.assert_allclose(torque, 8000.0 * (1 - speeds / w0), rtol=1e-14)
     assert torque[1] == 8000.0 and abs(torque[3]) < 1e-9  # stall, no load
-    np.testing.assert_allclose([positive_displacement_kernel(m.kernel_array(), s) for s in speeds], torque, rtol=1e-15)
+    none = np.zeros(0)
+    np.testing.assert_allclose([positive_displacement_kernel(m.kernel_array(), MotorContext(0.0, s), none, none)
+                                for s in speeds], torque, rtol=1e-15)
     np.testing.assert_allclose(m.speed_at(torque), speeds, atol=1e-12)
     # Jacobian against a central difference (the law is linear: exact)
     assert m.jacobian(1.0) == pytest.approx((m.evaluate(1.5) - m.evaluate(0.5)) / 1.0, rel=1e-12)

@@ -72,8 +72,13 @@ def stability(
         table.add_row("motor differential pressure", f"{pressure(steady['differential_pressure']):,.3f}",
                       pressure.label)
     drive = payload.get("top_drive")
-    if drive:
-        tuned = set(drive["tuned"])
+    if drive and "controller" not in drive:  # another top boundary: its own summary (SI), whatever it holds
+        table.add_row(escape(f"top boundary: {drive.get('top_boundary', '?')}"), "", "")
+        for key, value in drive.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                table.add_row(escape(key.replace("_", " ")), f"{value:,.6g}", "SI")
+    elif drive:
+        tuned = set(drive.get("tuned", ()))
         mark = {name: " (tuned)" if name in tuned else "" for name in ("proportional_gain", "integral_gain")}
         table.add_row(escape(f"top drive: {drive['controller']}, inertia"), f"{drive['inertia']:,.1f}", "kg·m²")
         table.add_row("proportional gain" + mark["proportional_gain"], f"{drive['proportional_gain']:,.1f}",

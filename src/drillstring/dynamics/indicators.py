@@ -43,9 +43,10 @@ def bit_area(case) -> float:
 
 
 def has_top_drive(case) -> bool:
-    """Whether ``case`` turns its string with a top drive (``top_drive.controller`` other than
-    ``"imposed_speed"``): its quill speed and surface torque then vary and are recorded in studies."""
-    return case.top_drive.controller != "imposed_speed"
+    """Whether ``case`` turns its string with a driving top boundary (``top_drive.controller`` other than
+    ``"imposed_speed"``, or another ``top_drive.boundary``: :attr:`~drillstring.case.Case.top_driven`): its quill
+    speed and surface torque then vary and are recorded in studies."""
+    return case.top_driven
 
 
 def mechanical_specific_energy(force_on_bit: float, torque_on_bit: float, top_speed: float,

@@ -116,6 +116,7 @@ from drillstring.forces.registry import (
     contact_law_forces,
     hook_load as registered_hook_load,
     hook_load_force,
+    MotorContext,
     motor_torque,
     pack,
     top_boundary_torque,
@@ -386,16 +387,24 @@ def _top_drive(d, t, y, out):
 
 
 @inner_kernel()
-def _downhole_motor(d, y):
+def _motor_speed(d, y):
     """A downhole motor's rotor speed relative to its stator ω_m [rad/s] (the torsional row
-    :attr:`RotorRelease.relative`) and its torque [N·m] (the registered motor,
-    :func:`~drillstring.forces.registry.motor_torque`), for the state ``y``."""
+    :attr:`RotorRelease.relative`) for the state ``y``."""
     n = d.omega2.shape[0]
     t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     speed = 0.0
     for j in range(t0, t1):
         speed += d.torsion_rows[_TORSION_MOTOR, j - t0] * y[n + j]
-    return speed, motor_torque(d.laws, speed)
+    return speed
+
+
+@inner_kernel()
+def _downhole_motor(d, t, y, out):
+    """A downhole motor's ω_m [rad/s] (:func:`_motor_speed`) and its torque [N·m] (the registered motor,
+    :func:`~drillstring.forces.registry.motor_torque`), for the state ``y`` at time ``t`` [s]; the motor reads
+    its states in ``y`` and writes their rates in ``out`` where the registry put them."""
+    speed = _motor_speed(d, y)
+    return speed, motor_torque(d.laws, MotorContext(t, speed), y, out)
 
 
 @njit(cache=True)
@@ -418,7 +427,7 @@ def _rhs_kernel(d, t, y, out):
     if d.laws[TOP_BOUNDARY_CODE] != 0.0:
         _top_drive(d, t, y, out)
     if d.laws[MOTOR_CODE] != 0.0:  # a downhole motor: +T on the rotor side, -T on the stator side
-        _, motor = _downhole_motor(d, y)
+        _, motor = _downhole_motor(d, t, y, out)
         for j in range(t0, t1):
             acc[j] += d.torsion_rows[_TORSION_MOTOR, j - t0] * motor
     # bit-rock interaction at the bit node; the hook's extra pull at the top during a ramped start
@@ -706,10 +715,11 @@ def _stiff_bit_law(d, t, y, shapes, partials):
         if d.laws[MOTOR_CODE] != 0.0:
             for j in range(t0, t1):
                 shapes[2, j] = d.torsion_rows[_TORSION_MOTOR, j - t0]
-            relative_speed, _ = _downhole_motor(d, y)
+            relative_speed = _motor_speed(d, y)
             step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
-            partials[2, 0] = (motor_torque(d.laws, relative_speed + step)
-                              - motor_torque(d.laws, relative_speed - step)) / (2.0 * step)
+            rates = np.empty(y.shape[0])  # the motor writes its states' rates: not needed here
+            partials[2, 0] = (motor_torque(d.laws, MotorContext(t, relative_speed + step), y, rates)
+                              - motor_torque(d.laws, MotorContext(t, relative_speed - step), y, rates)) / (2.0 * step)
     return d.omega2, d.damping_t, d.damping_blocks
 
 
@@ -826,7 +836,7 @@ def observe_kernel(d, o, t, y, rate, out):
     out[_MOTOR_SPEED] = 0.0
     out[_MOTOR_TORQUE] = 0.0
     if d.laws[MOTOR_CODE] != 0.0:
-        out[_MOTOR_SPEED], out[_MOTOR_TORQUE] = _downhole_motor(d, y)
+        out[_MOTOR_SPEED], out[_MOTOR_TORQUE] = _downhole_motor(d, t, y, np.empty(y.shape[0]))
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
         j = o.probe_nodes[k]
@@ -1151,7 +1161,7 @@ class ReducedOrderModel:
         """True when the compiled kernels hold the model's components (the package's registered ones); a
         component registered outside the package runs through :meth:`rhs_reference` only
         (:mod:`drillstring.forces.registry`)."""
-        return all(compiled(c) for c in (self.bit_rock, self.top_drive, self.hook_load, self.contact)
+        return all(compiled(c) for c in (self.bit_rock, self.top_drive, self.hook_load, self.contact, self.motor)
                    if c is not None)
 
     def require_compiled(self) -> None:
@@ -1211,8 +1221,12 @@ class ReducedOrderModel:
                 y[first:first + self.top_drive.n_states])
             states[first - 2 * n:first - 2 * n + self.top_drive.n_states] = rates
             acceleration = acceleration + self.quill_shapes * torque
-        if self.motor is not None:  # +T on the rotor side, -T on the stator side
-            acceleration = acceleration + self.motor_shapes * float(self.motor.evaluate(self.motor_shapes @ eta_dot))
+        if self.motor is not None:  # +T on the rotor side, -T on the stator side; its states where the layout puts them
+            first = self.layout.states["motor"]
+            torque, rates = self.motor.evaluate_at(MotorContext(t, self.motor_shapes @ eta_dot),
+                                                   y[first:first + self.motor.n_states])
+            states[first - 2 * n:first - 2 * n + self.motor.n_states] = rates
+            acceleration = acceleration + self.motor_shapes * float(torque)
         if self.nonlinear == "full":
             q = self.basis @ eta
             qd = self.basis @ eta_dot

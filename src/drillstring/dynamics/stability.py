@@ -40,7 +40,8 @@ controller has integral action; with ``k_i = 0`` the speed at which ``k_p (Ω �
 found by fixed-point iteration), the motor torque ``τ_m`` balances the torque on bit and the rigid-rotation
 friction ``c2 ω`` (the rigid-rotation equation), the integral state is ``τ_m / k_i`` and the z_torque filter
 holds the surface torque. The linearisation (2) then takes the whole loop: ``δτ_m`` from the controller's
-Jacobian (:meth:`~drillstring.forces.top_drive.TopDriveParameters.jacobian`) on the quill speed ``qᵀδη̇``
+Jacobian at the steady state (the boundary's ``jacobian_at``, :mod:`drillstring.forces.registry`) on the
+quill speed ``qᵀδη̇``
 and the surface torque ``sᵀδη``, acting through ``q`` (the torsional shapes at the top), and the controller's
 states as extra rows. The rigid rotation's angle, like the depth drilled, enters no equation and is left
 out. **Off bottom** (``bit_rock.law = "off_bottom"``) the steady state is rotation without penetration
@@ -78,7 +79,7 @@ from drillstring.dynamics.delay_stability import (
     regenerative_coupling,
 )
 from drillstring.dynamics.rom import ReducedOrderModel, rigid_axial_column
-from drillstring.forces.registry import BitContext, BitSteadyState
+from drillstring.forces.registry import BitContext, BitSteadyState, MotorContext, TopContext
 from drillstring.units import quantity_text
 
 #: Families reported for the eigenvalues (lateral y and z together).
@@ -415,6 +416,8 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
         states[first:first + drive.n_states] = drive.steady_states(motor, float(model.surface_torque_shapes @ offsets))
     downhole = None
     if model.motor is not None:
+        first = model.layout.states["motor"] - 2 * n
+        states[first:first + model.motor.n_states] = model.motor.steady_states(motor_speed)
         torque = float(model.motor.evaluate(motor_speed))
         downhole = {"motor_speed": motor_speed, "motor_torque": torque,
                     "differential_pressure": float(model.motor.differential_pressure(torque)),
@@ -439,13 +442,20 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     a[:n, n:2 * n] = np.eye(n)
     a[n:2 * n, :n] = -np.diag(model.omega2)
     a[n:2 * n, n:2 * n] = coupling - model.damping
-    if model.motor is not None:  # the downhole motor's torque pair: dT/dω_m (ω_m = motor_shapesᵀ η̇)
-        jac_motor = model.motor.jacobian(steady.motor["motor_speed"])
-        a[n:2 * n, n:2 * n] += jac_motor * np.outer(model.motor_shapes, model.motor_shapes)
+    if model.motor is not None:  # the downhole motor's torque pair: dT/dω_m (ω_m = motor_shapesᵀ η̇), its states
+        m, first, k = model.motor_shapes, model.layout.states["motor"], model.motor.n_states
+        # rows (T, each state's rate), columns (ω_m, each state), at the steady state
+        law = model.motor.jacobian_at(*_motor_point(model, steady))
+        a[n:2 * n, n:2 * n] += law[0, 0] * np.outer(m, m)
+        if k:
+            a[n:2 * n, first:first + k] += np.outer(m, law[0, 1:])
+            a[first:first + k, n:2 * n] += np.outer(law[1:, 0], m)
+            a[first:first + k, first:first + k] += law[1:, 1:]
     drive = model.top_drive
     if drive.drives:
         q, s = model.quill_shapes, model.surface_torque_shapes
-        law = drive.jacobian()  # rows (τ_m, then each state's rate), columns (θ̇₀, T_s, then each state)
+        # rows (τ_m, then each state's rate), columns (θ̇₀, T_s, then each state), at the steady state
+        law = drive.jacobian_at(*_top_point(model, steady))
         first = model.layout.states["top_boundary"]
         rows = [(slice(n, 2 * n), q, law[0])] + [(first + k, 1.0, law[1 + k]) for k in range(drive.n_states)]
         for row, weight, d in rows:
@@ -454,6 +464,23 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
             for k in range(drive.n_states):
                 a[row, first + k] += weight * d[2 + k]
     return a
+
+
+def _top_point(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[TopContext, np.ndarray]:
+    """The top boundary's operating point in steady drilling: its context (the quill speed and surface torque of
+    the steady state; ``time`` infinite, past any start-up ramp) and its states."""
+    n, first = model.size, model.layout.states["top_boundary"]
+    y = steady.state
+    ctx = TopContext(math.inf, float(model.base_speed + model.quill_shapes @ y[n:2 * n]),
+                     float(model.surface_torque_shapes @ y[:n]))
+    return ctx, y[first:first + model.top_drive.n_states]
+
+
+def _motor_point(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[MotorContext, np.ndarray]:
+    """A downhole motor's operating point in steady drilling: its context (its steady speed) and its states."""
+    first = model.layout.states["motor"]
+    return (MotorContext(math.inf, steady.motor["motor_speed"]),
+            steady.state[first:first + model.motor.n_states])
 
 
 def _context(model: ReducedOrderModel, steady: SteadyDrilling) -> BitContext:
@@ -469,8 +496,9 @@ def _family_of(model: ReducedOrderModel) -> np.ndarray:
 
 def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:
     """The state matrix without the rigid axial position (the depth drilled: no equation depends on it) and,
-    with a top drive, the rigid rotation's angle (likewise) and, with ``integral_gain = 0``, the controller's
-    integral state (likewise), and the mask of the rows kept."""
+    with a top drive, the rigid rotation's angle (likewise) and any state of a component that no equation
+    depends on (its column of the matrix zero: the integral state of a controller with ``integral_gain = 0``),
+    and the mask of the rows kept."""
     keep = np.ones(model.state_size, dtype=bool)
     keep[rigid_axial_column(model)] = False
     if model.rigid_rotation_column is not None:
@@ -478,9 +506,10 @@ def _informative_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> tup
     if model.rotor is not None:  # the rigid rotations' angles (the rotor's relative one included): likewise
         torsional = np.array([f == "torsional" for f in model.family])
         keep[:model.size][torsional & (model.omega2 == 0.0)] = False
-    if model.top_drive.n_states and model.top_drive.integral_gain == 0.0:
-        keep[2 * model.size] = False  # the integral state: with k_i = 0 no equation depends on it
-    return linearized_matrix(model, steady)[np.ix_(keep, keep)], keep
+    matrix = linearized_matrix(model, steady)
+    components = np.arange(model.state_size) >= 2 * model.size
+    keep[components & ~matrix.any(axis=0)] = False  # a component's state no equation depends on
+    return matrix[np.ix_(keep, keep)], keep
 
 
 def delay_matrices(model: ReducedOrderModel, steady: SteadyDrilling) -> tuple[np.ndarray, np.ndarray]:

@@ -60,10 +60,10 @@ def _partials(function, point: np.ndarray) -> np.ndarray:
 BIT_INPUTS = (("axial velocity", "m/s"), ("bit speed", "rad/s"), ("depth of cut", "m"))
 
 
-def _bit_law_at(model, t: float, y: np.ndarray):
-    """The bit's inputs ``(u̇ [m/s], θ̇ [rad/s], d [m])`` at ``(t, y)`` and the law's ``(force, torque)`` as a
-    function of them (its NumPy reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named
-    context, the bit's position and angle held)."""
+def _bit_context_at(model, t: float, y: np.ndarray):
+    """The bit–rock law's named context (:class:`~drillstring.forces.registry.BitContext`) at ``(t, y)``: the
+    bit's velocity ``b_uᵀη̇`` [m/s], speed ``Ω + b_tᵀη̇`` [rad/s], depth of cut [m] (delayed laws, from the
+    model's bit history), position, angle and the static weight on bit."""
     from drillstring.dynamics.delay import delayed_difference
     from drillstring.forces.registry import bit_context
 
@@ -71,12 +71,20 @@ def _bit_law_at(model, t: float, y: np.ndarray):
     eta_dot = y[n:2 * n]
     position, angle = model.bit_position(t, y)
     depth = delayed_difference(model.history, angle, position) if model.bit_rock.delayed else 0.0
-    point = np.array([model.bit_u @ eta_dot, model.base_speed + model.bit_t @ eta_dot, depth])
+    return bit_context(model.bit_u @ eta_dot, model.base_speed + model.bit_t @ eta_dot, depth, time=t,
+                       position=position, angle=angle, weight_on_bit=model.weight_on_bit)
+
+
+def _bit_law_at(model, t: float, y: np.ndarray):
+    """The bit's inputs ``(u̇ [m/s], θ̇ [rad/s], d [m])`` at ``(t, y)`` and the law's ``(force, torque)`` as a
+    function of them (its NumPy reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named
+    context, the bit's position and angle held)."""
+    ctx = _bit_context_at(model, t, y)
+    point = np.array([ctx.axial_velocity, ctx.bit_speed, ctx.depth_of_cut], dtype=float)
 
     def forces(x: np.ndarray) -> np.ndarray:
-        ctx = bit_context(x[0], x[1], x[2], time=t, position=position, angle=angle,
-                          weight_on_bit=model.weight_on_bit)
-        return np.array(model.bit_rock.evaluate_at(ctx), dtype=float).ravel()
+        moved = ctx._replace(axial_velocity=x[0], bit_speed=x[1], depth_of_cut=x[2])
+        return np.array(model.bit_rock.evaluate_at(moved), dtype=float).ravel()
 
     return point, forces
 
@@ -102,13 +110,18 @@ def bit_rock_jump(model, t: float, y: np.ndarray) -> str:
 
 
 def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
-    """The bit–rock law's part of ``∂(η̈)/∂y`` (n rows), from the law's own partial derivatives (its NumPy
-    reference :meth:`~drillstring.forces.registry.BitLaw.evaluate_at` on the named context, so any registered
-    law): its force and torque act along the bit's shapes ``b_u``, ``b_t`` and depend on the bit's velocity
-    ``b_uᵀη̇``, speed ``Ω + b_tᵀη̇`` and (delayed laws) depth of cut through the bit's position ``b_uᵀη``."""
+    """The bit–rock law's part of ``∂(η̈)/∂y`` (n rows), from the law's own Jacobian at the state
+    (:meth:`~drillstring.forces.registry.BitLaw.jacobian_at` on the named context and, for a delayed law,
+    :meth:`depth_partials`, so any registered law): its force and torque act along the bit's shapes ``b_u``,
+    ``b_t`` and depend on the bit's velocity ``b_uᵀη̇``, speed ``Ω + b_tᵀη̇`` and (delayed laws) depth of cut
+    through the bit's position ``b_uᵀη``."""
     n = model.size
-    point, forces = _bit_law_at(model, t, y)
-    law = _partials(forces, point)
+    bit = model.bit_rock
+    ctx = _bit_context_at(model, t, y)
+    law = np.zeros((2, 3))
+    law[:, :2] = np.asarray(bit.jacobian_at(ctx), dtype=float)
+    if bit.delayed:
+        law[:, 2] = np.asarray(bit.depth_partials(ctx), dtype=float).ravel()
     shapes = np.column_stack([model.bit_u, model.bit_t])  # (n, 2): force along b_u, torque along b_t
     rows = np.zeros((n, len(y)))
     rows[:, n:2 * n] = shapes @ law[:, :2] @ shapes.T
@@ -118,8 +131,8 @@ def _bit_rock_rows(model, t: float, y: np.ndarray) -> np.ndarray:
 
 def _top_drive_rows(model, t: float, y: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
     """The driving top boundary's part of ``∂(η̈, ż)/∂y``: its motor torque acts along the quill's shapes and
-    depends on the quill speed, the surface torque and its states (partial derivatives of its NumPy reference
-    :meth:`~drillstring.forces.registry.TopBoundary.evaluate_at` on the named context, so any registered
+    depends on the quill speed, the surface torque and its states (its own Jacobian at the state,
+    :meth:`~drillstring.forces.registry.TopBoundary.jacobian_at` on the named context, so any registered
     boundary, with states or without), and its states' own rows (from the finite-difference ``jacobian``)."""
     from drillstring.forces.registry import TopContext
 
@@ -131,7 +144,7 @@ def _top_drive_rows(model, t: float, y: np.ndarray, jacobian: np.ndarray) -> np.
     first = model.layout.states["top_boundary"]
     point = np.array([model.base_speed + model.quill_shapes @ y[n:2 * n], model.surface_torque_shapes @ y[:n],
                       *y[first:first + states]])
-    torque = _partials(lambda x: [boundary.evaluate_at(TopContext(t, x[0], x[1]), x[2:])[0]], point)[0]
+    torque = np.asarray(boundary.jacobian_at(TopContext(t, point[0], point[1]), point[2:]), dtype=float)[0]
     rows[:n, n:2 * n] = np.outer(model.quill_shapes, torque[0] * model.quill_shapes)
     rows[:n, :n] = np.outer(model.quill_shapes, torque[1] * model.surface_torque_shapes)
     rows[:n, first:first + states] = np.outer(model.quill_shapes, torque[2:])
@@ -171,6 +184,8 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
     named only for a model with lateral coordinates or turning loads). Each term's rate is the spectral radius
     of its part with the kinematic rows ``η' = η̇`` (a jump's "rate" grows as the difference step shrinks: it
     says the term is discontinuous there, not how stiff)."""
+    from drillstring.forces.registry import MotorContext
+
     n = model.size
     y = np.asarray(y, dtype=float)
     size = len(y)
@@ -193,7 +208,9 @@ def stiffness_rates(model, t: float, y: np.ndarray) -> dict[str, float]:
     top_drive = _top_drive_rows(model, t, y, jacobian)
     motor = np.zeros((n, size))
     if model.motor is not None:  # its torque pair along the rotor's relative row, from the motor's own slope
-        slope = model.motor.jacobian(model.motor_shapes @ y[n:2 * n])
+        first = model.layout.states["motor"]
+        slope = model.motor.jacobian_at(MotorContext(t, model.motor_shapes @ y[n:2 * n]),
+                                        y[first:first + model.motor.n_states])[0, 0]
         motor[:, n:2 * n] = slope * np.outer(model.motor_shapes, model.motor_shapes)
         rates[MOTOR] = _rate(motor, n)
     rest = jacobian[:n] - linear - bit_rock - top_drive[:n] - motor

@@ -413,4 +413,4 @@ def case_bit_rock(case) -> BitLaw:
     (:func:`~drillstring.forces.registry.bit_law`), built from the case by its own ``from_case``."""
     from drillstring.forces.registry import bit_law
 
-    return bit_law(case.bit_rock.law).from_case(case)
+    return bit_law(case.bit_rock.law, "bit_rock.law").from_case(case)

@@ -100,6 +100,7 @@ from numba import njit
 
 from drillstring.case import Contact
 from drillstring.forces.registry import ContactContext, ContactLaw, register
+from drillstring.forces.registry import contact_law as registered_contact_law
 
 __all__ = [
     "ContactParameters",
@@ -477,7 +478,7 @@ def contact_jacobian(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
     return jac
 
 
-def case_contact(case) -> ContactParameters:
-    """The borehole contact law of a :class:`~drillstring.case.Case` (``[contact]``,
-    :meth:`ContactParameters.from_case`)."""
-    return ContactParameters.from_case(case)
+def case_contact(case) -> ContactLaw:
+    """The borehole contact law of a :class:`~drillstring.case.Case`: the registered law ``contact.law`` names
+    (``"penalty"``: :meth:`ContactParameters.from_case`, its keys ``[contact]``)."""
+    return registered_contact_law(case.contact.law, "contact.law").from_case(case)

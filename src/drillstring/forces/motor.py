@@ -45,16 +45,18 @@ import numpy as np
 from numba import njit
 
 from drillstring.case import DownholeMotor
-from drillstring.forces.registry import Motor, register
+from drillstring.forces.registry import Motor, MotorContext, case_keys, register
+from drillstring.forces.registry import motor as registered_motor
 
 __all__ = ["PositiveDisplacementMotor", "case_motor", "positive_displacement_kernel"]
 
 
 @njit(cache=True)
-def positive_displacement_kernel(args, relative_speed):
-    """Eq. (2): the rotor's torque [N·m] at its speed ``relative_speed`` ω_m [rad/s] relative to the stator;
-    ``args`` = [T_s (stall torque, N·m), ω₀ (no-load speed, rad/s)]."""
-    return args[0] * (1.0 - relative_speed / args[1])
+def positive_displacement_kernel(args, ctx, states, rates):
+    """Eq. (2): the rotor's torque [N·m] at its speed ``ctx.relative_speed`` ω_m [rad/s] relative to the stator
+    (:class:`~drillstring.forces.registry.MotorContext`); ``args`` = [T_s (stall torque, N·m), ω₀ (no-load
+    speed, rad/s)]; no states (``states``, ``rates`` empty)."""
+    return args[0] * (1.0 - ctx.relative_speed / args[1])
 
 
 @register
@@ -89,9 +91,9 @@ class PositiveDisplacementMotor(Motor):
         """The case's ``[motor]`` (None without): its flow rate by default the case's pumped flow
         (``fluid.flow_rate``), its displacement from ``speed_per_flow`` when given so, its stall torque from
         ``max_differential_pressure`` by eq. (2) when given so."""
-        m = case.motor
-        if m is None:
+        if case.motor is None or case.motor.law != cls.name:
             return None
+        m = case_keys(case.motor, cls)
         flow = case.flow_rate if m.flow_rate is None else m.flow_rate
         if not flow > 0.0:
             raise ValueError(f"motor.flow_rate: the case pumps no mud (fluid flow rate {flow:g} m3/s): give "
@@ -121,9 +123,13 @@ class PositiveDisplacementMotor(Motor):
         broadcast)."""
         return self.stall_torque * (1.0 - np.asarray(relative_speed, dtype=float) / self.no_load_speed)
 
-    def jacobian(self, relative_speed=0.0) -> float:
-        """dT/dω_m = −T_s/ω₀ [N·m·s/rad] (the same at every speed: the law is linear)."""
-        return -self.stall_torque / self.no_load_speed
+    def evaluate_at(self, ctx: MotorContext, states) -> tuple[float, np.ndarray]:
+        """NumPy reference of :func:`positive_displacement_kernel`: ``(T [N·m], no rates)``."""
+        return self.evaluate(ctx.relative_speed), np.zeros(0)
+
+    def jacobian_at(self, ctx: MotorContext, states) -> np.ndarray:
+        """``[[dT/dω_m]]`` = ``[[−T_s/ω₀]]`` [N·m·s/rad] (the same at every speed: the law is linear)."""
+        return np.array([[-self.stall_torque / self.no_load_speed]])
 
     def speed_at(self, torque):
         """The rotor's speed ω_m [rad/s] relative to the stator at which it gives ``torque`` [N·m] (eq. (2)
@@ -143,5 +149,8 @@ class PositiveDisplacementMotor(Motor):
 
 
 def case_motor(case) -> Motor | None:
-    """The downhole motor of a :class:`~drillstring.case.Case` (its ``[motor]``), None without one."""
-    return PositiveDisplacementMotor.from_case(case)
+    """The downhole motor of a :class:`~drillstring.case.Case` (its ``[motor]``; the registered motor that
+    ``motor.law`` names), None without one."""
+    if case.motor is None:
+        return None
+    return registered_motor(case.motor.law, "motor.law").from_case(case)

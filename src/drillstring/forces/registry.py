@@ -19,9 +19,10 @@ lag angle) and ``depth_partials(ctx)``.
 **Top boundaries** (:class:`TopBoundary`): the top of the torsion; those that drive the string
 (``drives = True``) declare ``n_states`` (their own states, integrated with the modal coordinates),
 ``kernel(args, ctx, states, rates) -> motor torque`` (reading the named context :class:`TopContext`; writes
-the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian()`` (rows: torque then each
-state's rate; columns: quill speed, surface torque, then each state), ``steady_states(motor_torque,
-surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and ``check_steady_torque``.
+the states' rates), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian_at(ctx, states)`` (at that
+operating point; rows: torque then each state's rate; columns: quill speed, surface torque, then each state),
+``steady_states(motor_torque, surface_torque)``, ``top_inertia``, ``steady_speed(motor_torque)`` and
+``check_steady_torque``. The case's ``top_drive.boundary`` names it (``"top_drive"`` by default).
 
 **Contact laws** (:class:`ContactLaw`): the force of the borehole wall on the string at the contact
 stations outside their clearance, from the named context :class:`ContactContext` (arrays over those stations:
@@ -47,12 +48,24 @@ starts off bottom (``clearance`` [m] above the rock, the string hanging from the
 ``initial.start`` names it (``"on_bottom"``: none, code 0, the kernels add nothing; ``"ramp"``).
 
 **Downhole motors** (:class:`Motor`): a rotor between two sections (:mod:`drillstring.rotor` releases its
-rotation), ``kernel(args, relative_speed) -> torque`` (+T on the rotor side, −T on the stator side),
-``evaluate(relative_speed)``, ``jacobian(relative_speed)``, ``position`` (the rotor station [m]) and
-``n_states``; the kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0.
+rotation), ``kernel(args, ctx, states, rates) -> torque`` (+T on the rotor side, −T on the stator side; the
+named context :class:`MotorContext`; writes its states' rates), ``evaluate_at(ctx, states) -> (torque,
+rates)``, ``jacobian_at(ctx, states)`` (rows: torque then each state's rate; columns: the relative speed, then
+each state), ``steady_states(relative_speed)``, ``position`` (the rotor station [m]) and ``n_states``; the
+kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0.
 
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
-(:class:`~drillstring.case.TuckerWangKeys`, ...).
+(:class:`~drillstring.case.TuckerWangKeys`, ...), and the case names it in its kind's table (``bit_rock.law``,
+``top_drive.boundary``, ``contact.law``, ``motor.law``). A component's keys live in its own sub-table of that
+table, ``[bit_rock.<name>]``, read by :func:`case_keys`, so two components may use the same key name; the
+package's built-in components keep their keys in the kind's table itself, as case files have always written
+them.
+
+**Codes are stable.** A component's code in the kernels' array is derived from its kind and name
+(:func:`name_code`; or given explicitly, ``component_code`` in its class body), never from its rank among the
+registered names: registering another component never changes the code of one already there. The kernel cache
+is keyed on every source file of the package and checks the table of names and codes it was compiled with
+(:func:`drillstring.kernel_cache.check_registry`, called by :func:`pack`).
 
 **Offsets are computed, never written.** The compiled kernels read every component's numbers from one
 flat float array (one field of the kernels' data: every field is an argument of each inner kernel, and
@@ -78,55 +91,64 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import zlib
 from dataclasses import dataclass
-from typing import Any, ClassVar, NamedTuple
+from typing import Any
 
 import numpy as np
 from numba.core.extending import overload
+
+from drillstring.forces.protocol import (  # noqa: F401 (the protocol's names, re-exported: documented there)
+    BitContext,
+    BitLaw,
+    BitSteadyState,
+    ContactContext,
+    ContactLaw,
+    HookContext,
+    HookLoad,
+    Motor,
+    MotorContext,
+    TopBoundary,
+    TopContext,
+    TurningLoadSource,
+    bit_context,
+)
 
 __all__ = [
     "BIT_LAW",
     "HISTORY",
     "HOOK_LOAD",
     "HOOK_LOAD_CODE",
-    "HookContext",
-    "HookLoad",
     "MOTOR",
     "MOTOR_CODE",
+    "MOTOR_STATES",
     "TOP_BOUNDARY_CODE",
     "TOP_INERTIA",
     "HEADER",
-    "BitContext",
-    "BitLaw",
-    "BitSteadyState",
     "CONTACT_LAW",
     "CONTACT_LAW_CODE",
-    "ContactContext",
-    "ContactLaw",
     "contact_law",
     "contact_law_forces",
     "contact_laws",
     "Layout",
-    "Motor",
-    "TopBoundary",
-    "TopContext",
-    "bit_context",
     "bit_law",
     "bit_law_force",
     "bit_laws",
+    "case_keys",
     "compiled",
     "hook_load",
     "hook_load_force",
     "hook_loads",
-    "TurningLoadSource",
     "turning_load_source",
     "turning_load_sources",
     "motor",
     "motor_torque",
     "motors",
+    "name_code",
     "pack",
     "package_components",
     "register",
+    "registry_table",
     "top_boundaries",
     "top_boundary",
     "top_boundary_torque",
@@ -136,291 +158,15 @@ __all__ = [
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
 #: bit's history starts, the hook load's code (0: none, the kernels add nothing), the contact law's code and where
-#: its numbers start, the downhole motor's code (0: none) and where its numbers start.
+#: its numbers start, the downhole motor's code (0: none), where its numbers start and the index of its first state.
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
           "history", "hook_load_code", "contact_law_code", "contact_law",
-          "motor_code", "motor")
+          "motor_code", "motor", "motor_states")
 (BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY,
- HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW, MOTOR_CODE, MOTOR) = range(len(HEADER))
+ HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW, MOTOR_CODE, MOTOR, MOTOR_STATES) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
-
-class BitContext(NamedTuple):
-    """What a bit–rock law may read (SI; floats in the compiled kernels, array-likes in the references):
-    ``time`` [s], ``position`` u [m] of the bit from the static state (down), ``angle`` θ [rad],
-    ``axial_velocity`` u̇ [m/s] (> 0 drilling), ``bit_speed`` θ̇ [rad/s], ``depth_of_cut`` [m] per blade
-    (delayed laws; 0 for the others), ``weight_on_bit`` [N], the static one."""
-
-    time: Any
-    position: Any
-    angle: Any
-    axial_velocity: Any
-    bit_speed: Any
-    depth_of_cut: Any
-    weight_on_bit: Any
-
-
-def bit_context(axial_velocity=0.0, bit_speed=0.0, depth_of_cut=0.0, *, time=0.0, position=0.0, angle=0.0,
-                weight_on_bit=0.0) -> BitContext:
-    """A :class:`BitContext` by keyword (the fields a law does not read default to 0)."""
-    return BitContext(time, position, angle, axial_velocity, bit_speed, depth_of_cut, weight_on_bit)
-
-
-class TopContext(NamedTuple):
-    """What a top boundary may read: ``time`` [s], ``quill_speed`` θ̇₀ [rad/s], ``surface_torque`` T_s [N·m]
-    (the elastic torque of the top element)."""
-
-    time: Any
-    quill_speed: Any
-    surface_torque: Any
-
-
-class ContactContext(NamedTuple):
-    """What a contact law may read, one entry per contact station outside its gap (1-D float64 arrays, SI):
-    lateral displacements ``v``, ``w`` [m] and velocities ``v_dot``, ``w_dot`` [m/s] (0 unless the law
-    ``reads_lateral_velocity``), ``spin_speed`` θ̇x [rad/s], ``gap`` [m], ``outer_diameter`` [m] and the
-    station's ``stiffness`` [N/m]."""
-
-    v: Any
-    w: Any
-    v_dot: Any
-    w_dot: Any
-    spin_speed: Any
-    gap: Any
-    outer_diameter: Any
-    stiffness: Any
-
-
-class HookContext(NamedTuple):
-    """What a hook load may read: ``time`` [s] and the static ``weight_on_bit`` [N]."""
-
-    time: Any
-    weight_on_bit: Any
-
-
-@dataclass(frozen=True)
-class BitSteadyState:
-    """Steady drilling of a bit law at a bit speed: ``rate_of_penetration`` V [m/s] (0: rotation without
-    penetration), the ``axial_force`` [N] and ``torque`` [N·m] on the string, ``depth_of_cut`` [m] per blade
-    (0 for a law that reads none)."""
-
-    rate_of_penetration: float
-    axial_force: float
-    torque: float
-    depth_of_cut: float = 0.0
-
-
-class BitLaw:
-    """Base of the bit–rock laws (module docstring). Subclasses set the class attributes and the methods;
-    instances are the law's parameters (SI)."""
-
-    name: ClassVar[str]
-    #: numbers of :meth:`kernel_array`
-    kernel_size: ClassVar[int]
-    #: the compiled kernel ``kernel(args, ctx) -> (axial_force [N], torque [N·m])`` on the string
-    kernel: ClassVar[Any]
-    #: reads the depth of cut (the bit's history)
-    delayed: ClassVar[bool] = False
-    #: touches the rock (False: the bit hangs free)
-    on_bottom: ClassVar[bool] = True
-    #: its case keys, read from ``[bit_rock]``: its own pydantic model, with units and bounds
-    #: (:class:`~drillstring.case.TuckerWangKeys`, ...; None: it has none); ``[bit_rock]`` is their union
-    keys: ClassVar[Any] = None
-    #: code in the kernels' array (set by :func:`register`)
-    component_code: ClassVar[float] = 0.0
-
-    @classmethod
-    def from_case(cls, case) -> "BitLaw":
-        raise NotImplementedError
-
-    def kernel_array(self) -> np.ndarray:
-        raise NotImplementedError
-
-    def evaluate_at(self, ctx: BitContext):
-        """NumPy reference of :attr:`kernel`: ``(axial_force, torque)`` arrays, the context's fields broadcast."""
-        raise NotImplementedError
-
-    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
-        """``[[f_u, f_θ], [t_u, t_θ]]``: partials of the force and torque in u̇ and θ̇ at ``ctx``."""
-        raise NotImplementedError
-
-    def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState:
-        """Steady drilling at ``bit_speed`` Ω [rad/s] when the string pushes the bit with ``axial_load`` W [N]
-        less ``resistance`` c [N·s/m] times the rate of penetration: the V ≥ 0 with ``−f(V, Ω) = W − c V``
-        (a :class:`BitSteadyState`), None when there is none."""
-        raise NotImplementedError
-
-    def start_depth_of_cut(self, weight_on_bit: float, bit_speed: float) -> float:
-        """A delayed law's depth of cut [m] per blade under the bit at the start of a run on the static state:
-        that of its steady drilling under ``weight_on_bit`` [N] at ``bit_speed`` [rad/s] (0 when none)."""
-        steady = self.steady_drilling(bit_speed, weight_on_bit, 0.0)
-        return steady.depth_of_cut if steady is not None else 0.0
-
-    # -- conveniences over the context ---------------------------------------------------------------------
-    def evaluate(self, bit_axial_velocity, bit_speed, depth_of_cut=0.0):
-        """:meth:`evaluate_at` at the bit's axial velocity [m/s], speed [rad/s] and depth of cut [m] per blade."""
-        return self.evaluate_at(bit_context(bit_axial_velocity, bit_speed, depth_of_cut))
-
-
-class TopBoundary:
-    """Base of the top boundaries (module docstring). Instances are the boundary's parameters (SI).
-
-    A boundary that drives the string (``drives``) lumps ``top_inertia`` [kg·m²] at the quill (the torsional
-    basis is then free at the top, its first mode the rigid rotation), declares its ``n_states``, its kernel
-    ``kernel(args, ctx, states, rates) -> τ_m`` and NumPy reference ``evaluate_at(ctx, states) -> (τ_m,
-    rates)``, ``jacobian()`` (rows τ_m then each state's rate; columns θ̇₀, T_s, then each state),
-    ``steady_states(motor_torque, surface_torque)``, ``steady_speed(motor_torque)`` (the quill speed [rad/s]
-    at which it gives that torque; ValueError when none) and ``check_steady_torque(motor_torque)``."""
-
-    name: ClassVar[str]
-    #: drives the string through a motor torque (False: the top speed is imposed)
-    drives: ClassVar[bool] = True
-    kernel_size: ClassVar[int] = 0
-    kernel: ClassVar[Any] = None
-    component_code: ClassVar[float] = 0.0
-    #: its case keys (a pydantic model with units and bounds)
-    keys: ClassVar[Any] = None
-    #: the run starts from rest (a ramped set point) instead of spinning at the top speed
-    starts_at_rest: ClassVar[bool] = False
-
-    @property
-    def n_states(self) -> int:
-        return 0
-
-    def kernel_array(self) -> np.ndarray:
-        return np.zeros(0)
-
-    def check_steady_torque(self, motor_torque: float) -> None:
-        """ValueError when the boundary cannot give ``motor_torque`` [N·m] in steady rotation (none here)."""
-
-    def describe(self) -> dict:
-        """JSON-ready summary (SI)."""
-        return {"top_boundary": self.name}
-
-
-class Motor:
-    """Base of the downhole motors: a rotor between two sections of the string (docs/extending.md). The string
-    below the rotor station turns relative to the string above (:mod:`drillstring.rotor` releases that
-    rotation in the torsional family); the motor applies a torque ``T`` across it, ``+T`` on the rotor side and
-    ``−T`` on the stator side, from the relative speed ``ω_m`` [rad/s] (rotor minus stator). A motor declares
-    ``name``, ``keys``, ``from_case(case)`` (None when the case has no such motor), ``kernel_size``,
-    ``kernel_array()``, ``kernel(args, relative_speed) -> torque [N·m]`` (compiled), ``evaluate(relative_speed)``
-    (its NumPy reference), ``jacobian(relative_speed)`` (``dT/dω_m`` [N·m·s/rad]), ``n_states`` (0 here) and
-    ``position`` [m] (the rotor station from the top)."""
-
-    name: ClassVar[str]
-    kernel_size: ClassVar[int] = 0
-    kernel: ClassVar[Any] = None
-    keys: ClassVar[Any] = None
-    component_code: ClassVar[float] = 0.0
-    position: float
-
-    @property
-    def n_states(self) -> int:
-        return 0
-
-    def kernel_array(self) -> np.ndarray:
-        raise NotImplementedError
-
-    def evaluate(self, relative_speed):
-        raise NotImplementedError
-
-    def jacobian(self, relative_speed) -> float:
-        raise NotImplementedError
-
-    def describe(self) -> dict:
-        """JSON-ready summary (SI)."""
-        return {"motor": self.name}
-
-
-class ContactLaw:
-    """Base of the contact laws (module docstring). Instances are the law's parameters (SI)."""
-
-    name: ClassVar[str]
-    kernel_size: ClassVar[int] = 0
-    #: the compiled kernel ``kernel(args, ctx, force_v, force_w, torque)``: fills the forces [N] and torques [N·m]
-    kernel: ClassVar[Any] = None
-    component_code: ClassVar[float] = 0.0
-    #: its case keys (a pydantic model with units and bounds), read from ``[contact]``
-    keys: ClassVar[Any] = None
-    # k'_sh [N/m per m of string], the wall's distributed stiffness: station i gets k'_sh ℓ_i (the context's
-    # ``stiffness``, ContactStations.stiffness); a plain comment, not a documented attribute: each law documents
-    # its own field (a second description of the same attribute is a documentation-build error)
-    shock_stiffness: float
-
-    @classmethod
-    def from_case(cls, case) -> "ContactLaw":
-        raise NotImplementedError
-
-    @property
-    def reads_lateral_velocity(self) -> bool:
-        """Whether the law reads the stations' lateral velocities (the kernels gather them only then)."""
-        return True
-
-    def kernel_array(self) -> np.ndarray:
-        return np.zeros(0)
-
-    def evaluate_at(self, ctx: ContactContext):
-        """NumPy reference of :attr:`kernel`: ``(force_v, force_w, torque)`` arrays, one entry per station."""
-        raise NotImplementedError
-
-    def jacobian_at(self, ctx: ContactContext) -> np.ndarray:
-        """(n, 3, 5): rows force_v, force_w, torque; columns v, w, v̇, ẇ, θ̇x; one block per station."""
-        raise NotImplementedError
-
-
-class TurningLoadSource:
-    """Base of the turning-load sources (module docstring). Instances are the source's parameters (SI)."""
-
-    name: ClassVar[str]
-    #: its case keys (a pydantic model with units and bounds)
-    keys: ClassVar[Any] = None
-    #: rank among the package's sources when the case builds them (their entries are concatenated in this order)
-    order: ClassVar[int] = 0
-    component_code: ClassVar[float] = 0.0
-
-    @classmethod
-    def from_case(cls, case) -> "TurningLoadSource":
-        raise NotImplementedError
-
-    def loads(self, mesh):
-        """Its entries on ``mesh`` (a :class:`~drillstring.forces.excitation.TurningLoads`, empty when none)."""
-        raise NotImplementedError
-
-
-class HookLoad:
-    """Base of the hook loads (module docstring). Instances are the load's parameters (SI). A load that adds
-    nothing (``adds = False``, the reference start) has code 0 and no kernel."""
-
-    name: ClassVar[str]
-    #: adds a force (False: the kernels add nothing, code 0)
-    adds: ClassVar[bool] = True
-    kernel_size: ClassVar[int] = 0
-    #: the compiled kernel ``kernel(args, ctx) -> extra axial force [N]`` on the top along +x (down)
-    kernel: ClassVar[Any] = None
-    component_code: ClassVar[float] = 0.0
-    #: its case keys (a pydantic model with units and bounds), read from ``[initial]``
-    keys: ClassVar[Any] = None
-    #: the run starts off bottom, the string hanging from the hook, the bit ``clearance`` [m] above the rock
-    active: ClassVar[bool] = False
-    clearance: float = 0.0
-
-    @classmethod
-    def from_case(cls, case, weight_on_bit: float) -> "HookLoad":
-        """The load of a :class:`~drillstring.case.Case` whose static weight-on-bit is ``weight_on_bit`` [N]."""
-        raise NotImplementedError
-
-    def kernel_array(self) -> np.ndarray:
-        return np.zeros(0)
-
-    def evaluate_at(self, ctx: HookContext):
-        """NumPy reference of :attr:`kernel`: the extra axial force [N] at the top (``ctx.time`` may be an array)."""
-        return np.zeros_like(np.asarray(ctx.time, dtype=float))
-
-    def force(self, t):
-        """:meth:`evaluate_at` at time(s) ``t`` [s]."""
-        return self.evaluate_at(HookContext(t, 0.0))
 
 
 _REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {},
@@ -445,27 +191,74 @@ def _in_package(cls: type) -> bool:
     return cls.__module__.split(".")[0] == __name__.split(".")[0]
 
 
+#: Codes derived from names lie in [1, CODE_RANGE] (exact in float64).
+CODE_RANGE = 2**24
+
+
+def name_code(kind: str, name: str) -> float:
+    """The code of the component ``name`` of ``kind`` derived from its name alone (CRC-32 of ``kind:name``
+    folded into [1, :data:`CODE_RANGE`]): the same in every process and version, whatever else is registered."""
+    return float(zlib.crc32(f"{kind}:{name}".encode()) % CODE_RANGE + 1)
+
+
 def register(cls: type) -> type:
-    """Class decorator: register a bit–rock law or a top boundary under its ``name``. The package's
-    components get their code from their rank among the package's names of that kind (the same in every
-    process); one from outside the package a negative code (never in the compiled dispatch)."""
+    """Class decorator: register a component under its ``name``. Its code is given in its class body
+    (``component_code``, a positive whole number) or derived from its kind and name (:func:`name_code`),
+    never from the other registered names; 0 for one that the kernels skip (a top boundary that does not
+    drive, a hook load that adds nothing); negative for one from outside the package (never in the compiled
+    dispatch). ValueError when another class of the package holds the name or the code."""
     kind = _kind(cls)
     table = _REGISTRY[kind]
     known = table.get(cls.name)
     if known is not None and _in_package(known) and \
             (known.__module__, known.__qualname__) != (cls.__module__, cls.__qualname__):
         raise ValueError(f"{kind} {cls.name!r} is already registered by {known.__module__}.{known.__qualname__}")
+    given = cls.__dict__.get("component_code")
+    code = float(given) if given is not None and given > 0.0 else name_code(kind, cls.name)
+    if not _DISPATCHED[kind](cls):
+        code = 0.0
+    elif not _in_package(cls):
+        code = -code
+    clash = [c for n, c in table.items() if n != cls.name and code != 0.0 and c.component_code == code]
+    if clash:
+        raise ValueError(f"{kind} {cls.name!r}: its code {code:g} is that of {clash[0].name!r}: give it "
+                         f"another name or an explicit component_code")
+    cls.component_code = code
     table[cls.name] = cls
-    inside = sorted(n for n, c in table.items() if _in_package(c) and _DISPATCHED[kind](c))
-    outside = sorted(n for n, c in table.items() if not _in_package(c))
-    for name, c in table.items():
-        if name in inside:
-            c.component_code = float(inside.index(name) + 1)
-        elif name in outside:
-            c.component_code = -float(outside.index(name) + 1)
-        else:
-            c.component_code = 0.0
     return cls
+
+
+def registry_table() -> dict[str, dict[str, float]]:
+    """kind -> {name: code} of the package's components that the compiled dispatch holds (code > 0)."""
+    package_components()
+    return {kind: {name: c.component_code for name, c in sorted(table.items())
+                   if _in_package(c) and c.component_code > 0.0}
+            for kind, table in _REGISTRY.items()}
+
+
+_CHECKED: list = []
+
+
+def _check_cache_table() -> None:
+    """The kernel cache's check of :func:`registry_table` (once per process and table)."""
+    table = registry_table()
+    if _CHECKED != [table]:
+        from drillstring.kernel_cache import check_registry
+
+        check_registry(table)
+        _CHECKED[:] = [table]
+
+
+def case_keys(table, cls: type):
+    """The keys of the component ``cls`` from its case ``table`` (the kind's table of a case, e.g.
+    ``case.bit_rock``): its own sub-table ``[<kind table>.<name>]`` validated by its ``keys`` model (units
+    converted, bounds checked); a built-in component's keys are the kind's table itself."""
+    extra = getattr(table, "model_extra", None) or {}
+    if cls.name in extra:
+        return cls.keys.model_validate(dict(extra[cls.name]))
+    if cls.keys is not None and isinstance(table, cls.keys):
+        return table
+    return cls.keys.model_validate({})
 
 
 _LOADED = False
@@ -483,22 +276,25 @@ def package_components() -> None:
         importlib.import_module(f"drillstring.forces.{info.name}")
 
 
-def _lookup(kind: str, name: str):
+def _lookup(kind: str, name: str, field: str | None = None):
     package_components()
     table = _REGISTRY[kind]
     if name not in table:
-        raise ValueError(f"{kind.replace('_', ' ')} {name!r}: must be one of {', '.join(sorted(table))}")
+        what = f"{field} = {name!r}" if field else f"{kind.replace('_', ' ')} {name!r}"
+        raise ValueError(f"{what}: must be one of {', '.join(sorted(table))} (the registered "
+                         f"{kind.replace('_', ' ')}s)")
     return table[name]
 
 
-def bit_law(name: str) -> type[BitLaw]:
-    """The registered bit–rock law ``name`` (ValueError naming the registered ones otherwise)."""
-    return _lookup("bit_law", name)
+def bit_law(name: str, field: str | None = None) -> type[BitLaw]:
+    """The registered bit–rock law ``name`` (ValueError naming the registered ones otherwise, and the case's
+    ``field`` that gave the name, if any)."""
+    return _lookup("bit_law", name, field)
 
 
-def top_boundary(name: str) -> type[TopBoundary]:
+def top_boundary(name: str, field: str | None = None) -> type[TopBoundary]:
     """The registered top boundary ``name``."""
-    return _lookup("top_boundary", name)
+    return _lookup("top_boundary", name, field)
 
 
 def hook_load(name: str) -> type[HookLoad]:
@@ -506,9 +302,9 @@ def hook_load(name: str) -> type[HookLoad]:
     return _lookup("hook_load", name)
 
 
-def contact_law(name: str) -> type[ContactLaw]:
+def contact_law(name: str, field: str | None = None) -> type[ContactLaw]:
     """The registered contact law ``name``."""
-    return _lookup("contact_law", name)
+    return _lookup("contact_law", name, field)
 
 
 def contact_laws() -> tuple[str, ...]:
@@ -537,9 +333,9 @@ def hook_loads() -> tuple[str, ...]:
     return tuple(sorted(_REGISTRY["hook_load"]))
 
 
-def motor(name: str) -> type[Motor]:
+def motor(name: str, field: str | None = None) -> type[Motor]:
     """The registered downhole motor ``name``."""
-    return _lookup("motor", name)
+    return _lookup("motor", name, field)
 
 
 def motors() -> tuple[str, ...]:
@@ -587,15 +383,15 @@ def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
     last: it runs to the end) and its :class:`Layout`; the top boundary's states follow the ``modal_states``
     entries ``[η, η̇]``, the motor's (none for the package's motors) the top boundary's. ``contact`` None: no
     contact law (code 0, its kernel gives no force); ``motor`` None: no downhole motor (code 0)."""
-    package_components()  # every package component registered: the codes are final
+    _check_cache_table()  # every package component registered; the cached kernels were written for this table
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
              "hook_load": np.asarray(hook.kernel_array(), dtype=np.float64),
              "contact_law": np.asarray(contact.kernel_array() if contact is not None else np.zeros(0), dtype=np.float64),
              "motor": np.zeros(0) if motor is None else np.asarray(motor.kernel_array(), dtype=np.float64),
              "history": np.asarray(history, dtype=np.float64)}
-    checked = [("bit law", bit), ("hook load", hook)] + ([("contact law", contact)] if contact is not None else []) + (
-        [("motor", motor)] if motor is not None else [])
+    checked = [("bit law", bit), ("top boundary", top), ("hook load", hook)] + (
+        [("contact law", contact)] if contact is not None else []) + ([("motor", motor)] if motor is not None else [])
     for kind, component in checked:
         values = parts[kind.replace(" ", "_")]
         if values.shape != (type(component).kernel_size,):
@@ -620,6 +416,7 @@ def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
     header[CONTACT_LAW] = numbers["contact_law"]
     header[MOTOR_CODE] = 0.0 if motor is None else motor.component_code
     header[MOTOR] = numbers["motor"]
+    header[MOTOR_STATES] = states["motor"]
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -656,9 +453,10 @@ def contact_law_forces(laws, ctx, force_v, force_w, torque):
     raise NotImplementedError("compiled code only")
 
 
-def motor_torque(laws, relative_speed):
-    """The torque [N·m] of the downhole motor whose code and numbers ``laws`` holds at the rotor's speed
-    ``relative_speed`` [rad/s] relative to the stator; NaN for a code no package motor has. Compiled code only."""
+def motor_torque(laws, ctx, y, out):
+    """The torque [N·m] of the downhole motor whose code and numbers ``laws`` holds at ``ctx``
+    (:class:`MotorContext`), reading its states in ``y`` and writing their rates in ``out`` at the index the
+    header gives; NaN for a code no package motor has. Compiled code only."""
     raise NotImplementedError("compiled code only")
 
 
@@ -679,7 +477,7 @@ def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: 
                      ) -> tuple[str, dict]:
     """The dispatch over the package's components of ``kind`` by their code; ``none``: what code 0 returns
     (first test), when the kind has a component that adds nothing."""
-    package_components()
+    _check_cache_table()
     entries = sorted((c.component_code, c) for c in _REGISTRY[kind].values()
                      if _in_package(c) and c.component_code > 0.0)
     namespace: dict[str, Any] = {"np": np}
@@ -740,8 +538,9 @@ def _contact_law_forces_compiled(laws, ctx, force_v, force_w, torque):
 
 
 @overload(motor_torque)
-def _motor_torque_compiled(laws, relative_speed):
-    source, namespace = _dispatch_source("motor", "laws, relative_speed",
-                                         f"laws[int(laws[{MOTOR}]):], relative_speed", "np.nan")
+def _motor_torque_compiled(laws, ctx, y, out):
+    source, namespace = _dispatch_source(
+        "motor", "laws, ctx, y, out",
+        f"laws[int(laws[{MOTOR}]):], ctx, y[int(laws[{MOTOR_STATES}]):], out[int(laws[{MOTOR_STATES}]):]", "np.nan")
     exec(compile(source, "<motor_torque dispatch>", "exec"), namespace)
     return namespace["dispatch"]

@@ -63,7 +63,7 @@ import numpy as np
 from numba import njit
 
 from drillstring.case import TopDrive
-from drillstring.forces.registry import TopBoundary, TopContext, register
+from drillstring.forces.registry import TopBoundary, TopContext, register, top_boundary
 
 #: The top boundaries, ``top_drive.controller`` in a case; code = index (the kernels read the code).
 CONTROLLERS = ("imposed_speed", "pi", "soft_torque", "z_torque")
@@ -179,10 +179,21 @@ class TopDriveParameters(TopBoundary):
         """The numbers :func:`top_drive_kernel` reads: :meth:`kernel_args`."""
         return self.kernel_args()
 
+    @classmethod
+    def from_case(cls, case, stick_slip_frequency=None) -> TopDriveParameters:
+        """:func:`top_drive_from_case`."""
+        return top_drive_from_case(case, stick_slip_frequency)
+
     def jacobian(self) -> np.ndarray:
         """:func:`top_drive_jacobian` of this top boundary: rows τ_m then the rate of each of its
-        :attr:`n_states` states, columns θ̇₀, T_s then each state."""
+        :attr:`n_states` states, columns θ̇₀, T_s then each state; the same at every operating point where the
+        motor torque is not saturated (the law is affine there)."""
         return top_drive_jacobian(self)[:1 + self.n_states, :2 + self.n_states]
+
+    def jacobian_at(self, ctx: TopContext, states) -> np.ndarray:
+        """The Jacobian at the operating point ``ctx``, ``states`` (the protocol's): :meth:`jacobian`, the
+        unsaturated law's (steady drilling never saturates it: :meth:`check_steady_torque`)."""
+        return self.jacobian()
 
     def evaluate_at(self, ctx: TopContext, states) -> tuple[float, np.ndarray]:
         """NumPy reference of :func:`top_drive_kernel`: ``(τ_m [N·m], rates of the states)``."""
@@ -336,8 +347,14 @@ def top_drive_jacobian(params: TopDriveParameters) -> np.ndarray:
     return jac
 
 
-def case_top_drive(case, stick_slip_frequency=None) -> TopDriveParameters:
-    """The top boundary of a :class:`~drillstring.case.Case` (``[top_drive]``), with the tuned gains of
+def case_top_drive(case, stick_slip_frequency=None) -> TopBoundary:
+    """The top boundary of a :class:`~drillstring.case.Case`: the registered boundary ``top_drive.boundary``
+    names, built by its ``from_case(case, stick_slip_frequency)`` (the top drive's: :func:`top_drive_from_case`)."""
+    return top_boundary(case.top_drive.boundary, "top_drive.boundary").from_case(case, stick_slip_frequency)
+
+
+def top_drive_from_case(case, stick_slip_frequency=None) -> TopDriveParameters:
+    """The top drive of a :class:`~drillstring.case.Case` (``[top_drive]``), with the tuned gains of
     soft_torque and z_torque computed where the case leaves them out. ``stick_slip_frequency``: a callable
     returning ω_s [rad/s] (the first torsional natural frequency with the top held), called only when a
     tuning rule needs it. Z_p is that of the top section."""
