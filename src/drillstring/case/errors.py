@@ -24,6 +24,9 @@ class CaseError(ValueError):
         Where the case came from (a file name, ``"<dict>"``, ...).
     """
 
+    problems: list[str]
+    source: str
+
     def __init__(self, problems: list[str] | list[_Entry] | str, source: str = "<case>") -> None:
         if isinstance(problems, str):
             problems = [problems]
