@@ -143,7 +143,7 @@ def test_long_key_and_dotted_header_refused(tmp_path):
 
 
 def test_dots_in_values_strings_and_arrays_are_not_keys():
-    from drillstring.case import _toml_key_problem
+    from drillstring.case.loading import _toml_key_problem
 
     text = ('description = """\n' + ".".join(["a"] * 40) + ' = 1\n"""\n"' + ".".join(["q"] * 40) + '" = 2\n'
             "probes = [\n" + "1.5, " * 200 + "\n]\n")

@@ -2,12 +2,14 @@
 
 Validating a case (:mod:`drillstring.case`) needs a few numbers that the finite-element model also
 builds on: where the mesh puts its nodes, how many DOFs each mode family has, and the distributed axial
-load on the string (its weight, buoyed or not, plus the drilling fluid's skin friction). Each is computed
-here, once; :mod:`drillstring.case` and :mod:`drillstring.fem` both call these functions, so the case's
-``weight`` and the statics' weight, or the case's mode limits and the mesh, cannot disagree.
+load on the string (its weight, buoyed or not, plus the drilling fluid's skin friction); and the dogleg of
+each survey course, which the well path (:mod:`drillstring.well.survey`) also builds on. Each is computed
+here, once; :mod:`drillstring.case`, :mod:`drillstring.fem` and :mod:`drillstring.well` call these
+functions, so the case's ``weight`` and the statics' weight, or the case's mode limits and the mesh, cannot
+disagree.
 
-Pure functions of numbers, SI units; this module imports nothing from the rest of ``drillstring`` and no
-third-party package.
+Pure functions of numbers, SI units; this module imports nothing from the rest of ``drillstring``, and NumPy
+only inside :func:`dogleg` (reading a case does not load it).
 """
 
 from __future__ import annotations
@@ -115,3 +117,20 @@ def string_axial_load(loads_per_length: Sequence[float], lengths: Sequence[float
     """Total distributed axial load on the string [N], ``Σ q_i L_i``: the string's weight (plus the
     fluid's skin friction when switched on), which the hook and the bit carry together."""
     return math.fsum(q * length for q, length in zip(loads_per_length, lengths))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Survey courses (used by drillstring.case.survey_input and drillstring.well.survey)
+# ---------------------------------------------------------------------------------------------------------
+
+
+def dogleg(inc1, azi1, inc2, azi2):
+    """Dogleg angle beta [rad] between two directions, eq. (2) of :mod:`drillstring.well.survey` (haversine
+    with atan2)."""
+    import numpy as np
+
+    inc1, inc2 = np.asarray(inc1, dtype=float), np.asarray(inc2, dtype=float)
+    h = np.sin((inc2 - inc1) / 2.0) ** 2 + np.sin(inc1) * np.sin(inc2) * np.sin(
+        (np.asarray(azi2, dtype=float) - np.asarray(azi1, dtype=float)) / 2.0) ** 2
+    h = np.clip(h, 0.0, 1.0)
+    return 2.0 * np.arctan2(np.sqrt(h), np.sqrt(1.0 - h))

@@ -9,8 +9,8 @@ import pytest
 from drillstring.case import case_from_dict, load_case
 from drillstring.fem.sections import hollow_circle
 from drillstring.statics import case_static_state
-from drillstring.well.buckling import buckled_intervals, critical_loads, lockup_depth
-from drillstring.well.torque_drag import case_torque_drag, string_in_well, torque_drag
+from drillstring.well.buckling import buckled_intervals, critical_loads
+from drillstring.well.torque_drag import case_torque_drag, lockup_depth, string_in_well, torque_drag
 
 DEG = math.pi / 180.0
 

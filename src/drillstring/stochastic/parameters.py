@@ -292,7 +292,7 @@ def _unwrap(annotation: Any) -> tuple[Any, list[Any]]:
 
 
 def _dimension_of(metadata: typing.Iterable[Any]) -> Dimension:
-    """The dimension of a quantity field: case.py names each unit converter ``to_si_<dimension name>``."""
+    """The dimension of a quantity field: drillstring.case.base names each unit converter ``to_si_<dimension name>``."""
     for item in metadata:
         if isinstance(item, BeforeValidator):
             name = getattr(item.func, "__name__", "")

@@ -9,10 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from drillstring.well.buckling import buckled_intervals, critical_loads, lockup_depth
+from drillstring.well.buckling import buckled_intervals, critical_loads
 from drillstring.well.calibration import FrictionPosterior, HookLoadMeasurements, calibrate
 from drillstring.well.survey import Trajectory
-from drillstring.well.torque_drag import MAX_STEP, TorqueDragResult, case_torque_drag, case_trajectory, string_in_well
+from drillstring.well.torque_drag import (MAX_STEP, TorqueDragResult, case_torque_drag, case_trajectory, lockup_depth,
+                                          string_in_well)
 
 __all__ = ["TorqueDragAnalysis", "analyse"]
 

@@ -1,5 +1,6 @@
-"""Buckling of the string in inclined and curved holes: critical compressions along the string, where each
-operation exceeds them, and the lock-up depth when sliding.
+"""Buckling of the string in inclined and curved holes: critical compressions along the string and where each
+operation exceeds them (the lock-up depth when sliding, which runs the torque and drag with them:
+:func:`drillstring.well.torque_drag.lockup_depth`).
 
 The wall holds a compressed pipe in the hole with the lateral load per length ``n`` of the soft-string model
 (:mod:`drillstring.well.torque_drag`, eq. (1)), which for a compression C = -F is
@@ -24,17 +25,13 @@ much larger than in a straight hole; in a drop section the bend lifts the pipe o
 critical load is smaller. (1)-(2) are solved at each node by bisection on the exact n(C) (vector geometry:
 build, drop, turn alike). In a vertical hole n = 0 and both are 0: any compression buckles a long vertical
 string (its length-dependent critical load is :mod:`drillstring.buckling`'s finite-element one).
-
-Lock-up when sliding: the string slides down only while the surface still holds it, hook load > 0; the
-lock-up depth is the shallowest bit depth at which the sliding hook load, with the helical wall force of
-Mitchell (1986) included, reaches 0 at the case's weight on bit (:func:`lockup_depth`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["buckled_intervals", "critical_loads", "lockup_depth"]
+__all__ = ["buckled_intervals", "critical_loads"]
 
 #: Bisection steps of (1)-(2): the bracket shrinks 2^-80 times, below float precision.
 _BISECTIONS = 80
@@ -89,22 +86,3 @@ def buckled_intervals(measured_depth, axial_force, critical) -> list[tuple[float
     if start is not None:
         intervals.append((float(md[start]), float(md[-1])))
     return intervals
-
-
-def lockup_depth(case, bit_depths, *, max_step: float = 10.0) -> float | None:
-    """Shallowest of ``bit_depths`` [m] at which sliding at the case's weight on bit locks up (hook load
-    <= 0 with the helical wall force); None if none does."""
-    from drillstring.well.torque_drag import case_trajectory, string_in_well, torque_drag
-
-    path = case_trajectory(case)
-    well = case.well
-    mu_c = 0.0 if well is None else well.cased_hole_friction
-    mu_o = 0.0 if well is None else well.open_hole_friction
-    for depth in sorted(bit_depths):
-        string = string_in_well(case, path, bit_depth=depth, max_step=max_step)
-        result = torque_drag(string, "sliding", cased_friction=mu_c, open_hole_friction=mu_o,
-                             weight_on_bit=case.operation.weight_on_bit,
-                             helical=critical_loads(string)["helical"])
-        if result.hook_load <= 0.0:
-            return float(depth)
-    return None

@@ -27,7 +27,8 @@ straight section (beta = 0) is exact. A position at any depth inside an arc is (
 which equals (3) at u = 1; the curvature vector of the arc is dt/ds = (b/(s2 - s1)) (-sin(u b) t1 +
 cos(u b) e/sin b). Azimuth differences are wrapped to (-pi, pi] for the turn rate. Everything is in SI units.
 
-This module imports nothing from the rest of ``drillstring``.
+This module imports nothing from the rest of ``drillstring`` but :mod:`drillstring.derived` (:func:`dogleg`,
+which validating a case's survey also needs).
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from drillstring.derived import dogleg
 
 __all__ = ["Trajectory", "dogleg", "ratio_factor", "tangent", "trajectory", "wrap_angle"]
 
@@ -54,15 +57,6 @@ def tangent(inclination, azimuth) -> np.ndarray:
     """Unit tangent (north, east, down) of eq. (1); shape (..., 3)."""
     inc, azi = np.asarray(inclination, dtype=float), np.asarray(azimuth, dtype=float)
     return np.stack([np.sin(inc) * np.cos(azi), np.sin(inc) * np.sin(azi), np.cos(inc)], axis=-1)
-
-
-def dogleg(inc1, azi1, inc2, azi2):
-    """Dogleg angle beta [rad] between two directions, eq. (2) (haversine with atan2)."""
-    inc1, inc2 = np.asarray(inc1, dtype=float), np.asarray(inc2, dtype=float)
-    h = np.sin((inc2 - inc1) / 2.0) ** 2 + np.sin(inc1) * np.sin(inc2) * np.sin(
-        (np.asarray(azi2, dtype=float) - np.asarray(azi1, dtype=float)) / 2.0) ** 2
-    h = np.clip(h, 0.0, 1.0)
-    return 2.0 * np.arctan2(np.sqrt(h), np.sqrt(1.0 - h))
 
 
 def ratio_factor(beta):
@@ -171,7 +165,7 @@ class Trajectory:
 
 def trajectory(measured_depth, inclination, azimuth) -> Trajectory:
     """The minimum-curvature :class:`Trajectory` of a survey [m, rad, rad] (assumed valid: increasing
-    depths from 0, inclinations in [0, pi], finite values; :func:`drillstring.well.survey_input.survey_problems`
+    depths from 0, inclinations in [0, pi], finite values; :func:`drillstring.case.survey_input.survey_problems`
     says why one is not). Positions by eq. (3), accumulated course by course."""
     md = np.asarray(measured_depth, dtype=float)
     inc = np.asarray(inclination, dtype=float)

@@ -33,6 +33,10 @@ Helically buckled sections (compression above the helical critical load of :mod:
 press on the wall with the extra ``r_c F^2/(4 E I)`` per length (Mitchell 1986, SPE 15470; r_c the radial
 clearance), which is what locks a string up when sliding.
 
+Lock-up when sliding: the string slides down only while the surface still holds it, hook load > 0; the
+lock-up depth is the shallowest bit depth at which the sliding hook load, with the helical wall force of
+Mitchell (1986) included, reaches 0 at the case's weight on bit (:func:`lockup_depth`).
+
 Units: SI throughout (m, N, N*m, rad). This module reads a :class:`~drillstring.case.Case`, never plotting or
 the command line.
 """
@@ -46,10 +50,11 @@ import numpy as np
 
 from drillstring.derived import axial_load_per_length
 from drillstring.fem.sections import hollow_circle
+from drillstring.well.buckling import critical_loads
 from drillstring.well.survey import Trajectory, trajectory
 
 __all__ = ["LOCKED", "OPERATIONS", "StringInWell", "TorqueDragResult", "case_trajectory", "string_in_well",
-           "torque_drag", "case_torque_drag"]
+           "torque_drag", "case_torque_drag", "lockup_depth"]
 
 #: Operations: (axial friction direction sigma, rotating, on bottom).
 OPERATIONS: dict[str, tuple[int, bool, bool]] = {
@@ -345,8 +350,6 @@ def case_torque_drag(case, operations=tuple(OPERATIONS), *, string: StringInWell
     """Every operation of ``case`` at its weight-on-bit (``operation.weight_on_bit``) and torque on bit
     (``well.torque_on_bit``), with the case's friction factors unless given; helical lock-up forces when
     ``with_buckling``. A case without ``[well]`` is a vertical well (friction factors then 0 unless given)."""
-    from drillstring.well.buckling import critical_loads
-
     string = string_in_well(case) if string is None else string
     well = case.well
     mu_c = (0.0 if well is None else well.cased_hole_friction) if cased_friction is None else cased_friction
@@ -356,3 +359,20 @@ def case_torque_drag(case, operations=tuple(OPERATIONS), *, string: StringInWell
     return {op: torque_drag(string, op, cased_friction=mu_c, open_hole_friction=mu_o,
                             weight_on_bit=case.operation.weight_on_bit, torque_on_bit=tob, helical=helical)
             for op in operations}
+
+
+def lockup_depth(case, bit_depths, *, max_step: float = 10.0) -> float | None:
+    """Shallowest of ``bit_depths`` [m] at which sliding at the case's weight on bit locks up (hook load
+    <= 0 with the helical wall force); None if none does."""
+    path = case_trajectory(case)
+    well = case.well
+    mu_c = 0.0 if well is None else well.cased_hole_friction
+    mu_o = 0.0 if well is None else well.open_hole_friction
+    for depth in sorted(bit_depths):
+        string = string_in_well(case, path, bit_depth=depth, max_step=max_step)
+        result = torque_drag(string, "sliding", cased_friction=mu_c, open_hole_friction=mu_o,
+                             weight_on_bit=case.operation.weight_on_bit,
+                             helical=critical_loads(string)["helical"])
+        if result.hook_load <= 0.0:
+            return float(depth)
+    return None

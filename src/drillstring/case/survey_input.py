@@ -16,7 +16,8 @@ first station), too few stations.
 A survey file must be a regular file of at most :data:`MAX_SURVEY_FILE_BYTES` and :data:`MAX_STATIONS` rows
 (a FIFO or a device such as ``/dev/zero`` is refused without being read: :func:`drillstring.files.read_input_text`).
 
-This module imports nothing from ``drillstring`` but :mod:`drillstring.units` and :mod:`drillstring.files`.
+This module imports nothing from ``drillstring`` but :mod:`drillstring.units`, :mod:`drillstring.files` and
+:mod:`drillstring.derived` (the dogleg of a course).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import re
 from pathlib import Path
 from typing import Any, Sequence
 
+from drillstring.derived import dogleg
 from drillstring.files import read_input_text
 from drillstring.units import ANGLE, LENGTH, to_si
 
@@ -157,8 +159,6 @@ def survey_problems(measured_depth: Sequence[float], inclination: Sequence[float
                                     "stations must be in order of increasing depth"))
         previous = s if previous is None or s > previous else previous
     if not problems:  # a course turning the hole right round has no minimum-curvature arc
-        from drillstring.well.survey import dogleg
-
         beta = dogleg(inclination[:-1], azimuth[:-1], inclination[1:], azimuth[1:])
         for i in map(int, (beta > math.pi - 1e-9).nonzero()[0]):
             problems.append((i + 1, "turns the hole through 180 deg from the previous row: the arc is undefined"))
