@@ -1,0 +1,221 @@
+"""The reduced model's build (docs/model.md §5): the prestressed system projected on its modes, the structural and
+fluid damping reduced on the basis (:func:`reduced_model`), from a case (:func:`case_reduced_model`), with the
+case's start (:func:`case_hook_load`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drillstring.damping import reduced_structural_damping
+from drillstring.dynamics.reduced.model import ReducedOrderModel
+from drillstring.forces.bit_rock import case_bit_rock
+from drillstring.forces.contact import case_contact, mesh_contact_stations
+from drillstring.forces.excitation import TurningLoads
+from drillstring.forces.motor import case_motor
+from drillstring.forces.registry import BitLaw, ContactLaw, HookLoad, Motor, TopBoundary
+from drillstring.forces.registry import hook_load as registered_hook_load
+from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
+from drillstring.forces.turning_loads import case_turning_loads
+from drillstring.modal import (
+    LinearSystem,
+    ModeFamily,
+    Modes,
+    case_linear_system,
+    compute_modes,
+    coupled_modes,
+    family_coupling,
+    family_modes,
+)
+from drillstring.rotor import first_torsional_frequency, released_modes
+from drillstring.statics import StaticState, case_static_state
+
+
+def reduced_model(
+    static: StaticState,
+    system: LinearSystem,
+    *,
+    axial_modes: int,
+    torsional_modes: int,
+    lateral_modes: int,
+    modal_damping_ratio: float,
+    rigid_axial_damping: float,
+    top_speed: float,
+    bit_rock: BitLaw,
+    contact: ContactLaw,
+    borehole_diameter: float,
+    rigid_rotation_damping: float = 0.0,
+    damping_basis: str = "free_free",
+    probe_positions=(),
+    nonlinear: str = "bit_and_contact",
+    turning_loads: TurningLoads | None = None,
+    lateral_cutoff: float = 0.0,
+    top_drive: TopDriveParameters | None = None,
+    hook_load: HookLoad | None = None,
+    rayleigh: tuple[float, float] = (0.0, 0.0),
+    truncation_correction: str = "none",
+    motor: Motor | None = None,
+) -> ReducedOrderModel:
+    """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
+    ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
+    ``torsional_modes`` elastic, plus the rigid rotation with a top drive).
+
+    Args:
+        modal_damping_ratio: ξ [-]; rigid_axial_damping: c1 [N·s/m], viscous resistance to the
+            rigid axial motion; rigid_rotation_damping: c2 [N·m·s/rad], to the rigid rotation.
+        damping_basis: "free_free" (ξ, c1, c2 on the free–free modes) or "constrained" (ξ on every
+            basis mode); see :mod:`drillstring.damping`.
+        top_speed: Ω [rad/s].
+        contact: the contact law, ``shock_stiffness`` read as k'_sh [N/m per m of string].
+        borehole_diameter: D_ch [m]; the contact stations follow from it and the mesh
+            (:func:`~drillstring.forces.contact.mesh_contact_stations`).
+        turning_loads: mass imbalance and bow (:mod:`drillstring.forces.excitation`), or None.
+        top_drive: the top boundary; None: the top speed imposed.
+        hook_load: the start (a :class:`~drillstring.forces.registry.HookLoad`); None: the reference start.
+        rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
+        truncation_correction: "none" (the modes alone) or "static" (each of the axial and torsional families
+            followed by its residual-flexibility attachment modes at the bit, and at the top with a top drive:
+            :func:`drillstring.modal.compute_modes`).
+        motor: a downhole motor (:mod:`drillstring.forces.motor`), None without: the torsional family is then that
+            of the string released at the motor's rotor station (:func:`drillstring.rotor.released_modes`;
+            ``torsional_modes`` elastic modes plus its rigid motions).
+    """
+    drive = top_drive is not None and top_drive.drives
+    coupled = family_coupling(system) > 0.0
+    release, damped = None, system
+    if coupled:
+        if motor is not None:
+            raise ValueError("a downhole motor on a coupled basis (a string out of the straight axis) is not "
+                             "supported yet: its rotor is released in the torsional family of a straight string")
+        modes, basis, omega, family, residual = _coupled_basis(
+            system, axial_modes + 1 + torsional_modes + 2 * lateral_modes, lateral_cutoff, truncation_correction,
+            damping_basis)
+        released = basis
+    else:
+        if drive:
+            torsional_modes += 1
+        top_inertia = top_drive.top_inertia if drive else None
+        if motor is None:
+            modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
+                                  top_inertia=top_inertia, truncation_correction=truncation_correction)
+        else:
+            modes, release, damped = released_modes(system, motor.position, axial_modes + 1, torsional_modes + 1,
+                                                    lateral_modes, lateral_cutoff, top_inertia, truncation_correction)
+        families = [modes.axial, modes.torsional, modes.lateral_y, modes.lateral_z]
+        basis = np.hstack([f.shapes for f in families])
+        omega = np.concatenate([f.angular_frequencies for f in families])
+        # the family's size, its attachment modes (truncation_correction = "static") included
+        family = ["rigid_axial"] + ["axial"] * (len(modes.axial.angular_frequencies) - 1)
+        for f in families[1:]:
+            family += [f.name] * len(f.angular_frequencies)
+        residual = np.concatenate([np.arange(len(f.angular_frequencies)) >= len(f.angular_frequencies)
+                                   - f.attachments for f in families])
+        released = basis if release is None else np.vstack([basis, np.concatenate(  # the rotor side's row after
+            [np.zeros(f.shapes.shape[1]) if f is not modes.torsional else release.rotor for f in families])])
+    structural = reduced_structural_damping(
+        damped.mass, damped.stiffness, released, family, omega, damping_ratio=modal_damping_ratio,
+        rigid_axial=rigid_axial_damping, rigid_rotation=rigid_rotation_damping,
+        top_speed=0.0 if drive else top_speed, definition=damping_basis, rayleigh=rayleigh,
+    )
+    damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
+    return ReducedOrderModel(
+        static=static, system=system, modes=modes, basis=basis, family=tuple(family),
+        angular_frequencies=omega, damping=damping, top_speed=top_speed,
+        weight_on_bit=static.weight_on_bit, bit_rock=bit_rock, contact=contact,
+        stations=mesh_contact_stations(static.mesh, borehole_diameter),
+        probe_positions=np.asarray(probe_positions, dtype=float),
+        nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
+        top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled, motor=motor,
+        rotor=release,
+    )
+
+
+def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_correction: str,
+                   damping_basis: str):
+    """The one basis of a system whose families couple (:func:`~drillstring.modal.coupled_modes`: the ``count``
+    lowest modes of the whole string and every one below ``cutoff`` [rad/s], then its attachment modes):
+    ``(modes, basis, ω, labels, residual)``, labels "rigid_axial" for the rigid translation and "coupled" for
+    the others."""
+    if damping_basis != "constrained":
+        raise ValueError(f"damping.basis = {damping_basis!r} with coupled families (a string out of its straight "
+                         "axis): the free-free damping is defined family by family; use 'constrained' (and "
+                         "Rayleigh damping)")
+    found = coupled_modes(system, count, cutoff, truncation_correction)
+    empty = {name: ModeFamily(name, np.zeros(0), np.zeros((system.mesh.n_dofs, 0)))
+             for name in ("axial", "torsional", "lateral_y", "lateral_z")}
+    n = len(found.angular_frequencies)
+    family = ["coupled"] * n
+    if n and found.angular_frequencies[0] == 0.0:  # coupled_modes put the rigid axial translation first
+        family[0] = "rigid_axial"
+    residual = np.arange(n) >= n - found.attachments
+    return Modes(**empty, coupled=found), found.shapes, found.angular_frequencies, family, residual
+
+
+def _lateral_cutoff(case_value: float, lateral_modes: int | None, lateral_cutoff: float | None) -> float:
+    if lateral_cutoff is not None:
+        return lateral_cutoff
+    return 0.0 if lateral_modes is not None else case_value
+
+
+def case_reduced_model(
+    case,
+    *,
+    weight_on_bit: float | None = None,
+    axial_modes: int | None = None,
+    torsional_modes: int | None = None,
+    lateral_modes: int | None = None,
+    static: StaticState | None = None,
+    nonlinear: str | None = None,
+    lateral_cutoff: float | None = None,
+    bit_rock: BitLaw | None = None,
+    top_drive: TopBoundary | None = None,
+    motor: Motor | None = None,
+) -> ReducedOrderModel:
+    """The ROM of a :class:`~drillstring.case.Case`; keyword arguments override the case's values
+    (``bit_rock``, ``top_drive``, ``motor``: a bit–rock law, a top boundary or a downhole motor instance, e.g.
+    one registered outside the package, instead of the case's; the case's motor is its ``[motor]``)
+    (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
+    ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``). A
+    ``lateral_modes`` given without ``lateral_cutoff`` asks for exactly that many lateral modes (no
+    cut-off)."""
+    static = case_static_state(case, weight_on_bit) if static is None else static
+    system = case_linear_system(case, static)
+    motor = case_motor(case) if motor is None else motor
+    if top_drive is None:
+        top_drive = case_top_drive(case, lambda: (
+            float(family_modes(system, "torsional", 1).angular_frequencies[0]) if motor is None
+            else first_torsional_frequency(system, motor.position)))
+    r = case.reduced_model
+    return reduced_model(
+        static,
+        system,
+        axial_modes=r.axial_modes if axial_modes is None else axial_modes,
+        torsional_modes=r.torsional_modes if torsional_modes is None else torsional_modes,
+        lateral_modes=r.lateral_modes if lateral_modes is None else lateral_modes,
+        modal_damping_ratio=case.damping.modal_damping_ratio,
+        rigid_axial_damping=case.damping.rigid_axial,
+        rigid_rotation_damping=case.damping.rigid_rotation,
+        rayleigh=(case.damping.mass_proportional, case.damping.stiffness_proportional),
+        damping_basis=case.damping.basis,
+        top_speed=case.operation.top_speed,
+        bit_rock=case_bit_rock(case) if bit_rock is None else bit_rock,
+        contact=case_contact(case),
+        borehole_diameter=case.borehole.diameter,
+        probe_positions=case.mesh.probes,
+        nonlinear=case.model.nonlinear if nonlinear is None else nonlinear,
+        turning_loads=case_turning_loads(case, static.mesh),
+        lateral_cutoff=_lateral_cutoff(r.lateral_cutoff, lateral_modes, lateral_cutoff) * case.operation.top_speed,
+        top_drive=top_drive,
+        hook_load=case_hook_load(case, static.weight_on_bit),
+        truncation_correction=r.truncation_correction,
+        motor=motor,
+    )
+
+
+def case_hook_load(case, weight_on_bit: float) -> HookLoad:
+    """The start of a :class:`~drillstring.case.Case` (``[initial]``): the registered hook load that
+    ``initial.start`` names (:func:`~drillstring.forces.registry.hook_load`), built from the case and the static
+    ``weight_on_bit`` [N]: the ramp of it over ``weight_ramp_time`` with the bit ``clearance`` off bottom for
+    ``start = "ramp"`` (:class:`~drillstring.forces.hook_load.HookLoadRamp`); the reference start for
+    ``"on_bottom"``."""
+    return registered_hook_load(case.initial.start).from_case(case, weight_on_bit)

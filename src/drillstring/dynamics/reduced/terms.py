@@ -1,0 +1,250 @@
+"""The reduced model's compiled inner kernels, one per part of the right-hand side (docs/model.md §5–§9):
+the linear part's products (block-diagonal damping, mode shapes by columns), the bit's motion and the bit–rock
+law, the turning loads, the top boundary, the downhole motor, and the string's lateral displacements for the
+contact. Each reads the case-2 data (:class:`~drillstring.dynamics.kernel_data.RhsData`) by name; the
+right-hand side that assembles them is :mod:`drillstring.dynamics.reduced.rhs`, the observation
+:mod:`drillstring.dynamics.reduced.observation`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, types
+from numba.extending import overload
+
+from drillstring.dynamics.delay import delayed_difference, view
+from drillstring.dynamics.kernel_data import AXIAL_ROW, TORSION_ROW, DelayedRhsData
+from drillstring.forces.registry import (
+    HISTORY,
+    BitContext,
+    MotorContext,
+    TopContext,
+    bit_law_force,
+    motor_torque,
+    top_boundary_torque,
+)
+from drillstring.forces.turning_loads import turning_load
+
+# the mode-shape rows the kernels read, by name (kernel_data.AXIAL_ROWS, TORSION_ROWS)
+_AXIAL_BIT, _AXIAL_TOP = AXIAL_ROW["bit"], AXIAL_ROW["top"]
+_TORSION_BIT, _TORSION_QUILL = TORSION_ROW["bit"], TORSION_ROW["quill"]
+_TORSION_SURFACE_TORQUE, _TORSION_MOTOR = TORSION_ROW["surface_torque"], TORSION_ROW["motor"]
+
+#: Let Numba reassociate sums (SIMD dot products) but keep IEEE NaN/inf semantics, so divergence
+#: is still detected. Deterministic for a given build: same results for any worker count.
+VECTOR_MATH = {"reassoc", "contract"}
+
+
+def inner_kernel(**options):
+    """``njit(cache=True)`` for a kernel called only from other compiled kernels: no CPython wrapper is
+    generated for it (each wrapper unpacks the large structured arguments and cost about 0.15 s of the
+    first compilation; 1.6 s in all). Such a kernel cannot be called from Python."""
+    return njit(cache=True, no_cpython_wrapper=True, **options)
+
+
+@inner_kernel(fastmath=VECTOR_MATH)
+def _matvec(matrix, vector, offset, out):
+    """out = matrix @ vector[offset:offset + matrix.shape[1]] with compiled loops (no BLAS, so no
+    thread oversubscription when several worker processes run)."""
+    for i in range(matrix.shape[0]):
+        total = 0.0
+        for j in range(matrix.shape[1]):
+            total += matrix[i, j] * vector[offset + j]
+        out[i] = total
+
+
+def diagonal_blocks(matrix: np.ndarray) -> np.ndarray:
+    """The finest contiguous diagonal blocks ``[start, end)`` of a square matrix outside which every
+    entry is exactly 0, as a (k, 2) int64 array (all-zero blocks left out). The ROM's damping is block
+    diagonal by mode family (the families are uncoupled in the linear model)."""
+    nonzero = matrix != 0.0
+    n = matrix.shape[0]
+    reach = np.arange(n)
+    for i in range(n):
+        linked = np.nonzero(nonzero[i] | nonzero[:, i])[0]
+        if linked.size:
+            reach[i] = max(i, int(linked.max()))
+    blocks, start, end = [], 0, 0
+    for i in range(n):
+        end = max(end, reach[i] + 1)
+        if i + 1 == end:
+            if nonzero[start:end, start:end].any():
+                blocks.append((start, end))
+            start = end
+    return np.array(blocks, dtype=np.int64).reshape(-1, 2)
+
+
+@inner_kernel()
+def _block_damping(damping_t, blocks, velocity, out):
+    """out −= D velocity, D block diagonal (``blocks`` from :func:`diagonal_blocks`, ``damping_t`` = Dᵀ)."""
+    for b in range(blocks.shape[0]):
+        start, end = blocks[b, 0], blocks[b, 1]
+        for j in range(start, end):
+            x = velocity[j]
+            if x != 0.0:
+                for i in range(start, end):
+                    out[i] -= damping_t[j, i] * x
+
+
+@inner_kernel()
+def _columns_matvec(matrix_t, vector, offset, out, sign):
+    """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
+    column, so the inner loop is contiguous and vectorises without reassociating sums."""
+    for j in range(matrix_t.shape[0]):
+        x = sign * vector[offset + j]
+        if x != 0.0:
+            for i in range(matrix_t.shape[1]):
+                out[i] += matrix_t[j, i] * x
+
+
+@inner_kernel()
+def _bit_state(d, t, y):
+    """Axial position u [m] (from the static state, down), angle θ [rad], axial velocity u̇ [m/s] and spin
+    speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇]."""
+    n = d.omega2.shape[0]
+    ranges = d.ranges
+    a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
+    position = 0.0
+    velocity = 0.0
+    for j in range(a0, a1):
+        position += d.axial_rows[_AXIAL_BIT, j - a0] * y[j]
+        velocity += d.axial_rows[_AXIAL_BIT, j - a0] * y[n + j]
+    angle = d.top_speed * t
+    speed = d.top_speed
+    for j in range(t0, t1):
+        angle += d.torsion_rows[_TORSION_BIT, j - t0] * y[j]
+        speed += d.torsion_rows[_TORSION_BIT, j - t0] * y[n + j]
+    return position, angle, velocity, speed
+
+
+@inner_kernel()
+def _bit_rock(d, t, y):
+    """The bit–rock law at the bit (the registered law of the model, :func:`~drillstring.forces.registry.
+    bit_law_force`, reading the named context :class:`~drillstring.forces.registry.BitContext`): ``(axial force
+    [N], torque [N·m], depth of cut per blade [m], bit position u [m], axial velocity [m/s], spin speed
+    [rad/s])``. A delayed law's depth of cut is ``u(t)`` minus the hole bottom one blade sector behind
+    (:func:`~drillstring.dynamics.delay.delayed_difference`); the other laws read none (0)."""
+    position, angle, velocity, speed = _bit_state(d, t, y)
+    depth = _depth_of_cut(d, position, angle)
+    force, torque = bit_law_force(d.laws, BitContext(t, position, angle, velocity, speed, depth, d.weight_on_bit))
+    return force, torque, depth, position, velocity, speed
+
+
+def _depth_of_cut(d, position, angle):
+    """The depth of cut per blade [m] of the bit at ``position`` u [m] and ``angle`` θ [rad]: ``u`` minus the
+    hole bottom one blade sector behind (:func:`~drillstring.dynamics.delay.delayed_difference`) for
+    :class:`DelayedRhsData`, 0 for :class:`RhsData` (resolved by type when compiled)."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_depth_of_cut)
+def _depth_of_cut_compiled(d, position, angle):
+    if _is(d, DelayedRhsData):
+        return lambda d, position, angle: delayed_difference(view(d.laws[int(d.laws[HISTORY]):]), angle, position)
+    return lambda d, position, angle: 0.0
+
+
+def _delayed(d):
+    """True for :class:`DelayedRhsData` (a law that reads the bit's history), resolved when compiled."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_delayed)
+def _delayed_compiled(d):
+    delayed = _is(d, DelayedRhsData)
+    return lambda d: delayed
+
+
+@inner_kernel()
+def _lateral_displacements(d, y, v, w):
+    """v and w [m] at every node for the state ``y``."""
+    v[:] = 0.0
+    w[:] = 0.0
+    _columns_matvec(d.phi_v_t, y, d.ranges.lateral_y_start, v, 1.0)
+    _columns_matvec(d.phi_w_t, y, d.ranges.lateral_z_start, w, 1.0)
+
+
+@njit(cache=True)
+def _surely_clear(d, eta):
+    """True when no node can touch the borehole: r_i ≤ |v_i| + |w_i| ≤ Σ_j (max_i |φ_ij|) |η_j| over
+    both lateral families (triangle inequality) is below the smallest gap. Costs one pass over the
+    lateral coordinates instead of the mode shapes at every node."""
+    bound = 0.0
+    ranges = d.ranges
+    for j in range(ranges.lateral_y_start, ranges.lateral_y_end):
+        bound += d.lateral_shape_max[j - ranges.lateral_y_start] * abs(eta[j])
+    offset = ranges.lateral_y_end - ranges.lateral_y_start
+    for j in range(ranges.lateral_z_start, ranges.lateral_z_end):
+        bound += d.lateral_shape_max[offset + j - ranges.lateral_z_start] * abs(eta[j])
+    return bound < d.smallest_gap
+
+
+@inner_kernel()
+def _turning_loads(d, t, y, acc):
+    """Add the projected loads that turn with the string (:class:`~drillstring.forces.turning_loads.TurningLoadData`)
+    to ``acc``, each at the angle and spin speed of its node."""
+    r = d.turning
+    n = d.omega2.shape[0]
+    ranges = d.ranges
+    t0, t1, y0, y1, z0, z1 = (ranges.torsion_start, ranges.torsion_end, ranges.lateral_y_start, ranges.lateral_y_end,
+                              ranges.lateral_z_start, ranges.lateral_z_end)
+    for k in range(r.node.shape[0]):
+        i = r.node[k]
+        angle = d.top_speed * t + r.phase[k]
+        speed = d.top_speed
+        for j in range(t0, t1):
+            angle += d.phi_tx_t[j - t0, i] * y[j]
+            speed += d.phi_tx_t[j - t0, i] * y[n + j]
+        turning_load(r, k, angle, speed, acc, y0, y1, z0, z1)
+
+
+@inner_kernel()
+def _top_motion(d, y):
+    """Quill speed θ̇₀ [rad/s] and surface torque T_s [N·m] for the state ``y``."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
+    quill = d.top_speed
+    torque = 0.0
+    for j in range(t0, t1):
+        quill += d.torsion_rows[_TORSION_QUILL, j - t0] * y[n + j]
+        torque += d.torsion_rows[_TORSION_SURFACE_TORQUE, j - t0] * y[j]
+    return quill, torque
+
+
+@inner_kernel()
+def _top_drive(d, t, y, out):
+    """The top boundary's motor torque on the torsional modes; its kernel (the registered boundary,
+    :func:`~drillstring.forces.registry.top_boundary_torque`, reading the named context
+    :class:`~drillstring.forces.registry.TopContext`) reads its states in ``y`` and writes their rates in
+    ``out`` where the registry put them."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
+    quill, surface = _top_motion(d, y)
+    torque = top_boundary_torque(d.laws, TopContext(t, quill, surface), y, out)
+    for j in range(t0, t1):
+        out[n + j] += d.torsion_rows[_TORSION_QUILL, j - t0] * torque
+
+
+@inner_kernel()
+def _motor_speed(d, y):
+    """A downhole motor's rotor speed relative to its stator ω_m [rad/s] (the torsional row
+    :attr:`RotorRelease.relative`) for the state ``y``."""
+    n = d.omega2.shape[0]
+    t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
+    speed = 0.0
+    for j in range(t0, t1):
+        speed += d.torsion_rows[_TORSION_MOTOR, j - t0] * y[n + j]
+    return speed
+
+
+@inner_kernel()
+def _downhole_motor(d, t, y, out):
+    """A downhole motor's ω_m [rad/s] (:func:`_motor_speed`) and its torque [N·m] (the registered motor,
+    :func:`~drillstring.forces.registry.motor_torque`), for the state ``y`` at time ``t`` [s]; the motor reads
+    its states in ``y`` and writes their rates in ``out`` where the registry put them."""
+    speed = _motor_speed(d, y)
+    return speed, motor_torque(d.laws, MotorContext(t, speed), y, out)
+
+
+def _is(numba_type, cls) -> bool:
+    return isinstance(numba_type, types.BaseNamedTuple) and numba_type.instance_class is cls
