@@ -166,7 +166,8 @@ def test_the_protocol_applies_the_kernel_elementwise_by_default():
     np.testing.assert_allclose(torque, own_torque, rtol=1e-13, atol=1e-12 * np.abs(own_torque).max())
     assert np.count_nonzero(force == 0.0) > 0  # the bit leaves the rock at some of them
     scalar = BitLaw.evaluate_at(LAW, bit_context(1e-3, 5.0))
-    assert scalar[0].shape == () and float(scalar[0]) == _weakening_kernel(LAW.kernel_array(), bit_context(1e-3, 5.0))[0]
+    assert scalar[0].shape == ()
+    assert float(scalar[0]) == _weakening_kernel(LAW.kernel_array(), bit_context(1e-3, 5.0))[0]
 
 
 @pytest.fixture(scope="module")

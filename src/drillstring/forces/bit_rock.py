@@ -51,8 +51,8 @@ its Jacobian :func:`bit_rock_jacobian` and its steady drilling (:meth:`BitRockPa
 closed form). The law is written once, in the kernel: :func:`evaluate_bit_rock` (the component's
 ``evaluate_at``, which the NumPy reference engine calls) applies that kernel elementwise; it is no
 independent reference. The tests check the kernel against the law as written above, the steady state's
-closed form (:func:`steady_state`) and finite differences of the Jacobian (docs/extending.md). The other laws are components of their own:
-:mod:`drillstring.forces.off_bottom` and :mod:`drillstring.forces.detournay`.
+closed form (:func:`steady_state`) and finite differences of the Jacobian (docs/extending.md). The other
+laws are components of their own: :mod:`drillstring.forces.off_bottom` and :mod:`drillstring.forces.detournay`.
 
 **Unilateral contact.** The rock pushes the bit, never pulls it: when the law gives an axial force on the
 string pointing down (``f > 0``: it does so when the bit moves up faster than ``a3 h − a1`` over ``1/Z²``,

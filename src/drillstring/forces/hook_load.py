@@ -18,8 +18,8 @@ Two components of the protocol (:class:`~drillstring.forces.registry.HookLoad`, 
 named by the case's ``initial.start``: :class:`OnBottomStart` (``"on_bottom"``, the reference start: no extra
 force, code 0, nothing in the kernels) and :class:`HookLoadRamp` (``"ramp"``: its keys
 :class:`~drillstring.case.RampStartKeys`, the numbers :meth:`HookLoadRamp.kernel_array` the compiled kernel
-:func:`hook_load_change` reads, which :meth:`HookLoadRamp.evaluate_at` applies over an array of times). A ramp time of 0 is the
-reference start (no extra force). The load is a prescribed function of time: no Jacobian on the state.
+:func:`hook_load_change` reads, which :meth:`HookLoadRamp.evaluate_at` applies over an array of times). A ramp
+time of 0 is the reference start (no extra force). The load is a prescribed function of time: no Jacobian on the state.
 """
 
 from __future__ import annotations

@@ -124,7 +124,8 @@ class BitLaw:
         fields = np.broadcast_arrays(*(np.asarray(field, dtype=np.float64) for field in ctx))
         args = self.kernel_array()
         kernel = type(self).kernel
-        values = [kernel(args, BitContext(*(float(field.flat[i]) for field in fields))) for i in range(fields[0].size)]
+        values = [kernel(args, BitContext(*(float(field.flat[i]) for field in fields)))
+                  for i in range(fields[0].size)]
         out = np.array(values, dtype=np.float64).reshape(fields[0].shape + (2,))
         return out[..., 0], out[..., 1]
 
@@ -217,9 +218,9 @@ class Motor:
     ``name``, ``keys``, ``from_case(case)`` (None when the case has no such motor), ``kernel_size``,
     ``kernel_array()``, ``kernel(args, ctx, states, rates) -> torque [N·m]`` (compiled; the named context
     :class:`MotorContext`; it writes its states' rates), ``evaluate_at(ctx, states) -> (torque, rates)`` (the
-    kernel's law from Python), ``jacobian_at(ctx, states)`` (rows the torque then each state's rate, columns ``ω_m`` then
-    each state), ``steady_states(relative_speed)``, ``n_states`` and ``position`` [m] (the rotor station from
-    the top)."""
+    kernel's law from Python), ``jacobian_at(ctx, states)`` (rows the torque then each state's rate, columns
+    ``ω_m`` then each state), ``steady_states(relative_speed)``, ``n_states`` and ``position`` [m] (the rotor
+    station from the top)."""
 
     name: ClassVar[str]
     kernel_size: ClassVar[int] = 0
