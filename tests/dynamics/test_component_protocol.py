@@ -153,6 +153,23 @@ def test_outside_law_kernel_reference_and_jacobian():
                                        atol=1e-9 * np.abs(jac).max())
 
 
+def test_the_protocol_applies_the_kernel_elementwise_by_default():
+    """A law that writes only its kernel gets ``evaluate_at`` from the protocol: the kernel applied elementwise
+    over the broadcast context, equal to this law's own NumPy form (written independently above)."""
+    u = np.linspace(-2e-3, 6e-3, 7).reshape(7, 1)
+    w = np.linspace(-3.0, 15.0, 5)
+    ctx = bit_context(u, w, time=1.0, weight_on_bit=1e5)
+    force, torque = BitLaw.evaluate_at(LAW, ctx)
+    own_force, own_torque = LAW.evaluate_at(ctx)
+    assert force.shape == torque.shape == (7, 5)
+    np.testing.assert_allclose(force, own_force, rtol=1e-13, atol=0.0)
+    np.testing.assert_allclose(torque, own_torque, rtol=1e-13, atol=1e-12 * np.abs(own_torque).max())
+    assert np.count_nonzero(force == 0.0) > 0  # the bit leaves the rock at some of them
+    scalar = BitLaw.evaluate_at(LAW, bit_context(1e-3, 5.0))
+    assert scalar[0].shape == ()
+    assert float(scalar[0]) == _weakening_kernel(LAW.kernel_array(), bit_context(1e-3, 5.0))[0]
+
+
 @pytest.fixture(scope="module")
 def model(torsional_case):
     return case_reduced_model(torsional_case, bit_rock=LAW)

@@ -17,7 +17,6 @@ from drillstring.fem.dofs import THETA_X, dof
 from drillstring.forces.registry import TopContext
 from drillstring.forces.top_drive import (
     TopDriveParameters,
-    evaluate_top_drive,
     reflection_coefficient,
     soft_torque_gains,
     top_drive_jacobian,
@@ -171,15 +170,37 @@ _CONTROLLERS = [
 ]
 
 
+def _controller_by_hand(params, t, quill_speed, surface_torque, integral, filtered):
+    """Eq. (1) of :mod:`drillstring.forces.top_drive` and the z_torque feedback written out, independently of
+    the compiled law: ``(τ_m, ż, ẋ)``."""
+    reference = params.set_point * (min(t / params.ramp_time, 1.0) if params.ramp_time > 0 else 1.0)
+    d_filtered = 0.0
+    if params.controller == "z_torque":
+        reference -= (surface_torque - filtered) / params.pipe_impedance
+        d_filtered = params.filter_frequency * (surface_torque - filtered)
+    error = reference - quill_speed
+    raw = params.proportional_gain * error + params.integral_gain * integral
+    torque = float(np.clip(raw, -params.max_torque, params.max_torque))
+    saturated = torque != raw and np.sign(error) == np.sign(raw)  # conditional integration
+    return torque, 0.0 if saturated else error, d_filtered
+
+
 @pytest.mark.parametrize("params", _CONTROLLERS, ids=lambda p: p.controller)
-def test_compiled_law_matches_the_reference_and_its_jacobian(params):
+def test_compiled_law_is_the_controller_as_written_and_its_jacobian(params):
+    """The compiled law (which the kernel and ``evaluate_at`` both call) against eq. (1) written out by hand,
+    through the ramp, both saturations and the z_torque feedback; its Jacobian against central differences."""
     rng = np.random.default_rng(3)
-    for _ in range(50):
-        t, speed, torque, integral, filtered = rng.uniform([0, 0, -1e4, -20, -1e4], [10, 20, 2e4, 20, 2e4])
+    saturated = 0
+    windup = 2.0 * params.max_torque / params.integral_gain  # an integral state beyond either saturation
+    points = [rng.uniform([0, 0, -1e4, -20, -1e4], [10, 20, 2e4, 20, 2e4]) for _ in range(50)]
+    points += [(6.0, 9.0, 1e3, windup, 0.0), (6.0, 11.0, 1e3, -windup, 0.0), (6.0, 11.0, 1e3, windup, 0.0)]
+    for t, speed, torque, integral, filtered in points:
         compiled = top_drive_law(params.kernel_args(), t, speed, torque, integral, filtered)
-        reference = evaluate_top_drive(params, t, speed, torque, integral, filtered)
-        assert np.allclose(compiled, reference, rtol=1e-14, atol=1e-9)
+        expected = _controller_by_hand(params, t, speed, torque, integral, filtered)
+        np.testing.assert_allclose(compiled, expected, rtol=1e-13, atol=1e-9)
+        saturated += abs(compiled[0]) == params.max_torque
         assert abs(compiled[0]) <= params.max_torque
+    assert 3 <= saturated < len(points)
     # the Jacobian against central differences, unsaturated, after the ramp
     point = np.array([9.5, 5e3, 1.0, 4.9e3])
     jac = top_drive_jacobian(params)
@@ -199,8 +220,8 @@ def test_compiled_law_matches_the_reference_and_its_jacobian(params):
     for k in range(4):
         step = np.zeros(4)
         step[k] = 1e-4 * max(1.0, abs(point[k]))
-        plus = evaluate_top_drive(params, 20.0, *(point + step))
-        minus = evaluate_top_drive(params, 20.0, *(point - step))
+        plus = top_drive_law(params.kernel_args(), 20.0, *(point + step))
+        minus = top_drive_law(params.kernel_args(), 20.0, *(point - step))
         assert np.allclose((np.array(plus) - np.array(minus)) / (2 * step[k]), jac[:, k], rtol=1e-7, atol=1e-9)
 
 

@@ -162,29 +162,37 @@ def test_negative_speed_symmetry():
                 assert tp < 0.0 < tm  # opposes the rotation
 
 
-def test_vectorised_wrapper_matches_kernel():
-    """The wrapper is the law with unilateral contact: the law's force where it pushes the bit up (f ≤ 0),
-    no force and no torque where the law would pull the bit down (it has left the rock)."""
+def _law_as_written(u, w, params):
+    """docs/model.md §5 by hand, away from stick (Z ≠ 0), with the unilateral contact: the force and torque on
+    the string, ``(0, 0)`` where the law would pull the bit down. Independent of the kernels."""
+    z = w / math.sqrt(w * w + params.e**2)
+    f = -u / (params.a2 * z * z) + params.a3 * w / (params.a2 * z) - params.a1 / params.a2
+    t = -u * params.a4 * z * z / w - params.a5 * z
+    return (0.0, 0.0) if f > 0.0 else (f, t)
+
+
+def test_kernel_and_evaluate_at_are_the_law_as_written_with_unilateral_contact():
+    """The component's kernel (its numbers, the named context) and ``evaluate_at`` (the kernel applied
+    elementwise) against the law written out by hand: the force where it pushes the bit up, nothing where
+    the law would pull the bit down (it has left the rock)."""
     rng = np.random.default_rng(0)
     u = rng.normal(2e-3, 3e-3, size=(4, 5))
     w = rng.normal(5.0, 8.0, size=(4, 5))
-    w[0, 0] = 0.0
-    f, t = evaluate_bit_rock(u, w, P)
+    packed = P.kernel_array()
+    f, t = P.evaluate_at(bit_context(u, w, time=1.0, position=0.1, angle=3.0, weight_on_bit=1e5))
     assert f.shape == t.shape == (4, 5)
     lifted = 0
     for idx in np.ndindex(u.shape):
-        fk, tk = bit_rock_force(u[idx], w[idx], *ARGS)
-        if fk > 0.0:
-            lifted += 1
-            assert f[idx] == 0.0 and t[idx] == 0.0
-        else:
-            assert f[idx] == fk and t[idx] == tk
+        expected = _law_as_written(u[idx], w[idx], P)
+        lifted += expected == (0.0, 0.0)
+        assert (f[idx], t[idx]) == pytest.approx(expected, rel=1e-12, abs=1e-9)
+        ctx = bit_context(u[idx], w[idx], time=1.0, weight_on_bit=1e5)
+        assert tucker_wang_kernel(packed, ctx) == pytest.approx(expected, rel=1e-12, abs=1e-9)
     assert 0 < lifted < u.size  # both regimes are exercised
-    fb, tb = evaluate_bit_rock(1e-3, np.array([0.0, 1.0, 10.0]), P)  # broadcasting
-    assert fb.shape == (3,)
-    assert tb[2] == bit_rock_force(1e-3, 10.0, *ARGS)[1]
+    fb, tb = evaluate_bit_rock(1e-3, np.array([0.5, 1.0, 10.0]), P)  # broadcasting, scalars to 0-d
+    assert fb.shape == (3,) and tb[2] == pytest.approx(_law_as_written(1e-3, 10.0, P)[1], rel=1e-12)
     fs, ts = evaluate_bit_rock(1e-3, 10.0, P)
-    assert fs.shape == () and float(fs) == bit_rock_force(1e-3, 10.0, *ARGS)[0]
+    assert fs.shape == () and float(fs) == pytest.approx(_law_as_written(1e-3, 10.0, P)[0], rel=1e-12)
 
 
 def test_stick_floor_from_stiffening_limit():
@@ -222,25 +230,29 @@ def test_bit_rock_jacobian_against_finite_differences():
 
 
 @pytest.mark.parametrize("law", ["tucker_wang", "off_bottom"])
-def test_component_kernel_is_the_reference_law(law):
-    """The compiled kernel reading its numbers and the named context gives exactly the NumPy reference (zero
-    off bottom); the Jacobian is zero off bottom."""
+def test_component_kernel_reads_its_numbers_and_the_named_context(law):
+    """The compiled kernel reading its packed numbers and the named context gives the law as written (with a
+    stick floor of 1e-3 e: at stick the floored form), zero off bottom; the Jacobian is zero off bottom."""
     params = (BitRockParameters(*P.as_array(), stick_speed_floor_ratio=1e-3) if law == "tucker_wang"
               else OffBottom())
     packed = params.kernel_array()
     assert packed.shape == (type(params).kernel_size,) and packed.dtype == np.float64
     assert params.name == law and params.on_bottom == (law == "tucker_wang")
+    floor = 1e-3 * P.e
     for u, w in [(3.6e-3, 10.47), (0.0, 0.0), (1e-3, 1e-4), (-2e-3, -4.0)]:
         ctx = bit_context(u, w, time=1.0, position=0.1, angle=3.0, weight_on_bit=1e5)
-        expected = tuple(float(v) for v in params.evaluate_at(ctx))
-        assert type(params).kernel(packed, ctx) == expected
+        got = type(params).kernel(packed, ctx)
+        assert got == tuple(float(v) for v in params.evaluate_at(ctx))
         if law == "off_bottom":
-            assert expected == (0.0, 0.0)
+            assert got == (0.0, 0.0)
             np.testing.assert_array_equal(params.jacobian_at(ctx), np.zeros((2, 2)))
-        else:
-            assert tucker_wang_kernel(packed, ctx) == expected
-            raw = bit_rock_force_floored(u, w, *params.kernel_args())
-            assert expected == (raw if raw[0] <= 0.0 else (0.0, 0.0))
+        elif abs(w) >= floor:
+            assert got == pytest.approx(_law_as_written(u, w, P), rel=1e-12, abs=1e-9)
+        else:  # below the floor 1/Z² is frozen at 1 + (e/θ̇_floor)², θ̇/Z = h, Z²/θ̇ = θ̇/h², Z = θ̇/h
+            h = math.hypot(w, P.e)
+            f = (-u * (1.0 + (P.e / floor) ** 2) + P.a3 * h - P.a1) / P.a2
+            t = -u * P.a4 * w / h**2 - P.a5 * w / h
+            assert got == pytest.approx((0.0, 0.0) if f > 0.0 else (f, t), rel=1e-12, abs=1e-9)
     assert KERNEL_SIZE == 7
 
 

@@ -114,6 +114,81 @@ def test_tangential_force_zero_slip():
     assert fv1 == fv0
 
 
+def _station_law_by_hand(v, w, v_dot, w_dot, spin, gap, outer_diameter, k, mu, eps, tangential):
+    """docs/model.md §5 written out in plain NumPy, independently of the kernels (which compute it once per
+    station in ``_station_contact``): ``F_n = k (r − g)₊`` along −n, ``T = −μ F_n (D_o/2) sgn_ε(θ̇x)``, and
+    with ``tangential`` ``F_t = −μ F_n sgn_{εR}(s)`` along ``t = (−w, v)/r``, ``s = θ̇x D_o/2 + (v ẇ − w v̇)/r``."""
+    v, w, v_dot, w_dot, spin, gap, outer_diameter, k = np.broadcast_arrays(
+        *(np.asarray(a, dtype=float) for a in (v, w, v_dot, w_dot, spin, gap, outer_diameter, k)))
+    r = np.sqrt(v**2 + w**2)
+    normal = np.where(r > gap, k * (r - gap), 0.0)
+    radius = outer_diameter / 2
+    r_safe = np.where(r > 0.0, r, 1.0)
+    force_v = -normal * v / r_safe
+    force_w = -normal * w / r_safe
+    torque = -mu * normal * radius * spin / np.sqrt(spin**2 + eps**2)
+    if tangential:
+        slip = spin * radius + (v * w_dot - w * v_dot) / r_safe
+        f_t = -mu * normal * slip / np.sqrt(slip**2 + (eps * radius) ** 2)
+        force_v = force_v + f_t * (-w / r_safe)
+        force_w = force_w + f_t * (v / r_safe)
+    return force_v, force_w, torque
+
+
+@pytest.mark.parametrize("params", [P, PT, ContactParameters(K_SH, 0.3, 0.5, tangential_friction=True)],
+                         ids=["normal_and_torque", "tangential", "rough"])
+def test_component_kernel_is_the_law_as_written(params):
+    """The component's compiled kernel (its numbers, the named context, one stiffness per station) and
+    ``evaluate_at`` against the law written out by hand, at stations inside and outside their gap, spinning
+    either way and whirling."""
+    from drillstring.forces.contact import penalty_contact_kernel
+    from drillstring.forces.registry import ContactContext
+
+    rng = np.random.default_rng(6)
+    n = 60
+    gap = rng.uniform(0.02, 0.05, n)
+    r = gap * rng.uniform(0.5, 1.3, n)
+    ang = rng.uniform(-np.pi, np.pi, n)
+    ctx = ContactContext(r * np.cos(ang), r * np.sin(ang), rng.normal(0.0, 0.5, n), rng.normal(0.0, 0.5, n),
+                         rng.normal(0.0, 10.0, n), gap, rng.uniform(0.1, 0.25, n), rng.uniform(1e7, 1e9, n))
+    expected = _station_law_by_hand(*ctx, params.friction_coefficient, params.speed_regularization,
+                                    params.tangential_friction)
+    assert 10 < np.count_nonzero(expected[0]) < n - 10  # both inside and outside the gap
+    out = [np.full(n, np.nan) for _ in range(3)]
+    penalty_contact_kernel(params.kernel_array(), ctx, *out)
+    for got, by_evaluate_at, want in zip(out, params.evaluate_at(ctx), expected):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+        np.testing.assert_array_equal(by_evaluate_at, got)
+
+
+def test_friction_dissipates_mu_normal_force_over_each_sliding_path():
+    """The work of the wall on a station pressed δ into it: over one revolution of a spin Ω without whirl, the
+    torque does ``−μ k δ (D_o/2) sgn_ε(Ω) · 2π``; over one forward whirl of its centre round the wall at
+    ``r = g + δ`` without spin, the tangential force does ``−μ k δ sgn_{εR}(r φ̇) · 2π r`` and the normal force
+    none (it is perpendicular to the path). Integrated over the cycle from the kernel's forces."""
+    delta, whirl, spin = 2e-3, 3.0, 7.0
+    r = GAP + delta
+    normal = K_SH * delta
+    # a revolution of the spin: the torque's power T Ω over 2π/Ω
+    _, _, torque, _ = one_node(r, 0.0, spin=spin, params=PT)
+    assert torque * spin * (2 * np.pi / spin) == pytest.approx(
+        -MU * normal * D_O / 2 * 2 * np.pi * spin / math.hypot(spin, EPS), rel=1e-12)
+    # a whirl of the centre: ∮ F · dc, the centre at r (cos φ, sin φ), velocity r φ̇ (−sin φ, cos φ)
+    phi = np.linspace(0.0, 2 * np.pi, 721)
+    v, w = r * np.cos(phi), r * np.sin(phi)
+    vd, wd = -r * whirl * np.sin(phi), r * whirl * np.cos(phi)
+    radius = D_O / 2
+    expected = -MU * normal * 2 * np.pi * r * (r * whirl) / math.hypot(r * whirl, EPS * radius)
+    for params, work in ((PT, expected), (P, 0.0)):
+        fv, fw, _, touching = evaluate_contact(v, w, vd, wd, 0.0, GAP, D_O, params)
+        assert touching == phi.size
+        power = fv * vd + fw * wd
+        assert np.trapezoid(power, phi / whirl) == pytest.approx(work, abs=1e-9 * abs(expected))
+    # a backward whirl dissipates as much: the force turns with the path
+    fv, fw, _, _ = evaluate_contact(v, -w, vd, -wd, 0.0, GAP, D_O, PT)
+    assert np.trapezoid(fv * vd - fw * wd, phi / whirl) == pytest.approx(expected, rel=1e-12)
+
+
 def test_normal_force_is_gradient_of_potential():
     def potential(v, w):
         r = math.hypot(v, w)
@@ -145,9 +220,9 @@ def test_counts_and_multinode_kernel_in_place():
     assert nc == int(np.sum(r > gap))
     assert np.all(np.isfinite(fv)) and np.all(np.isfinite(fw)) and np.all(np.isfinite(tq))
     assert np.all(fv[r <= gap] == 0.0) and np.all(tq[r <= gap] == 0.0)
-    for i in range(n):
-        fvi, fwi, ti, _ = evaluate_contact(v[i], w[i], vd[i], wd[i], spin[i], gap[i], dia[i], PT)
-        assert (fv[i], fw[i], tq[i]) == (fvi[0], fwi[0], ti[0])
+    expected = _station_law_by_hand(v, w, vd, wd, spin, gap, dia, K_SH, MU, EPS, True)
+    for got, want in zip((fv, fw, tq), expected):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
 
 
 @njit

@@ -45,7 +45,8 @@ def test_the_law_is_the_line_from_no_load_speed_to_stall():
     assert torque[1] == 8000.0 and abs(torque[3]) < 1e-9  # stall, no load
     none = np.zeros(0)
     np.testing.assert_allclose([positive_displacement_kernel(m.kernel_array(), MotorContext(0.0, s), none, none)
-                                for s in speeds], torque, rtol=1e-15)
+                                for s in speeds], 8000.0 * (1 - speeds / w0), rtol=1e-14, atol=1e-9)
+    assert m.evaluate(0.0).shape == () and m.evaluate([[0.0, w0]]).shape == (1, 2)
     np.testing.assert_allclose(m.speed_at(torque), speeds, atol=1e-12)
     # Jacobian against a central difference (the law is linear: exact)
     assert m.jacobian(1.0) == pytest.approx((m.evaluate(1.5) - m.evaluate(0.5)) / 1.0, rel=1e-12)

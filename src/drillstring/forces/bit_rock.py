@@ -47,9 +47,12 @@ The law is one component of the reduced model (:mod:`drillstring.forces.registry
 :meth:`BitRockParameters.from_case`), the numbers its compiled kernel reads
 (:meth:`BitRockParameters.kernel_array`, :data:`KERNEL_SIZE` entries), the compiled kernel
 :func:`tucker_wang_kernel` (reading the named context :class:`~drillstring.forces.registry.BitContext`),
-its NumPy reference :func:`evaluate_bit_rock`, its Jacobian :func:`bit_rock_jacobian` and its steady drilling
-(:meth:`BitRockParameters.steady_drilling`, closed form). The other laws are components of their own:
-:mod:`drillstring.forces.off_bottom` and :mod:`drillstring.forces.detournay`.
+its Jacobian :func:`bit_rock_jacobian` and its steady drilling (:meth:`BitRockParameters.steady_drilling`,
+closed form). The law is written once, in the kernel: :func:`evaluate_bit_rock` (the component's
+``evaluate_at``, which the NumPy reference engine calls) applies that kernel elementwise; it is no
+independent reference. The tests check the kernel against the law as written above, the steady state's
+closed form (:func:`steady_state`) and finite differences of the Jacobian (docs/extending.md). The other
+laws are components of their own: :mod:`drillstring.forces.off_bottom` and :mod:`drillstring.forces.detournay`.
 
 **Unilateral contact.** The rock pushes the bit, never pulls it: when the law gives an axial force on the
 string pointing down (``f > 0``: it does so when the bit moves up faster than ``a3 h − a1`` over ``1/Z²``,
@@ -174,7 +177,8 @@ class BitRockParameters(BitLaw):
 
     # -- the protocol (drillstring.forces.registry) -------------------------------------------------------
     def evaluate_at(self, ctx: BitContext):
-        """NumPy reference, :func:`evaluate_bit_rock` at the context's axial velocity and bit speed."""
+        """The kernel at array-valued contexts: :func:`evaluate_bit_rock` at the context's axial velocity and
+        bit speed (the law's one implementation, applied elementwise)."""
         return evaluate_bit_rock(ctx.axial_velocity, ctx.bit_speed, self)
 
     def jacobian_at(self, ctx: BitContext) -> np.ndarray:
@@ -335,7 +339,7 @@ def evaluate_bit_rock(bit_axial_velocity, bit_speed, params: BitRockParameters):
 
     ``bit_axial_velocity`` [m/s] and ``bit_speed`` [rad/s] are array-likes (broadcast together). Scalars in,
     0-d arrays out. The component's kernel :func:`tucker_wang_kernel` (the law, its stick handling,
-    unilateral contact) applied elementwise.
+    unilateral contact) applied elementwise: the law's one implementation, not an independent reference.
     """
     u, w = np.broadcast_arrays(np.asarray(bit_axial_velocity, dtype=np.float64),
                                np.asarray(bit_speed, dtype=np.float64))

@@ -76,8 +76,12 @@ built from the case in one place, :meth:`ContactParameters.from_case`), the stat
 (:class:`ContactStations`, :func:`mesh_contact_stations`: the model's geometry, not the law's numbers), the
 compiled kernel :func:`penalty_contact_kernel` over the named context
 :class:`~drillstring.forces.registry.ContactContext` (the station law :func:`distributed_contact_forces`), the
-NumPy reference :func:`evaluate_contact` (:meth:`ContactParameters.evaluate_at`) and its Jacobian
-:func:`contact_jacobian` (:meth:`ContactParameters.jacobian_at`).
+law at arrays of stations :func:`evaluate_contact` (:meth:`ContactParameters.evaluate_at`, which the NumPy
+reference engine calls: the same kernel, not an independent reference) and its Jacobian
+:func:`contact_jacobian` (:meth:`ContactParameters.jacobian_at`). The law is written once, in
+:func:`_station_contact`; the tests check it against the equations above written out by hand, the
+potential it derives from, the work its friction does over a revolution and a whirl, and finite
+differences of the Jacobian (docs/extending.md).
 
 Jacobian (closed form). With ``N = k (r − g)``, ``n = (n_v, n_w)``, ``t = (−n_w, n_v)``, ``∂n/∂(v, w) =
 t tᵀ / r`` and ``sgn_ε'(a) = ε² / (a² + ε²)^{3/2}``, the normal force ``−N n`` has the symmetric derivative
@@ -191,7 +195,8 @@ class ContactParameters(ContactLaw):
                          1.0 if self.tangential_friction else 0.0], dtype=np.float64)
 
     def evaluate_at(self, ctx: ContactContext):
-        """NumPy reference of the kernel: ``(force_v [N], force_w [N], torque [N·m])`` at the stations of ``ctx``."""
+        """The kernel at the stations of ``ctx``: ``(force_v [N], force_w [N], torque [N·m])``
+        (:func:`evaluate_contact`, the law's one implementation)."""
         force_v, force_w, torque, _ = evaluate_contact(ctx.v, ctx.w, ctx.v_dot, ctx.w_dot, ctx.spin_speed, ctx.gap,
                                                        ctx.outer_diameter, self, stiffness=ctx.stiffness)
         return force_v, force_w, torque
@@ -390,7 +395,8 @@ def evaluate_contact(v, w, v_dot, w_dot, spin_speed, gap, outer_diameter, params
     """Contact forces for arrays of nodes or stations: ``(force_v [N], force_w [N], torque [N·m], n_contacts)``.
 
     Array-likes are broadcast together to 1-D (``gap`` [m] and ``outer_diameter`` [m] may be scalars);
-    see :func:`contact_forces` for units and the model (docs/model.md §5). Without ``stiffness`` every entry has
+    see :func:`contact_forces` for units and the model (docs/model.md §5); the compiled kernels themselves, not an
+    independent reference. Without ``stiffness`` every entry has
     ``params.shock_stiffness`` [N/m] (per-node law); with ``stiffness`` [N/m] (one per entry, e.g.
     :meth:`ContactStations.stiffness`) it replaces it (:func:`distributed_contact_forces`).
     """

@@ -44,7 +44,9 @@ bit–rock laws (:mod:`drillstring.forces.bit_rock`): ``(−W, −T)`` while dri
 
 The component (:mod:`drillstring.forces.registry`), registered as ``"detournay"``: :class:`DetournayParameters`
 (built from the case by :meth:`DetournayParameters.from_case`), its kernel :func:`detournay_kernel` (reading
-the depth of cut of the named context), its NumPy reference, Jacobian and steady drilling in closed form.
+the depth of cut of the named context), its Jacobian and steady drilling in closed form. The law is written
+once, in :func:`detournay_force`; :meth:`DetournayParameters.evaluate` (and ``evaluate_at``) apply it
+elementwise, and the tests check it against the steady state, the saturations and the friction line above.
 """
 
 from __future__ import annotations
@@ -65,6 +67,7 @@ __all__ = [
     "DetournaySteadyState",
     "KERNEL_SIZE",
     "detournay_force",
+    "detournay_force_array",
     "detournay_kernel",
 ]
 
@@ -140,7 +143,7 @@ class DetournayParameters(BitLaw):
 
     # -- the protocol (drillstring.forces.registry) -------------------------------------------------------
     def evaluate_at(self, ctx: BitContext):
-        """NumPy reference: :meth:`evaluate` at the context's depth of cut, axial velocity and bit speed."""
+        """:meth:`evaluate` (the kernel, elementwise) at the context's depth of cut, axial velocity and bit speed."""
         return self.evaluate(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
 
     def jacobian_at(self, ctx: BitContext) -> np.ndarray:
@@ -219,22 +222,21 @@ class DetournayParameters(BitLaw):
         d = np.asarray(depth_of_cut, dtype=np.float64)
         return np.where(d > 0.0, self.cutting_stiffness * np.maximum(d, 0.0), 0.0)
 
-    # -- the law at one state: NumPy reference and Jacobian ------------------------------------------------
+    # -- the law over arrays and its Jacobian ---------------------------------------------------------------
     def evaluate(self, depth_of_cut, bit_axial_velocity, bit_speed):
-        """NumPy reference of :func:`detournay_force`: ``(axial_force [N], torque [N·m])`` on the string for
-        the depth of cut per blade ``d_n`` [m], the bit's axial velocity u̇ [m/s] and spin speed ω [rad/s],
-        array-likes broadcast together (scalars in, 0-d arrays out); ``(0, 0)`` where ``d_n ≤ 0``."""
+        """:func:`detournay_force` (the law's one implementation) applied elementwise: ``(axial_force [N],
+        torque [N·m])`` on the string for the depth of cut per blade ``d_n`` [m], the bit's axial velocity u̇
+        [m/s] and spin speed ω [rad/s], array-likes broadcast together (scalars in, 0-d arrays out);
+        ``(0, 0)`` where ``d_n ≤ 0``."""
         d, u, w = np.broadcast_arrays(np.asarray(depth_of_cut, dtype=np.float64),
                                       np.asarray(bit_axial_velocity, dtype=np.float64),
                                       np.asarray(bit_speed, dtype=np.float64))
-        on_rock = d > 0.0
-        advance = np.clip(u / self.contact_velocity, 0.0, 1.0)
-        turn = np.clip(w / self.friction_speed, -1.0, 1.0)
-        contact = self.contact_force * advance
-        with np.errstate(invalid="ignore"):  # an infinite depth off the rock times a zero speed: masked below
-            weight = self.cutting_stiffness * d + contact
-            torque = (self.cutting_torque_rate * d + self.friction_arm * contact) * turn
-        return np.where(on_rock, -weight, 0.0), np.where(on_rock, -torque, 0.0)
+        force = np.empty(d.size)
+        torque = np.empty(d.size)
+        detournay_force_array(self.kernel_array(), np.ascontiguousarray(d).reshape(-1),
+                              np.ascontiguousarray(u).reshape(-1), np.ascontiguousarray(w).reshape(-1), force,
+                              torque)
+        return force.reshape(d.shape), torque.reshape(d.shape)
 
     def jacobian(self, depth_of_cut: float, bit_axial_velocity: float, bit_speed: float) -> np.ndarray:
         """``[[f_d, f_u, f_ω], [t_d, t_u, t_ω]]``: partial derivatives of the force f [N] and torque t [N·m]
@@ -334,3 +336,10 @@ def detournay_kernel(args, ctx):
 
 
 DetournayParameters.kernel = detournay_kernel
+
+
+@njit(cache=True)
+def detournay_force_array(args, depth_of_cut, bit_axial_velocity, bit_speed, axial_force, torque):
+    """Loop of :func:`detournay_force` over 1-D arrays; fills ``axial_force`` [N] and ``torque`` [N·m] in place."""
+    for i in range(depth_of_cut.shape[0]):
+        axial_force[i], torque[i] = detournay_force(args, depth_of_cut[i], bit_axial_velocity[i], bit_speed[i])

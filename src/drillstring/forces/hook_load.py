@@ -18,8 +18,8 @@ Two components of the protocol (:class:`~drillstring.forces.registry.HookLoad`, 
 named by the case's ``initial.start``: :class:`OnBottomStart` (``"on_bottom"``, the reference start: no extra
 force, code 0, nothing in the kernels) and :class:`HookLoadRamp` (``"ramp"``: its keys
 :class:`~drillstring.case.RampStartKeys`, the numbers :meth:`HookLoadRamp.kernel_array` the compiled kernel
-:func:`hook_load_change` reads, its NumPy reference :meth:`HookLoadRamp.evaluate_at`). A ramp time of 0 is the
-reference start (no extra force). The load is a prescribed function of time: no Jacobian on the state.
+:func:`hook_load_change` reads, which :meth:`HookLoadRamp.evaluate_at` applies over an array of times). A ramp
+time of 0 is the reference start (no extra force). The load is a prescribed function of time: no Jacobian on the state.
 """
 
 from __future__ import annotations
@@ -106,9 +106,10 @@ class HookLoadRamp(HookLoad):
         return np.array([self.ramp_time, self.weight_on_bit], dtype=np.float64)
 
     def evaluate_at(self, ctx: HookContext):
-        """NumPy reference of :func:`hook_load_change`: the extra axial force on the top [N] along +x
-        (down) at time(s) ``ctx.time`` [s]: ``−W (1 − min(t/T, 1))``, 0 without a ramp."""
+        """The extra axial force on the top [N] along +x (down) at time(s) ``ctx.time`` [s] (array-like):
+        ``−W (1 − min(t/T, 1))``, 0 without a ramp; :func:`hook_load_change` (the load's one implementation)
+        applied elementwise."""
         t = np.asarray(ctx.time, dtype=float)
-        if not self.active:
-            return np.zeros_like(t)
-        return -self.weight_on_bit * (1.0 - np.minimum(t / self.ramp_time, 1.0))
+        args = self.kernel_array()
+        force = [hook_load_change(args, HookContext(float(time), float(ctx.weight_on_bit))) for time in t.flat]
+        return np.array(force, dtype=float).reshape(t.shape)

@@ -119,12 +119,15 @@ class PositiveDisplacementMotor(Motor):
         return np.array([self.stall_torque, self.no_load_speed])
 
     def evaluate(self, relative_speed):
-        """Eq. (2), NumPy reference of the kernel: the torque [N·m] at ``relative_speed`` ω_m [rad/s] (arrays
-        broadcast)."""
-        return self.stall_torque * (1.0 - np.asarray(relative_speed, dtype=float) / self.no_load_speed)
+        """Eq. (2): the torque [N·m] at ``relative_speed`` ω_m [rad/s] (array-like; scalars in, 0-d arrays out),
+        :func:`positive_displacement_kernel` (the law's one implementation) applied elementwise."""
+        speeds = np.asarray(relative_speed, dtype=float)
+        args, none = self.kernel_array(), np.zeros(0)
+        torque = [positive_displacement_kernel(args, MotorContext(0.0, float(w)), none, none) for w in speeds.flat]
+        return np.array(torque, dtype=float).reshape(speeds.shape)
 
     def evaluate_at(self, ctx: MotorContext, states) -> tuple[float, np.ndarray]:
-        """NumPy reference of :func:`positive_displacement_kernel`: ``(T [N·m], no rates)``."""
+        """The kernel at ``ctx`` (:meth:`evaluate`): ``(T [N·m], no rates)``."""
         return self.evaluate(ctx.relative_speed), np.zeros(0)
 
     def jacobian_at(self, ctx: MotorContext, states) -> np.ndarray:

@@ -117,8 +117,17 @@ class BitLaw:
         raise NotImplementedError
 
     def evaluate_at(self, ctx: BitContext):
-        """NumPy reference of :attr:`kernel`: ``(axial_force, torque)`` arrays, the context's fields broadcast."""
-        raise NotImplementedError
+        """The law at a context whose fields may be arrays (broadcast together): ``(axial_force, torque)``
+        arrays (0-d for scalars), :attr:`kernel` applied elementwise, so the law is written once, in its
+        kernel (docs/extending.md). A law may override it with a faster loop (the Tucker–Wang and Detournay
+        laws compile one)."""
+        fields = np.broadcast_arrays(*(np.asarray(field, dtype=np.float64) for field in ctx))
+        args = self.kernel_array()
+        kernel = type(self).kernel
+        values = [kernel(args, BitContext(*(float(field.flat[i]) for field in fields)))
+                  for i in range(fields[0].size)]
+        out = np.array(values, dtype=np.float64).reshape(fields[0].shape + (2,))
+        return out[..., 0], out[..., 1]
 
     def jacobian_at(self, ctx: BitContext) -> np.ndarray:
         """``[[f_u, f_θ], [t_u, t_θ]]``: partials of the force and torque in u̇ and θ̇ at ``ctx``."""
@@ -147,7 +156,7 @@ class TopBoundary:
 
     A boundary that drives the string (``drives``) lumps ``top_inertia`` [kg·m²] at the quill (the torsional
     basis is then free at the top, its first mode the rigid rotation), declares its ``n_states``, its kernel
-    ``kernel(args, ctx, states, rates) -> τ_m`` and NumPy reference ``evaluate_at(ctx, states) -> (τ_m,
+    ``kernel(args, ctx, states, rates) -> τ_m`` and ``evaluate_at(ctx, states) -> (τ_m,
     rates)``, ``jacobian_at(ctx, states)`` (at that operating point; rows τ_m then each state's rate; columns
     θ̇₀, T_s, then each state), ``steady_states(motor_torque, surface_torque)``, ``steady_speed(motor_torque)``
     (the quill speed [rad/s] at which it gives that torque; ValueError when none) and
@@ -180,7 +189,8 @@ class TopBoundary:
         return np.zeros(0)
 
     def evaluate_at(self, ctx: TopContext, states) -> tuple[float, np.ndarray]:
-        """NumPy reference of :attr:`kernel`: ``(τ_m [N·m], rates of the states)``."""
+        """:attr:`kernel`'s law from Python (the same implementation, not a second one): ``(τ_m [N·m], rates of
+        the states)``."""
         raise NotImplementedError
 
     def jacobian_at(self, ctx: TopContext, states) -> np.ndarray:
@@ -207,10 +217,10 @@ class Motor:
     ``−T`` on the stator side, from the relative speed ``ω_m`` [rad/s] (rotor minus stator). A motor declares
     ``name``, ``keys``, ``from_case(case)`` (None when the case has no such motor), ``kernel_size``,
     ``kernel_array()``, ``kernel(args, ctx, states, rates) -> torque [N·m]`` (compiled; the named context
-    :class:`MotorContext`; it writes its states' rates), ``evaluate_at(ctx, states) -> (torque, rates)`` (its
-    NumPy reference), ``jacobian_at(ctx, states)`` (rows the torque then each state's rate, columns ``ω_m`` then
-    each state), ``steady_states(relative_speed)``, ``n_states`` and ``position`` [m] (the rotor station from
-    the top)."""
+    :class:`MotorContext`; it writes its states' rates), ``evaluate_at(ctx, states) -> (torque, rates)`` (the
+    kernel's law from Python), ``jacobian_at(ctx, states)`` (rows the torque then each state's rate, columns
+    ``ω_m`` then each state), ``steady_states(relative_speed)``, ``n_states`` and ``position`` [m] (the rotor
+    station from the top)."""
 
     name: ClassVar[str]
     kernel_size: ClassVar[int] = 0
@@ -227,7 +237,8 @@ class Motor:
         raise NotImplementedError
 
     def evaluate_at(self, ctx: MotorContext, states) -> tuple[float, np.ndarray]:
-        """NumPy reference of :attr:`kernel`: ``(torque [N·m], rates of the states)``."""
+        """:attr:`kernel`'s law from Python (the same implementation, not a second one): ``(torque [N·m], rates
+        of the states)``."""
         raise NotImplementedError
 
     def jacobian_at(self, ctx: MotorContext, states) -> np.ndarray:
@@ -282,7 +293,8 @@ class ContactLaw:
         return np.zeros(0)
 
     def evaluate_at(self, ctx: ContactContext):
-        """NumPy reference of :attr:`kernel`: ``(force_v, force_w, torque)`` arrays, one entry per station."""
+        """:attr:`kernel`'s law from Python (the same implementation, not a second one): ``(force_v, force_w,
+        torque)`` arrays, one entry per station."""
         raise NotImplementedError
 
     def jacobian_at(self, ctx: ContactContext) -> np.ndarray:
@@ -335,7 +347,8 @@ class HookLoad:
         return np.zeros(0)
 
     def evaluate_at(self, ctx: HookContext):
-        """NumPy reference of :attr:`kernel`: the extra axial force [N] at the top (``ctx.time`` may be an array)."""
+        """:attr:`kernel`'s load from Python (the same implementation): the extra axial force [N] at the top
+        (``ctx.time`` may be an array)."""
         return np.zeros_like(np.asarray(ctx.time, dtype=float))
 
     def force(self, t):

@@ -10,8 +10,8 @@ walks through adding a law.
 from a named context (:class:`BitContext`: time, bit position and angle, axial velocity, bit speed, depth
 of cut, static weight-on-bit), never from positional arguments. A law declares ``name``, ``kernel_size``
 (how many numbers its compiled kernel reads), ``kernel_array()`` (those numbers), ``kernel`` (the compiled
-kernel, ``kernel(args, ctx) -> (axial_force, torque)``), ``evaluate_at(ctx)`` (its NumPy reference, array
-fields broadcast), ``jacobian_at(ctx)`` (``[[f_u, f_θ], [t_u, t_θ]]``) and ``steady_drilling(bit_speed,
+kernel, ``kernel(args, ctx) -> (axial_force, torque)``), ``evaluate_at(ctx)`` (the kernel at array
+fields, broadcast; inherited), ``jacobian_at(ctx)`` (``[[f_u, f_θ], [t_u, t_θ]]``) and ``steady_drilling(bit_speed,
 axial_load, resistance)`` (the steady state, :class:`BitSteadyState`: the stability analysis asks the law,
 it never samples it). A law that reads the depth of cut (``delayed = True``) also gives ``sector`` (the
 lag angle) and ``depth_partials(ctx)``.
@@ -27,8 +27,8 @@ operating point; rows: torque then each state's rate; columns: quill speed, surf
 **Contact laws** (:class:`ContactLaw`): the force of the borehole wall on the string at the contact
 stations outside their clearance, from the named context :class:`ContactContext` (arrays over those stations:
 lateral displacements and velocities, spin speed, gap, outer diameter, station stiffness): ``kernel(args, ctx,
-force_v, force_w, torque)`` fills the three arrays, ``evaluate_at(ctx) -> (force_v, force_w, torque)`` is its
-NumPy reference and ``jacobian_at(ctx)`` the (n, 3, 5) partials over (v, w, v̇, ẇ, θ̇x) per station.
+force_v, force_w, torque)`` fills the three arrays, ``evaluate_at(ctx) -> (force_v, force_w, torque)`` gives
+them from Python and ``jacobian_at(ctx)`` the (n, 3, 5) partials over (v, w, v̇, ẇ, θ̇x) per station.
 ``reads_lateral_velocity`` says whether the kernels must gather the stations' lateral velocities for it (they
 are left at 0 otherwise). The case's ``[contact]`` holds its keys.
 

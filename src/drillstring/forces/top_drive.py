@@ -46,8 +46,9 @@ top drive that does not drive, ``controller = "imposed_speed"``) declares its st
 controller) and ``x`` (``z_torque`` only), integrated with the modal coordinates where the registry puts them
 (:attr:`TopDriveParameters.n_states`). Its pieces: :class:`TopDriveParameters` (built from the case in one
 place, :func:`case_top_drive`), the compiled kernel :func:`top_drive_kernel` (reading the named context
-:class:`~drillstring.forces.registry.TopContext` and its own states) over the law :func:`top_drive_law`, the
-NumPy reference :meth:`TopDriveParameters.evaluate_at`, the Jacobian :func:`top_drive_jacobian` (used by the
+:class:`~drillstring.forces.registry.TopContext` and its own states) over the law :func:`top_drive_law` (written
+once: :meth:`TopDriveParameters.evaluate_at` calls it from Python; the tests check it against eq. (1) by hand),
+the Jacobian :func:`top_drive_jacobian` (used by the
 closed-loop stability), the steady states :meth:`TopDriveParameters.steady_states` and the closed form (2),
 :func:`reflection_coefficient`.
 """
@@ -196,12 +197,14 @@ class TopDriveParameters(TopBoundary):
         return self.jacobian()
 
     def evaluate_at(self, ctx: TopContext, states) -> tuple[float, np.ndarray]:
-        """NumPy reference of :func:`top_drive_kernel`: ``(τ_m [N·m], rates of the states)``."""
+        """The law at ``ctx``, ``states`` from Python: ``(τ_m [N·m], rates of the states)`` of
+        :func:`top_drive_law`, the one implementation the compiled kernel calls too."""
         rates = np.zeros(self.n_states)
         if not self.n_states:
             return 0.0, rates
-        torque, rates[0], filtered_rate = evaluate_top_drive(
-            self, ctx.time, ctx.quill_speed, ctx.surface_torque, states[0], states[1] if self.n_states > 1 else 0.0)
+        torque, rates[0], filtered_rate = top_drive_law(
+            self.kernel_args(), float(ctx.time), float(ctx.quill_speed), float(ctx.surface_torque),
+            float(states[0]), float(states[1]) if self.n_states > 1 else 0.0)
         rates[1:] = filtered_rate
         return torque, rates
 
@@ -316,20 +319,6 @@ def top_drive_kernel(args, ctx, states, rates):
 
 
 TopDriveParameters.kernel = top_drive_kernel
-
-
-def evaluate_top_drive(params: TopDriveParameters, t, quill_speed, surface_torque, integral, filtered=0.0):
-    """NumPy reference of :func:`top_drive_law` (scalars): ``(τ_m, ż, ẋ)``."""
-    reference = params.set_point * (min(t / params.ramp_time, 1.0) if params.ramp_time > 0 else 1.0)
-    d_filtered = 0.0
-    if params.controller == "z_torque":
-        reference -= (surface_torque - filtered) / params.pipe_impedance
-        d_filtered = params.filter_frequency * (surface_torque - filtered)
-    error = reference - quill_speed
-    raw = params.proportional_gain * error + params.integral_gain * integral
-    torque = float(np.clip(raw, -params.max_torque, params.max_torque))
-    saturated = torque != raw and np.sign(error) == np.sign(raw)
-    return torque, 0.0 if saturated else error, d_filtered
 
 
 def top_drive_jacobian(params: TopDriveParameters) -> np.ndarray:
