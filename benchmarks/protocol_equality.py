@@ -4,6 +4,11 @@ and every eigenvalue of the stability analysis of the built-in cases, saved by e
     python benchmarks/protocol_equality.py save OUT.npz          # run with PYTHONPATH=<tree>/src
     python benchmarks/protocol_equality.py compare A.npz B.npz    # the largest relative difference
 
+``save --gravity 9.81`` sets ``environment.gravity`` [m/s^2] of every case (standard gravity is the default of
+a case without it since issue 37; ``reference`` and ``contact`` write 9.81): a tree saved so against one from
+before that change tells whether g is the whole difference. ``save --cases a,b`` runs those of the cases below
+(the stick-slip variants always).
+
 The cases: ``reference``, ``stick_slip``, ``contact``, ``aarsnes2019`` and ``motor`` as written (their bases of
 today, their own run length), and, for the top boundaries, the stick-slip case under each controller
 (``pi``, ``soft_torque``, ``z_torque``, 3 s), and off bottom.
@@ -16,7 +21,7 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import sys  # noqa: E402
+import argparse  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -25,10 +30,16 @@ CONTROLLERS = {"pi": {"controller": "pi", "proportional_gain": 2000.0, "integral
                "soft_torque": {"controller": "soft_torque"}, "z_torque": {"controller": "z_torque"}}
 
 
-def _variants():
-    from drillstring.case import load_case
+def _variants(cases=CASES, gravity: float | None = None):
+    from drillstring.case import load_case as load_written
 
-    for name in CASES:
+    def load_case(name):
+        case = load_written(name)
+        if gravity is None:
+            return case
+        return case.model_copy(update={"environment": case.environment.model_copy(update={"gravity": gravity})})
+
+    for name in cases:
         yield name, load_case(name), None
     base = load_case("stick_slip")
     for name, fields in CONTROLLERS.items():
@@ -38,11 +49,11 @@ def _variants():
     yield "stick_slip_off_bottom", case, 2.0
 
 
-def save(path: str) -> None:
+def save(path: str, cases=CASES, gravity: float | None = None) -> None:
     from drillstring.api import simulate, stability
 
     out = {}
-    for name, case, t_end in _variants():
+    for name, case, t_end in _variants(cases, gravity):
         data = simulate(case, t_end=t_end)
         for var in data.data_vars:
             out[f"{name}/{var}"] = np.asarray(data[var].values, dtype=float)
@@ -81,8 +92,22 @@ def compare(a: str, b: str) -> None:
     print(f"largest relative difference (max |a - b| / max |a| per array): {worst:.3g} over {len(keys)} arrays")
 
 
-if __name__ == "__main__":
-    if sys.argv[1] == "save":
-        save(sys.argv[2])
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="command", required=True)
+    saving = commands.add_parser("save", help="run the cases and save every array to OUT.npz")
+    saving.add_argument("out")
+    saving.add_argument("--gravity", type=float, default=None, help="environment.gravity of every case [m/s^2]")
+    saving.add_argument("--cases", default=",".join(CASES), help="the built-in cases run as written (the stick-slip variants always run)")
+    comparing = commands.add_parser("compare", help="the largest relative difference of each array")
+    comparing.add_argument("first")
+    comparing.add_argument("second")
+    args = parser.parse_args()
+    if args.command == "save":
+        save(args.out, tuple(name for name in args.cases.split(",") if name), args.gravity)
     else:
-        compare(sys.argv[2], sys.argv[3])
+        compare(args.first, args.second)
+
+
+if __name__ == "__main__":
+    main()
