@@ -4,13 +4,12 @@ map or a search, the run record of a store."""
 
 from __future__ import annotations
 
+import functools
+import inspect
 from pathlib import Path
-from typing import TYPE_CHECKING, Mapping
+from typing import Callable, Mapping
 
 from drillstring.case import Case, load_case
-
-if TYPE_CHECKING:  # the simulating modules load with the functions that use them (light static, modes)
-    pass
 
 
 def as_case(case: Case | str | Path) -> Case:
@@ -133,3 +132,29 @@ def run_table(record: dict, noun: str) -> dict:
         rows["wall time of this run [s]"] = round(record["wall_time_this_run"], 2)
         rows[f"runs that computed {noun}"] = len(record["sessions"])
     return rows
+
+
+def keywords_of(recipe: Callable, *, leaving_out: tuple[str, ...] = ()) -> Callable:
+    """Decorator of a shorthand ``function(case, **options)`` that calls ``recipe`` with the same arguments: its
+    signature (``help()``, the reference, :func:`inspect.signature`) is ``recipe``'s less the keywords
+    ``leaving_out`` (with the shorthand's own return annotation), and a keyword it does not list is refused with
+    Python's TypeError before anything runs. One list of keywords and defaults, written once on ``recipe``."""
+    shared = inspect.signature(recipe)
+
+    def decorate(function: Callable) -> Callable:
+        signature = shared.replace(
+            parameters=[p for name, p in shared.parameters.items() if name not in leaving_out],
+            return_annotation=inspect.signature(function).return_annotation)
+
+        @functools.wraps(function)
+        def shorthand(*args, **kwargs):
+            try:
+                signature.bind(*args, **kwargs)
+            except TypeError as error:  # as Python's own, for an argument it does not take
+                raise TypeError(f"{function.__name__}() {error}") from None
+            return function(*args, **kwargs)
+
+        shorthand.__signature__ = signature
+        return shorthand
+
+    return decorate

@@ -124,10 +124,18 @@ def operating_map(
     if sigma is not None or parameters is not None or correlation is not None or model is not None:
         raise ValueError("sigma, parameters, correlation and model declare the uncertainty of a probabilistic map: "
                          "give samples (realizations per point) too")
+    return _run_map(run_map, _finish_map, case, settings, engine, out, units)
+
+
+def _run_map(runner, finish, case, settings, engine, out, units) -> MapOutcome:
+    """Run a map of ``case`` (its ``[uncertainty]`` table dropped: the laws are in ``settings``) with ``runner``
+    (:func:`~drillstring.stochastic.operating_map.run_map` or :func:`~drillstring.stochastic.probabilistic_map.
+    run_sampled_map`) into ``out``/map.zarr (``out`` None: a temporary folder, and no files but the store), then
+    ``finish(case, folder, units, run)`` under its lock."""
     case = case.model_copy(update={"uncertainty": None})
     folder = output_folder(out, "drillstring-map-")
-    run = run_map(case, settings, folder / "map.zarr", engine,
-                  finish=partial(_finish_map, case, folder if out is not None else None, units))
+    run = runner(case, settings, folder / "map.zarr", engine,
+                 finish=partial(finish, case, folder if out is not None else None, units))
     return MapOutcome(*run.result, run.already, run.note)
 
 
@@ -191,11 +199,7 @@ def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correla
     sigma, laws, correlated, matrix, dispersions = point_uncertainty(case, parameters, correlation, model, sigma)
     settings = SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, laws=laws, correlated=correlated,
                                   correlation=matrix, model_dispersion=dispersions.as_tuple())
-    case = case.model_copy(update={"uncertainty": None})
-    folder = output_folder(out, "drillstring-map-")
-    run = run_sampled_map(case, settings, folder / "map.zarr", engine,
-                          finish=partial(_finish_sampled_map, case, folder if out is not None else None, units))
-    return MapOutcome(*run.result, run.already, run.note)
+    return _run_map(run_sampled_map, _finish_sampled_map, case, settings, engine, out, units)
 
 
 def _finish_sampled_map(case, folder, units, run):

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
-from drillstring.api.arguments import as_case, case_window, check_mapping, make_engine, output_folder
+from drillstring.api.arguments import as_case, case_window, check_mapping, keywords_of, make_engine, output_folder
 from drillstring.api.runs import stability_boundary
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
@@ -310,27 +310,12 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
 
 
 @single_threaded_blas()
-def study(
-    case: Case | str | Path = "reference",
-    *,
-    sigma: float | None = None,
-    dispersion: float | None = None,
-    parameters: Mapping[str, Any] | None = None,
-    correlation: Mapping[str, Any] | None = None,
-    model: Mapping[str, float] | None = None,
-    samples: int = DEFAULT_SAMPLES,
-    seed: int = DEFAULT_SEED,
-    out: str | Path | None = None,
-    workers: int | None = None,
-    scheduler=None,
-    t_end: float | None = None,
-    output_step: float | None = None,
-    transient: float | None = None,
-    progress: Callable[[int, int, int], None] | None = None,
-) -> xr.Dataset:
+@keywords_of(monte_carlo_study, leaving_out=("note", "worker_timeout", "units", "stage"))
+def study(case: Case | str | Path = "reference", **options) -> xr.Dataset:
     """Monte Carlo study of random case parameters (docs/model.md §11); returns the statistics Dataset.
 
-    The statistics of :func:`monte_carlo_study` (same arguments, same checks and files): laws of
+    The statistics of :func:`monte_carlo_study` (its arguments but ``note``, ``worker_timeout``, ``units`` and
+    ``stage``; the same checks and files): laws of
     ``parameters`` (or the case's ``[uncertainty]`` table), at most one of ``sigma`` [N] or
     ``dispersion`` (σ / mean) for the weight-on-hook (default, nothing declared: σ = 5000 N); the
     drawn values are in ``input_values``; realizations stream to the Zarr
@@ -339,8 +324,4 @@ def study(
     indicators (default ``min(10 s, t_end/2)``).
     Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
     """
-    return monte_carlo_study(
-        case, sigma=sigma, dispersion=dispersion, parameters=parameters, correlation=correlation, model=model,
-        samples=samples, seed=seed, out=out, workers=workers, scheduler=scheduler, t_end=t_end,
-        output_step=output_step, transient=transient, progress=progress,
-    ).statistics
+    return monte_carlo_study(case, **options).statistics

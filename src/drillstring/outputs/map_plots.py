@@ -98,18 +98,22 @@ def plot_map(ds: xr.Dataset, path: str | Path, *, units: str | None = None) -> P
                Line2D([], [], color="k", marker=".", ls="", label="simulated point")]
     if (status != 1).any():
         handles.append(Line2D([], [], color="C3", marker="x", ls="", label="failed point"))
-    if _coexisting(ds).any():
-        handles.append(COEXISTING_HANDLE())
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
-    title = "Operating map"
-    name = case_name(ds.attrs.get("case", ""))
-    if name:
-        title += f": case '{name}'"
+    title = _legend_and_title(fig, ds, handles, "Operating map")
     t_end, t_tr = ds.attrs.get("t_end"), ds.attrs.get("t_transient")
     if t_end is not None and t_tr is not None:
         title += f" (runs of {float(t_end):g} s, outputs over t ≥ {float(t_tr):g} s)"
     fig.suptitle(title)
     return canvas.save_png(fig, path)
+
+
+def _legend_and_title(fig, ds: xr.Dataset, handles: list, title: str) -> str:
+    """Draw the legend of a map figure below its panels (``handles``, and the mark of coexisting cycles where the
+    map has such points); return ``title`` with the case's name."""
+    if _coexisting(ds).any():
+        handles.append(COEXISTING_HANDLE())
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
+    name = case_name(ds.attrs.get("case", ""))
+    return f"{title}: case '{name}'" if name else title
 
 
 def _coexisting(ds: xr.Dataset) -> np.ndarray:
@@ -191,14 +195,7 @@ def plot_map_stability(ds: xr.Dataset, path: str | Path, *, units: str | None = 
                Line2D([], [], color="C3", ls="--", lw=1.6,
                       label=f"lateral buckling, WOB = {critical:.4g} {force.label}"),
                Line2D([], [], color="k", marker=".", ls="", label="point")]
-    if _coexisting(ds).any():
-        handles.append(COEXISTING_HANDLE())
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize="small")
-    title = "Linear stability of steady drilling per family"
-    name = case_name(ds.attrs.get("case", ""))
-    if name:
-        title += f": case '{name}'"
-    fig.suptitle(title)
+    fig.suptitle(_legend_and_title(fig, ds, handles, "Linear stability of steady drilling per family"))
     return canvas.save_png(fig, path)
 
 
