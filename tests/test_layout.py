@@ -26,8 +26,8 @@ KNOWN_STAGE_CIRCLES = [{"drillstring.case", "drillstring.fem", "drillstring.well
 
 #: The output and interface layers: figures, reports, the API's recipes and the command line. Nothing of the
 #: physics or the statistics imports them.
-OUTER = ("drillstring.plots", "drillstring.outputs", "drillstring.report", "drillstring.interactive", "drillstring.torque_drag_plots",
-         "drillstring.optimize_plots", "drillstring.api", "drillstring.operating_point", "drillstring.cli")
+OUTER = ("drillstring.plots", "drillstring.outputs", "drillstring.report", "drillstring.interactive", "drillstring.api",
+         "drillstring.operating_point", "drillstring.cli")
 #: The physics and statistics stages (the pipeline's inner layers).
 INNER = ("drillstring.case", "drillstring.units", "drillstring.fem", "drillstring.well", "drillstring.statics",
          "drillstring.modal", "drillstring.forces", "drillstring.dynamics", "drillstring.stochastic",

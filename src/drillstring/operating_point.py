@@ -191,7 +191,7 @@ def optimize(
 def _finish(case, settings, folder, units, run):
     """Under the store's lock: the summary, the dataset and (in ``folder`` unless None) the files."""
     from drillstring.files import strict_json, write_text_atomic
-    from drillstring.optimize_plots import decision_unit, objective_unit, plot_optimization
+    from drillstring.outputs.optimize_plots import decision_unit, objective_unit, plot_optimization
     from drillstring.report import write_optimization_report
     from drillstring.results import write_netcdf
     from drillstring.stochastic.optimize import optimization_result
