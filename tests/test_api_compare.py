@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from drillstring.api import COMPARED_MODELS, COMPARED_OBSERVABLES, _difference_numbers, compare
+from drillstring.api import COMPARED_MODELS, COMPARED_OBSERVABLES, compare
+from drillstring.api.runs import _difference_numbers
 from drillstring.case import load_case
 from drillstring.dynamics.simulate import SimulationError
 

@@ -5,6 +5,7 @@ carries it."""
 from __future__ import annotations
 
 import inspect
+import sys
 
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
@@ -58,7 +59,7 @@ def test_every_public_api_function_runs_single_threaded(name, monkeypatch):
         seen.append(_blas_threads())
         raise LookupError("stop")
 
-    monkeypatch.setattr(api, "as_case", as_case)
+    monkeypatch.setattr(sys.modules[function.__module__], "as_case", as_case)  # where the function reads it
     with threadpool_limits(limits=2, user_api="blas"), pytest.raises(LookupError):
         function("reference")
     assert seen == [{1}]

@@ -9,6 +9,7 @@ import pytest
 import xarray as xr
 
 from drillstring import plots
+from drillstring.outputs import canvas
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 OBSERVABLES = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
@@ -26,13 +27,13 @@ def _assert_png(path):
 def drawn(monkeypatch):
     """The figures the plotting functions save, in order (each still written to its file)."""
     figures = []
-    save = plots._save
+    save = canvas.save_png
 
     def keep(fig, path):
         figures.append(fig)
         return save(fig, path)
 
-    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(canvas, "save_png", keep)
     return figures
 
 
@@ -268,7 +269,7 @@ def test_figures_follow_the_unit_system(run_dataset, monkeypatch, tmp_path):
         drawn[str(path)] = fig
         return path
 
-    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(canvas, "save_png", keep)
     plots.plot_run(run_dataset, tmp_path / "si.png", units="si")
     plots.plot_run(run_dataset, tmp_path / "field.png", units="field")
     si, field = ([ax.get_ylabel() for ax in drawn[str(tmp_path / f)].axes] for f in ("si.png", "field.png"))
@@ -285,7 +286,7 @@ def test_figures_follow_the_unit_system(run_dataset, monkeypatch, tmp_path):
 def test_case_names_are_plain_text_in_figures(run_dataset, tmp_path, name):
     """A case name is drawn as written: dollar signs never start Matplotlib's mathtext."""
     ds = run_dataset.assign_attrs(case=f'name = "{name}"\n')
-    assert plots._case_name(ds.attrs["case"]).replace("\\$", "$") == name.replace("\\\\", "\\")
+    assert canvas.case_name(ds.attrs["case"]).replace("\\$", "$") == name.replace("\\\\", "\\")
     _assert_png(plots.plot_run(ds, tmp_path / "run.png"))
     _assert_png(plots.plot_compare(ds, ds, tmp_path / "compare.png"))
 

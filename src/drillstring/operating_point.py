@@ -9,7 +9,8 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from drillstring.api import _engine, _mapping, _output_folder, _point_uncertainty, _run_record, _window, as_case
+from drillstring.api.arguments import (as_case, case_window, check_mapping, make_engine, output_folder,
+                                       point_uncertainty, run_record, run_table)
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
 from drillstring.stochastic import DEFAULT_SEED
@@ -91,18 +92,18 @@ def optimization_settings(case: Case, *, variables, objective="rate_of_penetrati
     (arguments as :func:`optimize`)."""
     from drillstring.stochastic.optimize import DEFAULT_BATCH, OptimizationSettings, check_optimization
 
-    _mapping("variables", variables)
-    _mapping("constraints", constraints)
-    _mapping("parameters", parameters)
-    _mapping("correlation", correlation)
-    _mapping("model", model)
+    check_mapping("variables", variables)
+    check_mapping("constraints", constraints)
+    check_mapping("parameters", parameters)
+    check_mapping("correlation", correlation)
+    check_mapping("model", model)
     if not variables:
         raise ValueError("variables: give at least one decision variable with its bounds, e.g. "
                          "{'top_speed': '60 rpm:140 rpm'}")
     units = dict(default_units or {})
     bounded = tuple(parse_bounds(case, name, text, units.get(name, "")) for name, text in variables.items())
-    sigma, laws, correlated, matrix, dispersions = _point_uncertainty(case, parameters, correlation, model, sigma)
-    window = _window(case, t_end, output_step, transient)
+    sigma, laws, correlated, matrix, dispersions = point_uncertainty(case, parameters, correlation, model, sigma)
+    window = case_window(case, t_end, output_step, transient)
     initial = max(4, 4 * len(bounded)) if initial is None else initial
     points = 2 * initial if points is None else points
     settings = OptimizationSettings(
@@ -178,9 +179,9 @@ def optimize(
                                      output_step=output_step, transient=transient, sigma=sigma,
                                      parameters=parameters, correlation=correlation, model=model,
                                      default_units=default_units)
-    engine = _engine(workers, scheduler, progress, note, worker_timeout)
+    engine = make_engine(workers, scheduler, progress, note, worker_timeout)
     case = case.model_copy(update={"uncertainty": None})
-    folder = _output_folder(out, "drillstring-optimize-")
+    folder = output_folder(out, "drillstring-optimize-")
     run = run_optimization(case, settings, folder / "optimize.zarr", engine,
                            finish=partial(_finish, case, settings, folder if out is not None else None, units))
     summary, dataset, files = run.result
@@ -189,16 +190,15 @@ def optimize(
 
 def _finish(case, settings, folder, units, run):
     """Under the store's lock: the summary, the dataset and (in ``folder`` unless None) the files."""
-    from drillstring.api import _run_table
     from drillstring.files import strict_json, write_text_atomic
-    from drillstring.optimize_plots import decision_unit, objective_unit, plot_optimization
+    from drillstring.outputs.optimize_plots import decision_unit, objective_unit, plot_optimization
     from drillstring.report import write_optimization_report
     from drillstring.results import write_netcdf
     from drillstring.stochastic.optimize import optimization_result
 
     result = optimization_result(run.store)
     summary = {"case": case.name, **{k: v for k, v in result.items() if k not in ("surrogates", "problem")},
-               **_run_record(run.store, run, "realizations")}
+               **run_record(run.store, run, "realizations")}
     dataset = _dataset(run.store, settings, result)
     files: dict[str, Path] = {}
     if folder is not None:
@@ -214,7 +214,7 @@ def _finish(case, settings, folder, units, run):
             objective_unit=objective_unit(summary["objective"], units)[0],
             figures={"The surrogate's objective over the decision variables, each chance constraint's boundary, "
                      "the region where one fails hatched, the design points and the answer": files["figure"]},
-            run_info={**_run_table(summary, "realizations"), "store": str(run.store.path)})
+            run_info={**run_table(summary, "realizations"), "store": str(run.store.path)})
     return summary, dataset, files
 
 

@@ -762,7 +762,7 @@ def write_torque_drag_page(path: str | Path, *, title: str, case_toml: str, payl
                            interactive: Sequence[Mapping[str, Any]], units: str | None = None) -> Path:
     """Write the interactive torque-and-drag page (one self-contained HTML file, the report's style): the case,
     the loads of each operation and the well (``payload``: :attr:`drillstring.well.analysis.TorqueDragAnalysis.
-    payload`), then the ``interactive`` figures (:func:`drillstring.torque_drag_plots.well_figures`)."""
+    payload`), then the ``interactive`` figures (:func:`drillstring.outputs.torque_drag_plots.well_figures`)."""
     from drillstring.interactive import write_interactive_page
 
     body = [*_heading(title), _case_section(case_toml, units), _torque_drag_section(payload, units)]

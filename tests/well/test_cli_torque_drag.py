@@ -99,7 +99,7 @@ def test_html_page_is_the_report_with_every_panel_of_the_png(tmp_path):
     its files one a line."""
     from matplotlib.colors import to_hex
 
-    from drillstring.torque_drag_plots import _COLORS
+    from drillstring.outputs.torque_drag_plots import _COLORS
 
     case = _case_file(tmp_path, _WELL)
     page = tmp_path / "td.html"

@@ -154,7 +154,7 @@ def optimize_command(
 
 
 def _point_text(case, summary: dict[str, Any], units) -> str:
-    from drillstring.optimize_plots import decision_unit
+    from drillstring.outputs.optimize_plots import decision_unit
 
     values = summary["recommended"]["values"]
     parts = []
@@ -173,7 +173,7 @@ def _probabilities_text(summary: dict[str, Any]) -> str:
 
 
 def _print_answer(case, summary: dict[str, Any], units) -> None:
-    from drillstring.optimize_plots import objective_unit
+    from drillstring.outputs.optimize_plots import objective_unit
 
     console = _console()
     best = summary["recommended"]

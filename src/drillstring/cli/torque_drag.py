@@ -74,7 +74,7 @@ def torque_drag_command(
                               str(plot.with_name(plot.stem + "-broomstick.png"))]
     if html_page is not None:
         from drillstring.report import write_torque_drag_page
-        from drillstring.torque_drag_plots import well_figures
+        from drillstring.outputs.torque_drag_plots import well_figures
 
         write_torque_drag_page(html_page, title=f"Torque and drag: case {the_case.name}",
                                case_toml=the_case.to_toml(), payload=payload, units=units,
@@ -131,7 +131,7 @@ def _shown(value: float | None, unit, spec: str) -> str:
 
 
 def _torque_drag_figures(case: Case, analysis, plot: Path, measurements, units: str | None) -> None:
-    from drillstring.torque_drag_plots import plot_broomstick, plot_torque_drag, plot_well_path
+    from drillstring.outputs.torque_drag_plots import plot_broomstick, plot_torque_drag, plot_well_path
     from drillstring.well.calibration import broomstick, posterior_bands
 
     shoe = 0.0 if case.well is None else case.well.casing_shoe

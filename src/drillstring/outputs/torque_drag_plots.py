@@ -13,7 +13,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from drillstring.plots import _figure, _save
+from drillstring.outputs.canvas import new_figure, save_png
 from drillstring.units import display_unit
 
 __all__ = ["plot_broomstick", "plot_torque_drag", "plot_well_path", "well_figures"]
@@ -27,7 +27,7 @@ def plot_well_path(trajectory, path: str | Path, *, casing_shoe: float = 0.0, ti
                    units: str | None = None) -> Path:
     """Vertical section (along the direction of the bottom hole) and plan view of a trajectory."""
     length = display_unit("length", units)
-    fig, (section, plan) = _figure(1, 2, (11.0, 5.0))
+    fig, (section, plan) = new_figure(1, 2, (11.0, 5.0))
     vs = trajectory.vertical_section() * length.scale
     tvd = trajectory.true_vertical_depth * length.scale
     section.plot(vs, tvd, "-", color="C0", lw=2)
@@ -52,7 +52,7 @@ def plot_well_path(trajectory, path: str | Path, *, casing_shoe: float = 0.0, ti
     plan.set_aspect("equal", adjustable="datalim")
     plan.legend(loc="best")
     fig.suptitle(title)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _axial_range(results: Mapping[str, Any]) -> tuple[float, float]:
@@ -68,7 +68,7 @@ def plot_torque_drag(results: Mapping[str, Any], path: str | Path, *, critical: 
     """Effective axial force, torque and side force per length against measured depth for each operation;
     the critical compressions of sinusoidal and helical buckling drawn on the axial force."""
     force, length, torque = (display_unit(k, units) for k in ("force", "length", "torque"))
-    fig, (axial, twist, side) = _figure(1, 3, (14.0, 6.0))
+    fig, (axial, twist, side) = new_figure(1, 3, (14.0, 6.0))
     for op, r in results.items():
         depth = r.measured_depth * length.scale
         axial.plot(r.axial_force * force.scale, depth, color=_COLORS.get(op), label=_LABELS.get(op, op))
@@ -90,7 +90,7 @@ def plot_torque_drag(results: Mapping[str, Any], path: str | Path, *, critical: 
     axial.legend(loc="upper left", fontsize=8)
     twist.legend(loc="lower left", fontsize=8)
     fig.suptitle(title)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def plot_broomstick(bit_depths, chart: Mapping[str, np.ndarray], frictions: Sequence[float], path: str | Path, *,
@@ -99,7 +99,7 @@ def plot_broomstick(bit_depths, chart: Mapping[str, np.ndarray], frictions: Sequ
     """Hook load against bit depth for each operation and friction factor (:func:`drillstring.well.calibration.
     broomstick`), the measured hook loads as points, and posterior bands (5-95 %) if given."""
     force, length = display_unit("force", units), display_unit("length", units)
-    fig, (ax,) = _figure(1, 1, (8.0, 8.0))
+    fig, (ax,) = new_figure(1, 1, (8.0, 8.0))
     depth = np.asarray(bit_depths) * length.scale
     styles = ["-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1))]
     for op, loads in chart.items():
@@ -126,7 +126,7 @@ def plot_broomstick(bit_depths, chart: Mapping[str, np.ndarray], frictions: Sequ
     ax.grid(alpha=0.3)
     ax.legend(loc="lower left", fontsize=8)
     ax.set_title(title)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _hex(color: str) -> str:

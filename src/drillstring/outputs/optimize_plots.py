@@ -43,7 +43,7 @@ def objective_unit(objective: str, units: str | None = None) -> tuple[DisplayUni
 def plot_optimization(case: Case, result: dict, path: str | Path, *, units: str | None = None,
                       resolution: int = 61) -> Path:
     """Draw the search's figure (module docstring) to ``path`` (PNG)."""
-    from drillstring.plots import _figure, _save
+    from drillstring.outputs.canvas import new_figure, save_png
 
     problem, surrogates = result["problem"], result["surrogates"]
     names, bounds = result["variables"], np.asarray(result["bounds"], dtype=float)
@@ -52,7 +52,7 @@ def plot_optimization(case: Case, result: dict, path: str | Path, *, units: str 
     shown = [decision_unit(case, name, units) for name in names]
     value_unit, value_label = objective_unit(result["objective"], units)
     sign = 1.0 if result["maximize"] else -1.0
-    fig, (ax,) = _figure(1, 1, (7.0, 5.2))
+    fig, (ax,) = new_figure(1, 1, (7.0, 5.2))
     label = f"{'expected ' if '_q' not in result['objective'] else ''}{value_label}" + (
         f" (quantile {result['objective'].rsplit('_q', 1)[1]} %)" if "_q" in result["objective"] else "")
     if len(names) == 1:
@@ -106,7 +106,7 @@ def plot_optimization(case: Case, result: dict, path: str | Path, *, units: str 
         ax.legend(fontsize=7, loc="best", framealpha=0.8)
         if len(names) > 2:
             ax.set_title("other variables at the recommended point", fontsize=9)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _axis_label(path: str, unit: DisplayUnit) -> str:

@@ -1,0 +1,327 @@
+"""Monte Carlo studies of random case parameters (docs/model.md §11) with their files: statistics, summary,
+figures and report."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Mapping
+
+import numpy as np
+
+from drillstring.api.arguments import as_case, case_window, check_mapping, keywords_of, make_engine, output_folder
+from drillstring.api.runs import stability_boundary
+from drillstring.blas_threads import single_threaded_blas
+from drillstring.case import Case
+from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
+from drillstring.units import display_unit, unit_system
+
+if TYPE_CHECKING:  # the simulating modules load with the functions that use them (light static, modes)
+    import xarray as xr
+
+
+class StudyFailed(RuntimeError):
+    """A study that ran but cannot give statistics (fewer than 2 realizations finished); the message
+    lists the first failures, the store keeps everything."""
+
+
+@dataclass
+class StudyOutcome:
+    """What :func:`monte_carlo_study` did.
+
+    Attributes:
+        statistics: the statistics Dataset (as returned by :func:`study`).
+        summary: the JSON-ready summary (SI), as written to ``summary.json``: dispersions after the
+            transient, the failures and their causes, ``wall_time`` (the computation time of the study,
+            summed over the runs that computed realizations; a rerun of a finished study keeps it),
+            ``wall_time_this_run``, ``workers``, ``sessions`` and ``files``.
+        files: name -> path of each file written (empty when ``out`` is None).
+        already: realizations that were in the store before this run (a resumed or finished study).
+        note: a note for the user (a stale lock taken over), or None.
+    """
+
+    statistics: xr.Dataset
+    summary: dict
+    files: dict[str, Path]
+    already: int
+    note: str | None = None
+
+
+#: Captions of the study figures in the report, by figure name.
+_STUDY_CAPTIONS = {
+    "envelopes": "95 % envelopes, mean and nominal response (deterministic run at the mean of every random "
+                 "parameter)",
+    "dispersion": "Dispersion of the response vs time (transient t < {t_transient:g} s shaded)",
+    "convergence": "Convergence: mean-square conv(n_s), each observable divided by its last value (left); maximum "
+                   "and time-mean dispersion over records of growing length after the transient (right)",
+    "realizations": "Per-realization cycle metrics after t = {t_transient:g} s: histograms, mean and nominal run",
+}
+
+
+def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None, model=None,
+                   samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
+    """The validated settings of a Monte Carlo study of ``case`` (TypeError / ValueError naming the field or
+    the parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
+
+    The random parameters: ``parameters`` (path -> law spec or table) with ``correlation`` (``{"parameters":
+    [...], "matrix": [[...]]}``) when given, else the case's ``[uncertainty]`` table; plus the weight-on-hook,
+    Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given (a
+    shorthand for the law ``weight_on_hook = "normal mean=<hook load> std=<sigma>"``, declared first). With
+    none of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``model``: the model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
+    "damping_dispersion": δ_D}`` (:mod:`~drillstring.stochastic.random_matrices`), else the case's
+    ``[uncertainty.model]`` table, else none.
+    """
+    from drillstring.checks import real_number
+    from drillstring.stochastic import DEFAULT_SIGMA
+    from drillstring.stochastic.montecarlo import (
+        StudySettings,
+        check_study,
+        nominal_weight_on_hook,
+        weight_on_hook_normal,
+    )
+    from drillstring.stochastic.uncertainty import declared_uncertainty
+
+    if sigma is not None and dispersion is not None:
+        raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
+    if dispersion is not None:
+        sigma = real_number("dispersion", dispersion, low=0.0, low_open=True) * nominal_weight_on_hook(case)
+    if sigma is not None:
+        sigma = real_number("sigma", sigma, unit="N", low=0.0, low_open=True)
+    check_mapping("parameters", parameters)
+    check_mapping("correlation", correlation)
+    check_mapping("model", model)
+    from drillstring.stochastic.random_matrices import ModelDispersion
+
+    dispersions = ModelDispersion.declared(case, model)
+    first = dict([weight_on_hook_normal(case, sigma)]) if sigma is not None else None
+    declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
+    if declared is None:
+        first = dict([weight_on_hook_normal(case, DEFAULT_SIGMA)])
+        declared = declared_uncertainty(case, None, None, first=first, tolerance=1.0)
+    correlated, matrix = (), ()
+    if declared.correlation is not None:
+        correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+    window = case_window(case, t_end, output_step)
+    bare = case.model_copy(update={"uncertainty": None})
+    settings = StudySettings(samples=samples, seed=seed, t_end=window.t_end, output_step=window.output_step,
+                             laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
+                             correlated=correlated, correlation=matrix,
+                             model_dispersion=dispersions.as_tuple())
+    check_study(bare, settings)
+    return settings, bare
+
+
+@single_threaded_blas()
+def monte_carlo_study(
+    case: Case | str | Path = "reference",
+    *,
+    sigma: float | None = None,
+    dispersion: float | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    correlation: Mapping[str, Any] | None = None,
+    model: Mapping[str, float] | None = None,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = DEFAULT_SEED,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    t_end: float | None = None,
+    output_step: float | None = None,
+    transient: float | None = None,
+    progress: Callable[[int, int, int], None] | None = None,
+    note: Callable[[str], None] | None = None,
+    worker_timeout: float | None = None,
+    units: str | None = None,
+    stage: Callable[[str], None] | None = None,
+) -> StudyOutcome:
+    """Monte Carlo study of random case parameters (docs/model.md §11; by default a random weight-on-hook), with
+    its files.
+
+    The random parameters (:func:`study_settings`): each of ``parameters`` (case-parameter path -> law
+    spec, e.g. ``{"fluid.inlet_velocity": "uniform 1.2 1.8 m/s"}``; laws by the Maximum Entropy Principle,
+    :mod:`drillstring.stochastic.uncertainty`), correlated normals by ``correlation`` (``{"parameters":
+    [...], "matrix": [[...]]}``), or the case's ``[uncertainty]`` table when ``parameters`` is None; and the
+    weight-on-hook, Normal of standard deviation ``sigma`` [N] or ``dispersion`` × mean (at most one of
+    them). Nothing declared: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
+    ``model``: nonparametric model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
+    "damping_dispersion": δ_D}`` (random reduced matrices, :mod:`~drillstring.stochastic.random_matrices`;
+    default the case's ``[uncertainty.model]``).
+    ``samples`` realizations (>= 2) of ``t_end`` [s]
+    run on ``workers`` local processes (default: one per core) or on the Dask cluster at ``scheduler``
+    (an address, or a ``distributed.Client``). Summaries use ``t >= transient`` (default
+    ``min(10 s, t_end/2)``; in [0, t_end)). ``progress(done, failed, total)`` follows the realizations;
+    ``note(text)`` receives notes (a stale lock taken over); ``stage(text)``, what runs after the realizations
+    ("reading the store", "statistics", "figures", "report").
+
+    Everything is checked before anything runs (TypeError or ValueError naming the argument): the
+    arguments, the run window and the study's size (:data:`~drillstring.stochastic.montecarlo.
+    MAX_STUDY_BYTES`), the settings (a law that puts a probability above 1e-3 outside its parameter's
+    range, e.g. a sigma that would put a weight-on-bit outside (0, string weight), included; a
+    law that buckles more than one draw in a thousand is a result, not an error: ``summary["buckling"]``
+    counts the buckled realizations, and ``note`` is told before the run when at least one is expected),
+    ``out`` (must be a writable folder), the scheduler (:class:`~drillstring.stochastic.execution.
+    SchedulerUnreachable`) and the lock on ``out`` (:class:`~drillstring.stochastic.locks.
+    StudyLocked` while another study runs there; held until every file is written).
+
+    In ``out`` (default: a temporary folder, and no files but the store): ``study.zarr`` (every
+    realization, streamed; rerunning resumes), then, each written atomically, ``statistics.nc``,
+    ``summary.json``, the figures ``envelopes.png``, ``dispersion.png``, ``convergence.png``, ``realizations.png`` and
+    ``report.html``; figures and report in the unit system ``units`` (``"si"`` or ``"field"``; None:
+    ``$DRILLSTRING_UNITS``, else si; JSON and NetCDF stay SI). Fewer than 2 finished realizations raise
+    :class:`StudyFailed`.
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    from drillstring.stochastic.montecarlo import buckling_note, run_study, study_buckling_margin
+
+    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
+    settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
+                                    correlation=correlation, model=model, samples=samples, seed=seed,
+                                    t_end=t_end, output_step=output_step)
+    t_transient = case_window(case, settings.t_end, settings.output_step, transient).transient
+    engine = make_engine(workers, scheduler, progress, note, worker_timeout)
+    folder = output_folder(out, "drillstring-study-")
+    buckling = study_buckling_margin(case, settings)
+    if note is not None and buckling["warning"] and buckling["expected"] >= 1.0:
+        # a result, not a misuse: said before the run only when a buckled realization is expected, and only
+        # to a caller that takes notes (the summary counts them in any case)
+        note(buckling_note(buckling, settings.samples, units))
+    buckling = {k: v for k, v in buckling.items() if k not in ("lateral", "source")}
+    finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None,
+                     units, stage or (lambda text: None))
+    run = run_study(case, settings, folder / "study.zarr", engine, finish=finish)
+    return StudyOutcome(*run.result, run.already, run.note)
+
+
+def _finish_study(case, settings, t_transient, buckling, folder, units, stage, run):
+    """Under the study's lock: its statistics, summary and (in ``folder``, unless None) files; ``stage(text)``
+    is told each step."""
+    stage("reading the store")
+    from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
+    from drillstring.stochastic.execution import computation_time
+
+    raw = load_study(run.store.path)
+    stage("statistics")
+    failures = {str(k): str(v) for k, v in dict(raw.attrs.get("failures", {})).items()}
+    try:
+        stats = study_statistics(raw, t_transient=t_transient)
+    except ValueError as error:
+        listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
+        raise StudyFailed(f"{error} ({len(failures)} failure(s)"
+                          f"{': ' + listing if listing else ''})") from None
+    summary = study_summary(stats, t_transient=t_transient, boundary=_stability_boundary(case))
+    sessions = run.store.sessions()
+    wall_time, used = computation_time(sessions)
+    if not sessions:  # a store written before sessions were recorded
+        wall_time, used = run.wall_time, run.workers
+    payload = dict(summary)
+    payload["buckling"] = {**summary["buckling"], **buckling}
+    payload.update({
+        "case": case.name,
+        "samples": settings.samples,
+        "failures": failures,
+        "wall_time": wall_time,
+        "wall_time_this_run": run.wall_time,
+        "realizations_this_run": run.computed,
+        "realization_wall_time_total": float(np.nansum(raw["wall_time"].values)),
+        "workers": used if isinstance(used, (int, str)) else str(used),
+        "sessions": sessions,
+    })
+    files: dict[str, Path] = {}
+    if folder is not None:
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units, stage)
+    return stats, payload, files
+
+
+def _stability_boundary(case: Case) -> dict | None:
+    """:func:`stability_boundary`, None where steady drilling does not exist."""
+    try:
+        return stability_boundary(case)
+    except ValueError:
+        return None
+
+
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
+                       raw=None, units: str | None = None, stage=lambda text: None) -> dict[str, Path]:
+    """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
+    statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
+    finished realizations of ``raw``, the study's raw Dataset); figures and report in the unit system ``units``."""
+
+    from drillstring.files import strict_json, write_text_atomic
+    from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
+    from drillstring.quantities import stored_observables
+    from drillstring.report import INTERACTIVE_PAGE, write_report
+    from drillstring.results import write_netcdf
+    from drillstring.stochastic.analysis import current_figures, figures_key, record_figures
+    from drillstring.stochastic.store import DONE
+
+    paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
+             "statistics": folder / "statistics.nc", "report": folder / "report.html",
+             "interactive": folder / INTERACTIVE_PAGE}
+    shown = None
+    if raw is not None:
+        finished = np.nonzero(raw.status.values == DONE)[0][:REALIZATIONS_SHOWN]
+        shown = raw[list(stored_observables(raw))].isel(realization=finished)
+    force = display_unit("force", units)
+    write_netcdf(stats, paths["statistics"])
+    key = figures_key(payload, settings, t_transient, units)
+    figures = current_figures(folder, key)
+    if figures is None:  # drawn again (importing Matplotlib only then)
+        from drillstring.plots import plot_study
+
+        stage("figures")
+        figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)
+        record_figures(folder, key, figures)
+    stage("report")
+    payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
+    write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
+    run_info = {
+        "realizations requested": settings.samples,
+        "failures": payload["failures"],
+        "computation wall time [s]": round(payload["wall_time"], 2),
+        "buckled realizations (lowest lateral ω² < 0)": (
+            f"{payload['buckling']['buckled_realizations']} of {payload['n_samples']}; critical weight-on-bit "
+            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}, probability of a "
+            f"buckled draw {payload['buckling']['probability']:.3g}"),
+        "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
+        "workers": payload["workers"],
+    }
+    if payload["realizations_this_run"] == 0 or len(payload["sessions"]) > 1:
+        run_info["wall time of this run [s]"] = round(payload["wall_time_this_run"], 2)
+        run_info["runs that computed realizations"] = len(payload["sessions"])
+    run_info.update({
+        "simulated time per realization [s]": settings.t_end,
+        "output step [s]": settings.output_step,
+        "store": str(paths["store"]),
+    })
+    write_report(
+        paths["report"],
+        title=f"Monte Carlo study: case '{case.name}', random {', '.join(stats.attrs['parameters'])}",
+        case_toml=case.to_toml(),
+        summary=summary,
+        figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
+                 for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
+        run_info=run_info,
+        interactive=study_figures(stats, shown, units=units),
+        units=units,
+    )
+    return {**paths, **figures}
+
+
+@single_threaded_blas()
+@keywords_of(monte_carlo_study, leaving_out=("note", "worker_timeout", "units", "stage"))
+def study(case: Case | str | Path = "reference", **options) -> xr.Dataset:
+    """Monte Carlo study of random case parameters (docs/model.md §11); returns the statistics Dataset.
+
+    The statistics of :func:`monte_carlo_study` (its arguments but ``note``, ``worker_timeout``, ``units`` and
+    ``stage``; the same checks and files): laws of
+    ``parameters`` (or the case's ``[uncertainty]`` table), at most one of ``sigma`` [N] or
+    ``dispersion`` (σ / mean) for the weight-on-hook (default, nothing declared: σ = 5000 N); the
+    drawn values are in ``input_values``; realizations stream to the Zarr
+    store ``out``/study.zarr (a temporary folder when None), rerunning with the same ``out`` resumes.
+    ``transient`` [s]: start of the steady window for the summaries and the per-realization vibration
+    indicators (default ``min(10 s, t_end/2)``).
+    Scripts that use several local processes must call this under ``if __name__ == "__main__":``.
+    """
+    return monte_carlo_study(case, **options).statistics
