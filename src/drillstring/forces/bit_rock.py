@@ -400,7 +400,7 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRo
     if evaluate_bit_rock(bit_axial_velocity, bit_speed, params)[0] == 0.0:
         return np.zeros((2, 2))
     u, w = float(bit_axial_velocity), float(bit_speed)
-    a1, a2, a3, a4, a5, e = params.a1, params.a2, params.a3, params.a4, params.a5, params.e
+    a2, a3, a4, a5, e = params.a2, params.a3, params.a4, params.a5, params.e
     h2 = w * w + e * e
     h = math.sqrt(h2)
     floored = abs(w) < params.stick_speed_floor

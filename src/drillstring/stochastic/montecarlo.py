@@ -57,7 +57,7 @@ from drillstring.dynamics.simulate import (
 )
 from drillstring.quantities import STUDY_OBSERVABLES, TOP_DRIVE_OBSERVABLES, stored_observables  # noqa: F401
 from drillstring.stochastic.execution import Engine, StoreRun, run_locked
-from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError
+from drillstring.stochastic.parameters import WEIGHT_ON_HOOK
 from drillstring.stochastic.runs import (
     FAMILY_GROWTH_METRICS,
     REALIZATION_METRICS,

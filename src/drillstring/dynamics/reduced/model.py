@@ -258,8 +258,6 @@ class ReducedOrderModel:
             dofs = family_dofs(mesh, name).astype(np.int64)
             rows[name] = (c(dofs), c(self.basis[dofs, start:end].T, dtype=float))
         tensor = modal_mass_coupling(e, self.basis[:, t0:t1], self.basis[:, y0:y1], self.basis[:, z0:z1])
-        n_dofs = mesh.n_dofs
-        n_t, n_y = t1 - t0, y1 - y0
         return FullModelData(
             rhs=case2,
             axial_dofs=rows["axial"][0], axial_shapes_t=rows["axial"][1],
