@@ -53,6 +53,7 @@ The model lives in :mod:`drillstring.dynamics.reduced`, part by part; this modul
 - :mod:`~drillstring.dynamics.reduced.build`: :func:`reduced_model`, :func:`case_reduced_model` (from a case),
   :func:`case_hook_load`;
 - :mod:`~drillstring.dynamics.reduced.terms`: the compiled inner kernels, one per term of the right-hand side;
+- :mod:`~drillstring.dynamics.reduced.frame`: the frame, each station's spin from the state (one place);
 - :mod:`~drillstring.dynamics.reduced.rhs`: the compiled right-hand side of case 2 and case 1,
   :func:`evaluate_rhs` and :func:`stiff_part`;
 - :mod:`~drillstring.dynamics.reduced.observation`: :data:`OBSERVABLES`, the observation and the impacts

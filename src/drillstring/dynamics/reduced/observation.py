@@ -16,10 +16,10 @@ import numpy as np
 from numba import njit
 
 from drillstring.dynamics.delay import record_bottom, view
+from drillstring.dynamics.reduced.frame import frame_speed, station_spin
 from drillstring.dynamics.reduced.rhs import _rhs_kernel
 from drillstring.dynamics.reduced.terms import (
     _AXIAL_BIT,
-    _TORSION_BIT,
     _TORSION_QUILL,
     _bit_rock,
     _bit_state,
@@ -90,7 +90,7 @@ def _surface_torque(d, t, y, rate):
     read from a truncated basis, does: the basis's shapes depend on ``J_td``)."""
     n = d.omega2.shape[0]
     t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
-    quill, elastic = _top_motion(d, y)
+    quill, elastic = _top_motion(d, t, y)
     states_rate = np.empty(y.shape[0])  # the boundary writes its states' rates: not needed here
     torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
     acceleration = 0.0
@@ -179,7 +179,7 @@ def observe_kernel(d, o, t, y, rate, out):
     out[_DEPTH_OF_CUT] = depth_of_cut
     out[_CONTACTS] = count
     out[_CONTACT_FORCE] = force
-    out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, y)
+    out[_QUILL_SPEED], out[_SURFACE_TORQUE] = _top_motion(d, t, y)
     if observes_rate(d):  # a driving boundary: the torque from the quill's equation of motion
         out[_SURFACE_TORQUE] = _surface_torque(d, t, y, rate)
     out[_MOTOR_SPEED] = 0.0
@@ -213,7 +213,8 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
     h Σ_i Σ_p dense[i, p] σ^(p+1) k_i``."""
     if _delayed(d):
         ranges = d.ranges
-        a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
+        a0, a1 = ranges.axial_start, ranges.axial_end
+        bit = d.phi_tx_t.shape[1] - 1
         order = dense.shape[1]
         angle_coef = o.dense[0, :order]
         position_coef = o.dense[1, :order]
@@ -223,13 +224,12 @@ def accepted_step_kernel(d, o, t_old, h, y_old, k_old, dense, y):
             rate = 0.0  # the bit's axial velocity at stage i (k holds dη/dt = η̇ first)
             for j in range(a0, a1):
                 rate += d.axial_rows[_AXIAL_BIT, j - a0] * k_old[i, j]
-            spin = 0.0
-            for j in range(t0, t1):
-                spin += d.torsion_rows[_TORSION_BIT, j - t0] * k_old[i, j]
+            spin, _ = station_spin(d, 0.0, k_old[i], bit, 0.0)  # the frame's map of the stage's dη/dt: the
+            # bit's spin relative to the frame's rotation Ω, added once below
             for p in range(order):
                 position_coef[p] += h * dense[i, p] * rate
                 angle_coef[p] += h * dense[i, p] * spin
-        angle_coef[0] += d.top_speed * h
+        angle_coef[0] += frame_speed(d) * h
         position, angle, _, _ = _bit_state(d, t_old, y_old)
         record_bottom(view(d.laws[int(d.laws[HISTORY]):]), angle, angle_coef, position, position_coef)
     return impacts_kernel(d, o, y)

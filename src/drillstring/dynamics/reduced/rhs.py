@@ -12,6 +12,7 @@ from numba import njit
 from numba.extending import overload
 
 from drillstring.dynamics.kernel_data import DelayedRhsData, FullModelData, RhsData
+from drillstring.dynamics.reduced.frame import frame_speed, station_spin
 from drillstring.dynamics.reduced.terms import (
     _AXIAL_BIT,
     _AXIAL_TOP,
@@ -102,10 +103,7 @@ def _rhs_kernel(d, t, y, out):
         cw.gap[m] = c.gap[k]
         cw.outer_diameter[m] = c.outer_diameter[k]
         cw.stiffness[m] = c.stiffness[k]
-        spin = d.top_speed
-        for j in range(t0, t1):
-            spin += d.phi_tx_t[j - t0, i] * eta_dot[j]
-        cw.spin[m] = spin
+        _, cw.spin[m] = station_spin(d, t, y, i, 0.0)
         vd = 0.0
         wd = 0.0
         if c.tangential:
@@ -210,8 +208,9 @@ def _rhs_full_kernel(f, t, y, out):
                                    (f.bending_z_shapes_t, f.bending_z_dofs, z0)):
         _expand(shapes_t, dofs, y, offset, f.q)
         _expand(shapes_t, dofs, y, n + offset, f.qd)
+    spin = frame_speed(d)
     for i in range(f.theta_x_dofs.shape[0]):
-        f.qd[f.theta_x_dofs[i]] += d.top_speed
+        f.qd[f.theta_x_dofs[i]] += spin
     _strain_energy_forces_kernel(f.q, f.inv_length, f.weights, f.slope, f.axial_stiffness, f.f_se)
     _kinetic_forces_kernel(f.q, f.qd, f.xi, f.weights, f.rotation, f.polar_inertia, f.f_vel, f.coupling)
     for i in range(f.f_se.shape[0]):

@@ -14,6 +14,7 @@ from numba.extending import overload
 
 from drillstring.dynamics.delay import delayed_difference, view
 from drillstring.dynamics.kernel_data import AXIAL_ROW, TORSION_ROW, DelayedRhsData
+from drillstring.dynamics.reduced.frame import station_spin
 from drillstring.forces.registry import (
     HISTORY,
     BitContext,
@@ -102,18 +103,13 @@ def _bit_state(d, t, y):
     """Axial position u [m] (from the static state, down), angle θ [rad], axial velocity u̇ [m/s] and spin
     speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇]."""
     n = d.omega2.shape[0]
-    ranges = d.ranges
-    a0, a1, t0, t1 = ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end
+    a0, a1 = d.ranges.axial_start, d.ranges.axial_end
     position = 0.0
     velocity = 0.0
     for j in range(a0, a1):
         position += d.axial_rows[_AXIAL_BIT, j - a0] * y[j]
         velocity += d.axial_rows[_AXIAL_BIT, j - a0] * y[n + j]
-    angle = d.top_speed * t
-    speed = d.top_speed
-    for j in range(t0, t1):
-        angle += d.torsion_rows[_TORSION_BIT, j - t0] * y[j]
-        speed += d.torsion_rows[_TORSION_BIT, j - t0] * y[n + j]
+    angle, speed = station_spin(d, t, y, d.phi_tx_t.shape[1] - 1, 0.0)  # the bit: the last node
     return position, angle, velocity, speed
 
 
@@ -184,29 +180,21 @@ def _turning_loads(d, t, y, acc):
     """Add the projected loads that turn with the string (:class:`~drillstring.forces.turning_loads.TurningLoadData`)
     to ``acc``, each at the angle and spin speed of its node."""
     r = d.turning
-    n = d.omega2.shape[0]
     ranges = d.ranges
-    t0, t1, y0, y1, z0, z1 = (ranges.torsion_start, ranges.torsion_end, ranges.lateral_y_start, ranges.lateral_y_end,
-                              ranges.lateral_z_start, ranges.lateral_z_end)
+    y0, y1, z0, z1 = ranges.lateral_y_start, ranges.lateral_y_end, ranges.lateral_z_start, ranges.lateral_z_end
     for k in range(r.node.shape[0]):
-        i = r.node[k]
-        angle = d.top_speed * t + r.phase[k]
-        speed = d.top_speed
-        for j in range(t0, t1):
-            angle += d.phi_tx_t[j - t0, i] * y[j]
-            speed += d.phi_tx_t[j - t0, i] * y[n + j]
+        angle, speed = station_spin(d, t, y, r.node[k], r.phase[k])
         turning_load(r, k, angle, speed, acc, y0, y1, z0, z1)
 
 
 @inner_kernel()
-def _top_motion(d, y):
-    """Quill speed θ̇₀ [rad/s] and surface torque T_s [N·m] for the state ``y``."""
-    n = d.omega2.shape[0]
+def _top_motion(d, t, y):
+    """Quill speed θ̇₀ [rad/s] (the spin of the top node, :func:`~drillstring.dynamics.reduced.frame.station_spin`)
+    and surface torque T_s [N·m] for the state ``y`` at time ``t`` [s]."""
     t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
-    quill = d.top_speed
+    _, quill = station_spin(d, t, y, 0, 0.0)
     torque = 0.0
     for j in range(t0, t1):
-        quill += d.torsion_rows[_TORSION_QUILL, j - t0] * y[n + j]
         torque += d.torsion_rows[_TORSION_SURFACE_TORQUE, j - t0] * y[j]
     return quill, torque
 
@@ -219,7 +207,7 @@ def _top_drive(d, t, y, out):
     ``out`` where the registry put them."""
     n = d.omega2.shape[0]
     t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
-    quill, surface = _top_motion(d, y)
+    quill, surface = _top_motion(d, t, y)
     torque = top_boundary_torque(d.laws, TopContext(t, quill, surface), y, out)
     for j in range(t0, t1):
         out[n + j] += d.torsion_rows[_TORSION_QUILL, j - t0] * torque
