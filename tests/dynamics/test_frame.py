@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 from numba import njit
 
-from drillstring.dynamics.reduced.frame import frame_speed, station_spin
+from drillstring.dynamics.reduced.frame import (
+    bit_axial_motion,
+    frame_speed,
+    lateral_displacements,
+    station_lateral_velocity,
+    station_spin,
+)
 from drillstring.dynamics.reduced.terms import _bit_rock
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.forces.protocol import BitContext
@@ -24,6 +30,12 @@ def _spin(d, t, y, node, phase):
 @njit
 def _frame_speed(d):
     return frame_speed(d)
+
+
+@njit
+def _translation(d, y, node, v, w):
+    lateral_displacements(d, y, v, w)
+    return bit_axial_motion(d, y), station_lateral_velocity(d, y, node)
 
 
 @njit
@@ -52,6 +64,19 @@ def test_a_stations_spin_is_the_frames_map_of_the_state(spinning):
             angle, speed = _spin(d, t, y, node, phase)
             assert angle == pytest.approx(12.0 * t + phase + model.phi_tx[node] @ y[:n], rel=1e-12)
             assert speed == pytest.approx(12.0 + model.phi_tx[node] @ y[n:], rel=1e-12)
+
+
+def test_a_stations_translation_is_the_frames_map_of_the_state(spinning):
+    model, y = spinning
+    n = model.size
+    nodes = model.phi_v.shape[0]
+    v, w = np.empty(nodes), np.empty(nodes)
+    node = nodes // 2
+    (position, velocity), (v_dot, w_dot) = _translation(model.case2_data, y, node, v, w)
+    assert (position, velocity) == pytest.approx((model.bit_u @ y[:n], model.bit_u @ y[n:]), rel=1e-12)
+    np.testing.assert_allclose(v, model.phi_v @ y[:n], rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(w, model.phi_w @ y[:n], rtol=1e-12, atol=1e-18)
+    assert (v_dot, w_dot) == pytest.approx((model.phi_v[node] @ y[n:], model.phi_w[node] @ y[n:]), rel=1e-12)
 
 
 def test_the_bit_law_reads_the_motion_of_the_bit_through_its_context(spinning):

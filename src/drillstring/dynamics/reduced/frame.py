@@ -1,6 +1,8 @@
-"""The reduced model's frame (docs/model.md §8): the one compiled function that maps the modal state to a
-station's spin (:func:`station_spin`, from the frame's own rotation :func:`frame_speed`), so that every law
-reads a station's angle and spin speed from the same place. A curved string
+"""The reduced model's frame (docs/model.md §8): the compiled functions that map the modal state to a
+station's motion, one per quantity: its spin (:func:`station_spin`, from the frame's own rotation
+:func:`frame_speed`), the bit's axial motion (:func:`bit_axial_motion`), the lateral displacements
+(:func:`lateral_displacements`) and velocities (:func:`station_lateral_velocity`), so that every law reads a
+station's motion from the same place. A curved string
 changes this mapping (the rotation about each station's local tangent), not the laws that read it: the bit law
 (:class:`~drillstring.forces.registry.BitContext`), the top boundary
 (:class:`~drillstring.forces.registry.TopContext`), the contact (:class:`~drillstring.forces.registry.
@@ -10,6 +12,10 @@ ContactContext`) and the turning loads.
 from __future__ import annotations
 
 from numba import njit
+
+from drillstring.dynamics.kernel_data import AXIAL_ROW
+
+_AXIAL_BIT = AXIAL_ROW["bit"]
 
 
 @njit(cache=True, no_cpython_wrapper=True)
@@ -35,3 +41,53 @@ def frame_speed(d):
     what a state of zero η̇ spins at, at every node (the full model's ``q̇ = Φη̇ + Ω`` at the θx DOFs, the bit's
     angle over a step). Compiled code only."""
     return d.top_speed
+
+
+@njit(cache=True, no_cpython_wrapper=True)
+def bit_axial_motion(d, y):
+    """The bit's axial position u [m] (from the static state, down) and velocity u̇ [m/s] for the state ``y`` =
+    [η, η̇] of the case-2 data ``d`` (its axial row ``bit``). Compiled code only."""
+    n = d.omega2.shape[0]
+    a0, a1 = d.ranges.axial_start, d.ranges.axial_end
+    position = 0.0
+    velocity = 0.0
+    for j in range(a0, a1):
+        position += d.axial_rows[_AXIAL_BIT, j - a0] * y[j]
+        velocity += d.axial_rows[_AXIAL_BIT, j - a0] * y[n + j]
+    return position, velocity
+
+
+@njit(cache=True, no_cpython_wrapper=True)
+def _columns_matvec(matrix_t, vector, offset, out, sign):
+    """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
+    column, so the inner loop is contiguous and vectorises without reassociating sums."""
+    for j in range(matrix_t.shape[0]):
+        x = sign * vector[offset + j]
+        if x != 0.0:
+            for i in range(matrix_t.shape[1]):
+                out[i] += matrix_t[j, i] * x
+
+
+@njit(cache=True, no_cpython_wrapper=True)
+def lateral_displacements(d, y, v, w):
+    """The lateral displacements v and w [m] of every node for the state ``y``, written into ``v`` and ``w``
+    (n_nodes,). Compiled code only."""
+    v[:] = 0.0
+    w[:] = 0.0
+    _columns_matvec(d.phi_v_t, y, d.ranges.lateral_y_start, v, 1.0)
+    _columns_matvec(d.phi_w_t, y, d.ranges.lateral_z_start, w, 1.0)
+
+
+@njit(cache=True, no_cpython_wrapper=True)
+def station_lateral_velocity(d, y, node):
+    """The lateral velocities v̇ and ẇ [m/s] of the mesh node ``node`` for the state ``y`` = [η, η̇].
+    Compiled code only."""
+    n = d.omega2.shape[0]
+    ranges = d.ranges
+    vd = 0.0
+    wd = 0.0
+    for j in range(ranges.lateral_y_start, ranges.lateral_y_end):
+        vd += d.phi_v_t[j - ranges.lateral_y_start, node] * y[n + j]
+    for j in range(ranges.lateral_z_start, ranges.lateral_z_end):
+        wd += d.phi_w_t[j - ranges.lateral_z_start, node] * y[n + j]
+    return vd, wd

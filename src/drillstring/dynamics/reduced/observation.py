@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from drillstring.dynamics.delay import record_bottom, view
-from drillstring.dynamics.reduced.frame import frame_speed, station_spin
+from drillstring.dynamics.reduced.frame import frame_speed, lateral_displacements, station_spin
 from drillstring.dynamics.reduced.rhs import _rhs_kernel
 from drillstring.dynamics.reduced.terms import (
     _AXIAL_BIT,
@@ -25,7 +25,6 @@ from drillstring.dynamics.reduced.terms import (
     _bit_state,
     _delayed,
     _downhole_motor,
-    _lateral_displacements,
     _top_motion,
     inner_kernel,
 )
@@ -103,7 +102,7 @@ def _surface_torque(d, t, y, rate):
 def _contact_state(d, y, v, w, in_contact):
     """Fill ``v``, ``w`` (every node) and ``in_contact`` (nodes with a station outside its gap) for the
     state ``y``; returns the total normal force of the wall Σ k_i (r_i − g_i)₊ [N]."""
-    _lateral_displacements(d, y, v, w)
+    lateral_displacements(d, y, v, w)
     in_contact[:] = False
     c = d.contact
     total = 0.0

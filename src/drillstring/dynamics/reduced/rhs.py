@@ -12,7 +12,12 @@ from numba import njit
 from numba.extending import overload
 
 from drillstring.dynamics.kernel_data import DelayedRhsData, FullModelData, RhsData
-from drillstring.dynamics.reduced.frame import frame_speed, station_spin
+from drillstring.dynamics.reduced.frame import (
+    frame_speed,
+    lateral_displacements,
+    station_lateral_velocity,
+    station_spin,
+)
 from drillstring.dynamics.reduced.terms import (
     _AXIAL_BIT,
     _AXIAL_TOP,
@@ -25,7 +30,6 @@ from drillstring.dynamics.reduced.terms import (
     _depth_of_cut,
     _downhole_motor,
     _is,
-    _lateral_displacements,
     _motor_speed,
     _surely_clear,
     _top_drive,
@@ -86,7 +90,7 @@ def _rhs_kernel(d, t, y, out):
         return
     c = d.contact
     cw = c.work
-    _lateral_displacements(d, eta, cw.v, cw.w)
+    lateral_displacements(d, eta, cw.v, cw.w)
     n_c = 0
     for k in range(c.node.shape[0]):
         i = c.node[k]
@@ -107,10 +111,7 @@ def _rhs_kernel(d, t, y, out):
         vd = 0.0
         wd = 0.0
         if c.tangential:
-            for j in range(y0, y1):
-                vd += d.phi_v_t[j - y0, i] * eta_dot[j]
-            for j in range(z0, z1):
-                wd += d.phi_w_t[j - z0, i] * eta_dot[j]
+            vd, wd = station_lateral_velocity(d, y, i)
         cw.v_dot[m] = vd
         cw.w_dot[m] = wd
     contact_law_forces(d.laws, ContactContext(cw.v_c[:n_c], cw.w_c[:n_c], cw.v_dot[:n_c], cw.w_dot[:n_c],

@@ -1,7 +1,7 @@
 """The reduced model's compiled inner kernels, one per part of the right-hand side (docs/model.md §5–§9):
-the linear part's products (block-diagonal damping, mode shapes by columns), the bit's motion and the bit–rock
-law, the turning loads, the top boundary, the downhole motor, and the string's lateral displacements for the
-contact. Each reads the case-2 data (:class:`~drillstring.dynamics.kernel_data.RhsData`) by name; the
+the linear part's products (block-diagonal damping), the bit's motion and the bit–rock law, the turning loads,
+the top boundary and the downhole motor. The stations' motion they read comes from the frame
+(:mod:`drillstring.dynamics.reduced.frame`). Each reads the case-2 data (:class:`~drillstring.dynamics.kernel_data.RhsData`) by name; the
 right-hand side that assembles them is :mod:`drillstring.dynamics.reduced.rhs`, the observation
 :mod:`drillstring.dynamics.reduced.observation`.
 """
@@ -14,7 +14,7 @@ from numba.extending import overload
 
 from drillstring.dynamics.delay import delayed_difference, view
 from drillstring.dynamics.kernel_data import AXIAL_ROW, TORSION_ROW, DelayedRhsData
-from drillstring.dynamics.reduced.frame import station_spin
+from drillstring.dynamics.reduced.frame import bit_axial_motion, station_spin
 from drillstring.forces.registry import (
     HISTORY,
     BitContext,
@@ -88,27 +88,11 @@ def _block_damping(damping_t, blocks, velocity, out):
 
 
 @inner_kernel()
-def _columns_matvec(matrix_t, vector, offset, out, sign):
-    """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
-    column, so the inner loop is contiguous and vectorises without reassociating sums."""
-    for j in range(matrix_t.shape[0]):
-        x = sign * vector[offset + j]
-        if x != 0.0:
-            for i in range(matrix_t.shape[1]):
-                out[i] += matrix_t[j, i] * x
-
-
-@inner_kernel()
 def _bit_state(d, t, y):
     """Axial position u [m] (from the static state, down), angle θ [rad], axial velocity u̇ [m/s] and spin
-    speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇]."""
-    n = d.omega2.shape[0]
-    a0, a1 = d.ranges.axial_start, d.ranges.axial_end
-    position = 0.0
-    velocity = 0.0
-    for j in range(a0, a1):
-        position += d.axial_rows[_AXIAL_BIT, j - a0] * y[j]
-        velocity += d.axial_rows[_AXIAL_BIT, j - a0] * y[n + j]
+    speed ω [rad/s] of the bit at time ``t`` [s] for the state ``y`` = [η, η̇], from the frame
+    (:mod:`drillstring.dynamics.reduced.frame`)."""
+    position, velocity = bit_axial_motion(d, y)
     angle, speed = station_spin(d, t, y, d.phi_tx_t.shape[1] - 1, 0.0)  # the bit: the last node
     return position, angle, velocity, speed
 
@@ -149,15 +133,6 @@ def _delayed(d):
 def _delayed_compiled(d):
     delayed = _is(d, DelayedRhsData)
     return lambda d: delayed
-
-
-@inner_kernel()
-def _lateral_displacements(d, y, v, w):
-    """v and w [m] at every node for the state ``y``."""
-    v[:] = 0.0
-    w[:] = 0.0
-    _columns_matvec(d.phi_v_t, y, d.ranges.lateral_y_start, v, 1.0)
-    _columns_matvec(d.phi_w_t, y, d.ranges.lateral_z_start, w, 1.0)
 
 
 @njit(cache=True)
