@@ -14,9 +14,9 @@ No physics here and no drillstring imports: any layer that writes files may use 
 - :func:`output_file_problem` and :func:`output_folder_problem` say, before any computation, why an
   output path cannot be written (a folder where a file is expected, a file where a folder is expected,
   no permission), or return None.
-- :func:`read_input_text` reads an input file (a survey, measurements) only when it is a regular file of
-  bounded size: a FIFO, a device (``/dev/zero``, ``/dev/urandom``), a socket or a folder is refused at once,
-  without blocking on it or reading it.
+- :func:`read_input_bytes` and :func:`read_input_text` read an input file (a case file, a survey, measurements)
+  only when it is a regular file of bounded size: a FIFO, a device (``/dev/zero``, ``/dev/urandom``), a socket
+  or a folder is refused at once, without blocking on it or reading it.
 - :class:`FileLock` is an exclusive (writer) or shared (reader) lock held on a lock file with
   ``flock``: a second writer is refused at once with who holds the lock; a lock left by a process that
   died (``kill -9``, power loss) is released by the kernel and detected as stale from the holder's
@@ -225,20 +225,21 @@ def output_file_problem(path: str | Path) -> str | None:
 # --- input files ---------------------------------------------------------------------------------
 
 
-def read_input_text(path: str | Path, *, what: str, max_bytes: int) -> str:
-    """The text of the input file ``path`` (UTF-8, a byte-order mark dropped): a regular file of at most
+def read_input_bytes(path: str | Path, *, what: str, max_bytes: int) -> bytes:
+    """The bytes of the input file ``path`` (a case file, a survey, measurements): a regular file of at most
     ``max_bytes``. Raises ValueError with one line naming ``what`` (e.g. "survey file") and the path: not
     found, not a regular file (a FIFO or a device is refused from its ``stat``, never opened for reading
     beyond a non-blocking open), larger than ``max_bytes`` (checked again while reading: a file that grows
-    is cut off), unreadable, or not UTF-8 text."""
+    is cut off), or unreadable."""
     path = Path(path)
     try:
         info = path.stat()
         if not stat.S_ISREG(info.st_mode):
-            kind = next((name for test, name in _KINDS if test(info.st_mode)), "not a regular file")
-            raise ValueError(f"{what} {path} is {kind}, not a regular file")
+            kind = next((name for test, name in _KINDS if test(info.st_mode)), "another kind of file")
+            raise ValueError(f"{what} {path} is not a regular file ({kind})")
         if info.st_size > max_bytes:
             raise ValueError(f"{what} {path} has {info.st_size:,} bytes, more than the {max_bytes:,} allowed")
+        # Read no more than the bound even if the file grew since (or its size was not reported).
         with open(path, "rb", opener=lambda name, flags: os.open(name, flags | os.O_NONBLOCK)) as handle:
             if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):  # replaced since the check
                 raise ValueError(f"{what} {path} is not a regular file")
@@ -249,6 +250,13 @@ def read_input_text(path: str | Path, *, what: str, max_bytes: int) -> str:
         raise ValueError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
     if len(raw) > max_bytes:
         raise ValueError(f"{what} {path} has more than the {max_bytes:,} bytes allowed")
+    return raw
+
+
+def read_input_text(path: str | Path, *, what: str, max_bytes: int) -> str:
+    """The text of the input file ``path`` (UTF-8, a byte-order mark dropped), read by :func:`read_input_bytes`;
+    ValueError as there, or when it is not UTF-8 text."""
+    raw = read_input_bytes(path, what=what, max_bytes=max_bytes)
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -4,8 +4,6 @@ mapping, validated into a :class:`~drillstring.case.Case`.
 
 from __future__ import annotations
 
-import os
-import stat
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -14,6 +12,7 @@ from typing import Any, Mapping
 from drillstring.case.bounds import MAX_CASE_DEPTH, MAX_CASE_FILE_BYTES, PHYSICAL_BOUNDS
 from drillstring.case.drilling_case import Case
 from drillstring.case.errors import CaseError, _Entry
+from drillstring.files import read_input_bytes
 
 
 def _depth(data: Any) -> int:
@@ -78,28 +77,12 @@ def _looks_like_path(source: str) -> bool:
 
 def _read_case_file(path: Path, label: str) -> bytes:
     """The bytes of a case file: a regular file of at most :data:`MAX_CASE_FILE_BYTES` (a FIFO, a device
-    such as /dev/zero or a folder is refused at once, without opening it)."""
+    such as /dev/zero or a folder is refused at once, without opening it: :func:`drillstring.files.
+    read_input_bytes`), its refusal a :class:`CaseError`."""
     try:
-        info = path.stat()
-        if not stat.S_ISREG(info.st_mode):
-            raise CaseError(f"case file {label} is not a regular file (a folder, FIFO, socket or device)",
-                            source=label)
-        if info.st_size > MAX_CASE_FILE_BYTES:
-            raise CaseError(f"case file {label} has {info.st_size:,} bytes, more than the "
-                            f"{MAX_CASE_FILE_BYTES:,} allowed", source=label)
-        # Read no more than the bound even if the file grew since (or its size was not reported).
-        with open(path, "rb", opener=lambda name, flags: os.open(name, flags | os.O_NONBLOCK)) as handle:
-            if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):  # replaced since the check
-                raise CaseError(f"case file {label} is not a regular file", source=label)
-            raw = handle.read(MAX_CASE_FILE_BYTES + 1)
-    except FileNotFoundError:
-        raise CaseError(f"case file not found: {label}", source=label) from None
-    except OSError as exc:
-        raise CaseError(f"cannot read case file {label}: {exc.strerror or exc}", source=label) from None
-    if len(raw) > MAX_CASE_FILE_BYTES:
-        raise CaseError(f"case file {label} has more than the {MAX_CASE_FILE_BYTES:,} bytes allowed",
-                        source=label)
-    return raw
+        return read_input_bytes(path, what="case file", max_bytes=MAX_CASE_FILE_BYTES)
+    except ValueError as exc:
+        raise CaseError(str(exc), source=label) from None
 
 
 #: Longest key of a case file, dotted parts together [characters], and most parts of a dotted key (a case
