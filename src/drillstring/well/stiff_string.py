@@ -25,9 +25,17 @@ Equilibrium (small displacements about the path, second order in the axial force
   rotations are ``±κh/2`` and its bending moment is ``EI κ`` (the pipe bent to the hole).
 - ``K_g(N)`` the geometric stiffness of the effective axial force ``N`` (tension positive,
   :func:`drillstring.fem.assembly.geometric_stiffness` with the rotations); ``N`` is the solution's own
-  axial force, updated in an outer loop until it changes by less than the tolerance. The geometric
-  stiffness acts on ``q`` only (not on ``q_0``: the tension's turn along the path is already carried by
-  the chords' change of direction at the nodes, ``N β`` per node = ``N κ h``).
+  axial force, updated in an outer loop until it changes by less than the tolerance. It acts on the
+  string's deflection from the path, ``P q``, with the slide along the path taken out::
+
+      K_g  ->  Pᵀ K_g P,      P = I − S,   S: (d, θ) -> ((d·t) t, (d·t) t × κ)   at each node      (2)
+
+  (a node moved by ``u = d·t`` along the tangent and turned by ``u t × κ`` stays on the path, its shape
+  unchanged). The string stretches by up to a metre along a curved path; the plain ``K_g q`` would read
+  that slide as a turn ``u κ`` of every chord and push the string along the path by ``N κ² u`` per length
+  (a spurious 525 N in the build of the ``deviated`` case's hook load; 3e-4 of the side force on an arc,
+  the axial strain). ``K_g`` does not act on ``q_0``: the tension's turn along the path is already carried
+  by the chords' change of direction at the nodes, ``N β`` per node = ``N κ h``.
 - ``f_g``: the buoyed weight ``w`` per length [N/m] along ``+x`` (as :mod:`drillstring.well.torque_drag`
   computes it: ``w = g (m + ρ_i A_i − ρ_o A_o)``), plus the mud's skin friction along the element's axis
   when the case switches it on, as consistent element loads in the element's axes (axial: half to each
@@ -132,15 +140,16 @@ def wall_stations(mesh: Mesh, outer_diameter: Sequence[float], hole_diameter: fl
                         length=np.concatenate([h / 2.0] * 2))
 
 
-def path_frames(mesh: Mesh, path: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def path_frames(mesh: Mesh, path: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The nodes placed on ``path`` at measured depths ``mesh.nodes`` (the top at the surface): global
-    positions (n, 3) [m], the path's unit tangents at the nodes (n, 3) and each element's direction cosines
-    (n_el, 3, 3) from its chord. ValueError when the string is longer than the path."""
+    positions (n, 3) [m], the path's unit tangents (n, 3) and curvature vectors (n, 3) [1/m] at the nodes,
+    and each element's direction cosines (n_el, 3, 3) from its chord. ValueError when the string is longer
+    than the path."""
     if mesh.length > path.depth * (1.0 + 1e-12):
         raise ValueError(f"mesh length = {mesh.length:g} m: the string must fit in the well ({path.depth:g} m)")
-    position, tangent, _, _ = path.locate(np.minimum(mesh.nodes, path.depth))
-    position, tangent = position[:, _GLOBAL], tangent[:, _GLOBAL]
-    return position, tangent, direction_cosines(centreline_directions(position))
+    position, tangent, curvature, _ = path.locate(np.minimum(mesh.nodes, path.depth))
+    position, tangent, curvature = position[:, _GLOBAL], tangent[:, _GLOBAL], curvature[:, _GLOBAL]
+    return position, tangent, curvature, direction_cosines(centreline_directions(position))
 
 
 @dataclass(frozen=True)
@@ -160,7 +169,8 @@ class StiffStringState:
         top_reaction, bit_reaction: the supports' forces on the string, global (3,) [N].
         weight: the string's buoyed weight plus skin friction, ∫ q ds [N].
         weight_on_bit: the bit's axial reaction [N] (−N at the bit).
-        geometric_stiffness: K_g(N) in global axes (sparse, no boundary conditions).
+        geometric_stiffness: K_g(N) in global axes (sparse, no boundary conditions; the plain K_g of the
+            prestress, for small vibrations about this state; the statics used Pᵀ K_g P, eq. (2)).
         wall_stiffness: the wall's linearised springs at the equilibrium, global (sparse; the tangent of f_c).
         iterations: Newton iterations, all outer loops together.
     """
@@ -356,12 +366,11 @@ def _initial_axial_force(mesh: Mesh, tangent: np.ndarray, weight: np.ndarray, sk
     return bit_force + np.concatenate([np.cumsum(step[::-1])[::-1], [0.0]])
 
 
-def _soft_string_start(mesh, path, stations, tangent, weight, axial_force) -> np.ndarray:
+def _soft_string_start(mesh, curvature, stations, tangent, weight, axial_force) -> np.ndarray:
     """Newton's start: each inner node pressed into the wall along the soft string's side load
     ``p = N κ + w (x̂ − (x̂·t) t)`` [N/m] (the wall's penalty depth ``|p| ℓ / k``), the ends on the axis; a
     node with no side load stays on the axis. Starting from the axis instead, the first steps, with no
     contact, throw the string far out of the hole and the line search creeps back."""
-    curvature = path.locate(np.minimum(mesh.nodes, path.depth))[2][:, _GLOBAL]
     w = weight[mesh.node_section()]
     vertical = np.array([1.0, 0.0, 0.0])
     load = axial_force[:, None] * curvature + w[:, None] * (vertical - tangent[:, :1] * tangent)
@@ -380,14 +389,32 @@ def _soft_string_start(mesh, path, stations, tangent, weight, axial_force) -> np
     return q
 
 
-def _recover(q, mesh, rotations, local_k, q0, loads, axial_force):
-    """Element end forces in element axes (n_el, 12): K'(T q + q_0) + K'_g T q − f_e; the axial force
+def _deflection_operator(tangent: np.ndarray, curvature: np.ndarray) -> sp.csr_matrix:
+    """P = I − S: q less its slide along the path. A node moved by ``u = d·t`` along its tangent and turned
+    by ``θ = u t × κ`` (the path's tangent turns by κ u) is still on the path, its shape unchanged; the
+    geometric stiffness acts on ``P q`` only (eq. (2) of the module docstring)."""
+    n = len(tangent)
+    binormal = np.cross(tangent, curvature)
+    blocks = np.zeros((n, 6, 6))
+    blocks[:, :3, :3] = np.einsum("ni,nj->nij", tangent, tangent)
+    blocks[:, 3:, :3] = np.einsum("ni,nj->nij", binormal, tangent)
+    base = DOFS_PER_NODE * np.arange(n)[:, None] + np.arange(6)
+    rows = np.broadcast_to(base[:, :, None], blocks.shape)
+    cols = np.broadcast_to(base[:, None, :], blocks.shape)
+    slide = sp.coo_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(6 * n, 6 * n)).tocsr()
+    return (sp.identity(6 * n, format="csr") - slide).tocsr()
+
+
+def _recover(q, deflection, mesh, rotations, local_k, q0, loads, axial_force):
+    """Element end forces in element axes (n_el, 12): K'(T q + q_0) + K'_g T (P q) − f_e (``deflection`` =
+    P q, :func:`_deflection_operator`); the axial force
     [N] and |bending moment| [N·m] at the nodes (each node from the element below it, the bit from the last)."""
     index = DOFS_PER_NODE * np.arange(mesh.n_elements)[:, None] + np.arange(12)
     local = _to_local(q[index], rotations)
+    bent = _to_local(deflection[index], rotations)
     kg = np.stack([element_geometric_stiffness(s, h, axial_force[e], axial_force[e + 1])
                    for e, (s, h) in enumerate(zip(mesh.element_sections(), mesh.element_lengths))])
-    end = (np.einsum("eij,ej->ei", local_k, local + q0) + np.einsum("eij,ej->ei", kg, local) - loads)
+    end = (np.einsum("eij,ej->ei", local_k, local + q0) + np.einsum("eij,ej->ei", kg, bent) - loads)
     force = np.append(-end[:, U], end[-1, 6 + U])
     moment = np.append(np.linalg.norm(end[:, [THETA_Y, THETA_Z]], axis=1),
                        np.linalg.norm(end[-1, [6 + THETA_Y, 6 + THETA_Z]]))
@@ -448,7 +475,8 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
         raise ValueError(f"tolerance = {tolerance!r}: must be in (0, 1)")
     if not (isinstance(max_iterations, int) and max_iterations >= 1):
         raise ValueError(f"max_iterations = {max_iterations!r}: must be an integer >= 1")
-    position, tangent, rotations = path_frames(mesh, path)
+    position, tangent, curvature, rotations = path_frames(mesh, path)
+    deflection = _deflection_operator(tangent, curvature)
     n, n_dofs = mesh.n_nodes, mesh.n_dofs
     pairs = list(zip(mesh.element_sections(), mesh.element_lengths))
     local_k = np.stack([element_stiffness(s, h) for s, h in pairs])
@@ -463,10 +491,10 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
     scale = max(float(np.abs(f_ext).max()), float(np.abs(f0).max()), abs(bit_force), 1.0)
     tol = tolerance * scale
     axial = _initial_axial_force(mesh, tangent, weight, skin, bit_force)
-    q = _soft_string_start(mesh, path, stations, tangent, weight, axial)
+    q = _soft_string_start(mesh, curvature, stations, tangent, weight, axial)
     iterations, residual_norm = 0, math.inf
     for _outer in range(max_iterations):
-        a = (k + geometric_stiffness(mesh, axial, rotations)).tocsr()
+        a = (k + deflection.T @ geometric_stiffness(mesh, axial, rotations) @ deflection).tocsr()
 
         def residual(x):
             return a @ x + f0 + _wall(x, stations, tangent, n_dofs, False)[0] - f_ext
@@ -484,7 +512,7 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
             dq = z @ spla.spsolve(jacobian, -(zt @ r))
             q = q + _line_search(q, dq, residual) * dq
             iterations += 1
-        new_axial, moment = _recover(q, mesh, rotations, local_k, q0, loads, axial)
+        new_axial, moment = _recover(q, deflection @ q, mesh, rotations, local_k, q0, loads, axial)
         change = float(np.abs(new_axial - axial).max())
         axial = new_axial
         if change <= tolerance * max(float(np.abs(axial).max()), 1.0):
@@ -494,7 +522,7 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
                          f"force changing by {change:.3g} N")
     fc, _, kc = _wall(q, stations, tangent, n_dofs)
     kg = geometric_stiffness(mesh, axial, rotations)
-    reaction = (k + kg) @ q + f0 + fc - f_ext
+    reaction = (k + deflection.T @ kg @ deflection) @ q + f0 + fc - f_ext
     stabilizer_force = -(_stabilizer_matrix(mesh, stabilizers, tangent) @ q)
     wall = (-fc + stabilizer_force).reshape(-1, DOFS_PER_NODE)[:, :3]
     tributary = np.bincount(stations.node, weights=stations.length, minlength=n)
