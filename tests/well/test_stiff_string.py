@@ -7,14 +7,18 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from drillstring.case import case_from_dict, load_case
+from drillstring.case import load_case
 from drillstring.fem.assembly import Stabilizer
 from drillstring.fem.mesh import build_mesh
 from drillstring.fem.sections import hollow_circle
 from drillstring.statics import case_static_state
 from drillstring.well import stiff_string as ss
-from drillstring.well.stiff_string import (case_static_state_in_well, case_stiff_string, solve_stiff_string,
-                                           wall_stations)
+from drillstring.well.stiff_string import (
+    case_static_state_in_well,
+    case_stiff_string,
+    solve_stiff_string,
+    wall_stations,
+)
 from drillstring.well.survey import trajectory
 from drillstring.well.torque_drag import case_torque_drag
 

@@ -73,8 +73,8 @@ string this reduces to away from the ends).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -94,8 +94,15 @@ from drillstring.fem.mesh import Mesh
 from drillstring.statics import StaticState
 from drillstring.well.survey import Trajectory
 
-__all__ = ["StiffStringState", "WallStations", "wall_stations", "path_frames", "solve_stiff_string",
-           "case_stiff_string", "case_static_state_in_well"]
+__all__ = [
+    "StiffStringState",
+    "WallStations",
+    "case_static_state_in_well",
+    "case_stiff_string",
+    "path_frames",
+    "solve_stiff_string",
+    "wall_stations",
+]
 
 #: Column order taking the survey's (north, east, TVD) to the model's global (x = TVD, y = north, z = east).
 _GLOBAL = [2, 0, 1]
@@ -496,7 +503,7 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
     for _outer in range(max_iterations):
         a = (k + deflection.T @ geometric_stiffness(mesh, axial, rotations) @ deflection).tocsr()
 
-        def residual(x):
+        def residual(x, a=a):
             return a @ x + f0 + _wall(x, stations, tangent, n_dofs, False)[0] - f_ext
 
         while True:
