@@ -524,9 +524,9 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
         axial = new_axial
         if change <= tolerance * max(float(np.abs(axial).max()), 1.0):
             break
-    else:  # pragma: no cover - each outer loop takes at least one Newton iteration but the converged last
-        raise ValueError(f"stiff-string statics did not converge in {iterations} Newton iterations: axial "
-                         f"force changing by {change:.3g} N")
+    else:  # the axial force kept changing through max_iterations outer loops
+        raise ValueError(f"stiff-string statics did not converge in {max_iterations} outer loops "
+                         f"({iterations} Newton iterations): the axial force still changing by {change:.3g} N")
     fc, _, kc = _wall(q, stations, tangent, n_dofs)
     kg = geometric_stiffness(mesh, axial, rotations)
     reaction = (k + deflection.T @ kg @ deflection) @ q + f0 + fc - f_ext
