@@ -237,3 +237,17 @@ def test_deviated_case_against_the_soft_string(deviated, operation, weight_on_bi
     assert np.allclose(state.side_force_per_length[build], soft_at_nodes, rtol=5e-4)  # measured 1.3e-4
     statics = case_static_state_in_well(deviated)
     assert statics.weight_on_hook == pytest.approx(case_stiff_string(deviated).hook_load, rel=1e-12)
+
+
+def test_stability_changes_at_the_dawson_paslay_load():
+    """A string in compression P lying on the low side of a horizontal hole: the wall's rolling spring F/r
+    (w/r per length) and the compression's K_g make it a beam on a foundation, which buckles sideways at
+    P = 2 sqrt(EI w / r) (Dawson & Paslay 1984, SPE 11167, at I = 90 deg). The iteration finds the string on
+    the low side either way; its tangent stiffness says whether that state is stable, 1 % either side."""
+    w = 250.0
+    critical = 2.0 * math.sqrt(PIPE.bending_stiffness * w / GAP)
+    below = _solve(200.0, 1.0, 90.0 * DEG, w, bit_force=-0.99 * critical)[1]
+    above = _solve(200.0, 1.0, 90.0 * DEG, w, bit_force=-1.01 * critical)[1]
+    assert np.allclose(below.axial_force, -0.99 * critical, rtol=1e-9)
+    assert below.unstable_directions() == 0
+    assert above.unstable_directions() > 0

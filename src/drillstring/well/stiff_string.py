@@ -180,6 +180,8 @@ class StiffStringState:
             prestress, for small vibrations about this state; the statics used Pᵀ K_g P, eq. (2)).
         wall_stiffness: the wall's linearised springs at the equilibrium, global (sparse; the tangent of f_c).
         iterations: Newton iterations, all outer loops together.
+        tangent_stiffness: the statics' tangent K + K_stab + Pᵀ K_g P + the wall's, global (sparse).
+        free_basis: Z, q = Z y satisfying the supports (n_dofs × n_free).
     """
 
     mesh: Mesh
@@ -198,6 +200,8 @@ class StiffStringState:
     geometric_stiffness: sp.csr_matrix
     wall_stiffness: sp.csr_matrix
     iterations: int
+    tangent_stiffness: sp.csr_matrix | None = None
+    free_basis: sp.csr_matrix | None = None
 
     @property
     def measured_depth(self) -> np.ndarray:
@@ -244,6 +248,18 @@ class StiffStringState:
             return float(np.linalg.norm(force - (force @ t) * t))
         return float(self.side_force.sum() + lateral(self.top_reaction, self.tangent[0])
                      + lateral(self.bit_reaction, self.tangent[-1]))
+
+    def unstable_directions(self) -> int:
+        """The number of negative eigenvalues of the tangent stiffness on the free DOFs, ``Zᵀ K_t Z``
+        (dense): 0 for a stable equilibrium; positive when the string found is past buckling (the
+        iteration finds the equilibrium on the low side, stable or not: a straight string in a straight
+        hole stays on its low side past the Dawson–Paslay load, 2 sqrt(EI w sin I / r))."""
+        if self.tangent_stiffness is None or self.free_basis is None:
+            raise ValueError("tangent_stiffness: not stored with this state")
+        z = self.free_basis
+        reduced = (z.T @ self.tangent_stiffness @ z).toarray()
+        values = np.linalg.eigvalsh(0.5 * (reduced + reduced.T))
+        return int(np.count_nonzero(values < -1e-12 * np.abs(values).max()))
 
     def static_state(self) -> StaticState:
         """The axial part as :class:`drillstring.statics.StaticState` (the prestress for
@@ -536,7 +552,8 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
     weight_total = math.fsum(((weight + skin)[mesh.element_section] * mesh.element_lengths).tolist())
     return StiffStringState(mesh, position, tangent, rotations, q, axial, moment, wall, tributary,
                             reaction[:3].copy(), reaction[DOFS_PER_NODE * (n - 1):DOFS_PER_NODE * (n - 1) + 3].copy(),
-                            weight_total, -bit_force, kg.tocsr(), kc, iterations)
+                            weight_total, -bit_force, kg.tocsr(), kc, iterations,
+                            (k + deflection.T @ kg @ deflection + kc).tocsr(), z)
 
 
 def case_stiff_string(case, *, weight_on_bit: float | None = None, wall_stiffness: float | None = None,
