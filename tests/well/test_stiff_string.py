@@ -251,3 +251,19 @@ def test_stability_changes_at_the_dawson_paslay_load():
     assert np.allclose(below.axial_force, -0.99 * critical, rtol=1e-9)
     assert below.unstable_directions() == 0
     assert above.unstable_directions() > 0
+
+
+def test_a_hundred_times_stiffer_wall_changes_only_the_penetration(deviated):
+    """The wall's penalty is a numerical device: the deviated case at 1e8 and 1e10 N/m per m converges
+    (the Newton steps move the nodes in contact round the wall) to the same loads within 1e-5."""
+    soft_wall = case_stiff_string(deviated, weight_on_bit=0.0)
+    hard_wall = case_stiff_string(deviated, weight_on_bit=0.0, wall_stiffness=1e10)
+    assert hard_wall.iterations < 30
+    assert hard_wall.hook_load == pytest.approx(soft_wall.hook_load, rel=1e-8)
+    assert hard_wall.total_side_force == pytest.approx(soft_wall.total_side_force, rel=1e-5)
+    x = soft_wall.measured_depth
+    assert np.allclose(hard_wall.side_force_per_length, soft_wall.side_force_per_length, rtol=0,
+                       atol=1e-3 * soft_wall.side_force_per_length.max())
+    contact = soft_wall.in_contact & hard_wall.in_contact
+    assert np.all(hard_wall.lateral_offset[contact] - soft_wall.lateral_offset[contact] < 0.0)
+    assert x[-1] == deviated.length

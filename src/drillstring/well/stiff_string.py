@@ -54,8 +54,10 @@ held laterally (bit in gauge on the hole bottom: its two displacements across th
 
 Solution: (1) is the stationarity of a convex energy while ``K + K_g`` is positive (tension, or
 compression below buckling). Newton's method with the penalty's tangent, ``k [n nᵀ + (1 − g/r)(P − n nᵀ)]``
-(``n = δ/r``, ``P = I − t tᵀ``), and an exact line search on the directional derivative (secant on the
-piecewise-quadratic energy) converges from the string on the axis; the outer loop updates ``N`` and
+(``n = δ/r``, ``P = I − t tᵀ``), its steps moving the nodes in contact round the wall (the step's radial
+part kept, its tangential part turned into an arc: along the chord a stiff wall would be pressed
+``|Δ_t|²/(2r)`` and the iteration creep round the hole), and an exact line search on the directional
+derivative (secant), starting from the soft string's side-load direction; the outer loop updates ``N`` and
 ``K_g``. The friction of the side forces is NOT in the statics: the axial force is the frictionless one
 (the soft string's ``rotating`` operations, or any operation with friction factors 0). A case whose
 iterations do not converge raises ValueError naming the iteration count and the residual.
@@ -444,6 +446,38 @@ def _recover(q, deflection, mesh, rotations, local_k, q0, loads, axial_force):
     return force, moment
 
 
+def _rounding_floor(q: np.ndarray, stations: WallStations) -> float:
+    """The wall forces' rounding [N]: a station's offset from the axis is the node's translation less its
+    part along the path (up to a metre: the stretch), known to ``ε |d|``, times the station's stiffness."""
+    largest = float(np.abs(q.reshape(-1, DOFS_PER_NODE)[:, :3]).max()) if len(q) else 0.0
+    return 16.0 * np.finfo(float).eps * float(stations.stiffness.max(initial=0.0)) * largest
+
+
+def _on_the_wall(q: np.ndarray, dq: np.ndarray, stations: WallStations, tangent: np.ndarray) -> np.ndarray:
+    """Newton's step with the nodes on the wall moved round it: a node in contact keeps the step's radial
+    change ``n·Δ`` and turns by its tangential part, ``δ' = (r + n·Δ) (δ + Δ_t)/|δ + Δ_t|``, instead of
+    going along the chord (which would press it ``|Δ_t|²/(2r)`` into the wall: with a stiff wall, forces
+    far off the linearisation and a Newton iteration creeping round the hole)."""
+    d = q.reshape(-1, DOFS_PER_NODE)[:, :3]
+    step = dq.reshape(-1, DOFS_PER_NODE)[:, :3]
+    lateral = d - np.einsum("ij,ij->i", d, tangent)[:, None] * tangent
+    r = np.linalg.norm(lateral, axis=1)
+    clearance = np.full(len(d), np.inf)
+    np.minimum.at(clearance, stations.node, stations.clearance)
+    touching = np.nonzero(r > clearance)[0]
+    if not len(touching):
+        return dq
+    out = dq.copy()
+    t = tangent[touching]
+    n = lateral[touching] / r[touching, None]
+    delta = step[touching] - np.einsum("ij,ij->i", step[touching], t)[:, None] * t
+    radial = np.einsum("ij,ij->i", delta, n)
+    turned = lateral[touching] + delta - radial[:, None] * n
+    moved = (r[touching] + radial)[:, None] * turned / np.linalg.norm(turned, axis=1)[:, None]
+    out.reshape(-1, DOFS_PER_NODE)[touching, :3] += moved - lateral[touching] - delta
+    return out
+
+
 def _line_search(q, dq, residual) -> float:
     """Step α in (0, 1] where the energy along dq stops decreasing: a root of dqᵀ r(q + α dq), increasing
     in α for a convex energy (Illinois secant; α = 1 when the full step still descends)."""
@@ -470,7 +504,7 @@ def _line_search(q, dq, residual) -> float:
 def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], stations: WallStations, *,
                        skin_friction: Sequence[float] | None = None, bit_force: float = 0.0,
                        stabilizers: Sequence[Stabilizer] = (), tolerance: float = 1e-9,
-                       max_iterations: int = 100) -> StiffStringState:
+                       max_iterations: int = 200) -> StiffStringState:
     """Static equilibrium (1) of the string ``mesh`` (x = measured depth, top at the surface) in the well
     ``path``.
 
@@ -480,8 +514,9 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
         skin_friction: the mud's axial load per length of each mesh section [N/m], along the string (0).
         bit_force: effective axial force at the bit [N], tension positive (−WOB on bottom).
         stabilizers: lateral springs (:class:`drillstring.fem.assembly.Stabilizer`).
-        tolerance: the equilibrium's residual allowed, relative to the largest nodal load; the axial force's
-            change between outer loops allowed, relative to its largest value.
+        tolerance: the equilibrium's residual allowed, relative to the largest nodal load (never below the
+            wall forces' rounding, 16 ε k |d|); the axial force's change between outer loops allowed,
+            relative to its largest value.
         max_iterations: Newton iterations allowed (all outer loops together).
 
     Raises ValueError for bad input and when the iterations do not converge (naming their count and the
@@ -526,13 +561,13 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
             fc, _, kc = _wall(q, stations, tangent, n_dofs)
             r = a @ q + f0 + fc - f_ext
             residual_norm = float(np.abs(zt @ r).max())
-            if residual_norm <= tol:
+            if residual_norm <= max(tol, _rounding_floor(q, stations)):
                 break
             if iterations >= max_iterations:
                 raise ValueError(f"stiff-string statics did not converge in {iterations} Newton iterations: "
                                  f"residual {residual_norm:.3g} N > tolerance {tol:.3g} N")
             jacobian = (zt @ (a + kc) @ z).tocsc()
-            dq = z @ spla.spsolve(jacobian, -(zt @ r))
+            dq = _on_the_wall(q, z @ spla.spsolve(jacobian, -(zt @ r)), stations, tangent)
             q = q + _line_search(q, dq, residual) * dq
             iterations += 1
         new_axial, moment = _recover(q, deflection @ q, mesh, rotations, local_k, q0, loads, axial)
@@ -558,7 +593,7 @@ def solve_stiff_string(mesh: Mesh, path: Trajectory, weight: Sequence[float], st
 
 def case_stiff_string(case, *, weight_on_bit: float | None = None, wall_stiffness: float | None = None,
                       mesh: Mesh | None = None, path: Trajectory | None = None, tolerance: float = 1e-9,
-                      max_iterations: int = 100) -> StiffStringState:
+                      max_iterations: int = 200) -> StiffStringState:
     """The stiff-string statics of a :class:`~drillstring.case.Case` in its well (``[well]``; a vertical hole
     as deep as the string without one): its mesh (:func:`drillstring.fem.build.case_mesh`), the weights
     and skin friction of the soft string (:mod:`drillstring.well.torque_drag`), its stabilizers, the wall's
