@@ -186,13 +186,14 @@ def _times(path: Path, cells: list[str], unit: str, lines: list[int]) -> tuple[n
     if np.all(np.isfinite(numbers)):
         factor = unit_factor(unit or "s", TIME) if unit else 1.0
         return (numbers - numbers[0]) * factor, None
-    stamps = []
-    for cell, line in zip(cells, lines):
-        stamp = _timestamp(cell)
-        if stamp is None:
+    stamps = [_timestamp(cell) for cell in cells]
+    for cell, line, number, stamp in zip(cells, lines, numbers, stamps):
+        if stamp is None and not np.isfinite(number):
             raise ValueError(f"surface record {path}, line {line}: time {cell!r} is neither a number nor an ISO "
                              "8601 timestamp")
-        stamps.append(stamp)
+    if any(stamp is None for stamp in stamps):
+        line = lines[next(k for k, stamp in enumerate(stamps) if stamp is None)]
+        raise ValueError(f"surface record {path}, line {line}: the time column mixes numbers and timestamps")
     if len({s.tzinfo is None for s in stamps}) > 1:
         raise ValueError(f"surface record {path}: the timestamps mix times with and without a time zone")
     return np.array([(s - stamps[0]).total_seconds() for s in stamps]), stamps[0].isoformat()
