@@ -19,7 +19,9 @@ import pytest
 
 from drillstring.case import load_case
 from drillstring.estimation import faults
-from drillstring.estimation.faults import fill_gaps, flag_faults, frozen, frozen_run_length, spikes
+from drillstring.estimation.faults import (
+    fill_gaps, flag_faults, frozen, frozen_run_length, noise_sigma, spikes, trend_residual, trend_spikes,
+)
 from drillstring.estimation.reading import read_surface_record
 from drillstring.estimation.surface import FROZEN, MISSING, OUT_OF_RANGE, SPIKE, USABLE
 from drillstring.estimation.synthetic import NOISE, read_truth
@@ -72,6 +74,38 @@ def test_hampel_filter_equals_a_loop_of_medians():
     x[rng.choice(600, 15, replace=False)] += rng.choice([-1, 1], 15) * rng.uniform(2, 9, 15)
     for k, threshold, floor in ((10, 6.0, 0.0), (3, 3.0, 0.5), (10, 3.0, 0.2)):
         np.testing.assert_array_equal(spikes(x, k, threshold, floor), _hampel_loops(x, k, threshold, floor))
+
+
+def test_trend_residual_is_exact_on_piecewise_linear_signals():
+    """Corners included: of the six predictions at least four lie on the sample's own line."""
+    k = np.arange(200)
+    x = np.where(k % 40 < 25, 1.0, -1.6) * 1e3  # steep slopes, N·m per sample
+    x = np.cumsum(x)
+    e = trend_residual(x)
+    np.testing.assert_allclose(e[3:-3], 0.0, atol=1e-9 * np.abs(x).max())
+    y = np.random.default_rng(2).standard_normal(12)
+    i = 6
+    predictions = [2 * y[i - 1] - y[i - 2], 2 * y[i + 1] - y[i + 2], 3 * y[i - 2] - 2 * y[i - 3],
+                   3 * y[i + 2] - 2 * y[i + 3], (y[i - 1] + y[i + 1]) / 2, (y[i - 2] + y[i + 2]) / 2]
+    assert trend_residual(y)[i] == pytest.approx(y[i] - np.median(predictions))
+
+
+def test_noise_sigma_ignores_a_steep_trend():
+    rng = np.random.default_rng(4)
+    t = np.arange(20_000)
+    x = 3.0 * rng.standard_normal(len(t)) + 50.0 * np.sin(t / 8.0) + 10.0 * t
+    assert noise_sigma(x) == pytest.approx(3.0, rel=0.05)
+
+
+def test_a_spike_on_a_steep_trend_is_found_against_the_trend(truth):
+    rng = np.random.default_rng(8)
+    torque = truth["surface_torque"] + NOISE["surface_torque"] * rng.standard_normal(len(truth["time"]))
+    steep = int(np.argmax(np.abs(np.diff(truth["surface_torque"]))[20:-20])) + 20
+    torque[steep] += 15 * NOISE["surface_torque"]  # 3 kN·m where the torque moves 1.4 kN·m a sample
+    assert not spikes(torque)[steep]  # Hampel's window sees the stick-slip swing, not the spike
+    assert np.nonzero(trend_spikes(torque))[0].tolist() == [steep]
+    torque[300:302] -= 20 * NOISE["surface_torque"]  # two samples: both flagged, not their neighbours
+    assert np.nonzero(trend_spikes(torque))[0].tolist() == sorted([steep, 300, 301])
 
 
 def test_frozen_repeat_probability_matches_quantised_noise():

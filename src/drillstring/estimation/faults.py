@@ -9,12 +9,23 @@ Gaps (:func:`fill_gaps`)
     A filter stepping through the record then forecasts across the gap without an update. An empty or
     non-numeric cell (or the LAS null value -999.25) is NaN, flagged ``MISSING`` in its channel.
 
-Spikes (:func:`spikes`)
-    Hampel's filter: a sample deviating from the median of the :data:`HAMPEL_HALF_WINDOW` samples on either side
-    by more than :data:`HAMPEL_THRESHOLD` robust standard deviations, ``1.4826 MAD`` of that window (the
-    median absolute deviation, scaled to a normal law's σ), is a spike. The scale is at least the channel's
-    own noise level (:func:`noise_level`, from the whole record), so that a quiet or quantised stretch (MAD 0)
-    flags no ordinary step. Flagged ``SPIKE``.
+Spikes (:func:`spikes`, :func:`trend_spikes`)
+    Two tests; a sample either flags is a spike (``SPIKE``).
+
+    - Hampel's filter (:func:`spikes`): a sample deviating from the median of the :data:`HAMPEL_HALF_WINDOW`
+      samples on either side by more than :data:`HAMPEL_THRESHOLD` robust standard deviations, ``1.4826 MAD``
+      of that window (the median absolute deviation, scaled to a normal law's σ), is a spike. The scale is at
+      least the channel's own noise level (:func:`noise_level`), so that a quiet or quantised stretch (MAD 0)
+      flags no ordinary step. Robust to wide excursions, but blind to a spike smaller than the signal's own
+      swing over the window (a stick-slip torque swings by ±10 kN·m within the 2 s window at 10 Hz).
+    - Against the local trend (:func:`trend_spikes`): each sample is compared with the median of six
+      predictions from its neighbours (linear extrapolations from the two samples on its left, on its right,
+      and from the two beyond them; the means of its two neighbours and of the two beyond), exact on any
+      piecewise-linear signal, corners included. A residual above :data:`TREND_THRESHOLD` times the channel's
+      noise σ (from its second differences, :func:`noise_sigma`, insensitive to the trend) marks a candidate;
+      the largest candidate within ±3 samples is flagged and removed, and the test repeats (at most
+      :data:`TREND_ITERATIONS` times), so that a spike's neighbours, whose predictions it spoils, are not
+      flagged with it.
 
 Frozen stretches (:func:`frozen`)
     A run of identical consecutive values. A channel with noise σ_d between samples (the robust σ of its
@@ -43,6 +54,7 @@ Values the case cannot explain (:func:`check_against_case`)
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,6 +70,7 @@ __all__ = [
     "GAP_FACTOR",
     "HAMPEL_HALF_WINDOW",
     "HAMPEL_THRESHOLD",
+    "TREND_THRESHOLD",
     "UNIT_CANDIDATES",
     "case_expectations",
     "check_against_case",
@@ -67,7 +80,9 @@ __all__ = [
     "frozen_run_length",
     "missing_note",
     "noise_level",
+    "noise_sigma",
     "spikes",
+    "trend_spikes",
 ]
 
 #: A time step longer than this many typical (median) steps is a gap.
@@ -76,6 +91,11 @@ GAP_FACTOR = 3.0
 HAMPEL_HALF_WINDOW = 10
 #: Hampel's filter: a spike deviates from the window's median by more than this many robust σ (1.4826 MAD).
 HAMPEL_THRESHOLD = 6.0
+#: The test against the local trend: a spike's residual exceeds this many noise σ (the residual of white noise has
+#: a standard deviation of 1.25 σ).
+TREND_THRESHOLD = 8.0
+#: The test against the local trend: most passes (each flags the largest residual of each cluster).
+TREND_ITERATIONS = 20
 #: The median absolute deviation of a normal law is σ / 1.4826.
 MAD_SCALE = 1.482602218505602
 #: The shortest run of identical values ever flagged frozen [samples].
@@ -188,6 +208,65 @@ def spikes(values: np.ndarray, half_window: int = HAMPEL_HALF_WINDOW, threshold:
         mad = np.nanmedian(np.abs(w - median[:, None]), axis=1)
         scale = np.maximum(MAD_SCALE * mad, floor)
         out[a + rows] = np.abs(centre[rows] - median) > threshold * scale
+    return out
+
+
+def noise_sigma(values: np.ndarray) -> float:
+    """The channel's white-noise σ [its unit] from its second differences, ``1.4826 MAD / √6`` (white noise of σ
+    has second differences of σ√6; a trend, even a steep one, adds only its curvature). 0 when fewer than three
+    consecutive finite samples."""
+    d = np.diff(np.asarray(values, dtype=float), 2)
+    d = d[np.isfinite(d)]
+    if len(d) == 0:
+        return 0.0
+    return float(MAD_SCALE * np.median(np.abs(d - np.median(d))) / math.sqrt(6.0))
+
+
+def _shifted(x: np.ndarray, k: int) -> np.ndarray:
+    """``x[i - k]`` at i (NaN outside)."""
+    out = np.full(len(x), np.nan)
+    if k > 0:
+        out[k:] = x[:-k]
+    else:
+        out[:k] = x[-k:]
+    return out
+
+
+def trend_residual(values: np.ndarray) -> np.ndarray:
+    """Each sample less the median of its six predictions from its neighbours (module docstring): ``2x[i−1] −
+    x[i−2]``, ``2x[i+1] − x[i+2]``, ``3x[i−2] − 2x[i−3]``, ``3x[i+2] − 2x[i+3]``, ``(x[i−1] + x[i+1])/2``,
+    ``(x[i−2] + x[i+2])/2``, those with a NaN left out (NaN where none is left)."""
+    x = np.asarray(values, dtype=float)
+    s = {k: _shifted(x, k) for k in (-3, -2, -1, 1, 2, 3)}
+    predictions = np.array([2 * s[1] - s[2], 2 * s[-1] - s[-2], 3 * s[2] - 2 * s[3], 3 * s[-2] - 2 * s[-3],
+                            (s[1] + s[-1]) / 2, (s[2] + s[-2]) / 2])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN column: NaN, as wanted
+        return x - np.nanmedian(predictions, axis=0)
+
+
+def trend_spikes(values: np.ndarray, threshold: float = TREND_THRESHOLD, sigma: float | None = None,
+                 iterations: int = TREND_ITERATIONS) -> np.ndarray:
+    """Boolean mask of the spikes of ``values`` against their local trend (module docstring): repeatedly, the
+    samples whose :func:`trend_residual` exceeds ``threshold · sigma`` and is the largest within ±3 samples are
+    flagged and removed. ``sigma`` defaults to :func:`noise_sigma` of the values."""
+    x = np.array(values, dtype=float)
+    if sigma is None:
+        sigma = noise_sigma(x)
+    out = np.zeros(len(x), dtype=bool)
+    if not sigma > 0.0:
+        return out
+    for _ in range(iterations):
+        e = np.abs(trend_residual(x))
+        e[~np.isfinite(e)] = 0.0
+        candidates = e > threshold * sigma
+        if not candidates.any():
+            break
+        padded = np.concatenate([np.zeros(3), e, np.zeros(3)])
+        largest = np.lib.stride_tricks.sliding_window_view(padded, 7).max(axis=1)
+        picked = candidates & (e >= largest)
+        out |= picked
+        x[picked] = np.nan
     return out
 
 
@@ -339,13 +418,13 @@ def check_against_case(name: str, values: np.ndarray, unit: str, expectation: Ex
     e = expectation
     if not e.low <= median <= e.high:
         given = unit_factor(unit, DIMENSION[name])
-        fits = []
+        fits = []  # (distance from the expected median in log, unit) of the units that bring the median in
         for candidate in UNIT_CANDIDATES[name]:
-            corrected = median * unit_factor(candidate, DIMENSION[name]) / given
-            if candidate != unit and e.low <= corrected <= e.high and abs(unit_factor(candidate, DIMENSION[name])
-                                                                          / given - 1.0) > 1e-9:
-                fits.append((abs(math.log(abs(corrected / e.centre))) if corrected and e.centre else math.inf,
-                             candidate))
+            ratio = unit_factor(candidate, DIMENSION[name]) / given  # SI of one value in candidate / in unit
+            corrected = median * ratio
+            if abs(ratio - 1.0) > 1e-9 and e.low <= corrected <= e.high:
+                distance = abs(math.log(corrected / e.centre)) if corrected * e.centre > 0.0 else math.inf
+                fits.append((distance, candidate))
         shown = f"{median / given:.4g} {unit}"
         if not fits:
             raise ValueError(f"{where}: median {shown}, outside {e.what}, and no usual unit explains it: the record "
@@ -403,11 +482,12 @@ def flag_faults(time: np.ndarray, channels: dict[str, np.ndarray], flags: dict[s
             notes.append(f"{name}: {int(mask.sum())} sample(s) frozen (runs of {length:g} or more identical values) "
                          f"at {_where(time, mask)}")
         usable = np.where(flag == USABLE, x, np.nan)
-        mask = spikes(usable)
+        mask = spikes(usable) | trend_spikes(usable)
         if mask.any():
             flag[mask] = SPIKE
             notes.append(f"{name}: {int(mask.sum())} spike(s) (Hampel, {2 * HAMPEL_HALF_WINDOW + 1} samples, "
-                         f"{HAMPEL_THRESHOLD:g} robust σ) at {_where(time, mask)}")
+                         f"{HAMPEL_THRESHOLD:g} robust σ, or {TREND_THRESHOLD:g} noise σ off the local trend) at "
+                         f"{_where(time, mask)}")
     return notes
 
 
