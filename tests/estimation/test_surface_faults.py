@@ -256,10 +256,10 @@ def test_a_few_hook_loads_above_the_weight_in_air_are_out_of_range(truth, case):
 
 
 @pytest.mark.parametrize("channel, scale, shift, message", [
-    ("top_speed", 0.03, 0.0, r"top_speed \(column RPM\): median 0.314\d rad/s, outside the case's set point, 100 rpm, "
-                             r"and no usual unit explains it: the record does not fit the case"),
-    ("hook_load", 1.0, -1.8e6, r"hook_load \(column RPM\): median -1.357e\+05 N, outside the case's hook load while "
-                               r"drilling, 1664 kN .*, and no usual unit explains it"),
+    ("top_speed", 0.03, 0.0, (r"top_speed \(column RPM\): median 0.314\d rad/s, outside the case's set point, 100 rpm, "
+                              r"and no usual unit explains it: the record does not fit the case")),
+    ("hook_load", 1.0, -1.8e6, (r"hook_load \(column RPM\): median -1.357e\+05 N, outside the case's hook load while "
+                                r"drilling, 1664 kN .*, and no usual unit explains it")),
 ])
 def test_a_median_no_unit_explains_is_refused(truth, case, channel, scale, shift, message):
     channels = _clean(truth, 7)

@@ -217,7 +217,7 @@ def _unit(path: Path, name: str, column: str, header_unit: str, units: dict[str,
 
 
 def read_surface_record(path: str | Path, *, columns: dict[str, str] | None = None,
-                        units: dict[str, str] | None = None, case=None) -> "SurfaceRecord":
+                        units: dict[str, str] | None = None, case=None) -> SurfaceRecord:
     """The surface record in the CSV (or Parquet) file ``path`` (module docstring), its channels in SI units on
     one time axis [s], its faults flagged (:mod:`drillstring.estimation.faults`).
 

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drillstring.estimation.surface import FROZEN, MISSING, SPIKE, USABLE
+from drillstring.estimation.surface import FROZEN, MISSING, SPIKE
 
 __all__ = ["BLOCK_START", "DECIMALS", "DISPERSION", "FAULTS", "FILE_UNITS", "HOOK_LOAD_BIAS", "NOISE",
            "SEED", "SyntheticRecord", "make_synthetic_record", "read_truth", "write_synthetic_record"]
@@ -221,14 +221,14 @@ def _cell(value: float, decimals: int) -> str:
 
 def record_text(record: SyntheticRecord, truth_name: str = "stick_slip_surface_truth.csv") -> str:
     """The record file's text: ``#`` lines, the header ``TIME [s],RPM [rpm],...``, a row per present sample."""
-    from drillstring.units import unit_factor
     from drillstring.estimation.faults import DIMENSION
-    from drillstring.units import TIME
+    from drillstring.units import TIME, unit_factor
 
     scale = {name: 1.0 / unit_factor(unit, DIMENSION[name] if name != "time" else TIME)
              for name, unit in FILE_UNITS.items()}
-    lines = [f"# drillstring synthetic surface record of case {record.parameters['case'][0]}, seed "
-             f"{record.parameters['seed'][0]}: made by drillstring.estimation.synthetic (benchmarks/make_surface_record.py)",
+    lines = [(f"# drillstring synthetic surface record of case {record.parameters['case'][0]}, seed "
+              f"{record.parameters['seed'][0]}: made by drillstring.estimation.synthetic "
+              "(benchmarks/make_surface_record.py)"),
              f"# its hidden truth: {truth_name}",
              ",".join(f"{column} [{unit}]" for column, unit in FILE_COLUMNS.values())]
     for k in np.nonzero(record.present)[0]:
