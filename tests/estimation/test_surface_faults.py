@@ -142,6 +142,20 @@ def test_white_noise_is_not_flagged():
         assert not frozen(np.round(x, 1))[0].any()
 
 
+def test_a_quantised_slow_channel_is_not_flagged():
+    """A block position logged in whole centimetres while drilling at 10 m/h: long legitimate repeats and
+    one-centimetre steps, none a fault; a 5 cm spike on it is one."""
+    t = 0.1 * np.arange(6000)
+    block = np.round((30.0 - 10.0 / 3600.0 * t + 0.002 * np.random.default_rng(9).standard_normal(len(t))) * 100) / 100
+    channels = {"block_position": block.copy()}
+    flags = _flags(channels)
+    assert flag_faults(t, channels, flags) == [] and not flags["block_position"].any()
+    channels["block_position"][3000] += 0.05
+    flags = _flags(channels)
+    flag_faults(t, channels, flags)
+    assert np.nonzero(flags["block_position"])[0].tolist() == [3000]
+
+
 # -- each fault, injected, flagged where it is ------------------------------------------------------------
 
 

@@ -15,14 +15,15 @@ Spikes (:func:`spikes`, :func:`trend_spikes`)
     - Hampel's filter (:func:`spikes`): a sample deviating from the median of the :data:`HAMPEL_HALF_WINDOW`
       samples on either side by more than :data:`HAMPEL_THRESHOLD` robust standard deviations, ``1.4826 MAD``
       of that window (the median absolute deviation, scaled to a normal law's σ), is a spike. The scale is at
-      least the channel's own noise level (:func:`noise_level`), so that a quiet or quantised stretch (MAD 0)
-      flags no ordinary step. Robust to wide excursions, but blind to a spike smaller than the signal's own
+      least the channel's own noise level (:func:`noise_level`) and its resolution (:func:`resolution`), so
+      that a quiet or quantised stretch (MAD 0) flags no ordinary step. Robust to wide excursions, but blind to a spike smaller than the signal's own
       swing over the window (a stick-slip torque swings by ±10 kN·m within the 2 s window at 10 Hz).
     - Against the local trend (:func:`trend_spikes`): each sample is compared with the median of six
       predictions from its neighbours (linear extrapolations from the two samples on its left, on its right,
       and from the two beyond them; the means of its two neighbours and of the two beyond), exact on any
       piecewise-linear signal, corners included. A residual above :data:`TREND_THRESHOLD` times the channel's
-      noise σ (from its second differences, :func:`noise_sigma`, insensitive to the trend) marks a candidate;
+      noise σ (from its second differences, :func:`noise_sigma`, insensitive to the trend; at least the rounding
+      noise q/√12 of the resolution q) marks a candidate;
       the largest candidate within ±3 samples is flagged and removed, and the test repeats (at most
       :data:`TREND_ITERATIONS` times), so that a spike's neighbours, whose predictions it spoils, are not
       flagged with it.
@@ -81,6 +82,7 @@ __all__ = [
     "missing_note",
     "noise_level",
     "noise_sigma",
+    "resolution",
     "spikes",
     "trend_spikes",
 ]
@@ -187,11 +189,12 @@ def spikes(values: np.ndarray, half_window: int = HAMPEL_HALF_WINDOW, threshold:
            floor: float | None = None) -> np.ndarray:
     """Boolean mask of the spikes of ``values`` (NaN: not tested, not used) by Hampel's filter (module docstring):
     ``|x_i − median| > threshold · max(1.4826 MAD, floor)`` over the ``2 half_window + 1`` samples centred on i
-    (the finite ones; at least ``half_window`` of them). ``floor`` defaults to :func:`noise_level`."""
+    (the finite ones; at least ``half_window`` of them). ``floor`` defaults to the larger of :func:`noise_level`
+    and the resolution (:func:`resolution`: a step of one resolution is never a spike)."""
     x = np.asarray(values, dtype=float)
     n = len(x)
     if floor is None:
-        floor = noise_level(x)
+        floor = max(noise_level(x), resolution(x))
     out = np.zeros(n, dtype=bool)
     padded = np.concatenate([np.full(half_window, np.nan), x, np.full(half_window, np.nan)])
     windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1)
@@ -209,6 +212,14 @@ def spikes(values: np.ndarray, half_window: int = HAMPEL_HALF_WINDOW, threshold:
         scale = np.maximum(MAD_SCALE * mad, floor)
         out[a + rows] = np.abs(centre[rows] - median) > threshold * scale
     return out
+
+
+def resolution(values: np.ndarray) -> float:
+    """The channel's resolution q [its unit]: its smallest nonzero step between consecutive finite samples (the
+    logging's quantum for a quantised channel; tiny for one logged with every digit); 0 when it never changes."""
+    d = np.abs(np.diff(np.asarray(values, dtype=float)))
+    d = d[np.isfinite(d) & (d > 0.0)]
+    return float(d.min()) if len(d) else 0.0
 
 
 def noise_sigma(values: np.ndarray) -> float:
@@ -249,10 +260,11 @@ def trend_spikes(values: np.ndarray, threshold: float = TREND_THRESHOLD, sigma: 
                  iterations: int = TREND_ITERATIONS) -> np.ndarray:
     """Boolean mask of the spikes of ``values`` against their local trend (module docstring): repeatedly, the
     samples whose :func:`trend_residual` exceeds ``threshold · sigma`` and is the largest within ±3 samples are
-    flagged and removed. ``sigma`` defaults to :func:`noise_sigma` of the values."""
+    flagged and removed. ``sigma`` defaults to :func:`noise_sigma` of the values, or the resolution's rounding
+    noise ``q/√12`` (:func:`resolution`) if larger."""
     x = np.array(values, dtype=float)
     if sigma is None:
-        sigma = noise_sigma(x)
+        sigma = max(noise_sigma(x), resolution(x) / math.sqrt(12.0))
     out = np.zeros(len(x), dtype=bool)
     if not sigma > 0.0:
         return out
@@ -280,10 +292,8 @@ def frozen_run_length(values: np.ndarray, false_runs: float = FROZEN_FALSE_RUNS,
     n = int(np.sum(np.isfinite(x)))
     if len(d) == 0:
         return math.inf
-    nonzero = np.abs(d[d != 0.0])
     sigma_d = noise_level(x) * math.sqrt(2.0)
-    resolution = float(nonzero.min()) if len(nonzero) else 0.0
-    p_model = resolution / (sigma_d * math.sqrt(2.0 * math.pi)) if sigma_d > 0.0 else 1.0
+    p_model = resolution(x) / (sigma_d * math.sqrt(2.0 * math.pi)) if sigma_d > 0.0 else 1.0
     p = max(p_model, float(np.mean(d == 0.0)))
     if p >= 1.0:
         return math.inf
