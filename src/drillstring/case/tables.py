@@ -373,11 +373,12 @@ class Simulation(_Base):
     atol: Dimensionless = Field(1e-9, gt=0)
     max_steps: int = Field(2_000_000, gt=0, le=10**12)
     min_step: Time = Field(1e-12, gt=0, description="smallest step before giving up [s]")
-    method: Literal["dopri5", "bs32", "ark43", "ark32"] = Field(
+    method: Literal["dopri5", "bs32", "ark43", "ark32", "erk32"] = Field(
         "ark43", description="'dopri5' (Dormand-Prince 5(4)) or 'bs32' (Bogacki-Shampine 3(2)), explicit; 'ark43' "
         "(the default for new cases) or 'ark32' (Kennedy-Carpenter ARK4(3)6L, ARK3(2)4L): the linear modal part "
         "and the bit law implicit, so that the attachment modes of the default basis (truncation_correction = "
-        "'static') do not set the step (docs/model.md §9)")
+        "'static') do not set the step (docs/model.md §9); 'erk32' (Hochbruck-Ostermann exponential Runge-Kutta, "
+        "stiff order 3): the linear modal part exact, the rest explicit (docs/performance.md)")
 
     @model_validator(mode="after")
     def _output_step_within_run(self) -> Simulation:

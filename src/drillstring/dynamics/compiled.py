@@ -286,10 +286,13 @@ def kernel_set(model, method) -> str:
     data, not on sizes or values: :func:`prepare_kernels`), so a case that adds a set (the first ``ark43`` run
     of a delayed law, say) compiles once more, then loads it from the cache."""
     from drillstring.dynamics.additive_rk import AdditiveTableau
+    from drillstring.dynamics.exponential_rk import ExponentialTableau
     from drillstring.dynamics.runge_kutta import ButcherTableau
 
     if isinstance(method, AdditiveTableau):
         kind = "implicit-explicit step"
+    elif isinstance(method, ExponentialTableau):
+        kind = "exponential step"
     elif isinstance(method, ButcherTableau):
         kind = "explicit Runge-Kutta step"
     else:
@@ -480,9 +483,9 @@ def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output
         raise ValueError(f"output_times: must be increasing and at or after the state's time {t0:g} s")
     ctrl = StepSizeController(rtol=solver.rtol, atol=solver.atol, max_step=solver.max_step)
     settings = StepperSettings.create(ctrl, y0.shape[0], min_step=solver.min_step, max_steps=solver.max_steps)
-    step = step_data(method, y0.shape[0])
     work = Workspace.allocate(y0, grid, observation_width(len(model.probe_nodes)))
     data = model.kernel_data(start.history)
+    step = step_data(method, y0.shape[0], data.rhs)
     rhs_data, case2, observe_data = data.rhs, data.case2, data.observe
     if start.in_contact is not None:
         observe_data.previous[:] = start.in_contact

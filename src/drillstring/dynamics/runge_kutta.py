@@ -77,6 +77,7 @@ from typing import Any
 import numpy as np
 
 from drillstring.dynamics.additive_rk import IMEX_TABLEAUS
+from drillstring.dynamics.exponential_rk import EXPONENTIAL_TABLEAUS
 from drillstring.dynamics.step_control import RHS, StepSizeController, error_norm, step_factor
 from drillstring.dynamics.steps import kind_of
 from drillstring.dynamics.tableaus import (
@@ -106,10 +107,11 @@ __all__ = [
 
 
 def method_named(name: str):
-    """The integration method called ``name``: an explicit pair of :data:`TABLEAUS` or an implicit–explicit
-    additive pair of :data:`drillstring.dynamics.additive_rk.IMEX_TABLEAUS` (``simulation.method``)."""
+    """The integration method called ``name``: an explicit pair of :data:`TABLEAUS`, an implicit–explicit
+    additive pair of :data:`drillstring.dynamics.additive_rk.IMEX_TABLEAUS` or an exponential pair of
+    :data:`drillstring.dynamics.exponential_rk.EXPONENTIAL_TABLEAUS` (``simulation.method``)."""
 
-    methods = {**TABLEAUS, **IMEX_TABLEAUS}
+    methods = {**TABLEAUS, **IMEX_TABLEAUS, **EXPONENTIAL_TABLEAUS}
     try:
         return methods[name]
     except KeyError:
