@@ -247,3 +247,20 @@ def test_compiled_erk32_agrees_with_dopri5_on_the_reduced_model(small_case):
     for key in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
         x, ref = result.observables[key], explicit.observables[key]
         assert np.abs(x - ref).max() <= 1e-5 * np.abs(ref).max(), key
+
+
+def test_bit_law_linearisation_is_the_laws_jacobian(small_case):
+    """The measured alternative's law part of A (off by default): the compiled partials as modal damping and
+    stiffness equal the NumPy Jacobian rows of the law (drillstring.dynamics.stiffness, the law's closed form)."""
+    from drillstring.dynamics.stiffness import _bit_rock_rows
+
+    model = case_reduced_model(small_case)
+    data = model.kernel_data()
+    y = model.initial_state(1e-3, 1)
+    n = model.size
+    stiffness, damping = exponential.bit_law_linearisation(data.rhs, 0.0, y)
+    rows = _bit_rock_rows(model, 0.0, y)
+    scale = np.abs(rows[:, n:2 * n]).max()
+    assert scale > 0.0
+    np.testing.assert_allclose(-damping, rows[:, n:2 * n], rtol=0.0, atol=1e-6 * scale)
+    np.testing.assert_allclose(-stiffness, rows[:, :n], rtol=0.0, atol=1e-6 * scale)

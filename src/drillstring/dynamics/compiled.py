@@ -485,7 +485,7 @@ def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output
     settings = StepperSettings.create(ctrl, y0.shape[0], min_step=solver.min_step, max_steps=solver.max_steps)
     work = Workspace.allocate(y0, grid, observation_width(len(model.probe_nodes)))
     data = model.kernel_data(start.history)
-    step = step_data(method, y0.shape[0], data.rhs)
+    step = step_data(method, y0.shape[0], data.rhs, t0, y0)
     rhs_data, case2, observe_data = data.rhs, data.case2, data.observe
     if start.in_contact is not None:
         observe_data.previous[:] = start.in_contact

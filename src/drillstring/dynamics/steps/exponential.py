@@ -12,13 +12,12 @@ follows exactly (:func:`linear_modal_part`):
 - each damping block of at most :data:`MAX_DENSE_BLOCK` modes enters whole; a larger one (the contact case's
   lateral block, coupled by the fluid's Coriolis damping: 83 modes) by its diagonal, its off-diagonal damping
   (not stiff) left in ``N``;
-- a rigid mode (``ω² = 0``: the rigid axial translation, a top drive's free rotation) is left out of ``A``
-  (its 2 × 2 part ``[[0, 1], [0, −d]]`` is nearly or exactly defective, and it is slow): its ``η``, ``η̇``
-  are integrated as the states ``s`` are, with the coefficients at ``Z = 0``;
 - a block whose eigenvalues are all slow (below :data:`SLOW_BLOCK_RATE`) enters by its diagonal;
-- a block whose eigenvector matrix is ill-conditioned (condition number above :data:`MAX_CONDITION`: nearly
-  repeated eigenvalues, a critically damped mode) enters by its diagonal, and a single mode so conditioned is
-  left out.
+- a block whose eigenvector matrix is ill-conditioned (condition number above :data:`MAX_CONDITION`) enters
+  without its rigid modes (``ω² = 0``: the rigid axial translation, a top drive's free rotation, whose 2 × 2 part
+  ``[[0, 1], [0, −d]]`` is nearly or exactly defective for a small ``d``), else by its diagonal; a mode left out
+  (rigid, or a single mode so conditioned: critically damped) has its ``η``, ``η̇`` integrated as the states
+  ``s`` are, with the coefficients at ``Z = 0``.
 
 Diagonalised once per model (block by block, :func:`numpy.linalg.eig`; cached for the model's arrays),
 ``A = V Λ V⁻¹`` with complex ``Λ``: of each conjugate pair only one eigenvalue is kept, weighted 2 (``y`` is
@@ -53,7 +52,7 @@ from numba import njit
 
 from drillstring.dynamics.exponential_rk import ExponentialTableau, phi_functions
 from drillstring.dynamics.kernel_data import FullModelData
-from drillstring.dynamics.rom import evaluate_rhs
+from drillstring.dynamics.rom import diagonal_blocks, evaluate_rhs, stiff_part
 from drillstring.dynamics.steps.kinds import StepKind, register
 
 #: Damping blocks of more modes than this enter ``A`` by their diagonal (module docstring).
@@ -65,6 +64,10 @@ MAX_CONDITION = 1e6
 #: damping, slow, left in ``N``): the dense transforms of the reference case's 20-mode lateral blocks
 #: (|λ| ≤ 3.1 1/s) cost more than the right-hand side.
 SLOW_BLOCK_RATE = 10.0
+#: Add the bit law's linearisation at the run's start to ``A`` (:func:`bit_law_linearisation`): off, the
+#: measured alternative of docs/performance.md ("Exponential step"), not better on the built-in cases (the
+#: law's partials move along a run; frozen at the start they left more in ``N`` than they took out).
+LINEARISED_LAW = False
 #: A mode with ``|ω²|`` at most this fraction of the model's largest is rigid (left out of ``A``).
 RIGID = 1e-12
 
@@ -94,30 +97,32 @@ class ModalEigen(NamedTuple):
     n_modal: int  # n, the modal coordinates (the state's first 2n entries are η, η̇)
 
 
-def _groups(omega2: np.ndarray, damping: np.ndarray, blocks: np.ndarray) -> tuple[list, list]:
-    """The mode groups that enter ``A`` (lists of mode indices) and the modes left out (module docstring)."""
+def _groups(omega2: np.ndarray, blocks: np.ndarray) -> tuple[list, set]:
+    """The mode groups that may enter ``A`` whole (lists of mode indices) and the rigid modes."""
     n = omega2.shape[0]
     scale = max(float(np.max(np.abs(omega2))) if n else 0.0, 1.0)
-    rigid = [i for i in range(n) if abs(omega2[i]) <= RIGID * scale]
+    rigid = {i for i in range(n) if abs(omega2[i]) <= RIGID * scale}
     in_block = np.zeros(n, dtype=bool)
     groups = []
     for start, end in blocks:
         in_block[start:end] = True
-        modes = [i for i in range(start, end) if i not in rigid]
+        modes = list(range(start, end))
         if len(modes) > MAX_DENSE_BLOCK:
             groups.extend([i] for i in modes)
-        elif modes:
+        else:
             groups.append(modes)
-    groups.extend([i] for i in range(n) if not in_block[i] and i not in rigid)
+    groups.extend([i] for i in range(n) if not in_block[i])
     return groups, rigid
 
 
-def _block_matrix(omega2, damping, modes, diagonal: bool) -> np.ndarray:
+def _block_matrix(stiffness, damping, modes, diagonal: bool) -> np.ndarray:
+    """[[0, I], [−K, −D]] on ``modes`` (their diagonals only when ``diagonal``)."""
     k = len(modes)
-    d = damping[np.ix_(modes, modes)]
+    index = np.ix_(modes, modes)
+    kb, db = stiffness[index], damping[index]
     if diagonal:
-        d = np.diag(np.diag(d))
-    return np.block([[np.zeros((k, k)), np.eye(k)], [-np.diag(omega2[modes]), -d]])
+        kb, db = np.diag(np.diag(kb)), np.diag(np.diag(db))
+    return np.block([[np.zeros((k, k)), np.eye(k)], [-kb, -db]])
 
 
 def _eigen(matrix: np.ndarray):
@@ -128,32 +133,38 @@ def _eigen(matrix: np.ndarray):
     return lam, vectors, np.linalg.inv(vectors)
 
 
-def linear_modal_part(omega2: np.ndarray, damping: np.ndarray, blocks: np.ndarray, state_size: int) -> ModalEigen:
+def linear_modal_part(omega2: np.ndarray, damping: np.ndarray, blocks: np.ndarray, state_size: int,
+                      stiffness: np.ndarray | None = None) -> ModalEigen:
     """``A`` diagonalised (module docstring) from the signed ``ω²`` [1/s²] (n,), the damping ``D`` [1/s] (n, n)
-    and its blocks ``[start, end)`` (:func:`~drillstring.dynamics.reduced.terms.diagonal_blocks`), for a state of
-    ``state_size`` ≥ 2n components."""
+    and its blocks ``[start, end)`` (:func:`~drillstring.dynamics.reduced.terms.diagonal_blocks`: every nonzero of
+    ``D`` and of the stiffness off its diagonal within one), for a state of ``state_size`` ≥ 2n components;
+    ``stiffness`` (n, n) in place of ``diag(ω²)`` when given (the bit law's position partials added)."""
     omega2 = np.asarray(omega2, dtype=float)
     n = omega2.shape[0]
-    groups, left_out = _groups(omega2, damping, np.asarray(blocks).reshape(-1, 2))
-    parts = []
-    pending = list(groups)
-    while pending:
-        modes = pending.pop(0)
-        found = _eigen(_block_matrix(omega2, damping, modes, diagonal=False))
-        if found is not None and len(modes) > 1 and np.max(np.abs(found[0])) < SLOW_BLOCK_RATE:
-            found = None  # slow: by its diagonal, which costs no dense transform
-        if found is None and len(modes) > 1:
-            for i in modes:  # the block by its diagonal
-                single = _eigen(_block_matrix(omega2, damping, [i], diagonal=True))
-                if single is None:
-                    left_out.append(i)
-                else:
-                    parts.append(([i], *single))
+    if stiffness is None:
+        stiffness = np.diag(omega2)
+    groups, rigid = _groups(omega2, np.asarray(blocks).reshape(-1, 2))
+    parts, left_out = [], []
+    for modes in groups:
+        found = _eigen(_block_matrix(stiffness, damping, modes, diagonal=False))
+        slow = found is not None and len(modes) > 1 and np.max(np.abs(found[0])) < SLOW_BLOCK_RATE
+        if found is not None and not slow:
+            parts.append((modes, *found))
             continue
-        if found is None:
-            left_out.append(modes[0])
-            continue
-        parts.append((modes, *found))
+        rest = [i for i in modes if i not in rigid]
+        if not slow and len(rest) < len(modes):  # ill-conditioned: whole without its rigid modes
+            found = _eigen(_block_matrix(stiffness, damping, rest, diagonal=False)) if rest else None
+            if found is not None or not rest:
+                left_out.extend(i for i in modes if i in rigid)
+                if found is not None:
+                    parts.append((rest, *found))
+                continue
+        for i in modes:  # by its diagonal (slow, or ill-conditioned): mode by mode
+            single = _eigen(_block_matrix(stiffness, damping, [i], diagonal=True))
+            if single is None:
+                left_out.append(i)
+            else:
+                parts.append(([i], *single))
     lam_all, weight_all, rows, mode_list, offsets, v_re, v_im, w_re, w_im = [], [], [], [], [], [], [], [], []
     offset = 0
     for modes, lam, vectors, inverse in parts:
@@ -236,26 +247,61 @@ def allocate(tableau: ExponentialTableau, n: int, eigen: ModalEigen | None = Non
         dense_stages=np.zeros((3, n)))
 
 
-_EIGEN_CACHE: dict = {}  # (id ω², id Dᵀ, state size) -> (ω², Dᵀ, ModalEigen): the arrays kept alive with it
+_EIGEN_CACHE: dict = {}  # key -> (the model's arrays, ModalEigen): the arrays kept alive with it
 
 
-def prepare(step: ExponentialStep, rhs_data) -> ExponentialStep:
+@njit(cache=True)
+def _law_partials(rhs_data, t, y, shapes, partials):
+    """The bit law's (and a downhole motor's) partial derivatives at ``(t, y)`` and the rows they act along
+    (:func:`~drillstring.dynamics.rom.stiff_part`, the implicit step's own)."""
+    stiff_part(rhs_data, t, y, shapes, partials)
+
+
+def bit_law_linearisation(rhs_data, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The bit–rock law's (and a downhole motor's) linear part at the state ``y`` at ``t`` [s], as modal
+    stiffness and damping ``(K_law, D_law)`` (n, n) [1/s², 1/s] to add to ``diag(ω²)`` and ``D``: with the
+    bit's axial and torsional rows ``b_u``, ``b_t``, the partials ``P`` of (force, torque) in (u̇, θ̇, u)
+    (:func:`~drillstring.dynamics.rom.stiff_part`) and the motor's ``m``, ``dT/dω_m``:
+    ``D_law = −[b_u b_t] P[:, :2] [b_u b_t]ᵀ − m (dT/dω_m) mᵀ``, ``K_law = −[b_u b_t] P[:, 2] b_uᵀ``
+    (the right-hand side's ``η̈ = … − K η − D η̇``)."""
+    d = rhs_data.rhs if isinstance(rhs_data, FullModelData) else rhs_data
+    n = d.omega2.shape[0]
+    shapes, partials = np.zeros((3, n)), np.zeros((3, 3))
+    _law_partials(rhs_data, float(t), np.ascontiguousarray(y, dtype=float), shapes, partials)
+    if not np.all(np.isfinite(partials)):
+        return np.zeros((n, n)), np.zeros((n, n))
+    rows = shapes[:2].T  # (n, 2): b_u, b_t
+    damping = -(rows @ partials[:2, :2] @ rows.T) - partials[2, 0] * np.outer(shapes[2], shapes[2])
+    stiffness = -np.outer(rows @ partials[:2, 2], shapes[0])
+    return stiffness, damping
+
+
+def prepare(step: ExponentialStep, rhs_data, t: float | None = None, y: np.ndarray | None = None) -> ExponentialStep:
     """``step`` with the linear part of the model whose right-hand-side data is ``rhs_data`` (case 2 or
-    case 1) diagonalised (:func:`linear_modal_part`; once per model's arrays)."""
+    case 1) diagonalised (:func:`linear_modal_part`): the modal part, and with :data:`LINEARISED_LAW` and a state
+    ``y`` at ``t`` [s] (the run's start) the bit law's linearisation there (:func:`bit_law_linearisation`);
+    cached for the model's arrays and the linearisation's values."""
     d = rhs_data.rhs if isinstance(rhs_data, FullModelData) else rhs_data
     n_state = step.k.shape[1]
-    key = (id(d.omega2), id(d.damping_t), n_state)
+    damping = np.asarray(d.damping_t).T
+    stiffness = np.diag(np.asarray(d.omega2, dtype=float))
+    if LINEARISED_LAW and y is not None:
+        law_stiffness, law_damping = bit_law_linearisation(rhs_data, 0.0 if t is None else t, y)
+        stiffness, damping = stiffness + law_stiffness, damping + law_damping
+    key = (id(d.omega2), id(d.damping_t), n_state, stiffness.tobytes(), damping.tobytes())
     hit = _EIGEN_CACHE.get(key)
     if hit is None or hit[0] is not d.omega2 or hit[1] is not d.damping_t:
         if len(_EIGEN_CACHE) > 16:
             _EIGEN_CACHE.clear()
-        damping = np.asarray(d.damping_t).T
-        eigen = linear_modal_part(d.omega2, damping, d.damping_blocks, n_state)
+        pattern = (damping != 0.0) | (stiffness - np.diag(np.diag(stiffness)) != 0.0)
+        blocks = diagonal_blocks(pattern.astype(float) + np.eye(pattern.shape[0]) * 0.0)
+        eigen = linear_modal_part(d.omega2, damping, blocks, n_state, stiffness)
         hit = _EIGEN_CACHE[key] = (d.omega2, d.damping_t, eigen)
     m = hit[2].lam.shape[0]
     return step._replace(eigen=hit[2], phi=np.zeros((step.nodes.shape[0], step.alpha.shape[2], m), np.complex128),
                          z=np.zeros((step.z.shape[0], m), np.complex128), nt=np.zeros((step.nt.shape[0], m),
-                                                                                        np.complex128))
+                                                                                        np.complex128),
+                         memo=np.array([math.nan]))
 
 
 @njit(cache=True)

@@ -22,8 +22,8 @@ A kind is one module that registers one :class:`StepKind` (:func:`register`):
   the new state (FSAL: its last stage), write it into ``f`` and return True, else return False and the loop
   evaluates it. (No right-hand-side data here: each compiled call passes the model's large structured data
   anew, which costs run time, see :func:`_implementation`);
-- optionally ``prepare(data, rhs_data) -> data``: Python, called once per run with the model's right-hand-side
-  data (:func:`step_data`): what the step reads of the model besides the right-hand side (the exponential step's
+- optionally ``prepare(data, rhs_data, t, y) -> data``: Python, called once per run with the model's
+  right-hand-side data and the run's start (:func:`step_data`; ``t``, ``y`` may be None): what the step reads of the model besides the right-hand side (the exponential step's
   diagonalised linear part, :mod:`drillstring.dynamics.steps.exponential`), in arrays of fixed types;
 - optionally ``reference(method, y)``: the NumPy reference of the same step for a right-hand side in Python,
   used by :class:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper` (the reference integrator's own loop):
@@ -59,7 +59,7 @@ class StepKind:
     attempt: Callable  # Numba-compilable, its parameters named as those of `attempt` below
     accept: Callable  # Numba-compilable, its parameters named as those of `accept` below
     reference: Callable[[Any, Any], Any] | None = None
-    prepare: Callable[[Any, Any], Any] | None = None  # (data, rhs_data) -> data: what the step reads of the model
+    prepare: Callable[..., Any] | None = None  # (data, rhs_data, t, y) -> data: what the step reads of the model
     cacheable: bool = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
@@ -93,14 +93,14 @@ def kind_of(method: Any) -> StepKind:
     raise TypeError(f"method {method!r}: no step kind is registered for {type(method).__name__} (known: {known})")
 
 
-def step_data(method: Any, n: int, rhs_data: Any = None) -> Any:
+def step_data(method: Any, n: int, rhs_data: Any = None, t: float | None = None, y: Any = None) -> Any:
     """The compiled loop's data for ``method`` and a state of ``n`` components; with the model's right-hand-side
-    data ``rhs_data``, what a kind with ``prepare`` reads of the model once per run (an exponential step's
-    diagonalised linear part) is set as well."""
+    data ``rhs_data`` (and the run's start ``t``, ``y``), what a kind with ``prepare`` reads of the model once
+    per run (an exponential step's diagonalised linear part) is set as well."""
     kind = kind_of(method)
     data = kind.allocate(method, n)
     if kind.prepare is not None and rhs_data is not None:
-        data = kind.prepare(data, rhs_data)
+        data = kind.prepare(data, rhs_data, t, y)
     return data
 
 
