@@ -7,7 +7,9 @@ each rtol of ``--rtols`` (multiples of the case's rtol, atol scaled with it), an
 steps and solver CPU time (one core, best of ``--repeat``). "At equal accuracy": for each method the cheapest
 of its runs whose records error is at most DOPRI5's at the case's rtol (×1.5); the ratios are against DOPRI5
 at the case's rtol, measured in the same process. ``--compile`` adds the cold compile time [s] of the step loop
-per method (a fresh Numba cache in a child process, ``compile_time`` of a 0.01 s run), for the case 2 model.
+per method (a fresh Numba cache in a child process, ``compile_time`` of a 0.01 s run), for the case 2 model;
+``--law-in-a`` runs the exponential step with the bit law's linearisation at the run's start in ``A`` (the
+measured alternative, :data:`drillstring.dynamics.steps.exponential.LINEARISED_LAW`).
 
     PYTHONPATH=src python benchmarks/bench_exponential.py [--cases reference,contact] [--t-end 5] [--compile]
 """
@@ -80,7 +82,13 @@ def main() -> None:
     parser.add_argument("--t-end", type=float, default=None, help="default: the case's")
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--compile", action="store_true")
+    parser.add_argument("--law-in-a", action="store_true",
+                        help="the measured alternative: the bit law's linearisation at each run's start in A")
     args = parser.parse_args()
+    if args.law_in_a:
+        from drillstring.dynamics.steps import exponential
+
+        exponential.LINEARISED_LAW = True
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
     methods = args.methods.split(",")

@@ -38,7 +38,7 @@ METHODS = typing.get_args(Simulation.model_fields["method"].annotation)
 
 def test_every_simulation_method_runs_through_simulate_and_agrees():
     reference_case = drillstring.load_case("reference")
-    assert set(METHODS) == {"dopri5", "bs32", "ark43", "ark32"}
+    assert set(METHODS) == {"dopri5", "bs32", "ark43", "ark32", "erk32"}
     mesh = reference_case.mesh.model_copy(update={"max_element_length": 40.0})
     runs = {}
     for method in METHODS:
@@ -49,7 +49,7 @@ def test_every_simulation_method_runs_through_simulate_and_agrees():
     # a 3rd-order method takes more steps than the 5th-order one for the same tolerance ...
     assert runs["bs32"].attrs["solver_n_accepted"] > 2 * runs["dopri5"].attrs["solver_n_accepted"]
     # ... and both solve the same equations
-    for method in ("bs32", "ark43", "ark32"):
+    for method in ("bs32", "ark43", "ark32", "erk32"):
         for name in ("rate_of_penetration", "bit_speed", "torque_on_bit"):
             a, b = runs[method][name].values, runs["dopri5"][name].values
             assert np.max(np.abs(a - b)) <= 1e-6 * np.max(np.abs(b)), (method, name)  # observed: <= 4e-8

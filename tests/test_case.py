@@ -364,7 +364,7 @@ def test_refuses_bad_choice(data):
     data["simulation"]["method"] = "rk4"
     data["model"]["nonlinear"] = "some"
     err = refused(data)
-    assert_problem(err, "simulation.method", "'rk4'", "dopri5", "bs32", "ark43", "ark32")
+    assert_problem(err, "simulation.method", "'rk4'", "dopri5", "bs32", "ark43", "ark32", "erk32")
     assert_problem(err, "model.nonlinear", "'some'", "bit_and_contact", "full")
 
 
