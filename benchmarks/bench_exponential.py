@@ -9,7 +9,10 @@ of its runs whose records error is at most DOPRI5's at the case's rtol (×1.5); 
 at the case's rtol, measured in the same process. ``--compile`` adds the cold compile time [s] of the step loop
 per method (a fresh Numba cache in a child process, ``compile_time`` of a 0.01 s run), for the case 2 model;
 ``--law-in-a`` runs the exponential step with the bit law's linearisation at the run's start in ``A`` (the
-measured alternative, :data:`drillstring.dynamics.steps.exponential.LINEARISED_LAW`).
+measured alternative, :data:`drillstring.dynamics.steps.exponential.LINEARISED_LAW`); ``--refresh S`` with it runs
+the exponential step as a sequence of :func:`~drillstring.dynamics.compiled.advance` calls of ``S`` seconds each,
+so that ``A`` holds the law's linearisation at the start of each (an experiment: the state of a continued run
+carries the controller, but the bit's history is the model's start's, right only for a law without delay).
 
     PYTHONPATH=src python benchmarks/bench_exponential.py [--cases reference,contact] [--t-end 5] [--compile]
 """
@@ -54,6 +57,38 @@ def run(model, case, method: str, rtol: float, t_end: float, repeat: int):
     return best, best_cpu
 
 
+def segmented(model, case, rtol: float, t_end: float, seconds: float):
+    """The exponential step in ``advance`` calls of ``seconds`` each (``--refresh``): (observables by name,
+    CPU [s], stats summed)."""
+    from drillstring.dynamics.compiled import RunState, SolverSettings, advance
+    from drillstring.dynamics.rom import OBSERVABLES
+
+    s = case.simulation
+    grid = np.arange(0.0, t_end + 1e-12, s.output_step)
+    state = RunState.start(model, model.initial_state(case.initial.lateral_perturbation, case.initial.seed))
+    solver = SolverSettings("erk32", rtol, s.atol * rtol / s.rtol, max_steps=20_000_000)
+    rows, stats = [], {"n_rhs": 0, "n_accepted": 0, "n_rejected": 0, "status": "success"}
+    start = time.process_time()
+    for edge in np.append(np.arange(seconds, t_end, seconds), t_end):
+        times = grid[(grid >= state.t) & (grid <= edge)] if not rows else grid[(grid > state.t) & (grid <= edge)]
+        run = advance(model, solver, state, float(edge), output_times=times)
+        rows.append(run.outputs)
+        for key in ("n_rhs", "n_accepted", "n_rejected"):
+            stats[key] += run.stats[key]
+        if not run.success:
+            stats["status"] = "failed"
+            break
+        state = run.state
+    cpu = time.process_time() - start
+    out = np.vstack(rows)
+    return {name: out[:, k] for k, name in enumerate(OBSERVABLES)}, cpu, stats
+
+
+class _Observed:
+    def __init__(self, time_axis, observables):
+        self.time, self.observables = time_axis, observables
+
+
 def records(a, b) -> float:
     n = min(len(a.time), len(b.time))
     if n == 0:
@@ -82,6 +117,7 @@ def main() -> None:
     parser.add_argument("--t-end", type=float, default=None, help="default: the case's")
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--compile", action="store_true")
+    parser.add_argument("--refresh", type=float, default=None, help="seconds per advance call (with --law-in-a)")
     parser.add_argument("--law-in-a", action="store_true",
                         help="the measured alternative: the bit law's linearisation at each run's start in A")
     args = parser.parse_args()
@@ -118,8 +154,18 @@ def main() -> None:
                 status = "" if st["status"] == "success" else f"  FAILED: {result.message[:100]}"
                 print(f"  {method:7s} rtol {rtol * factor:7.1e}: CPU {cpu:7.3f} s  RHS {st['n_rhs']:>9d}  steps "
                       f"{st['n_accepted']:>8d}+{st['n_rejected']:<5d} records error {error:.2e}{status}", flush=True)
+        extra = [f"erk32/{args.refresh:g}s"] if args.refresh else []
+        if args.refresh:
+            for factor in factors:
+                observed, cpu, st = segmented(model, case, rtol * factor, t_end, args.refresh)
+                result = _Observed(np.arange(len(observed[RECORDS[0]])) * case.simulation.output_step, observed)
+                error = records(result, tight)
+                rows[(f"erk32/{args.refresh:g}s", factor)] = (cpu, error, st)
+                print(f"  erk32, A re-linearised every {args.refresh:g} s, rtol {rtol * factor:7.1e}: CPU {cpu:7.3f} s "
+                      f" RHS {st['n_rhs']:>9d}  steps {st['n_accepted']:>8d}+{st['n_rejected']:<5d} records error "
+                      f"{error:.2e} {st['status']}", flush=True)
         base_cpu, base_error, _ = rows[("dopri5", 1.0)] if ("dopri5", 1.0) in rows else (np.nan, np.nan, None)
-        for method in methods:
+        for method in methods + extra:
             fits = [(cpu, f, e) for (m, f), (cpu, e, st) in rows.items()
                     if m == method and st["status"] == "success" and e <= 1.5 * base_error]
             if fits:
