@@ -26,6 +26,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import resource  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -97,16 +98,20 @@ def records(a, b) -> float:
                      / max(np.max(np.abs(b.observables[k][:n])), 1e-300)) for k in RECORDS)
 
 
-def cold_compile(method: str) -> float:
-    """compile_time [s] of a 0.01 s reference run with ``method`` in a fresh Numba cache (child process)."""
+def cold_compile(method: str) -> tuple[float, float]:
+    """compile_time [s] of a 0.01 s reference run with ``method`` in a fresh Numba cache (child process), and
+    the child's whole CPU time [s] (user + system: the machine is shared, wall times under load mislead)."""
     code = ("import json; from drillstring.case import load_case; from drillstring.dynamics.rom import "
             "case_reduced_model; from drillstring.dynamics.simulate import simulate_model; c = load_case('reference');"
             f" r = simulate_model(case_reduced_model(c), t_end=0.01, output_step=0.01, method={method!r});"
             " print(json.dumps(r.stats['compile_time']))")
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    return float(json.loads(out.stdout.strip().splitlines()[-1]))
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return float(json.loads(out.stdout.strip().splitlines()[-1])), cpu
 
 
 def main() -> None:
@@ -130,8 +135,11 @@ def main() -> None:
     methods = args.methods.split(",")
     factors = [float(x) for x in args.rtols.split(",")]
     if args.compile:
-        for method in methods:
-            print(f"cold compile (reference, case 2) {method}: {cold_compile(method):.1f} s", flush=True)
+        for _ in range(args.repeat):  # the methods alternating
+            for method in methods:
+                wall, cpu = cold_compile(method)
+                print(f"cold compile (reference, case 2) {method}: compile_time {wall:.1f} s, process CPU {cpu:.1f} s",
+                      flush=True)
     for label in args.cases.split(","):
         name, nonlinear = CASES[label]
         case = load_case(name)
