@@ -52,7 +52,7 @@ def run(model, case, method: str, rtol: float, t_end: float, repeat: int):
                                 atol=s.atol * rtol / s.rtol, method=method, raise_on_failure=False,
                                 lateral_perturbation=case.initial.lateral_perturbation, seed=case.initial.seed,
                                 max_steps=20_000_000)
-        cpu = time.process_time() - start - result.stats.get("compile_time", 0.0)
+        cpu = time.process_time() - start  # the kernels compiled beforehand (main): a cache hit costs ~ms
         if cpu < best_cpu:
             best, best_cpu = result, cpu
     return best, best_cpu
