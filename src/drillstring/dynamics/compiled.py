@@ -4,7 +4,9 @@ The loop is split from the step. The *step* — its stages, its local error esti
 a step kind of :mod:`drillstring.dynamics.steps`, chosen by the type of the method's data when the loop is
 compiled (:mod:`drillstring.dynamics.steps.explicit_rk` for a
 :class:`~drillstring.dynamics.runge_kutta.ButcherTableau`, :mod:`drillstring.dynamics.steps.imex_ark` for an
-:class:`~drillstring.dynamics.additive_rk.AdditiveTableau`: the stiff part implicit).
+:class:`~drillstring.dynamics.additive_rk.AdditiveTableau`: the stiff part implicit;
+:mod:`drillstring.dynamics.steps.exponential` for an :class:`~drillstring.dynamics.exponential_rk.ExponentialTableau`:
+the linear modal part exact, its data prepared from the run's model data and start).
 The *loop* (:func:`_run_chunk`) owns the rest: the step-size controller — the compiled functions
 :func:`~drillstring.dynamics.runge_kutta.error_norm` and :func:`~drillstring.dynamics.runge_kutta.step_factor`,
 shared with the reference integrator :func:`~drillstring.dynamics.runge_kutta.integrate` —, acceptance, landing

@@ -242,7 +242,8 @@ def allocate(tableau: ExponentialTableau, n: int, eigen: ModalEigen | None = Non
         c=c(tableau.c), alpha=c(tableau.alpha), beta=c(tableau.beta), error_weights=c(tableau.error_weights),
         a_zero=c(a0), b_zero=c(b0), e_zero=c(e0), nodes=np.array(positive), node_of=node_of, eigen=eigen,
         phi=np.zeros((len(positive), count, m), dtype=np.complex128), z=np.zeros((s + 2, m), dtype=np.complex128),
-        nt=np.zeros((s, m), dtype=np.complex128), k=np.zeros((s, n)), f_new=np.zeros(n), local=np.zeros(n), delta=np.zeros(n),
+        nt=np.zeros((s, m), dtype=np.complex128), k=np.zeros((s, n)), f_new=np.zeros(n), local=np.zeros(n),
+        delta=np.zeros(n),
         memo=np.array([math.nan]), order=float(tableau.controller_order), dense=HERMITE.copy(),
         dense_stages=np.zeros((3, n)))
 

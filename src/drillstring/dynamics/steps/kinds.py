@@ -23,8 +23,9 @@ A kind is one module that registers one :class:`StepKind` (:func:`register`):
   evaluates it. (No right-hand-side data here: each compiled call passes the model's large structured data
   anew, which costs run time, see :func:`_implementation`);
 - optionally ``prepare(data, rhs_data, t, y) -> data``: Python, called once per run with the model's
-  right-hand-side data and the run's start (:func:`step_data`; ``t``, ``y`` may be None): what the step reads of the model besides the right-hand side (the exponential step's
-  diagonalised linear part, :mod:`drillstring.dynamics.steps.exponential`), in arrays of fixed types;
+  right-hand-side data and the run's start (:func:`step_data`; ``t``, ``y`` may be None): what the step reads of
+  the model besides the right-hand side (the exponential step's diagonalised linear part,
+  :mod:`drillstring.dynamics.steps.exponential`), in arrays of fixed types;
 - optionally ``reference(method, y)``: the NumPy reference of the same step for a right-hand side in Python,
   used by :class:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper` (the reference integrator's own loop):
   an object with ``order``, ``dense``, ``dense_stages`` as above, ``attempt(rhs, t, h, y, f) -> (y_new, err,
