@@ -66,6 +66,7 @@ from drillstring.stochastic.runs import (
     realization_metrics,
     simulation_options,
 )
+from drillstring.stochastic.study_model import realization_model, study_model_note
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
 from drillstring.units import display_unit, quantity_text
@@ -355,7 +356,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         realized = law.apply(case, values)
         outcome.weight_on_hook = realized.weight_on_hook
         outcome.weight_on_bit = realized.operation.weight_on_bit
-        model = case_reduced_model(realized)
+        model = realization_model(case, (case.to_toml(), settings), law, realized, nominal=index == NOMINAL)
         if index != NOMINAL:
             model = random_reduced_model(model, settings.model, model_generator(settings.seed, index))
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
@@ -519,6 +520,9 @@ def run_study(case: Case, settings: StudySettings, store_path: str | Path, engin
     runs on it). :func:`~drillstring.stochastic.execution.run_locked` does the rest.
     """
     check_study(case, settings)
+    model_note = study_model_note(case, (case.to_toml(), settings), study_uncertainty(case, settings))
+    if model_note is not None and engine.note is not None:
+        engine.note(model_note)
 
     def pending(store: StudyStore):
         return [(i, i) for i in ([] if store.nominal_done() else [NOMINAL]) + store.pending()]

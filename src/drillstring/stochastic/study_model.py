@@ -1,0 +1,128 @@
+"""The reduced model of each realization of a study, built once per study and worker process (issue 35).
+
+Rebuilding the model of every realization (:func:`~drillstring.dynamics.reduced.build.case_reduced_model`:
+statics, the linear system, every family's modes and the free–free damping's dense eigenproblems) costs about a
+sixth of the realization on the reference study. When the study's random parameters enter the model in a known
+way, :class:`~drillstring.dynamics.reduced.parametric.ParametricReducedModel` is built once (per study and per
+worker process, :func:`parametric_model`) and gives each realization's model in a few milliseconds:
+
+- **prestress** (:data:`PRESTRESS_PATHS`): the weight-on-hook or the weight-on-bit, which move the static axial
+  force and the geometric stiffness affinely; the model is built over the range of weights-on-bit that the
+  study's law gives with probability ``1 − 2·`` :data:`RANGE_TAIL` (about ±6 σ for a Normal law); a draw outside it
+  is rebuilt;
+- **force laws** (:data:`FORCE_PREFIXES`): the parameters of the bit–rock law, the contact law, the start
+  (``initial``) and the integrator (``simulation``), which the model takes from the realized case as the
+  rebuild does.
+
+Any other random parameter (the geometry, the materials, the mud, the top speed, the damping, the mesh, ...)
+changes the linear system in ways the parametric form does not cover: such a study rebuilds every realization
+(:func:`coverage` says why; the study notes it once). The nominal run is always rebuilt (the deterministic run
+at the means, as ``drillstring simulate`` would build it).
+
+The model equals the rebuilt one to round-off in its axial and torsional parts and to the Ritz error of the
+lateral modes (below :data:`~drillstring.dynamics.reduced.parametric.RITZ_TOLERANCE`, checked when built): a
+realization's time histories differ from the rebuilt model's at that level, far below the digits a study prints
+(tests/stochastic/test_study_model.py, benchmarks/bench_study_parametric.py). The study store's fingerprint
+(case and settings) does not name the recipe: a study resumed across the change mixes realizations that agree
+to that level.
+
+Setting the environment variable :data:`REBUILD_VARIABLE` to ``1`` (read when a realization runs, inherited by
+the worker processes) rebuilds every realization as before: for comparisons and benchmarks.
+"""
+
+from __future__ import annotations
+
+import os
+
+from drillstring.case import Case
+from drillstring.dynamics.reduced.build import case_reduced_model
+from drillstring.dynamics.reduced.model import ReducedOrderModel
+from drillstring.dynamics.reduced.parametric import NotCovered, ParametricReducedModel
+from drillstring.stochastic.parameters import WEIGHT_ON_HOOK
+from drillstring.stochastic.uncertainty import Uncertainty
+
+#: The random parameters that enter the model through the prestress (the static axial force).
+PRESTRESS_PATHS = (WEIGHT_ON_HOOK, "operation.weight_on_bit")
+#: The tables whose parameters enter the model only through laws built from the realized case.
+FORCE_PREFIXES = ("bit_rock.", "contact.", "initial.", "simulation.")
+#: Probability of each tail of the weight-on-bit's law left outside the parametric model's range.
+RANGE_TAIL = 1e-9
+#: Environment variable: ``1`` rebuilds every realization's model (the recipe before the parametric model).
+REBUILD_VARIABLE = "DRILLSTRING_STUDY_REBUILD"
+
+#: Built parametric models (or the reason there is none) by study, in this process.
+_MODELS: dict[tuple, ParametricReducedModel | str] = {}
+
+
+def coverage(case: Case, law: Uncertainty) -> str | None:
+    """None when every random parameter of ``law`` is covered by the parametric model (module docstring), else
+    why not (one sentence, naming the first parameter that is not)."""
+    for path in law.paths:
+        if path in PRESTRESS_PATHS or path.startswith(FORCE_PREFIXES):
+            continue
+        return (f"{path} changes the linear system beyond the prestress: every realization's reduced model is "
+                "rebuilt (slower)")
+    return None
+
+
+def weight_on_bit_range(case: Case, law: Uncertainty) -> tuple[float, float]:
+    """The weights-on-bit [N] the study's law gives with probability ``1 − 2 RANGE_TAIL``, within
+    ``[0, case.weight]``, and holding the case's own; the case's weight-on-bit ± 1 N when it is not random."""
+    w0 = float(case.operation.weight_on_bit)
+    low, high = w0, w0
+    for path, parameter in zip(law.paths, law.parameters):
+        if path not in PRESTRESS_PATHS:
+            continue
+        density = parameter.law.density
+        ends = (float(density.ppf(RANGE_TAIL)), float(density.ppf(1.0 - RANGE_TAIL)))
+        if path == WEIGHT_ON_HOOK:
+            ends = (case.weight - ends[1], case.weight - ends[0])
+        low, high = min(low, ends[0]), max(high, ends[1])
+    low, high = max(low, 0.0), min(high, case.weight)
+    if not low < high:
+        low, high = max(w0 - 1.0, 0.0), w0 + 1.0
+    return low, high
+
+
+def parametric_model(case: Case, key, law: Uncertainty) -> ParametricReducedModel | str:
+    """The study's parametric model, built once per ``key`` (the study: case and settings) in this process, or
+    the reason there is none (:func:`coverage`, or the parametric form's own refusal)."""
+    if key in _MODELS:
+        return _MODELS[key]
+    reason = coverage(case, law)
+    if reason is None:
+        try:
+            found: ParametricReducedModel | str = ParametricReducedModel(case, *weight_on_bit_range(case, law))
+        except NotCovered as error:
+            found = f"{error}: every realization's reduced model is rebuilt (slower)"
+    else:
+        found = reason
+    if len(_MODELS) > 4:
+        _MODELS.clear()
+    _MODELS[key] = found
+    return found
+
+
+def realization_model(case: Case, key, law: Uncertainty, realized: Case, *, nominal: bool = False
+                      ) -> ReducedOrderModel:
+    """The reduced model of the realized case ``realized`` of the study ``key`` on ``case``: from the study's
+    parametric model when it covers the draw, else rebuilt (:func:`case_reduced_model`), as always for the
+    nominal run and when :data:`REBUILD_VARIABLE` is set."""
+    if nominal or os.environ.get(REBUILD_VARIABLE) == "1":
+        return case_reduced_model(realized)
+    found = parametric_model(case, key, law)
+    if isinstance(found, str):
+        return case_reduced_model(realized)
+    try:
+        return found.model(realized)
+    except NotCovered:  # a draw outside the built range (probability about 2e-9 per draw)
+        return case_reduced_model(realized)
+
+
+def study_model_note(case: Case, key, law: Uncertainty) -> str | None:
+    """The study's note on its models: None when the parametric model covers it, else why every realization is
+    rebuilt (built here, in the calling process, and kept for its realizations)."""
+    if os.environ.get(REBUILD_VARIABLE) == "1":
+        return None
+    found = parametric_model(case, key, law)
+    return found if isinstance(found, str) else None

@@ -1,0 +1,93 @@
+"""Each realization's reduced model in a study (stochastic/study_model.py): the parametric model where the random
+parameters are covered, a rebuild otherwise; a realization's outputs against the rebuilding recipe."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from drillstring.dynamics.reduced.parametric import ParametricReducedModel
+from drillstring.dynamics.rom import case_reduced_model
+from drillstring.stochastic import montecarlo as mc
+from drillstring.stochastic import study_model
+from drillstring.stochastic.store import DONE
+
+
+def settings(case, laws, **kwargs):
+    return mc.StudySettings(laws=laws, **{"samples": 4, "seed": 3, "t_end": 1.0, "output_step": 0.05, **kwargs})
+
+
+def test_coverage_names_the_parameter_outside(small_case):
+    covered = settings(small_case, (mc.weight_on_hook_normal(small_case, 5000.0), ("bit_rock.a2", "normal 5.6e-8 1e-9"),
+                                    ("contact.friction_coefficient", "uniform 0.0004 0.0006")))
+    assert study_model.coverage(small_case, mc.study_uncertainty(small_case, covered)) is None
+    geometry = settings(small_case, (mc.weight_on_hook_normal(small_case, 5000.0),
+                                     ("sections[0].outer_diameter", "uniform 0.126 0.128")))
+    reason = study_model.coverage(small_case, mc.study_uncertainty(small_case, geometry))
+    assert reason is not None and "sections[0].outer_diameter" in reason and "rebuilt" in reason
+
+
+def test_weight_on_bit_range_of_a_normal_weight_on_hook(small_case):
+    sigma = 5000.0
+    law = mc.study_uncertainty(small_case, settings(small_case, (mc.weight_on_hook_normal(small_case, sigma),)))
+    low, high = study_model.weight_on_bit_range(small_case, law)
+    z = -norm.ppf(study_model.RANGE_TAIL)  # about 6.0
+    wob = small_case.operation.weight_on_bit
+    assert low == pytest.approx(wob - z * sigma, rel=1e-6)
+    assert high == pytest.approx(wob + z * sigma, rel=1e-6)
+
+
+def test_geometry_changing_input_falls_back_to_a_rebuild(small_case):
+    study = settings(small_case, (mc.weight_on_hook_normal(small_case, 5000.0),
+                                  ("sections[1].outer_diameter", "uniform 0.2 0.23")))
+    law = mc.study_uncertainty(small_case, study)
+    key = (small_case.to_toml(), study)
+    note = study_model.study_model_note(small_case, key, law)
+    assert note is not None and "sections[1].outer_diameter" in note
+    realized = law.apply(small_case, mc.draw_inputs(small_case, study, 0))
+    found = study_model.realization_model(small_case, key, law, realized)
+    exact = case_reduced_model(realized)
+    assert np.array_equal(found.basis, exact.basis) and np.array_equal(found.damping, exact.damping)
+
+
+def test_covered_study_uses_one_parametric_model_per_study(small_case):
+    study = settings(small_case, (mc.weight_on_hook_normal(small_case, 5000.0),))
+    law = mc.study_uncertainty(small_case, study)
+    key = (small_case.to_toml(), study)
+    assert study_model.study_model_note(small_case, key, law) is None
+    built = study_model.parametric_model(small_case, key, law)
+    assert isinstance(built, ParametricReducedModel)
+    assert study_model.parametric_model(small_case, key, law) is built  # kept for the study's realizations
+    other = settings(small_case, (mc.weight_on_hook_normal(small_case, 8000.0),))
+    assert study_model.parametric_model(small_case, (small_case.to_toml(), other),
+                                        mc.study_uncertainty(small_case, other)) is not built
+    # a draw outside the built range: rebuilt, exactly
+    realized = law.apply(small_case, [small_case.weight - built.range[1] - 100.0])
+    found = study_model.realization_model(small_case, key, law, realized)
+    assert np.array_equal(found.basis, case_reduced_model(realized).basis)
+
+
+def test_realization_equals_the_rebuilding_recipe(small_case, monkeypatch):
+    """Two realizations and the nominal run of a weight-on-hook study with model uncertainty: the same draws,
+    the same random matrices, and outputs equal to the rebuilt model's to 1e-6 of each series' range."""
+    study = settings(small_case, (mc.weight_on_hook_normal(small_case, 5000.0),), model_dispersion=(0.05, 0.05, 0.1))
+    key, law = (small_case.to_toml(), study), mc.study_uncertainty(small_case, study)
+    assert isinstance(study_model.parametric_model(small_case, key, law), ParametricReducedModel)  # not a fallback
+    for index in (mc.NOMINAL, 0, 1):
+        found = mc.run_realization(small_case, study, index)
+        monkeypatch.setenv(study_model.REBUILD_VARIABLE, "1")
+        exact = mc.run_realization(small_case, study, index)
+        monkeypatch.delenv(study_model.REBUILD_VARIABLE)
+        assert found.status == exact.status == DONE, (found.message, exact.message)
+        assert found.weight_on_bit == exact.weight_on_bit
+        np.testing.assert_array_equal(found.inputs, exact.inputs)
+        for name, series in exact.observables.items():
+            scale = np.abs(series).max()
+            assert np.abs(found.observables[name] - series).max() <= 1e-6 * scale, name
+        for name, value in exact.metrics.items():
+            if math.isfinite(value):
+                assert found.metrics[name] == pytest.approx(value, rel=1e-6, abs=1e-12), name
+        assert found.lowest_lateral_eigenvalue == pytest.approx(exact.lowest_lateral_eigenvalue, rel=1e-6)
