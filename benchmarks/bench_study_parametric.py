@@ -1,6 +1,7 @@
 """Benchmark: the reference Monte Carlo study (weight-on-hook Normal, σ = 5 kN) with each realization's model
-rebuilt (the recipe before issue 35) and from the study's parametric model (dynamics/reduced/parametric.py), in
-the same run.
+rebuilt and each realization written to the store alone (the recipe before issue 35, "rebuild") and with the
+models from the study's parametric model (dynamics/reduced/parametric.py) and the store's batched writes
+("parametric"), in the same run.
 
 Prints, per recipe: the stages of a realization measured in this process (draw, law.apply, model, random
 matrices, growth rates, simulation, metrics; mean over ``--profile`` realizations, one BLAS thread as in the
@@ -45,12 +46,19 @@ from drillstring.stochastic.runs import (  # noqa: E402
 RECIPES = ("rebuild", "parametric")
 
 
+#: The study store's flush interval of this tree (the new recipe's); main wrote each realization alone (0).
+FLUSH_INTERVAL = mc.StudyStore.flush_interval
+
+
 def recipe(name: str) -> None:
-    """Select a recipe for this process and the workers it spawns."""
+    """Select a recipe for this process and the workers it spawns: "rebuild" is main's (every model rebuilt,
+    each realization written to the store alone), "parametric" this tree's."""
     if name == "rebuild":
         os.environ[study_model.REBUILD_VARIABLE] = "1"
+        mc.StudyStore.flush_interval = 0.0
     else:
         os.environ.pop(study_model.REBUILD_VARIABLE, None)
+        mc.StudyStore.flush_interval = FLUSH_INTERVAL
 
 
 def stages(case, settings, count: int) -> dict[str, dict[str, float]]:
@@ -133,6 +141,35 @@ def store_write_cost(case, settings, batch: int) -> tuple[float, float]:
         store.write_many(rows[batch:])
         grouped = (time.perf_counter() - start) / batch
     return single, grouped
+
+
+def _empty_realization(case, settings, index: int):
+    """A task that computes nothing and returns an outcome of a reference realization's size (30 s at 0.01 s:
+    4 observables and one probe): what the process pool moves per realization."""
+    from drillstring.stochastic.store import DONE
+
+    n = len(settings.time)
+    outcome = mc.RealizationOutcome(index, 0.0, 0.0, DONE, "")
+    outcome.observables = {name: np.full(n, float(index)) for name in mc.study_observables(case)}
+    outcome.radial_displacement = np.zeros((n, len(case.mesh.probes)))
+    return outcome
+
+
+def task_overhead(case, settings, workers: int) -> float:
+    """Seconds of wall time per task that the process pool adds (sending the case and settings, returning the
+    outcome): empty tasks, 400 against 40, so that the pool's start-up cancels (issue 35 item 3: batching
+    realizations per worker call can save at most this)."""
+    from functools import partial
+
+    from drillstring.stochastic.execution import execute
+
+    walls = []
+    for n in (40, 400):
+        start = time.perf_counter()
+        execute(partial(_empty_realization, case, settings), [(i, i) for i in range(n)], lambda outcome: None,
+                workers=workers)
+        walls.append(time.perf_counter() - start)
+    return (walls[1] - walls[0]) / 360
 
 
 def documented_table(path: Path) -> list[str] | None:
@@ -225,10 +262,15 @@ def main() -> None:
     print(f"  build speed-up {profiles['rebuild']['model'] / profiles['parametric']['model']:.1f}x; realization "
           f"speed-up {sum(profiles['rebuild'].values()) / sum(profiles['parametric'].values()):.2f}x")
 
+    recipe("parametric")
     batch = min(8, args.samples // 2)
     single, grouped = store_write_cost(case, settings, batch)
     print(f"store write in the driver: {1e3 * single:.1f} ms per realization written alone, {1e3 * grouped:.1f} ms "
           f"in a batch of {batch} (the study store's flush_interval = {mc.StudyStore.flush_interval:g} s gathers them)")
+
+    overhead = task_overhead(case, settings, args.workers)
+    print(f"process pool: {1e3 * overhead:.2f} ms of wall time per task (empty tasks returning a realization's "
+          f"outcome, {args.workers} workers): batching realizations per worker call could save at most that")
 
     results = {}
     for name in RECIPES:
@@ -253,13 +295,12 @@ def main() -> None:
     documented = documented_table(Path(__file__).resolve().parents[1] / "docs" / "studies" / "summary_sigma5000.json")
     if documented is not None and args.samples == 500:
         for name in RECIPES:
-            lines = results[name][1].splitlines()
-            same = sum(a == b for a, b in zip(lines, documented))
+            lines = set(results[name][1].splitlines())
+            missing = [line for line in documented if line not in lines]
             print(f"against docs/studies/summary_sigma5000.json (the documented 500-realization study), {name}: "
-                  f"{same} of {len(documented)} printed lines identical")
-            for a, b in zip(lines, documented):
-                if a != b:
-                    print(f"  {name}:{' ' * (11 - len(name))}{a}\n  documented: {b}")
+                  f"{len(documented) - len(missing)} of its {len(documented)} printed lines found identical")
+            for line in missing:
+                print(f"  documented, not printed by {name}: {line}")
     if args.sobol:
         sobol_cost(args.sobol)
     print(load_average("end"))
