@@ -13,7 +13,8 @@ With ``--sobol`` also the build and solve cost of runs of the 3-parameter Sobol'
 bench_sensitivity.py), which the parametric model does not cover (inlet velocity and top speed change the
 linear system and the forcing). Run:
 
-    .venv/bin/python benchmarks/bench_study_parametric.py [--samples 500] [--workers 2] [--profile 10] [--sobol]
+    .venv/bin/python benchmarks/bench_study_parametric.py [--samples 500] [--workers 2] [--profile 10] [--repeat 1]
+        [--sobol 4]
 """
 
 from __future__ import annotations
@@ -240,6 +241,7 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=500)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--profile", type=int, default=10, help="realizations timed stage by stage per recipe")
+    parser.add_argument("--repeat", type=int, default=1, help="studies per recipe, alternating (fastest kept)")
     parser.add_argument("--sobol", type=int, default=0, help="also time this many Sobol' runs (build vs solve)")
     args = parser.parse_args()
     case = load_case("reference")
@@ -273,15 +275,18 @@ def main() -> None:
           f"outcome, {args.workers} workers): batching realizations per worker call could save at most that")
 
     results = {}
-    for name in RECIPES:
-        recipe(name)
-        results[name] = study(case, settings, args.workers)
-        wall, _, _, realization = results[name]
-        print(f"study, {name:10s}: wall {wall:7.1f} s ({(args.samples + 1) / wall:5.2f} realizations/s); mean "
-              f"realization time in the store {1e3 * realization:.1f} ms")
+    for repeat in range(args.repeat):  # the recipes alternate: the machine's load drifts
+        for name in RECIPES:
+            recipe(name)
+            found = study(case, settings, args.workers)
+            wall, _, _, realization = found
+            print(f"study, {name:10s}: wall {wall:7.1f} s ({(args.samples + 1) / wall:5.2f} realizations/s); mean "
+                  f"realization time in the store {1e3 * realization:.1f} ms")
+            if name not in results or wall < results[name][0]:
+                results[name] = found
     recipe("parametric")
     ratio = results["rebuild"][0] / results["parametric"][0]
-    print(f"study wall-time ratio rebuild/parametric: {ratio:.2f}x (issue 35 asks >= 10x and <= 20 s: "
+    print(f"study wall-time ratio rebuild/parametric (fastest of {args.repeat} each): {ratio:.2f}x (issue 35 asks >= 10x and <= 20 s: "
           f"{'met' if ratio >= 10 and results['parametric'][0] <= 20 else 'NOT met'})")
 
     old, new = (results[name][1].splitlines() for name in RECIPES)

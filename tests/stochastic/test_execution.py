@@ -108,3 +108,15 @@ def test_run_locked_in_passes_each_choosing_from_what_the_previous_wrote(tmp_pat
     assert len(store.sessions) == 2  # the empty pass recorded no session
     with pytest.raises(TypeError, match="one of pending and passes"):
         execution.run_locked(tmp_path / "other", lambda: store, lambda s: [], square, passes=passes)
+
+
+def test_batches_hold_at_most_the_store_flush_count():
+    """A store that asks for batches (a long flush_interval) gets them no larger than its flush_count, the last
+    one at the end of the run; every outcome written once."""
+    store = Memory(7)
+    store.flush_interval, store.flush_count = 1e9, 3
+    sizes = []
+    write = store.write_many
+    store.write_many = lambda outcomes: (sizes.append(len(outcomes)), write(outcomes))
+    execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(7)], workers=1)
+    assert sizes == [3, 3, 1] and sorted(store.rows) == list(range(7))

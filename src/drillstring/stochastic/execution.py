@@ -334,7 +334,8 @@ def run_tasks(
 
     ``store`` provides ``counts() -> (done, failed)``, ``total`` (items of the whole run),
     ``write_many(outcomes)``, ``record_session(started, wall_time, count, workers)``, ``path`` and
-    optionally ``flush_interval`` [s] (default :data:`FLUSH_INTERVAL`; 0 writes each outcome at once).
+    optionally ``flush_interval`` [s] (default :data:`FLUSH_INTERVAL`; 0 writes each outcome at once) and
+    ``flush_count`` (a batch is written once it holds that many outcomes, however recent; default no limit).
     Items with an index outside ``[0, total)`` (a study's nominal run) are written but not counted.
     ``client`` (a ``distributed.Client``, ``address`` its scheduler) runs them on Dask, otherwise
     ``workers`` local processes (default one per core; 1 runs in this process).
@@ -349,6 +350,7 @@ def run_tasks(
     buffer: list = []
     last_flush = time.monotonic()
     interval = float(getattr(store, "flush_interval", FLUSH_INTERVAL))
+    most = getattr(store, "flush_count", None)
 
     def flush() -> None:
         nonlocal last_flush
@@ -366,7 +368,7 @@ def run_tasks(
                 done += 1
             else:
                 failed += 1
-        if time.monotonic() - last_flush >= interval:
+        if time.monotonic() - last_flush >= interval or (most is not None and len(buffer) >= most):
             flush()
         if progress:
             progress(done, failed, total)

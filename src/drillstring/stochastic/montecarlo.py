@@ -408,11 +408,12 @@ class StudyStore(TaskStore):
     kind = "study"
     row_dim = "realization"
     noun = "realizations"
-    #: Realizations arriving within this many seconds are written together (a kill loses at most this much work):
-    #: each write rewrites the ~20 small per-realization arrays whole, 34 ms for one realization alone and 3.4 ms
-    #: each in a batch of 25 on the reference study (benchmarks/bench_study_parametric.py), CPU taken from the
-    #: workers on a machine with as many workers as cores.
+    #: Realizations arriving within this many seconds, at most ``flush_count``, are written together (a kill loses
+    #: at most that much work): each write rewrites the ~20 small per-realization arrays whole, 34–80 ms of the
+    #: driver's CPU for one realization alone and 3.4–16 ms each in batches of 8–25 on the reference study
+    #: (benchmarks/bench_study_parametric.py), CPU taken from the workers when there are as many as cores.
     flush_interval = 1.0
+    flush_count = 8
     differ = "case or settings differ: samples, sigma, laws, seed, t_end, output_step, model_dispersion"
 
     def __init__(self, path: str | Path, case: Case, settings: StudySettings) -> None:
