@@ -125,3 +125,22 @@ def test_cases_outside_the_form_are_refused(reference):
     motor = load_case("motor")
     with pytest.raises(NotCovered, match="motor"):
         ParametricReducedModel(motor, 0.5 * motor.operation.weight_on_bit, 1.5 * motor.operation.weight_on_bit)
+
+
+def test_lateral_cutoff_count_follows_the_rebuild():
+    """The contact case keeps every lateral mode below 1.5x the rotation frequency: their count changes with the
+    weight-on-bit (82 or 83 per plane across ±20 %) and the parametric model keeps the rebuild's count, with its
+    frequencies within the tolerance."""
+    contact = load_case("contact")
+    w0 = contact.operation.weight_on_bit
+    parametric = ParametricReducedModel(contact, 0.8 * w0, 1.2 * w0)
+    sizes = set()
+    for w in (0.85 * w0, 1.13 * w0):
+        case = realized(contact, w)
+        found, exact = parametric.model(case), case_reduced_model(case)
+        assert found.family == exact.family
+        assert len(found.generalized_force) == len(found.family)
+        moving = exact.omega2 != 0.0
+        assert np.abs(found.omega2[moving] / exact.omega2[moving] - 1).max() <= RITZ_TOLERANCE
+        sizes.add(len(found.family))
+    assert len(sizes) == 2  # the count did change across the range

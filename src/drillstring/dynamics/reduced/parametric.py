@@ -124,7 +124,9 @@ class ParametricReducedModel:
         _not_on(self._geometric_slope, axial_torsional, "the geometric stiffness's change with the weight-on-bit")
         _not_on(system.fluid_damping, axial_torsional, "the fluid damping")
         r = case.reduced_model
+        #: lateral modes per plane: the nominal model's, and at least the case's count (more below a cut-off)
         self.lateral_count = nominal.modes.lateral_y.shapes.shape[1]
+        self.lateral_minimum = int(r.lateral_modes)
         self.lateral_cutoff = (r.lateral_cutoff * case.operation.top_speed if r.lateral_cutoff > 0
                                else 0.0)
         # the axial and torsional columns of the nominal model, fixed
@@ -133,6 +135,8 @@ class ParametricReducedModel:
         if not np.array_equal(fixed, np.arange(len(fixed))):
             raise NotCovered("the axial and torsional columns do not come first in the basis")
         self._fixed = fixed
+        if np.any(np.delete(nominal.generalized_force, fixed)):
+            raise NotCovered("the constant generalised force acts on the lateral modes")
         self.snapshots = [low, self.weight_on_bit, high]
         self._planes = self._ritz_planes(self.snapshots)
         self.ritz_error = self._refine()
@@ -249,8 +253,8 @@ class ParametricReducedModel:
             values, vectors = sla.eigh(plane.stiffness + dw * plane.slope, plane.mass)
             if count is None:  # the z plane takes as many modes as the y plane (compute_modes)
                 count = self.lateral_count
-                if self.lateral_cutoff > 0.0:
-                    count = max(count, int(np.count_nonzero(values < self.lateral_cutoff**2)))
+                if self.lateral_cutoff > 0.0:  # as family_modes_below: the case's count, more below the cut-off
+                    count = max(self.lateral_minimum, int(np.count_nonzero(values < self.lateral_cutoff**2)))
                 if count > plane.space.shape[1] - SNAPSHOT_MARGIN // 2:
                     raise NotCovered(f"{count} lateral modes below the cut-off: beyond the Ritz space's "
                                      f"{plane.space.shape[1]} columns")
@@ -302,7 +306,8 @@ class ParametricReducedModel:
             static=static, system=system, modes=modes, basis=basis, family=family, angular_frequencies=omega,
             damping=damping, top_speed=nominal.top_speed, weight_on_bit=w, bit_rock=case_bit_rock(realized),
             contact=case_contact(realized), stations=nominal.stations, probe_positions=nominal.probe_positions,
-            nonlinear=nominal.nonlinear, generalized_force=nominal.generalized_force,
+            nonlinear=nominal.nonlinear,
+            generalized_force=np.concatenate([nominal.generalized_force[fixed], np.zeros(2 * count)]),
             turning_loads=nominal.turning_loads, top_drive=nominal.top_drive,
             hook_load=case_hook_load(realized, w),
             residual_columns=np.concatenate([nominal.residual_columns[fixed], np.zeros(2 * count, dtype=bool)]),
