@@ -1,0 +1,399 @@
+"""An ensemble Kalman filter on the reduced model: from the surface channels of a record
+(:class:`~drillstring.estimation.surface.SurfaceRecord`) to the downhole state with its bands (issue 36).
+
+**Filter.** The ensemble transform Kalman filter (ETKF; Bishop, Etherton & Majumdar 2001, in the form of Hunt,
+Kostelich & Szunyogh 2007, Physica D 230, eqs. 20-24), a deterministic square-root filter: with the forecast
+anomalies ``A`` (n × N), the predicted observations' anomalies scaled by the noise, ``S = R^-1/2 (Y − ȳ)/√(N−1)``
+(m × N), and the innovation ``d = R^-1/2 (y_o − ȳ)``::
+
+    C = I + SᵀS,   w = C⁻¹ Sᵀ d / √(N−1),   x̄_a = x̄ + A w,   A_a = A C^-1/2      (C^-1/2 symmetric)
+
+It needs no perturbed observations (no sampling noise in the analysis, which matters at the small ensembles a
+real-time filter runs), keeps the ensemble's mean exactly (the symmetric square root maps the vector of ones to
+itself), and for a linear observation its analysis mean and sample covariance are the Kalman filter's applied to the
+forecast's sample mean and covariance (checked in tests/estimation/test_ensemble.py). The observations are few
+(at most three scalars a time) so the N × N problem is cheap.
+
+**State.** The augmented state of a member is ``[y, log c, b, z0]``: ``y`` the reduced model's state
+(:attr:`~drillstring.dynamics.rom.ReducedOrderModel.state_size`: modal coordinates, their rates, the top drive's
+controller states), ``log c`` the logarithm of one bit–rock coefficient of the case's law
+(``bit_rock_coefficient``, e.g. ``a5``, the frictional torque of the Tucker–Wang law; the logarithm keeps it
+positive), ``b`` the weight-on-bit bias [N] and ``z0`` the block position of the static state [m] (the record's
+zero is the driller's). The parameters follow a random walk (``coefficient_walk``, ``weight_on_bit_bias_walk``,
+per √s) between observations: they may drift, and the walk keeps the ensemble from collapsing on them.
+
+**Forecast.** Each member runs its own copy of the model (the shared model with the law's numbers and the
+weight-on-bit replaced in its kernel data: :func:`member_model`, a few microseconds, where building a model
+takes 0.1-0.2 s) by :func:`~drillstring.dynamics.compiled.advance` from the analysis to the next record time.
+The weight-on-bit of a member over an interval is ``W = W_case + (H_static − H̄) + b``: the case's, plus the hook
+load's drop below the static hook load (``H̄`` the mean of the usable hook-load samples over the last
+``hook_load_window`` seconds, the hook load an input, not an observation), plus the member's bias ``b``, the
+offset of the hook-load sensor (a hook load read ``b`` too high leaves ``b`` more on the bit than it says).
+
+**Observations.** ``top_speed`` ↔ the ``quill_speed`` observable, ``surface_torque`` ↔ ``surface_torque`` (both
+from the member's :class:`~drillstring.dynamics.compiled.AdvanceResult` at the record time), ``block_position`` ↔
+``z0 − u_top`` (the top's axial displacement ``u_top = φ_top·η``, down positive). A sample is used only where
+``record.usable(channel)``; a time with no usable sample is a forecast only.
+
+**Inflation, localisation.** Multiplicative prior inflation of the anomalies (``inflation``) stands for the model's
+error (the estimator's basis is truncated: no lateral modes, few torsional ones). No localisation: the state is a
+few modal coordinates, each global along the string, and the ensemble (16-64) exceeds the augmented state's
+dimension (about 25).
+
+**Failures.** A member whose forecast fails (the integrator stops, a non-finite value, a bit speed beyond
+``divergence_speed_ratio`` times the top speed) is replaced by a copy of a member drawn from those that
+succeeded (its state, parameters, outputs and recent bit speed); the count per time is returned
+(:attr:`~drillstring.estimation.results.EstimationResult.replaced`). The run stops (RuntimeError) only when every
+member fails at one time.
+
+**Stick-slip index.** ``(max − min)/(2 mean)`` of each member's bit speed over the last ``stick_slip_window``
+seconds (the definition of :func:`drillstring.dynamics.indicators.cycle_metrics`), sampled every
+``output_step`` along the forecasts (the analysis replacing the forecast at each record time); NaN for a member
+whose mean is not positive.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import time as _time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from drillstring.checks import integer, real_number
+from drillstring.checks import seed as checked_seed
+from drillstring.dynamics.compiled import RunState, SolverSettings, advance
+from drillstring.dynamics.reduced.build import case_reduced_model
+from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
+from drillstring.estimation.results import DOWNHOLE, QUANTILES, EstimationResult
+from drillstring.estimation.surface import SurfaceRecord
+
+#: The channels the filter reads as observations (the hook load is an input).
+OBSERVED = ("top_speed", "surface_torque", "block_position")
+_QUILL = OBSERVABLE_COLUMN["quill_speed"]
+_SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
+_BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
+#: Units of the Tucker–Wang coefficients (pint spelling), for the results.
+COEFFICIENT_UNITS = {"a1": "m/s", "a2": "m/(N*s)", "a3": "m/rad", "a4": "N*rad", "a5": "N*m"}
+
+
+@dataclass(frozen=True)
+class EstimatorSettings:
+    """The estimator's settings, named as the case keys they become (SI units).
+
+    Attributes:
+        ensemble_size: members N, in [4, 1000].
+        top_speed_noise: standard deviation of the top-speed measurement [rad/s], > 0.
+        surface_torque_noise: of the surface torque [N·m], > 0.
+        block_position_noise: of the block position [m], > 0.
+        hook_load_window: the hook load's averaging window [s], > 0.
+        inflation: multiplicative prior inflation of the anomalies [-], in [1, 2].
+        initial_speed_spread: standard deviation of the members' initial string speed [rad/s], >= 0.
+        bit_rock_coefficient: the estimated coefficient of the case's bit–rock law (a field of its parameters).
+        coefficient_spread: prior standard deviation of its logarithm [-], in (0, 2].
+        coefficient_walk: its random walk, standard deviation of the logarithm's change per √s [1/√s], >= 0.
+        weight_on_bit_bias_spread: prior standard deviation of the weight-on-bit bias [N], > 0.
+        weight_on_bit_bias_walk: its random walk [N/√s], >= 0.
+        stick_slip_window: the window of the stick-slip index [s], > 0.
+        output_step: the forecasts' sampling of the bit speed for that index [s], > 0.
+        axial_modes, torsional_modes: the estimator's basis (elastic modes; no lateral ones), in [1, 40].
+        rtol: the integrator's relative tolerance [-], in (0, 1e-2]; atol its absolute one (state units), > 0.
+        divergence_speed_ratio: a member whose bit speed exceeds this times the top speed has diverged [-], > 1.
+        seed: the random stream's seed (initial ensemble, random walks).
+    """
+
+    ensemble_size: int = 32
+    top_speed_noise: float = 0.05
+    surface_torque_noise: float = 300.0
+    block_position_noise: float = 0.005
+    hook_load_window: float = 10.0
+    inflation: float = 1.05
+    initial_speed_spread: float = 0.5
+    bit_rock_coefficient: str = "a5"
+    coefficient_spread: float = 0.3
+    coefficient_walk: float = 0.003
+    weight_on_bit_bias_spread: float = 20e3
+    weight_on_bit_bias_walk: float = 100.0
+    stick_slip_window: float = 20.0
+    output_step: float = 0.1
+    axial_modes: int = 3
+    torsional_modes: int = 5
+    rtol: float = 1e-4
+    atol: float = 1e-6
+    divergence_speed_ratio: float = 10.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        integer("ensemble_size", self.ensemble_size, low=4, high=1000)
+        for name in ("top_speed_noise", "surface_torque_noise", "block_position_noise", "hook_load_window",
+                     "weight_on_bit_bias_spread", "stick_slip_window", "output_step", "atol"):
+            real_number(name, getattr(self, name), low=0.0, low_open=True)
+        for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk"):
+            real_number(name, getattr(self, name), low=0.0)
+        real_number("inflation", self.inflation, low=1.0, high=2.0)
+        real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
+        real_number("rtol", self.rtol, low=0.0, high=1e-2, low_open=True)
+        real_number("divergence_speed_ratio", self.divergence_speed_ratio, low=1.0, low_open=True)
+        integer("axial_modes", self.axial_modes, low=1, high=40)
+        integer("torsional_modes", self.torsional_modes, low=1, high=40)
+        checked_seed(self.seed)
+        if not isinstance(self.bit_rock_coefficient, str) or not self.bit_rock_coefficient:
+            raise ValueError(f"bit_rock_coefficient = {self.bit_rock_coefficient!r}: must be the name of a "
+                             "coefficient of the case's bit-rock law (e.g. 'a5')")
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def estimator_model(case, settings: EstimatorSettings = EstimatorSettings()):
+    """The estimator's reduced model of ``case``: the case's, on the basis of ``settings`` (``axial_modes``,
+    ``torsional_modes``, no lateral mode), case 2 (bit and contact nonlinear)."""
+    return case_reduced_model(case, axial_modes=settings.axial_modes, torsional_modes=settings.torsional_modes,
+                              lateral_modes=0, nonlinear="bit_and_contact")
+
+
+def member_model(model, laws: np.ndarray, weight_on_bit: float):
+    """A shallow copy of ``model`` (a case-2 :class:`~drillstring.dynamics.rom.ReducedOrderModel`) whose
+    kernels read the numbers ``laws`` (the packed array of :func:`~drillstring.forces.registry.pack`, same
+    layout) and the weight-on-bit ``weight_on_bit`` [N]; ``model`` is not changed. The components' objects
+    (``model.bit_rock``) stay the nominal ones: only what the compiled kernels read changes."""
+    other = copy.copy(model)
+    other.case2_data = model.case2_data._replace(laws=laws, weight_on_bit=float(weight_on_bit))
+    other.rhs_data = other.case2_data
+    return other
+
+
+def coefficient_slot(model, name: str) -> int:
+    """The index in the model's packed law array of the bit–rock coefficient ``name`` (found by changing it
+    alone and re-packing the law: :meth:`kernel_array`); ValueError for a name the law does not have or does
+    not pass to its kernel as itself."""
+    law = model.bit_rock
+    fields = [f.name for f in dataclasses.fields(law)]
+    if name not in fields:
+        raise ValueError(f"bit_rock_coefficient = {name!r}: the case's bit-rock law {law.name!r} has "
+                         f"{', '.join(fields)}")
+    value = getattr(law, name)
+    base = np.asarray(law.kernel_array(), dtype=float)
+    changed = np.asarray(dataclasses.replace(law, **{name: value * 1.5 + 1.0}).kernel_array(), dtype=float)
+    moved = np.flatnonzero(base != changed)
+    if len(moved) != 1 or not math.isclose(changed[moved[0]], value * 1.5 + 1.0) or not value > 0.0:
+        raise ValueError(f"bit_rock_coefficient = {name!r}: not a positive coefficient that the law "
+                         f"{law.name!r} passes to its kernel unchanged")
+    return model.layout.numbers["bit_law"] + int(moved[0])
+
+
+def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndarray, noise: np.ndarray,
+                  inflation: float = 1.0) -> np.ndarray:
+    """The ETKF analysis (module docstring) of ``ensemble`` (n × N) given the members' ``predicted``
+    observations (m × N), the ``observed`` values (m,) and the noise standard deviations ``noise`` (m,), the
+    observation errors independent; the anomalies of both first multiplied by ``inflation``. Returns the
+    analysis ensemble (n × N)."""
+    x = np.asarray(ensemble, dtype=float)
+    y = np.asarray(predicted, dtype=float)
+    n_members = x.shape[1]
+    mean = x.mean(axis=1, keepdims=True)
+    anomalies = inflation * (x - mean)
+    y_mean = y.mean(axis=1, keepdims=True)
+    scale = 1.0 / np.asarray(noise, dtype=float)[:, None]
+    s = scale * inflation * (y - y_mean) / math.sqrt(n_members - 1)
+    d = scale[:, 0] * (np.asarray(observed, dtype=float) - y_mean[:, 0])
+    values, vectors = np.linalg.eigh(np.eye(n_members) + s.T @ s)
+    weights = vectors @ ((vectors.T @ (s.T @ d)) / values) / math.sqrt(n_members - 1)
+    transform = (vectors / np.sqrt(values)) @ vectors.T
+    return mean + anomalies @ weights[:, None] + anomalies @ transform
+
+
+class _Members:
+    """The ensemble's forecast bookkeeping: per member its run state, augmented parameters, last outputs and
+    the recent bit speed (the stick-slip index's window)."""
+
+    def __init__(self, states, parameters, window_samples):
+        self.states = states
+        self.parameters = parameters  # (N, 3): log c, b, z0
+        self.outputs = [None] * len(states)
+        self.speed = np.full((len(states), window_samples), np.nan)
+
+    def push(self, i, speeds):
+        speeds = np.asarray(speeds, dtype=float)[-self.speed.shape[1]:]
+        k = len(speeds)
+        if k:
+            self.speed[i, :-k] = self.speed[i, k:]
+            self.speed[i, -k:] = speeds
+
+    def copy_member(self, target, source):
+        self.states[target] = self.states[source]
+        self.parameters[target] = self.parameters[source]
+        self.outputs[target] = self.outputs[source]
+        self.speed[target] = self.speed[source]
+
+
+def _hook_load_mean(record: SurfaceRecord, t: float, window: float) -> float:
+    """Mean of the usable hook-load samples in ``(t − window, t]`` [N]; NaN without one (or channel)."""
+    if "hook_load" not in record.channels:
+        return math.nan
+    time = record.time
+    keep = record.usable("hook_load") & (time <= t + 1e-12) & (time > t - window)
+    return float(np.mean(record.channels["hook_load"][keep])) if np.any(keep) else math.nan
+
+
+def _summaries(values: np.ndarray) -> tuple[float, np.ndarray]:
+    finite = values[np.isfinite(values)]
+    if not finite.size:
+        return math.nan, np.full(len(QUANTILES), np.nan)
+    return float(finite.mean()), np.quantile(finite, QUANTILES)
+
+
+def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = EstimatorSettings(), *,
+             progress: Callable[[float], None] | None = None, model=None) -> EstimationResult:
+    """The downhole state of ``case`` (a :class:`~drillstring.case.Case`) from the surface ``record`` by the
+    ensemble filter of this module, started at the record's first time from the model's initial state
+    (the static state spinning at the top speed, :meth:`~drillstring.dynamics.rom.ReducedOrderModel.initial_state`)
+    with the prior spreads of ``settings``. ``progress``: called with the record time reached [s] after each
+    analysis. ``model``: the estimator's model (default :func:`estimator_model`: building it takes ~0.5 s).
+    Returns an :class:`~drillstring.estimation.results.EstimationResult`."""
+    begin = _time.perf_counter()
+    if not isinstance(record, SurfaceRecord):
+        raise TypeError(f"record: must be a SurfaceRecord, not {type(record).__name__}")
+    if not any(name in record.channels for name in OBSERVED):
+        raise ValueError(f"record {record.source!r}: holds none of the channels the estimator reads "
+                         f"({', '.join(OBSERVED)})")
+    model = estimator_model(case, settings) if model is None else model
+    if model.full:
+        raise ValueError("estimate: the estimator's model must be case 2 (nonlinear = 'bit_and_contact')")
+    slot = coefficient_slot(model, settings.bit_rock_coefficient)
+    coefficient = float(getattr(model.bit_rock, settings.bit_rock_coefficient))
+    rng = np.random.default_rng(settings.seed)
+    n_members = settings.ensemble_size
+    n = model.size
+    solver = SolverSettings(rtol=settings.rtol, atol=settings.atol)
+    top_speed = float(model.top_speed)
+    weight = float(model.weight_on_bit)
+    static_hook = float(model.static.weight_on_hook)
+    top_u = np.asarray(model.top_u, dtype=float)
+    time = np.asarray(record.time, dtype=float)
+    clock = time - time[0]  # the model's time: the record's from its first sample
+    n_time = len(time)
+    channels = [name for name in OBSERVED if name in record.channels]
+    usable = {name: record.usable(name) for name in channels}
+    noise = {"top_speed": settings.top_speed_noise, "surface_torque": settings.surface_torque_noise,
+             "block_position": settings.block_position_noise}
+
+    # the initial ensemble: the string's speed spread, the parameters' priors
+    y0 = model.initial_state(0.0, settings.seed)
+    states, parameters = [], np.zeros((n_members, 3))
+    block0 = math.nan
+    if "block_position" in channels and np.any(usable["block_position"]):
+        block0 = float(record.channels["block_position"][np.flatnonzero(usable["block_position"])[0]])
+    for i in range(n_members):
+        y = y0.copy()
+        if model.rigid_rotation_column is not None:
+            r = model.rigid_rotation_column
+            y[n + r] += settings.initial_speed_spread * rng.standard_normal() / model.quill_shapes[r]
+        states.append(RunState.start(model, y))
+        parameters[i] = (math.log(coefficient) + settings.coefficient_spread * rng.standard_normal(),
+                         settings.weight_on_bit_bias_spread * rng.standard_normal(),
+                         (block0 if math.isfinite(block0) else 0.0)
+                         + settings.block_position_noise * rng.standard_normal())
+    window_samples = max(int(round(settings.stick_slip_window / settings.output_step)), 2)
+    members = _Members(states, parameters, window_samples)
+
+    names = tuple(DOWNHOLE) + (settings.bit_rock_coefficient, "weight_on_bit_bias")
+    mean = {name: np.full(n_time, np.nan) for name in names}
+    quantiles = {name: np.full((n_time, len(QUANTILES)), np.nan) for name in names}
+    predicted_mean = {name: np.full(n_time, np.nan) for name in channels}
+    predicted_quantiles = {name: np.full((n_time, len(QUANTILES)), np.nan) for name in channels}
+    used = {name: np.zeros(n_time, dtype=bool) for name in channels}
+    replaced = np.zeros(n_time, dtype=np.int64)
+    laws_nominal = model.case2_data.laws
+
+    def member(i, hook_mean):
+        laws = laws_nominal.copy()
+        laws[slot] = math.exp(members.parameters[i, 0])
+        drop = 0.0 if not math.isfinite(hook_mean) else static_hook - hook_mean
+        return member_model(model, laws, weight + drop + members.parameters[i, 1])
+
+    for k in range(n_time):
+        t = float(clock[k])
+        hook_mean = _hook_load_mean(record, float(time[max(k - 1, 0)]), settings.hook_load_window)
+        if k == 0:
+            for i in range(n_members):
+                row = member(i, hook_mean).observe(t, members.states[i].y)
+                members.outputs[i] = row
+                members.push(i, [row[_BIT_SPEED]])
+        else:
+            dt = t - float(clock[k - 1])
+            members.parameters[:, 0] += settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members)
+            members.parameters[:, 1] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
+                n_members)
+            grid = np.append(np.arange(float(clock[k - 1]) + settings.output_step, t - 1e-9 * dt,
+                                       settings.output_step), t)
+            ok = np.zeros(n_members, dtype=bool)
+            for i in range(n_members):
+                try:
+                    run = advance(member(i, hook_mean), solver, members.states[i], t, output_times=grid)
+                except (ValueError, FloatingPointError, ZeroDivisionError):
+                    continue
+                rows = run.outputs
+                if not run.success or len(rows) != len(grid) or not np.all(np.isfinite(rows[:, :_SURFACE_TORQUE + 1])) \
+                        or not np.all(np.isfinite(run.state.y)) \
+                        or np.max(np.abs(rows[:, _BIT_SPEED])) > settings.divergence_speed_ratio * abs(top_speed):
+                    continue
+                ok[i] = True
+                members.states[i] = run.state
+                members.outputs[i] = rows[-1]
+                members.push(i, rows[:, _BIT_SPEED])
+            if not ok.any():
+                raise RuntimeError(f"estimate: every member's forecast failed between t = {clock[k - 1]:g} s and "
+                                   f"{t:g} s of the record")
+            good = np.flatnonzero(ok)
+            for i in np.flatnonzero(~ok):
+                members.copy_member(i, int(rng.choice(good)))
+            replaced[k] = int(np.sum(~ok))
+        # the predicted surface channels, the analysis
+        z = np.array([np.concatenate([members.states[i].y, members.parameters[i]]) for i in range(n_members)]).T
+        predicted = {"top_speed": np.array([o[_QUILL] for o in members.outputs]),
+                     "surface_torque": np.array([o[_SURFACE_TORQUE] for o in members.outputs]),
+                     "block_position": z[-1] - top_u @ z[:n]}
+        for name in channels:
+            predicted_mean[name][k], predicted_quantiles[name][k] = _summaries(predicted[name])
+        rows = [name for name in channels if usable[name][k]]
+        if rows:
+            for name in rows:
+                used[name][k] = True
+            z = etkf_analysis(z, np.array([predicted[name] for name in rows]),
+                              np.array([record.channels[name][k] for name in rows]),
+                              np.array([noise[name] for name in rows]), settings.inflation)
+            for i in range(n_members):
+                members.states[i] = members.states[i].updated(z[:-3, i])
+                members.parameters[i] = z[-3:, i]
+                row = member(i, hook_mean).observe(t, members.states[i].y)
+                members.outputs[i] = row
+                members.speed[i, -1] = row[_BIT_SPEED]
+        # the analysis's downhole state and parameters
+        rows_out = np.array(members.outputs)
+        values = {name: rows_out[:, OBSERVABLE_COLUMN[name]] for name in DOWNHOLE if name in OBSERVABLE_COLUMN}
+        speed_window = members.speed
+        with np.errstate(invalid="ignore", divide="ignore"):
+            window_mean = np.nanmean(speed_window, axis=1)
+            index = (np.nanmax(speed_window, axis=1) - np.nanmin(speed_window, axis=1)) / (2.0 * window_mean)
+        values["stick_slip_index"] = np.where(window_mean > 0.0, index, np.nan)
+        values[settings.bit_rock_coefficient] = np.exp(members.parameters[:, 0])
+        values["weight_on_bit_bias"] = members.parameters[:, 1]
+        for name in names:
+            mean[name][k], quantiles[name][k] = _summaries(values[name])
+        if progress is not None:
+            progress(float(time[k]))
+
+    units = {name: unit for name, (unit, _) in DOWNHOLE.items()}
+    units[settings.bit_rock_coefficient] = COEFFICIENT_UNITS.get(settings.bit_rock_coefficient, "1")
+    units["weight_on_bit_bias"] = "N"
+    return EstimationResult(
+        time=time, mean=mean, quantiles=quantiles, units=units,
+        parameters=(settings.bit_rock_coefficient, "weight_on_bit_bias"),
+        predicted_mean=predicted_mean, predicted_quantiles=predicted_quantiles,
+        observed={name: np.asarray(record.channels[name], dtype=float) for name in channels},
+        used=used, replaced=replaced, settings=settings.as_dict(), wall_time=_time.perf_counter() - begin,
+        source=record.source)

@@ -1,0 +1,84 @@
+"""Twin experiments for the ensemble estimator (tests/estimation/test_ensemble.py, benchmarks/bench_estimator.py):
+a truth simulated by a model other than the estimator's, its surface channels sampled with noise.
+
+The truth: the case's own reduced model (its full basis: 10 axial, 10 torsional modes plus the rigid rotation, 20
+lateral modes per plane with the stabilizer's contact), its reduced matrices drawn once from the random-matrix
+model (:func:`drillstring.stochastic.random_matrices.random_reduced_model`, dispersion ``dispersion``), the
+bit-rock coefficient ``coefficient`` scaled by ``coefficient_factor``; the estimator runs 3 axial and 5 torsional
+modes and no lateral one, on the nominal matrices. The hook-load sensor reads ``hook_load_offset`` too high (the
+weight-on-bit bias the estimator should find: W = W_case + (H_static - H) + b, b = the offset).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from drillstring.dynamics.compiled import RunState, SolverSettings, advance
+from drillstring.dynamics.reduced.build import case_reduced_model
+from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
+from drillstring.estimation.surface import SurfaceRecord
+from drillstring.stochastic.random_matrices import ModelDispersion, random_reduced_model
+
+
+@dataclass
+class Twin:
+    record: SurfaceRecord
+    time: np.ndarray  # the record's times [s]
+    truth: dict  # observable -> values on ``time``
+    fine_time: np.ndarray  # every output_step [s]
+    fine: dict  # observable -> values on fine_time
+    coefficient: float  # the truth's coefficient
+    bias: float  # the weight-on-bit bias the estimator should find [N]
+
+    def stick_slip_index(self, window: float) -> np.ndarray:
+        """The truth's (max - min)/(2 mean) of the bit speed over the last ``window`` s at each record time."""
+        out = np.full(len(self.time), np.nan)
+        speed = self.fine["bit_speed"]
+        for k, t in enumerate(self.time):
+            keep = (self.fine_time > t - window + 1e-9) & (self.fine_time <= t + 1e-9)
+            s = speed[keep]
+            out[k] = (s.max() - s.min()) / (2 * s.mean()) if s.mean() > 0 else np.nan
+        return out
+
+
+def twin(case, t_end: float, *, coefficient: str = "a5", coefficient_factor: float = 1.3,
+         hook_load_offset: float = 15e3, dispersion: float = 0.05, noise=(0.05, 300.0, 0.005, 2e3),
+         sample_step: float = 1.0, output_step: float = 0.1, seed: int = 1) -> Twin:
+    """A truth of ``case`` over ``t_end`` [s] and its record at ``sample_step`` [s], the channels with Gaussian
+    noise of standard deviations ``noise`` = (top speed [rad/s], surface torque [N m], block position [m],
+    hook load [N])."""
+    nominal = case_reduced_model(case)
+    truth_law = dataclasses.replace(nominal.bit_rock,
+                                    **{coefficient: getattr(nominal.bit_rock, coefficient) * coefficient_factor})
+    model = case_reduced_model(case, bit_rock=truth_law)
+    rng = np.random.default_rng(seed)
+    model = random_reduced_model(model, ModelDispersion(dispersion, dispersion, dispersion), rng)
+    state = RunState.start(model, model.initial_state(1e-4, seed))
+    solver = SolverSettings(rtol=1e-6, atol=1e-9)
+    time = np.arange(0.0, t_end + 1e-9, sample_step)
+    steps = int(round(sample_step / output_step))
+    fine_time = np.arange(0.0, t_end + 1e-9, output_step)
+    rows, top = [model.observe(0.0, state.y)], [model.top_u @ state.y[:model.size]]
+    for k in range(1, len(time)):
+        grid = fine_time[(k - 1) * steps + 1:k * steps + 1]
+        run = advance(model, solver, state, time[k], output_times=grid)
+        assert run.success, run.message
+        state = run.state
+        rows.extend(run.outputs)
+        top.append(model.top_u @ state.y[:model.size])
+    rows = np.array(rows)
+    fine = {name: rows[:, c] for name, c in OBSERVABLE_COLUMN.items()}
+    at = np.arange(0, len(fine_time), steps)
+    truth = {name: values[at] for name, values in fine.items()}
+    n_t = len(time)
+    sigma = noise
+    record = SurfaceRecord.from_arrays(
+        time, source="twin",
+        top_speed=truth["quill_speed"] + sigma[0] * rng.standard_normal(n_t),
+        surface_torque=truth["surface_torque"] + sigma[1] * rng.standard_normal(n_t),
+        block_position=30.0 - np.array(top) + sigma[2] * rng.standard_normal(n_t),
+        hook_load=model.static.weight_on_hook + hook_load_offset + sigma[3] * rng.standard_normal(n_t))
+    return Twin(record, time, truth, fine_time, fine, getattr(truth_law, coefficient), hook_load_offset)
