@@ -76,6 +76,8 @@ OBSERVED = ("top_speed", "surface_torque", "block_position")
 _QUILL = OBSERVABLE_COLUMN["quill_speed"]
 _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
 _BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
+#: The estimated coefficient stays within exp(±LOG_RANGE) of the case's (an analysis can throw a member's far out).
+LOG_RANGE = 5.0
 #: Units of the Tucker–Wang coefficients (pint spelling), for the results.
 COEFFICIENT_UNITS = {"a1": "m/s", "a2": "m/(N*s)", "a3": "m/rad", "a4": "N*rad", "a5": "N*m"}
 
@@ -91,6 +93,9 @@ class EstimatorSettings:
         block_position_noise: of the block position [m], > 0.
         hook_load_window: the hook load's averaging window [s], > 0.
         inflation: multiplicative prior inflation of the anomalies [-], in [1, 2].
+        model_speed_noise: additive model error: the torsional modal velocities of each member are perturbed before
+            each forecast, white over the torsional modes, scaled so that the bit speed's perturbation has this
+            standard deviation per √s of the interval [rad/s/√s], >= 0.
         initial_speed_spread: standard deviation of the members' initial string speed [rad/s], >= 0.
         bit_rock_coefficient: the estimated coefficient of the case's bit–rock law (a field of its parameters).
         coefficient_spread: prior standard deviation of its logarithm [-], in (0, 2].
@@ -111,6 +116,7 @@ class EstimatorSettings:
     block_position_noise: float = 0.005
     hook_load_window: float = 10.0
     inflation: float = 1.05
+    model_speed_noise: float = 0.3
     initial_speed_spread: float = 0.5
     bit_rock_coefficient: str = "a5"
     coefficient_spread: float = 0.3
@@ -131,7 +137,7 @@ class EstimatorSettings:
         for name in ("top_speed_noise", "surface_torque_noise", "block_position_noise", "hook_load_window",
                      "weight_on_bit_bias_spread", "stick_slip_window", "output_step", "atol"):
             real_number(name, getattr(self, name), low=0.0, low_open=True)
-        for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk"):
+        for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk", "model_speed_noise"):
             real_number(name, getattr(self, name), low=0.0)
         real_number("inflation", self.inflation, low=1.0, high=2.0)
         real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
@@ -308,10 +314,14 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     used = {name: np.zeros(n_time, dtype=bool) for name in channels}
     replaced = np.zeros(n_time, dtype=np.int64)
     laws_nominal = model.case2_data.laws
+    t_start, t_end = int(model.blocks[2]), int(model.blocks[3])
+    bit_shape = np.asarray(model.bit_t[t_start:t_end], dtype=float)
+    speed_noise = settings.model_speed_noise / max(float(np.linalg.norm(bit_shape)), 1e-300)
+    log_nominal = math.log(coefficient)
 
     def member(i, hook_mean):
         laws = laws_nominal.copy()
-        laws[slot] = math.exp(members.parameters[i, 0])
+        laws[slot] = math.exp(min(max(members.parameters[i, 0], log_nominal - LOG_RANGE), log_nominal + LOG_RANGE))
         drop = 0.0 if not math.isfinite(hook_mean) else static_hook - hook_mean
         return member_model(model, laws, weight + drop + members.parameters[i, 1])
 
@@ -328,6 +338,11 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             members.parameters[:, 0] += settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members)
             members.parameters[:, 1] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
                 n_members)
+            if speed_noise > 0.0:
+                for i in range(n_members):
+                    y = members.states[i].y.copy()
+                    y[n + t_start:n + t_end] += speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
+                    members.states[i] = members.states[i].updated(y)
             grid = np.append(np.arange(float(clock[k - 1]) + settings.output_step, t - 1e-9 * dt,
                                        settings.output_step), t)
             ok = np.zeros(n_members, dtype=bool)
