@@ -229,3 +229,31 @@ def test_result_dataset_carries_units(experiment):
     assert data["a5_quantile"].dims == ("time", "quantile")
     assert data["predicted_surface_torque"].attrs["units"] == "N*m"
     assert data.attrs["estimator_ensemble_size"] == 32
+
+
+def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monkeypatch):
+    """A member whose advance fails (here every third call, made to fail) is replaced by a copy of one that
+    succeeded and counted; the run goes on. When every member fails, the run stops with a RuntimeError."""
+    import drillstring.estimation.ensemble as ensemble
+
+    real = ensemble.advance
+    calls = {"n": 0}
+
+    def failing(*args, **kwargs):
+        calls["n"] += 1
+        result = real(*args, **kwargs)
+        if calls["n"] % 3 == 0:
+            result.message = "integration failed (made to fail by the test)"
+        return result
+
+    time = np.arange(0.0, 4.0, 1.0)
+    record = SurfaceRecord.from_arrays(time, top_speed=np.full(len(time), small_model.top_speed),
+                                       surface_torque=np.full(len(time), 5000.0))
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3)
+    monkeypatch.setattr(ensemble, "advance", failing)
+    result = estimate(stick_slip, record, settings, model=small_model)
+    assert result.replaced.tolist() == [0, 2, 2, 2]
+    assert np.all(np.isfinite(result.mean["bit_speed"]))
+    monkeypatch.setattr(ensemble, "advance", lambda *a, **k: (_ for _ in ()).throw(ValueError("no")))
+    with pytest.raises(RuntimeError, match="every member's forecast failed between t = 0 s and 1 s"):
+        estimate(stick_slip, record, settings, model=small_model)
