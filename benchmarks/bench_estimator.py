@@ -33,11 +33,15 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="the estimator's seed")
     args = parser.parse_args()
     if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     from twin import twin
 
     from drillstring.case import load_case
-    from drillstring.estimation.ensemble import EstimatorSettings, estimate, estimator_model
+    from drillstring.estimation.ensemble import (
+        EstimatorSettings,
+        estimate,
+        estimator_model,
+    )
 
     case = load_case("stick_slip")
     begin = time.perf_counter()

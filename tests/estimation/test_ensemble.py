@@ -25,7 +25,7 @@ from drillstring.estimation.ensemble import (
 from drillstring.estimation.surface import SPIKE, SurfaceRecord
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from twin import twin  # noqa: E402
+from twin import twin
 
 # --------------------------------------------------------------------------------------------------------
 # The filter core: linear Gaussian problems, against the Kalman filter written here
@@ -189,7 +189,7 @@ def test_twin_detects_stick_slip_while_the_surface_speed_is_held(experiment):
 def test_twin_recovers_the_parameters(experiment):
     """(d) a5 (truth 1.3 times the case's, where the prior is centred) and the weight-on-bit bias (truth 15 kN,
     prior 0): the final mean has at most half the prior mean's error."""
-    truth, result, settings = experiment
+    truth, result, _settings = experiment
     prior = load_case("stick_slip").bit_rock.a5
     assert abs(result.mean["a5"][-1] - truth.coefficient) < 0.5 * abs(prior - truth.coefficient)
     assert abs(result.mean["weight_on_bit_bias"][-1] - truth.bias) < 0.5 * truth.bias
@@ -234,7 +234,7 @@ def test_result_dataset_carries_units(experiment):
 def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monkeypatch):
     """A member whose advance fails (here every third call, made to fail) is replaced by a copy of one that
     succeeded and counted; the run goes on. When every member fails, the run stops with a RuntimeError."""
-    import drillstring.estimation.ensemble as ensemble
+    from drillstring.estimation import ensemble
 
     real = ensemble.advance
     calls = {"n": 0}

@@ -59,7 +59,7 @@ def twin(case, t_end: float, *, coefficient: str = "a5", coefficient_factor: flo
     state = RunState.start(model, model.initial_state(1e-4, seed))
     solver = SolverSettings(rtol=1e-6, atol=1e-9)
     time = np.arange(0.0, t_end + 1e-9, sample_step)
-    steps = int(round(sample_step / output_step))
+    steps = round(sample_step / output_step)
     fine_time = np.arange(0.0, t_end + 1e-9, output_step)
     rows, top = [model.observe(0.0, state.y)], [model.top_u @ state.y[:model.size]]
     for k in range(1, len(time)):

@@ -60,8 +60,8 @@ import copy
 import dataclasses
 import math
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -313,7 +313,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
                          settings.weight_on_bit_bias_spread * rng.standard_normal(),
                          (block0 if math.isfinite(block0) else 0.0)
                          + settings.block_position_noise * rng.standard_normal())
-    window_samples = max(int(round(settings.stick_slip_window / settings.output_step)), 2)
+    window_samples = max(round(settings.stick_slip_window / settings.output_step), 2)
     members = _Members(states, parameters, window_samples)
 
     names = tuple(DOWNHOLE) + (settings.bit_rock_coefficient, "weight_on_bit_bias")
