@@ -10,7 +10,7 @@ The notebook API: :func:`load_case`, :func:`static` (the prestressed static stat
 stability), :func:`compare` (case 1 against case 2), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
 :func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
 (Sobol' indices), :func:`campbell` (Campbell diagram and critical speeds), :func:`optimize` (the robust operating point under
-chance constraints).
+chance constraints), :func:`estimate` (the downhole state from a surface record, with its uncertainty).
 """
 
 from drillstring._version import __version__  # noqa: F401  (the package's version)
@@ -33,7 +33,7 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
 
         return stability
     if name in ("static", "modes", "study", "monte_carlo_study", "operating_map", "sensitivity", "compare",
-                "campbell"):
+                "campbell", "estimate"):
         from drillstring import api
 
         return getattr(api, name)

@@ -6,7 +6,7 @@ single-threaded (:mod:`drillstring.blas_threads`), whatever the caller's BLAS se
 The functions live in the package's modules, one per kind of work: :mod:`~drillstring.api.runs` (one case: a run,
 its static state, modes, stability, Campbell diagram, the comparison of the two nonlinear models),
 :mod:`~drillstring.api.studies` (Monte Carlo studies), :mod:`~drillstring.api.maps` (operating maps and global
-sensitivity) and :mod:`~drillstring.api.arguments` (the checks of the arguments they share); this module offers
+sensitivity), :mod:`~drillstring.api.estimates` (the downhole state from a surface record) and :mod:`~drillstring.api.arguments` (the checks of the arguments they share); this module offers
 them all under one name.
 
 >>> import drillstring
@@ -18,6 +18,10 @@ them all under one name.
 # them twice).
 from drillstring.api.arguments import (  # noqa: F401
     as_case,
+)
+from drillstring.api.estimates import (  # noqa: F401
+    EstimateOutcome,
+    estimate,
 )
 from drillstring.api.maps import (  # noqa: F401
     MAX_RESAMPLES,

@@ -20,6 +20,7 @@ from drillstring.case.bounds import (
 )
 from drillstring.case.component_tables import DownholeMotor, _from_components, _motor_problems
 from drillstring.case.errors import _Problems
+from drillstring.case.estimator_table import Estimator
 from drillstring.case.tables import (
     BitRock,
     Borehole,
@@ -104,6 +105,8 @@ class Case(_Base):
     well: Well | None = Field(None, description="optional [well]: survey, casing, friction (drillstring.well)")
     motor: DownholeMotor | None = Field(
         None, description="optional [motor]: a downhole motor (drillstring.forces.motor), from [[components]]")
+    estimator: Estimator | None = Field(
+        None, description="optional [estimator]: the ensemble estimator's settings (drillstring.estimation)")
 
     # -- inputs converted with the whole case: components, flow rate -------------------------------------
 

@@ -27,6 +27,9 @@ Commands
 ``drillstring torque-drag [CASE] [--json] [--plot FILE.png] [--measurements CSV] [--html FILE]``
     Soft-string torque and drag along the well of the case's ``[well]`` survey: hook load and surface torque
     tripping out and in, rotating off bottom, sliding and drilling; buckling; lock-up; friction calibration.
+``drillstring estimate [CASE] [--surface CSV] [--truth CSV] [--out DIR] [--ensemble-size N] [--json]``
+    The downhole state (bit speed, torque and force on bit, ROP, stick-slip index) and the bit–rock coefficient
+    and weight-on-bit bias in time, with 5–95 % bands, from a surface record (an ensemble Kalman filter).
 
 ``CASE`` is a built-in case name (default ``reference``) or the path to a TOML case file.
 
@@ -59,7 +62,7 @@ Modules
 :mod:`~drillstring.cli.tables` (tables that fit the terminal), :mod:`~drillstring.cli.engine` (what the
 engine commands share), and one module per command group: ``static`` (cases, static, modes), ``campbell``,
 ``stability``, ``simulate`` (simulate, compare), ``study``, ``operating_map``, ``sensitivity``,
-``optimize``, ``torque_drag``.
+``optimize``, ``torque_drag``, ``estimate``.
 """
 
 from __future__ import annotations
@@ -80,6 +83,7 @@ from drillstring.cli import (  # noqa: E402, F401
     sensitivity,
     optimize,
     torque_drag,
+    estimate,
 )
 from drillstring.cli.options import (  # noqa: E402, F401
     EXIT_INTERRUPTED,
@@ -96,7 +100,8 @@ from drillstring.cli.study import _realizations_table, _study_table  # noqa: E40
 #: dask.array and dask.distributed (about 0.4 s of start-up) for ordinary Dataset operations and NetCDF
 #: writes; the console script hides Dask from these commands so that xarray treats it as absent.
 #: (``study``, ``map`` and ``sensitivity`` may run on a Dask cluster and keep it.)
-NO_DASK_COMMANDS = frozenset({"cases", "static", "modes", "stability", "simulate", "compare", "torque-drag"})
+NO_DASK_COMMANDS = frozenset({"cases", "static", "modes", "stability", "simulate", "compare", "torque-drag",
+                              "estimate"})
 
 
 def run() -> None:

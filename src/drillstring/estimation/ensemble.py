@@ -165,6 +165,21 @@ class EstimatorSettings:
         return dataclasses.asdict(self)
 
 
+def case_estimator_settings(case, **overrides) -> EstimatorSettings:
+    """The estimator's settings of ``case``: its ``[estimator]`` table's keys (:mod:`drillstring.case.
+    estimator_table`, SI) over the defaults, then ``overrides`` (the same names). A bad value raises a ValueError
+    naming ``estimator.<key>`` (its range from :class:`EstimatorSettings`); an unknown override, a TypeError."""
+    given = {} if getattr(case, "estimator", None) is None else case.estimator.given()
+    unknown = sorted(set(overrides) - {f.name for f in dataclasses.fields(EstimatorSettings)})
+    if unknown:
+        raise TypeError(f"unknown estimator setting(s): {', '.join(unknown)}")
+    given.update(overrides)
+    try:
+        return EstimatorSettings(**given)
+    except ValueError as error:
+        raise ValueError(f"estimator.{error}") from None
+
+
 def estimator_model(case, settings: EstimatorSettings = EstimatorSettings()):
     """The estimator's reduced model of ``case``: the case's, on the basis of ``settings`` (``axial_modes``,
     ``torsional_modes``, no lateral mode), case 2 (bit and contact nonlinear)."""

@@ -1,0 +1,43 @@
+"""The ``[estimator]`` table: the settings of the ensemble estimator (``drillstring estimate``,
+:mod:`drillstring.estimation.ensemble`) as case keys, with their units. Units are converted here; the ranges are
+checked once, where the estimator's settings are built
+(:class:`~drillstring.estimation.ensemble.EstimatorSettings`, its errors naming ``estimator.<key>``). Keys left
+out take the estimator's defaults."""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from drillstring.case.base import AngularSpeed, Dimensionless, Force, Length, Time, Torque, _Base
+
+
+class Estimator(_Base):
+    """The ensemble estimator's keys (docs/estimation.md); None: the estimator's default."""
+
+    ensemble_size: int | None = Field(None, description="members of the ensemble")
+    top_speed_noise: AngularSpeed | None = Field(None, description="top-speed sensor noise, std [rad/s]")
+    surface_torque_noise: Torque | None = Field(None, description="surface-torque sensor noise, std [N*m]")
+    block_position_noise: Length | None = Field(None, description="block-position sensor noise, std [m]")
+    hook_load_window: Time | None = Field(None, description="averaging window of the hook load [s]")
+    inflation: Dimensionless | None = Field(None, description="multiplicative prior inflation [-]")
+    model_speed_noise: float | None = Field(None, description="model error on the bit speed [rad/s per sqrt(s)]")
+    model_noise_modes: int | None = Field(None, description="torsional modes the model error is spread over")
+    initial_speed_spread: AngularSpeed | None = Field(None, description="initial string-speed spread, std [rad/s]")
+    bit_rock_coefficient: str | None = Field(None, description="the estimated coefficient of the bit-rock law")
+    coefficient_spread: Dimensionless | None = Field(None, description="its prior spread (of its logarithm) [-]")
+    coefficient_walk: float | None = Field(None, description="its random walk [1/sqrt(s)]")
+    weight_on_bit_bias_spread: Force | None = Field(None, description="prior std of the weight-on-bit bias [N]")
+    weight_on_bit_bias_walk: float | None = Field(None, description="its random walk [N/sqrt(s)]")
+    stick_slip_window: Time | None = Field(None, description="window of the stick-slip index [s]")
+    output_step: Time | None = Field(None, description="forecasts' sampling of the bit speed [s]")
+    axial_modes: int | None = Field(None, description="elastic axial modes of the estimator's model")
+    torsional_modes: int | None = Field(None, description="elastic torsional modes of the estimator's model")
+    rtol: Dimensionless | None = Field(None, description="integrator's relative tolerance [-]")
+    atol: float | None = Field(None, description="integrator's absolute tolerance (state units)")
+    divergence_speed_ratio: Dimensionless | None = Field(None, description="a member above this times the top "
+                                                         "speed has diverged [-]")
+    seed: int | None = Field(None, description="seed of the estimator's random stream")
+
+    def given(self) -> dict:
+        """The keys the case sets (SI values)."""
+        return {key: value for key, value in self.model_dump().items() if value is not None}
