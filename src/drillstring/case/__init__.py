@@ -52,6 +52,8 @@ from drillstring.case.component_tables import (  # noqa: F401  (re-exported: the
     MOTOR_SPEED_RANGE,
     Component,
     DownholeMotor,
+    StringFriction,
+    StringFrictionKeys,
     MotorKeys,
     ToolJoint,
 )
@@ -196,6 +198,8 @@ __all__ = [
     "Mesh",
     "Model",
     "Operation",
+    "StringFriction",
+    "StringFrictionKeys",
     "Pressure",
     "ReducedModel",
     "Section",

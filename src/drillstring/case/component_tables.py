@@ -19,6 +19,7 @@ from drillstring.case.base import (
     Pressure,
     Stiffness,
     Torque,
+    Velocity,
     VolumeFlow,
     _Base,
     _RPM,
@@ -255,3 +256,21 @@ def _from_components(data: dict[str, Any]) -> dict[str, Any]:
         data["materials"] = {**(raw_materials if raw_materials is not None else
                                 {n: m.model_dump() for n, m in materials.items()}), **expansion.materials}
     return data
+
+
+class StringFrictionKeys(_Base):
+    """The keys of the along-string Coulomb friction (:mod:`drillstring.forces.string_friction`), in
+    ``[string_friction.coulomb]``. The friction factors are the well's (``well.cased_hole_friction`` above the
+    casing shoe, ``well.open_hole_friction`` below), the normal forces the stiff string's in the well."""
+
+    regularization_speed: Velocity = Field(
+        0.01, gt=0, description="v_reg [m/s]: the friction is mu N v / sqrt(v^2 + v_reg^2) along the contact point's "
+                                "sliding velocity v (axial and circumferential)")
+
+
+class StringFriction(_ComponentTables):
+    """Along-string friction in the dynamics of a deviated well (docs/stiff_string.md): ``law`` names a registered
+    friction law (``"coulomb"``; ``"none"``: no friction, the default), its keys in ``[string_friction.<law>]``.
+    It acts only in a case with ``[well]``, whose stiff-string statics gives the normal forces."""
+
+    law: str = Field("none", min_length=1, description="along-string friction law: 'none' or a registered law's name")

@@ -18,7 +18,7 @@ from drillstring.case.bounds import (
     PHYSICAL_BOUNDS,
     _bound_problems,
 )
-from drillstring.case.component_tables import DownholeMotor, _from_components, _motor_problems
+from drillstring.case.component_tables import DownholeMotor, StringFriction, _from_components, _motor_problems
 from drillstring.case.errors import _Problems
 from drillstring.case.estimator_table import Estimator
 from drillstring.case.tables import (
@@ -107,6 +107,8 @@ class Case(_Base):
         None, description="optional [motor]: a downhole motor (drillstring.forces.motor), from [[components]]")
     estimator: Estimator | None = Field(
         None, description="optional [estimator]: the ensemble estimator's settings (drillstring.estimation)")
+    string_friction: StringFriction = Field(
+        default_factory=StringFriction, description="along-string friction in a deviated well (its [well])")
 
     # -- inputs converted with the whole case: components, flow rate -------------------------------------
 

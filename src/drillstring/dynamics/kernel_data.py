@@ -64,6 +64,34 @@ class ContactData(NamedTuple):
     work: ContactWork  # scratch: each run's own (ReducedOrderModel.kernel_data), empty in the model's data
 
 
+class StringFrictionWork(NamedTuple):
+    """Scratch of the along-string friction, one entry per friction station: the context's velocities and the
+    law's forces (each run's own)."""
+
+    axial_velocity: np.ndarray  # u̇ [m/s]
+    spin: np.ndarray  # θ̇x [rad/s]
+    force: np.ndarray  # axial force on the string [N]
+    torque: np.ndarray  # torque on the string [N·m]
+
+    @classmethod
+    def allocate(cls, n_stations: int) -> StringFrictionWork:
+        return cls(*(np.zeros(n_stations) for _ in cls._fields))
+
+
+class StringFrictionData(NamedTuple):
+    """The along-string friction's stations as the kernels read them
+    (:class:`~drillstring.forces.string_friction.FrictionStations`): the nodes resting on the wall in the static
+    state, their static normal force, contact radius and friction coefficient, and the axial mode shapes there.
+    The law's numbers are in the kernels' flat array (:func:`~drillstring.forces.registry.pack`)."""
+
+    node: np.ndarray  # (m,) int64 mesh nodes
+    normal_force: np.ndarray  # (m,) N_i [N]
+    radius: np.ndarray  # (m,) r_i [m]
+    friction: np.ndarray  # (m,) μ_i [-]
+    axial_t: np.ndarray  # (a1 − a0, m): u at each station, columns of the axial range
+    work: StringFrictionWork  # scratch: each run's own (ReducedOrderModel.kernel_data), empty in the model's data
+
+
 class ModalRanges(NamedTuple):
     """The columns ``[start, end)`` of the basis that can move each physical quantity: the axial DOFs, the
     torsional ones (θx), the lateral ones along y (v, θz) and along z (w, θy). For a straight string each range
@@ -125,6 +153,7 @@ class RhsData(NamedTuple):
     #                   top boundary's, the hook load's, the contact law's, the bit's history (the hole bottom)
     contact: ContactData
     turning: TurningLoadData
+    friction: StringFrictionData  # the along-string friction's stations (none: zero stations)
 
 
 #: The case-2 data of a model whose bit–rock law reads the bit's history (the Detournay law): the same fields

@@ -1,7 +1,7 @@
 """The component protocol's base classes and named contexts (docs/extending.md): what each kind of component
 declares (:class:`BitLaw`, :class:`TopBoundary`, :class:`Motor`, :class:`ContactLaw`, :class:`TurningLoadSource`,
-:class:`HookLoad`) and what it may read (:class:`BitContext`, :class:`TopContext`, :class:`MotorContext`,
-:class:`ContactContext`, :class:`HookContext`). The registry (:mod:`drillstring.forces.registry`) registers the
+:class:`HookLoad`, :class:`StringFriction`) and what it may read (:class:`BitContext`, :class:`TopContext`,
+:class:`MotorContext`, :class:`ContactContext`, :class:`HookContext`, :class:`StringFrictionContext`). The registry (:mod:`drillstring.forces.registry`) registers the
 components, lays out their numbers and states and writes the compiled dispatch; it re-exports these names.
 SI units throughout.
 """
@@ -14,7 +14,8 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 
 __all__ = ["BitContext", "BitLaw", "BitSteadyState", "ContactContext", "ContactLaw", "HookContext", "HookLoad",
-           "Motor", "MotorContext", "TopBoundary", "TopContext", "TurningLoadSource", "bit_context"]
+           "Motor", "MotorContext", "StringFriction", "StringFrictionContext", "TopBoundary", "TopContext",
+           "TurningLoadSource", "bit_context"]
 
 
 class BitContext(NamedTuple):
@@ -69,6 +70,19 @@ class ContactContext(NamedTuple):
     gap: Any
     outer_diameter: Any
     stiffness: Any
+
+
+class StringFrictionContext(NamedTuple):
+    """What an along-string friction law may read, one entry per friction station (a node resting on the wall
+    in the static state; 1-D float64 arrays, SI): the station's ``axial_velocity`` u̇ [m/s] along the string
+    (down positive), its ``spin_speed`` θ̇x [rad/s], the wall's static ``normal_force`` N [N] on it, the contact
+    ``radius`` r [m] (pipe body or tool joint) and the ``friction`` coefficient μ [-] there."""
+
+    axial_velocity: Any
+    spin_speed: Any
+    normal_force: Any
+    radius: Any
+    friction: Any
 
 
 class HookContext(NamedTuple):
@@ -299,6 +313,42 @@ class ContactLaw:
 
     def jacobian_at(self, ctx: ContactContext) -> np.ndarray:
         """(n, 3, 5): rows force_v, force_w, torque; columns v, w, v̇, ẇ, θ̇x; one block per station."""
+        raise NotImplementedError
+
+
+class StringFriction:
+    """Base of the along-string friction laws (module docstring of :mod:`drillstring.forces.registry`): the
+    wall's friction on the string at the stations in contact in the static state, from the named context
+    :class:`StringFrictionContext`. Instances are the law's parameters (SI)."""
+
+    name: ClassVar[str]
+    kernel_size: ClassVar[int] = 0
+    #: the compiled kernel ``kernel(args, ctx, force, torque)``: fills the axial forces [N] and torques [N·m]
+    kernel: ClassVar[Any] = None
+    component_code: ClassVar[float] = 0.0
+    #: its case keys (a pydantic model with units and bounds), read from ``[string_friction.<name>]``
+    keys: ClassVar[Any] = None
+
+    @classmethod
+    def from_case(cls, case) -> "StringFriction":
+        raise NotImplementedError
+
+    def kernel_array(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def evaluate_at(self, ctx: StringFrictionContext):
+        """:attr:`kernel`'s law from Python (the same implementation): ``(force, torque)`` arrays, one entry per
+        station."""
+        n = np.asarray(ctx.axial_velocity, dtype=float).shape[0]
+        force, torque = np.zeros(n), np.zeros(n)
+        type(self).kernel(np.asarray(self.kernel_array(), dtype=float),
+                          StringFrictionContext(*(np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float),
+                                                                                       (n,))) for a in ctx)),
+                          force, torque)
+        return force, torque
+
+    def jacobian_at(self, ctx: StringFrictionContext) -> np.ndarray:
+        """(n, 2, 2): rows force, torque; columns u̇, θ̇x; one block per station."""
         raise NotImplementedError
 
 

@@ -108,6 +108,8 @@ from drillstring.forces.protocol import (  # noqa: F401 (the protocol's names, r
     HookLoad,
     Motor,
     MotorContext,
+    StringFriction,
+    StringFrictionContext,
     TopBoundary,
     TopContext,
     TurningLoadSource,
@@ -122,6 +124,11 @@ __all__ = [
     "MOTOR",
     "MOTOR_CODE",
     "MOTOR_STATES",
+    "STRING_FRICTION",
+    "STRING_FRICTION_CODE",
+    "string_friction",
+    "string_friction_forces",
+    "string_frictions",
     "TOP_BOUNDARY_CODE",
     "TOP_INERTIA",
     "HEADER",
@@ -158,25 +165,27 @@ __all__ = [
 #: the string), where the top boundary's numbers start, the index of its first state in the state vector, the
 #: inertia [kg·m²] it lumps at the quill (0 when it does not drive), where the hook load's numbers start, where the
 #: bit's history starts, the hook load's code (0: none, the kernels add nothing), the contact law's code and where
-#: its numbers start, the downhole motor's code (0: none), where its numbers start and the index of its first state.
+#: its numbers start, the downhole motor's code (0: none), where its numbers start and the index of its first state,
+#: the along-string friction's code (0: none, the kernels add nothing) and where its numbers start.
 HEADER = ("bit_law_code", "top_boundary_code", "top_boundary", "top_boundary_states", "top_inertia", "hook_load",
           "history", "hook_load_code", "contact_law_code", "contact_law",
-          "motor_code", "motor", "motor_states")
+          "motor_code", "motor", "motor_states", "string_friction_code", "string_friction")
 (BIT_LAW_CODE, TOP_BOUNDARY_CODE, TOP_BOUNDARY, TOP_BOUNDARY_STATES, TOP_INERTIA, HOOK_LOAD, HISTORY,
- HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW, MOTOR_CODE, MOTOR, MOTOR_STATES) = range(len(HEADER))
+ HOOK_LOAD_CODE, CONTACT_LAW_CODE, CONTACT_LAW, MOTOR_CODE, MOTOR, MOTOR_STATES, STRING_FRICTION_CODE,
+ STRING_FRICTION) = range(len(HEADER))
 #: Where the bit law's numbers start (right after the header).
 BIT_LAW = len(HEADER)
 
 
 
 _REGISTRY: dict[str, dict[str, type]] = {"bit_law": {}, "top_boundary": {}, "hook_load": {}, "contact_law": {},
-                                          "turning_load": {}, "motor": {}}
+                                          "turning_load": {}, "motor": {}, "string_friction": {}}
 _KINDS = {BitLaw: "bit_law", TopBoundary: "top_boundary", HookLoad: "hook_load", ContactLaw: "contact_law",
-          TurningLoadSource: "turning_load", Motor: "motor"}
+          TurningLoadSource: "turning_load", Motor: "motor", StringFriction: "string_friction"}
 #: whether a registered class of each kind enters the compiled dispatch (has a nonzero code)
 _DISPATCHED = {"bit_law": lambda c: True, "top_boundary": lambda c: c.drives, "hook_load": lambda c: c.adds,
                "contact_law": lambda c: True, "turning_load": lambda c: False,
-               "motor": lambda c: True}
+               "motor": lambda c: True, "string_friction": lambda c: True}
 
 
 def _kind(cls: type) -> str:
@@ -184,7 +193,7 @@ def _kind(cls: type) -> str:
         if issubclass(cls, base):
             return kind
     raise TypeError(f"{cls.__name__} is not a BitLaw, a TopBoundary, a HookLoad, a ContactLaw, a "
-                    "TurningLoadSource or a Motor")
+                    "TurningLoadSource, a Motor or a StringFriction")
 
 
 def _in_package(cls: type) -> bool:
@@ -344,6 +353,17 @@ def motors() -> tuple[str, ...]:
     return tuple(sorted(_REGISTRY["motor"]))
 
 
+def string_friction(name: str, field: str | None = None) -> type[StringFriction]:
+    """The registered along-string friction law ``name``."""
+    return _lookup("string_friction", name, field)
+
+
+def string_frictions() -> tuple[str, ...]:
+    """Names of the registered along-string friction laws."""
+    package_components()
+    return tuple(sorted(_REGISTRY["string_friction"]))
+
+
 def bit_laws() -> tuple[str, ...]:
     """Names of the registered bit–rock laws."""
     package_components()
@@ -378,20 +398,25 @@ class Layout:
 
 def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
          modal_states: int, contact: ContactLaw | None = None,
-         motor: Motor | None = None) -> tuple[np.ndarray, Layout]:
-    """The kernels' flat array ``[header, bit law, top boundary, hook load, contact law, motor, history]`` (the history
+         motor: Motor | None = None, friction: StringFriction | None = None) -> tuple[np.ndarray, Layout]:
+    """The kernels' flat array ``[header, bit law, top boundary, hook load, contact law, motor, string friction,
+    history]`` (the history
     last: it runs to the end) and its :class:`Layout`; the top boundary's states follow the ``modal_states``
     entries ``[η, η̇]``, the motor's (none for the package's motors) the top boundary's. ``contact`` None: no
-    contact law (code 0, its kernel gives no force); ``motor`` None: no downhole motor (code 0)."""
+    contact law (code 0, its kernel gives no force); ``motor`` None: no downhole motor (code 0); ``friction`` None:
+    no along-string friction (code 0)."""
     _check_cache_table()  # every package component registered; the cached kernels were written for this table
     parts = {"bit_law": np.asarray(bit.kernel_array(), dtype=np.float64),
              "top_boundary": np.asarray(top.kernel_array(), dtype=np.float64),
              "hook_load": np.asarray(hook.kernel_array(), dtype=np.float64),
              "contact_law": np.asarray(contact.kernel_array() if contact is not None else np.zeros(0), dtype=np.float64),
              "motor": np.zeros(0) if motor is None else np.asarray(motor.kernel_array(), dtype=np.float64),
+             "string_friction": np.zeros(0) if friction is None else np.asarray(friction.kernel_array(),
+                                                                                  dtype=np.float64),
              "history": np.asarray(history, dtype=np.float64)}
     checked = [("bit law", bit), ("top boundary", top), ("hook load", hook)] + (
-        [("contact law", contact)] if contact is not None else []) + ([("motor", motor)] if motor is not None else [])
+        [("contact law", contact)] if contact is not None else []) + ([("motor", motor)] if motor is not None else []) + (
+        [("string friction", friction)] if friction is not None else [])
     for kind, component in checked:
         values = parts[kind.replace(" ", "_")]
         if values.shape != (type(component).kernel_size,):
@@ -417,6 +442,8 @@ def pack(bit: BitLaw, top: TopBoundary, hook: HookLoad, history: np.ndarray,
     header[MOTOR_CODE] = 0.0 if motor is None else motor.component_code
     header[MOTOR] = numbers["motor"]
     header[MOTOR_STATES] = states["motor"]
+    header[STRING_FRICTION_CODE] = 0.0 if friction is None else friction.component_code
+    header[STRING_FRICTION] = numbers["string_friction"]
     return np.concatenate([header, *parts.values()]), Layout(numbers, states, size)
 
 
@@ -453,6 +480,13 @@ def contact_law_forces(laws, ctx, force_v, force_w, torque):
     raise NotImplementedError("compiled code only")
 
 
+def string_friction_forces(laws, ctx, force, torque):
+    """Fill ``force`` [N] (along the string) and ``torque`` [N·m] (about it) at the stations of ``ctx``
+    (:class:`StringFrictionContext`) with the along-string friction law whose code and numbers ``laws`` holds: 0
+    for code 0 (none), NaN for a code no package law has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
 def motor_torque(laws, ctx, y, out):
     """The torque [N·m] of the downhole motor whose code and numbers ``laws`` holds at ``ctx``
     (:class:`MotorContext`), reading its states in ``y`` and writing their rates in ``out`` at the index the
@@ -461,7 +495,7 @@ def motor_torque(laws, ctx, y, out):
 
 
 _CODE_ENTRY = {"bit_law": BIT_LAW_CODE, "top_boundary": TOP_BOUNDARY_CODE, "hook_load": HOOK_LOAD_CODE,
-               "contact_law": CONTACT_LAW_CODE, "motor": MOTOR_CODE}
+               "contact_law": CONTACT_LAW_CODE, "motor": MOTOR_CODE, "string_friction": STRING_FRICTION_CODE}
 
 
 def inlined(function):
@@ -543,4 +577,23 @@ def _motor_torque_compiled(laws, ctx, y, out):
         "motor", "laws, ctx, y, out",
         f"laws[int(laws[{MOTOR}]):], ctx, y[int(laws[{MOTOR_STATES}]):], out[int(laws[{MOTOR_STATES}]):]", "np.nan")
     exec(compile(source, "<motor_torque dispatch>", "exec"), namespace)
+    return namespace["dispatch"]
+
+
+def _fill_two(force, torque, value):
+    for i in range(force.shape[0]):
+        force[i] = value
+        torque[i] = value
+
+
+@overload(string_friction_forces)
+def _string_friction_forces_compiled(laws, ctx, force, torque):
+    from numba import njit
+
+    source, namespace = _dispatch_source(
+        "string_friction", "laws, ctx, force, torque",
+        f"laws[int(laws[{STRING_FRICTION}]):], ctx, force, torque", "fill(force, torque, np.nan)",
+        none="fill(force, torque, 0.0)")
+    namespace["fill"] = njit(_fill_two)
+    exec(compile(source, "<string_friction_forces dispatch>", "exec"), namespace)
     return namespace["dispatch"]

@@ -13,8 +13,10 @@ from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import case_contact, mesh_contact_stations
 from drillstring.forces.excitation import TurningLoads
 from drillstring.forces.motor import case_motor
-from drillstring.forces.registry import BitLaw, ContactLaw, HookLoad, Motor, TopBoundary
+from drillstring.forces.registry import BitLaw, ContactLaw, HookLoad, Motor, StringFriction, TopBoundary
 from drillstring.forces.registry import hook_load as registered_hook_load
+from drillstring.forces.registry import string_friction as registered_string_friction
+from drillstring.forces.string_friction import FrictionStations
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
 from drillstring.forces.turning_loads import case_turning_loads
 from drillstring.modal import (
@@ -29,6 +31,7 @@ from drillstring.modal import (
 )
 from drillstring.rotor import first_torsional_frequency, released_modes
 from drillstring.statics import StaticState, case_static_state
+from drillstring.well.stiff_string import StiffStringState, case_stiff_string
 
 
 def reduced_model(
@@ -55,6 +58,8 @@ def reduced_model(
     rayleigh: tuple[float, float] = (0.0, 0.0),
     truncation_correction: str = "none",
     motor: Motor | None = None,
+    string_friction: StringFriction | None = None,
+    friction_stations: FrictionStations | None = None,
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -79,6 +84,8 @@ def reduced_model(
         motor: a downhole motor (:mod:`drillstring.forces.motor`), None without: the torsional family is then that
             of the string released at the motor's rotor station (:func:`drillstring.rotor.released_modes`;
             ``torsional_modes`` elastic modes plus its rigid motions).
+        string_friction, friction_stations: the along-string friction law and where it acts
+            (:mod:`drillstring.forces.string_friction`); None: none.
     """
     drive = top_drive is not None and top_drive.drives
     coupled = family_coupling(system) > 0.0
@@ -126,7 +133,7 @@ def reduced_model(
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
         top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled, motor=motor,
-        rotor=release,
+        rotor=release, string_friction=string_friction, friction_stations=friction_stations,
     )
 
 
@@ -177,8 +184,24 @@ def case_reduced_model(
     (``nonlinear``: "bit_and_contact" = case 2, "full" = case 1, default the case's ``model.nonlinear``;
     ``lateral_cutoff``: ratio to the rotation speed, as ``reduced_model.lateral_cutoff``). A
     ``lateral_modes`` given without ``lateral_cutoff`` asks for exactly that many lateral modes (no
-    cut-off)."""
+    cut-off).
+
+    A case with ``[well]`` (a deviated well) is built on the well's static state: the stiff string's axial
+    force along measured depth as the prestress (:func:`~drillstring.well.stiff_string.case_stiff_string`),
+    unless ``static`` is given; with a friction law (``[string_friction] law``) the wall's friction acts at the
+    nodes resting on the wall there, with their static normal forces (:func:`case_friction_stations`). The
+    lateral dynamics stays that of a straight string (docs/stiff_string.md)."""
+    well_state = None
+    if static is None and case.well is not None:
+        well_state = case_stiff_string(case, weight_on_bit=weight_on_bit)
+        static = well_state.static_state()
     static = case_static_state(case, weight_on_bit) if static is None else static
+    friction = case_string_friction(case)
+    stations = None
+    if friction is not None and case.well is not None:
+        if well_state is None:
+            well_state = case_stiff_string(case, weight_on_bit=static.weight_on_bit)
+        stations = case_friction_stations(case, well_state)
     system = case_linear_system(case, static)
     motor = case_motor(case) if motor is None else motor
     if top_drive is None:
@@ -209,7 +232,40 @@ def case_reduced_model(
         hook_load=case_hook_load(case, static.weight_on_bit),
         truncation_correction=r.truncation_correction,
         motor=motor,
+        string_friction=friction,
+        friction_stations=stations,
     )
+
+
+def case_string_friction(case) -> StringFriction | None:
+    """The case's along-string friction law (``[string_friction] law``; None for ``"none"``)."""
+    name = case.string_friction.law
+    if name == "none":
+        return None
+    return registered_string_friction(name, "string_friction.law").from_case(case)
+
+
+def case_friction_stations(case, state: StiffStringState) -> FrictionStations:
+    """The along-string friction's stations of a case in its well: the nodes of the stiff string ``state`` that
+    the wall (or a stabilizer) pushes, with that force's magnitude as their normal force N_i [N], the contact
+    radius of the section below the node (the bit's node: above; the tool joint's where ``well.tool_joints``
+    gives one, as the soft string's torque arm, :func:`drillstring.well.torque_drag._section_table`) and the
+    well's friction factor there (``cased_hole_friction`` above the casing shoe, ``open_hole_friction`` at and
+    below it, as :func:`drillstring.well.torque_drag._friction`)."""
+    from drillstring.well.torque_drag import _section_table
+
+    well = case.well
+    if well is None:
+        return FrictionStations.empty()
+    mesh = state.mesh
+    table = _section_table(case)
+    if len(table) != len(mesh.sections):
+        raise ValueError(f"the mesh has {len(mesh.sections)} sections, the case {len(table)}")
+    node = np.nonzero(state.in_contact)[0].astype(np.int64)
+    element = np.minimum(node, mesh.n_elements - 1)
+    radius = np.array([row[5] for row in table])[mesh.element_section[element]]
+    friction = np.where(mesh.nodes[node] < well.casing_shoe, well.cased_hole_friction, well.open_hole_friction)
+    return FrictionStations(node, state.side_force[node], radius, friction)
 
 
 def case_hook_load(case, weight_on_bit: float) -> HookLoad:

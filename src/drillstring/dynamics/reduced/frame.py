@@ -58,6 +58,19 @@ def bit_axial_motion(d, y):
 
 
 @njit(cache=True, no_cpython_wrapper=True)
+def friction_station_axial_velocity(d, y, station):
+    """The axial velocity u̇ [m/s] along the string (down positive) of the along-string friction's station
+    ``station`` (:class:`~drillstring.dynamics.kernel_data.StringFrictionData`) for the state ``y`` = [η, η̇].
+    Compiled code only."""
+    n = d.omega2.shape[0]
+    a0, a1 = d.ranges.axial_start, d.ranges.axial_end
+    velocity = 0.0
+    for j in range(a0, a1):
+        velocity += d.friction.axial_t[j - a0, station] * y[n + j]
+    return velocity
+
+
+@njit(cache=True, no_cpython_wrapper=True)
 def _columns_matvec(matrix_t, vector, offset, out, sign):
     """out (+)= sign · matrix @ vector[offset:] given ``matrix_t`` = matrixᵀ (C order): column by
     column, so the inner loop is contiguous and vectorises without reassociating sums."""

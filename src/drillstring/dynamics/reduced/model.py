@@ -27,6 +27,8 @@ from drillstring.dynamics.kernel_data import (  # the kernels' data, by name
     ModalRanges,
     ObserveData,
     RhsData,
+    StringFrictionData,
+    StringFrictionWork,
 )
 from drillstring.dynamics.reduced.observation import (
     _FOB,
@@ -53,10 +55,12 @@ from drillstring.forces.registry import (
     ContactLaw,
     HookLoad,
     Motor,
+    StringFriction,
     TopContext,
     compiled,
     pack,
 )
+from drillstring.forces.string_friction import FrictionStations
 from drillstring.forces.top_drive import TopDriveParameters
 from drillstring.forces.turning_loads import turning_load_data
 from drillstring.modal import LinearSystem, Modes, family_dofs
@@ -97,6 +101,10 @@ class ReducedOrderModel:
         motor: a downhole motor (:mod:`drillstring.forces.motor`) or None; with one, ``rotor`` is the release of
             its rotor's rotation (:class:`~drillstring.rotor.RotorRelease`, its rows over the torsional columns)
             and the basis is that of the released string (:func:`~drillstring.rotor.released_modes`).
+        string_friction: the along-string friction law (:mod:`drillstring.forces.string_friction`) or None; it
+            acts at ``friction_stations`` (:class:`~drillstring.forces.string_friction.FrictionStations`: the
+            nodes on the wall in a deviated well's static state, their normal forces), its axial force along
+            the axial modes and its torque along the torsional ones. None or no stations: no friction (code 0).
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1) and its
     case-2 part ``case2_data``, the model's data as the compiled kernels read it, by name. The model holds no
@@ -129,6 +137,8 @@ class ReducedOrderModel:
     coupled: bool = False
     motor: Motor | None = None
     rotor: RotorRelease | None = None
+    string_friction: StringFriction | None = None
+    friction_stations: FrictionStations | None = None
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -213,8 +223,15 @@ class ReducedOrderModel:
         transposed = np.ascontiguousarray
         history = (allocate_storage(self.bit_rock.sector, self.history_bins) if self.bit_rock.delayed
                    else allocate_storage(1.0, 4))
+        if self.friction_stations is None:
+            self.friction_stations = FrictionStations.empty()
+        fs = self.friction_stations
+        if len(fs) and (np.min(fs.node) < 0 or np.max(fs.node) >= mesh.n_nodes):
+            raise ValueError("friction stations must sit on the mesh's nodes")
+        #: the friction law the kernels run: None without a law or without stations (code 0, nothing added)
+        self.active_friction = self.string_friction if len(fs) else None
         laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n, contact=self.contact,
-                                 motor=self.motor)
+                                 motor=self.motor, friction=self.active_friction)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
             omega2=self.omega2,
             damping_t=transposed(self.damping.T),
@@ -241,6 +258,11 @@ class ReducedOrderModel:
                 tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(0, 0),  # kernel_data's
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
+            friction=StringFrictionData(
+                node=transposed(fs.node, dtype=np.int64), normal_force=transposed(fs.normal_force, dtype=float),
+                radius=transposed(fs.radius, dtype=float), friction=transposed(fs.friction, dtype=float),
+                axial_t=transposed(phi[dof(np.asarray(fs.node, dtype=np.int64), U), a0:a1].T, dtype=float),
+                work=StringFrictionWork.allocate(0)),  # kernel_data's
         )
         self.full = self.nonlinear == "full"
         self.rhs_data: RhsData | DelayedRhsData | FullModelData = (
@@ -290,7 +312,8 @@ class ReducedOrderModel:
             laws[offset:] = history
         mesh = self.static.mesh
         case2 = template._replace(laws=laws, contact=template.contact._replace(
-            work=ContactWork.allocate(mesh.n_nodes, len(self.stations))))
+            work=ContactWork.allocate(mesh.n_nodes, len(self.stations))), friction=template.friction._replace(
+            work=StringFrictionWork.allocate(len(self.friction_stations))))
         rhs = case2
         if self.full:
             t0, t1, y0, y1 = (int(b) for b in self.blocks[2:6])

@@ -9,7 +9,15 @@ import numpy as np
 
 from drillstring.dynamics.delay import delayed_difference
 from drillstring.fem.dofs import THETA_X, dof
-from drillstring.forces.registry import BitContext, ContactContext, HookContext, MotorContext, TopContext
+from drillstring.fem.dofs import U
+from drillstring.forces.registry import (
+    BitContext,
+    ContactContext,
+    HookContext,
+    MotorContext,
+    StringFrictionContext,
+    TopContext,
+)
 
 
 def reference_rhs(model, t: float, y: np.ndarray, history: np.ndarray | None = None) -> np.ndarray:
@@ -43,6 +51,12 @@ def reference_rhs(model, t: float, y: np.ndarray, history: np.ndarray | None = N
                    + model.top_u * float(model.hook_load.evaluate_at(HookContext(t, model.weight_on_bit)))
                    + model.generalized_force + np.where(lateral, turning, 0.0))
     acceleration = generalized - model.damping @ eta_dot - model.omega2 * eta
+    if model.active_friction is not None:  # the wall's friction along a string resting on it (a deviated well)
+        fs = model.friction_stations
+        axial_shapes = model.basis[dof(np.asarray(fs.node, dtype=np.int64), U)]
+        force, torque = model.active_friction.evaluate_at(StringFrictionContext(
+            axial_shapes @ eta_dot, spin[fs.node], fs.normal_force, fs.radius, fs.friction))
+        acceleration = acceleration + axial_shapes.T @ force + model.phi_tx[fs.node].T @ torque
     states = np.zeros(model.state_size - 2 * n)
     if model.top_drive.drives:  # the motor torque of any driving boundary, its states where the registry put them
         first = model.layout.states["top_boundary"]

@@ -31,6 +31,7 @@ from drillstring.dynamics.reduced.terms import (
     _downhole_motor,
     _is,
     _motor_speed,
+    _string_friction,
     _surely_clear,
     _top_drive,
     _turning_loads,
@@ -39,6 +40,7 @@ from drillstring.dynamics.reduced.terms import (
 from drillstring.forces.nonlinear import _kinetic_forces_kernel, _strain_energy_forces_kernel
 from drillstring.forces.registry import (
     MOTOR_CODE,
+    STRING_FRICTION_CODE,
     TOP_BOUNDARY_CODE,
     BitContext,
     ContactContext,
@@ -82,6 +84,8 @@ def _rhs_kernel(d, t, y, out):
         acc[j] += d.axial_rows[_AXIAL_BIT, j - a0] * axial_force + d.axial_rows[_AXIAL_TOP, j - a0] * hook
     for j in range(t0, t1):
         acc[j] += d.torsion_rows[_TORSION_BIT, j - t0] * bit_torque
+    if d.laws[STRING_FRICTION_CODE] != 0.0:  # the wall's friction along a string resting on it (a deviated well)
+        _string_friction(d, t, y, acc)
     if y1 == y0 and z1 == z0:
         return
     _turning_loads(d, t, y, acc)

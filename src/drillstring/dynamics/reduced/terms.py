@@ -14,14 +14,16 @@ from numba.extending import overload
 
 from drillstring.dynamics.delay import delayed_difference, view
 from drillstring.dynamics.kernel_data import AXIAL_ROW, TORSION_ROW, DelayedRhsData
-from drillstring.dynamics.reduced.frame import bit_axial_motion, station_spin
+from drillstring.dynamics.reduced.frame import bit_axial_motion, friction_station_axial_velocity, station_spin
 from drillstring.forces.registry import (
     HISTORY,
     BitContext,
     MotorContext,
+    StringFrictionContext,
     TopContext,
     bit_law_force,
     motor_torque,
+    string_friction_forces,
     top_boundary_torque,
 )
 from drillstring.forces.turning_loads import turning_load
@@ -160,6 +162,31 @@ def _turning_loads(d, t, y, acc):
     for k in range(r.node.shape[0]):
         angle, speed = station_spin(d, t, y, r.node[k], r.phase[k])
         turning_load(r, k, angle, speed, acc, y0, y1, z0, z1)
+
+
+@inner_kernel()
+def _string_friction(d, t, y, acc):
+    """Add the along-string friction (the registered law, :func:`~drillstring.forces.registry.
+    string_friction_forces`, reading the named context :class:`~drillstring.forces.registry.StringFrictionContext`)
+    at its stations, projected on the axial (force) and torsional (torque) modes, to ``acc``. Each station's
+    axial velocity and spin speed come from the frame."""
+    n = d.omega2.shape[0]
+    a0, a1, t0, t1 = d.ranges.axial_start, d.ranges.axial_end, d.ranges.torsion_start, d.ranges.torsion_end
+    f = d.friction
+    w = f.work
+    for k in range(f.node.shape[0]):
+        w.axial_velocity[k] = friction_station_axial_velocity(d, y, k)
+        _, w.spin[k] = station_spin(d, t, y, f.node[k], 0.0)
+    string_friction_forces(d.laws, StringFrictionContext(w.axial_velocity, w.spin, f.normal_force, f.radius,
+                                                         f.friction), w.force, w.torque)
+    for k in range(f.node.shape[0]):
+        force = w.force[k]
+        torque = w.torque[k]
+        for j in range(a0, a1):
+            acc[j] += f.axial_t[j - a0, k] * force
+        i = f.node[k]
+        for j in range(t0, t1):
+            acc[j] += d.phi_tx_t[j - t0, i] * torque
 
 
 @inner_kernel()
