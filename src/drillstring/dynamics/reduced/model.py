@@ -56,6 +56,7 @@ from drillstring.forces.registry import (
     HookLoad,
     Motor,
     StringFriction,
+    StringFrictionContext,
     TopContext,
     compiled,
     pack,
@@ -528,11 +529,14 @@ class ReducedOrderModel:
         projected on the lateral modes (mass-orthogonal projection ``η0 = Φᵀ(M + M_f) q0``), so it
         converges to the physical shape as lateral modes are added. With a top drive the rigid rotation
         carries Ω (or the string starts at rest when the set point is ramped) and the controller's states
-        start at 0 (the motor torque builds up from 0)."""
+        start at 0 (the motor torque builds up from 0). With along-string friction and the top speed imposed,
+        the string starts in its steady twist under that friction (:meth:`friction_twist`)."""
         at_rest = self.top_drive.starts_at_rest  # a ramped set point starts from rest: no spin, no whirl
         y0 = np.zeros(self.state_size)
         if not at_rest:
             y0[:2 * self.size] = self.turning_whirl()
+        if self.active_friction is not None and not self.top_drive.drives:
+            y0[:self.size] += self.friction_twist()
         if self.hook_load.active:
             y0[:self.size] += self.off_bottom_offsets()
         if self.rigid_rotation_column is not None and not at_rest:
@@ -559,6 +563,24 @@ class ReducedOrderModel:
         eta0 = self.basis.T @ (self.system.mass @ q0)
         y0[: self.size] += np.where(lateral, eta0, 0.0)
         return y0
+
+    def friction_twist(self) -> np.ndarray:
+        """(n,) modal coordinates of the string's steady twist under its along-string friction, the string
+        turning at the frame's speed Ω with no axial motion: ``η_j = φ_jᵀ τ(Ω) / ω_j²`` on the columns with
+        ``ω_j² > 0`` (the torsional family held at the top; τ the law's torques at the stations, axial velocity
+        0), so that a run does not start with the friction switched on at t = 0 (a torsional wave that
+        nearly stops the bit of the ``deviated`` case). Zeros without friction."""
+        n = self.size
+        twist = np.zeros(n)
+        if self.active_friction is None:
+            return twist
+        fs = self.friction_stations
+        _, torque = self.active_friction.evaluate_at(StringFrictionContext(
+            np.zeros(len(fs)), np.full(len(fs), self.base_speed), fs.normal_force, fs.radius, fs.friction))
+        generalised = self.phi_tx[fs.node].T @ torque
+        positive = self.omega2 > 0.0
+        twist[positive] = generalised[positive] / self.omega2[positive]
+        return twist
 
     def off_bottom_offsets(self) -> np.ndarray:
         """Modal coordinates η [√kg·m] of the string hanging off bottom at the start of a ramped start
