@@ -266,6 +266,10 @@ class StringFrictionKeys(_Base):
     regularization_speed: Velocity = Field(
         0.01, gt=0, description="v_reg [m/s]: the friction is mu N v / sqrt(v^2 + v_reg^2) along the contact point's "
                                 "sliding velocity v (axial and circumferential)")
+    static_factor: Dimensionless = Field(
+        1.0, ge=1, le=5, description="k_s [-]: the friction coefficient at rest over the kinetic one (1: kinetic only)")
+    stribeck_speed: Velocity = Field(
+        0.1, gt=0, description="v_S [m/s]: the sliding speed over which the coefficient decays from k_s mu to mu")
 
 
 class StringFriction(_ComponentTables):

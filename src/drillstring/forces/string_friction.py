@@ -10,15 +10,18 @@ or the tool joint where the case gives one: :func:`drillstring.well.torque_drag.
 the axial velocity ``u̇_i`` along the string and the circumferential one ``r_i θ̇_i``; the friction acts against
 that velocity, regularised by the speed ``v_reg``::
 
-    s_i = sqrt(u̇_i² + (r_i θ̇_i)² + v_reg²)
-    f_i = −μ_i N_i u̇_i / s_i               axial force on the string [N]              (1)
-    τ_i = −μ_i N_i r_i (r_i θ̇_i) / s_i     torque about the string's axis [N·m]      (2)
+    v_i = sqrt(u̇_i² + (r_i θ̇_i)²),   s_i = sqrt(v_i² + v_reg²)
+    g(v) = 1 + (k_s − 1) exp(−v / v_S)      (Stribeck: k_s μ at rest, μ sliding fast)
+    f_i = −μ_i g(v_i) N_i u̇_i / s_i               axial force on the string [N]              (1)
+    τ_i = −μ_i g(v_i) N_i r_i (r_i θ̇_i) / s_i     torque about the string's axis [N·m]      (2)
 
 For ``v_reg → 0`` this is ``μ N`` along the sliding direction (the combined axial and circumferential
 direction: a string rotating at ``Ω`` while moving axially at ``V`` takes the axial drag ``μ N V / sqrt(V² +
 (rΩ)²)``, the soft-string model's reduction of drag by rotation); at ``|v| ≪ v_reg`` a viscous law of
-coefficient ``μ N / v_reg``. Only the kinetic coefficient is modelled (no static factor, no Stribeck decay).
-The friction's power ``f u̇ + τ θ̇ = −μ N (u̇² + r² θ̇²)/s ≤ 0``: it never feeds energy in.
+coefficient ``k_s μ N / v_reg``. The static factor ``k_s`` (≥ 1; 1 by default: the kinetic coefficient alone)
+raises the coefficient towards rest over the Stribeck speed ``v_S``: a friction that weakens with speed, the
+mechanism of the string's own stick-slip. The friction's power ``f u̇ + τ θ̇ = −μ g N (u̇² + r² θ̇²)/s ≤ 0``:
+it never feeds energy in.
 
 The normal forces are the static ones, held fixed during the run (the dynamic lateral motion does not change
 them; the lateral dynamics of the reduced model stays that of a straight string: docs/stiff_string.md).
@@ -44,14 +47,17 @@ __all__ = ["CoulombStringFriction", "FrictionStations", "coulomb_string_friction
 @njit(cache=True)
 def coulomb_string_friction_kernel(args, ctx, force, torque):
     """Eqs. (1)-(2) at every station of ``ctx`` (:class:`~drillstring.forces.registry.StringFrictionContext`),
-    ``args = [v_reg]`` [m/s]: fills ``force`` [N] and ``torque`` [N·m] on the string."""
+    ``args = [v_reg [m/s], k_s [-], v_S [m/s]]``: fills ``force`` [N] and ``torque`` [N·m] on the string."""
     v_reg2 = args[0] * args[0]
+    excess = args[1] - 1.0
     for i in range(force.shape[0]):
         r = ctx.radius[i]
         axial = ctx.axial_velocity[i]
         circumferential = r * ctx.spin_speed[i]
-        scale = ctx.friction[i] * ctx.normal_force[i] / math.sqrt(axial * axial + circumferential * circumferential
-                                                                 + v_reg2)
+        sliding2 = axial * axial + circumferential * circumferential
+        scale = ctx.friction[i] * ctx.normal_force[i] / math.sqrt(sliding2 + v_reg2)
+        if excess != 0.0:
+            scale *= 1.0 + excess * math.exp(-math.sqrt(sliding2) / args[2])
         force[i] = -scale * axial
         torque[i] = -scale * r * circumferential
 
@@ -63,41 +69,61 @@ class CoulombStringFriction(StringFriction):
 
     Attributes:
         regularization_speed: v_reg [m/s] (> 0).
+        static_factor: k_s [-] (≥ 1): the coefficient at rest over the kinetic one (1: kinetic only).
+        stribeck_speed: v_S [m/s] (> 0): the sliding speed over which it decays to the kinetic one.
     """
 
     name: ClassVar[str] = "coulomb"
-    kernel_size: ClassVar[int] = 1
+    kernel_size: ClassVar[int] = 3
     kernel: ClassVar = coulomb_string_friction_kernel
     keys: ClassVar = StringFrictionKeys
 
     regularization_speed: float = 0.01
+    static_factor: float = 1.0
+    stribeck_speed: float = 0.1
 
     def __post_init__(self) -> None:
-        v = self.regularization_speed
-        if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0.0):
-            raise ValueError(f"string_friction regularization_speed = {v!r} m/s: must be a finite number > 0")
+        for field, low, unit, strict in (("regularization_speed", 0.0, "m/s", True), ("static_factor", 1.0, "", False),
+                                         ("stribeck_speed", 0.0, "m/s", True)):
+            v = getattr(self, field)
+            if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and (v > low if strict else v >= low)):
+                raise ValueError(f"string_friction {field} = {v!r}{' ' + unit if unit else ''}: must be a finite "
+                                 f"number {'>' if strict else '>='} {low:g}")
 
     @classmethod
     def from_case(cls, case) -> CoulombStringFriction:
         keys = case_keys(case.string_friction, cls)
-        return cls(regularization_speed=float(keys.regularization_speed))
+        return cls(regularization_speed=float(keys.regularization_speed), static_factor=float(keys.static_factor),
+                   stribeck_speed=float(keys.stribeck_speed))
 
     def kernel_array(self) -> np.ndarray:
-        return np.array([self.regularization_speed], dtype=np.float64)
+        return np.array([self.regularization_speed, self.static_factor, self.stribeck_speed], dtype=np.float64)
 
     def jacobian_at(self, ctx: StringFrictionContext) -> np.ndarray:
-        """(n, 2, 2): ∂(f, τ)/∂(u̇, θ̇x) of eqs. (1)-(2) per station, in closed form."""
+        """(n, 2, 2): ∂(f, τ)/∂(u̇, θ̇x) of eqs. (1)-(2) per station, in closed form: with the sliding velocity
+        ``p = (u̇, r θ̇)``, ``(f, τ/r) = −μ N h(v) p``, ``h = g(v)/s``, ``∂/∂p = −μ N (h I + p ⊗ h'(v) p/v)``
+        (at ``v = 0`` the Stribeck term's direction is undefined: taken as 0)."""
         u = np.asarray(ctx.axial_velocity, dtype=float)
         r = np.broadcast_to(np.asarray(ctx.radius, dtype=float), u.shape)
         c = r * np.asarray(ctx.spin_speed, dtype=float)
         mu_n = np.asarray(ctx.friction, dtype=float) * np.asarray(ctx.normal_force, dtype=float)
-        s2 = u * u + c * c + self.regularization_speed**2
-        s3 = s2 * np.sqrt(s2)
+        v = np.hypot(u, c)
+        s = np.sqrt(v * v + self.regularization_speed**2)
+        decay = (self.static_factor - 1.0) * np.exp(-v / self.stribeck_speed)
+        g = 1.0 + decay
+        h = g / s
+        dh_dv = -decay / self.stribeck_speed / s - g * v / s**3
+        radial = np.divide(dh_dv, v, out=np.zeros_like(v), where=v > 0.0)  # h'(v)/v
+        a = np.empty(u.shape + (2, 2))
+        a[..., 0, 0] = h + u * radial * u
+        a[..., 0, 1] = u * radial * c
+        a[..., 1, 0] = c * radial * u
+        a[..., 1, 1] = h + c * radial * c
         out = np.empty(u.shape + (2, 2))
-        out[..., 0, 0] = -mu_n * (s2 - u * u) / s3
-        out[..., 0, 1] = mu_n * u * c * r / s3
-        out[..., 1, 0] = mu_n * r * c * u / s3
-        out[..., 1, 1] = -mu_n * r * r * (s2 - c * c) / s3
+        out[..., 0, 0] = -mu_n * a[..., 0, 0]
+        out[..., 0, 1] = -mu_n * a[..., 0, 1] * r
+        out[..., 1, 0] = -mu_n * r * a[..., 1, 0]
+        out[..., 1, 1] = -mu_n * r * r * a[..., 1, 1]
         return out
 
 
