@@ -12,7 +12,10 @@ Prints, for the ``deviated`` case (its [well], [string_friction]):
    bit, against the soft string's drilling torque (whose torque on bit is the case's ``well.torque_on_bit``)
    and its hook load; the hook load of the reduced model is the static state's (a constant hook force);
 3. the torsional oscillation with and without friction: the bit speed's range and standard deviation over the
-   window, off bottom and drilling, and the decay of the off-bottom start-up transient.
+   window, off bottom and drilling, and the decay of the off-bottom start-up transient;
+4. a static factor with a Stribeck decay (k_s = 1.5, v_S = 0.1 m/s) off bottom at 120, 60 and 30 rpm: the bit
+   speed's range over the window against the kinetic friction's (a friction weakening with speed can drive the
+   string's own stick-slip).
 """
 
 from __future__ import annotations
@@ -111,6 +114,17 @@ def main() -> None:
         early = np.abs(speed[(t > 2.0) & (t <= 12.0)]).max()
         late = np.abs(speed[t > t[-1] - 10.0]).max()
         print(f"  {label:<34s} |bit speed - top speed| max over 2-12 s {early:.3f}, over the last 10 s {late:.3f} rad/s")
+
+    print("\n4. static factor 1.5, Stribeck speed 0.1 m/s, off bottom (window as above)")
+    for rpm in (120.0, 60.0, 30.0):
+        at = off.model_copy(update={"operation": off.operation.model_copy(update={"top_speed": rpm * np.pi / 30.0})})
+        model = case_reduced_model(at)
+        for label, law in (("kinetic", CoulombStringFriction(0.01)),
+                           ("k_s 1.5, v_S 0.1", CoulombStringFriction(0.01, 1.5, 0.1))):
+            result, _ = _run(dataclasses.replace(model, string_friction=law), at, args.t_end)
+            torque = _window(result, "surface_torque", args.window)
+            print(_bit_speed_line(f"{rpm:g} rpm, {label}", result, args.window)
+                  + f"; surface torque mean {torque.mean():.0f}, range {torque.min():.0f}..{torque.max():.0f} N*m")
 
 
 if __name__ == "__main__":
