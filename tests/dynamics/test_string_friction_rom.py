@@ -13,6 +13,7 @@ from drillstring.case import StringFriction, load_case
 from drillstring.dynamics.reduced.build import case_friction_stations
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import simulate_model
+from drillstring.dynamics.stability import steady_drilling
 from drillstring.fem.dofs import THETA_X, U, dof
 from drillstring.forces.string_friction import CoulombStringFriction, FrictionStations
 from drillstring.well.stiff_string import case_stiff_string
@@ -152,6 +153,9 @@ def test_deviated_case_builds_on_its_well_statics():
     np.testing.assert_array_equal(fs.normal_force, state.side_force[fs.node])
     shoe = case.well.casing_shoe
     np.testing.assert_array_equal(fs.friction, np.where(state.mesh.nodes[fs.node] < shoe, 0.2, 0.3))
+    # the stability analysis leaves the friction out, and says so
+    assert "along-string friction is left out" in steady_drilling(model).note
+    assert steady_drilling(dataclasses.replace(model, string_friction=None)).note == ""
     # on the case's own 10 m mesh (the 60 m one's stiff string presses harder: 19.3 against 18.1 kN·m)
     fine = load_case("deviated")
     fine = fine.model_copy(update={"bit_rock": fine.bit_rock.model_copy(update={"law": "off_bottom"})})

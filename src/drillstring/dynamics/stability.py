@@ -404,6 +404,8 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
                     f"{set_point * 30.0 / math.pi:.4g} rpm: without integral action "
                     f"the top boundary's speed droops with the load torque")
         drive.check_steady_torque(motor)
+    if model.active_friction is not None:  # not in eq. (1) nor (2): docs/stiff_string.md, "Torsional stability"
+        note = (note + "; " if note else "") + "the along-string friction is left out of this analysis"
     n = model.size
     if model.rigid_rotation_column is not None:
         load = load + model.quill_shapes * motor
