@@ -15,6 +15,7 @@ from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import simulate_model
 from drillstring.dynamics.stability import steady_drilling
 from drillstring.fem.dofs import THETA_X, U, dof
+from drillstring.forces.registry import StringFrictionContext
 from drillstring.forces.string_friction import CoulombStringFriction, FrictionStations
 from drillstring.well.stiff_string import case_stiff_string
 from drillstring.well.torque_drag import case_torque_drag
@@ -167,3 +168,32 @@ def test_deviated_case_builds_on_its_well_statics():
                                   lateral_modes=2)
     assert len(vertical.friction_stations) == 0
     assert abs(vertical.static.weight_on_hook - model.static.weight_on_hook) > 1e4
+
+
+def test_projected_jacobian_of_the_compiled_friction(coarse):
+    """∂(η̈)/∂(η̇) of the compiled right-hand side's friction part (central differences, with the model without
+    friction subtracted) is the law's closed-form Jacobian projected here, ``Σ Φ_aᵀ J_ab Φ_b`` over (u, θx), with
+    a static factor and a Stribeck decay as well."""
+    plain, model = coarse
+    model = dataclasses.replace(model, string_friction=CoulombStringFriction(0.01, 1.5, 0.1))
+    n = model.size
+    y = _random_state(model, 11)
+    y[n:2 * n] *= 0.1
+    fs = model.friction_stations
+    phi_u, phi_t = model.basis[dof(fs.node, U)], model.basis[dof(fs.node, THETA_X)]
+    jac = model.string_friction.jacobian_at(StringFrictionContext(
+        phi_u @ y[n:2 * n], model.base_speed + phi_t @ y[n:2 * n], fs.normal_force, fs.radius, fs.friction))
+    rows = (phi_u, phi_t)
+    expected = sum(rows[a].T @ (jac[:, a, b][:, None] * rows[b]) for a in range(2) for b in range(2))
+    numeric = np.empty((n, n))
+    for k in range(n):
+        step = 1e-7
+        up, down = y.copy(), y.copy()
+        up[n + k] += step
+        down[n + k] -= step
+        numeric[:, k] = ((model.rhs(0.0, up) - plain.rhs(0.0, up)) - (model.rhs(0.0, down) - plain.rhs(0.0, down))
+                         )[n:2 * n] / (2 * step)
+    # the differences' rounding: a few ulps of the accelerations over the step
+    rounding = 8 * np.finfo(float).eps * np.abs(model.rhs(0.0, y)[n:2 * n]).max() / 1e-7
+    np.testing.assert_allclose(numeric, expected, rtol=1e-5, atol=rounding)
+    assert rounding < 1e-2 * np.abs(expected).max()
