@@ -1,19 +1,19 @@
 """The growth rate of the deviated case's first torsional mode with and without the along-string friction, by
 the eigenvalues of the right-hand side's Jacobian (central differences of the compiled ``model.rhs``) at the
-steady state (issue 34 item 4; docs/stiff_string.md, "Torsional stability"). The stability analysis
-(``drillstring.dynamics.stability``) leaves the friction out; this differences the whole model instead.
+steady state, against the stability analysis's (``drillstring.dynamics.stability``: its steady state and state
+matrix with the friction's load, axial resistance and closed-form Jacobian) (issue 34 item 4;
+docs/stiff_string.md, "Torsional stability").
 
     PYTHONPATH=src python benchmarks/deviated_friction_linear.py
 
-The steady state: the stability analysis's steady drilling (``steady_drilling``: the bit law's steady rate of
-penetration, the static offsets of its loads) plus the static twist and stretch under the friction's forces at
-that state's velocities (``η_j += φ_jᵀ f / ω_j²`` on the elastic columns); off bottom the model's own start
-(its steady twist, :meth:`ReducedOrderModel.friction_twist`). The friction's axial force is left out of the
-rigid axial equation (its rate of penetration is the frictionless one: 0.7 % off at the case's point).
+The steady state for the differences: the stability analysis's (its rate of penetration with the friction's
+axial resistance, the static offsets of every load, the friction's too); off bottom the model's own start (its
+steady twist, :meth:`ReducedOrderModel.friction_twist`), the same state.
 
 Cases: drilling at 120 rpm (the case), friction off / kinetic; off bottom at 30 rpm, kinetic / static factor
-1.5 with a Stribeck speed of 0.1 m/s. Printed: the first torsional root (the largest torsional share of its
-eigenvector among the roots below 1 Hz), its frequency [Hz] and growth rate [1/s].
+1.5 with a Stribeck speed of 0.1 m/s. Printed: the first torsional root (the lowest root
+below 1 Hz whose eigenvector is mostly torsional), its frequency [Hz] and growth rate [1/s], by differences and by
+the stability analysis (its leading torsional root).
 """
 
 from __future__ import annotations
@@ -24,29 +24,13 @@ import numpy as np
 
 from drillstring.case import load_case
 from drillstring.dynamics.rom import case_reduced_model
-from drillstring.dynamics.stability import steady_drilling
-from drillstring.fem.dofs import THETA_X, U, dof
-from drillstring.forces.registry import StringFrictionContext
+from drillstring.dynamics.stability import stability, steady_drilling
 from drillstring.forces.string_friction import CoulombStringFriction
 
 
 def _steady(model):
-    """The steady state (module docstring)."""
-    steady = steady_drilling(model.__class__(**{**{f.name: getattr(model, f.name) for f in
-                                                     dataclasses.fields(model)}, "string_friction": None}))
-    y = np.array(steady.state, dtype=float)
-    law = model.active_friction
-    if law is None:
-        return y
-    n = model.size
-    fs = model.friction_stations
-    phi_u, phi_t = model.basis[dof(fs.node, U)], model.basis[dof(fs.node, THETA_X)]
-    force, torque = law.evaluate_at(StringFrictionContext(phi_u @ y[n:2 * n], model.base_speed + phi_t @ y[n:2 * n],
-                                                          fs.normal_force, fs.radius, fs.friction))
-    load = phi_u.T @ force + phi_t.T @ torque
-    elastic = model.omega2 > 0.0
-    y[:n][elastic] += load[elastic] / model.omega2[elastic]
-    return y
+    """The stability analysis's steady drilling, the friction's load, axial resistance and twist in it."""
+    return np.array(steady_drilling(model).state, dtype=float)
 
 
 def _jacobian(model, y, t=0.0):
@@ -83,7 +67,7 @@ def main() -> None:
     off = case.model_copy(update={"bit_rock": case.bit_rock.model_copy(update={"law": "off_bottom"}),
                                   "operation": case.operation.model_copy(update={"top_speed": np.pi})})
     off_bottom = case_reduced_model(off)
-    print(f"{'case':<44}{'frequency [Hz]':>16}{'growth rate [1/s]':>19}")
+    print(f"{'case':<44}{'frequency [Hz]':>16}{'growth rate [1/s]':>19}{'analysis [Hz]':>15}{'analysis [1/s]':>16}")
     runs = (("drilling 120 rpm, no friction", dataclasses.replace(drilling, string_friction=None), False),
             ("drilling 120 rpm, kinetic friction", drilling, False),
             ("off bottom 30 rpm, no friction", dataclasses.replace(off_bottom, string_friction=None), True),
@@ -93,7 +77,9 @@ def main() -> None:
     for label, model, start in runs:
         y = model.initial_state(0.0, 0) if start else _steady(model)
         root = _first_torsional(model, _jacobian(model, y))
-        print(f"{label:<44}{root.imag / (2 * np.pi):>16.4f}{root.real:>19.5f}")
+        analysis = stability(model).leading_by_family["torsional"]
+        print(f"{label:<44}{root.imag / (2 * np.pi):>16.4f}{root.real:>19.5f}{analysis.frequency:>15.4f}"
+              f"{analysis.growth_rate:>16.5f}")
 
 
 if __name__ == "__main__":

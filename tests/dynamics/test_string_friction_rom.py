@@ -13,7 +13,7 @@ from drillstring.case import StringFriction, load_case
 from drillstring.dynamics.reduced.build import case_friction_stations
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import simulate_model
-from drillstring.dynamics.stability import steady_drilling
+from drillstring.dynamics.stability import linearized_matrix, steady_drilling
 from drillstring.fem.dofs import THETA_X, U, dof
 from drillstring.forces.registry import StringFrictionContext
 from drillstring.forces.string_friction import CoulombStringFriction, FrictionStations
@@ -154,9 +154,6 @@ def test_deviated_case_builds_on_its_well_statics():
     np.testing.assert_array_equal(fs.normal_force, state.side_force[fs.node])
     shoe = case.well.casing_shoe
     np.testing.assert_array_equal(fs.friction, np.where(state.mesh.nodes[fs.node] < shoe, 0.2, 0.3))
-    # the stability analysis leaves the friction out, and says so
-    assert "along-string friction is left out" in steady_drilling(model).note
-    assert steady_drilling(dataclasses.replace(model, string_friction=None)).note == ""
     # on the case's own 10 m mesh (the 60 m one's stiff string presses harder: 19.3 against 18.1 kN·m)
     fine = load_case("deviated")
     fine = fine.model_copy(update={"bit_rock": fine.bit_rock.model_copy(update={"law": "off_bottom"})})
@@ -197,3 +194,35 @@ def test_projected_jacobian_of_the_compiled_friction(coarse):
     rounding = 8 * np.finfo(float).eps * np.abs(model.rhs(0.0, y)[n:2 * n]).max() / 1e-7
     np.testing.assert_allclose(numeric, expected, rtol=1e-5, atol=rounding)
     assert rounding < 1e-2 * np.abs(expected).max()
+
+
+@pytest.mark.parametrize("law", ["off_bottom", "tucker_wang"])
+def test_stability_analysis_includes_the_friction(law):
+    """The stability analysis's steady state is an equilibrium of the right-hand side with the friction (off
+    bottom exactly; drilling to the friction's nonlinearity in the rate of penetration, (V/rΩ)² ~ 1e-5), and its
+    state matrix is the central differences of the compiled right-hand side there (a deviated case, coarse mesh,
+    a Stribeck factor to make the friction's Jacobian matter)."""
+    case = load_case("deviated")
+    case = case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 60.0}),
+                                   "bit_rock": case.bit_rock.model_copy(update={"law": law})})
+    model = case_reduced_model(case, axial_modes=2, torsional_modes=4, lateral_modes=2)
+    model = dataclasses.replace(model, string_friction=CoulombStringFriction(0.01, 1.5, 0.5))
+    n = model.size
+    after = 1e3  # [s]: after the case's start (its hook-load ramp), the steady state's regime
+    steady = steady_drilling(model)
+    y = np.asarray(steady.state, dtype=float)
+    load = np.abs(model.friction_load(y[n:2 * n])).max()
+    residual = np.abs(model.rhs(after, y)[n:2 * n]).max()
+    assert residual < (1e-9 if law == "off_bottom" else 1e-4) * load
+    a = linearized_matrix(model, steady)
+    numeric = np.empty_like(a)
+    for k in range(y.size):
+        step = 1e-6 * max(abs(y[k]), 1.0)  # the differences' rounding ~ eps |ω² η| / step stays below 1e-7
+        up, down = y.copy(), y.copy()
+        up[k] += step
+        down[k] -= step
+        numeric[:, k] = (model.rhs(after, up) - model.rhs(after, down)) / (2 * step)
+    scale = np.abs(a[n:2 * n]).max()
+    np.testing.assert_allclose(numeric[n:2 * n], a[n:2 * n], rtol=1e-5, atol=1e-7 * scale)
+    # and the friction is in it: its Jacobian is not negligible there
+    assert np.abs(model.friction_jacobian(y[n:2 * n])).max() > 1e-4 * scale

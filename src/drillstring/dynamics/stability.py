@@ -251,10 +251,11 @@ def _steady_law(model: ReducedOrderModel, omega: float, r: int) -> BitSteadyStat
     """The bit law's steady drilling at the bit speed ``omega`` [rad/s] (the law's own
     :meth:`~drillstring.forces.registry.BitLaw.steady_drilling`): the rigid axial equation
     ``b_r (f + wob) + g_r = D_rr V / b_r`` is ``−f(V, Ω) = W − c V`` with the axial load
-    ``W = wob + g_r / b_r`` and the resistance ``c = D_rr / b_r²``; eq. (1) for a law affine in V."""
+    ``W = wob + g_r / b_r`` and the resistance ``c = D_rr / b_r²`` (plus the along-string friction's,
+    :meth:`~drillstring.dynamics.reduced.model.ReducedOrderModel.friction_axial_resistance`); eq. (1) for a law affine in V."""
     b_r = model.bit_u[r]
     steady = model.bit_rock.steady_drilling(omega, model.weight_on_bit + model.generalized_force[r] / b_r,
-                                            model.damping[r, r] / b_r**2)
+                                            model.damping[r, r] / b_r**2 + model.friction_axial_resistance(omega))
     if steady is None:
         raise ValueError(
             f"no steady drilling at weight_on_bit = {quantity_text(model.weight_on_bit, 'force')}, top_speed = "
@@ -286,7 +287,7 @@ def _steady_load_at(model: ReducedOrderModel, omega: float, motor_speed: float, 
     if model.motor is not None:
         velocity = velocity + motor_speed * _lower_rotation(model)
     load = (model.bit_u * (law.axial_force + model.weight_on_bit) + model.bit_t * law.torque
-            + model.generalized_force - model.damping @ velocity)
+            + model.generalized_force - model.damping @ velocity + model.friction_load(velocity))
     if model.motor is not None:
         load = load + model.motor_shapes * float(model.motor.evaluate(motor_speed))
     motor = 0.0 if spin is None else float(-load[spin] / model.quill_shapes[spin])
@@ -404,8 +405,6 @@ def steady_drilling(model: ReducedOrderModel) -> SteadyDrilling:
                     f"{set_point * 30.0 / math.pi:.4g} rpm: without integral action "
                     f"the top boundary's speed droops with the load torque")
         drive.check_steady_torque(motor)
-    if model.active_friction is not None:  # not in eq. (1) nor (2): docs/stiff_string.md, "Torsional stability"
-        note = (note + "; " if note else "") + "the along-string friction is left out of this analysis"
     n = model.size
     if model.rigid_rotation_column is not None:
         load = load + model.quill_shapes * motor
@@ -443,7 +442,7 @@ def linearized_matrix(model: ReducedOrderModel, steady: SteadyDrilling) -> np.nd
     a = np.zeros((size, size))
     a[:n, n:2 * n] = np.eye(n)
     a[n:2 * n, :n] = -np.diag(model.omega2)
-    a[n:2 * n, n:2 * n] = coupling - model.damping
+    a[n:2 * n, n:2 * n] = coupling - model.damping + model.friction_jacobian(steady.state[n:2 * n])
     if model.motor is not None:  # the downhole motor's torque pair: dT/dω_m (ω_m = motor_shapesᵀ η̇), its states
         m, first, k = model.motor_shapes, model.layout.states["motor"], model.motor.n_states
         # rows (T, each state's rate), columns (ω_m, each state), at the steady state

@@ -231,6 +231,11 @@ class ReducedOrderModel:
             raise ValueError("friction stations must sit on the mesh's nodes")
         #: the friction law the kernels run: None without a law or without stations (code 0, nothing added)
         self.active_friction = self.string_friction if len(fs) else None
+        if self.active_friction is not None and self.motor is not None:
+            raise ValueError("along-string friction with a downhole motor is not supported yet: the stations below "
+                             "the rotor turn at the string's speed plus the motor's")
+        self._friction_rows = (phi[dof(np.asarray(fs.node, dtype=np.int64), U)],
+                               phi[dof(np.asarray(fs.node, dtype=np.int64), THETA_X)])
         laws, self.layout = pack(self.bit_rock, self.top_drive, self.hook_load, history, 2 * n, contact=self.contact,
                                  motor=self.motor, friction=self.active_friction)
         self.case2_data = (DelayedRhsData if self.bit_rock.delayed else RhsData)(
@@ -581,6 +586,41 @@ class ReducedOrderModel:
         positive = self.omega2 > 0.0
         twist[positive] = generalised[positive] / self.omega2[positive]
         return twist
+
+    def _friction_context(self, velocity: np.ndarray) -> StringFrictionContext:
+        fs = self.friction_stations
+        u, t = self._friction_rows
+        return StringFrictionContext(u @ velocity, self.base_speed + t @ velocity, fs.normal_force, fs.radius,
+                                     fs.friction)
+
+    def friction_load(self, velocity: np.ndarray):
+        """The along-string friction's generalised force ``Φ_uᵀ f + Φ_θᵀ τ`` (n,) with the modal velocities
+        ``velocity`` = η̇ (the stations' axial velocity and spin from them, the frame's speed added); 0.0 without
+        friction (the stability analysis's steady load, :mod:`drillstring.dynamics.stability`)."""
+        if self.active_friction is None:
+            return 0.0
+        force, torque = self.active_friction.evaluate_at(self._friction_context(velocity))
+        return self._friction_rows[0].T @ force + self._friction_rows[1].T @ torque
+
+    def friction_jacobian(self, velocity: np.ndarray):
+        """``∂(friction_load)/∂η̇`` (n, n) at ``velocity``: the law's closed-form Jacobian projected,
+        ``Σ_ab Φ_aᵀ J_ab Φ_b`` over (u, θx); 0.0 without friction."""
+        if self.active_friction is None:
+            return 0.0
+        jac = self.active_friction.jacobian_at(self._friction_context(velocity))
+        rows = self._friction_rows
+        return sum(rows[a].T @ (jac[:, a, b][:, None] * rows[b]) for a in range(2) for b in range(2))
+
+    def friction_axial_resistance(self, speed: float) -> float:
+        """``Σ_i −∂f_i/∂u̇`` at ``u̇ = 0`` with every station turning at ``speed`` [rad/s]: the friction's resistance
+        [N·s/m] to a slow rigid axial motion of the turning string (``μ N g/s`` summed; exact to ``(V/rΩ)²`` at a
+        speed V; the stability analysis's steady rate of penetration); 0.0 without friction."""
+        if self.active_friction is None:
+            return 0.0
+        fs = self.friction_stations
+        jac = self.active_friction.jacobian_at(StringFrictionContext(
+            np.zeros(len(fs)), np.full(len(fs), float(speed)), fs.normal_force, fs.radius, fs.friction))
+        return float(-jac[:, 0, 0].sum())
 
     def off_bottom_offsets(self) -> np.ndarray:
         """Modal coordinates η [√kg·m] of the string hanging off bottom at the start of a ramped start
