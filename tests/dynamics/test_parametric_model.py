@@ -125,6 +125,9 @@ def test_cases_outside_the_form_are_refused(reference):
     motor = load_case("motor")
     with pytest.raises(NotCovered, match="motor"):
         ParametricReducedModel(motor, 0.5 * motor.operation.weight_on_bit, 1.5 * motor.operation.weight_on_bit)
+    deviated = load_case("deviated")  # its statics are the stiff string's along the path, not the vertical ones
+    with pytest.raises(NotCovered, match=r"\[well\]"):
+        ParametricReducedModel(deviated, 0.5 * deviated.operation.weight_on_bit, 1.5 * deviated.operation.weight_on_bit)
 
 
 def test_lateral_cutoff_count_follows_the_rebuild():

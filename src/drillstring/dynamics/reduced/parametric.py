@@ -103,6 +103,9 @@ class ParametricReducedModel:
             raise NotCovered("bit_rock.law = 'off_bottom': the weight-on-bit is always 0, nothing to parametrise")
         if case.motor is not None:
             raise NotCovered("a downhole motor: its released torsional basis is not parametrised")
+        if case.well is not None:
+            raise NotCovered("a case with [well]: its static state (the stiff string along the well path) is not "
+                             "parametrised")
         self.case = case
         self.range = (low, high)
         nominal = case_reduced_model(case)
