@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import Any, Callable
@@ -42,7 +42,6 @@ from drillstring.checks import seed as check_seed
 from drillstring.dynamics.indicators import RENAMED_METRICS, TOP_DRIVE_METRICS, has_top_drive
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.stochastic.random_matrices import (
-    ModelDispersion,
     model_generator,
     random_reduced_model,
 )
@@ -68,7 +67,13 @@ from drillstring.stochastic.runs import (
 )
 from drillstring.stochastic.study_model import realization_model, study_model_note
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
-from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
+from drillstring.stochastic.uncertainty import Uncertainty, input_attributes
+from drillstring.stochastic.uncertainty_settings import (
+    NO_UNCERTAINTY,
+    UncertaintyFields,
+    UncertaintySettings,
+    accepts_uncertainty_fields,
+)
 from drillstring.units import display_unit, quantity_text
 
 
@@ -94,29 +99,31 @@ OUT_OF_RANGE_PROBABILITY = 1e-3
 MAX_STUDY_BYTES = 4 * 2**30
 
 
+@accepts_uncertainty_fields
 @dataclass(frozen=True)
-class StudySettings:
+class StudySettings(UncertaintyFields):
     """What defines a study's realizations; a resumed study must have the same settings.
 
-    The random parameters are every ``(path, law)`` of ``laws`` (case-parameter paths and law specs,
-    :mod:`drillstring.stochastic.uncertainty`; a random weight-on-hook is the path ``weight_on_hook``, e.g.
-    :func:`weight_on_hook_normal`), at least one. ``correlated`` and ``correlation`` declare a correlation
-    matrix of some normal parameters.
+    The random parameters are every ``(path, law)`` of ``uncertainty.laws`` (case-parameter paths and law
+    specs, :mod:`drillstring.stochastic.uncertainty`; a random weight-on-hook is the path ``weight_on_hook``,
+    e.g. :func:`weight_on_hook_normal`), at least one, with the correlation and the model dispersion of
+    ``uncertainty`` (:class:`~drillstring.stochastic.uncertainty_settings.UncertaintySettings`). The
+    uncertainty's fields are also accepted as keywords and read through (``StudySettings(samples=100,
+    laws=..., model_dispersion=...)``, ``settings.laws``).
 
     Attributes:
         samples: number of realizations n_s.
         seed: root seed of the realizations' random streams, in [0, 2**64 - 1].
         t_end: simulated time per realization [s].
         output_step: output step [s].
-        laws: ``((path, spec), ...)`` of the random parameters (canonical specs).
-        correlated: paths of the correlated normal parameters.
-        correlation: their correlation matrix (rows of numbers).
-        model_dispersion: ``(δ_M, δ_K, δ_D)`` of the random reduced mass, stiffness and damping matrices
+        uncertainty: the random parameters' laws, their correlation and the model dispersion
+            ``(δ_M, δ_K, δ_D)`` of the random reduced mass, stiffness and damping matrices
             (:mod:`~drillstring.stochastic.random_matrices`; all 0: none). Realization ``i`` draws them from
             :func:`~drillstring.stochastic.random_matrices.model_generator` ``(seed, i)``; the nominal run
             keeps the nominal model.
 
-    Checked when built (TypeError / ValueError naming the field; the time window by
+    Checked when built (TypeError / ValueError naming the field; the uncertainty by
+    :class:`~drillstring.stochastic.uncertainty_settings.UncertaintySettings`, the time window by
     :func:`~drillstring.dynamics.simulate.run_window`).
     """
 
@@ -124,34 +131,19 @@ class StudySettings:
     seed: int = 0
     t_end: float = 30.0
     output_step: float = 0.01
-    laws: tuple[tuple[str, str], ...] = ()
-    correlated: tuple[str, ...] = ()
-    correlation: tuple[tuple[float, ...], ...] = ()
-    model_dispersion: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    uncertainty: UncertaintySettings = NO_UNCERTAINTY
 
     def __post_init__(self) -> None:
         samples = integer("samples", self.samples, low=MIN_SAMPLES,
                           allowed=f"an integer >= {MIN_SAMPLES} (the statistics need at least 2 realizations)")
-        if not self.laws:
+        self._check_uncertainty()
+        if not self.uncertainty.laws:
             raise ValueError("no random parameter: give at least one parameter law (e.g. of weight_on_hook)")
-        paths = [str(path).strip() for path, _ in self.laws]
-        twice = next((path for i, path in enumerate(paths) if path in paths[:i]), None)
-        if twice is not None:
-            raise ValueError(f"{twice} is declared twice")
         window = run_window(self.t_end, self.output_step)
         object.__setattr__(self, "samples", samples)
         object.__setattr__(self, "seed", check_seed(self.seed))
         object.__setattr__(self, "t_end", window.t_end)
         object.__setattr__(self, "output_step", window.output_step)
-        object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
-        object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
-        object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
-        object.__setattr__(self, "model_dispersion", ModelDispersion.from_tuple(self.model_dispersion).as_tuple())
-
-    @property
-    def model(self) -> ModelDispersion:
-        """The model uncertainty (:class:`~drillstring.stochastic.random_matrices.ModelDispersion`)."""
-        return ModelDispersion(*self.model_dispersion)
 
     @property
     def time(self) -> np.ndarray:
@@ -215,9 +207,7 @@ def study_uncertainty(case: Case, settings: StudySettings, *, check: bool = Fals
     key = (case.to_toml(), settings, check)
     if key in _UNCERTAINTIES:
         return _UNCERTAINTIES[key]
-    correlation = [list(row) for row in settings.correlation] if settings.correlated else None
-    found = uncertainty(case, dict(settings.laws), correlated=settings.correlated, correlation=correlation,
-                        tolerance=OUT_OF_RANGE_PROBABILITY if check else 1.0)
+    found = settings.uncertainty.law(case, tolerance=OUT_OF_RANGE_PROBABILITY if check else 1.0)
     if len(_UNCERTAINTIES) > 16:
         _UNCERTAINTIES.clear()
     _UNCERTAINTIES[key] = found
@@ -449,7 +439,7 @@ class StudyStore(TaskStore):
                     else nominal_weight_on_hook(case))
         attrs = {"weight_on_hook_mean": woh_mean, "weight": case.weight, **input_attributes(law),
                  "metrics_transient": metrics_transient(settings)}
-        super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
+        super().__init__(path, case_toml=case.to_toml(), settings=settings.store_settings(), layout=layout, sizes=sizes,
                          attrs=attrs)
 
     def owner_status(self, name: str) -> str | None:

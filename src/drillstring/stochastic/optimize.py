@@ -42,7 +42,7 @@ points it had). A store of another case or settings is refused by its fingerprin
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any, Callable
@@ -59,11 +59,16 @@ from drillstring.stochastic.operating_map import MapSettings
 from drillstring.stochastic.parameters import WEIGHT_ON_HOOK, ParameterError, case_parameter, with_parameters
 from drillstring.stochastic.probabilistic_map import (PROBABILITIES, SAMPLE_OUTPUTS, SampledMapSettings,
                                                       check_sampled_map, point_uncertainty, run_realization)
-from drillstring.stochastic.random_matrices import ModelDispersion
 from drillstring.stochastic.runs import TOP_DRIVE_OUTPUTS, compile_kernels, with_top_drive_outputs
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, TaskStore
 from drillstring.stochastic.surrogate import Estimates, SearchProblem, constraint_confidence, next_batch, recommend
 from drillstring.stochastic.uncertainty import input_attributes
+from drillstring.stochastic.uncertainty_settings import (
+    NO_UNCERTAINTY,
+    UncertaintyFields,
+    UncertaintySettings,
+    accepts_uncertainty_fields,
+)
 
 __all__ = ["DECISION_ALIASES", "DEFAULT_BATCH", "MAX_POINTS", "MAX_SAMPLES", "OBJECTIVES", "OptimizationSettings", "OptimizationStore",
            "point_estimates", "optimization_result", "run_optimization"]
@@ -128,8 +133,9 @@ def event_function(event: str, outputs) -> tuple[str, Callable[[np.ndarray], np.
     raise ValueError(f"constraint {text!r}: the event must be one of {named}, or OUTPUT>VALUE / OUTPUT<VALUE")
 
 
+@accepts_uncertainty_fields
 @dataclass(frozen=True)
-class OptimizationSettings:
+class OptimizationSettings(UncertaintyFields):
     """What defines a search; a resumed one must have the same settings.
 
     Attributes:
@@ -144,8 +150,10 @@ class OptimizationSettings:
             ``points − initial``: all of them at once).
         probability_mean: the prior mean of the constraints' surrogates, ``"constant"`` or ``"linear"`` (a
             plane by generalised least squares: :class:`~drillstring.stochastic.surrogate.GaussianProcess`).
-        seed, t_end, output_step, transient, sigma, laws, correlated, correlation, model_dispersion: as for a
-            probabilistic map (:class:`~drillstring.stochastic.probabilistic_map.SampledMapSettings`).
+        seed, t_end, output_step, transient, sigma, uncertainty: as for a probabilistic map
+            (:class:`~drillstring.stochastic.probabilistic_map.SampledMapSettings`); the uncertainty's fields
+            (``laws``, ``correlated``, ``correlation``, ``model_dispersion``) are also accepted as keywords and
+            read through.
     """
 
     variables: tuple[tuple[str, float, float], ...]
@@ -161,10 +169,7 @@ class OptimizationSettings:
     output_step: float = 0.01
     transient: float | None = None
     sigma: float | None = None
-    laws: tuple[tuple[str, str], ...] = ()
-    correlated: tuple[str, ...] = ()
-    correlation: tuple[tuple[float, ...], ...] = ()
-    model_dispersion: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    uncertainty: UncertaintySettings = NO_UNCERTAINTY
 
     def __post_init__(self) -> None:
         if not self.variables:
@@ -210,10 +215,10 @@ class OptimizationSettings:
         object.__setattr__(self, "seed", check_seed(self.seed))
         # A law of the top speed, weight-on-bit or hook load is refused by the point's map settings (sigma is
         # the hook load's uncertainty around each point's own value); any other decision variable:
-        clash = next((p for p, _ in self.laws if p in paths), None)
+        self._check_uncertainty()
+        clash = next((p for p in self.uncertainty.paths if p in paths), None)
         if clash is not None:
             raise ValueError(f"{clash}: a decision variable cannot carry a law too")
-        ModelDispersion.from_tuple(self.model_dispersion)
 
     @property
     def problem(self) -> SearchProblem:
@@ -237,8 +242,7 @@ def point_settings(at_point: Case, settings: OptimizationSettings) -> SampledMap
     grid = MapSettings((at_point.operation.top_speed,), (at_point.operation.weight_on_bit,), t_end=settings.t_end,
                        output_step=settings.output_step, transient=settings.transient)
     return SampledMapSettings(grid, samples=settings.samples, seed=settings.seed, sigma=settings.sigma,
-                              laws=settings.laws, correlated=settings.correlated, correlation=settings.correlation,
-                              model_dispersion=settings.model_dispersion)
+                              uncertainty=settings.uncertainty)
 
 
 def check_optimization(case: Case, settings: OptimizationSettings) -> None:
@@ -287,7 +291,7 @@ class OptimizationStore(TaskStore):
             "design_values": ArraySpec(("realization", "variable")),
         }
         sizes = {"realization": settings.realizations, "parameter": law.size, "variable": len(settings.variables)}
-        super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
+        super().__init__(path, case_toml=case.to_toml(), settings=settings.store_settings(), layout=layout, sizes=sizes,
                          attrs={"variables": [p for p, _, _ in settings.variables], **input_attributes(law)})
 
 

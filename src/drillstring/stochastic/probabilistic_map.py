@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any, Callable
@@ -72,7 +72,13 @@ from drillstring.stochastic.runs import (DERIVED_OUTPUTS, REALIZATION_OUTPUTS, R
                                         stored_outputs, with_top_drive_outputs)
 from drillstring.stochastic.random_matrices import ModelDispersion, model_generator, random_reduced_model
 from drillstring.stochastic.store import DONE, FAILED, ArraySpec, TaskStore
-from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
+from drillstring.stochastic.uncertainty import Uncertainty, input_attributes
+from drillstring.stochastic.uncertainty_settings import (
+    NO_UNCERTAINTY,
+    UncertaintyFields,
+    UncertaintySettings,
+    accepts_uncertainty_fields,
+)
 
 __all__ = [
     "PROBABILITIES",
@@ -121,8 +127,9 @@ MIN_SAMPLES = 2
 OUT_OF_RANGE_PROBABILITY = 1e-3
 
 
+@accepts_uncertainty_fields
 @dataclass(frozen=True)
-class SampledMapSettings:
+class SampledMapSettings(UncertaintyFields):
     """What defines a probabilistic map; a resumed map must have the same settings.
 
     Attributes:
@@ -131,10 +138,10 @@ class SampledMapSettings:
         seed: root seed of the realizations' random streams, in [0, 2**64 - 1].
         sigma: standard deviation [N] of the weight-on-hook, Normal around each point's hook load; None: the
             weight-on-hook is not random.
-        laws: ``((path, spec), ...)`` of the other random parameters (canonical specs).
-        correlated, correlation: correlated normal parameters and their correlation matrix.
-        model_dispersion: ``(δ_M, δ_K, δ_D)`` of random reduced matrices
-            (:mod:`~drillstring.stochastic.random_matrices`); sample ``j`` draws them from
+        uncertainty: the other random parameters' laws, their correlation (which may name ``weight_on_hook``,
+            the law of ``sigma``) and the model dispersion ``(δ_M, δ_K, δ_D)`` of random reduced matrices
+            (:class:`~drillstring.stochastic.uncertainty_settings.UncertaintySettings`; its fields are also
+            accepted as keywords and read through); sample ``j`` draws the reduced matrices from
             ``model_generator(seed, j)`` at every point (as its parameters: common random numbers).
     """
 
@@ -142,10 +149,7 @@ class SampledMapSettings:
     samples: int
     seed: int = 0
     sigma: float | None = None
-    laws: tuple[tuple[str, str], ...] = ()
-    correlated: tuple[str, ...] = ()
-    correlation: tuple[tuple[float, ...], ...] = ()
-    model_dispersion: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    uncertainty: UncertaintySettings = NO_UNCERTAINTY
 
     def __post_init__(self) -> None:
         from drillstring.checks import real_number
@@ -160,22 +164,13 @@ class SampledMapSettings:
         object.__setattr__(self, "seed", check_seed(self.seed))
         if self.sigma is not None:
             object.__setattr__(self, "sigma", real_number("sigma", self.sigma, unit="N", low=0.0, low_open=True))
-        laws = tuple((str(p).strip(), str(s)) for p, s in self.laws)
-        grid_law = next((p for p, _ in laws if p in GRID_PARAMETERS), None)
+        self._check_uncertainty()
+        grid_law = next((p for p in self.uncertainty.paths if p in GRID_PARAMETERS), None)
         if grid_law is not None:
             raise ValueError(f"{grid_law}: cannot carry a law on a map, whose grid sets it (give the weight-on-hook's "
                              "uncertainty as sigma, a Normal around each point's hook load)")
-        if self.sigma is None and not laws:
+        if self.sigma is None and not self.uncertainty.laws:
             raise ValueError("no random parameter: give sigma (the weight-on-hook's standard deviation) or a law")
-        object.__setattr__(self, "laws", laws)
-        object.__setattr__(self, "correlated", tuple(str(p) for p in self.correlated))
-        object.__setattr__(self, "correlation", tuple(tuple(float(v) for v in row) for row in self.correlation))
-        object.__setattr__(self, "model_dispersion", ModelDispersion.from_tuple(self.model_dispersion).as_tuple())
-
-    @property
-    def model(self) -> ModelDispersion:
-        """The model uncertainty (:class:`~drillstring.stochastic.random_matrices.ModelDispersion`)."""
-        return ModelDispersion(*self.model_dispersion)
 
     @property
     def realizations(self) -> int:
@@ -205,10 +200,8 @@ def point_uncertainty(case: Case, settings: SampledMapSettings, point: int, *,
     from drillstring.stochastic.montecarlo import weight_on_hook_normal
 
     at_point = point_case(case, settings, point)
-    laws = dict([weight_on_hook_normal(at_point, settings.sigma)]) if settings.sigma is not None else {}
-    laws.update(dict(settings.laws))
-    correlation = [list(row) for row in settings.correlation] if settings.correlated else None
-    found = uncertainty(at_point, laws, correlated=settings.correlated, correlation=correlation, tolerance=tolerance)
+    first = dict([weight_on_hook_normal(at_point, settings.sigma)]) if settings.sigma is not None else None
+    found = settings.uncertainty.law(at_point, first=first, tolerance=tolerance)
     if len(_LAWS) > 256:
         _LAWS.clear()
     _LAWS[key] = found
@@ -274,7 +267,7 @@ class SampledMapStore(TaskStore):
                  "parameter": law.size}
         attrs = {"critical_weight_on_bit": float(critical_weight_on_bit), "bit_area": bit_area(case),
                  "weight": case.weight, **input_attributes(law)}
-        super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
+        super().__init__(path, case_toml=case.to_toml(), settings=settings.store_settings(), layout=layout, sizes=sizes,
                          attrs=attrs)
 
 

@@ -19,7 +19,7 @@ parameters would bias the indices.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any, Callable
@@ -41,7 +41,12 @@ from drillstring.stochastic.sensitivity import (
     sobol_indices,
 )
 from drillstring.stochastic.store import FAILED, ArraySpec, TaskStore
-from drillstring.stochastic.uncertainty import Uncertainty, input_attributes, uncertainty
+from drillstring.stochastic.uncertainty import OUT_OF_RANGE_TOLERANCE, Uncertainty, input_attributes
+from drillstring.stochastic.uncertainty_settings import (
+    UncertaintyFields,
+    UncertaintySettings,
+    accepts_uncertainty_fields,
+)
 
 __all__ = [
     "SENSITIVITY_OUTPUTS",
@@ -57,13 +62,16 @@ SENSITIVITY_OUTPUTS = ("mean_rate_of_penetration", "bit_speed_oscillation", "mea
                        "mean_force_on_bit", "std_rate_of_penetration", "std_torque_on_bit", "std_force_on_bit")
 
 
+@accepts_uncertainty_fields
 @dataclass(frozen=True)
-class SensitivitySettings:
+class SensitivitySettings(UncertaintyFields):
     """What defines a sensitivity run; a resumed run must have the same settings.
 
     Attributes:
         base_samples: N, a power of 2 (>= 8); the design has N(k + 2) runs.
-        laws: ``((path, spec), ...)`` of the uncertain parameters (canonical specs, independent).
+        uncertainty: the uncertain parameters' laws (:class:`~drillstring.stochastic.uncertainty_settings.
+            UncertaintySettings`, independent: no correlation, no model dispersion); also accepted as the
+            laws ``((path, spec), ...)`` themselves or the keyword ``laws``, and read through (``settings.laws``).
         seed: scrambling seed of the Sobol' sequence (and of the bootstrap).
         t_end: simulated time per run [s].
         output_step: output step [s].
@@ -71,7 +79,7 @@ class SensitivitySettings:
     """
 
     base_samples: int
-    laws: tuple[tuple[str, str], ...]
+    uncertainty: UncertaintySettings
     seed: int = 0
     t_end: float = 30.0
     output_step: float = 0.01
@@ -79,9 +87,13 @@ class SensitivitySettings:
 
     def __post_init__(self) -> None:
         _check_power_of_two(self.base_samples, "samples")
-        if not self.laws:
+        if not isinstance(self.uncertainty, UncertaintySettings):  # the laws themselves (the earlier field)
+            object.__setattr__(self, "uncertainty", UncertaintySettings(laws=self.uncertainty))
+        if not self.uncertainty.laws:
             raise ValueError("no uncertain parameter: give at least one law (--param PATH=LAW)")
-        object.__setattr__(self, "laws", tuple((str(p), str(s)) for p, s in self.laws))
+        if self.uncertainty.correlated or self.uncertainty.model.active:
+            raise ValueError("uncertainty: Sobol' indices need independent parameter laws (no correlated, no "
+                             "correlation) and no model dispersion (model_dispersion = (0, 0, 0))")
         object.__setattr__(self, "seed", check_seed(self.seed))
         window = run_window(self.t_end, self.output_step, self.transient)
         for name in ("t_end", "output_step", "transient"):
@@ -91,7 +103,7 @@ class SensitivitySettings:
 def sensitivity_design(case: Case, settings: SensitivitySettings) -> SaltelliDesign:
     """The Saltelli design of the settings' laws on ``case`` (raises ParameterError / ValueError, one line,
     for unknown paths, bad laws, laws outside their ranges or correlated parameters)."""
-    law: Uncertainty = uncertainty(case, dict(settings.laws))
+    law: Uncertainty = settings.uncertainty.law(case, tolerance=OUT_OF_RANGE_TOLERANCE)
     return saltelli_design(law, settings.base_samples, seed=settings.seed)
 
 
@@ -112,7 +124,7 @@ class SensitivityStore(TaskStore):
         }
         sizes = {"run": design.runs, "parameter": design.uncertainty.size}
         attrs = {**input_attributes(design.uncertainty), "base_samples": design.base_samples}
-        super().__init__(path, case_toml=case.to_toml(), settings=asdict(settings), layout=layout, sizes=sizes,
+        super().__init__(path, case_toml=case.to_toml(), settings=settings.store_settings(("laws",)), layout=layout, sizes=sizes,
                          attrs=attrs)
 
 
