@@ -102,16 +102,15 @@ def optimization_settings(case: Case, *, variables, objective="rate_of_penetrati
                          "{'top_speed': '60 rpm:140 rpm'}")
     units = dict(default_units or {})
     bounded = tuple(parse_bounds(case, name, text, units.get(name, "")) for name, text in variables.items())
-    sigma, laws, correlated, matrix, dispersions = point_uncertainty(case, parameters, correlation, model, sigma)
+    sigma, uncertainty = point_uncertainty(case, parameters, correlation, model, sigma)
     window = case_window(case, t_end, output_step, transient)
     initial = max(4, 4 * len(bounded)) if initial is None else initial
     points = 2 * initial if points is None else points
     settings = OptimizationSettings(
         variables=bounded, objective=objective, constraints=tuple((constraints or {}).items()), samples=samples,
         points=points, initial=initial, batch=DEFAULT_BATCH if batch is None else batch, seed=seed,
-        t_end=window.t_end, output_step=window.output_step, transient=window.transient, sigma=sigma, laws=laws,
-        correlated=correlated, correlation=matrix, model_dispersion=dispersions.as_tuple(),
-        probability_mean=probability_mean)
+        t_end=window.t_end, output_step=window.output_step, transient=window.transient, sigma=sigma,
+        uncertainty=uncertainty, probability_mean=probability_mean)
     check_optimization(case.model_copy(update={"uncertainty": None}), settings)
     return settings
 

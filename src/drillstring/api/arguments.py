@@ -89,23 +89,21 @@ def make_engine(workers, scheduler, progress, note, worker_timeout):
 
 
 def point_uncertainty(case, parameters, correlation, model, sigma):
-    """What the realizations at each point of a map or a search draw: ``(sigma, laws, correlated, correlation
-    matrix, model dispersions)`` for the settings of :mod:`drillstring.stochastic.probabilistic_map` and
-    :mod:`drillstring.stochastic.optimize`; the weight-on-hook's default σ when no parameter is declared."""
+    """What the realizations at each point of a map or a search draw: ``(sigma, uncertainty)``, the
+    weight-on-hook's σ (its default when no parameter is declared) and the
+    :class:`~drillstring.stochastic.uncertainty_settings.UncertaintySettings` of the other declared laws and the
+    model dispersion, for the settings of :mod:`drillstring.stochastic.probabilistic_map` and
+    :mod:`drillstring.stochastic.optimize`."""
     from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.random_matrices import ModelDispersion
     from drillstring.stochastic.uncertainty import declared_uncertainty
+    from drillstring.stochastic.uncertainty_settings import UncertaintySettings
 
     dispersions = ModelDispersion.declared(case, model)
     declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
     if declared is None and sigma is None:
         sigma = DEFAULT_SIGMA
-    laws, correlated, matrix = (), (), ()
-    if declared is not None:
-        laws = tuple((p.path, p.law.to_spec()) for p in declared.parameters)
-        if declared.correlation is not None:
-            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
-    return sigma, laws, correlated, matrix, dispersions
+    return sigma, UncertaintySettings.of(declared, dispersions)
 
 
 def run_record(store, run, noun: str) -> dict:

@@ -119,8 +119,11 @@ def operating_map(
                             output_step=output_step, transient=transient)
     engine = make_engine(workers, scheduler, progress, note, worker_timeout)
     if samples is not None:
-        return _sampled_map(case, settings, engine, out, samples=samples, sigma=sigma, parameters=parameters,
-                            correlation=correlation, model=model, seed=seed, units=units)
+        from drillstring.stochastic.probabilistic_map import run_sampled_map
+
+        sampled = sampled_map_settings(case, settings, samples=samples, sigma=sigma, parameters=parameters,
+                                       correlation=correlation, model=model, seed=seed)
+        return _run_map(run_sampled_map, _finish_sampled_map, case, sampled, engine, out, units)
     if sigma is not None or parameters is not None or correlation is not None or model is not None:
         raise ValueError("sigma, parameters, correlation and model declare the uncertainty of a probabilistic map: "
                          "give samples (realizations per point) too")
@@ -188,18 +191,16 @@ def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, 
     return ds, summary, files
 
 
-def _sampled_map(case, grid, engine, out, *, samples, sigma, parameters, correlation, model, seed,
-                 units) -> MapOutcome:
-    """A probabilistic map (:func:`operating_map` with ``samples``), its figures and report in ``units``."""
-    from drillstring.stochastic.probabilistic_map import SampledMapSettings, run_sampled_map
+def sampled_map_settings(case, grid, *, samples, sigma, parameters, correlation, model, seed):
+    """The settings of a probabilistic map of ``case`` on ``grid`` (:func:`operating_map` with ``samples``; the
+    uncertainty by :func:`~drillstring.api.arguments.point_uncertainty`)."""
+    from drillstring.stochastic.probabilistic_map import SampledMapSettings
 
     check_mapping("parameters", parameters)
     check_mapping("correlation", correlation)
     check_mapping("model", model)
-    sigma, laws, correlated, matrix, dispersions = point_uncertainty(case, parameters, correlation, model, sigma)
-    settings = SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, laws=laws, correlated=correlated,
-                                  correlation=matrix, model_dispersion=dispersions.as_tuple())
-    return _run_map(run_sampled_map, _finish_sampled_map, case, settings, engine, out, units)
+    sigma, uncertainty = point_uncertainty(case, parameters, correlation, model, sigma)
+    return SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, uncertainty=uncertainty)
 
 
 def _finish_sampled_map(case, folder, units, run):
@@ -273,6 +274,7 @@ def sensitivity(
     from drillstring.checks import seed as check_seed
     from drillstring.stochastic.sensitivity_study import SensitivitySettings, run_sensitivity
     from drillstring.stochastic.uncertainty import declared_uncertainty
+    from drillstring.stochastic.uncertainty_settings import UncertaintySettings
 
     units = unit_system(units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case)
@@ -295,8 +297,8 @@ def sensitivity(
                          "correlated (drop the correlation, or use a Monte Carlo study for the joint law)")
     case = case.model_copy(update={"uncertainty": None})
     settings = SensitivitySettings(
-        base_samples=samples, laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
-        seed=check_seed(seed), t_end=window.t_end, output_step=window.output_step, transient=window.transient)
+        base_samples=samples, uncertainty=UncertaintySettings.of(declared), seed=check_seed(seed),
+        t_end=window.t_end, output_step=window.output_step, transient=window.transient)
     engine = make_engine(workers, scheduler, progress, note, worker_timeout)
     folder = output_folder(out, "drillstring-sensitivity-")
     run = run_sensitivity(case, settings, folder / "sensitivity.zarr", engine,

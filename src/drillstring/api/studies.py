@@ -82,6 +82,7 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
         weight_on_hook_normal,
     )
     from drillstring.stochastic.uncertainty import declared_uncertainty
+    from drillstring.stochastic.uncertainty_settings import UncertaintySettings
 
     if sigma is not None and dispersion is not None:
         raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
@@ -100,15 +101,10 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
     if declared is None:
         first = dict([weight_on_hook_normal(case, DEFAULT_SIGMA)])
         declared = declared_uncertainty(case, None, None, first=first, tolerance=1.0)
-    correlated, matrix = (), ()
-    if declared.correlation is not None:
-        correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
     window = case_window(case, t_end, output_step)
     bare = case.model_copy(update={"uncertainty": None})
     settings = StudySettings(samples=samples, seed=seed, t_end=window.t_end, output_step=window.output_step,
-                             laws=tuple((p.path, p.law.to_spec()) for p in declared.parameters),
-                             correlated=correlated, correlation=matrix,
-                             model_dispersion=dispersions.as_tuple())
+                             uncertainty=UncertaintySettings.of(declared, dispersions))
     check_study(bare, settings)
     return settings, bare
 

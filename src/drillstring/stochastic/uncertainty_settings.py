@@ -65,7 +65,7 @@ class UncertaintySettings:
             if not path:
                 raise ValueError(f"laws[{i}] = {item!r}: the path is empty (a case-parameter path is required)")
             if path in (p for p, _ in laws):
-                raise ValueError(f"laws: {path} is declared twice (each parameter has one law)")
+                raise ValueError(f"{path} is declared twice in laws (each parameter has one law)")
             laws.append((path, spec))
         correlated = tuple(str(p).strip() for p in _sequence("correlated", self.correlated))
         twice = next((p for i, p in enumerate(correlated) if p in correlated[:i]), None)
@@ -96,6 +96,22 @@ class UncertaintySettings:
         object.__setattr__(self, "correlation", tuple(matrix))
         object.__setattr__(self, "model_dispersion", ModelDispersion.from_tuple(self.model_dispersion).as_tuple())
 
+    @classmethod
+    def of(cls, declared: Uncertainty | None,
+           model_dispersion: ModelDispersion | tuple[float, float, float] = (0.0, 0.0, 0.0)) -> UncertaintySettings:
+        """The settings of a declared joint law (:func:`~drillstring.stochastic.uncertainty.declared_uncertainty`;
+        None: no random parameter): its parameters' canonical law specs in order, its correlated parameters and
+        correlation matrix when not independent, and ``model_dispersion``."""
+        if isinstance(model_dispersion, ModelDispersion):
+            model_dispersion = model_dispersion.as_tuple()
+        if declared is None:
+            return cls(model_dispersion=model_dispersion)
+        correlated, matrix = (), ()
+        if declared.correlation is not None:
+            correlated, matrix = declared.correlated, tuple(map(tuple, declared.correlation.tolist()))
+        return cls(tuple((p.path, p.law.to_spec()) for p in declared.parameters), correlated, matrix,
+                   model_dispersion)
+
     @property
     def model(self) -> ModelDispersion:
         """The model uncertainty (:class:`~drillstring.stochastic.random_matrices.ModelDispersion`)."""
@@ -125,15 +141,15 @@ class UncertaintySettings:
         return uncertainty(case, laws, correlated=self.correlated, correlation=correlation, tolerance=tolerance)
 
 
-#: No random parameter and no model dispersion (the default ``uncertainty`` of the settings that hold one).
-NO_UNCERTAINTY = UncertaintySettings()
-
-
 def _sequence(name: str, value: Any) -> tuple:
     """``value`` as a tuple (TypeError naming the field for a string or a non-sequence)."""
     if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
         raise TypeError(f"{name} = {value!r}: must be a sequence")
     return tuple(value)
+
+
+#: No random parameter and no model dispersion (the default ``uncertainty`` of the settings that hold one).
+NO_UNCERTAINTY = UncertaintySettings()
 
 
 class UncertaintyFields:
