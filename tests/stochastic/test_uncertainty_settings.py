@@ -119,8 +119,8 @@ def test_a_study_a_map_and_a_search_built_from_one_uncertainty_draw_the_same_law
     # the same law as built directly from the declaration (an independent path through uncertainty())
     from drillstring.stochastic.uncertainty import uncertainty
 
-    direct = uncertainty(small_case, dict(u.laws), correlated=u.correlated, correlation=[list(r) for r in u.correlation],
-                         tolerance=1.0)
+    direct = uncertainty(small_case, dict(u.laws), correlated=u.correlated,
+                         correlation=[list(r) for r in u.correlation], tolerance=1.0)
     np.testing.assert_array_equal(direct.draw(5, [0, 1, 2, 3]), draws[0])
     independent = UncertaintySettings(laws=(DENSITY, VELOCITY))
     design = ss.sensitivity_design(small_case, ss.SensitivitySettings(8, independent, t_end=1.0, output_step=0.05))

@@ -158,19 +158,36 @@ def _finish_map(case, folder, units, run):
                              "Growth rate of the leading torsional, axial and lateral root of steady drilling over "
                              "the map (blue decays, red grows; black: the family's boundary): the torsional and axial "
                              "windows are not hidden by a buckled string's lateral root")}
-    return _map_files(case, folder, run, map_dataset, map_summary, "points", figures,
-                      partial(write_map_report, units=units),
-                      f"Operating map: case '{case.name}'", partial(map_figures, units=units))
+    return _map_files(case, folder, run, _MapKind(
+        map_dataset, map_summary, "points", figures, partial(write_map_report, units=units),
+        f"Operating map: case '{case.name}'", partial(map_figures, units=units)))
 
 
-def _map_files(case, folder, run, dataset, summarize, noun: str, figures: dict, report, title: str, interactive):
-    """A map's Dataset (``dataset(store)``), summary (``summarize(ds)`` with the run's record) and, in ``folder``
-    unless None, ``map.nc``, ``map.json``, the ``figures`` (key -> (file name, plot function, caption)) and
-    the ``report`` (``report(path, title=..., case_toml=..., summary=..., figures=..., run_info=...,
-    interactive=...)``) with its ``interactive(ds)`` figures beside it."""
+@dataclass(frozen=True)
+class _MapKind:
+    """What a kind of map writes: its Dataset (``dataset(store)``), summary (``summarize(ds)``), the ``noun`` of
+    its runs, the ``figures`` (key -> (file name, plot function, caption)), the ``report`` (``report(path,
+    title=..., case_toml=..., summary=..., figures=..., run_info=..., interactive=...)``) with its ``title``, and
+    its ``interactive(ds)`` figures."""
+
+    dataset: Callable
+    summarize: Callable
+    noun: str
+    figures: dict
+    report: Callable
+    title: str
+    interactive: Callable
+
+
+def _map_files(case, folder, run, kind: _MapKind):
+    """A map's Dataset, summary (with the run's record) and, in ``folder`` unless None, ``map.nc``, ``map.json``,
+    the figures and the report with its interactive figures beside it (what ``kind`` says)."""
     from drillstring.files import strict_json, write_text_atomic
     from drillstring.report import INTERACTIVE_PAGE
     from drillstring.results import write_netcdf
+
+    dataset, summarize, noun, figures = kind.dataset, kind.summarize, kind.noun, kind.figures
+    report, title, interactive = kind.report, kind.title, kind.interactive
 
     store_path = run.store.path
     ds = dataset(store_path)
@@ -219,9 +236,10 @@ def _finish_sampled_map(case, folder, units, run):
                "quantiles": ("quantiles.png", partial(plot_quantile_map, units=units),
                              "2.5, 50 and 97.5 % quantiles of the mean ROP and of the stick-slip index over each "
                              "point's realizations")}
-    return _map_files(case, folder, run, sampled_map_dataset, sampled_map_summary, "realizations", figures,
-                      partial(write_probability_map_report, units=units),
-                      f"Probabilistic operating map: case '{case.name}'", partial(probability_map_figures, units=units))
+    return _map_files(case, folder, run, _MapKind(
+        sampled_map_dataset, sampled_map_summary, "realizations", figures,
+        partial(write_probability_map_report, units=units), f"Probabilistic operating map: case '{case.name}'",
+        partial(probability_map_figures, units=units)))
 
 
 @dataclass

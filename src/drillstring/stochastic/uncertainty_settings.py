@@ -27,7 +27,8 @@ from drillstring.case import Case
 from drillstring.stochastic.random_matrices import ModelDispersion
 from drillstring.stochastic.uncertainty import Uncertainty, uncertainty
 
-__all__ = ["NO_UNCERTAINTY", "UNCERTAINTY_FIELDS", "UncertaintyFields", "UncertaintySettings", "accepts_uncertainty_fields"]
+__all__ = ["NO_UNCERTAINTY", "UNCERTAINTY_FIELDS", "UncertaintyFields", "UncertaintySettings",
+           "accepts_uncertainty_fields"]
 
 #: The fields of :class:`UncertaintySettings`, also accepted as keywords by the settings that hold one.
 UNCERTAINTY_FIELDS = ("laws", "correlated", "correlation", "model_dispersion")
@@ -73,8 +74,8 @@ class UncertaintySettings:
             raise ValueError(f"correlated: {twice} is listed twice (each correlated parameter once)")
         rows = _sequence("correlation", self.correlation)
         if bool(correlated) != bool(rows):
-            raise ValueError(f"correlated = {correlated!r}, correlation with {len(rows)} rows: give both the correlated "
-                             "parameters and their correlation matrix, or neither")
+            raise ValueError(f"correlated = {correlated!r}, correlation with {len(rows)} rows: give both the "
+                             "correlated parameters and their correlation matrix, or neither")
         matrix = []
         for i, row in enumerate(rows):
             row = _sequence(f"correlation[{i}]", row)
