@@ -60,10 +60,10 @@ def test_interruption_writes_what_finished():
             raise KeyboardInterrupt
 
     with pytest.raises(execution.Interrupted, match="map interrupted after 3 of 5 points"):
-        execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(5)], workers=1, progress=stop,
-                            what="map", noun="points")
+        execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(5)],
+                            execution.Engine(workers=1, progress=stop), what="map", noun="points")
     assert sorted(store.rows) == [0, 1, 2] and len(store.sessions) == 1
-    report = execution.run_tasks(store, square, [(i, (i, float(i))) for i in (3, 4)], workers=1)
+    report = execution.run_tasks(store, square, [(i, (i, float(i))) for i in (3, 4)], execution.Engine(workers=1))
     assert report.completed == 5 and report.computed == 2
 
 
@@ -118,5 +118,5 @@ def test_batches_hold_at_most_the_store_flush_count():
     sizes = []
     write = store.write_many
     store.write_many = lambda outcomes: (sizes.append(len(outcomes)), write(outcomes))
-    execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(7)], workers=1)
+    execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(7)], execution.Engine(workers=1))
     assert sizes == [3, 3, 1] and sorted(store.rows) == list(range(7))

@@ -38,7 +38,7 @@ import datetime as _dt
 import multiprocessing
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Iterable, Sequence
 
 from drillstring.stochastic.store import DONE, FAILED
@@ -279,9 +279,8 @@ def run_locked(
                 if items and client is None and prepare is not None and not prepared:
                     prepare()
                     prepared = True
-                report = run_tasks(store, task, items, workers=engine.workers, client=client, address=address,
-                                   progress=engine.progress, worker_timeout=engine.worker_timeout, lost=lost,
-                                   what=what, noun=noun, note=engine.note)
+                report = run_tasks(store, task, items, replace(engine, scheduler=client),
+                                   address=address, lost=lost, what=what, noun=noun)
                 computed, wall, used = computed + report.computed, wall + report.wall_time, report.workers
                 counts = report.completed, report.failed  # the whole store's
             done, failed = store.counts() if counts is None else counts
@@ -318,16 +317,12 @@ def run_tasks(
     store,
     task: Callable[[Any], Any],
     items: Sequence[tuple[int, Any]],
+    engine: Engine = Engine(),
     *,
-    workers: int | None = None,
-    client=None,
     address: str | None = None,
-    progress: ProgressCallback | None = None,
-    worker_timeout: float = DASK_WORKER_TIMEOUT,
     lost: LostOutcome = bare_failure,
     what: str = "study",
     noun: str = "realizations",
-    note: Callable[[str], None] | None = None,
 ) -> RunReport:
     """Run ``items`` (``(index, argument)``, the store's pending ones) with ``task`` and write each
     outcome to ``store``; the caller holds the store's lock.
@@ -337,11 +332,15 @@ def run_tasks(
     optionally ``flush_interval`` [s] (default :data:`FLUSH_INTERVAL`; 0 writes each outcome at once) and
     ``flush_count`` (a batch is written once it holds that many outcomes, however recent; default no limit).
     Items with an index outside ``[0, total)`` (a study's nominal run) are written but not counted.
-    ``client`` (a ``distributed.Client``, ``address`` its scheduler) runs them on Dask, otherwise
-    ``workers`` local processes (default one per core; 1 runs in this process).
+    ``engine`` (:class:`Engine`): its ``scheduler``, a connected ``distributed.Client`` (``address`` its
+    scheduler's; :func:`run_locked` connects an address), runs them on Dask, otherwise its ``workers`` local
+    processes (default one per core; 1 runs in this process); its ``progress``, ``note`` and ``worker_timeout``.
     Raises :class:`Interrupted` on Ctrl-C and :class:`WorkersLost` when no worker is left, after writing
     every outcome received; ``what`` and ``noun`` name the run and its items in those messages.
     """
+    client, workers, progress = engine.scheduler, engine.workers, engine.progress
+    if isinstance(client, str):
+        raise TypeError(f"run_tasks: scheduler = {client!r}: connect it first (a distributed.Client; run_locked does)")
     done, failed = store.counts()
     total = store.total
     started = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
@@ -384,7 +383,7 @@ def run_tasks(
     try:
         try:
             execute(task, items, record, workers=used if isinstance(used, int) else None, client=client,
-                    address=address, worker_timeout=worker_timeout, lost=lost, noun=noun, note=note)
+                    address=address, worker_timeout=engine.worker_timeout, lost=lost, noun=noun, note=engine.note)
         finally:
             flush()
     except KeyboardInterrupt as error:
