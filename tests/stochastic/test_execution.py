@@ -120,3 +120,24 @@ def test_batches_hold_at_most_the_store_flush_count():
     store.write_many = lambda outcomes: (sizes.append(len(outcomes)), write(outcomes))
     execution.run_tasks(store, square, [(i, (i, float(i))) for i in range(7)], execution.Engine(workers=1))
     assert sizes == [3, 3, 1] and sorted(store.rows) == list(range(7))
+
+
+def test_cancelled_futures_of_a_lost_scheduler_say_so():
+    """The client cancels its futures itself when its scheduler's connection drops (seen first on a loaded
+    machine when the scheduler is killed): that is a lost scheduler, not a scheduler that cancelled them."""
+    from drillstring.stochastic.dask_watch import cancelled_reason
+
+    class Client:
+        def __init__(self, status, answers):
+            self.status, self.answers = status, answers
+            self.scheduler = type("Scheduler", (), {"identity": None})()
+
+        def sync(self, function, callback_timeout):
+            if not self.answers:
+                raise OSError("connection refused")
+            return {}
+
+    address = "tcp://127.0.0.1:1"
+    assert cancelled_reason(Client("closed", True), address).startswith(f"lost the Dask scheduler at {address}")
+    assert cancelled_reason(Client("running", False), address) == f"lost the Dask scheduler at {address} (OSError)"
+    assert cancelled_reason(Client("running", True), address) == f"the Dask scheduler at {address} cancelled the tasks"

@@ -17,7 +17,7 @@ sensitivity designs (one design row per index) all run through :func:`run_tasks`
   the cluster has had no worker, or none of its workers has answered the scheduler (stopped with SIGSTOP,
   frozen), or the scheduler has not answered (each request bounded by :data:`SCHEDULER_TIMEOUT`); at once
   when the scheduler is gone (connection closed). While nothing finishes but some worker answers, a
-  note says so every ``worker_timeout`` seconds (:class:`_ClusterWatch`);
+  note says so every ``worker_timeout`` seconds (:class:`~drillstring.stochastic.dask_watch.ClusterWatch`);
 - writes outcomes to the store in batches (at most :data:`FLUSH_INTERVAL` seconds apart; data first,
   then status flags), reports ``progress(done, failed, total)`` after each outcome, and on Ctrl-C
   writes what finished and raises :class:`Interrupted`;
@@ -41,6 +41,7 @@ import time
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Iterable, Sequence
 
+from drillstring.stochastic.dask_watch import SCHEDULER_TIMEOUT, ClusterWatch, cancelled_reason, is_timeout
 from drillstring.stochastic.store import DONE, FAILED
 
 #: Seconds a Dask run waits, once nothing finishes, with no worker in the cluster, with no worker
@@ -49,14 +50,6 @@ from drillstring.stochastic.store import DONE, FAILED
 #: about ``DASK_WORKER_TIMEOUT + SCHEDULER_TIMEOUT + 2`` seconds of the fault (36 s; a lost scheduler
 #: connection at once).
 DASK_WORKER_TIMEOUT = 30.0
-#: Until the first task of a Dask run finishes, workers that do not answer the scheduler get this many
-#: times ``worker_timeout`` (2 min by default): a starting worker imports the program and compiles or
-#: loads its kernels, and its interpreter is held meanwhile.
-STARTUP_FACTOR = 4
-#: Seconds allowed to each step of reaching a Dask scheduler (TCP connection, the server's greeting,
-#: its identity, the client's registration) and to each later request to it: an address that is no
-#: scheduler fails at one of the first three, so within 12 s.
-SCHEDULER_TIMEOUT = 4.0
 #: Largest delay [s] between an outcome's arrival and its write to the store, unless the store sets its
 #: own ``flush_interval`` (outcomes are written in batches: a kill loses at most this much work; stores of
 #: many cheap scalar rows rewrite their small arrays once per batch instead of once per outcome).
@@ -647,91 +640,12 @@ def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT):
         raise SchedulerUnreachable(f"scheduler = {address!r}: cannot connect ({message})") from None
 
 
-class _ClusterWatch:
-    """What a Dask run knows of its cluster while nothing finishes: asked at most once a second
-    (:meth:`check`), the scheduler's identity, each request bounded by :data:`SCHEDULER_TIMEOUT`, gives its
-    workers and the time each last reported (its heartbeat, every 0.5 s or so on a small cluster). A worker
-    whose report has not changed for ``worker_timeout`` seconds is not answering (stopped, frozen, or gone
-    without the scheduler noticing yet)."""
-
-    def __init__(self, client, scheduler: str, worker_timeout: float, noun: str,
-                 note: Callable[[str], None] | None) -> None:
-        self.client, self.scheduler, self.timeout, self.noun, self.note = client, scheduler, worker_timeout, noun, note
-        self.reports: dict[str, tuple[Any, float]] = {}  # worker -> (last report, when it changed)
-        now = time.monotonic()
-        self.answered = now  # the scheduler's last answer
-        self.alive = now  # the last time the cluster was seen with workers
-        self.finished = now  # the last time an item finished
-        self.noted = self.checked = self.started = now
-        self.unanswered = 0  # scheduler requests unanswered in a row
-
-    def progress(self) -> None:
-        self.finished = self.alive = self.noted = time.monotonic()
-
-    def _identity(self) -> dict | None:
-        # identity() lists every worker: later versions take ``n_workers`` (default -1, all), 2024.1 takes none.
-        try:
-            return self.client.sync(self.client.scheduler.identity, callback_timeout=SCHEDULER_TIMEOUT)
-        except (TimeoutError, OSError) as error:
-            if not _is_timeout(error):
-                raise
-            return None
-
-    def check(self) -> str | None:
-        """Why the run must stop now (one phrase), or None; issues the note of a long wait."""
-        now = time.monotonic()
-        if now - self.checked < 1.0:
-            return None
-        self.checked = now
-        try:
-            info = self._identity()
-        except Exception as error:  # the connection to the scheduler is gone
-            return f"lost the Dask scheduler at {self.scheduler} ({type(error).__name__})"
-        now = time.monotonic()
-        if info is None:  # two requests in a row unanswered, the last answer older than the timeout
-            self.unanswered += 1
-            if self.unanswered >= 2 and now - self.answered > self.timeout:
-                return f"the Dask scheduler at {self.scheduler} has not answered for {now - self.answered:.0f} s"
-            return None
-        self.answered, self.unanswered = now, 0
-        workers = dict(info.get("workers") or {})
-        self.reports = {address: (report.get("last_seen"), now if self.reports.get(address, (None,))[0]
-                                  != report.get("last_seen") else self.reports[address][1])
-                        for address, report in workers.items() if isinstance(report, dict)}
-        # Before anything finished, workers may be silent while they start (imports, compiling the kernels
-        # hold their interpreter): they get STARTUP_FACTOR times the timeout then.
-        patience = self.timeout * (1 if self.finished > self.started else STARTUP_FACTOR)
-        answering = [a for a, (_, changed) in self.reports.items() if now - changed <= patience]
-        if self.reports:
-            self.alive = now  # the cluster has workers; whether they answer is their reports' age
-            if not answering:
-                return (f"none of the {len(self.reports)} Dask worker(s) of {self.scheduler} has answered for "
-                        f"{patience:g} s (stopped or frozen)")
-        elif now - self.alive > self.timeout:
-            return f"the Dask cluster at {self.scheduler} has had no worker for {self.timeout:g} s"
-        # A long wait with workers that answer now (within half the timeout, 5 s at least) is said; one
-        # whose workers are going silent ends in the stop instead.
-        lively = [a for a, (_, changed) in self.reports.items()
-                  if now - changed <= min(self.timeout, max(self.timeout / 2, 5.0))]
-        if self.note is not None and lively and now - self.noted >= self.timeout:
-            self.noted = now
-            self.note(f"no {self.noun} finished for {now - self.finished:.0f} s on the Dask cluster at "
-                      f"{self.scheduler}: {len(lively)} of {len(self.reports)} worker(s) answering")
-        return None
-
-
-def _is_timeout(error: BaseException) -> bool:
-    import asyncio
-
-    return isinstance(error, (TimeoutError, asyncio.TimeoutError)) or "timed out" in str(error).lower()
-
-
 def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float, lost: LostOutcome,
               noun: str, note: Callable[[str], None] | None = None) -> None:
     """Run ``items`` on the cluster of ``client``. An item whose workers keep dying (``KilledWorker``)
     is recorded as failed with that cause; a cluster left without any worker, or without any worker that
     answers, or a scheduler that does not answer, for ``worker_timeout`` seconds, or a lost scheduler,
-    raises :class:`WorkersLost` (:class:`_ClusterWatch`)."""
+    raises :class:`WorkersLost` (:class:`~drillstring.stochastic.dask_watch.ClusterWatch`)."""
     from distributed.scheduler import KilledWorker
 
     if not items:
@@ -739,7 +653,7 @@ def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float
     futures = client.map(task, [argument for _, argument in items], pure=False)
     item_of = {future.key: item for future, item in zip(futures, items)}
     pending = list(futures)
-    watch = _ClusterWatch(client, scheduler, worker_timeout, noun, note)
+    watch = ClusterWatch(client, scheduler, worker_timeout, noun, note)
 
     def gone(why: str) -> WorkersLost:
         return WorkersLost(f"{why}; the finished {noun} are saved, rerun the same command (with workers "
@@ -759,7 +673,7 @@ def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float
                     try:  # a result held by a stopped worker does not come: tried again later
                         outcome = future.result(timeout=max(0.05, deadline - time.monotonic()))
                     except Exception as error:
-                        if not _is_timeout(error):
+                        if not is_timeout(error):
                             raise gone(f"lost the Dask scheduler at {scheduler} ({type(error).__name__})") from None
                         tries[future.key] = tries.get(future.key, 0) + 1
                         continue
@@ -775,7 +689,7 @@ def _run_dask(client, scheduler: str, task, items, record, worker_timeout: float
                     record(lost(index, argument, "Dask workers died (killed or crashed) while computing "
                                                  f"this task: {error}"))
                 elif status == "cancelled":
-                    raise gone(f"the Dask scheduler at {scheduler} cancelled the tasks")
+                    raise gone(cancelled_reason(client, scheduler))
                 # "pending", or "lost" (its result left with its worker; recomputed): wait
             if finished:
                 done_now = set(map(id, finished))
