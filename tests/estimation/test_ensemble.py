@@ -99,6 +99,8 @@ def test_ensemble_filter_approaches_the_kalman_filter_as_the_ensemble_grows():
     ("top_speed_noise", 0.0, "top_speed_noise = 0.0: must be a finite number > 0"),
     ("coefficient_spread", 5.0, "coefficient_spread = 5.0: must be a number in (0, 2]"),
     ("model_speed_noise", -1.0, "model_speed_noise = -1.0: must be a finite number >= 0"),
+    ("spin_up", -1.0, "spin_up = -1.0: must be a finite number >= 0"),
+    ("assimilation_step", 0.0, "assimilation_step = 0.0: must be a finite number > 0"),
 ])
 def test_settings_refuse_values_out_of_range_naming_them(field, value, words):
     with pytest.raises(ValueError, match=words.replace("[", r"\[").replace("(", r"\(")):
@@ -145,7 +147,8 @@ SPIN_UP = 10.0  # [s] the start, where the prior (the static state spinning) is 
 
 @pytest.fixture(scope="module")
 def experiment(stick_slip):
-    settings = EstimatorSettings(ensemble_size=32)
+    # the twin's truth starts at the model's initial state, as its record does: no spin-up
+    settings = EstimatorSettings(ensemble_size=32, spin_up=0.0)
     truth = twin(stick_slip, T_END)
     return truth, estimate(stick_slip, truth.record, settings), settings
 
@@ -201,7 +204,7 @@ def test_flagged_sample_is_not_used(stick_slip, small_model):
     time = np.arange(0.0, 6.0, 1.0)
     speed = np.full(len(time), small_model.top_speed)
     torque = np.full(len(time), 5000.0)
-    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3)
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=0.0)
 
     def run(values, flags=None):
         record = SurfaceRecord.from_arrays(time, top_speed=speed, surface_torque=values)
@@ -249,7 +252,7 @@ def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monk
     time = np.arange(0.0, 4.0, 1.0)
     record = SurfaceRecord.from_arrays(time, top_speed=np.full(len(time), small_model.top_speed),
                                        surface_torque=np.full(len(time), 5000.0))
-    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3)
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=0.0)
     monkeypatch.setattr(ensemble, "advance", failing)
     result = estimate(stick_slip, record, settings, model=small_model)
     assert result.replaced.tolist() == [0, 2, 2, 2]
@@ -257,3 +260,52 @@ def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monk
     monkeypatch.setattr(ensemble, "advance", lambda *a, **k: (_ for _ in ()).throw(ValueError("no")))
     with pytest.raises(RuntimeError, match="every member's forecast failed between t = 0 s and 1 s"):
         estimate(stick_slip, record, settings, model=small_model)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Assimilation windows and the spin-up
+# --------------------------------------------------------------------------------------------------------
+
+
+def _window_run(stick_slip, small_model, torque, **changes):
+    time = np.arange(0.0, len(torque), 1.0)
+    record = SurfaceRecord.from_arrays(time, top_speed=np.full(len(time), small_model.top_speed),
+                                       surface_torque=np.asarray(torque, dtype=float))
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=0.0,
+                                 coefficient_walk=0.0, weight_on_bit_bias_walk=0.0, **changes)
+    return estimate(stick_slip, record, settings, model=small_model)
+
+
+def test_one_analysis_per_assimilation_window_with_the_window_means(stick_slip, small_model):
+    """With ``assimilation_step`` 3 s on a 1 s record the windows are {0}, (0, 3], (3, 6]: the parameters (no
+    walk) change only at each window's last sample; samples of a window changed with their mean kept give the
+    same estimate bit for bit (the analysis reads the means), a changed mean another."""
+    torque = [5000.0, 4000.0, 5000.0, 6000.0, 5000.0, 5000.0, 5000.0]
+    result = _window_run(stick_slip, small_model, torque, assimilation_step=3.0)
+    changed = np.diff(result.mean["a5"]) != 0.0
+    assert changed.tolist() == [False, False, True, False, False, True]
+    assert result.used["surface_torque"].all()
+    same_mean = _window_run(stick_slip, small_model, [5000.0] * 7, assimilation_step=3.0)
+    np.testing.assert_array_equal(result.mean["bit_speed"], same_mean.mean["bit_speed"])
+    other_mean = _window_run(stick_slip, small_model, [5000.0, 4000.0, 5000.0, 9000.0, 5000.0, 5000.0, 5000.0],
+                             assimilation_step=3.0)
+    assert not np.array_equal(result.mean["bit_speed"][3:], other_mean.mean["bit_speed"][3:])
+    # a window of one sample each: an analysis at every sample
+    every = _window_run(stick_slip, small_model, torque, assimilation_step=1.0)
+    assert (np.diff(every.mean["a5"]) != 0.0).all()
+
+
+def test_spin_up_starts_the_members_on_their_run(stick_slip, small_model):
+    """After a spin-up the members are twisted (the surface torque predicted at the first sample is that of
+    the string turning the bit against the rock, thousands of N·m; the static state spinning has next to none)
+    and the predicted block position at the first sample is the first sample (the block's zero is set there)."""
+    time = np.arange(0.0, 2.0, 1.0)
+    record = SurfaceRecord.from_arrays(time, top_speed=np.full(len(time), small_model.top_speed),
+                                       block_position=np.array([29.9, 29.9]),
+                                       surface_torque=np.array([np.nan, np.nan]))
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=5.0)
+    spun = estimate(stick_slip, record, settings, model=small_model)
+    cold = estimate(stick_slip, record, dataclasses.replace(settings, spin_up=0.0), model=small_model)
+    assert abs(cold.predicted_mean["surface_torque"][0]) < 1e3
+    assert spun.predicted_mean["surface_torque"][0] > 2e3
+    assert abs(spun.predicted_mean["block_position"][0] - 29.9) < 3 * settings.block_position_noise

@@ -83,6 +83,8 @@ _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
 _BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
 #: The estimated coefficient stays within exp(±LOG_RANGE) of the case's (an analysis can throw a member's far out).
 LOG_RANGE = 5.0
+#: The spin-up's longest step between the model error's kicks [s].
+SPIN_UP_STEP = 1.0
 #: Units of the Tucker–Wang coefficients (pint spelling), for the results.
 COEFFICIENT_UNITS = {"a1": "m/s", "a2": "m/(N*s)", "a3": "m/rad", "a4": "N*rad", "a5": "N*m"}
 
@@ -106,6 +108,11 @@ class EstimatorSettings:
             alone gave bands covering the truth 0.6-0.7 of the time against 0.86-1.0 (the truncated higher modes are
             part of the model's error), but the ringing of the higher modes biases the stick-slip index up ~2-10 %.
         initial_speed_spread: standard deviation of the members' initial string speed [rad/s], >= 0.
+        spin_up: the members run this long [s] from the model's initial state, with the model error and without
+            observations, before the record's first time, >= 0: a record starts in operation (in stick-slip, the
+            string twisted), not in the static state; 0 starts the filter from the initial state (a record that
+            starts where its run does). The spin-up puts the ensemble on the model's own cycle with the members'
+            phases spread by their parameters and the model error (docs/estimation_filter.md, "The shipped record").
         bit_rock_coefficient: the estimated coefficient of the case's bit–rock law (a field of its parameters).
         coefficient_spread: prior standard deviation of its logarithm [-], in (0, 2].
         coefficient_walk: its random walk, standard deviation of the logarithm's change per √s [1/√s], >= 0.
@@ -128,6 +135,8 @@ class EstimatorSettings:
     model_speed_noise: float = 3.0
     model_noise_modes: int = 40
     initial_speed_spread: float = 0.5
+    spin_up: float = 20.0
+    assimilation_step: float = 1.0
     bit_rock_coefficient: str = "a5"
     coefficient_spread: float = 0.3
     coefficient_walk: float = 0.003
@@ -145,9 +154,11 @@ class EstimatorSettings:
     def __post_init__(self) -> None:
         integer("ensemble_size", self.ensemble_size, low=4, high=1000)
         for name in ("top_speed_noise", "surface_torque_noise", "block_position_noise", "hook_load_window",
-                     "weight_on_bit_bias_spread", "stick_slip_window", "output_step", "atol"):
+                     "weight_on_bit_bias_spread", "stick_slip_window", "output_step", "atol",
+                     "assimilation_step"):
             real_number(name, getattr(self, name), low=0.0, low_open=True)
-        for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk", "model_speed_noise"):
+        for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk", "model_speed_noise",
+                     "spin_up"):
             real_number(name, getattr(self, name), low=0.0)
         real_number("inflation", self.inflation, low=1.0, high=2.0)
         real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
@@ -308,7 +319,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     static_hook = float(model.static.weight_on_hook)
     top_u = np.asarray(model.top_u, dtype=float)
     time = np.asarray(record.time, dtype=float)
-    clock = time - time[0]  # the model's time: the record's from its first sample
+    spin = float(settings.spin_up)
+    clock = time - time[0] + spin  # the model's time: the record's from its first sample, after the spin-up
     n_time = len(time)
     channels = [name for name in OBSERVED if name in record.channels]
     usable = {name: record.usable(name) for name in channels}
@@ -354,6 +366,63 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         drop = 0.0 if not math.isfinite(hook_mean) else static_hook - hook_mean
         return member_model(model, laws, weight + drop + members.parameters[i, 1])
 
+    # the assimilation windows (t0 + (j-1) step, t0 + j step] of the record (the first sample alone in window 0),
+    # each analysed at its last sample with the means of its usable samples
+    window = np.ceil((time - time[0]) / settings.assimilation_step - 1e-9).astype(np.int64)
+    window_observed = {name: 0.0 for name in channels}
+    window_predicted = {name: np.zeros(n_members) for name in channels}
+    window_samples_used: dict[str, list[int]] = {name: [] for name in channels}
+
+    def forecast(t_from: float, t_to: float, hook_mean: float, walk: bool = True) -> int:
+        """Every member from model time ``t_from`` to ``t_to`` [s]: the parameters' walk (if ``walk``), the model
+        error's kick, the model; a failed member replaced by a copy of a good one. Returns the count replaced."""
+        dt = t_to - t_from
+        if walk:
+            members.parameters[:, 0] += settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members)
+            members.parameters[:, 1] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
+                n_members)
+        if speed_noise > 0.0:
+            for i in range(n_members):
+                y = members.states[i].y.copy()
+                y[n + t_start:n + t_end] += speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
+                members.states[i] = members.states[i].updated(y)
+        grid = np.append(np.arange(t_from + settings.output_step, t_to - 1e-9 * dt, settings.output_step), t_to)
+        ok = np.zeros(n_members, dtype=bool)
+        for i in range(n_members):
+            try:
+                run = advance(member(i, hook_mean), solver, members.states[i], t_to, output_times=grid)
+            except (ValueError, FloatingPointError, ZeroDivisionError):
+                continue
+            rows = run.outputs
+            if not run.success or len(rows) != len(grid) or not np.all(np.isfinite(rows[:, :_SURFACE_TORQUE + 1])) \
+                    or not np.all(np.isfinite(run.state.y)) \
+                    or np.max(np.abs(rows[:, _BIT_SPEED])) > settings.divergence_speed_ratio * abs(top_speed):
+                continue
+            ok[i] = True
+            members.states[i] = run.state
+            members.outputs[i] = rows[-1]
+            members.push(i, rows[:, _BIT_SPEED])
+        if not ok.any():
+            raise RuntimeError(f"estimate: every member's forecast failed between t = {t_from - spin:g} s and "
+                               f"{t_to - spin:g} s of the record")
+        good = np.flatnonzero(ok)
+        for i in np.flatnonzero(~ok):
+            source = int(rng.choice(good))
+            members.copy_member(i, source)
+            for name in channels:
+                window_predicted[name][i] = window_predicted[name][source]
+        return int(np.sum(~ok))
+
+    if spin > 0.0:
+        # the spin-up: from the initial state to the record's first time, in steps of at most SPIN_UP_STEP
+        hook_first = _hook_load_mean(record, float(time[0]), settings.hook_load_window)
+        marks = np.linspace(0.0, spin, max(math.ceil(spin / SPIN_UP_STEP - 1e-9), 1) + 1)
+        for a, b in zip(marks[:-1], marks[1:]):
+            forecast(float(a), float(b), hook_first, walk=False)
+        # the block's zero: each member's predicted block position at the record's first time is the first sample's
+        top_now = np.array([top_u @ members.states[i].y[:n] for i in range(n_members)])
+        members.parameters[:, 2] += top_now
+
     for k in range(n_time):
         t = float(clock[k])
         hook_mean = _hook_load_mean(record, float(time[max(k - 1, 0)]), settings.hook_load_window)
@@ -361,41 +430,12 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             for i in range(n_members):
                 row = member(i, hook_mean).observe(t, members.states[i].y)
                 members.outputs[i] = row
-                members.push(i, [row[_BIT_SPEED]])
+                if spin > 0.0:
+                    members.speed[i, -1] = row[_BIT_SPEED]
+                else:
+                    members.push(i, [row[_BIT_SPEED]])
         else:
-            dt = t - float(clock[k - 1])
-            members.parameters[:, 0] += settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members)
-            members.parameters[:, 1] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
-                n_members)
-            if speed_noise > 0.0:
-                for i in range(n_members):
-                    y = members.states[i].y.copy()
-                    y[n + t_start:n + t_end] += speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
-                    members.states[i] = members.states[i].updated(y)
-            grid = np.append(np.arange(float(clock[k - 1]) + settings.output_step, t - 1e-9 * dt,
-                                       settings.output_step), t)
-            ok = np.zeros(n_members, dtype=bool)
-            for i in range(n_members):
-                try:
-                    run = advance(member(i, hook_mean), solver, members.states[i], t, output_times=grid)
-                except (ValueError, FloatingPointError, ZeroDivisionError):
-                    continue
-                rows = run.outputs
-                if not run.success or len(rows) != len(grid) or not np.all(np.isfinite(rows[:, :_SURFACE_TORQUE + 1])) \
-                        or not np.all(np.isfinite(run.state.y)) \
-                        or np.max(np.abs(rows[:, _BIT_SPEED])) > settings.divergence_speed_ratio * abs(top_speed):
-                    continue
-                ok[i] = True
-                members.states[i] = run.state
-                members.outputs[i] = rows[-1]
-                members.push(i, rows[:, _BIT_SPEED])
-            if not ok.any():
-                raise RuntimeError(f"estimate: every member's forecast failed between t = {clock[k - 1]:g} s and "
-                                   f"{t:g} s of the record")
-            good = np.flatnonzero(ok)
-            for i in np.flatnonzero(~ok):
-                members.copy_member(i, int(rng.choice(good)))
-            replaced[k] = int(np.sum(~ok))
+            replaced[k] = forecast(float(clock[k - 1]), t, hook_mean)
         # the predicted surface channels, the analysis
         z = np.array([np.concatenate([members.states[i].y, members.parameters[i]]) for i in range(n_members)]).T
         predicted = {"top_speed": np.array([o[_QUILL] for o in members.outputs]),
@@ -403,12 +443,19 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
                      "block_position": z[-1] - top_u @ z[:n]}
         for name in channels:
             predicted_mean[name][k], predicted_quantiles[name][k] = _summaries(predicted[name])
-        rows = [name for name in channels if usable[name][k]]
-        if rows:
+        # the window's sums: the usable samples of each channel and each member's predictions at their times
+        for name in channels:
+            if usable[name][k]:
+                window_observed[name] += float(record.channels[name][k])
+                window_predicted[name] += predicted[name]
+                window_samples_used[name].append(k)
+        rows = [name for name in channels if window_samples_used[name]]
+        if rows and (k == n_time - 1 or window[k + 1] != window[k]):
             for name in rows:
-                used[name][k] = True
-            z = etkf_analysis(z, np.array([predicted[name] for name in rows]),
-                              np.array([record.channels[name][k] for name in rows]),
+                used[name][window_samples_used[name]] = True
+            count = {name: len(window_samples_used[name]) for name in rows}
+            z = etkf_analysis(z, np.array([window_predicted[name] / count[name] for name in rows]),
+                              np.array([window_observed[name] / count[name] for name in rows]),
                               np.array([noise[name] for name in rows]), settings.inflation)
             for i in range(n_members):
                 members.states[i] = members.states[i].updated(z[:-3, i])
@@ -416,6 +463,11 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
                 row = member(i, hook_mean).observe(t, members.states[i].y)
                 members.outputs[i] = row
                 members.speed[i, -1] = row[_BIT_SPEED]
+        if k == n_time - 1 or window[k + 1] != window[k]:
+            for name in channels:
+                window_observed[name] = 0.0
+                window_predicted[name] = np.zeros(n_members)
+                window_samples_used[name] = []
         # the analysis's downhole state and parameters
         rows_out = np.array(members.outputs)
         values = {name: rows_out[:, OBSERVABLE_COLUMN[name]] for name in DOWNHOLE if name in OBSERVABLE_COLUMN}
