@@ -309,3 +309,13 @@ def test_spin_up_starts_the_members_on_their_run(stick_slip, small_model):
     assert abs(cold.predicted_mean["surface_torque"][0]) < 1e3
     assert spun.predicted_mean["surface_torque"][0] > 2e3
     assert abs(spun.predicted_mean["block_position"][0] - 29.9) < 3 * settings.block_position_noise
+
+
+def test_case_table_keys_are_the_settings():
+    """The [estimator] case keys are the settings' fields, the new ones included, converted to SI."""
+    from drillstring.case.estimator_table import Estimator
+
+    assert set(Estimator.model_fields) == {f.name for f in dataclasses.fields(EstimatorSettings)}
+    given = Estimator(spin_up="5 s", assimilation_step="500 ms").given()
+    assert given == {"spin_up": 5.0, "assimilation_step": 0.5}
+    assert EstimatorSettings(**given).assimilation_step == 0.5

@@ -43,7 +43,7 @@ def test_bands_cover_the_truth(shipped):
     """The 90 % bands of the bit speed and the torque on bit hold the truth 75-100 % of the time: the bounds of
     the twin experiments (tests/estimation/test_ensemble.py), the nominal 90 % less the sampling error of 16
     members' quantiles and of the few stick-slip cycles (~4) that 20 s hold."""
-    piece, truth, _bias, _settings, result = shipped
+    _piece, truth, _bias, _settings, result = shipped
     for name in ("bit_speed", "torque_on_bit"):
         coverage = result.coverage(name, truth[name])
         assert 0.75 <= coverage <= 1.0, (name, coverage)
@@ -52,7 +52,7 @@ def test_bands_cover_the_truth(shipped):
 
 def test_bit_speed_beats_the_surface_guess(shipped):
     """The bit speed's error (RMS over the piece) is under half that of reading the top speed as the bit's."""
-    piece, truth, _bias, _settings, result = shipped
+    _piece, truth, _bias, _settings, result = shipped
     error = np.sqrt(np.mean((result.mean["bit_speed"] - truth["bit_speed"]) ** 2))
     naive = np.sqrt(np.mean((truth["top_speed"] - truth["bit_speed"]) ** 2))
     assert 2.0 * error < naive, (error, naive)
@@ -64,7 +64,7 @@ def test_force_on_bit_rate_of_penetration_and_bias(shipped):
     bias's error, has its mean over the piece within the same 10 kN of the truth's. The rate of penetration's
     mean is within 30 % of the truth's: the block position (5 mm noise, averaged over 1 s) fixes the mean
     descent of the top over 20 s to a few per cent, the string's stretching over the stick-slip cycles not."""
-    piece, truth, bias, settings, result = shipped
+    _piece, truth, bias, settings, result = shipped
     half_prior = 0.5 * settings.weight_on_bit_bias_spread
     assert abs(result.mean["weight_on_bit_bias"][-1] - bias) < half_prior
     assert abs(np.mean(result.mean["force_on_bit"]) - np.mean(truth["force_on_bit"])) < half_prior

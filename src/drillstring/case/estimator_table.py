@@ -24,6 +24,7 @@ class Estimator(_Base):
     model_noise_modes: int | None = Field(None, description="torsional modes the model error is spread over")
     initial_speed_spread: AngularSpeed | None = Field(None, description="initial string-speed spread, std [rad/s]")
     spin_up: Time | None = Field(None, description="the members' run before the record's first time [s]")
+    assimilation_step: Time | None = Field(None, description="assimilation window: one analysis of its means [s]")
     bit_rock_coefficient: str | None = Field(None, description="the estimated coefficient of the bit-rock law")
     coefficient_spread: Dimensionless | None = Field(None, description="its prior spread (of its logarithm) [-]")
     coefficient_walk: float | None = Field(None, description="its random walk [1/sqrt(s)]")

@@ -82,6 +82,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import itertools
 import math
 import time as _time
 from collections.abc import Callable
@@ -441,7 +442,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         # the spin-up: from the initial state to the record's first time, in steps of at most SPIN_UP_STEP
         hook_first = _hook_load_mean(record, float(time[0]), settings.hook_load_window)
         marks = np.linspace(0.0, spin, max(math.ceil(spin / SPIN_UP_STEP - 1e-9), 1) + 1)
-        for a, b in zip(marks[:-1], marks[1:]):
+        for a, b in itertools.pairwise(marks):
             forecast(float(a), float(b), hook_first, walk=False)
         # the block's zero: each member's predicted block position at the record's first time is the first sample's
         top_now = np.array([top_u @ members.states[i].y[:n] for i in range(n_members)])
