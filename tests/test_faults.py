@@ -14,6 +14,7 @@ import zarr
 from typer.testing import CliRunner
 
 from drillstring.cli import app
+from drillstring.stochastic import montecarlo as mc
 
 runner = CliRunner()
 _ENV = {"COLUMNS": "120", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "TTY_INTERACTIVE": None}
@@ -181,6 +182,7 @@ def test_write_refused_midway_stops_in_one_line_and_resumes(case_file, tmp_path,
         return original(self, outcomes)
 
     monkeypatch.setattr(TaskStore, "write_many", refused)
+    monkeypatch.setattr(mc.StudyStore, "flush_interval", 0.0)  # one write per realization: refused after the first
     out = tmp_path / "study"
     line = _one_line(_study(case_file, out), 1, "cannot write", "Permission denied",
                      f"finished realizations are kept in {out / 'study.zarr'}", "run the same command again")
