@@ -1,4 +1,4 @@
-"""The estimator on the record shipped with the stick_slip case against its hidden truth (docs/estimation_filter.md,
+"""The estimator on the record shipped with the stick_slip case against its hidden truth (docs/estimation.md,
 "The shipped record"): coverage of the 90 % bands, RMS errors, the surface-only guess's, the parameters, the wall
 time (the model's build and compilation included).
 

@@ -156,7 +156,7 @@ def experiment(stick_slip):
 def test_twin_bands_cover_the_truth(experiment):
     """(a) The 90 % bands of bit speed and torque on bit hold the truth most of the time after the spin-up
     (measured 0.86-1.0 on this 60 s record over seeds 0-2, 50 correlated samples; the 300 s benchmark gives the
-    long-record figure, docs/estimation_filter.md)."""
+    long-record figure, docs/estimation.md)."""
     truth, result, _ = experiment
     for name in ("bit_speed", "torque_on_bit"):
         coverage = result.coverage(name, truth.truth[name], SPIN_UP)
@@ -178,7 +178,7 @@ def test_twin_detects_stick_slip_while_the_surface_speed_is_held(experiment):
     """(c) The stick-slip index over the last window at the end of the record: the estimate's band reaches the
     truth's index or misses it by under 5 % (measured: band 1.85-2.22 for a truth of 1.83: the model noise's kicks
     ring in the higher torsional modes and raise each member's max - min, a known bias up,
-    docs/estimation_filter.md), its lower end above 1 (full stick-slip), while the index of the top speed -- the
+    docs/estimation.md), its lower end above 1 (full stick-slip), while the index of the top speed -- the
     surface alone -- stays below 0.2 (the PI top drive holds the speed)."""
     truth, result, settings = experiment
     index = truth.stick_slip_index(settings.stick_slip_window)[-1]

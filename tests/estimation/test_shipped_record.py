@@ -5,7 +5,7 @@ except 16 members, against the record's hidden truth.
 The bounds are not fitted to this run; each is fixed by a reason given where it is asserted. Each test fails for
 the estimator as it was before the spin-up and the assimilation windows (checked on this piece: bit-speed
 coverage 0.11, bit-speed error 10.2 rad/s against the surface guess's 13.4, final bias -95 kN;
-docs/estimation_filter.md, "The shipped record").
+docs/estimation.md, "The shipped record").
 """
 
 from __future__ import annotations

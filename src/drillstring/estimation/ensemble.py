@@ -47,7 +47,7 @@ The noise of that mean is the channel's setting, not divided by √(samples): th
 assimilated value, dominated by the model's error (another model, its basis truncated), which is correlated over
 a window and does not average out. A 1 Hz record with the default step (1 s) is analysed at each sample, as
 before; a 10 Hz one once per second: analysing each of its samples as independent over-fitted the model's error
-(docs/estimation_filter.md, "The shipped record": parameter bands collapsed, coverage 0.45-0.66).
+(docs/estimation.md, "The shipped record": parameter bands collapsed, coverage 0.45-0.66).
 
 **Spin-up.** A record starts in operation, not at the model's initial state: before the first sample the
 members run ``spin_up`` seconds from the initial state (in steps of at most :data:`SPIN_UP_STEP`, each
@@ -116,7 +116,7 @@ class EstimatorSettings:
     """The estimator's settings, named as the case keys they become (SI units).
 
     Attributes:
-        ensemble_size: members N, in [4, 1000] (64: on a 300 s twin, 16 and 32 gave bands too narrow, docs/estimation_filter.md).
+        ensemble_size: members N, in [4, 1000] (64: on a 300 s twin, 16 and 32 gave bands too narrow, docs/estimation.md).
         top_speed_noise: standard deviation of the top-speed measurement [rad/s], > 0.
         surface_torque_noise: of the surface torque [N·m], > 0.
         block_position_noise: of the block position [m], > 0.
@@ -134,7 +134,7 @@ class EstimatorSettings:
             observations, before the record's first time, >= 0: a record starts in operation (in stick-slip, the
             string twisted), not in the static state; 0 starts the filter from the initial state (a record that
             starts where its run does). The spin-up puts the ensemble on the model's own cycle with the members'
-            phases spread by their parameters and the model error (docs/estimation_filter.md, "The shipped record").
+            phases spread by their parameters and the model error (docs/estimation.md, "The shipped record").
         assimilation_step: the assimilation window [s], > 0: one analysis per window, of the means of its samples
             (module docstring); 1 s: the rate of the twin experiments the noises were set on.
         bit_rock_coefficient: the estimated coefficient of the case's bit–rock law (a field of its parameters).
