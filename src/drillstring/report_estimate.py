@@ -9,11 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from drillstring.report import _esc, _kv_table, _num, _page
+from drillstring.outputs.estimate_plots import DOWNHOLE
 from drillstring.units import display_unit
-
-#: Downhole quantity -> display kind (None: a plain number).
-_KINDS = {"bit_speed": "angular_speed", "torque_on_bit": "torque", "force_on_bit": "force",
-          "rate_of_penetration": "rate_of_penetration", "stick_slip_index": None}
 
 
 def _shown(value: float | None, kind: str | None, units: str | None) -> str:
@@ -28,7 +25,7 @@ def _shown(value: float | None, kind: str | None, units: str | None) -> str:
 def _estimate_section(payload: Mapping[str, Any], units: str | None) -> str:
     rows = []
     for name, row in payload["quantities"].items():
-        kind = _KINDS.get(name)
+        kind = DOWNHOLE.get(name, (None, ""))[0]  # a parameter: a plain number
         score = payload["scores"].get(name, {})
         text = (f"mean {_shown(row['mean'], kind, units)}, 90 % band width {_shown(row['band_width'], kind, units)}")
         if "coverage_90" in score:

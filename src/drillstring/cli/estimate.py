@@ -17,10 +17,6 @@ from drillstring.cli.options import (EXIT_INTERRUPTED, CaseArg, JsonOpt, UnitsOp
 from drillstring.cli.tables import print_table
 from drillstring.units import display_unit
 
-#: Downhole quantity -> display kind (None: a plain number).
-_KINDS = {"bit_speed": "angular_speed", "torque_on_bit": "torque", "force_on_bit": "force",
-          "rate_of_penetration": "rate_of_penetration", "stick_slip_index": None}
-
 
 @app.command("estimate")
 def estimate_command(
@@ -109,6 +105,8 @@ def _finite(value) -> float | None:
 
 
 def _print_summary(case, outcome, payload: dict, units: str | None) -> None:
+    from drillstring.outputs.estimate_plots import DOWNHOLE  # the quantities' display kinds (Matplotlib: loaded here)
+
     console = _console()
     for note in payload["notes"]:
         console.print(escape(f"record: {note}"), soft_wrap=True)
@@ -117,7 +115,7 @@ def _print_summary(case, outcome, payload: dict, units: str | None) -> None:
     for column in ("quantity", "time mean", "mean 90 % band width", "coverage of the truth", "RMSE"):
         table.add_column(column, justify="left" if column == "quantity" else "right")
     for name, row in payload["quantities"].items():
-        kind = _KINDS.get(name)
+        kind = DOWNHOLE.get(name, (None, ""))[0]  # a parameter: a plain number
         unit = display_unit(kind, units) if kind else None
         scale, label = (unit.scale, f" {unit.label}") if unit else (1.0, "")
         score = payload["scores"].get(name, {})

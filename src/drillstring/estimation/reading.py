@@ -139,14 +139,20 @@ def _find(names: list[str], wanted: str, what: str, path: Path) -> int:
                      f"{', '.join(names)}")
 
 
+def _channel_mapping(option: str, mapping: dict[str, str] | None, must: str) -> dict[str, str]:
+    """``mapping`` (channel or ``time`` -> a string) checked: a copy; ValueError naming ``option`` otherwise."""
+    mapping = dict(mapping or {})
+    for name, value in mapping.items():
+        if name != "time" and name not in CHANNELS:
+            raise ValueError(f"{option}: unknown channel {name!r}; channels are time, {', '.join(CHANNELS)}")
+        if not isinstance(value, str):
+            raise ValueError(f"{option}[{name!r}] = {value!r}: must be {must}")
+    return mapping
+
+
 def _map_columns(path: Path, names: list[str], columns: dict[str, str] | None) -> dict[str, int]:
     """Channel (and ``time``) -> column index."""
-    columns = dict(columns or {})
-    for name, column in columns.items():
-        if name != "time" and name not in CHANNELS:
-            raise ValueError(f"columns: unknown channel {name!r}; channels are time, {', '.join(CHANNELS)}")
-        if not isinstance(column, str):
-            raise ValueError(f"columns[{name!r}] = {column!r}: must be a column name (a string)")
+    columns = _channel_mapping("columns", columns, "a column name (a string)")
     found = {name: _find(names, column, name, path) for name, column in columns.items()}
     keys = [_key(n) for n in names]
     for name, mnemonics in MNEMONICS.items():
@@ -233,12 +239,7 @@ def read_surface_record(path: str | Path, *, columns: dict[str, str] | None = No
     or a record the case cannot explain.
     """
     path = Path(path)
-    units = dict(units or {})
-    for name, unit in units.items():
-        if name != "time" and name not in CHANNELS:
-            raise ValueError(f"units: unknown channel {name!r}; channels are time, {', '.join(CHANNELS)}")
-        if not isinstance(unit, str):
-            raise ValueError(f"units[{name!r}] = {unit!r}: must be a unit (a string such as 'klbf')")
+    units = _channel_mapping("units", units, "a unit (a string such as 'klbf')")
     if case is not None and not hasattr(case, "operation"):
         from drillstring.case import load_case
 
