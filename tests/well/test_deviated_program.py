@@ -1,0 +1,90 @@
+"""The whole program on a case with ``[well]`` (issue 34 item 4): a study, an operating map and a search of the
+operating point run on the deviated case (coarse: a 60 m mesh and a small basis, so each run costs a fraction
+of a second), their runs are the ``simulate`` and ``stability`` of the same case, and the study rebuilds every
+realization (the parametric model does not cover a well) with one note saying so."""
+
+import numpy as np
+import pytest
+
+import drillstring
+from drillstring import api
+from drillstring.case import load_case
+from drillstring.dynamics.indicators import bit_area, cycle_metrics, steady_window
+from drillstring.stochastic.montecarlo import nominal_weight_on_hook
+from drillstring.well.stiff_string import case_stiff_string
+
+T_END = 0.5  # [s]
+OUTPUT_STEP = 0.01  # [s]
+
+
+@pytest.fixture(scope="module")
+def deviated():
+    """The deviated case on a 60 m mesh, 2 axial, 3 torsional and 2 lateral modes per plane."""
+    case = load_case("deviated")
+    return case.model_copy(update={
+        "mesh": case.mesh.model_copy(update={"max_element_length": 60.0}),
+        "reduced_model": case.reduced_model.model_copy(update={"axial_modes": 2, "torsional_modes": 3,
+                                                               "lateral_modes": 2})})
+
+
+@pytest.fixture(scope="module")
+def simulated(deviated):
+    return api.simulate(deviated, t_end=T_END, output_step=OUTPUT_STEP)
+
+
+def test_study_nominal_run_is_simulate_and_every_realization_is_rebuilt(deviated, simulated, tmp_path):
+    """The study's nominal run (the deterministic run at the means) is ``simulate`` of the case to round-off;
+    the parametric model refuses the well, so the study notes once that every realization is rebuilt, and the
+    realizations differ from the nominal run (the weight-on-hook is random)."""
+    notes = []
+    outcome = api.monte_carlo_study(deviated, samples=3, t_end=T_END, output_step=OUTPUT_STEP, workers=1,
+                                    out=tmp_path / "s", note=notes.append)
+    rebuilt = [n for n in notes if "[well]" in n]
+    assert len(rebuilt) == 1 and "every realization's reduced model is rebuilt" in rebuilt[0]
+    stats = outcome.statistics
+    np.testing.assert_allclose(stats.time.values, simulated.time.values, rtol=0, atol=1e-12)
+    for name in ("bit_speed", "torque_on_bit", "force_on_bit", "rate_of_penetration"):
+        nominal, run = stats[f"{name}_nominal"].values, simulated[name].values
+        np.testing.assert_allclose(nominal, run, rtol=1e-9, atol=1e-9 * np.abs(run).max(), err_msg=name)
+        assert np.abs(stats[f"{name}_mean"].values - run).max() > 1e-6 * np.abs(run).max(), name
+    # the random weight-on-hook is the vertical one (weight − weight-on-bit), not the well's hook load
+    summary = outcome.summary
+    assert summary["weight_on_hook_mean"] == pytest.approx(deviated.weight - deviated.operation.weight_on_bit)
+    assert summary["weight_on_hook_mean"] == nominal_weight_on_hook(deviated)
+    assert summary["weight_on_hook_mean"] - case_stiff_string(deviated).hook_load > 1e5
+
+
+def test_map_point_is_simulate_and_its_root_is_stability(deviated, simulated, tmp_path):
+    """A one-point map at the case's own top speed and weight-on-bit: its outputs are those of ``simulate``'s
+    time histories (1e-9), its torsional and leading roots those of ``stability`` (1e-6)."""
+    outcome = api.operating_map(deviated, top_speed=[deviated.operation.top_speed],
+                                weight_on_bit=[deviated.operation.weight_on_bit], t_end=T_END,
+                                output_step=OUTPUT_STEP, transient=0.2, workers=1, out=tmp_path / "m")
+    point = outcome.dataset.isel(top_speed=0, weight_on_bit=0)
+    t = simulated.time.values
+    obs = {name: simulated[name].values for name in simulated.data_vars}
+    metrics = cycle_metrics(t, obs, deviated.operation.top_speed, bit_area(deviated), 0.2)
+    for name in ("rate_of_penetration", "torque_on_bit", "force_on_bit"):
+        assert float(point[f"mean_{name}"]) == pytest.approx(metrics[f"mean_{name}"], rel=1e-9), name
+        steady = obs[name][steady_window(t, 0.2)]
+        assert float(point[f"std_{name}"]) == pytest.approx(steady.std(), rel=1e-9, abs=1e-12), name
+    found = api.stability(deviated)
+    torsional = found.leading_by_family["torsional"]
+    assert float(point["torsional_growth_rate"]) == pytest.approx(torsional.growth_rate, rel=1e-6)
+    assert float(point["torsional_frequency"]) == pytest.approx(torsional.frequency, rel=1e-6)
+    assert float(point["growth_rate"]) == pytest.approx(found.leading.growth_rate, rel=1e-6)
+    assert float(point["steady_rate_of_penetration"]) == pytest.approx(found.steady_state.rate_of_penetration,
+                                                                       rel=1e-6)
+
+
+def test_optimize_runs_on_a_two_by_two_design(deviated, tmp_path):
+    """A search over top speed × weight-on-bit, its initial design of 4 points alone, 2 realizations each:
+    every realization finishes and the recommended point is one of the design."""
+    outcome = drillstring.optimize(deviated, variables={"top_speed": "100 rpm:140 rpm", "weight_on_bit": "60 kN:90 kN"},
+                           samples=2, points=4, initial=4, t_end=T_END, output_step=0.05, sigma=5e3, workers=1,
+                           out=tmp_path)
+    summary = outcome.summary
+    assert summary["realizations"] == 8 and not summary["failures"]
+    assert len(summary["design"]) == 4
+    assert summary["recommended"]["values"] in summary["design"]
+    assert np.all(np.isfinite(outcome.dataset.mean_rate_of_penetration.values))
