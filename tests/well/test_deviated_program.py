@@ -12,6 +12,7 @@ from drillstring.case import load_case
 from drillstring.dynamics.indicators import bit_area, cycle_metrics, steady_window
 from drillstring.stochastic.montecarlo import nominal_weight_on_hook
 from drillstring.well.stiff_string import case_stiff_string
+from drillstring.well.torque_drag import case_torque_drag
 
 T_END = 0.5  # [s]
 OUTPUT_STEP = 0.01  # [s]
@@ -88,3 +89,27 @@ def test_optimize_runs_on_a_two_by_two_design(deviated, tmp_path):
     assert len(summary["design"]) == 4
     assert summary["recommended"]["values"] in summary["design"]
     assert np.all(np.isfinite(outcome.dataset.mean_rate_of_penetration.values))
+
+
+@pytest.mark.parametrize("law, operation", [("off_bottom", "rotating_off_bottom"), ("tucker_wang", "drilling")])
+def test_hook_load_in_time_is_the_stiff_strings_and_the_soft_strings(law, operation):
+    """The ``hook_load`` channel (the top axially free under a prescribed force: the static hook load plus the
+    weight not yet transferred during the start's ramp) on the case's own 10 m mesh: after the ramp it is the
+    stiff string's static hook load exactly, and the soft string's torque-and-drag hook load of the same
+    operation to 2e-5 (frictionless both: without friction the weight's component along the path)."""
+    case = load_case("deviated")
+    case = case.model_copy(update={
+        "bit_rock": case.bit_rock.model_copy(update={"law": law}),
+        "initial": case.initial.model_copy(update={"weight_ramp_time": 0.1}),
+        "reduced_model": case.reduced_model.model_copy(update={"axial_modes": 2, "torsional_modes": 2,
+                                                               "lateral_modes": 1})})
+    run = api.simulate(case, t_end=0.2, output_step=0.05)
+    after = run.time.values >= 0.1
+    stiff = case_stiff_string(case).hook_load  # the case's weight on bit: 0 off bottom
+    np.testing.assert_array_equal(run.hook_load.values[after], stiff)
+    soft = case_torque_drag(case)[operation].hook_load
+    assert stiff == pytest.approx(soft, rel=2e-5)
+    assert abs(stiff - soft) > 1.0  # not the same computation: the stiff string's bending and nodes (−9 N)
+    # during the ramp the hook holds the weight not yet on the bit (none off bottom)
+    w = case.operation.weight_on_bit if law != "off_bottom" else 0.0
+    np.testing.assert_allclose(run.hook_load.values[0], stiff + w, rtol=1e-15)
