@@ -113,3 +113,52 @@ def test_hook_load_in_time_is_the_stiff_strings_and_the_soft_strings(law, operat
     # during the ramp the hook holds the weight not yet on the bit (none off bottom)
     w = case.operation.weight_on_bit if law != "off_bottom" else 0.0
     np.testing.assert_allclose(run.hook_load.values[0], stiff + w, rtol=1e-15)
+
+
+def test_figure_of_the_string_in_the_well(deviated, tmp_path):
+    """The figure of the stiff string in its well: a 3-D path and the contact force per node; the nodes on the
+    wall are drawn with their forces, the free ones apart, in the unit system asked for."""
+    from drillstring.outputs.torque_drag_plots import (
+        plot_string_in_well,
+        string_in_well_figure,
+    )
+
+    state = case_stiff_string(deviated)
+    fig = string_in_well_figure(state)
+    path3d = fig.axes[0]
+    assert path3d.name == "3d"
+    drawn = path3d.collections[0].get_array()  # the nodes on the wall, coloured by their force [kN]
+    np.testing.assert_allclose(np.sort(drawn), np.sort(state.side_force[state.in_contact]) / 1e3, rtol=1e-12)
+    assert 0 < drawn.size < state.side_force.size
+    assert f"{state.hook_load / 1e3:,.2f} kN" in fig.get_suptitle()
+    field = string_in_well_figure(state, units="field")
+    assert "klbf" in field.get_suptitle() and "[ft]" in field.axes[1].get_ylabel()
+    png = plot_string_in_well(state, tmp_path / "well.png")
+    assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size > 20_000
+
+
+def test_simulate_command_writes_the_well_figure(deviated, tmp_path):
+    """``drillstring simulate --plot F.png`` on a case with ``[well]`` writes ``F-well.png`` too (and says
+    so); a case without ``[well]`` does not."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from drillstring.cli import app
+
+    case_file = tmp_path / "deviated.toml"
+    case_file.write_text(deviated.to_toml(), encoding="utf-8")
+    png = tmp_path / "run.png"
+    result = CliRunner().invoke(app, ["simulate", str(case_file), "--t-end", "0.1", "--out", str(tmp_path / "run.nc"),
+                                      "--plot", str(png), "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    well = tmp_path / "run-well.png"
+    assert data["well_figure"] == str(well) and well.read_bytes().startswith(b"\x89PNG")
+    vertical = tmp_path / "vertical.toml"
+    vertical.write_text(deviated.model_copy(update={"well": None}).to_toml(),
+                        encoding="utf-8")
+    result = CliRunner().invoke(app, ["simulate", str(vertical), "--t-end", "0.1", "--out",
+                                      str(tmp_path / "v.nc"), "--plot", str(tmp_path / "v.png"), "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["well_figure"] is None and not (tmp_path / "v-well.png").exists()

@@ -167,7 +167,9 @@ def simulate(
         "simulation.nc"
     ),
     plot: Annotated[Path, typer.Option("--plot", help="PNG file of the six-panel figure (ROP, bit speed, radial "
-                                                      "displacement, TOB, whirl orbit, contact force).")] = Path(
+                                                      "displacement, TOB, whirl orbit, contact force); with "
+                                                      "[well], also <name>-well.png: the string in the well "
+                                                      "coloured by its contact force.")] = Path(
         "simulation.png"
     ),
     as_json: JsonOpt = False,
@@ -216,6 +218,7 @@ def simulate(
     try:
         netcdf = write_netcdf(ds, out)
         figure = plot_run(ds, plot, units=units) if ds.sizes.get("time", 0) else None  # probe nearest 1560 m
+        well_figure = _well_figure(the_case, plot, units)
     except OSError as error:  # disk full, no permission: the run is lost, the old files are left as they were
         from drillstring.files import write_error_message
 
@@ -227,6 +230,7 @@ def simulate(
     numbers["start_notes"] = notes
     numbers["netcdf"] = str(netcdf)
     numbers["figure"] = None if figure is None else str(figure)
+    numbers["well_figure"] = None if well_figure is None else str(well_figure)
     if failure is not None:
         numbers["message"] = str(failure)
     if as_json:
@@ -238,9 +242,23 @@ def simulate(
         for text in notes:
             console.print(escape(f"note: {text}"))
         written = f"NetCDF: {netcdf}" + ("" if figure is None else f", figure: {figure}")
-        console.print(escape(written))
+        console.print(escape(written + ("" if well_figure is None else f", the string in the well: {well_figure}")))
     if failure is not None:
         _fail(f"{failure} (the partial run is in {netcdf})", EXIT_RUN_FAILED)
+
+
+def _well_figure(case, plot: Path, units) -> Path | None:
+    """For a case with ``[well]``: the figure of its stiff string in the well, coloured by the contact force per
+    node (:func:`~drillstring.outputs.torque_drag_plots.plot_string_in_well`), as ``<plot's stem>-well.png``
+    beside ``plot``; None without ``[well]``."""
+    if case.well is None:
+        return None
+    from drillstring.outputs.torque_drag_plots import plot_string_in_well
+    from drillstring.well.stiff_string import case_stiff_string
+
+    path = Path(plot).with_name(f"{Path(plot).stem}-well.png")
+    return plot_string_in_well(case_stiff_string(case), path, title=f"{case.name}: the string in the well",
+                               units=units)
 
 
 # ---------------------------------------------------------------------------------------------------------

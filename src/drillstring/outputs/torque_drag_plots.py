@@ -1,6 +1,7 @@
 """Figures of the well and its torque and drag (no physics here): the vertical section and plan view, the
-loads along the string, the broomstick chart with measured hook loads and posterior bands (Matplotlib), and
-the interactive 3-D well path (plotly figure specs for :func:`drillstring.interactive.write_interactive_page`).
+loads along the string, the broomstick chart with measured hook loads and posterior bands, the stiff string
+in the well coloured by its contact force per node (Matplotlib), and the interactive 3-D well path (plotly
+figure specs for :func:`drillstring.interactive.write_interactive_page`).
 
 Inputs are the SI results of :mod:`drillstring.well`; axes are in the unit system ``units`` (``"si"``,
 ``"field"``; None: ``$DRILLSTRING_UNITS``, else si).
@@ -16,7 +17,8 @@ import numpy as np
 from drillstring.outputs.canvas import new_figure, save_png
 from drillstring.units import display_unit
 
-__all__ = ["plot_broomstick", "plot_torque_drag", "plot_well_path", "well_figures"]
+__all__ = ["plot_broomstick", "plot_string_in_well", "plot_torque_drag", "plot_well_path", "string_in_well_figure",
+           "well_figures"]
 
 _LABELS = {"trip_out": "trip out", "trip_in": "trip in", "rotating_off_bottom": "rotating off bottom",
            "sliding": "sliding", "drilling": "drilling"}
@@ -53,6 +55,57 @@ def plot_well_path(trajectory, path: str | Path, *, casing_shoe: float = 0.0, ti
     plan.legend(loc="best")
     fig.suptitle(title)
     return save_png(fig, path)
+
+
+def string_in_well_figure(state, *, title: str = "String in the well", units: str | None = None):
+    """The stiff string in its well (a :class:`~drillstring.well.stiff_string.StiffStringState`, or any object
+    with its ``position`` (n, 3) global (TVD, north, east) [m], ``measured_depth`` (n,) [m], ``side_force`` (n,)
+    [N]: the wall's and stabilizers' force on each node, and ``hook_load`` [N]): left, the 3-D path (east, north,
+    TVD down) with each node in contact coloured by its contact (side) force; right, that force per node against
+    measured depth. Returns the Matplotlib figure (Agg canvas)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    length, force = display_unit("length", units), display_unit("force", units)
+    position = np.asarray(state.position, dtype=float) * length.scale
+    side = np.asarray(state.side_force, dtype=float) * force.scale
+    depth = np.asarray(state.measured_depth, dtype=float) * length.scale
+    touching = side > 0.0
+    fig = Figure(figsize=(13.0, 6.0), layout="constrained")
+    FigureCanvasAgg(fig)
+    path3d = fig.add_subplot(1, 2, 1, projection="3d")
+    profile = fig.add_subplot(1, 2, 2)
+    path3d.plot(position[:, 2], position[:, 1], position[:, 0], "-", color="0.55", lw=1.2, label="string")
+    path3d.plot(position[~touching, 2], position[~touching, 1], position[~touching, 0], ".", color="0.75", ms=2,
+                label="free nodes")
+    high = float(side.max()) if side.size and side.max() > 0.0 else 1.0
+    points = path3d.scatter(position[touching, 2], position[touching, 1], position[touching, 0], c=side[touching],
+                            cmap="viridis", vmin=0.0, vmax=high, s=10, depthshade=False, label="nodes on the wall")
+    path3d.set_aspect("equal")
+    path3d.invert_zaxis()
+    path3d.set_xlabel(f"east [{length.label}]")
+    path3d.set_ylabel(f"north [{length.label}]")
+    path3d.set_zlabel(f"TVD [{length.label}]", labelpad=12)
+    path3d.set_title("String in the well")
+    path3d.legend(loc="upper left", fontsize=8)
+    fig.colorbar(points, ax=path3d, shrink=0.6, label=f"contact force per node [{force.label}]")
+    profile.plot(side, depth, "-", color="0.6", lw=0.8)
+    profile.scatter(side[touching], depth[touching], c=side[touching], cmap="viridis", vmin=0.0, vmax=high, s=10)
+    profile.plot(np.zeros(np.count_nonzero(~touching)), depth[~touching], ".", color="0.75", ms=2)
+    profile.invert_yaxis()
+    profile.set_xlabel(f"contact (side) force per node [{force.label}]")
+    profile.set_ylabel(f"measured depth [{length.label}]")
+    profile.set_title(f"{int(touching.sum())} of {side.size} nodes on the wall, total {side.sum():,.1f} {force.label}")
+    profile.grid(alpha=0.3)
+    hook = getattr(state, "hook_load", None)
+    fig.suptitle(title if hook is None else f"{title}: hook load {float(hook) * force.scale:,.2f} {force.label}")
+    return fig
+
+
+def plot_string_in_well(state, path: str | Path, *, title: str = "String in the well",
+                        units: str | None = None) -> Path:
+    """Write :func:`string_in_well_figure` of ``state`` as the PNG ``path``."""
+    return save_png(string_in_well_figure(state, title=title, units=units), path)
 
 
 def _axial_range(results: Mapping[str, Any]) -> tuple[float, float]:
