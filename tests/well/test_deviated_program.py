@@ -38,7 +38,7 @@ def test_study_nominal_run_is_simulate_and_every_realization_is_rebuilt(deviated
     the parametric model refuses the well, so the study notes once that every realization is rebuilt, and the
     realizations differ from the nominal run (the weight-on-hook is random)."""
     notes = []
-    outcome = api.monte_carlo_study(deviated, samples=3, t_end=T_END, output_step=OUTPUT_STEP, workers=1,
+    outcome = api.monte_carlo_study(deviated, samples=2, t_end=T_END, output_step=OUTPUT_STEP, workers=1,
                                     out=tmp_path / "s", note=notes.append)
     rebuilt = [n for n in notes if "[well]" in n]
     assert len(rebuilt) == 1 and "every realization's reduced model is rebuilt" in rebuilt[0]
