@@ -143,18 +143,20 @@ def test_numpy_integers_are_accepted_where_integers_are(small_case, tmp_path):
     assert len(found.torsional.frequencies) == 2
 
 
-def test_study_takes_the_keywords_of_monte_carlo_study_but_four(no_work):
-    """``study`` is ``monte_carlo_study``'s statistics: its signature (help(), the reference) is that recipe's less
-    ``note``, ``worker_timeout``, ``units`` and ``stage``, with their defaults, and any other keyword is refused before
-    anything runs, as Python refuses an unknown keyword."""
+def test_study_takes_the_arguments_of_monte_carlo_study(no_work):
+    """``study`` is ``monte_carlo_study``'s statistics: its signature (help(), the reference) is that recipe's, with
+    its defaults and settings objects, and a keyword that is neither an argument nor a field of a settings object
+    is refused before anything runs, naming what is allowed."""
     import inspect
 
     full = inspect.signature(api.monte_carlo_study).parameters
     short = inspect.signature(api.study)
-    assert list(short.parameters) == [n for n in full if n not in ("note", "worker_timeout", "units", "stage")]
+    assert list(short.parameters) == list(full)
     assert all(short.parameters[n] == full[n] for n in short.parameters)
     assert "Dataset" in str(short.return_annotation)
-    with pytest.raises(TypeError, match=r"^study\(\) got an unexpected keyword argument 'note'$"):
-        api.study("reference", note=print)
+    with pytest.raises(TypeError, match=r"^monte_carlo_study\(\) got an unexpected keyword argument 'notes'; it "
+                                        r"takes the settings objects inputs, window, run or their fields as "
+                                        r"keywords: .*\bnote\b"):
+        api.study("reference", notes=print)
     with pytest.raises(TypeError, match=r"^study\(\) "):  # one positional argument, the case
         api.study("reference", 10)

@@ -635,8 +635,10 @@ def test_study_calls_the_api_with_its_defaults(coarse_case, tmp_path, monkeypatc
     monkeypatch.setattr(api, "monte_carlo_study", record)
     result = _invoke("study", str(coarse_case), "--out", str(tmp_path / "s"))
     _one_line_error(result, "stop here")
-    assert seen["sigma"] is None and seen["dispersion"] is None and seen["transient"] is None
-    assert seen["t_end"] is None and seen["workers"] is None and seen["scheduler"] is None
+    inputs, window, run = seen["inputs"], seen["window"], seen["run"]
+    assert inputs == api.RandomInputs()  # nothing declared: the API's default law
+    assert window == api.SimulationWindow()  # the case's window, the API's transient
+    assert run.workers is None and run.scheduler is None and run.out == tmp_path / "s"
     from drillstring.stochastic import DEFAULT_SAMPLES, DEFAULT_SEED
     import inspect
 

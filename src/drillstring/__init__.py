@@ -10,7 +10,10 @@ The notebook API: :func:`load_case`, :func:`static` (the prestressed static stat
 stability), :func:`compare` (case 1 against case 2), :func:`study` / :func:`monte_carlo_study` for Monte Carlo studies of any parameters,
 :func:`operating_map` (performance and vibration over top speed × weight-on-bit) and :func:`sensitivity`
 (Sobol' indices), :func:`campbell` (Campbell diagram and critical speeds), :func:`optimize` (the robust operating point under
-chance constraints), :func:`estimate` (the downhole state from a surface record, with its uncertainty).
+chance constraints), :func:`estimate` (the downhole state from a surface record, with its uncertainty). The
+engine functions take their settings as objects: :class:`RunOptions` (output folder, workers or Dask scheduler,
+callbacks, unit system), :class:`SimulationWindow` (run length, output step, transient), :class:`RandomInputs`
+(the laws drawn) and :class:`SearchOptions` (the search's budget), :mod:`drillstring.api.settings`.
 """
 
 from drillstring._version import __version__  # noqa: F401  (the package's version)
@@ -37,6 +40,10 @@ def __getattr__(name):  # lazy, so `import drillstring` stays cheap for the comm
         from drillstring import api
 
         return getattr(api, name)
+    if name in ("RunOptions", "SimulationWindow", "RandomInputs", "SearchOptions"):
+        from drillstring.api import settings
+
+        return getattr(settings, name)
     if name == "optimize":
         from drillstring.operating_point import optimize
 

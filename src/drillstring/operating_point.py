@@ -7,19 +7,22 @@ import math
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from collections.abc import Mapping
+from typing import Any
 
-from drillstring.api.arguments import (as_case, case_window, check_mapping, make_engine, output_folder,
-                                       point_uncertainty, run_record, run_table)
+from drillstring.api.arguments import as_case, check_mapping, output_folder, point_uncertainty, run_record, run_table
+from drillstring.api.settings import (ALL_FIELDS, DEFAULT_POINT_SAMPLES, RandomInputs, RunOptions, SearchOptions,
+                                      SimulationWindow, gathered)
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
 from drillstring.stochastic import DEFAULT_SEED
 from drillstring.units import unit_system
 
-__all__ = ["OptimizeOutcome", "optimize", "optimization_settings", "parse_bounds"]
+__all__ = ["DEFAULT_POINT_SAMPLES", "OptimizeOutcome", "optimize", "optimization_settings", "parse_bounds"]
 
-#: Realizations per design point by default.
-DEFAULT_POINT_SAMPLES = 8
+#: The fields of :class:`~drillstring.api.settings.RandomInputs` a search draws from at each point (as a
+#: probabilistic map: no ``dispersion``).
+SEARCH_INPUTS = ("parameters", "correlation", "sigma", "model")
 
 
 @dataclass
@@ -84,33 +87,33 @@ def parse_bounds(case: Case, name: str, text, default_unit: str = "") -> tuple[s
 
 
 def optimization_settings(case: Case, *, variables, objective="rate_of_penetration", constraints=None,
-                          samples=DEFAULT_POINT_SAMPLES, points=None, initial=None, batch=None, seed=DEFAULT_SEED,
-                          t_end=None, probability_mean="constant",
-                          output_step=None, transient=None, sigma=None, parameters=None, correlation=None,
-                          model=None, default_units: Mapping[str, str] | None = None):
+                          search: SearchOptions | None = None, seed=DEFAULT_SEED, inputs: RandomInputs | None = None,
+                          window: SimulationWindow | None = None, default_units: Mapping[str, str] | None = None,
+                          **keywords):
     """The validated :class:`~drillstring.stochastic.optimize.OptimizationSettings` of a search of ``case``
     (arguments as :func:`optimize`)."""
     from drillstring.stochastic.optimize import DEFAULT_BATCH, OptimizationSettings, check_optimization
 
+    search, inputs, window = gathered("optimization_settings", keywords,
+                                      {"search": search, "inputs": inputs, "window": window},
+                                      {**ALL_FIELDS, "inputs": SEARCH_INPUTS})
     check_mapping("variables", variables)
     check_mapping("constraints", constraints)
-    check_mapping("parameters", parameters)
-    check_mapping("correlation", correlation)
-    check_mapping("model", model)
     if not variables:
         raise ValueError("variables: give at least one decision variable with its bounds, e.g. "
                          "{'top_speed': '60 rpm:140 rpm'}")
     units = dict(default_units or {})
     bounded = tuple(parse_bounds(case, name, text, units.get(name, "")) for name, text in variables.items())
-    sigma, uncertainty = point_uncertainty(case, parameters, correlation, model, sigma)
-    window = case_window(case, t_end, output_step, transient)
-    initial = max(4, 4 * len(bounded)) if initial is None else initial
-    points = 2 * initial if points is None else points
+    sigma, uncertainty = point_uncertainty(case, inputs)
+    window = window.on(case)
+    initial = max(4, 4 * len(bounded)) if search.initial is None else search.initial
+    points = 2 * initial if search.points is None else search.points
     settings = OptimizationSettings(
-        variables=bounded, objective=objective, constraints=tuple((constraints or {}).items()), samples=samples,
-        points=points, initial=initial, batch=DEFAULT_BATCH if batch is None else batch, seed=seed,
-        t_end=window.t_end, output_step=window.output_step, transient=window.transient, sigma=sigma,
-        uncertainty=uncertainty, probability_mean=probability_mean)
+        variables=bounded, objective=objective, constraints=tuple((constraints or {}).items()),
+        samples=search.samples, points=points, initial=initial,
+        batch=DEFAULT_BATCH if search.batch is None else search.batch, seed=seed, t_end=window.t_end,
+        output_step=window.output_step, transient=window.transient, sigma=sigma, uncertainty=uncertainty,
+        probability_mean=search.probability_mean)
     check_optimization(case.model_copy(update={"uncertainty": None}), settings)
     return settings
 
@@ -122,29 +125,22 @@ def optimize(
     variables: Mapping[str, Any],
     objective: str = "rate_of_penetration",
     constraints: Mapping[str, float] | None = None,
-    samples: int = DEFAULT_POINT_SAMPLES,
-    points: int | None = None,
-    initial: int | None = None,
-    batch: int | None = None,
-    probability_mean: str = "constant",
+    search: SearchOptions | None = None,
     seed: int = DEFAULT_SEED,
-    t_end: float | None = None,
-    output_step: float | None = None,
-    transient: float | None = None,
-    sigma: float | None = None,
-    parameters: Mapping[str, Any] | None = None,
-    correlation: Mapping[str, Any] | None = None,
-    model: Mapping[str, float] | None = None,
-    out: str | Path | None = None,
-    workers: int | None = None,
-    scheduler=None,
-    progress: Callable[[int, int, int], None] | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float | None = None,
-    units: str | None = None,
+    inputs: RandomInputs | None = None,
+    window: SimulationWindow | None = None,
+    run: RunOptions | None = None,
     default_units: Mapping[str, str] | None = None,
+    **keywords,
 ) -> OptimizeOutcome:
     """The robust operating point of ``case`` (:mod:`drillstring.stochastic.optimize`).
+
+    The settings come as objects (:mod:`drillstring.api.settings`): ``search``
+    (:class:`~drillstring.api.settings.SearchOptions`: ``samples``, ``points``, ``initial``, ``batch``,
+    ``probability_mean``), ``inputs`` (``sigma``, ``parameters``, ``correlation``, ``model``), ``window``
+    (``t_end``, ``output_step``, ``transient``) and ``run`` (``out``, ``workers``, ``scheduler``, ``progress``,
+    ``note``, ``worker_timeout``, ``units``); or, as before, each field as a keyword of its own (refused when its
+    object is given too).
 
     ``variables``: decision variable -> bounds, ``{"top_speed": "60 rpm:140 rpm", "weight_on_bit": "80 kN:120
     kN"}`` (aliases ``top_speed``, ``weight_on_bit``, ``weight_on_hook``, ``proportional_gain``,
@@ -170,21 +166,21 @@ def optimize(
     """
     from drillstring.stochastic.optimize import run_optimization
 
-    units = unit_system(units, "units")
+    search, inputs, window, run = gathered(
+        "optimize", keywords, {"search": search, "inputs": inputs, "window": window, "run": run},
+        {**ALL_FIELDS, "inputs": SEARCH_INPUTS})
+    units = unit_system(run.units, "units")
     case = as_case(case)
     settings = optimization_settings(case, variables=variables, objective=objective, constraints=constraints,
-                                     samples=samples, points=points, initial=initial, batch=batch, seed=seed,
-                                     t_end=t_end, probability_mean=probability_mean,
-                                     output_step=output_step, transient=transient, sigma=sigma,
-                                     parameters=parameters, correlation=correlation, model=model,
+                                     search=search, seed=seed, inputs=inputs, window=window,
                                      default_units=default_units)
-    engine = make_engine(workers, scheduler, progress, note, worker_timeout)
+    engine = run.engine()
     case = case.model_copy(update={"uncertainty": None})
-    folder = output_folder(out, "drillstring-optimize-")
-    run = run_optimization(case, settings, folder / "optimize.zarr", engine,
-                           finish=partial(_finish, case, settings, folder if out is not None else None, units))
-    summary, dataset, files = run.result
-    return OptimizeOutcome(summary, dataset, files, run.already, run.note)
+    folder = output_folder(run.out, "drillstring-optimize-")
+    done = run_optimization(case, settings, folder / "optimize.zarr", engine,
+                            finish=partial(_finish, case, settings, folder if run.out is not None else None, units))
+    summary, dataset, files = done.result
+    return OptimizeOutcome(summary, dataset, files, done.already, done.note)
 
 
 def _finish(case, settings, folder, units, run):

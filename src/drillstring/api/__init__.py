@@ -6,8 +6,10 @@ single-threaded (:mod:`drillstring.blas_threads`), whatever the caller's BLAS se
 The functions live in the package's modules, one per kind of work: :mod:`~drillstring.api.runs` (one case: a run,
 its static state, modes, stability, Campbell diagram, the comparison of the two nonlinear models),
 :mod:`~drillstring.api.studies` (Monte Carlo studies), :mod:`~drillstring.api.maps` (operating maps and global
-sensitivity), :mod:`~drillstring.api.estimates` (the downhole state from a surface record) and :mod:`~drillstring.api.arguments` (the checks of the arguments they share); this module offers
-them all under one name.
+sensitivity), :mod:`~drillstring.api.estimates` (the downhole state from a surface record), :mod:`~drillstring.api.settings` (the
+settings objects the engine functions take: :class:`RunOptions`, :class:`SimulationWindow`, :class:`RandomInputs`,
+:class:`SearchOptions`) and :mod:`~drillstring.api.arguments` (the checks of the arguments they share); this module
+offers them all under one name.
 
 >>> import drillstring
 >>> ds = drillstring.simulate("reference", t_end=5.0)        # doctest: +SKIP
@@ -42,6 +44,12 @@ from drillstring.api.runs import (  # noqa: F401
     stability,
     stability_boundary,
     static,
+)
+from drillstring.api.settings import (  # noqa: F401
+    RandomInputs,
+    RunOptions,
+    SearchOptions,
+    SimulationWindow,
 )
 from drillstring.api.studies import (  # noqa: F401
     StudyFailed,

@@ -1,6 +1,6 @@
 """The checks of the notebook API's arguments (TypeError or ValueError naming the argument) and what its
-recipes share: the case, the run window, the output folder, the engine, the uncertainty drawn at each point of a
-map or a search, the run record of a store."""
+recipes share: the case, the run window, the output folder, the uncertainty drawn at each point of a map or a
+search, the run record of a store (the engine's settings: :mod:`drillstring.api.settings`)."""
 
 from __future__ import annotations
 
@@ -80,16 +80,9 @@ def output_folder(out, prefix: str) -> Path:
     return Path(out)
 
 
-def make_engine(workers, scheduler, progress, note, worker_timeout):
-    """The :class:`~drillstring.stochastic.execution.Engine` of a study, map or sensitivity run (checked)."""
-    from drillstring.stochastic.execution import DASK_WORKER_TIMEOUT, Engine
-
-    return Engine(workers=workers, scheduler=scheduler, progress=progress, note=note,
-                  worker_timeout=DASK_WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
-
-
-def point_uncertainty(case, parameters, correlation, model, sigma):
-    """What the realizations at each point of a map or a search draw: ``(sigma, uncertainty)``, the
+def point_uncertainty(case, inputs):
+    """What the realizations at each point of a map or a search draw from ``inputs`` (a
+    :class:`~drillstring.api.settings.RandomInputs`): ``(sigma, uncertainty)``, the
     weight-on-hook's σ (its default when no parameter is declared) and the
     :class:`~drillstring.stochastic.uncertainty_settings.UncertaintySettings` of the other declared laws and the
     model dispersion, for the settings of :mod:`drillstring.stochastic.probabilistic_map` and
@@ -99,8 +92,9 @@ def point_uncertainty(case, parameters, correlation, model, sigma):
     from drillstring.stochastic.uncertainty import declared_uncertainty
     from drillstring.stochastic.uncertainty_settings import UncertaintySettings
 
-    dispersions = ModelDispersion.declared(case, model)
-    declared = declared_uncertainty(case, parameters, correlation, tolerance=1.0)
+    sigma = inputs.sigma
+    dispersions = ModelDispersion.declared(case, inputs.model)
+    declared = declared_uncertainty(case, inputs.parameters, inputs.correlation, tolerance=1.0)
     if declared is None and sigma is None:
         sigma = DEFAULT_SIGMA
     return sigma, UncertaintySettings.of(declared, dispersions)

@@ -6,12 +6,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from drillstring.api.arguments import (as_case, case_window, check_mapping, make_engine, output_folder,
-                                       point_uncertainty, run_record, run_table)
+from drillstring.api.arguments import as_case, output_folder, point_uncertainty, run_record, run_table
+from drillstring.api.settings import ALL_FIELDS, RandomInputs, RunOptions, SimulationWindow, gathered
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES, DEFAULT_SEED
@@ -20,6 +21,10 @@ from drillstring.units import unit_system
 if TYPE_CHECKING:  # the simulating modules load with the functions that use them (light static, modes)
     import xarray as xr
 
+
+#: The fields of :class:`~drillstring.api.settings.RandomInputs` a map draws from (its weight-on-hook's σ is about
+#: each point's own hook load: no ``dispersion``).
+MAP_INPUTS = ("parameters", "correlation", "sigma", "model")
 
 #: Largest number of bootstrap resamples of a sensitivity run's confidence intervals.
 MAX_RESAMPLES = 100_000
@@ -37,12 +42,13 @@ class MapOutcome:
     note: str | None = None
 
 
-def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, output_step=None, transient=None,
-                 default_units: tuple[str, str] = ("", "")):
+def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, window: SimulationWindow | None = None,
+                 default_units: tuple[str, str] = ("", ""), **keywords):
     """The validated :class:`~drillstring.stochastic.operating_map.MapSettings` of a map of ``case``: axes
     as sequences of SI numbers or grid strings (``"40 rpm:200 rpm:17"``, ``"100,120 kN"``; bare numbers in
     ``default_units`` or SI), default :data:`~drillstring.stochastic.DEFAULT_MAP_TOP_SPEED` ×
-    :data:`~drillstring.stochastic.DEFAULT_MAP_WEIGHT_ON_BIT`."""
+    :data:`~drillstring.stochastic.DEFAULT_MAP_WEIGHT_ON_BIT`; the run window ``window`` (a
+    :class:`~drillstring.api.settings.SimulationWindow`, or its fields as keywords)."""
     from drillstring.case import DIMENSIONS
     from drillstring.stochastic import DEFAULT_MAP_TOP_SPEED, DEFAULT_MAP_WEIGHT_ON_BIT
     from drillstring.stochastic.operating_map import MapSettings, check_map, parse_axis
@@ -52,7 +58,8 @@ def map_settings(case: Case, *, top_speed=None, weight_on_bit=None, t_end=None, 
                         name="top_speed", default_unit=default_units[0])
     weights = parse_axis(DEFAULT_MAP_WEIGHT_ON_BIT if weight_on_bit is None else weight_on_bit, dimension["force"],
                          name="weight_on_bit", default_unit=default_units[1])
-    window = case_window(case, t_end, output_step, transient)
+    (window,) = gathered("map_settings", keywords, {"window": window}, ALL_FIELDS)
+    window = window.on(case)
     settings = MapSettings(tuple(speeds), tuple(weights), t_end=window.t_end, output_step=window.output_step,
                            transient=window.transient)
     check_map(case, settings)
@@ -65,28 +72,23 @@ def operating_map(
     *,
     top_speed=None,
     weight_on_bit=None,
-    t_end: float | None = None,
-    output_step: float | None = None,
-    transient: float | None = None,
-    out: str | Path | None = None,
-    workers: int | None = None,
-    scheduler=None,
-    progress: Callable[[int, int, int], None] | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float | None = None,
     samples: int | None = None,
-    sigma: float | None = None,
-    parameters: Mapping[str, Any] | None = None,
-    correlation: Mapping[str, Any] | None = None,
     seed: int = DEFAULT_SEED,
-    units: str | None = None,
-    model: Mapping[str, float] | None = None,
+    inputs: RandomInputs | None = None,
+    window: SimulationWindow | None = None,
+    run: RunOptions | None = None,
+    **keywords,
 ) -> MapOutcome:
     """Operating map of ``case`` over top speed × weight-on-bit (:mod:`drillstring.stochastic.operating_map`):
     one simulation of ``t_end`` [s] per grid point, summarised after ``transient`` [s] (default
     ``min(10 s, t_end/2)``) by mean ROP, bit-speed oscillation, stick time, mean TOB and FOB, mechanical
     specific energy, largest radial displacement and impacts, with the linear stability of steady drilling
     (leading growth rate) and the buckling margin at each point.
+
+    The settings come as objects (:mod:`drillstring.api.settings`): ``window`` (``t_end``, ``output_step``,
+    ``transient``), ``run`` (``out``, ``workers``, ``scheduler``, ``progress``, ``note``, ``worker_timeout``,
+    ``units``) and ``inputs`` (``sigma``, ``parameters``, ``correlation``, ``model``); or, as before, each field as a
+    keyword of its own (refused when its object is given too).
 
     ``top_speed`` [rad/s] and ``weight_on_bit`` [N]: sequences of values or grid strings (``"40 rpm:200
     rpm:17"``, ``"A:B:N"``, ``"a,b,c"``; bare numbers SI), default 40–200 rpm (17) × 40–160 kN (13). Points
@@ -113,21 +115,21 @@ def operating_map(
     """
     from drillstring.stochastic.operating_map import run_map
 
-    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
+    inputs, window, run = gathered("operating_map", keywords, {"inputs": inputs, "window": window, "run": run},
+                                   {**ALL_FIELDS, "inputs": MAP_INPUTS})
+    units = unit_system(run.units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case)
-    settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, t_end=t_end,
-                            output_step=output_step, transient=transient)
-    engine = make_engine(workers, scheduler, progress, note, worker_timeout)
+    settings = map_settings(case, top_speed=top_speed, weight_on_bit=weight_on_bit, window=window)
+    engine = run.engine()
     if samples is not None:
         from drillstring.stochastic.probabilistic_map import run_sampled_map
 
-        sampled = sampled_map_settings(case, settings, samples=samples, sigma=sigma, parameters=parameters,
-                                       correlation=correlation, model=model, seed=seed)
-        return _run_map(run_sampled_map, _finish_sampled_map, case, sampled, engine, out, units)
-    if sigma is not None or parameters is not None or correlation is not None or model is not None:
+        sampled = sampled_map_settings(case, settings, samples=samples, inputs=inputs, seed=seed)
+        return _run_map(run_sampled_map, _finish_sampled_map, case, sampled, engine, run.out, units)
+    if inputs.declared():
         raise ValueError("sigma, parameters, correlation and model declare the uncertainty of a probabilistic map: "
                          "give samples (realizations per point) too")
-    return _run_map(run_map, _finish_map, case, settings, engine, out, units)
+    return _run_map(run_map, _finish_map, case, settings, engine, run.out, units)
 
 
 def _run_map(runner, finish, case, settings, engine, out, units) -> MapOutcome:
@@ -208,15 +210,12 @@ def _map_files(case, folder, run, kind: _MapKind):
     return ds, summary, files
 
 
-def sampled_map_settings(case, grid, *, samples, sigma, parameters, correlation, model, seed):
+def sampled_map_settings(case, grid, *, samples, inputs: RandomInputs, seed):
     """The settings of a probabilistic map of ``case`` on ``grid`` (:func:`operating_map` with ``samples``; the
-    uncertainty by :func:`~drillstring.api.arguments.point_uncertainty`)."""
+    uncertainty of ``inputs`` by :func:`~drillstring.api.arguments.point_uncertainty`)."""
     from drillstring.stochastic.probabilistic_map import SampledMapSettings
 
-    check_mapping("parameters", parameters)
-    check_mapping("correlation", correlation)
-    check_mapping("model", model)
-    sigma, uncertainty = point_uncertainty(case, parameters, correlation, model, sigma)
+    sigma, uncertainty = point_uncertainty(case, inputs)
     return SampledMapSettings(grid, samples=samples, seed=seed, sigma=sigma, uncertainty=uncertainty)
 
 
@@ -259,27 +258,22 @@ class SensitivityOutcome:
 def sensitivity(
     case: Case | str | Path = "reference",
     *,
-    parameters: Mapping[str, Any] | None = None,
     samples: int = DEFAULT_BASE_SAMPLES,
     seed: int = 0,
-    t_end: float | None = None,
-    output_step: float | None = None,
-    transient: float | None = None,
     confidence: float = 0.95,
     resamples: int = 1000,
-    out: str | Path | None = None,
-    workers: int | None = None,
-    scheduler=None,
-    progress: Callable[[int, int, int], None] | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float | None = None,
-    units: str | None = None,
+    inputs: RandomInputs | None = None,
+    window: SimulationWindow | None = None,
+    run: RunOptions | None = None,
+    **keywords,
 ) -> SensitivityOutcome:
     """Global sensitivity of ``case``: first-order and total Sobol' indices, with bootstrap confidence
     intervals (level ``confidence``) and a convergence check at N/4, N/2, N, of the time-mean ROP,
     bit-speed oscillation, mean TOB and FOB and the standard deviations in time of ROP, TOB and FOB
     (:mod:`drillstring.stochastic.sensitivity_study`).
 
+    The settings come as objects (:mod:`drillstring.api.settings`): ``inputs`` (only its ``parameters``),
+    ``window`` and ``run``; or, as before, each field as a keyword of its own (refused when its object is given too).
     The uncertain parameters: ``parameters`` (path -> law, independent), else the case's ``[uncertainty]``
     table. ``samples`` is the number of base samples N (a power of 2): N(k + 2) runs of ``t_end`` [s]
     on ``workers`` local processes or the Dask cluster at ``scheduler``; the store ``out``/sensitivity.zarr is
@@ -294,13 +288,15 @@ def sensitivity(
     from drillstring.stochastic.uncertainty import declared_uncertainty
     from drillstring.stochastic.uncertainty_settings import UncertaintySettings
 
-    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
+    inputs, window, run = gathered("sensitivity", keywords, {"inputs": inputs, "window": window, "run": run},
+                                   {**ALL_FIELDS, "inputs": ("parameters",)})
+    parameters = inputs.parameters
+    units = unit_system(run.units, "units")  # a bad unit system is refused before anything runs
     case = as_case(case)
-    check_mapping("parameters", parameters)
     confidence = real_number("confidence", confidence, low=0.0, high=1.0, low_open=True, high_open=True,
                              allowed="a number in (0, 1), e.g. 0.95")
     resamples = integer("resamples", resamples, low=1, high=MAX_RESAMPLES)
-    window = case_window(case, t_end, output_step, transient)
+    window = window.on(case)
     if parameters is None and case.uncertainty is not None and case.uncertainty.model is not None \
             and any(case.uncertainty.model.model_dump().values()):
         raise ValueError("[uncertainty.model] of the case: Sobol' sensitivity runs do not draw random reduced "
@@ -317,12 +313,11 @@ def sensitivity(
     settings = SensitivitySettings(
         base_samples=samples, uncertainty=UncertaintySettings.of(declared), seed=check_seed(seed),
         t_end=window.t_end, output_step=window.output_step, transient=window.transient)
-    engine = make_engine(workers, scheduler, progress, note, worker_timeout)
-    folder = output_folder(out, "drillstring-sensitivity-")
-    run = run_sensitivity(case, settings, folder / "sensitivity.zarr", engine,
-                          finish=partial(_finish_sensitivity, case, settings, confidence, resamples,
-                                         folder if out is not None else None, units))
-    return SensitivityOutcome(*run.result, run.already, run.note)
+    folder = output_folder(run.out, "drillstring-sensitivity-")
+    done = run_sensitivity(case, settings, folder / "sensitivity.zarr", run.engine(),
+                           finish=partial(_finish_sensitivity, case, settings, confidence, resamples,
+                                          folder if run.out is not None else None, units))
+    return SensitivityOutcome(*done.result, done.already, done.note)
 
 
 def _finish_sensitivity(case, settings, confidence, resamples, folder, units, run):

@@ -6,11 +6,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from drillstring.api.arguments import as_case, case_window, check_mapping, keywords_of, make_engine, output_folder
+from drillstring.api.arguments import as_case, case_window, keywords_of, output_folder
+from drillstring.api.settings import ALL_FIELDS, RandomInputs, RunOptions, SimulationWindow, gathered
 from drillstring.api.runs import stability_boundary
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
@@ -59,21 +60,22 @@ _STUDY_CAPTIONS = {
 }
 
 
-def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, correlation=None, model=None,
-                   samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED, t_end=None, output_step=None):
+def study_settings(case: Case, *, inputs: RandomInputs | None = None, samples: int = DEFAULT_SAMPLES,
+                   seed: int = DEFAULT_SEED, window: SimulationWindow | None = None, **keywords):
     """The validated settings of a Monte Carlo study of ``case`` (TypeError / ValueError naming the field or
     the parameter otherwise), and the case without its ``[uncertainty]`` table (the laws are in the settings).
 
-    The random parameters: ``parameters`` (path -> law spec or table) with ``correlation`` (``{"parameters":
+    The random parameters (``inputs``, a :class:`~drillstring.api.settings.RandomInputs`, or its fields as
+    keywords): ``parameters`` (path -> law spec or table) with ``correlation`` (``{"parameters":
     [...], "matrix": [[...]]}``) when given, else the case's ``[uncertainty]`` table; plus the weight-on-hook,
     Normal of standard deviation ``sigma`` [N] or ``dispersion`` × its mean, when either is given (a
     shorthand for the law ``weight_on_hook = "normal mean=<hook load> std=<sigma>"``, declared first). With
     none of these, the default: the weight-on-hook Normal of σ = :data:`~drillstring.stochastic.DEFAULT_SIGMA`.
     ``model``: the model uncertainty, ``{"mass_dispersion": δ_M, "stiffness_dispersion": δ_K,
     "damping_dispersion": δ_D}`` (:mod:`~drillstring.stochastic.random_matrices`), else the case's
-    ``[uncertainty.model]`` table, else none.
+    ``[uncertainty.model]`` table, else none. ``window``: the run's ``t_end`` and ``output_step`` [s] (its
+    ``transient`` is the summaries', not the settings').
     """
-    from drillstring.checks import real_number
     from drillstring.stochastic import DEFAULT_SIGMA
     from drillstring.stochastic.montecarlo import (
         StudySettings,
@@ -81,27 +83,22 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
         nominal_weight_on_hook,
         weight_on_hook_normal,
     )
+    from drillstring.stochastic.random_matrices import ModelDispersion
     from drillstring.stochastic.uncertainty import declared_uncertainty
     from drillstring.stochastic.uncertainty_settings import UncertaintySettings
 
-    if sigma is not None and dispersion is not None:
-        raise ValueError("give sigma [N] or dispersion (sigma / mean weight_on_hook), not both")
-    if dispersion is not None:
-        sigma = real_number("dispersion", dispersion, low=0.0, low_open=True) * nominal_weight_on_hook(case)
-    if sigma is not None:
-        sigma = real_number("sigma", sigma, unit="N", low=0.0, low_open=True)
-    check_mapping("parameters", parameters)
-    check_mapping("correlation", correlation)
-    check_mapping("model", model)
-    from drillstring.stochastic.random_matrices import ModelDispersion
-
-    dispersions = ModelDispersion.declared(case, model)
+    inputs, window = gathered("study_settings", keywords, {"inputs": inputs, "window": window},
+                              {**ALL_FIELDS, "window": ("t_end", "output_step")})
+    sigma = inputs.sigma
+    if inputs.dispersion is not None:
+        sigma = inputs.dispersion * nominal_weight_on_hook(case)
+    dispersions = ModelDispersion.declared(case, inputs.model)
     first = dict([weight_on_hook_normal(case, sigma)]) if sigma is not None else None
-    declared = declared_uncertainty(case, parameters, correlation, first=first, tolerance=1.0)
+    declared = declared_uncertainty(case, inputs.parameters, inputs.correlation, first=first, tolerance=1.0)
     if declared is None:
         first = dict([weight_on_hook_normal(case, DEFAULT_SIGMA)])
         declared = declared_uncertainty(case, None, None, first=first, tolerance=1.0)
-    window = case_window(case, t_end, output_step)
+    window = case_window(case, window.t_end, window.output_step)
     bare = case.model_copy(update={"uncertainty": None})
     settings = StudySettings(samples=samples, seed=seed, t_end=window.t_end, output_step=window.output_step,
                              uncertainty=UncertaintySettings.of(declared, dispersions))
@@ -113,27 +110,21 @@ def study_settings(case: Case, *, sigma=None, dispersion=None, parameters=None, 
 def monte_carlo_study(
     case: Case | str | Path = "reference",
     *,
-    sigma: float | None = None,
-    dispersion: float | None = None,
-    parameters: Mapping[str, Any] | None = None,
-    correlation: Mapping[str, Any] | None = None,
-    model: Mapping[str, float] | None = None,
+    inputs: RandomInputs | None = None,
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_SEED,
-    out: str | Path | None = None,
-    workers: int | None = None,
-    scheduler=None,
-    t_end: float | None = None,
-    output_step: float | None = None,
-    transient: float | None = None,
-    progress: Callable[[int, int, int], None] | None = None,
-    note: Callable[[str], None] | None = None,
-    worker_timeout: float | None = None,
-    units: str | None = None,
-    stage: Callable[[str], None] | None = None,
+    window: SimulationWindow | None = None,
+    run: RunOptions | None = None,
+    **keywords,
 ) -> StudyOutcome:
     """Monte Carlo study of random case parameters (docs/model.md §11; by default a random weight-on-hook), with
     its files.
+
+    The settings come as objects (:mod:`drillstring.api.settings`): ``inputs``
+    (:class:`~drillstring.api.settings.RandomInputs`), ``window``
+    (:class:`~drillstring.api.settings.SimulationWindow`), ``run`` (:class:`~drillstring.api.settings.RunOptions`);
+    or, as before, each of their fields as a keyword of its own (``sigma=..., t_end=..., workers=...``): a keyword
+    none of them has, or a field given both ways, is refused (TypeError).
 
     The random parameters (:func:`study_settings`): each of ``parameters`` (case-parameter path -> law
     spec, e.g. ``{"fluid.inlet_velocity": "uniform 1.2 1.8 m/s"}``; laws by the Maximum Entropy Principle,
@@ -171,12 +162,13 @@ def monte_carlo_study(
     """
     from drillstring.stochastic.montecarlo import buckling_note, run_study, study_buckling_margin
 
-    units = unit_system(units, "units")  # a bad unit system is refused before anything runs
-    settings, case = study_settings(as_case(case), sigma=sigma, dispersion=dispersion, parameters=parameters,
-                                    correlation=correlation, model=model, samples=samples, seed=seed,
-                                    t_end=t_end, output_step=output_step)
-    t_transient = case_window(case, settings.t_end, settings.output_step, transient).transient
-    engine = make_engine(workers, scheduler, progress, note, worker_timeout)
+    inputs, window, run = gathered("monte_carlo_study", keywords, {"inputs": inputs, "window": window, "run": run},
+                                   ALL_FIELDS)
+    out, note, units = run.out, run.note, unit_system(run.units, "units")  # a bad unit system: refused now
+    settings, case = study_settings(as_case(case), inputs=inputs, samples=samples, seed=seed,
+                                    t_end=window.t_end, output_step=window.output_step)
+    t_transient = case_window(case, settings.t_end, settings.output_step, window.transient).transient
+    engine = run.engine()
     folder = output_folder(out, "drillstring-study-")
     buckling = study_buckling_margin(case, settings)
     if note is not None and buckling["warning"] and buckling["expected"] >= 1.0:
@@ -185,9 +177,9 @@ def monte_carlo_study(
         note(buckling_note(buckling, settings.samples, units))
     buckling = {k: v for k, v in buckling.items() if k not in ("lateral", "source")}
     finish = partial(_finish_study, case, settings, t_transient, buckling, folder if out is not None else None,
-                     units, stage or (lambda text: None))
-    run = run_study(case, settings, folder / "study.zarr", engine, finish=finish)
-    return StudyOutcome(*run.result, run.already, run.note)
+                     units, run.stage or (lambda text: None))
+    done = run_study(case, settings, folder / "study.zarr", engine, finish=finish)
+    return StudyOutcome(*done.result, done.already, done.note)
 
 
 def _finish_study(case, settings, t_transient, buckling, folder, units, stage, run):
@@ -306,12 +298,12 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
 
 
 @single_threaded_blas()
-@keywords_of(monte_carlo_study, leaving_out=("note", "worker_timeout", "units", "stage"))
+@keywords_of(monte_carlo_study)
 def study(case: Case | str | Path = "reference", **options) -> xr.Dataset:
     """Monte Carlo study of random case parameters (docs/model.md §11); returns the statistics Dataset.
 
-    The statistics of :func:`monte_carlo_study` (its arguments but ``note``, ``worker_timeout``, ``units`` and
-    ``stage``; the same checks and files): laws of
+    The statistics of :func:`monte_carlo_study` (its arguments, settings objects or their fields as keywords; the
+    same checks and files): laws of
     ``parameters`` (or the case's ``[uncertainty]`` table), at most one of ``sigma`` [N] or
     ``dispersion`` (σ / mean) for the weight-on-hook (default, nothing declared: σ = 5000 N); the
     drawn values are in ``input_values``; realizations stream to the Zarr

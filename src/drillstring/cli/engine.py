@@ -99,10 +99,13 @@ def _api():
     return api
 
 
-def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
-    """Run ``call(progress, note)`` (an API function of the study engine) for a command writing to ``out``:
+def _engine_command(out: Path, store_name: str, what: str, noun: str, call, *, workers: int | None = None,
+                    scheduler: str | None = None, units: str | None = None):
+    """Run ``call(run)`` (an API function of the study engine) for a command writing to ``out``, ``run`` the
+    command's :class:`~drillstring.api.settings.RunOptions` built here, once for every command (``out``,
+    ``--workers`` or ``--scheduler``, a progress bar and notes on stderr, ``--units``):
     the store's lock is taken before loading the engine (a second run on the folder is refused at once),
-    a progress bar and notes go to stderr, and every error ends the command with one line: exit 130 when
+    and every error ends the command with one line: exit 130 when
     interrupted (what finished is saved), 1 for a run that started and failed (an output write that failed:
     disk full, no permission), 2 for refused input (settings, store, scheduler, lock, another kind of run in
     the folder, an output path that is not a regular file). Temporary files left in ``out`` by a killed run
@@ -111,6 +114,10 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     from drillstring.stochastic import execution
     from drillstring.stochastic.locks import StudyLock, StudyLocked
 
+    from drillstring.api.settings import RunOptions
+
+    if workers is not None and scheduler:
+        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     err = _err_console()
 
     def note(text: str) -> None:
@@ -129,7 +136,8 @@ def _engine_command(out: Path, store_name: str, what: str, noun: str, call):
     try:
         remove_stale_temporaries(out)
         try:
-            return call(tracker, note)
+            return call(RunOptions(out=out, workers=workers, scheduler=scheduler, progress=tracker, note=note,
+                                   units=units, stage=tracker.stage))
         finally:
             tracker.stop()
     except execution.Interrupted as error:

@@ -69,8 +69,6 @@ def map_command(
     of the leading torsional, axial and lateral root per point) and OUT/report.html.
     """
     the_case = _load(case)
-    if workers is not None and scheduler:
-        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     if samples is None and (sigma is not None or param or correlation):
         _fail("--sigma, --param and --correlation declare the uncertainty of a probabilistic map: give --samples N")
     laws, correlated = _declared_laws(param, correlation)
@@ -86,11 +84,11 @@ def map_command(
     noun = "grid points" if samples is None else "realizations"
     outcome = _engine_command(
         out, "map.zarr", "map", noun,
-        lambda progress, note: api.operating_map(
-            the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, t_end=t_end,
-            transient=transient, out=out, workers=workers, scheduler=scheduler, progress=progress, note=note,
-            samples=samples, sigma=sigma, parameters=laws, correlation=correlated, model=model, seed=seed,
-            units=units))
+        lambda run: api.operating_map(
+            the_case, top_speed=settings.top_speed, weight_on_bit=settings.weight_on_bit, samples=samples, seed=seed,
+            inputs=api.RandomInputs(sigma=sigma, parameters=laws, correlation=correlated, model=model),
+            window=api.SimulationWindow(t_end=t_end, transient=transient), run=run),
+        workers=workers, scheduler=scheduler, units=units)
     _note_resumed(outcome.already, settings.points * (samples or 1), noun, out / "map.zarr")
     if as_json:
         _print_json(outcome.summary)

@@ -104,8 +104,6 @@ def optimize_command(
     the_case = _load(case)
     if not vary:
         _fail("give at least one decision variable: --vary top_speed=60:140 --vary weight_on_bit='80 kN:120 kN'")
-    if workers is not None and scheduler:
-        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     variables: dict[str, str] = {}
     for text in vary:
         name, sep, bounds = text.partition("=")
@@ -126,22 +124,24 @@ def optimize_command(
         constraints[event.strip()] = value
     laws, correlated = _declared_laws(param, correlation)
     laws, model = _model_dispersions(laws)
+    from drillstring.api.settings import RandomInputs, SearchOptions, SimulationWindow
     from drillstring.operating_point import optimization_settings, optimize
 
     bare = {name: _BARE_UNITS.get(name, "") for name in variables}
-    arguments = dict(variables=variables, objective=objective, constraints=constraints, samples=samples,
-                     points=points, initial=initial, batch=batch, probability_mean=probability_mean, seed=seed,
-                     t_end=t_end, transient=transient, sigma=sigma, parameters=laws, correlation=correlated,
-                     model=model, default_units=bare)
     try:  # refused before the engine starts
+        arguments = dict(
+            variables=variables, objective=objective, constraints=constraints, seed=seed, default_units=bare,
+            search=SearchOptions(samples=samples, points=points, initial=initial, batch=batch,
+                                 probability_mean=probability_mean),
+            inputs=RandomInputs(sigma=sigma, parameters=laws, correlation=correlated, model=model),
+            window=SimulationWindow(t_end=t_end, transient=transient))
         settings = optimization_settings(the_case, **arguments)
     except (TypeError, ValueError) as error:
         _fail(_option_message(str(error)))
     _check_output("--out", out, folder=True)
     outcome = _engine_command(
         out, "optimize.zarr", "optimization", "realizations",
-        lambda progress, note: optimize(the_case, **arguments, out=out, workers=workers, scheduler=scheduler,
-                                        progress=progress, note=note, units=units))
+        lambda run: optimize(the_case, **arguments, run=run), workers=workers, scheduler=scheduler, units=units)
     _note_resumed(outcome.already, settings.realizations, "realizations", out / "optimize.zarr")
     if as_json:
         _print_json(outcome.summary)

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from drillstring.cli.engine import _declared_laws, _engine_command
 from drillstring.cli.options import (CaseArg, JsonOpt, OutOption, ParamOption, RunTEndOption, SchedulerOption,
-                                     TransientOption, UnitsOpt, WorkersOption, _check_output, _console, _fail,
+                                     TransientOption, UnitsOpt, WorkersOption, _check_output, _console,
                                      _load, _note_resumed, _print_json, app)
 from drillstring.cli.tables import print_table
 from drillstring.stochastic import DEFAULT_BASE_SAMPLES
@@ -47,16 +47,15 @@ def sensitivity_command(
     """
     the_case = _load(case)
     laws, _ = _declared_laws(param, None)
-    if workers is not None and scheduler:
-        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     _check_output("--out", out, folder=True)
     from drillstring import api
 
     outcome = _engine_command(
         out, "sensitivity.zarr", "sensitivity", "runs",
-        lambda progress, note: api.sensitivity(
-            the_case, parameters=laws, samples=samples, seed=seed, t_end=t_end, transient=transient, out=out,
-            workers=workers, scheduler=scheduler, progress=progress, note=note, units=units))
+        lambda run: api.sensitivity(
+            the_case, samples=samples, seed=seed, inputs=api.RandomInputs(parameters=laws),
+            window=api.SimulationWindow(t_end=t_end, transient=transient), run=run),
+        workers=workers, scheduler=scheduler, units=units)
     _note_resumed(outcome.already, outcome.payload["runs"], "runs", out / "sensitivity.zarr")
     if as_json:
         _print_json(outcome.payload)

@@ -264,15 +264,14 @@ def study(
         _fail("give --sigma or --dispersion, not both")
     laws, correlated = _declared_laws(param, correlation)
     laws, model = _model_dispersions(laws)
-    if workers is not None and scheduler:
-        _fail("give --workers (local processes) or --scheduler (Dask cluster), not both")
     _check_output("--out", out, folder=True)
     outcome = _engine_command(
         out, "study.zarr", "study", "realizations",
-        lambda progress, note: _api().monte_carlo_study(
-            the_case, out=out, progress=progress, note=note, sigma=sigma, dispersion=dispersion, parameters=laws,
-            correlation=correlated, model=model, samples=samples, seed=seed, workers=workers,
-            scheduler=scheduler, t_end=t_end, transient=transient, units=units, stage=progress.stage))
+        lambda run: _api().monte_carlo_study(
+            the_case, inputs=_api().RandomInputs(sigma=sigma, dispersion=dispersion, parameters=laws,
+                                                 correlation=correlated, model=model),
+            samples=samples, seed=seed, window=_api().SimulationWindow(t_end=t_end, transient=transient), run=run),
+        workers=workers, scheduler=scheduler, units=units)
     _note_resumed(outcome.already, samples, "realizations", out / "study.zarr")
 
     payload = outcome.summary

@@ -133,6 +133,26 @@ def event_function(event: str, outputs) -> tuple[str, Callable[[np.ndarray], np.
     raise ValueError(f"constraint {text!r}: the event must be one of {named}, or OUTPUT>VALUE / OUTPUT<VALUE")
 
 
+def checked_budget(samples, initial=None, points=None, batch=None, probability_mean="constant"):
+    """A search's budget checked (TypeError or ValueError naming the field, its value and range): ``(samples,
+    initial, points, batch)`` as Python integers, None left as None (not given yet: a default follows); ``points``
+    only with ``initial`` (its lower bound)."""
+    samples = integer("samples", samples, low=2, high=MAX_SAMPLES,
+                      allowed=f"an integer from 2 to {MAX_SAMPLES} (realizations per design point)")
+    if initial is not None:
+        initial = integer("initial", initial, low=2, high=MAX_POINTS,
+                          allowed=f"an integer from 2 to {MAX_POINTS} (points of the initial design)")
+    if points is not None and initial is not None:  # else checked once the default of initial is known
+        points = integer("points", points, low=initial, high=MAX_POINTS,
+                         allowed=f"an integer from initial = {initial} to {MAX_POINTS} (design points in all)")
+    if batch is not None:
+        batch = integer("batch", batch, low=1, high=MAX_POINTS,
+                        allowed=f"an integer from 1 to {MAX_POINTS} (design points chosen together)")
+    if probability_mean not in PROBABILITY_MEANS:
+        raise ValueError(f"probability_mean = {probability_mean!r}: must be one of {', '.join(PROBABILITY_MEANS)}")
+    return samples, initial, points, batch
+
+
 @accepts_uncertainty_fields
 @dataclass(frozen=True)
 class OptimizationSettings(UncertaintyFields):
@@ -197,21 +217,9 @@ class OptimizationSettings(UncertaintyFields):
                                 high_open=True, allowed="a probability in (0, 1)")
             constraints.append((str(event).strip(), bound))
         object.__setattr__(self, "constraints", tuple(constraints))
-        object.__setattr__(self, "samples", integer(
-            "samples", self.samples, low=2, high=MAX_SAMPLES,
-            allowed=f"an integer from 2 to {MAX_SAMPLES} (realizations per design point)"))
-        object.__setattr__(self, "initial", integer(
-            "initial", self.initial, low=2, high=MAX_POINTS,
-            allowed=f"an integer from 2 to {MAX_POINTS} (points of the initial design)"))
-        object.__setattr__(self, "points", integer(
-            "points", self.points, low=self.initial, high=MAX_POINTS,
-            allowed=f"an integer from initial = {self.initial} to {MAX_POINTS} (design points in all)"))
-        object.__setattr__(self, "batch", integer("batch", self.batch, low=1, high=MAX_POINTS,
-                                                  allowed=f"an integer from 1 to {MAX_POINTS} (design points "
-                                                          "chosen together)"))
-        if self.probability_mean not in PROBABILITY_MEANS:
-            raise ValueError(f"probability_mean = {self.probability_mean!r}: must be one of "
-                             f"{', '.join(PROBABILITY_MEANS)}")
+        budget = checked_budget(self.samples, self.initial, self.points, self.batch, self.probability_mean)
+        for name, value in zip(("samples", "initial", "points", "batch"), budget):
+            object.__setattr__(self, name, value)
         object.__setattr__(self, "seed", check_seed(self.seed))
         # A law of the top speed, weight-on-bit or hook load is refused by the point's map settings (sigma is
         # the hook load's uncertainty around each point's own value); any other decision variable:
