@@ -209,3 +209,17 @@ def test_a_tiny_study_gives_the_same_results_either_way(small_case, tmp_path):
     prints = [zarr.open_group(str(tmp_path / side / "study.zarr"), mode="r").attrs["fingerprint"]
               for side in ("old", "new")]
     assert prints[0] == prints[1]
+
+
+def test_the_engine_functions_take_objects_not_keyword_lists():
+    """Their signatures (help(), the reference) list the settings objects, not the fields one by one (issue 33: 15
+    to 25 parameters before); each field stays accepted as a keyword through ``**keywords``."""
+    import inspect
+
+    sizes = {name: inspect.signature(getattr(drillstring, name)).parameters
+             for name in ("monte_carlo_study", "study", "operating_map", "sensitivity", "optimize")}
+    assert {name: len(p) for name, p in sizes.items()} == {
+        "monte_carlo_study": 7, "study": 7, "operating_map": 9, "sensitivity": 9, "optimize": 11}
+    for parameters in sizes.values():
+        assert {"window", "run"} <= set(parameters) and "t_end" not in parameters and "workers" not in parameters
+        assert list(parameters.values())[-1].kind is inspect.Parameter.VAR_KEYWORD
