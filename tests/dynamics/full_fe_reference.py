@@ -56,6 +56,7 @@ from drillstring.fem.dofs import THETA_X, U, dof
 from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.registry import BitContext, HookContext, StringFrictionContext
 from drillstring.forces.string_friction import FrictionStations
+from drillstring.forces.top_drive import case_top_drive
 from drillstring.modal import case_linear_system
 from drillstring.well.stiff_string import case_stiff_string
 
@@ -196,6 +197,13 @@ def full_fe_model(case) -> FullFiniteElementModel:
     case's damping, bit–rock law, hook load and along-string friction at the nodes on the wall."""
     if case.well is None:
         raise ValueError("full_fe_model: the case has no [well]")
+    if case.motor is not None or case.bit_rock.law == "detournay":
+        raise ValueError("full_fe_model: a downhole motor or a delayed bit-rock law is not in the reference")
+    if getattr(case_hook_load(case, case.operation.weight_on_bit), "active", False):
+        raise ValueError("full_fe_model: initial.start = 'ramp'; the reference starts on bottom ('on_bottom')")
+    if case_top_drive(case, lambda: 1.0).drives:
+        raise ValueError(f"full_fe_model: top boundary {case.top_drive.boundary!r} drives the top; the reference "
+                         "imposes the top speed")
     state = case_stiff_string(case)
     static = state.static_state()
     system = case_linear_system(case, static)
@@ -234,6 +242,7 @@ def full_fe_model(case) -> FullFiniteElementModel:
         rayleigh = alpha * mass_all + beta * stiffness_all
         damping += block(rayleigh, dofs, dofs)
         imposed[n_axial:] -= omega * np.asarray(rayleigh[torsion][:, torsion_all].sum(axis=1)).ravel()
+    hook_load = case_hook_load(case, static.weight_on_bit)
     friction = case_string_friction(case)
     stations = case_friction_stations(case, state) if friction is not None else FrictionStations.empty()
     node = np.asarray(stations.node, dtype=np.int64)
@@ -242,7 +251,7 @@ def full_fe_model(case) -> FullFiniteElementModel:
         surface_torque_row=np.asarray(stiffness_all[torsion_all[0]][:, dofs].toarray()).ravel(),
         bit_axial=int(n_axial - 1), bit_torsion=int(len(dofs) - 1), top_axial=0, top_speed=omega,
         weight_on_bit=float(static.weight_on_bit), bit_rock=case_bit_rock(case),
-        hook_load=case_hook_load(case, static.weight_on_bit), string_friction=friction, stations=stations,
+        hook_load=hook_load, string_friction=friction, stations=stations,
         station_axial=node, station_torsion=np.where(node > 0, n_axial + node - 1, -1))
 
 

@@ -96,3 +96,11 @@ def test_the_check_fails_with_the_friction_stations_moved(full):
                              fs.friction)
     differences = _differences(dataclasses.replace(model, friction_stations=moved), reference)
     assert min(differences.values()) > 5 * BOUND and differences["force_on_bit"] > 50 * BOUND, differences
+
+
+def test_the_reference_refuses_what_it_does_not_integrate():
+    """The ramped start (the case as written) and a case without [well]: a clear refusal, not a wrong reference."""
+    with pytest.raises(ValueError, match="initial.start = 'ramp'"):
+        full_fe_model(load_case("deviated"))
+    with pytest.raises(ValueError, match="no \\[well\\]"):
+        full_fe_model(load_case("reference"))
