@@ -117,16 +117,26 @@ def _with_derived(dataset, model):
 
 @single_threaded_blas()
 def static(case: Case | str | Path = "reference"):
-    """The prestressed static state of ``case`` and its lateral buckling margin.
+    """The prestressed static state of ``case`` and its buckling margin.
 
     Returns ``(state, margin)``: a :class:`~drillstring.statics.StaticState` (``weight``,
     ``weight_on_hook``, ``weight_on_bit`` [N], ``neutral_point_height`` [m], the mesh and the axial
     force ``axial_force`` [N] at its nodes, tension positive) and a :class:`~drillstring.buckling.
-    BucklingMargin` (``critical_weight_on_bit`` [N], ``buckled``)."""
+    BucklingMargin` (``critical_weight_on_bit`` [N], ``buckled``). For a case with ``[well]`` the stiff string
+    along the well path instead (the state the dynamics is built on): a
+    :class:`~drillstring.well.stiff_string.StiffStringState` (the same names, x the measured depth, the hook
+    load as ``weight_on_hook``, and the wall's side forces) and a :class:`~drillstring.well.buckling.
+    WellBucklingMargin` (sinusoidal and helical buckling along the path; the vertical string's lateral
+    criterion does not apply in the deviated hole)."""
+    case = as_case(case)
+    if case.well is not None:
+        from drillstring.well.stiff_string import case_stiff_string, case_well_buckling_margin
+
+        well_state = case_stiff_string(case)
+        return well_state, case_well_buckling_margin(case, well_state)
     from drillstring.buckling import case_buckling_margin
     from drillstring.statics import case_static_state
 
-    case = as_case(case)
     state = case_static_state(case)
     return state, case_buckling_margin(case, state)
 

@@ -63,7 +63,8 @@ def _axial_force_landmarks(case: Case, x: np.ndarray) -> list[tuple[str, float]]
 @app.command()
 def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOpt = None) -> None:
     """The prestressed static state: weight, weight-on-hook, weight-on-bit, neutral point, critical
-    weight-on-bit (lateral buckling), axial force."""
+    weight-on-bit (lateral buckling), axial force. A case with [well]: the stiff string along the well path
+    (hook load, side forces, sinusoidal and helical buckling in the deviated hole)."""
     from drillstring import api
 
     the_case = _load(case)
@@ -71,49 +72,126 @@ def static(case: CaseArg = "reference", as_json: JsonOpt = False, units: UnitsOp
         state, margin = api.static(the_case)
     except ValueError as error:  # a model too large to solve (modal.DENSE_FALLBACK_MEMORY), as `modes` says
         _fail(str(error))
+    in_well = the_case.well is not None
     x = np.asarray(state.mesh.nodes, dtype=float)
     n = np.asarray(state.axial_force, dtype=float)
     if as_json:
-        _print_json(
-            {
-                "weight": float(state.weight),
-                "weight_on_hook": float(state.weight_on_hook),
-                "weight_on_bit": float(state.weight_on_bit),
-                "neutral_point_height": float(state.neutral_point_height),
-                "critical_weight_on_bit": margin.critical_weight_on_bit,
-                "axial_force": [[float(xi), float(ni)] for xi, ni in zip(x, n)],
-            }
-        )
+        payload = {
+            "weight": float(state.weight),
+            "weight_on_hook": float(state.weight_on_hook),
+            "weight_on_bit": float(state.weight_on_bit),
+            "neutral_point_height": float(state.neutral_point_height),
+            "critical_weight_on_bit": margin.critical_weight_on_bit,
+            "axial_force": [[float(xi), float(ni)] for xi, ni in zip(x, n)],
+        }
+        if in_well:
+            payload.update(_well_payload(state, margin))
+        _print_json(payload)
         return
 
     console = _console()
     force, length = display_unit("force", units), display_unit("length", units)
-    summary = Table(title=escape(f"Static state: case {the_case.name!r}"), title_justify="left")
+    title = f"Static state: case {the_case.name!r}" + (" (stiff string along the well path)" if in_well else "")
+    summary = Table(title=escape(title), title_justify="left")
     summary.add_column("quantity")
     summary.add_column("value", justify="right")
     summary.add_column("unit")
     summary.add_row("weight", f"{force(state.weight):,.2f}", force.label)
-    summary.add_row("weight-on-hook", f"{force(state.weight_on_hook):,.2f}", force.label)
+    summary.add_row("hook load (weight-on-hook)" if in_well else "weight-on-hook",
+                    f"{force(state.weight_on_hook):,.2f}", force.label)
     summary.add_row("weight-on-bit", f"{force(state.weight_on_bit):,.2f}", force.label)
-    summary.add_row("neutral point above the bit", f"{length(state.neutral_point_height):,.2f}", length.label)
-    summary.add_row("critical weight-on-bit (lateral buckling)",
-                    f"{force(margin.critical_weight_on_bit):,.2f}", force.label)
+    summary.add_row("neutral point above the bit" + (" (along the string)" if in_well else ""),
+                    f"{length(state.neutral_point_height):,.2f}", length.label)
+    if in_well:
+        _well_summary_rows(summary, state, margin, units)
+    else:
+        summary.add_row("critical weight-on-bit (lateral buckling)",
+                        f"{force(margin.critical_weight_on_bit):,.2f}", force.label)
     summary.add_row("string length", f"{length(state.mesh.length):,.1f}", length.label)
     print_table(console, summary)
-    console.print(escape(_buckling_note(margin, units)))
+    for line in (_well_buckling_notes(margin, units) if in_well else [_buckling_note(margin, units)]):
+        console.print(escape(line))
 
-    forces = Table(title="Axial force N (tension > 0)", title_justify="left")
+    forces = Table(title="Axial force N (tension > 0)" + (" and side force" if in_well else ""),
+                   title_justify="left")
     forces.add_column("where")
-    forces.add_column(escape(f"x [{length.label}]"), justify="right")
+    forces.add_column(escape(f"{'measured depth' if in_well else 'x'} [{length.label}]"), justify="right")
     forces.add_column(escape(f"above bit [{length.label}]"), justify="right")
     forces.add_column(escape(f"N [{force.label}]"), justify="right")
+    if in_well:
+        forces.add_column(escape(f"side force [{force.label}]"), justify="right")
+        side = state.side_force_with_supports
     for label, position in _axial_force_landmarks(the_case, x):
         # N is continuous and linear inside each element, so interpolation between nodes is exact.
         value = float(np.interp(position, x, n))
         height = state.mesh.length - position
-        forces.add_row(escape(label), f"{length(position):,.1f}", f"{length(height):,.1f}", f"{force(value):,.2f}")
+        cells = [f"{length(position):,.1f}", f"{length(height):,.1f}", f"{force(value):,.2f}"]
+        if in_well:  # the landmarks are nodes: the wall's, a stabilizer's, the hook's or the bit's force there
+            cells.append(f"{force(float(side[int(np.argmin(np.abs(x - position)))])):,.2f}")
+        forces.add_row(escape(label), *cells)
     print_table(console, forces)
     console.print(escape(f"{len(x)} nodes; full profile: drillstring static {case} --json"))
+
+
+def _well_payload(state, margin) -> dict:
+    """The JSON keys a case with [well] adds (SI): side forces, and buckling along the path."""
+    side = state.side_force_with_supports
+    largest = int(np.argmax(side))
+    return {
+        "model": "stiff string along the well path",
+        "hook_load": float(state.hook_load),
+        "total_side_force": float(state.total_side_force),
+        "max_side_force": float(side[largest]),
+        "max_side_force_measured_depth": float(state.measured_depth[largest]),
+        "side_force": [[float(xi), float(fi)] for xi, fi in zip(state.measured_depth, side)],
+        "buckling": {
+            "criterion": "sinusoidal (Dawson-Paslay; curved hole: Wu-Juvkam-Wold) and helical (Chen-Lin-Cheatham) "
+                         "along the well path",
+            "critical_weight_on_bit": margin.critical_weight_on_bit,
+            "critical_measured_depth": margin.critical_measured_depth,
+            "helical_weight_on_bit": margin.helical_weight_on_bit,
+            "helical_measured_depth": margin.helical_measured_depth,
+            "buckled": margin.buckled,
+            "sinusoidal_intervals": [list(i) for i in margin.sinusoidal_intervals],
+            "helical_intervals": [list(i) for i in margin.helical_intervals],
+        },
+    }
+
+
+def _well_summary_rows(summary: Table, state, margin, units: str) -> None:
+    """The side-force and buckling rows of a case with [well]."""
+    force, length = display_unit("force", units), display_unit("length", units)
+    side = state.side_force_with_supports
+    largest = int(np.argmax(side))
+    summary.add_row("total side force (wall, stabilizers, bit, hook)", f"{force(state.total_side_force):,.2f}",
+                    force.label)
+    summary.add_row(escape(f"largest side force on a node (at {length(state.measured_depth[largest]):,.1f} "
+                           f"{length.label} MD)"), f"{force(side[largest]):,.2f}", force.label)
+    summary.add_row("critical weight-on-bit (sinusoidal buckling in the well)",
+                    f"{force(margin.critical_weight_on_bit):,.2f}", force.label)
+    summary.add_row("critical weight-on-bit (helical buckling in the well)",
+                    f"{force(margin.helical_weight_on_bit):,.2f}", force.label)
+
+
+def _well_buckling_notes(margin, units: str) -> list[str]:
+    """Lines on buckling along the well path (:class:`~drillstring.well.buckling.WellBucklingMargin`)."""
+    force, length = display_unit("force", units), display_unit("length", units)
+    kn, m = force.label, length.label
+
+    def spans(intervals):
+        return ", ".join(f"{length(a):,.1f}-{length(b):,.1f} {m}" for a, b in intervals)
+
+    wob, critical = force(margin.weight_on_bit), force(margin.critical_weight_on_bit)
+    if margin.helical_intervals:
+        first = f"HELICALLY BUCKLED at measured depths {spans(margin.helical_intervals)}"
+    elif margin.buckled:
+        first = f"SINUSOIDALLY BUCKLED at measured depths {spans(margin.sinusoidal_intervals)}"
+    else:
+        first = (f"Buckling along the well path: sinusoidal at weight-on-bit {critical:,.2f} {kn}, first at "
+                 f"{length(margin.critical_measured_depth):,.1f} {m} MD: margin {critical - wob:,.2f} {kn} over "
+                 f"the case's {wob:,.2f} {kn}")
+    return [first + " (Dawson-Paslay; curved hole: Wu & Juvkam-Wold; the stiff string's axial force).",
+            "The vertical string's lateral buckling criterion does not apply in the deviated hole."]
 
 
 def _buckling_note(margin: BucklingMargin, units: str) -> str:

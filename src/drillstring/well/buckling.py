@@ -25,13 +25,28 @@ much larger than in a straight hole; in a drop section the bend lifts the pipe o
 critical load is smaller. (1)-(2) are solved at each node by bisection on the exact n(C) (vector geometry:
 build, drop, turn alike). In a vertical hole n = 0 and both are 0: any compression buckles a long vertical
 string (its length-dependent critical load is :mod:`drillstring.buckling`'s finite-element one).
+
+**Margin along the path** (:func:`margin_along_path`; for a case's stiff string
+:func:`drillstring.well.stiff_string.case_well_buckling_margin`, what ``drillstring static`` reports for
+a case with ``[well]``): with the axial force N(s) of a static state (tension positive) and the critical compressions
+C(s) of (1) or (2), the reserve ``C(s) + N(s)`` [N] is the compression the string still takes at s; the string
+buckles where it is negative. A change of the weight on bit moves N by the same amount all along the string
+when the axial force does not depend on the side forces (the frictionless soft string: dN/ds = -(w cos I +
+q_f), the stiff string away from its bottom-hole assembly), and C(s) depends on the path only, so the
+critical weight on bit is
+
+    WOB_cr = WOB + min_s (C(s) + N(s)),                                                              (3)
+
+reached first at the s of the minimum.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["buckled_intervals", "critical_loads"]
+__all__ = ["WellBucklingMargin", "buckled_intervals", "critical_loads", "margin_along_path"]
 
 #: Bisection steps of (1)-(2): the bracket shrinks 2^-80 times, below float precision.
 _BISECTIONS = 80
@@ -86,3 +101,53 @@ def buckled_intervals(measured_depth, axial_force, critical) -> list[tuple[float
     if start is not None:
         intervals.append((float(md[start]), float(md[-1])))
     return intervals
+
+
+@dataclass(frozen=True)
+class WellBucklingMargin:
+    """Buckling of a static state along the well path, eqs. (1)-(3) (SI units).
+
+    Attributes:
+        critical_weight_on_bit: WOB_cr of sinusoidal buckling, eq. (3) [N].
+        critical_measured_depth: where the reserve of (3) is smallest, i.e. where sinusoidal buckling starts [m].
+        helical_weight_on_bit: WOB_cr of helical buckling [N]; helical_measured_depth: where [m].
+        weight_on_bit: the state's weight on bit [N]; weight: the string's weight [N].
+        sinusoidal_intervals, helical_intervals: measured-depth intervals [m] buckled at the state
+            (:func:`buckled_intervals`).
+    """
+
+    critical_weight_on_bit: float
+    critical_measured_depth: float
+    helical_weight_on_bit: float
+    helical_measured_depth: float
+    weight_on_bit: float
+    weight: float
+    sinusoidal_intervals: list[tuple[float, float]]
+    helical_intervals: list[tuple[float, float]]
+
+    @property
+    def buckled(self) -> bool:
+        """True when the compression exceeds the sinusoidal critical load somewhere along the path."""
+        return bool(self.sinusoidal_intervals)
+
+    @property
+    def margin(self) -> float:
+        """WOB_cr − WOB [N]: extra weight on bit before sinusoidal buckling (negative: buckled)."""
+        return self.critical_weight_on_bit - self.weight_on_bit
+
+
+def margin_along_path(measured_depth, axial_force, critical: dict[str, np.ndarray], *, weight_on_bit: float,
+                      weight: float) -> WellBucklingMargin:
+    """The buckling margin, eq. (3), of the axial force ``axial_force`` [N] (tension positive) at the nodes
+    ``measured_depth`` [m] against the critical compressions ``critical`` (:func:`critical_loads`, same
+    nodes), at the state's ``weight_on_bit`` [N]; ``weight`` [N] the string's weight (carried along)."""
+    md, force = np.asarray(measured_depth, float), np.asarray(axial_force, float)
+    found = {}
+    for name in ("sinusoidal", "helical"):
+        reserve = np.asarray(critical[name], float) + force
+        i = int(np.argmin(reserve))
+        found[name] = (float(weight_on_bit + reserve[i]), float(md[i]))
+    return WellBucklingMargin(*found["sinusoidal"], *found["helical"], float(weight_on_bit), float(weight),
+                              buckled_intervals(md, force, critical["sinusoidal"]),
+                              buckled_intervals(md, force, critical["helical"]))
+

@@ -77,6 +77,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -96,11 +97,15 @@ from drillstring.fem.mesh import Mesh
 from drillstring.statics import StaticState
 from drillstring.well.survey import Trajectory
 
+if TYPE_CHECKING:
+    from drillstring.well.buckling import WellBucklingMargin
+
 __all__ = [
     "StiffStringState",
     "WallStations",
     "case_static_state_in_well",
     "case_stiff_string",
+    "case_well_buckling_margin",
     "path_frames",
     "solve_stiff_string",
     "wall_stations",
@@ -244,12 +249,38 @@ class StiffStringState:
         return float(-self.top_reaction @ self.tangent[0])
 
     @property
-    def total_side_force(self) -> float:
-        """Σ |wall force| + the hook's and the bit's lateral reactions [N] (comparable with ∫ n ds)."""
+    def weight_on_hook(self) -> float:
+        """:attr:`hook_load` [N], under :class:`drillstring.statics.StaticState`'s name."""
+        return self.hook_load
+
+    @property
+    def neutral_point_height(self) -> float:
+        """Length of string [m] between the bit and the point where the axial force changes sign (its
+        :meth:`static_state`'s); nan if it keeps one sign."""
+        return self.static_state().neutral_point_height
+
+    @property
+    def lateral_reactions(self) -> tuple[float, float]:
+        """The hook's and the bit's reactions across the path's tangent there, |F − (F·t) t| [N]."""
         def lateral(force, t):
             return float(np.linalg.norm(force - (force @ t) * t))
-        return float(self.side_force.sum() + lateral(self.top_reaction, self.tangent[0])
-                     + lateral(self.bit_reaction, self.tangent[-1]))
+        return lateral(self.top_reaction, self.tangent[0]), lateral(self.bit_reaction, self.tangent[-1])
+
+    @property
+    def side_force_with_supports(self) -> np.ndarray:
+        """:attr:`side_force` [N] with the hook's and the bit's lateral reactions added at the top and the bit
+        (the force across the path on each node; its sum is :attr:`total_side_force`)."""
+        out = self.side_force.copy()
+        top, bit = self.lateral_reactions
+        out[0] += top
+        out[-1] += bit
+        return out
+
+    @property
+    def total_side_force(self) -> float:
+        """Σ |wall force| + the hook's and the bit's lateral reactions [N] (comparable with ∫ n ds)."""
+        top, bit = self.lateral_reactions
+        return float(self.side_force.sum() + top + bit)
 
     def unstable_directions(self) -> int:
         """The number of negative eigenvalues of the tangent stiffness on the free DOFs, ``Zᵀ K_t Z``
@@ -631,3 +662,21 @@ def case_static_state_in_well(case) -> StaticState:
 
         return case_static_state(case)
     return case_stiff_string(case).static_state()
+
+
+def case_well_buckling_margin(case, state: StiffStringState) -> WellBucklingMargin:
+    """:func:`~drillstring.well.buckling.margin_along_path` (eq. (3) there) of the stiff string ``state``
+    (:func:`case_stiff_string`) of ``case`` in its well: the critical compressions of the
+    soft string's discretisation (:func:`~drillstring.well.torque_drag.string_in_well`, elements of at most
+    1 m, the pipe body's clearance), the stiff string's axial force interpolated linearly onto its nodes."""
+    from drillstring.well.buckling import critical_loads, margin_along_path
+    from drillstring.well.torque_drag import case_trajectory, string_in_well
+
+    string = string_in_well(case, case_trajectory(case))
+    md = string.measured_depth
+    force = np.interp(md, state.measured_depth, state.axial_force)
+    if not math.isclose(float(md[-1]), float(state.measured_depth[-1]), rel_tol=1e-9):
+        raise ValueError(f"the stiff string ends at {state.measured_depth[-1]:g} m, the string in the well at "
+                         f"{md[-1]:g} m: they must be the same string")
+    return margin_along_path(md, force, critical_loads(string), weight_on_bit=state.weight_on_bit,
+                             weight=state.weight)
