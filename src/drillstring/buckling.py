@@ -54,6 +54,7 @@ __all__ = [
     "critical_weight_on_bit",
     "buckling_margin",
     "case_buckling_margin",
+    "case_critical_weight_on_bit",
     "buckling_probability",
 ]
 
@@ -187,6 +188,23 @@ def case_buckling_margin(case, static: StaticState | None = None) -> BucklingMar
 
     static = case_static_state(case) if static is None else static
     return buckling_margin(case_linear_system(case, static))
+
+
+def case_critical_weight_on_bit(case) -> float:
+    """The critical weight-on-bit [N] that a study or a map compares its weights-on-bit with. Without
+    ``[well]``: the straight string's, :func:`case_buckling_margin` (eq. (1)). With ``[well]``: sinusoidal
+    buckling along the well path on the stiff string's axial force
+    (:func:`drillstring.well.stiff_string.case_well_buckling_margin`, eq. (3) of :mod:`drillstring.well.buckling`:
+    Dawson–Paslay, in curved sections Wu & Juvkam-Wold), the criterion of the deviated hole, where the
+    straight string's does not apply."""
+    if case.well is None:
+        return case_buckling_margin(case).critical_weight_on_bit
+    from drillstring.well.stiff_string import (
+        case_stiff_string,
+        case_well_buckling_margin,
+    )
+
+    return case_well_buckling_margin(case, case_stiff_string(case)).critical_weight_on_bit
 
 
 def buckling_probability(weight_on_hook_law, weight: float, critical_weight_on_bit: float) -> float:

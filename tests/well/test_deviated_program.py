@@ -11,7 +11,7 @@ from drillstring import api
 from drillstring.case import load_case
 from drillstring.dynamics.indicators import bit_area, cycle_metrics, steady_window
 from drillstring.stochastic.montecarlo import nominal_weight_on_hook
-from drillstring.well.stiff_string import case_stiff_string
+from drillstring.well.stiff_string import case_stiff_string, case_well_buckling_margin
 from drillstring.well.torque_drag import case_torque_drag
 
 T_END = 0.5  # [s]
@@ -53,6 +53,9 @@ def test_study_nominal_run_is_simulate_and_every_realization_is_rebuilt(deviated
     assert summary["weight_on_hook_mean"] == pytest.approx(deviated.weight - deviated.operation.weight_on_bit)
     assert summary["weight_on_hook_mean"] == nominal_weight_on_hook(deviated)
     assert summary["weight_on_hook_mean"] - case_stiff_string(deviated).hook_load > 1e5
+    # its buckling margin is the well path's (sinusoidal), named as such, not the straight string's
+    well = case_well_buckling_margin(deviated, case_stiff_string(deviated)).critical_weight_on_bit
+    assert summary["buckling"]["critical_weight_on_bit"] == well and "well path" in summary["buckling"]["criterion"]
 
 
 def test_map_point_is_simulate_and_its_root_is_stability(deviated, simulated, tmp_path):
@@ -62,6 +65,9 @@ def test_map_point_is_simulate_and_its_root_is_stability(deviated, simulated, tm
                                 weight_on_bit=[deviated.operation.weight_on_bit], t_end=T_END,
                                 output_step=OUTPUT_STEP, transient=0.2, workers=1, out=tmp_path / "m")
     point = outcome.dataset.isel(top_speed=0, weight_on_bit=0)
+    well = case_well_buckling_margin(deviated, case_stiff_string(deviated)).critical_weight_on_bit
+    assert outcome.dataset.attrs["critical_weight_on_bit"] == well  # the well path's buckling, not the straight's
+    assert float(point["buckling_margin"]) == well - deviated.operation.weight_on_bit
     t = simulated.time.values
     obs = {name: simulated[name].values for name in simulated.data_vars}
     metrics = cycle_metrics(t, obs, deviated.operation.top_speed, bit_area(deviated), 0.2)

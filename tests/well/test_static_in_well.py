@@ -14,7 +14,11 @@ from drillstring.case import load_case
 from drillstring.cli import app
 from drillstring.statics import StaticState
 from drillstring.well.buckling import margin_along_path
-from drillstring.well.stiff_string import StiffStringState, case_stiff_string, case_well_buckling_margin
+from drillstring.well.stiff_string import (
+    StiffStringState,
+    case_stiff_string,
+    case_well_buckling_margin,
+)
 
 runner = CliRunner()
 _ENV = {"COLUMNS": "120", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "TTY_INTERACTIVE": None,
@@ -110,3 +114,26 @@ def test_margin_along_a_straight_inclined_hole_is_the_dawson_paslay_load():
         if margin.buckled:
             assert margin.sinusoidal_intervals[0][1] == 1000.0
             assert margin.sinusoidal_intervals[0][0] == pytest.approx(1000.0 - (wob - 60e3) / w_axial, abs=10.0)
+
+
+def test_studies_and_maps_compare_with_the_wells_critical_weight_on_bit(deviated, stiff):
+    """The critical weight-on-bit of a study or a map: the straight string's without [well] (unchanged), the
+    well path's with it (362.3 kN for `deviated`, against the vertical string's 74.9 kN); the study names the
+    criterion only for a well, and its default weight-on-hook law (σ 5 kN around 80 kN on bit) gives no
+    warning: 282 kN of margin is 56 σ."""
+    from drillstring.api.studies import study_settings
+    from drillstring.buckling import case_buckling_margin, case_critical_weight_on_bit
+    from drillstring.stochastic.montecarlo import (
+        WELL_BUCKLING_CRITERION,
+        study_buckling_margin,
+    )
+
+    reference = load_case("reference")
+    assert case_critical_weight_on_bit(reference) == case_buckling_margin(reference).critical_weight_on_bit
+    assert "criterion" not in study_buckling_margin(reference, study_settings(reference, samples=2)[0])
+    well = case_well_buckling_margin(deviated, stiff).critical_weight_on_bit
+    assert case_critical_weight_on_bit(deviated) == well
+    assert case_buckling_margin(deviated).critical_weight_on_bit < 80e3 < well  # the vertical verdict: buckled
+    buckling = study_buckling_margin(deviated, study_settings(deviated, samples=2)[0])
+    assert buckling["critical_weight_on_bit"] == well and buckling["criterion"] == WELL_BUCKLING_CRITERION
+    assert buckling["probability"] < 1e-12 and buckling["warning"] is None

@@ -130,7 +130,10 @@ def static(case: Case | str | Path = "reference"):
     criterion does not apply in the deviated hole)."""
     case = as_case(case)
     if case.well is not None:
-        from drillstring.well.stiff_string import case_stiff_string, case_well_buckling_margin
+        from drillstring.well.stiff_string import (
+            case_stiff_string,
+            case_well_buckling_margin,
+        )
 
         well_state = case_stiff_string(case)
         return well_state, case_well_buckling_margin(case, well_state)

@@ -270,8 +270,9 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         "computation wall time [s]": round(payload["wall_time"], 2),
         "buckled realizations (lowest lateral ω² < 0)": (
             f"{payload['buckling']['buckled_realizations']} of {payload['n_samples']}; critical weight-on-bit "
-            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}, probability of a "
-            f"buckled draw {payload['buckling']['probability']:.3g}"),
+            f"{force(payload['buckling']['critical_weight_on_bit']):.5g} {force.label}"
+            + (f" ({payload['buckling']['criterion']})" if "criterion" in payload["buckling"] else "")
+            + f", probability of a buckled draw {payload['buckling']['probability']:.3g}"),
         "total time of the realizations [s]": round(payload["realization_wall_time_total"], 2),
         "workers": payload["workers"],
     }

@@ -65,6 +65,13 @@ def _buckling_line(summary: dict[str, Any], units: str | None = None) -> str:
     b, n, force = summary["buckling"], summary["n_samples"], display_unit("force", units)
     critical = f"{force(b['critical_weight_on_bit']):,.2f} {force.label}"
     count, chance = b["buckled_realizations"], _chance(b["probability"])
+    if "criterion" in b:  # a case with [well]: two criteria, each said for what it is
+        draws = (f"a draw puts the weight-on-bit above the critical {critical} ({b['criterion']}) {chance}"
+                 if b["probability"] > 0.0 else
+                 f"no draw puts the weight-on-bit above the critical {critical} ({b['criterion']})")
+        return (f"Buckling: {draws}; {count} of {n} realizations have a buckled string in the reduced model "
+                "(lowest lateral ω² < 0: a straight string's lateral dynamics under the well's axial force, not "
+                "the curved hole's).")
     if count:
         return (f"Buckling: {count} of {n} realizations ({100 * count / n:.3g} %) drew a weight-on-bit above "
                 f"the critical {critical}: their string buckles laterally near the bit and bows to the "

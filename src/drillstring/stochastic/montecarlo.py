@@ -259,19 +259,24 @@ def largest_accepted_sigma(case: Case, probability: float = OUT_OF_RANGE_PROBABI
 BUCKLING_WARNING_PROBABILITY = 1e-3
 
 
+#: The criterion a study of a case with ``[well]`` states (``summary["buckling"]["criterion"]``).
+WELL_BUCKLING_CRITERION = "sinusoidal buckling along the well path, Dawson-Paslay"
+
+
 def study_buckling_margin(case: Case, settings: StudySettings) -> dict:
     """The lateral buckling margin of a study's draws (SI): ``critical_weight_on_bit`` [N] of the case
-    (:func:`drillstring.buckling.case_buckling_margin`, at the nominal values of every parameter),
+    (:func:`drillstring.buckling.case_critical_weight_on_bit`, at the nominal values of every parameter: the
+    straight string's, or with ``[well]`` sinusoidal buckling along the well path, then with ``criterion``
+    :data:`WELL_BUCKLING_CRITERION`),
     ``probability`` that a draw buckles the string — from the law of the weight-on-hook
     (:func:`drillstring.buckling.buckling_probability`) or of the weight-on-bit when one of them is random,
     else 0 or 1 as the nominal string is straight or buckled —, ``expected`` buckled realizations
     (probability × samples), ``warning``: the note of :func:`buckling_note` (SI) when the probability is above
     :data:`BUCKLING_WARNING_PROBABILITY`, else None, and for that note ``lateral`` (whether the case has lateral
     modes) and ``source`` (which law or value gives the probability)."""
-    from drillstring.buckling import buckling_probability, case_buckling_margin
+    from drillstring.buckling import buckling_probability, case_critical_weight_on_bit
 
-    margin = case_buckling_margin(case)
-    critical = margin.critical_weight_on_bit
+    critical = case_critical_weight_on_bit(case)
     law = study_uncertainty(case, settings)
     if WEIGHT_ON_HOOK in law.paths:
         density = law.parameters[law.paths.index(WEIGHT_ON_HOOK)].law.density
@@ -285,6 +290,8 @@ def study_buckling_margin(case: Case, settings: StudySettings) -> dict:
     lateral = case.reduced_model.lateral_modes > 0 or case.reduced_model.lateral_cutoff > 0
     out = {"critical_weight_on_bit": float(critical), "probability": float(probability),
            "expected": float(probability * settings.samples), "lateral": lateral, "source": what}
+    if case.well is not None:
+        out["criterion"] = WELL_BUCKLING_CRITERION
     out["warning"] = buckling_note(out, settings.samples) if probability > BUCKLING_WARNING_PROBABILITY else None
     return out
 
@@ -299,8 +306,12 @@ def buckling_note(buckling: dict, samples: int, units: str | None = "si") -> str
     consequence = ("their string buckles laterally near the bit and bows to the borehole wall"
                    if buckling["lateral"] else
                    "their string buckles, but the case has no lateral modes, so it stays on the hole's axis")
+    criterion = buckling.get("criterion", "lateral buckling")
+    if "criterion" in buckling:  # a well: the model's lateral dynamics is a straight string's, not the hole's
+        consequence = ("their string buckles in the well; the reduced model's lateral dynamics is a straight "
+                       "string's, not the curved hole's")
     return (f"{buckling['source']} puts the weight-on-bit above the critical {critical:,.2f} {force.label} "
-            f"(lateral buckling) with probability {100 * probability:.3g} %, about "
+            f"({criterion}) with probability {100 * probability:.3g} %, about "
             f"{probability * samples:.2g} of the {samples} realizations: {consequence}; the study counts them")
 
 

@@ -10,9 +10,10 @@ deaths isolated) and depend only on the case and the settings, so an interrupted
 result.
 
 The **buckling margin** ``wob_cr − wob`` uses the critical weight-on-bit of the case
-(:func:`~drillstring.buckling.case_buckling_margin`), computed once: the prestressed lateral stiffness
+(:func:`~drillstring.buckling.case_critical_weight_on_bit`), computed once: the prestressed lateral stiffness
 depends on neither the weight-on-bit of the reference state nor the top speed (module docstring of
-:mod:`drillstring.buckling`).
+:mod:`drillstring.buckling`); for a case with ``[well]``, sinusoidal buckling along the well path
+(:mod:`drillstring.well.buckling`, eq. (3)).
 
 Grid axes are written ``A:B:N`` (N values from A to B, both included), ``a,b,c`` (a list) or ``a`` (one
 value); each value is a number or a ``"value unit"`` string as in case files (``"40 rpm:200 rpm:17"``); a
@@ -254,10 +255,10 @@ def run_map(case: Case, settings: MapSettings, store_path: str | Path, engine: E
     """Run (or resume) every pending point of a map into its Zarr store on ``engine``, then ``finish(run)``
     under the store's lock (like :func:`~drillstring.stochastic.montecarlo.run_study`: settings checked,
     scheduler reached and the store locked before anything is created)."""
-    from drillstring.buckling import case_buckling_margin
+    from drillstring.buckling import case_critical_weight_on_bit
 
     check_map(case, settings)
-    critical = case_buckling_margin(case).critical_weight_on_bit
+    critical = case_critical_weight_on_bit(case)
     return run_locked(store_path, partial(MapStore, Path(store_path), case, settings, critical),
                       lambda store: [(i, (i, *settings.point(i))) for i in store.pending()],
                       partial(_point_task, case, settings), engine, prepare=partial(compile_kernels, case),

@@ -44,7 +44,9 @@ realizations (n of them; failed ones are excluded and listed):
 **Closed form of the buckling probability** (what the tests check): with only ``sigma`` declared, a
 realization is buckled when its weight-on-bit exceeds the critical one ``wob_cr`` of the case
 (:func:`~drillstring.buckling.case_buckling_margin`), so ``P = P(wob + σZ > wob_cr) = Φ((wob − wob_cr)/σ)``
-at each point, and ``n P̂`` is binomial ``(n, P)``.
+at each point, and ``n P̂`` is binomial ``(n, P)``. Not for a case with ``[well]``: its ``wob_cr``
+(:func:`~drillstring.buckling.case_critical_weight_on_bit`) is sinusoidal buckling along the well path, while
+the probability counts the reduced model's straight string (its lateral dynamics is not the curved hole's).
 """
 
 from __future__ import annotations
@@ -307,10 +309,10 @@ def run_sampled_map(case: Case, settings: SampledMapSettings, store_path: str | 
                     finish: Callable[[StoreRun], Any] | None = None) -> StoreRun:
     """Run (or resume) every pending realization of a probabilistic map into its Zarr store on ``engine``,
     then ``finish(run)`` under the store's lock (checked first: :func:`check_sampled_map`)."""
-    from drillstring.buckling import case_buckling_margin
+    from drillstring.buckling import case_critical_weight_on_bit
 
     check_sampled_map(case, settings)
-    critical = case_buckling_margin(case).critical_weight_on_bit
+    critical = case_critical_weight_on_bit(case)
     return run_locked(store_path, partial(SampledMapStore, Path(store_path), case, settings, critical),
                       lambda store: [(i, i) for i in store.pending()], partial(_task, case, settings), engine,
                       prepare=partial(compile_kernels, case), finish=finish, what="map", noun="realizations")
