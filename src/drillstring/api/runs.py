@@ -9,7 +9,13 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from drillstring.api.arguments import as_case, case_window, check_callable, checked_tolerance, checked_weight_on_bit
+from drillstring.api.arguments import (
+    as_case,
+    case_window,
+    check_callable,
+    checked_tolerance,
+    checked_weight_on_bit,
+)
 from drillstring.blas_threads import single_threaded_blas
 from drillstring.case import Case
 
@@ -157,7 +163,14 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
     string above).
 
     Returns ``(modes, margin)``: :class:`~drillstring.modal.Modes` (``.axial.frequencies`` [Hz], ...) and a
-    :class:`~drillstring.buckling.BucklingMargin`. ``count``: an integer in [1, :data:`MAX_MODES`]."""
+    :class:`~drillstring.buckling.BucklingMargin`. ``count``: an integer in [1, :data:`MAX_MODES`].
+
+    A case with ``[well]``: the modes about the stiff string's static state along the well path, the families
+    coupled, each mode named by its largest share of kinetic energy
+    (:func:`~drillstring.well.well_modes.case_well_mode_families`): a
+    :class:`~drillstring.well.well_modes.WellModes` (``.axial``, ``.torsional``, ``.lateral``: every lateral
+    mode, the y/z pairs split; ``.shares``), and the :class:`~drillstring.well.buckling.WellBucklingMargin`
+    along the path. A case with ``[well]`` and ``[motor]`` is refused (ValueError)."""
     from drillstring.buckling import buckling_margin
     from drillstring.checks import integer
     from drillstring.modal import case_linear_system, compute_modes
@@ -166,6 +179,18 @@ def modes(case: Case | str | Path = "reference", *, count: int = 10):
 
     count = integer("count", count, low=1, high=MAX_MODES)
     case = as_case(case)
+    if case.well is not None:
+        from drillstring.well.stiff_string import (
+            case_stiff_string,
+            case_well_buckling_margin,
+        )
+        from drillstring.well.well_modes import case_well_mode_families
+
+        if case.motor is not None:
+            raise ValueError("modes of a case with [well] and [motor] (the torsion released at the rotor along the "
+                             "well path) are not supported yet: remove one of them")
+        state = case_stiff_string(case)
+        return case_well_mode_families(case, count, state), case_well_buckling_margin(case, state)
     system = case_linear_system(case, case_static_state(case))
     if case.motor is not None:  # the torsion released at the rotor: its first mode the string below turning
         return released_modes(system, case.motor.position, count, count, count)[0], buckling_margin(system)

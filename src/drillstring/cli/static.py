@@ -144,17 +144,22 @@ def _well_payload(state, margin) -> dict:
         "max_side_force": float(side[largest]),
         "max_side_force_measured_depth": float(state.measured_depth[largest]),
         "side_force": [[float(xi), float(fi)] for xi, fi in zip(state.measured_depth, side)],
-        "buckling": {
-            "criterion": "sinusoidal (Dawson-Paslay; curved hole: Wu-Juvkam-Wold) and helical (Chen-Lin-Cheatham) "
-                         "along the well path",
-            "critical_weight_on_bit": margin.critical_weight_on_bit,
-            "critical_measured_depth": margin.critical_measured_depth,
-            "helical_weight_on_bit": margin.helical_weight_on_bit,
-            "helical_measured_depth": margin.helical_measured_depth,
-            "buckled": margin.buckled,
-            "sinusoidal_intervals": [list(i) for i in margin.sinusoidal_intervals],
-            "helical_intervals": [list(i) for i in margin.helical_intervals],
-        },
+        "buckling": _well_buckling_payload(margin),
+    }
+
+
+def _well_buckling_payload(margin) -> dict:
+    """Buckling along the well path (:class:`~drillstring.well.buckling.WellBucklingMargin`) as JSON (SI)."""
+    return {
+        "criterion": "sinusoidal (Dawson-Paslay; curved hole: Wu-Juvkam-Wold) and helical (Chen-Lin-Cheatham) "
+                     "along the well path",
+        "critical_weight_on_bit": margin.critical_weight_on_bit,
+        "critical_measured_depth": margin.critical_measured_depth,
+        "helical_weight_on_bit": margin.helical_weight_on_bit,
+        "helical_measured_depth": margin.helical_measured_depth,
+        "buckled": margin.buckled,
+        "sinusoidal_intervals": [list(i) for i in margin.sinusoidal_intervals],
+        "helical_intervals": [list(i) for i in margin.helical_intervals],
     }
 
 
@@ -219,7 +224,9 @@ def modes(
     as_json: JsonOpt = False,
     units: UnitsOpt = None,
 ) -> None:
-    """The lowest natural frequencies [Hz] of the prestressed string, per mode family."""
+    """The lowest natural frequencies [Hz] of the prestressed string, per mode family. A case with [well]: the
+    modes about the stiff string's static state along the well path, each named by its largest share of
+    kinetic energy, and buckling along the path."""
     from drillstring import api
 
     the_case = _load(case)
@@ -227,16 +234,19 @@ def modes(
         found, margin = api.modes(the_case, count=count)
     except ValueError as error:
         _fail(str(error))
+    in_well = the_case.well is not None
     families = {
         "axial": [float(f) for f in found.axial.frequencies],
         "torsional": [float(f) for f in found.torsional.frequencies],
         "lateral": [float(f) for f in found.lateral.frequencies],
     }
     if as_json:
-        _print_json(families)
+        _print_json({"model": WELL_MODES_MODEL, **families, **_well_modes_payload(found, margin)}
+                    if in_well else families)
         return
 
-    table = Table(title=escape(f"Natural frequencies: case {the_case.name!r}"), title_justify="left")
+    title = f"Natural frequencies: case {the_case.name!r}" + (f" ({WELL_MODES_MODEL})" if in_well else "")
+    table = Table(title=escape(title), title_justify="left")
     table.add_column("mode", justify="right")
     for name in families:
         table.add_column(escape(f"{name} [Hz]"), justify="right")
@@ -246,6 +256,10 @@ def modes(
         table.add_row(str(i + 1), *cells)
     console = _console()
     print_table(console, table)
+    if in_well:
+        for note in _well_modes_notes(found, margin, units):
+            console.print(escape(note))
+        return
     for note in (
         "axial: both ends free; mode 1 is the rigid translation (0 Hz).",
         "torsional: top held, bit free. lateral: one plane of each y/z pair.",
@@ -254,3 +268,33 @@ def modes(
         _buckling_note(margin, units),
     ):
         console.print(escape(note))
+
+
+#: What the modes of a case with [well] are (the table's title, the JSON's "model").
+WELL_MODES_MODEL = "about the stiff string's static state along the well path, families named by kinetic energy"
+
+
+def _well_modes_payload(found, margin) -> dict:
+    """The JSON keys of `modes` for a case with [well] beside the frequencies (SI): each listed mode's
+    kinetic-energy shares, and buckling along the path."""
+    return {
+        "kinetic_energy_share": {name: [[float(e) for e in row] for row in shares]
+                                 for name, shares in found.shares.items()},
+        "kinetic_energy_share_columns": ["axial", "torsional", "lateral"],
+        "modes_solved": int(found.solved),
+        "buckling": _well_buckling_payload(margin),
+    }
+
+
+def _well_modes_notes(found, margin, units: str) -> list[str]:
+    """The lines under the table of `modes` for a case with [well]."""
+    least = min((float(s.max(axis=1).min()) for s in found.shares.values() if len(s)), default=1.0)
+    return [(f"Coupled modes of the whole string (the {found.solved} lowest solved), each in the family with the "
+             f"largest share of its kinetic energy (axial u, torsional θx, lateral v w θy θz in the nodes' frames; "
+             f"the least such share listed: {least:.2f}; --json gives every share)."),
+            ("Boundaries: top held across the path and in rotation, bit held across the path, both free along it "
+             "(axial mode 1: the slide along the path, 0 Hz only in a straight hole); every lateral mode listed "
+             "(the wall and the curvature split the y/z pairs)."),
+            ("Prestress (the stiff string's axial force), the wall's linearised springs, stabilizers and drilling "
+             "fluid included; a negative frequency is an unstable mode, -sqrt(|ω²|)/2π."),
+            *_well_buckling_notes(margin, units)]

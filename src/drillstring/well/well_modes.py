@@ -16,18 +16,31 @@ hold across the path at the ends, and :func:`drillstring.modal.coupled_modes` so
 basis. Stabilizers are springs on the nodal ``v`` and ``w`` (across the path), as in the vertical string. A
 vertical hole has every frame the identity and gives the vertical string's modes.
 
+The families couple along the path, so :func:`case_well_mode_families` names each mode by the family that
+holds the largest share of its kinetic energy (:func:`kinetic_energy_shares`): for the mass-normalised
+shape ``φ`` split into its parts on the nodal DOFs of each family (axial ``u``, torsional ``θx``, lateral
+``v, w, θy, θz``, in the nodes' frames), ``e_f = φ_fᵀ (M + M_f) φ_f / Σ_g φ_gᵀ (M + M_f) φ_g`` (the
+cross-family terms, zero in a straight string, left out of both).
+
 Units: SI (frequencies in rad/s in :class:`~drillstring.modal.ModeFamily`, ``.frequencies`` in Hz).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from drillstring.fem.assembly import (
+    THETA_X,
+    THETA_Y,
+    THETA_Z,
     Stabilizer,
+    U,
+    V,
+    W,
     fluid_matrices,
     stabilizer_stiffness,
     structural_matrices,
@@ -35,10 +48,20 @@ from drillstring.fem.assembly import (
 from drillstring.fem.dofs import DOFS_PER_NODE
 from drillstring.fem.fluid import FluidCoefficients
 from drillstring.fem.geometry import direction_cosines
-from drillstring.modal import LinearSystem, ModeFamily, coupled_modes
+from drillstring.modal import (
+    DENSE_LIMIT,
+    LinearSystem,
+    ModeFamily,
+    coupled_dofs,
+    coupled_modes,
+)
 from drillstring.well.stiff_string import StiffStringState, case_stiff_string
 
-__all__ = ["case_well_modes", "nodal_frames", "well_linear_system", "well_modes"]
+__all__ = ["WELL_MODE_FAMILIES", "WellModes", "case_well_mode_families", "case_well_modes", "case_well_system", "kinetic_energy_shares",
+           "nodal_frames", "well_linear_system", "well_modes"]
+
+#: The families a mode along the path is named by, and their nodal DOFs (in the nodes' frames).
+WELL_MODE_FAMILIES = {"axial": (U,), "torsional": (THETA_X,), "lateral": (V, W, THETA_Y, THETA_Z)}
 
 
 def nodal_frames(tangent: np.ndarray) -> sp.csr_matrix:
@@ -91,8 +114,70 @@ def case_well_modes(case, count: int = 10, state: StiffStringState | None = None
     """The lowest ``count`` modes of ``case`` about its stiff-string state in its well
     (:func:`drillstring.well.stiff_string.case_stiff_string` unless ``state`` is given), with its stabilizers
     and fluid."""
+    return well_modes(case_well_system(case, state), count)
+
+
+def case_well_system(case, state: StiffStringState | None = None) -> LinearSystem:
+    """:func:`well_linear_system` of ``case`` about ``state`` (its
+    :func:`~drillstring.well.stiff_string.case_stiff_string` when None), with its stabilizers and fluid."""
     from drillstring.fem.build import section_fluid_coefficients, stabilizers
 
     state = case_stiff_string(case) if state is None else state
-    system = well_linear_system(state, stabilizers(case), section_fluid_coefficients(case, state.mesh))
-    return well_modes(system, count)
+    return well_linear_system(state, stabilizers(case), section_fluid_coefficients(case, state.mesh))
+
+
+def kinetic_energy_shares(system: LinearSystem, shapes: np.ndarray) -> np.ndarray:
+    """(n_modes, 3): each mode's share of kinetic energy in the families of :data:`WELL_MODE_FAMILIES`
+    (axial, torsional, lateral; module docstring: ``e_f = φ_fᵀ M φ_f / Σ_g φ_gᵀ M φ_g``, ``M`` the mass
+    with the fluid's), rows summing to 1. ``shapes`` (n_dofs, n_modes) in the nodes' frames."""
+    kind = np.arange(system.mesh.n_dofs) % DOFS_PER_NODE
+    mass = system.mass
+    energies = []
+    for kinds in WELL_MODE_FAMILIES.values():
+        part = np.where(np.isin(kind, kinds)[:, None], shapes, 0.0)
+        energies.append(np.einsum("ij,ij->j", part, mass @ part))
+    energies = np.array(energies).T
+    return energies / energies.sum(axis=1, keepdims=True)
+
+
+@dataclass(frozen=True)
+class WellModes:
+    """The lowest modes about the stiff string's static state, named by family (:func:`case_well_mode_families`).
+
+    Attributes:
+        axial, torsional, lateral: the ``count`` lowest modes of each family (ω [rad/s], ``.frequencies`` [Hz];
+            shapes in the nodes' frames, mass-normalised); every lateral mode is listed (the wall and the
+            curvature split the straight string's y/z pairs).
+        shares: per family, (n, 3) its modes' kinetic-energy shares (axial, torsional, lateral).
+        solved: the number of lowest modes of the whole string solved to find them.
+    """
+
+    axial: ModeFamily
+    torsional: ModeFamily
+    lateral: ModeFamily
+    shares: dict[str, np.ndarray]
+    solved: int
+
+
+def case_well_mode_families(case, count: int = 10, state: StiffStringState | None = None) -> WellModes:
+    """The ``count`` lowest modes of each family (:data:`WELL_MODE_FAMILIES`, by the largest kinetic-energy
+    share: :func:`kinetic_energy_shares`) of ``case`` about its stiff-string state in its well, with its
+    stabilizers and fluid. The whole string is solved at once (:func:`well_modes`): all its modes when it has
+    at most :data:`~drillstring.modal.DENSE_LIMIT` free DOFs (one dense solve), else the lowest ``4 count``,
+    then four times as many until every family has ``count`` (or every mode is solved)."""
+    system = case_well_system(case, state)
+    free = len(coupled_dofs(system.mesh))
+    wanted = free if free <= DENSE_LIMIT else min(free, 4 * count)
+    while True:
+        found = well_modes(system, wanted)
+        shares = kinetic_energy_shares(system, found.shapes)
+        family = np.argmax(shares, axis=1)
+        if wanted >= free or np.all(np.bincount(family, minlength=3) >= count):
+            break
+        wanted = min(free, 4 * wanted)
+    picked, share_of = {}, {}
+    for i, name in enumerate(WELL_MODE_FAMILIES):
+        index = np.flatnonzero(family == i)[:count]
+        picked[name] = ModeFamily(name, found.angular_frequencies[index], found.shapes[:, index])
+        share_of[name] = shares[index]
+    return WellModes(picked["axial"], picked["torsional"], picked["lateral"], share_of, len(found.angular_frequencies))
