@@ -25,6 +25,7 @@ from drillstring.dynamics.reduced.terms import (
     _bit_state,
     _delayed,
     _downhole_motor,
+    _surely_clear,
     _top_motion,
     inner_kernel,
 )
@@ -143,9 +144,16 @@ def new_contact_zones(in_contact, previous):
 @njit(cache=True)
 def impacts_kernel(d, o, y):
     """Impacts at the accepted state ``y`` since the previous call (:func:`new_contact_zones`); keeps
-    the nodes in contact in ``o.previous`` for the next call."""
+    the nodes in contact in ``o.previous`` for the next call. Where the bound of
+    :func:`~drillstring.dynamics.reduced.terms._surely_clear` says no node can touch (the right-hand side's
+    own test, one pass over the lateral coordinates), no node is in contact and nothing else is computed."""
     ranges = d.ranges
     if ranges.lateral_y_end == ranges.lateral_y_start and ranges.lateral_z_end == ranges.lateral_z_start:
+        return 0
+    if _surely_clear(d, y):  # reads η = y[:n] only
+        for i in range(o.current.shape[0]):
+            o.current[i] = False
+            o.previous[i] = False
         return 0
     _contact_state(d, y, o.v, o.w, o.current)
     new = new_contact_zones(o.current, o.previous)
