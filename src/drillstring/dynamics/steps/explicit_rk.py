@@ -51,18 +51,19 @@ def allocate(tableau: ButcherTableau, n: int) -> ExplicitRungeKuttaStep:
 @njit
 def attempt(data, rhs_data, t, h, y, f, y_new, err):
     """Stages from ``f`` (the first), the candidate ``y_new`` (FSAL: the last stage's argument) and the
-    error estimate ``err``; stops at the first stage with a non-finite value. Returns (evaluations, finite)."""
+    error estimate ``err``; stops at the first stage with a non-finite value. Returns (evaluations, finite).
+
+    Each sum ``Σ_m a[i, m] k[m, j]`` is accumulated in ``y_new[j]`` (``err[j]`` for the estimate) stage by
+    stage, the loop over the state innermost: the same additions in the same order for every component as
+    a sum per component, on contiguous rows (no temporaries, vectorised). Zero coefficients are skipped
+    (adding ``0·k`` changes nothing but the sign of a zero; the stages are finite where they are used)."""
     k, a, b, c, error_weights, fsal = data.k, data.a, data.b, data.c, data.error_weights, data.fsal
     n = y.shape[0]
     s = c.shape[0]
     for j in range(n):
         k[0, j] = f[j]
     for i in range(1, s):
-        for j in range(n):
-            acc = 0.0
-            for m in range(i):
-                acc += a[i, m] * k[m, j]
-            y_new[j] = y[j] + h * acc
+        _weighted_sum(a[i], i, k, h, y, y_new)
         evaluate_rhs(rhs_data, t + c[i] * h, y_new, k[i])
         finite = True
         for j in range(n):
@@ -70,17 +71,35 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
                 finite = False
         if not finite:
             return i, False
+    if not fsal:
+        _weighted_sum(b, s, k, h, y, y_new)
     for j in range(n):
-        if not fsal:
-            acc = 0.0
-            for m in range(s):
-                acc += b[m] * k[m, j]
-            y_new[j] = y[j] + h * acc
-        e = 0.0
-        for m in range(s):
-            e += error_weights[m] * k[m, j]
-        err[j] = h * e
+        err[j] = 0.0
+    for m in range(s):
+        w = error_weights[m]
+        if w != 0.0:
+            km = k[m]
+            for j in range(n):
+                err[j] += w * km[j]
+    for j in range(n):
+        err[j] = h * err[j]
     return s - 1, True
+
+
+@njit(inline="always")
+def _weighted_sum(weights, count, k, h, y, out):
+    """out = y + h Σ_{m < count} weights[m] k[m] (the sum accumulated in ``out``, zero weights skipped)."""
+    n = y.shape[0]
+    for j in range(n):
+        out[j] = 0.0
+    for m in range(count):
+        w = weights[m]
+        if w != 0.0:
+            km = k[m]
+            for j in range(n):
+                out[j] += w * km[j]
+    for j in range(n):
+        out[j] = y[j] + h * out[j]
 
 
 @njit
