@@ -248,7 +248,11 @@ def _loop(step) -> Callable:
     ``step_accept`` bound to the kind's own functions, which Numba inlines into it (IR level); cached on disk
     for the package's kinds, not for kinds defined elsewhere (the kernel cache's source hash does not cover
     them, :mod:`drillstring.dynamics.steps.kinds`). One loop per kind, sharing the source and the cache index
-    (their signatures differ by the step's data type). Why not the loop calling the kind's functions through
+    (their signatures differ by the step's data type). A kind whose step allocates nothing
+    (``StepKind.allocates`` False: the explicit Runge–Kutta pairs) gets a loop compiled without Numba's reference
+    counting (``_nrt=False``, the kernels it calls compiled so too; every array they touch is the run's own,
+    allocated in Python): the increments and decrements of the arrays of the model's structured data, at every
+    call of an inner kernel, cost more than the arithmetic (docs/performance.md). Why not the loop calling the kind's functions through
     the ``overload`` of :func:`drillstring.dynamics.steps.attempt`: each compiled function that calls the
     right-hand side carries a copy of its call tree, which Numba generates again — the attempt compiled on its
     own cost 2–2.4 s of the reference case's first compilation (docs/performance.md)."""
@@ -258,7 +262,7 @@ def _loop(step) -> Callable:
         namespace = dict(_run_chunk.__globals__, step_attempt=inlined(kind.attempt), step_accept=inlined(kind.accept))
         function = FunctionType(_run_chunk.__code__, namespace, _run_chunk.__name__)
         function.__qualname__, function.__doc__ = _run_chunk.__qualname__, _run_chunk.__doc__
-        loop = _LOOPS[kind] = njit(cache=kind.cacheable)(function)
+        loop = _LOOPS[kind] = njit(cache=kind.cacheable, _nrt=kind.allocates)(function)
     return loop
 
 

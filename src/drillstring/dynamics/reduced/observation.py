@@ -91,8 +91,8 @@ def _surface_torque(d, t, y, rate):
     n = d.omega2.shape[0]
     t0, t1 = d.ranges.torsion_start, d.ranges.torsion_end
     quill, elastic = _top_motion(d, t, y)
-    states_rate = np.empty(y.shape[0])  # the boundary writes its states' rates: not needed here
-    torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, states_rate)
+    # the boundary writes its states' rates into ``rate`` (past η̈, the same values as the right-hand side's)
+    torque = top_boundary_torque(d.laws, TopContext(t, quill, elastic), y, rate)
     acceleration = 0.0
     for j in range(t0, t1):
         acceleration += d.torsion_rows[_TORSION_QUILL, j - t0] * rate[n + j]
@@ -169,7 +169,9 @@ def observe_kernel(d, o, t, y, rate, out):
     (:class:`ObserveData`, whose contact mask it fills). Returns the number of nodes in contact.
 
     ``rate``: where the top boundary drives the string (:func:`observes_rate`), dy/dt of the case-2 model at
-    ``(t, y)`` (:func:`_rhs_kernel`), which the surface torque reads; not read otherwise. The caller evaluates
+    ``(t, y)`` (:func:`_rhs_kernel`), which the surface torque reads; not read otherwise. A driving boundary and a
+    downhole motor write their states' rates into it (past η̈), so the kernel allocates nothing (it runs without
+    Numba's reference counting, docs/performance.md). The caller evaluates
     it rather than this kernel: every compiled function that calls the right-hand side carries a copy of its
     whole call tree, which Numba optimizes and generates again (three such callers here cost a third more
     first compilation, measured, docs/performance.md)."""
@@ -192,7 +194,8 @@ def observe_kernel(d, o, t, y, rate, out):
     out[_MOTOR_SPEED] = 0.0
     out[_MOTOR_TORQUE] = 0.0
     if d.laws[MOTOR_CODE] != 0.0:
-        out[_MOTOR_SPEED], out[_MOTOR_TORQUE] = _downhole_motor(d, t, y, np.empty(y.shape[0]))
+        # the motor writes its states' rates into ``rate`` (scratch here, read above only)
+        out[_MOTOR_SPEED], out[_MOTOR_TORQUE] = _downhole_motor(d, t, y, rate)
     n_p = o.probe_nodes.shape[0]
     for k in range(n_p):
         j = o.probe_nodes[k]

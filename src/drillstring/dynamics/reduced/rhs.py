@@ -53,10 +53,11 @@ from drillstring.forces.registry import (
 )
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rhs_kernel(d, t, y, out):
     """dy/dt of the case-2 ROM (module docstring) at time ``t`` [s] from :class:`RhsData` ``d``; contact
-    work is done only at the stations that touch the borehole."""
+    work is done only at the stations that touch the borehole. Compiled without Numba's reference counting
+    (``_nrt=False``: it allocates nothing; the counting of the arrays of ``d`` cost 3/4 of its time)."""
     n = d.omega2.shape[0]
     ranges = d.ranges
     a0, a1, t0, t1, y0, y1, z0, z1 = (ranges.axial_start, ranges.axial_end, ranges.torsion_start, ranges.torsion_end,
@@ -190,7 +191,7 @@ def _cholesky_solve(a, b, x):
         x[i] = s / a[i, i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rhs_full_kernel(f, t, y, out):
     """Case 1 from :class:`FullModelData` ``f``: the case-2 right-hand side plus the strain- and
     kinetic-energy forces f_se and f_ke (:mod:`drillstring.forces.nonlinear`), evaluated on the physical

@@ -178,4 +178,4 @@ class ReferenceStep:
 
 
 KIND = register(StepKind(method=ButcherTableau, data=ExplicitRungeKuttaStep, allocate=allocate,
-                         attempt=attempt, accept=accept, reference=ReferenceStep))
+                         attempt=attempt, accept=accept, reference=ReferenceStep, allocates=False))

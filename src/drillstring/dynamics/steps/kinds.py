@@ -26,6 +26,10 @@ A kind is one module that registers one :class:`StepKind` (:func:`register`):
   right-hand-side data and the run's start (:func:`step_data`; ``t``, ``y`` may be None): what the step reads of
   the model besides the right-hand side (the exponential step's diagonalised linear part,
   :mod:`drillstring.dynamics.steps.exponential`), in arrays of fixed types;
+- optionally ``allocates = False``: ``attempt`` and ``accept`` create no array (no NumPy allocation, no
+  array returned), so the loop is compiled without Numba's reference counting (``_nrt=False``), which the
+  right-hand side, the observation and the accepted-step kernels it calls then skip as well: on the
+  reference case that halves the solve (docs/performance.md, "The solve at the physical limit");
 - optionally ``reference(method, y)``: the NumPy reference of the same step for a right-hand side in Python,
   used by :class:`~drillstring.dynamics.runge_kutta.RungeKuttaStepper` (the reference integrator's own loop):
   an object with ``order``, ``dense``, ``dense_stages`` as above, ``attempt(rhs, t, h, y, f) -> (y_new, err,
@@ -62,6 +66,7 @@ class StepKind:
     reference: Callable[[Any, Any], Any] | None = None
     prepare: Callable[..., Any] | None = None  # (data, rhs_data, t, y) -> data: what the step reads of the model
     cacheable: bool = field(default=None)  # type: ignore[assignment]
+    allocates: bool = True  # False: attempt and accept create no array, the loop runs without reference counting
 
     def __post_init__(self) -> None:
         if not (isinstance(self.data, type) and issubclass(self.data, tuple) and hasattr(self.data, "_fields")):
