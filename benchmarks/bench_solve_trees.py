@@ -5,7 +5,8 @@ Each round runs one worker process per tree, the trees alternating (so a change 
 both), each pinned to one core with one thread per library. A worker builds each case's model (outside the
 timing), runs it once (the kernels compiled or loaded from the tree's own Numba cache, kept between rounds:
 the first round of a tree compiles cold, its compile time is reported), then times ``--repeat`` solves (the
-solver's ``wall_time``: the compiled step loop, without the model build). Printed per case: the median and
+CPU time of ``simulate_model``, steadier than wall time on a loaded machine; with ``--clock times`` the solver's
+``wall_time``, the compiled step loop; neither includes the model build). Printed per case: the median and
 the best solve of each tree over all rounds and repeats, the ratio of the medians, and the step counts of
 both trees (they must be equal: the outputs of the trees are compared bit for bit by
 ``benchmarks/protocol_equality.py``). Run:
@@ -27,6 +28,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 THREADS = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
@@ -50,11 +52,13 @@ def worker(cases: list[str], repeat: int, case1_t_end: float) -> dict:
                   "rtol": s.rtol, "atol": s.atol, "method": s.method,
                   "lateral_perturbation": case.initial.lateral_perturbation, "seed": case.initial.seed}
         first = simulate_model(model, **kwargs)
-        times = []
+        times, cpu = [], []
         for _ in range(repeat):
+            start = time.process_time()
             result = simulate_model(model, **kwargs)
+            cpu.append(time.process_time() - start)
             times.append(result.stats["wall_time"])
-        out[name] = {"times": times, "compile_time": first.stats["compile_time"],
+        out[name] = {"times": times, "cpu": cpu, "compile_time": first.stats["compile_time"],
                      "compiled": bool(first.stats["compiled"]),
                      "counts": [int(result.stats[k]) for k in ("n_rhs", "n_accepted", "n_rejected")]}
     return out
@@ -78,6 +82,9 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--case1-t-end", type=float, default=10.0)
+    parser.add_argument("--clock", choices=("cpu", "times"), default="cpu",
+                        help="cpu: the CPU time of the process over a run (default; steadier under load), times: "
+                             "the solver's wall_time")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     cases = [c for c in args.cases.split(",") if c]
@@ -96,13 +103,14 @@ def main() -> None:
             for label in order:
                 results[label].append(_run(trees[label], Path(caches) / label, arguments))
                 print(f"round {r + 1}: {label} done", file=sys.stderr, flush=True)
-    print(f"solve times [s], {args.rounds} rounds x {args.repeat} repeats per tree, one core; load average "
+    clock = "CPU time of simulate_model" if args.clock == "cpu" else "the solver's wall_time"
+    print(f"solve times [s] ({clock}), {args.rounds} rounds x {args.repeat} repeats per tree, one core; load average "
           + ", ".join(f"{v:.2f}" for v in os.getloadavg()))
     print(f"  tree: {trees['tree']}\n  baseline: {trees['baseline']}")
     for name in cases:
         row = {}
         for label in trees:
-            times = [t for res in results[label] for t in res[name]["times"]]
+            times = [t for res in results[label] for t in res[name][args.clock]]
             cold = [res[name]["compile_time"] for res in results[label] if res[name]["compiled"]]
             row[label] = (statistics.median(times), min(times), results[label][0][name]["counts"], cold)
         (med, best, counts, cold), (bmed, bbest, bcounts, bcold) = row["tree"], row["baseline"]
