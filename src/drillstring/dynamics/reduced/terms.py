@@ -79,14 +79,32 @@ def diagonal_blocks(matrix: np.ndarray) -> np.ndarray:
 
 @inner_kernel()
 def _block_damping(damping_t, blocks, velocity, out):
-    """out −= D velocity, D block diagonal (``blocks`` from :func:`diagonal_blocks`, ``damping_t`` = Dᵀ)."""
+    """out −= D velocity, D block diagonal (``blocks`` from :func:`diagonal_blocks`, ``damping_t`` = Dᵀ).
+
+    Column by column of D (a contiguous row of Dᵀ), two columns per pass where both velocities are non-zero:
+    each ``out[i]`` takes the same subtractions in the same order as one column at a time (zero velocities
+    skipped), over slices indexed from 0 (no negative-index handling, so the inner loop is vectorised): 3x
+    faster than indexing the whole arrays on the reference case (docs/performance.md)."""
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
-        for j in range(start, end):
+        size = end - start
+        part = out[start:end]
+        j = start
+        while j < end:
             x = velocity[j]
+            if x != 0.0 and j + 1 < end and velocity[j + 1] != 0.0:
+                x_next = velocity[j + 1]
+                column = damping_t[j, start:end]
+                column_next = damping_t[j + 1, start:end]
+                for i in range(size):
+                    part[i] = (part[i] - column[i] * x) - column_next[i] * x_next
+                j += 2
+                continue
             if x != 0.0:
-                for i in range(start, end):
-                    out[i] -= damping_t[j, i] * x
+                column = damping_t[j, start:end]
+                for i in range(size):
+                    part[i] -= column[i] * x
+            j += 1
 
 
 @inner_kernel()
