@@ -4,7 +4,8 @@ folder against this tree), so that the ratio is fair on a shared, noisy machine.
 Each round runs one worker process per tree, the trees alternating (so a change of the machine's load hits
 both), each pinned to one core with one thread per library. A worker builds each case's model (outside the
 timing), runs it once (the kernels compiled or loaded from the tree's own Numba cache, kept between rounds:
-the first round of a tree compiles cold, its compile time is reported), then times ``--repeat`` solves (the
+the first round of a tree compiles cold, or every round with ``--cold``; the compile time of each compiling
+run is reported, in wall time and as the CPU time of that first run), then times ``--repeat`` solves (the
 CPU time of ``simulate_model``, steadier than wall time on a loaded machine; with ``--clock times`` the solver's
 ``wall_time``, the compiled step loop; neither includes the model build). Printed per case: the median and
 the best solve of each tree over all rounds and repeats, the ratio of the medians, and the step counts of
@@ -51,7 +52,9 @@ def worker(cases: list[str], repeat: int, case1_t_end: float) -> dict:
         kwargs = {"t_end": case1_t_end if name == "case1" else s.t_end, "output_step": s.output_step,
                   "rtol": s.rtol, "atol": s.atol, "method": s.method,
                   "lateral_perturbation": case.initial.lateral_perturbation, "seed": case.initial.seed}
+        cpu_start = time.process_time()
         first = simulate_model(model, **kwargs)
+        first_cpu = time.process_time() - cpu_start
         times, cpu = [], []
         for _ in range(repeat):
             start = time.process_time()
@@ -59,6 +62,7 @@ def worker(cases: list[str], repeat: int, case1_t_end: float) -> dict:
             cpu.append(time.process_time() - start)
             times.append(result.stats["wall_time"])
         out[name] = {"times": times, "cpu": cpu, "compile_time": first.stats["compile_time"],
+                     "first_cpu": first_cpu,
                      "compiled": bool(first.stats["compiled"]),
                      "counts": [int(result.stats[k]) for k in ("n_rhs", "n_accepted", "n_rejected")]}
     return out
@@ -85,6 +89,8 @@ def main() -> None:
     parser.add_argument("--clock", choices=("cpu", "times"), default="cpu",
                         help="cpu: the CPU time of the process over a run (default; steadier under load), times: "
                              "the solver's wall_time")
+    parser.add_argument("--cold", action="store_true",
+                        help="an empty Numba cache for every round (each round compiles cold), not one per tree")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     cases = [c for c in args.cases.split(",") if c]
@@ -101,7 +107,8 @@ def main() -> None:
         for r in range(args.rounds):
             order = list(trees) if r % 2 == 0 else list(reversed(trees))
             for label in order:
-                results[label].append(_run(trees[label], Path(caches) / label, arguments))
+                cache = Path(caches) / (f"{label}-{r}" if args.cold else label)
+                results[label].append(_run(trees[label], cache, arguments))
                 print(f"round {r + 1}: {label} done", file=sys.stderr, flush=True)
     clock = "CPU time of simulate_model" if args.clock == "cpu" else "the solver's wall_time"
     print(f"solve times [s] ({clock}), {args.rounds} rounds x {args.repeat} repeats per tree, one core; load average "
@@ -111,7 +118,8 @@ def main() -> None:
         row = {}
         for label in trees:
             times = [t for res in results[label] for t in res[name][args.clock]]
-            cold = [res[name]["compile_time"] for res in results[label] if res[name]["compiled"]]
+            cold = [(res[name]["compile_time"], res[name]["first_cpu"]) for res in results[label]
+                    if res[name]["compiled"]]
             row[label] = (statistics.median(times), min(times), results[label][0][name]["counts"], cold)
         (med, best, counts, cold), (bmed, bbest, bcounts, bcold) = row["tree"], row["baseline"]
         same = "equal" if counts == bcounts else f"DIFFER (baseline {bcounts})"
@@ -119,7 +127,11 @@ def main() -> None:
               f"ratio of medians {bmed / med:.2f}x, of bests {bbest / best:.2f}x | RHS, accepted, rejected "
               f"{counts}: {same}")
         if cold and bcold:
-            print(f"{'':10s} cold compile (first round, wall): baseline {bcold[0]:.1f} s, tree {cold[0]:.1f} s")
+            print(f"{'':10s} compiling runs: compile_time (wall) baseline "
+                  + ", ".join(f"{c[0]:.1f}" for c in bcold) + " s, tree " + ", ".join(f"{c[0]:.1f}" for c in cold)
+                  + " s; CPU of the first run (compile + one solve) baseline "
+                  + ", ".join(f"{c[1]:.1f}" for c in bcold) + " s, tree " + ", ".join(f"{c[1]:.1f}" for c in cold)
+                  + f" s: median ratio tree/baseline {statistics.median(c[1] for c in cold) / statistics.median(c[1] for c in bcold):.2f}")
 
 
 if __name__ == "__main__":
