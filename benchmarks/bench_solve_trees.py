@@ -36,7 +36,7 @@ THREADS = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS
 os.environ.update(THREADS)
 
 
-def worker(cases: list[str], repeat: int, case1_t_end: float) -> dict:
+def worker(cases: list[str], repeat: int, case1_t_end: float, method: str | None = None) -> dict:
     """Build and solve each case in this process (the tree on ``PYTHONPATH``); the solve times [s]."""
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {max(os.sched_getaffinity(0))})
@@ -50,7 +50,7 @@ def worker(cases: list[str], repeat: int, case1_t_end: float) -> dict:
         s = case.simulation
         model = case_reduced_model(case, nonlinear="full" if name == "case1" else None)
         kwargs = {"t_end": case1_t_end if name == "case1" else s.t_end, "output_step": s.output_step,
-                  "rtol": s.rtol, "atol": s.atol, "method": s.method,
+                  "rtol": s.rtol, "atol": s.atol, "method": method or s.method,
                   "lateral_perturbation": case.initial.lateral_perturbation, "seed": case.initial.seed}
         cpu_start = time.process_time()
         first = simulate_model(model, **kwargs)
@@ -86,6 +86,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--case1-t-end", type=float, default=10.0)
+    parser.add_argument("--method", default=None, help="the integration method of every case (default: each case's)")
     parser.add_argument("--clock", choices=("cpu", "times"), default="cpu",
                         help="cpu: the CPU time of the process over a run (default; steadier under load), times: "
                              "the solver's wall_time")
@@ -95,13 +96,13 @@ def main() -> None:
     args = parser.parse_args()
     cases = [c for c in args.cases.split(",") if c]
     if args.worker:
-        print(json.dumps(worker(cases, args.repeat, args.case1_t_end)))
+        print(json.dumps(worker(cases, args.repeat, args.case1_t_end, args.method)))
         return
     if args.baseline is None:
         parser.error("--baseline is required")
     trees = {"tree": args.tree.resolve(), "baseline": args.baseline.resolve()}
     arguments = ["--worker", "--cases", ",".join(cases), "--repeat", str(args.repeat),
-                 "--case1-t-end", str(args.case1_t_end)]
+                 "--case1-t-end", str(args.case1_t_end)] + (["--method", args.method] if args.method else [])
     results: dict[str, list[dict]] = {label: [] for label in trees}
     with tempfile.TemporaryDirectory() as caches:
         for r in range(args.rounds):

@@ -63,7 +63,9 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
     for j in range(n):
         k[0, j] = f[j]
     for i in range(1, s):
-        _weighted_sum(a[i], i, k, h, y, y_new)
+        _stage_sum(a[i], i, k, y_new)
+        for j in range(n):
+            y_new[j] = y[j] + h * y_new[j]
         evaluate_rhs(rhs_data, t + c[i] * h, y_new, k[i])
         finite = True
         for j in range(n):
@@ -72,24 +74,19 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
         if not finite:
             return i, False
     if not fsal:
-        _weighted_sum(b, s, k, h, y, y_new)
-    for j in range(n):
-        err[j] = 0.0
-    for m in range(s):
-        w = error_weights[m]
-        if w != 0.0:
-            km = k[m]
-            for j in range(n):
-                err[j] += w * km[j]
+        _stage_sum(b, s, k, y_new)
+        for j in range(n):
+            y_new[j] = y[j] + h * y_new[j]
+    _stage_sum(error_weights, s, k, err)
     for j in range(n):
         err[j] = h * err[j]
     return s - 1, True
 
 
 @njit(inline="always")
-def _weighted_sum(weights, count, k, h, y, out):
-    """out = y + h Σ_{m < count} weights[m] k[m] (the sum accumulated in ``out``, zero weights skipped)."""
-    n = y.shape[0]
+def _stage_sum(weights, count, k, out):
+    """out = Σ_{m < count} weights[m] k[m], accumulated in ``out`` stage by stage (zero weights skipped)."""
+    n = out.shape[0]
     for j in range(n):
         out[j] = 0.0
     for m in range(count):
@@ -98,8 +95,6 @@ def _weighted_sum(weights, count, k, h, y, out):
             km = k[m]
             for j in range(n):
                 out[j] += w * km[j]
-    for j in range(n):
-        out[j] = y[j] + h * out[j]
 
 
 @njit
