@@ -242,6 +242,28 @@ def test_imbalance_and_bow_whirl_at_the_harmonic_response_of_the_finite_element_
     assert errors[2] < errors[1] < errors[0] and errors[2] < 1e-2, errors
 
 
+def test_a_clear_state_counts_no_impact_and_forgets_the_contact(coarse_case):
+    """The impacts count skips a state whose lateral coordinates the right-hand side's bound clears
+    (``_surely_clear``): no impact, no node left in contact, so the next touching state is a new impact; a
+    touching state is counted as by the contact state of every node."""
+    from drillstring.dynamics.rom import _surely_clear
+
+    rom = case_reduced_model(coarse_case, lateral_modes=5)
+    n = rom.size
+    touching = np.random.default_rng(2).normal(size=2 * n) * 30.0  # several nodes touch the wall
+    radius = np.hypot(rom.phi_v @ touching[:n], rom.phi_w @ touching[:n])
+    zones = np.count_nonzero(np.diff(np.concatenate([[0], (radius > rom.gap).astype(int)])) == 1)
+    clear = touching.copy()
+    clear[:n] *= 1e-9
+    assert zones >= 1 and _surely_clear(rom.case2_data, clear) and not _surely_clear(rom.case2_data, touching)
+    counter = rom.impact_counter()
+    assert counter(touching) == zones
+    assert counter(touching) == 0  # the same zones: no new impact
+    assert counter(clear) == 0
+    assert not counter.in_contact.any()
+    assert counter(touching) == zones  # the contact was forgotten: the zones are impacts again
+
+
 def test_energy_is_conserved_through_impacts_without_damping_and_friction(coarse_case):
     """Undamped, unforced, frictionless: the string thrown at the wall bounces off it several times, and
     its energy ½η̇ᵀη̇ + ½Σω²η² + Σ_i ½ k_i (r_i − g_i)₊² (the wall's penalty potential, computed here from
