@@ -362,6 +362,11 @@ class ReducedModel(_Base):
         "static", description="correction for the modes left out: 'static' appends to the axial and torsional "
         "families their residual-flexibility attachment modes at the bit (and the top with a top drive); "
         "'none', the modes alone")
+    lateral_basis: Literal["straight", "well"] = Field(
+        "straight", description="'straight': the straight string's modes under the axial force (lateral dynamics "
+        "of a vertical hole); 'well': the modes about the stiff string's static state along the well path, chosen "
+        "by kind (axial_modes, torsional_modes, 2 x lateral_modes), the spin about each node's tangent "
+        "(docs/stiff_string.md, The well basis)")
 
 
 class Simulation(_Base):

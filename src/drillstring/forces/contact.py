@@ -247,6 +247,11 @@ class ContactStations:
             )
         return stiffness_per_length * self.length
 
+    def subset(self, keep: np.ndarray) -> ContactStations:
+        """The stations where ``keep`` (one bool per station) is True."""
+        keep = np.asarray(keep, dtype=bool)
+        return ContactStations(self.node[keep], self.length[keep], self.gap[keep], self.outer_diameter[keep])
+
     def gather(self, nodal: np.ndarray) -> np.ndarray:
         """Values at the stations of a per-node array (the last axis indexes nodes)."""
         return np.asarray(nodal)[..., self.node]

@@ -5,9 +5,12 @@ case's start (:func:`case_hook_load`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from drillstring.damping import reduced_structural_damping
+from drillstring.fem.geometry import direction_cosines
 from drillstring.dynamics.reduced.model import ReducedOrderModel
 from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import case_contact, mesh_contact_stations
@@ -32,6 +35,7 @@ from drillstring.modal import (
 from drillstring.rotor import first_torsional_frequency, released_modes
 from drillstring.statics import StaticState, case_static_state
 from drillstring.well.stiff_string import StiffStringState, case_stiff_string
+from drillstring.well.well_modes import KINDS, case_path_curvature, case_well_system, path_slide, quota_modes
 
 
 def reduced_model(
@@ -60,6 +64,7 @@ def reduced_model(
     motor: Motor | None = None,
     string_friction: StringFriction | None = None,
     friction_stations: FrictionStations | None = None,
+    well_basis: WellBasis | None = None,
 ) -> ReducedOrderModel:
     """Project the prestressed system on its modes (``axial_modes`` elastic + the rigid one;
     ``lateral_modes`` per plane at least, plus every lateral mode below ``lateral_cutoff`` [rad/s];
@@ -86,11 +91,19 @@ def reduced_model(
             ``torsional_modes`` elastic modes plus its rigid motions).
         string_friction, friction_stations: the along-string friction law and where it acts
             (:mod:`drillstring.forces.string_friction`); None: none.
+        well_basis: the modes along the well path (:class:`WellBasis`, ``system`` then in the nodes' frames,
+            :func:`drillstring.well.well_modes.well_linear_system`), chosen by kind; None: the straight string's.
     """
     drive = top_drive is not None and top_drive.drives
-    coupled = family_coupling(system) > 0.0
+    coupled = well_basis is not None or family_coupling(system) > 0.0
     release, damped = None, system
-    if coupled:
+    if well_basis is not None:
+        _check_well_basis(top_drive, motor, damping_basis, truncation_correction, rayleigh, top_speed)
+        found, kinds = quota_modes(system, well_basis.slide, axial_modes, torsional_modes, 2 * lateral_modes,
+                                   lateral_cutoff)
+        modes, basis, omega, family, residual = _as_coupled(found, kinds, system.mesh)
+        released = basis
+    elif coupled:
         if motor is not None:
             raise ValueError("a downhole motor on a coupled basis (a string out of the straight axis) is not "
                              "supported yet: its rotor is released in the torsional family of a straight string")
@@ -125,16 +138,72 @@ def reduced_model(
         top_speed=0.0 if drive else top_speed, definition=damping_basis, rayleigh=rayleigh,
     )
     damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
+    stations = mesh_contact_stations(static.mesh, borehole_diameter)
+    if well_basis is not None:  # the wall under a resting node is in the basis (its linearised springs)
+        stations = stations.subset(~well_basis.resting[stations.node])
     return ReducedOrderModel(
         static=static, system=system, modes=modes, basis=basis, family=tuple(family),
         angular_frequencies=omega, damping=damping, top_speed=top_speed,
         weight_on_bit=static.weight_on_bit, bit_rock=bit_rock, contact=contact,
-        stations=mesh_contact_stations(static.mesh, borehole_diameter),
+        stations=stations,
         probe_positions=np.asarray(probe_positions, dtype=float),
         nonlinear=nonlinear, generalized_force=structural.generalized_force, turning_loads=turning_loads,
         top_drive=top_drive, hook_load=hook_load, residual_columns=residual, coupled=coupled, motor=motor,
         rotor=release, string_friction=string_friction, friction_stations=friction_stations,
+        rest_offsets=None if well_basis is None else well_basis.rest_offsets,
+        centreline_spin=well_basis is not None,
     )
+
+
+@dataclass(frozen=True)
+class WellBasis:
+    """What the well basis adds to a reduced model's build (``reduced_model.lateral_basis = "well"``,
+    docs/stiff_string.md): the string's slide along the path in the nodes' frames
+    (:func:`~drillstring.well.well_modes.path_slide`), each node's static lateral offset from the hole's axis
+    in its frame (n_nodes, 2) [m] (v, w: where the wall's gap is measured from) and the nodes resting on the
+    wall (n_nodes,) bool (their wall is the basis's linearised springs, not a contact station)."""
+
+    slide: np.ndarray
+    rest_offsets: np.ndarray
+    resting: np.ndarray
+
+    @classmethod
+    def of(cls, state: StiffStringState, curvature: np.ndarray) -> WellBasis:
+        """From the stiff string's static ``state`` and the path's curvature vectors at its nodes (n, 3) [1/m]."""
+        frames = direction_cosines(np.asarray(state.tangent, dtype=float))  # rows: tangent, then across it
+        offsets = np.einsum("nij,nj->ni", frames[:, 1:, :], state.translation)
+        return cls(path_slide(state, curvature), offsets, np.asarray(state.in_contact, dtype=bool))
+
+
+def _check_well_basis(top_drive, motor, damping_basis: str, truncation_correction: str, rayleigh,
+                      top_speed: float) -> None:
+    """ValueError, one line naming it, for what the well basis does not support yet."""
+    problems = []
+    if top_drive is not None and top_drive.drives:
+        problems.append(f"a top boundary with states ({top_drive.name!r}: the rigid rotation of the curved string "
+                        "is not in the basis; use an imposed top speed)")
+    if motor is not None:
+        problems.append("a downhole motor (its rotor is released in a straight string's torsional family)")
+    if damping_basis != "constrained":
+        problems.append(f"damping.basis = {damping_basis!r} (the free-free damping is defined family by family; "
+                        "use 'constrained')")
+    if truncation_correction != "none":
+        problems.append(f"reduced_model.truncation_correction = {truncation_correction!r} (use 'none')")
+    if rayleigh[0] and top_speed:
+        problems.append("damping.mass_proportional > 0 with a spinning string (it would damp the spin itself)")
+    if problems:
+        raise ValueError("reduced_model.lateral_basis = 'well' does not support yet: " + "; ".join(problems))
+
+
+def _as_coupled(found: ModeFamily, kinds: np.ndarray, mesh):
+    """``(modes, basis, ω, labels, residual)`` of one coupled family whose first column is the rigid axial
+    motion (:func:`_coupled_basis`'s form), each other column labelled by its kind (``kinds``, indices into
+    :data:`~drillstring.well.well_modes.KINDS`: what the stability analysis reports a root's family by)."""
+    empty = {name: ModeFamily(name, np.zeros(0), np.zeros((mesh.n_dofs, 0)))
+             for name in ("axial", "torsional", "lateral_y", "lateral_z")}
+    n = len(found.angular_frequencies)
+    family = ["rigid_axial"] + [KINDS[k] for k in kinds[1:]]
+    return Modes(**empty, coupled=found), found.shapes, found.angular_frequencies, family, np.zeros(n, dtype=bool)
 
 
 def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_correction: str,
@@ -192,7 +261,8 @@ def case_reduced_model(
     nodes resting on the wall there, with their static normal forces (:func:`case_friction_stations`). The
     lateral dynamics stays that of a straight string (docs/stiff_string.md)."""
     well_state = None
-    if static is None and case.well is not None:
+    well_basis = case.reduced_model.lateral_basis == "well"
+    if static is None and (case.well is not None or well_basis):
         well_state = case_stiff_string(case, weight_on_bit=weight_on_bit)
         static = well_state.static_state()
     static = case_static_state(case, weight_on_bit) if static is None else static
@@ -203,6 +273,12 @@ def case_reduced_model(
             well_state = case_stiff_string(case, weight_on_bit=static.weight_on_bit)
         stations = case_friction_stations(case, well_state)
     system = case_linear_system(case, static)
+    basis = None
+    if well_basis:
+        if well_state is None:
+            raise ValueError("reduced_model.lateral_basis = 'well' with a given static state: the well basis is "
+                             "built on the stiff string's (leave static out)")
+        system, basis = case_well_basis(case, well_state)
     motor = case_motor(case) if motor is None else motor
     if top_drive is None:
         top_drive = case_top_drive(case, lambda: (
@@ -234,7 +310,16 @@ def case_reduced_model(
         motor=motor,
         string_friction=friction,
         friction_stations=stations,
+        well_basis=basis,
     )
+
+
+def case_well_basis(case, state: StiffStringState) -> tuple[LinearSystem, WellBasis]:
+    """The linear system of a case about its stiff-string ``state`` in the nodes' frames, for the dynamics
+    (:func:`~drillstring.well.well_modes.case_well_system`: the path's curvature and the centreline spin), and
+    its :class:`WellBasis`."""
+    curvature = case_path_curvature(case, state)
+    return case_well_system(case, state, curvature), WellBasis.of(state, curvature)
 
 
 def case_string_friction(case) -> StringFriction | None:

@@ -106,6 +106,12 @@ class ReducedOrderModel:
             acts at ``friction_stations`` (:class:`~drillstring.forces.string_friction.FrictionStations`: the
             nodes on the wall in a deviated well's static state, their normal forces), its axial force along
             the axial modes and its torque along the torsional ones. None or no stations: no friction (code 0).
+        rest_offsets: (n_nodes, 2) each node's static lateral offset (v, w) from the hole's axis [m], where the
+            contact's gap is measured from (the modal displacement is the motion from rest); None: zeros (the
+            straight string on the axis).
+        centreline_spin: the basis is in the nodes' frames (the well basis, :mod:`drillstring.well.well_modes`):
+            θx of every node is its rotation about its own tangent, so the frame's spin ``Ω t`` is the curved
+            string's spin about its centreline and a coupled basis may spin (an imposed top speed).
 
     Built from them: ``rhs_data`` (:class:`RhsData` for case 2, :class:`FullModelData` for case 1) and its
     case-2 part ``case2_data``, the model's data as the compiled kernels read it, by name. The model holds no
@@ -140,6 +146,8 @@ class ReducedOrderModel:
     rotor: RotorRelease | None = None
     string_friction: StringFriction | None = None
     friction_stations: FrictionStations | None = None
+    rest_offsets: np.ndarray | None = None
+    centreline_spin: bool = False
 
     def __post_init__(self) -> None:
         if self.nonlinear not in ("bit_and_contact", "full"):
@@ -191,6 +199,11 @@ class ReducedOrderModel:
             raise ValueError("contact stations must sit on the mesh's nodes")
         #: k_i = k'_sh ℓ_i [N/m] of each contact station
         self.station_stiffness = self.stations.stiffness(self.contact.shock_stiffness)
+        rest = np.zeros((mesh.n_nodes, 2)) if self.rest_offsets is None else np.asarray(self.rest_offsets, float)
+        if rest.shape != (mesh.n_nodes, 2) or not np.all(np.isfinite(rest)):
+            raise ValueError(f"rest_offsets: must be ({mesh.n_nodes}, 2) finite offsets [m], got shape {rest.shape}")
+        #: (2, n_stations) the stations' static offsets (v, w) from the hole's axis [m]
+        self.station_rest = np.ascontiguousarray(rest[self.stations.node].T)
         labels = np.array(self.family)
         blocks = []
         for names in (("rigid_axial", "axial"), ("torsional",), ("lateral_y",), ("lateral_z",)):
@@ -251,7 +264,7 @@ class ReducedOrderModel:
             phi_v_t=transposed(self.phi_v[:, y0:y1].T),
             phi_w_t=transposed(self.phi_w[:, z0:z1].T),
             phi_tx_t=transposed(self.phi_tx[:, t0:t1].T),
-            smallest_gap=float(np.min(st.gap)) if len(st) else np.inf,
+            smallest_gap=float(np.min(st.gap - np.hypot(*self.station_rest))) if len(st) else np.inf,
             lateral_shape_max=np.concatenate([np.abs(self.phi_v[:, y0:y1]).max(axis=0, initial=0.0),
                                               np.abs(self.phi_w[:, z0:z1]).max(axis=0, initial=0.0)]),
             top_speed=self.base_speed,
@@ -261,6 +274,7 @@ class ReducedOrderModel:
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
                 stiffness=transposed(self.station_stiffness, dtype=float),
+                rest_v=transposed(self.station_rest[0]), rest_w=transposed(self.station_rest[1]),
                 tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(0, 0),  # kernel_data's
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
@@ -691,7 +705,7 @@ def _check_coupled(model: ReducedOrderModel) -> None:
         raise ValueError(f"top boundary {model.top_drive.name!r} with coupled families (a string out of its "
                          "straight axis) is not supported: the rigid rotation of a bent string is not a motion of "
                          "its global θx DOFs; use an imposed top speed")
-    if model.base_speed != 0.0:
+    if model.base_speed != 0.0 and not model.centreline_spin:
         raise ValueError(f"top_speed = {model.base_speed:g} rad/s with coupled families (a string out of its "
                          "straight axis): the spin of a bent string about its centreline is not a rotation of its "
                          "global θx DOFs (deviated-well dynamics); only 0 is supported")

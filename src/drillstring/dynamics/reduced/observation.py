@@ -109,7 +109,9 @@ def _contact_state(d, y, v, w, in_contact):
     total = 0.0
     for k in range(c.node.shape[0]):
         i = c.node[k]
-        r = math.sqrt(v[i] * v[i] + w[i] * w[i])
+        vi = v[i] + c.rest_v[k]  # from the hole's axis: the rest's offset plus the motion's
+        wi = w[i] + c.rest_w[k]
+        r = math.sqrt(vi * vi + wi * wi)
         if r > c.gap[k]:
             in_contact[i] = True
             total += c.stiffness[k] * (r - c.gap[k])

@@ -38,7 +38,7 @@ def reference_rhs(model, t: float, y: np.ndarray, history: np.ndarray | None = N
     spin = model.base_speed + model.phi_tx @ eta_dot
     lateral_velocity = model.contact.reads_lateral_velocity
     force_v, force_w, torque = model.contact.evaluate_at(ContactContext(
-        st.gather(model.phi_v @ eta), st.gather(model.phi_w @ eta),
+        st.gather(model.phi_v @ eta) + model.station_rest[0], st.gather(model.phi_w @ eta) + model.station_rest[1],
         st.gather(model.phi_v @ eta_dot) if lateral_velocity else np.zeros(len(st)),
         st.gather(model.phi_w @ eta_dot) if lateral_velocity else np.zeros(len(st)),
         st.gather(spin), st.gap, st.outer_diameter, model.station_stiffness))
