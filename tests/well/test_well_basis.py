@@ -157,6 +157,6 @@ def test_deviated_drilling_is_stable_on_the_well_basis(deviated):
     assert found["straight"].leading.family == "lateral"
     assert found["straight"].leading.growth_rate == pytest.approx(0.20, abs=0.01)  # measured 0.2014
     assert found["well"].leading.growth_rate < -0.1  # measured -0.190
-    straight, well = ([m for m in found[b].modes if m.family == "torsional"][0] for b in ("straight", "well"))
+    straight, well = (next(m for m in found[b].modes if m.family == "torsional") for b in ("straight", "well"))
     assert well.frequency == pytest.approx(straight.frequency, rel=1e-3)
     assert well.growth_rate == pytest.approx(straight.growth_rate, rel=1e-3)
