@@ -160,3 +160,15 @@ def test_deviated_drilling_is_stable_on_the_well_basis(deviated):
     straight, well = (next(m for m in found[b].modes if m.family == "torsional") for b in ("straight", "well"))
     assert well.frequency == pytest.approx(straight.frequency, rel=1e-3)
     assert well.growth_rate == pytest.approx(straight.growth_rate, rel=1e-3)
+
+
+def test_vertical_hole_gives_the_straight_basis(reference_case):
+    """No [well] (the vertical hole as deep as the string): every frame the identity, the slide the rigid
+    translation, the kinds the families: the well basis has the straight basis's frequencies (1e-9)."""
+    case = _inclined(reference_case, 0.0).model_copy(update={"well": None})
+    straight = case_reduced_model(case.model_copy(update={"reduced_model": case.reduced_model.model_copy(
+        update={"lateral_basis": "straight"})}))
+    well = case_reduced_model(case)
+    assert np.allclose(np.sort(well.angular_frequencies), np.sort(straight.angular_frequencies), rtol=1e-9,
+                       atol=1e-9)
+    assert sorted(well.family) == sorted(f if not f.startswith("lateral") else "lateral" for f in straight.family)
