@@ -53,17 +53,18 @@ class ContactWork(NamedTuple):
 
 class ContactData(NamedTuple):
     """The wall as the kernels read it: one entry per contact station
-    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node; a station's offset from the hole's
-    axis is its node's static offset (``rest_v``, ``rest_w``: the stiff string's in a well basis, zeros for the
-    straight string) plus the modal lateral displacement. The contact law's numbers are in
+    (:class:`~drillstring.forces.contact.ContactStations`), ordered by node; a node's offset from the hole's
+    axis is its static offset (``rest_v``, ``rest_w``, one per node: the stiff string's in a well basis, zeros for
+    the straight string) plus the modal lateral displacement
+    (:func:`~drillstring.dynamics.reduced.frame.lateral_displacements`). The contact law's numbers are in
     the kernels' flat array (:func:`~drillstring.forces.registry.pack`), not here."""
 
     node: np.ndarray  # (n_stations,) int64
     gap: np.ndarray  # (n_stations,) radial clearance [m]
     outer_diameter: np.ndarray  # (n_stations,) [m]
     stiffness: np.ndarray  # (n_stations,) k_i = k'_sh ℓ_i [N/m]
-    rest_v: np.ndarray  # (n_stations,) the node's static lateral offset v from the hole's axis [m] (0: straight)
-    rest_w: np.ndarray  # (n_stations,) and w: the gap is measured from the hole's axis, the motion from rest
+    rest_v: np.ndarray  # (n_nodes,) each node's static lateral offset v from the hole's axis [m] (0: straight)
+    rest_w: np.ndarray  # (n_nodes,) and w: the gap is measured from the hole's axis, the motion from rest
     tangential: bool  # gather the stations' lateral velocities: the contact law reads them
     work: ContactWork  # scratch: each run's own (ReducedOrderModel.kernel_data), empty in the model's data
 

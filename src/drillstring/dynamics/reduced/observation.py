@@ -109,9 +109,7 @@ def _contact_state(d, y, v, w, in_contact):
     total = 0.0
     for k in range(c.node.shape[0]):
         i = c.node[k]
-        vi = v[i] + c.rest_v[k]  # from the hole's axis: the rest's offset plus the motion's
-        wi = w[i] + c.rest_w[k]
-        r = math.sqrt(vi * vi + wi * wi)
+        r = math.sqrt(v[i] * v[i] + w[i] * w[i])
         if r > c.gap[k]:
             in_contact[i] = True
             total += c.stiffness[k] * (r - c.gap[k])

@@ -99,9 +99,7 @@ def _rhs_kernel(d, t, y, out):
     n_c = 0
     for k in range(c.node.shape[0]):
         i = c.node[k]
-        vi = cw.v[i] + c.rest_v[k]  # the offset from the hole's axis: the rest's plus the motion's
-        wi = cw.w[i] + c.rest_w[k]
-        if vi * vi + wi * wi > c.gap[k] * c.gap[k]:
+        if cw.v[i] * cw.v[i] + cw.w[i] * cw.w[i] > c.gap[k] * c.gap[k]:
             cw.stations[n_c] = k
             n_c += 1
     if n_c == 0:
@@ -109,8 +107,8 @@ def _rhs_kernel(d, t, y, out):
     for m in range(n_c):
         k = cw.stations[m]
         i = c.node[k]
-        cw.v_c[m] = cw.v[i] + c.rest_v[k]
-        cw.w_c[m] = cw.w[i] + c.rest_w[k]
+        cw.v_c[m] = cw.v[i]
+        cw.w_c[m] = cw.w[i]
         cw.gap[m] = c.gap[k]
         cw.outer_diameter[m] = c.outer_diameter[k]
         cw.stiffness[m] = c.stiffness[k]
