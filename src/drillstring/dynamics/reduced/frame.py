@@ -84,10 +84,10 @@ def _columns_matvec(matrix_t, vector, offset, out, sign):
 @njit(cache=True, no_cpython_wrapper=True)
 def lateral_displacements(d, y, v, w):
     """The lateral displacements v and w [m] of every node from the hole's axis for the state ``y``, written into
-    ``v`` and ``w`` (n_nodes,): the node's static offset (``d.contact.rest_v``, ``rest_w``: zeros for the
+    ``v`` and ``w`` (n_nodes,): the node's static offset (``d.contact.rest``: zeros for the
     straight string, the stiff string's rest in a well basis) plus the modal motion. Compiled code only."""
-    v[:] = d.contact.rest_v
-    w[:] = d.contact.rest_w
+    v[:] = d.contact.rest[0]
+    w[:] = d.contact.rest[1]
     _columns_matvec(d.phi_v_t, y, d.ranges.lateral_y_start, v, 1.0)
     _columns_matvec(d.phi_w_t, y, d.ranges.lateral_z_start, w, 1.0)
 

@@ -274,7 +274,7 @@ class ReducedOrderModel:
                 node=transposed(st.node, dtype=np.int64), gap=transposed(st.gap, dtype=float),
                 outer_diameter=transposed(st.outer_diameter, dtype=float),
                 stiffness=transposed(self.station_stiffness, dtype=float),
-                rest_v=transposed(rest[:, 0]), rest_w=transposed(rest[:, 1]),
+                rest=transposed(rest.T),
                 tangential=bool(c.reads_lateral_velocity), work=ContactWork.allocate(0, 0),  # kernel_data's
             ),
             turning=turning_load_data(self.turning_loads, phi[:, y0:y1], phi[:, z0:z1]),
