@@ -106,6 +106,8 @@ __all__ = [
     "case_static_state_in_well",
     "case_stiff_string",
     "case_well_buckling_margin",
+    "case_hole_diameters",
+    "hole_diameters",
     "path_frames",
     "solve_stiff_string",
     "wall_stations",
@@ -128,6 +130,21 @@ class WallStations:
     length: np.ndarray
 
 
+def hole_diameters(x: np.ndarray, hole_diameter: float, casing_shoe: float = 0.0,
+                   casing_diameter: float | None = None) -> np.ndarray:
+    """The hole's diameter [m] at measured depths ``x`` [m]: ``casing_diameter`` (default the hole's) above
+    ``casing_shoe`` [m], the open hole's ``hole_diameter`` at and below it."""
+    casing = hole_diameter if casing_diameter is None else casing_diameter
+    return np.where(np.asarray(x, dtype=float) < casing_shoe, casing, hole_diameter)
+
+
+def case_hole_diameters(case, x: np.ndarray) -> np.ndarray:
+    """:func:`hole_diameters` of ``case`` (its ``[borehole]`` and ``[well]`` casing) at ``x`` [m]."""
+    well = case.well
+    return hole_diameters(x, case.borehole.diameter, 0.0 if well is None else well.casing_shoe,
+                          None if well is None else well.casing_inner_diameter)
+
+
 def wall_stations(mesh: Mesh, outer_diameter: Sequence[float], hole_diameter: float, wall_stiffness: float, *,
                   casing_shoe: float = 0.0, casing_diameter: float | None = None) -> WallStations:
     """Two stations per element (one at each node, tributary length h/2, the element's own clearance):
@@ -139,10 +156,9 @@ def wall_stations(mesh: Mesh, outer_diameter: Sequence[float], hole_diameter: fl
                          f"shape {outer.shape}")
     if not (math.isfinite(wall_stiffness) and wall_stiffness > 0.0):
         raise ValueError(f"wall_stiffness = {wall_stiffness!r} N/m per m: must be a finite number > 0")
-    casing = hole_diameter if casing_diameter is None else casing_diameter
     h = mesh.element_lengths
     middle = 0.5 * (mesh.nodes[:-1] + mesh.nodes[1:])
-    hole = np.where(middle < casing_shoe, casing, hole_diameter)
+    hole = hole_diameters(middle, hole_diameter, casing_shoe, casing_diameter)
     gap = (hole - outer[mesh.element_section]) / 2.0
     if np.any(gap < 0.0):
         e = int(np.argmin(gap))

@@ -13,7 +13,7 @@ from drillstring.damping import reduced_structural_damping
 from drillstring.fem.geometry import direction_cosines
 from drillstring.dynamics.reduced.model import ReducedOrderModel
 from drillstring.forces.bit_rock import case_bit_rock
-from drillstring.forces.contact import case_contact, mesh_contact_stations
+from drillstring.forces.contact import ContactStations, case_contact, mesh_contact_stations
 from drillstring.forces.excitation import TurningLoads
 from drillstring.forces.motor import case_motor
 from drillstring.forces.registry import BitLaw, ContactLaw, HookLoad, Motor, StringFriction, TopBoundary
@@ -34,7 +34,7 @@ from drillstring.modal import (
 )
 from drillstring.rotor import first_torsional_frequency, released_modes
 from drillstring.statics import StaticState, case_static_state
-from drillstring.well.stiff_string import StiffStringState, case_stiff_string
+from drillstring.well.stiff_string import StiffStringState, case_hole_diameters, case_stiff_string
 from drillstring.well.well_modes import KINDS, case_path_curvature, case_well_system, path_slide, quota_modes
 
 
@@ -140,7 +140,7 @@ def reduced_model(
     damping = basis.T @ (system.fluid_damping @ basis) + structural.matrix
     stations = mesh_contact_stations(static.mesh, borehole_diameter)
     if well_basis is not None:  # the wall under a resting node is in the basis (its linearised springs)
-        stations = stations.subset(~well_basis.resting[stations.node])
+        stations = well_basis.stations(stations)
     return ReducedOrderModel(
         static=static, system=system, modes=modes, basis=basis, family=tuple(family),
         angular_frequencies=omega, damping=damping, top_speed=top_speed,
@@ -160,19 +160,30 @@ class WellBasis:
     """What the well basis adds to a reduced model's build (``reduced_model.lateral_basis = "well"``,
     docs/stiff_string.md): the string's slide along the path in the nodes' frames
     (:func:`~drillstring.well.well_modes.path_slide`), each node's static lateral offset from the hole's axis
-    in its frame (n_nodes, 2) [m] (v, w: where the wall's gap is measured from) and the nodes resting on the
-    wall (n_nodes,) bool (their wall is the basis's linearised springs, not a contact station)."""
+    in its frame (n_nodes, 2) [m] (v, w: where the wall's gap is measured from), the nodes resting on the
+    wall (n_nodes,) bool (their wall is the basis's linearised springs, not a contact station) and the hole's
+    diameter at each node (n_nodes,) [m] (the casing's bore above the casing shoe, as the statics)."""
 
     slide: np.ndarray
     rest_offsets: np.ndarray
     resting: np.ndarray
+    hole_diameter: np.ndarray
 
     @classmethod
-    def of(cls, state: StiffStringState, curvature: np.ndarray) -> WellBasis:
-        """From the stiff string's static ``state`` and the path's curvature vectors at its nodes (n, 3) [1/m]."""
+    def of(cls, state: StiffStringState, curvature: np.ndarray, hole_diameter: np.ndarray) -> WellBasis:
+        """From the stiff string's static ``state``, the path's curvature vectors at its nodes (n, 3) [1/m] and the
+        hole's diameter there (n,) [m]."""
         frames = direction_cosines(np.asarray(state.tangent, dtype=float))  # rows: tangent, then across it
         offsets = np.einsum("nij,nj->ni", frames[:, 1:, :], state.translation)
-        return cls(path_slide(state, curvature), offsets, np.asarray(state.in_contact, dtype=bool))
+        return cls(path_slide(state, curvature), offsets, np.asarray(state.in_contact, dtype=bool),
+                   np.asarray(hole_diameter, dtype=float))
+
+    def stations(self, stations: ContactStations) -> ContactStations:
+        """``stations`` less those on a resting node, each gap that of the hole at its node (the casing's above
+        the shoe: the statics' gap, so that a node at rest is inside it)."""
+        kept = stations.subset(~self.resting[stations.node])
+        gap = 0.5 * (self.hole_diameter[kept.node] - kept.outer_diameter)
+        return ContactStations(kept.node, kept.length, gap, kept.outer_diameter)
 
 
 def _check_well_basis(top_drive, motor, damping_basis: str, truncation_correction: str, rayleigh,
@@ -319,7 +330,8 @@ def case_well_basis(case, state: StiffStringState) -> tuple[LinearSystem, WellBa
     (:func:`~drillstring.well.well_modes.case_well_system`: the path's curvature and the centreline spin), and
     its :class:`WellBasis`."""
     curvature = case_path_curvature(case, state)
-    return case_well_system(case, state, curvature), WellBasis.of(state, curvature)
+    hole = case_hole_diameters(case, state.mesh.nodes)  # the casing's bore above its shoe, as the statics'
+    return case_well_system(case, state, curvature), WellBasis.of(state, curvature, hole)
 
 
 def case_string_friction(case) -> StringFriction | None:
