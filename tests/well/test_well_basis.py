@@ -123,14 +123,19 @@ def test_refusals_name_what_is_not_supported(reference_case):
     case = case.model_copy(update={"damping": case.damping.model_copy(update={"basis": "free_free"})})
     with pytest.raises(ValueError, match="lateral_basis = 'well' does not support yet: damping.basis"):
         case_reduced_model(case)
+    ramp = _inclined(reference_case, 30.0)
+    ramp = ramp.model_copy(update={"initial": ramp.initial.model_copy(update={"start": "ramp"})})
+    with pytest.raises(ValueError, match="initial.start = 'ramp'"):
+        case_reduced_model(ramp)
 
 
 @pytest.fixture(scope="module")
 def deviated():
-    """The ``deviated`` case on a 30 m mesh, the constrained damping (the well basis's)."""
+    """The ``deviated`` case on a 30 m mesh, the constrained damping and the start on bottom (the well basis's)."""
     case = load_case("deviated")
     return case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 30.0}),
-                                   "damping": case.damping.model_copy(update={"basis": "constrained"})})
+                                   "damping": case.damping.model_copy(update={"basis": "constrained"}),
+                                   "initial": case.initial.model_copy(update={"start": "on_bottom"})})
 
 
 def test_spin_about_the_centreline_stores_nothing_and_torsion_is_the_straight_strings(deviated):

@@ -98,7 +98,7 @@ def reduced_model(
     coupled = well_basis is not None or family_coupling(system) > 0.0
     release, damped = None, system
     if well_basis is not None:
-        _check_well_basis(top_drive, motor, damping_basis, truncation_correction, rayleigh, top_speed)
+        _check_well_basis(top_drive, motor, damping_basis, truncation_correction, rayleigh, top_speed, hook_load)
         found, kinds = quota_modes(system, well_basis.slide, axial_modes, torsional_modes, 2 * lateral_modes,
                                    lateral_cutoff)
         modes, basis, omega, family, residual = _as_coupled(found, kinds, system.mesh)
@@ -187,7 +187,7 @@ class WellBasis:
 
 
 def _check_well_basis(top_drive, motor, damping_basis: str, truncation_correction: str, rayleigh,
-                      top_speed: float) -> None:
+                      top_speed: float, hook_load) -> None:
     """ValueError, one line naming it, for what the well basis does not support yet."""
     problems = []
     if top_drive is not None and top_drive.drives:
@@ -202,6 +202,9 @@ def _check_well_basis(top_drive, motor, damping_basis: str, truncation_correctio
         problems.append(f"reduced_model.truncation_correction = {truncation_correction!r} (use 'none')")
     if rayleigh[0] and top_speed:
         problems.append("damping.mass_proportional > 0 with a spinning string (it would damp the spin itself)")
+    if hook_load is not None and hook_load.active:
+        problems.append("initial.start = 'ramp' (the weight moved to the hook in the linear basis swings the string "
+                        "round the wall at t = 0, pressing spans into it: use 'on_bottom')")
     if problems:
         raise ValueError("reduced_model.lateral_basis = 'well' does not support yet: " + "; ".join(problems))
 
