@@ -122,7 +122,7 @@ def allocate_storage(lag: float, bins_per_lag: int = 2048) -> np.ndarray:
     return storage
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def view(storage):
     """The :class:`AngleHistory` whose arrays are views of ``storage`` (:func:`allocate_storage`)."""
     capacity = (storage.shape[0] - META_SIZE) // 2

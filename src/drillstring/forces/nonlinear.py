@@ -340,7 +340,7 @@ def _strain_energy_forces_kernel(q, inv_length, weights, slope, axial_stiffness,
         out[b + THETA_Y1] += fw1
         out[b + W2] -= fw2
         out[b + THETA_Y2] += fw3
-    return out
+    # nothing returned: a kernel compiled inside a caller without reference counting must not hand an array back
 
 
 @njit(cache=True)
@@ -431,7 +431,7 @@ def _kinetic_forces_kernel(q, qd, xi, weights, rotation, polar_inertia, out, cou
         coupling[e, 1, 1] = c11
         coupling[e, 1, 2] = c12
         coupling[e, 1, 3] = c13
-    return out
+    # nothing returned: a kernel compiled inside a caller without reference counting must not hand an array back
 
 
 @njit(cache=True)
@@ -452,7 +452,7 @@ def _mass_coupling_kernel(q, xi, weights, rotation, polar_inertia, coupling):
                 pl = p * (xi[g] if i == 1 else 1.0 - xi[g])
                 for j in range(4):
                     coupling[e, i, j] += pl * rotation[e, g, j]
-    return coupling
+    # nothing returned: a kernel compiled inside a caller without reference counting must not hand an array back
 
 
 @njit(cache=True)
@@ -502,7 +502,7 @@ def _project_coupling_kernel(coupling, phi_elements, out, work):
             for k in range(n):
                 out[m, k] += (t0 * work[0, k] + t1 * work[1, k] + x0 * phi_elements[e, THETA_X1, k]
                               + x1 * phi_elements[e, THETA_X2, k])
-    return out
+    # nothing returned: a kernel compiled inside a caller without reference counting must not hand an array back
 
 
 @njit(cache=True)
@@ -524,7 +524,7 @@ def _project_blocks_kernel(blocks, phi_elements, out, work):
                 if p != 0.0:
                     for k in range(n):
                         out[m, k] += p * work[i, k]
-    return out
+    # nothing returned: a kernel compiled inside a caller without reference counting must not hand an array back
 
 
 @dataclass(eq=False)
@@ -568,9 +568,8 @@ class NonlinearElements:
 
         ``q`` (n_dofs,) float64: displacements from the static state [m, rad].
         """
-        return _strain_energy_forces_kernel(
-            q, self.inv_length, self.weights, self.slope, self.axial_stiffness, out
-        )
+        _strain_energy_forces_kernel(q, self.inv_length, self.weights, self.slope, self.axial_stiffness, out)
+        return out
 
     def strain_energy(self, q: np.ndarray) -> float:
         """Global ``U_nl(q̄)`` [J]."""
@@ -599,7 +598,8 @@ class NonlinearElements:
     def mass_coupling(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """The mass couplings (n_el, 2, 4) [kg·m, kg·m²] of ``M_nl(q)`` alone (see :meth:`kinetic_forces`)."""
         coupling = self._coupling if out is None else out
-        return _mass_coupling_kernel(q, self.xi, self.weights, self.rotation, self.polar_inertia, coupling)
+        _mass_coupling_kernel(q, self.xi, self.weights, self.rotation, self.polar_inertia, coupling)
+        return coupling
 
     def mass_correction_matrix(self, q: np.ndarray) -> sp.csr_matrix:
         """Global sparse ``M_nl(q)`` (n_dofs × n_dofs); for checks and small problems, allocates."""
@@ -674,11 +674,13 @@ def project_mass_correction(
     if blocks.shape[1:] == (2, 4):
         if work is None:
             work = np.empty((2, n))
-        return _project_coupling_kernel(blocks, phi_elements, out, work)
+        _project_coupling_kernel(blocks, phi_elements, out, work)
+        return out
     if blocks.shape[1:] == (12, 12):
         if work is None:
             work = np.empty((12, n))
-        return _project_blocks_kernel(blocks, phi_elements, out, work)
+        _project_blocks_kernel(blocks, phi_elements, out, work)
+        return out
     raise ValueError(f"blocks must have shape (n_el, 2, 4) or (n_el, 12, 12), got {blocks.shape}")
 
 
