@@ -94,7 +94,7 @@ def test_methods_by_name():
 
 @njit(cache=True)
 def _stiff_part(data, t, y, shapes, partials):
-    return stiff_part(data, t, y, shapes, partials)
+    return stiff_part(data, t, y, shapes, partials, np.empty(y.shape[0]))
 
 
 def test_compiled_stiff_part_is_the_laws_closed_form_jacobian(small_case):

@@ -249,7 +249,7 @@ def _loop(step) -> Callable:
     for the package's kinds, not for kinds defined elsewhere (the kernel cache's source hash does not cover
     them, :mod:`drillstring.dynamics.steps.kinds`). One loop per kind, sharing the source and the cache index
     (their signatures differ by the step's data type). A kind whose step allocates nothing
-    (``StepKind.allocates`` False: the explicit Runge–Kutta pairs) gets a loop compiled without Numba's reference
+    (``StepKind.allocates`` False: the explicit Runge–Kutta pairs, the IMEX step) gets a loop compiled without Numba's reference
     counting (``_nrt=False``, the kernels it calls compiled so too; every array they touch is the run's own,
     allocated in Python): the increments and decrements of the arrays of the model's structured data, at every
     call of an inner kernel, cost more than the arithmetic (docs/performance.md). Why not the loop calling the kind's functions through

@@ -291,7 +291,7 @@ BIT_LAW_SCALES = (1e-3, 1.0, 1e-3)
 
 
 @inner_kernel()
-def _stiff_bit_law(d, t, y, shapes, partials):
+def _stiff_bit_law(d, t, y, shapes, partials, scratch):
     """:func:`stiff_part` for case-2 data ``d``."""
     n = d.omega2.shape[0]
     ranges = d.ranges
@@ -331,13 +331,13 @@ def _stiff_bit_law(d, t, y, shapes, partials):
                 shapes[2, j] = d.torsion_rows[_TORSION_MOTOR, j - t0]
             relative_speed = _motor_speed(d, y)
             step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
-            rates = np.empty(y.shape[0])  # the motor writes its states' rates: not needed here
-            partials[2, 0] = (motor_torque(d.laws, MotorContext(t, relative_speed + step), y, rates)
-                              - motor_torque(d.laws, MotorContext(t, relative_speed - step), y, rates)) / (2.0 * step)
+            # the motor writes its states' rates into the scratch: not needed here
+            partials[2, 0] = (motor_torque(d.laws, MotorContext(t, relative_speed + step), y, scratch)
+                              - motor_torque(d.laws, MotorContext(t, relative_speed - step), y, scratch)) / (2.0 * step)
     return d.omega2, d.damping_t, d.damping_blocks
 
 
-def stiff_part(data, t, y, shapes, partials):
+def stiff_part(data, t, y, shapes, partials, scratch):
     """The model's stiff part, for an implicit step (:mod:`drillstring.dynamics.steps.imex_ark`), at time ``t``
     [s] and state ``y``: writes the bit's axial and torsional mode-shape rows (u and θx at the bit over the n
     modal coordinates, zero outside their families) into ``shapes[0, :n]``, ``shapes[1, :n]``, and into
@@ -350,15 +350,16 @@ def stiff_part(data, t, y, shapes, partials):
     ``shapes`` and ``partials`` have a third row, it gets a downhole motor's: the rotor's relative torsional row
     (:attr:`ReducedOrderModel.motor_shapes`) in ``shapes[2, :n]`` and ``dT/dω_m`` [N·m·s/rad] of the registered
     compiled motor by a central difference in ``partials[2, 0]`` (its part of ``∂(η̈)/∂η̇`` is
-    ``m (dT/dω_m) mᵀ``; zeros without a motor). Returns the linear part's ``(ω², Dᵀ, damping blocks)``.
+    ``m (dT/dω_m) mᵀ``; zeros without a motor; ``scratch``, of the state's size, takes the motor's state rates,
+    which are not kept: the function allocates nothing). Returns the linear part's ``(ω², Dᵀ, damping blocks)``.
     Compiled code only; case 1 (:class:`FullModelData`) reads its case-2 part."""
     raise NotImplementedError("compiled code only")
 
 
 @overload(stiff_part)
-def _stiff_part_compiled(data, t, y, shapes, partials):
+def _stiff_part_compiled(data, t, y, shapes, partials, scratch):
     if _is(data, FullModelData):
-        return lambda data, t, y, shapes, partials: _stiff_bit_law(data.rhs, t, y, shapes, partials)
+        return lambda data, t, y, shapes, partials, scratch: _stiff_bit_law(data.rhs, t, y, shapes, partials, scratch)
     if _is(data, RhsData) or _is(data, DelayedRhsData):
-        return lambda data, t, y, shapes, partials: _stiff_bit_law(data, t, y, shapes, partials)
+        return lambda data, t, y, shapes, partials, scratch: _stiff_bit_law(data, t, y, shapes, partials, scratch)
     return None

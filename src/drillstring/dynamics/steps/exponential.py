@@ -255,7 +255,7 @@ _EIGEN_CACHE: dict = {}  # key -> (the model's arrays, ModalEigen): the arrays k
 def _law_partials(rhs_data, t, y, shapes, partials):
     """The bit law's (and a downhole motor's) partial derivatives at ``(t, y)`` and the rows they act along
     (:func:`~drillstring.dynamics.rom.stiff_part`, the implicit step's own)."""
-    stiff_part(rhs_data, t, y, shapes, partials)
+    stiff_part(rhs_data, t, y, shapes, partials, np.empty(y.shape[0]))
 
 
 def bit_law_linearisation(rhs_data, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -97,6 +97,10 @@ class ImexStep(NamedTuple):
     dense_blocks: np.ndarray  # (n,) bool, per damping block: entered whole (factored) or by its diagonal
     columns: np.ndarray  # (3, n) S⁻¹ b_u, S⁻¹ b_t, S⁻¹ m (the velocity parts of A⁻¹U)
     small: np.ndarray  # (4, 4) (I − hγ (VᵀA⁻¹U) G)⁻¹
+    woodbury: np.ndarray  # (4, 4) scratch: I − hγ (VᵀA⁻¹U) G, before its inversion
+    products: np.ndarray  # (4, 3) scratch: P = VᵀA⁻¹U
+    law_matrix: np.ndarray  # (3, 4) scratch: G
+    covered: np.ndarray  # (n,) bool: the modal coordinates inside a damping block (set by _factor)
     memo: np.ndarray  # (2,) the number of modal coordinates, Jacobians computed
     dense_stages: np.ndarray  # (s, n) f(Y_i) of the last accepted step (dense output)
 
@@ -116,7 +120,8 @@ def allocate(tableau: AdditiveTableau, n: int) -> ImexStep:
         order=float(tableau.controller_order), k=np.zeros((s, n)), k_implicit=np.zeros((s, n)), z=np.zeros(n),
         r=np.zeros(n), v=np.zeros(n), shapes=np.zeros((3, n)), partials=np.zeros((3, 3)), base=np.zeros((n, n)),
         pivots=np.zeros(n, dtype=np.int64), dense_blocks=np.zeros(n, dtype=np.bool_), columns=np.zeros((3, n)),
-        small=np.zeros((4, 4)), memo=np.zeros(2),
+        small=np.zeros((4, 4)), woodbury=np.zeros((4, 4)), products=np.zeros((4, 3)), law_matrix=np.zeros((3, 4)),
+        covered=np.zeros(n, dtype=np.bool_), memo=np.zeros(2),
         dense_stages=np.zeros((s, n)))
 
 
@@ -178,15 +183,13 @@ def _lu_block(a, pivots, start, end):
 
 @njit(cache=True)
 def _base_solve(data, blocks, nm, x):
-    """x ← S⁻¹ x for the velocity-sized vector ``x`` (S factored by :func:`_factor`)."""
-    a, pivots = data.base, data.pivots
+    """x ← S⁻¹ x for the velocity-sized vector ``x`` (S factored by :func:`_factor`, which also marks the
+    coordinates inside a damping block in ``data.covered``)."""
+    a, pivots, covered = data.base, data.pivots, data.covered
     inside = 0
     for b in range(blocks.shape[0]):
         inside += blocks[b, 1] - blocks[b, 0]
     if inside < nm:  # the diagonal entries outside every damping block
-        covered = np.zeros(nm, dtype=np.bool_)
-        for b in range(blocks.shape[0]):
-            covered[blocks[b, 0]:blocks[b, 1]] = True
         for i in range(nm):
             if not covered[i]:
                 x[i] /= a[i, i]
@@ -215,12 +218,17 @@ def _base_solve(data, blocks, nm, x):
 @njit(cache=True)
 def _factor(data, h, omega2, damping_t, blocks):
     """Factor ``S = I + hγD + (hγ)²Ω²`` by damping blocks, then ``A⁻¹U`` and the 4 × 4 Woodbury matrix's
-    inverse for the step ``h``. Returns False when either is singular."""
+    inverse for the step ``h``. Returns False when either is singular. Allocates nothing (its small matrices
+    are the step's scratch), so the loop runs without reference counting (``StepKind.allocates``)."""
     hg = h * data.gamma
     nm = omega2.shape[0]
-    a, g, cols = data.base, data.partials, data.columns
+    a, g, cols, covered = data.base, data.partials, data.columns, data.covered
     for i in range(nm):
         a[i, i] = 1.0 + hg * hg * omega2[i]
+        covered[i] = False
+    for b in range(blocks.shape[0]):
+        for i in range(blocks[b, 0], blocks[b, 1]):
+            covered[i] = True
     for b in range(blocks.shape[0]):
         start, end = blocks[b, 0], blocks[b, 1]
         rate = 0.0
@@ -249,7 +257,10 @@ def _factor(data, h, omega2, damping_t, blocks):
             _base_solve(data, blocks, nm, cols[k])
     # P = Vᵀ A⁻¹ U, rows: velocity along b_u, along b_t, position along b_u (A⁻¹U's position part: hγ S⁻¹ b),
     # velocity along m
-    p = np.zeros((4, 3))
+    p = data.products
+    for i in range(4):
+        for k in range(3):
+            p[i, k] = 0.0
     for k in range(rank):
         for i in range(nm):
             p[0, k] += data.shapes[0, i] * cols[k, i]
@@ -257,12 +268,15 @@ def _factor(data, h, omega2, damping_t, blocks):
             p[2, k] += hg * data.shapes[0, i] * cols[k, i]
             p[3, k] += data.shapes[2, i] * cols[k, i]
     # G (3 × 4): the bit law's force and torque in (u̇, θ̇, u), the motor's torque in ω_m = mᵀη̇
-    gm = np.zeros((3, 4))
-    for j in range(3):
-        gm[0, j] = g[0, j]
-        gm[1, j] = g[1, j]
-    gm[2, 3] = g[2, 0]
-    m = np.eye(4)
+    gm = data.law_matrix
+    for j in range(4):
+        gm[0, j] = g[0, j] if j < 3 else 0.0
+        gm[1, j] = g[1, j] if j < 3 else 0.0
+        gm[2, j] = g[2, 0] if j == 3 else 0.0
+    m = data.woodbury
+    for i in range(4):
+        for j in range(4):
+            m[i, j] = 1.0 if i == j else 0.0
     for i in range(4):
         for j in range(4):
             m[i, j] -= hg * (p[i, 0] * gm[0, j] + p[i, 1] * gm[1, j] + p[i, 2] * gm[2, j])
@@ -312,7 +326,8 @@ def attempt(data, rhs_data, t, h, y, f, y_new, err):
     k, ki, ae, ai, c = data.k, data.k_implicit, data.a_explicit, data.a_implicit, data.c
     n = y.shape[0]
     s = c.shape[0]
-    omega2, damping_t, blocks = stiff_part(rhs_data, t, y, data.shapes, data.partials)
+    # (data.z, free until the first stage, takes a downhole motor's state rates: not needed here)
+    omega2, damping_t, blocks = stiff_part(rhs_data, t, y, data.shapes, data.partials, data.z)
     data.memo[_MODES] = omega2.shape[0]
     data.memo[_JACOBIANS] += 1.0
     for j in range(3):
@@ -440,4 +455,4 @@ class ReferenceStep:
 
 
 KIND = register(StepKind(method=AdditiveTableau, data=ImexStep, allocate=allocate, attempt=attempt,
-                         accept=accept, reference=ReferenceStep))
+                         accept=accept, reference=ReferenceStep, allocates=False))
