@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 from drillstring.case import load_case  # noqa: E402
 from drillstring.dynamics.rom import case_reduced_model  # noqa: E402
 from drillstring.dynamics.simulate import simulate_model  # noqa: E402
-from drillstring.dynamics.stability import family_growth_rates  # noqa: E402
+from drillstring.dynamics.growth_rates import family_growth_rates  # noqa: E402
 from drillstring.stochastic import DEFAULT_SEED  # noqa: E402
 from drillstring.stochastic import montecarlo as mc  # noqa: E402
 from drillstring.stochastic import study_model  # noqa: E402

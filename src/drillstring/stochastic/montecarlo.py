@@ -45,7 +45,7 @@ from drillstring.stochastic.random_matrices import (
     model_generator,
     random_reduced_model,
 )
-from drillstring.dynamics.stability import family_growth_rates
+from drillstring.dynamics.growth_rates import family_growth_rates
 from drillstring.dynamics.simulate import (
     SimulationError,
     SimulationResult,
