@@ -334,7 +334,6 @@ def _stiff_bit_law(d, t, y, shapes, partials, scratch):
             # the motor writes its states' rates into the scratch: not needed here
             partials[2, 0] = (motor_torque(d.laws, MotorContext(t, relative_speed + step), y, scratch)
                               - motor_torque(d.laws, MotorContext(t, relative_speed - step), y, scratch)) / (2.0 * step)
-    return d.omega2, d.damping_t, d.damping_blocks
 
 
 def stiff_part(data, t, y, shapes, partials, scratch):
@@ -356,10 +355,19 @@ def stiff_part(data, t, y, shapes, partials, scratch):
     raise NotImplementedError("compiled code only")
 
 
-@overload(stiff_part)
+@overload(stiff_part, inline="always")
 def _stiff_part_compiled(data, t, y, shapes, partials, scratch):
+    # Inlined into its callers: the arrays it returns never cross a compiled call, so a caller with Numba's
+    # reference counting and one without (the implicit-explicit loop) can share it (tests/dynamics/
+    # test_reference_counting.py); _stiff_bit_law returns nothing.
     if _is(data, FullModelData):
-        return lambda data, t, y, shapes, partials, scratch: _stiff_bit_law(data.rhs, t, y, shapes, partials, scratch)
+        def full(data, t, y, shapes, partials, scratch):
+            _stiff_bit_law(data.rhs, t, y, shapes, partials, scratch)
+            return data.rhs.omega2, data.rhs.damping_t, data.rhs.damping_blocks
+        return full
     if _is(data, RhsData) or _is(data, DelayedRhsData):
-        return lambda data, t, y, shapes, partials, scratch: _stiff_bit_law(data, t, y, shapes, partials, scratch)
+        def case_2(data, t, y, shapes, partials, scratch):
+            _stiff_bit_law(data, t, y, shapes, partials, scratch)
+            return data.omega2, data.damping_t, data.damping_blocks
+        return case_2
     return None
