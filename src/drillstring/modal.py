@@ -358,14 +358,21 @@ def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs
     found = residual_flexibility_vectors(k, m, phi, load, 1 if rigid else 0, [0])  # grounded at the top
     if found is None:
         return kept
-    values, vectors = found
-    shapes = np.zeros((system.mesh.n_dofs, vectors.shape[1]))
+    return with_attachments(kept, dofs, *found, mass_global)
+
+
+def with_attachments(kept: ModeFamily, dofs: np.ndarray, values: np.ndarray, vectors: np.ndarray,
+                     mass: sp.spmatrix) -> ModeFamily:
+    """``kept`` with the attachment vectors of :func:`residual_flexibility_vectors` (``vectors`` on ``dofs``,
+    their ``values`` ω̃² [rad²/s²]) appended as its last columns: spread on the global DOFs, mass-normalised
+    with ``mass`` (global), a deterministic sign (the largest entry positive)."""
+    shapes = np.zeros((kept.shapes.shape[0], vectors.shape[1]))
     shapes[dofs] = vectors
-    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, mass_global @ shapes))
+    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, mass @ shapes))
     pivot = np.argmax(np.abs(shapes), axis=0)
     shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
     omega = np.sign(values) * np.sqrt(np.abs(values))
-    return ModeFamily(family, np.concatenate([kept.angular_frequencies, omega]),
+    return ModeFamily(kept.name, np.concatenate([kept.angular_frequencies, omega]),
                       np.hstack([kept.shapes, shapes]), kept.attachments + shapes.shape[1])
 
 

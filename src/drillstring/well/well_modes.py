@@ -289,7 +289,7 @@ def path_slide(state: StiffStringState, curvature: np.ndarray) -> np.ndarray:
 
 
 def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: int, lateral: int,
-                cutoff: float = 0.0) -> tuple[ModeFamily, np.ndarray]:
+                cutoff: float = 0.0, loads: Sequence[int] = ()) -> tuple[ModeFamily, np.ndarray]:
     """The modes of the whole string (nodes' frames, :func:`drillstring.modal.coupled_dofs`) chosen by kind
     (:func:`kinetic_energy_shares`, the largest share): the slide along the path first (``slide``, :func:`path_slide`,
     made an exact zero-energy motion: the stiffness is taken on its M-orthogonal complement,
@@ -297,8 +297,19 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
     lowest axial modes, the ``torsional`` lowest torsional ones, the ``lateral`` lowest lateral ones and every
     lateral one below ``cutoff`` [rad/s], ordered by frequency; mass-normalised, a deterministic sign. Returns
     the modes and each one's kind (an index into :data:`KINDS`; the slide's: axial). Dense: at most
-    :data:`drillstring.modal.DENSE_LIMIT` free DOFs."""
-    from drillstring.modal import DENSE_LIMIT, coupled_dofs
+    :data:`drillstring.modal.DENSE_LIMIT` free DOFs.
+
+    ``loads``: global DOFs (nodes' frames) whose unit loads get the static correction: the residual-flexibility
+    attachment modes of :func:`drillstring.modal.residual_flexibility_vectors` (Craig & Chang 1977; the load
+    balanced by the slide's inertia, the response M-orthogonal, so also ``Qᵀ K Q``-orthogonal, to the chosen
+    modes) appended after them (``attachments`` counts them), each one's kind its largest kinetic-energy share.
+    Loads on held DOFs, or responses the chosen modes already span, add nothing."""
+    from drillstring.modal import (
+        DENSE_LIMIT,
+        coupled_dofs,
+        residual_flexibility_vectors,
+        with_attachments,
+    )
 
     mesh = system.mesh
     dofs = coupled_dofs(mesh)
@@ -311,7 +322,8 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
     s = s / np.sqrt(s @ m @ s)
     ms, ks = m @ s, k @ s  # Qᵀ K Q = K − K s mᵀ − m sᵀ K + (sᵀ K s) m mᵀ, m = M s
     k = k - np.outer(ks, ms) - np.outer(ms, ks) + (s @ ks) * np.outer(ms, ms)
-    values, vectors = sla.eigh(0.5 * (k + k.T), m)
+    k = 0.5 * (k + k.T)
+    values, vectors = sla.eigh(k, m)
     closest = int(np.argmax(np.abs(vectors.T @ (m @ s))))
     vectors[:, closest] = s
     values[closest] = 0.0
@@ -331,4 +343,16 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
     pivot = np.argmax(np.abs(shapes), axis=0)
     shapes *= np.sign(shapes[pivot, np.arange(len(chosen))])
     values = values[chosen]
-    return ModeFamily("coupled", np.sign(values) * np.sqrt(np.abs(values)), shapes), kind[chosen]
+    found, kinds = ModeFamily("coupled", np.sign(values) * np.sqrt(np.abs(values)), shapes), kind[chosen]
+    local = np.nonzero(np.isin(dofs, np.asarray(loads, dtype=np.int64)))[0]
+    if len(local) == 0 or len(chosen) >= len(dofs):
+        return found, kinds
+    load = np.zeros((len(dofs), len(local)))
+    load[local, np.arange(len(local))] = 1.0
+    # the slide first (the rigid motion of Qᵀ K Q), the response with the top's u (local DOF 0) held
+    extra = residual_flexibility_vectors(sp.csc_matrix(k), sp.csr_matrix(m), shapes[dofs], load, 1, [0])
+    if extra is None:
+        return found, kinds
+    corrected = with_attachments(found, dofs, *extra, system.mass)
+    added = np.argmax(kinetic_energy_shares(system, corrected.shapes[:, len(chosen):]), axis=1)
+    return corrected, np.concatenate([kinds, added])
