@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from drillstring.case import load_case
 from drillstring.case.well_table import Well
 from drillstring.dynamics.reduced.build import case_well_basis
 from drillstring.dynamics.rom import case_reduced_model
@@ -16,6 +15,7 @@ from drillstring.fem.dofs import THETA_X, dof
 from drillstring.modal import case_linear_system, family_modes
 from drillstring.well.stiff_string import case_stiff_string
 from drillstring.well.well_modes import quota_modes
+from tests.well.well_cases import deviated_for_well_basis
 
 AXIAL, TORSIONAL, LATERAL = 3, 3, 4
 
@@ -132,10 +132,7 @@ def test_refusals_name_what_is_not_supported(reference_case):
 @pytest.fixture(scope="module")
 def deviated():
     """The ``deviated`` case on a 30 m mesh, the constrained damping and the start on bottom (the well basis's)."""
-    case = load_case("deviated")
-    return case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 30.0}),
-                                   "damping": case.damping.model_copy(update={"basis": "constrained"}),
-                                   "initial": case.initial.model_copy(update={"start": "on_bottom"})})
+    return deviated_for_well_basis(30.0)
 
 
 def test_spin_about_the_centreline_stores_nothing_and_torsion_is_the_straight_strings(deviated):

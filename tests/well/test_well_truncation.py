@@ -8,20 +8,17 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from drillstring.case import load_case
 from drillstring.dynamics.rom import case_reduced_model
 from drillstring.dynamics.simulate import simulate_model
 from drillstring.fem.dofs import THETA_X, U, dof
 from drillstring.modal import coupled_dofs
+from tests.well.well_cases import deviated_for_well_basis
 
 
 @pytest.fixture(scope="module")
 def deviated():
     """``deviated`` on a 60 m mesh (330 free DOFs), the constrained damping and the start on bottom."""
-    case = load_case("deviated")
-    return case.model_copy(update={"mesh": case.mesh.model_copy(update={"max_element_length": 60.0}),
-                                   "damping": case.damping.model_copy(update={"basis": "constrained"}),
-                                   "initial": case.initial.model_copy(update={"start": "on_bottom"})})
+    return deviated_for_well_basis(60.0)
 
 
 def _model(case, correction: str, axial: int, torsional: int, lateral: int):
