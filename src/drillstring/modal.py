@@ -322,8 +322,25 @@ def residual_flexibility_vectors(k: sp.csc_matrix, m: sp.csr_matrix, phi: np.nda
     return values, response @ q
 
 
+def attachment_loads(dofs: np.ndarray, load_dofs, patterns: np.ndarray | None = None) -> np.ndarray:
+    """The loads of a static correction on a family's DOFs ``dofs`` (global numbers, ascending), one column each:
+    a unit load at each of ``load_dofs`` (global DOFs, in their order) the family holds, then each column of ``patterns``
+    ((n_dofs, p) global load vectors, e.g. the along-string friction's distribution,
+    :func:`drillstring.dynamics.reduced.build.friction_load_patterns`) restricted to ``dofs``, those with no entry
+    there left out. (len(dofs), count) [N or N·m per unit]."""
+    wanted = np.asarray(load_dofs, dtype=np.int64)
+    local = np.searchsorted(dofs, wanted)
+    local = local[(local < len(dofs)) & (dofs[np.minimum(local, len(dofs) - 1)] == wanted)]
+    load = np.zeros((len(dofs), len(local)))
+    load[local, np.arange(len(local))] = 1.0
+    if patterns is None:
+        return load
+    restricted = np.asarray(patterns, dtype=float)[dofs]
+    return np.hstack([load, restricted[:, np.any(restricted != 0.0, axis=0)]])
+
+
 def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs, top_inertia: float | None = None,
-                               rigid: bool = False) -> ModeFamily:
+                               rigid: bool = False, patterns: np.ndarray | None = None) -> ModeFamily:
     """``kept`` with the static correction for the modes left out at ``load_dofs`` (global DOFs of the family):
     its residual-flexibility attachment modes, appended after the kept modes.
 
@@ -340,21 +357,19 @@ def residual_flexibility_modes(system: LinearSystem, kept: ModeFamily, load_dofs
     response to any load at ``load_dofs``, which a truncated modal basis does not.
 
     ``top_inertia``: the top-drive inertia [kg·m²] lumped at the top's θx (a torsional family free at the top),
-    None when the top is held. Load DOFs the family does not hold, or responses the kept modes already span,
-    add nothing."""
+    None when the top is held. ``patterns``: (n_dofs, p) load vectors (global DOFs) corrected as well, one
+    attachment column each (:func:`attachment_loads`). Load DOFs the family does not hold, or responses the kept
+    modes already span, add nothing."""
     family = kept.name
     top_free = top_inertia is not None and family == "torsional"
     dofs = coupled_dofs(system.mesh) if family == "coupled" else family_dofs(system.mesh, family, top_free)
     mass_global = system.mass + top_inertia_matrix(system.mesh, top_inertia) if top_free else system.mass
     k = sp.csc_matrix(system.stiffness[dofs][:, dofs])
     m = sp.csr_matrix(mass_global[dofs][:, dofs])
-    local = np.searchsorted(dofs, np.asarray(load_dofs, dtype=np.int64))
-    local = local[(local < len(dofs)) & (dofs[np.minimum(local, len(dofs) - 1)] == np.asarray(load_dofs))]
+    load = attachment_loads(dofs, load_dofs, patterns)
     phi = kept.shapes[dofs]
-    if len(local) == 0 or phi.shape[1] >= len(dofs):
+    if load.shape[1] == 0 or phi.shape[1] >= len(dofs):
         return kept
-    load = np.zeros((len(dofs), len(local)))
-    load[local, np.arange(len(local))] = 1.0
     found = residual_flexibility_vectors(k, m, phi, load, 1 if rigid else 0, [0])  # grounded at the top
     if found is None:
         return kept
@@ -378,7 +393,7 @@ def with_attachments(kept: ModeFamily, dofs: np.ndarray, values: np.ndarray, vec
 
 def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int,
                   lateral_cutoff: float = 0.0, top_inertia: float | None = None,
-                  truncation_correction: str = "none") -> Modes:
+                  truncation_correction: str = "none", load_patterns: np.ndarray | None = None) -> Modes:
     """Modes of every family: ``axial`` counts the rigid mode; ``lateral`` is per plane, at least, with every
     lateral mode below ``lateral_cutoff`` [rad/s] (:func:`family_modes_below`; the z plane takes as many
     modes as the y plane); ``top_inertia``: the torsion's top is free with that inertia [kg·m²] (a top drive;
@@ -386,8 +401,11 @@ def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int
 
     ``truncation_correction``: "none", the modes alone; "static", each of the axial and torsional families
     followed by its residual-flexibility attachment modes (:func:`residual_flexibility_modes`) at the DOFs
-    where the laws act: the bit's u (axial), the bit's θx and, with a top drive, the top's θx (torsional).
-    The lateral families are left as they are (the contact acts all along them)."""
+    where the laws act: the bit's u (axial), the bit's θx and, with a top drive, the top's θx (torsional), and
+    for each column of ``load_patterns`` ((n_dofs, p) global load vectors, None: none; the along-string
+    friction's axial and torsional distributions, :func:`drillstring.dynamics.reduced.build.friction_load_patterns`)
+    one more in the family it loads (:func:`attachment_loads`). The lateral families are left as they are (the
+    contact acts all along them)."""
     if truncation_correction not in TRUNCATION_CORRECTIONS:
         raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
                          f"{', '.join(TRUNCATION_CORRECTIONS)}")
@@ -397,11 +415,12 @@ def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int
     if truncation_correction == "static":
         bit = system.mesh.n_nodes - 1
         if axial > 0:
-            axial_family = residual_flexibility_modes(system, axial_family, [dof(bit, U)], rigid=True)
+            axial_family = residual_flexibility_modes(system, axial_family, [dof(bit, U)], rigid=True,
+                                                      patterns=load_patterns)
         if torsional > 0:
             loads = [dof(bit, THETA_X)] + ([dof(0, THETA_X)] if top_inertia is not None else [])
             torsional_family = residual_flexibility_modes(system, torsional_family, loads, top_inertia,
-                                                          rigid=top_inertia is not None)
+                                                          rigid=top_inertia is not None, patterns=load_patterns)
     return Modes(
         axial=axial_family,
         torsional=torsional_family,
@@ -421,13 +440,14 @@ def _rigid_translation(system: LinearSystem, dofs: np.ndarray) -> np.ndarray | N
 
 
 def coupled_modes(system: LinearSystem, count: int, cutoff: float = 0.0,
-                  truncation_correction: str = "none") -> ModeFamily:
+                  truncation_correction: str = "none", load_patterns: np.ndarray | None = None) -> ModeFamily:
     """The ``count`` lowest modes of the whole string (families coupled: :func:`family_coupling` > 0) on its
     free DOFs (:func:`coupled_dofs`), and every mode with ``ω < cutoff`` [rad/s]; mass-normalised, a
     deterministic sign. When the axial translation is a zero-energy motion (:func:`_rigid_translation`) it is
     the first column, exact, at ω = 0 (it replaces the computed mode closest to it). ``truncation_correction =
     "static"`` appends the residual-flexibility attachment modes (:func:`residual_flexibility_modes`) at the
-    bit's u and θx, computed on the whole system."""
+    bit's u and θx, and one per column of ``load_patterns`` (as :func:`compute_modes`), computed on the whole
+    system."""
     if truncation_correction not in TRUNCATION_CORRECTIONS:
         raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
                          f"{', '.join(TRUNCATION_CORRECTIONS)}")
@@ -459,7 +479,8 @@ def coupled_modes(system: LinearSystem, count: int, cutoff: float = 0.0,
     found = ModeFamily("coupled", np.sign(values) * np.sqrt(np.abs(values)), shapes)
     if truncation_correction == "static" and keep:
         bit = mesh.n_nodes - 1
-        found = residual_flexibility_modes(system, found, [dof(bit, U), dof(bit, THETA_X)], rigid=rigid is not None)
+        found = residual_flexibility_modes(system, found, [dof(bit, U), dof(bit, THETA_X)], rigid=rigid is not None,
+                                           patterns=load_patterns)
     return found
 
 

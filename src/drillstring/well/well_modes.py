@@ -289,7 +289,8 @@ def path_slide(state: StiffStringState, curvature: np.ndarray) -> np.ndarray:
 
 
 def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: int, lateral: int,
-                cutoff: float = 0.0, loads: Sequence[int] = ()) -> tuple[ModeFamily, np.ndarray]:
+                cutoff: float = 0.0, loads: Sequence[int] = (),
+                patterns: np.ndarray | None = None) -> tuple[ModeFamily, np.ndarray]:
     """The modes of the whole string (nodes' frames, :func:`drillstring.modal.coupled_dofs`) chosen by kind
     (:func:`kinetic_energy_shares`, the largest share): the slide along the path first (``slide``, :func:`path_slide`,
     made an exact zero-energy motion: the stiffness is taken on its M-orthogonal complement,
@@ -302,10 +303,12 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
     ``loads``: global DOFs (nodes' frames) whose unit loads get the static correction: the residual-flexibility
     attachment modes of :func:`drillstring.modal.residual_flexibility_vectors` (Craig & Chang 1977; the load
     balanced by the slide's inertia, the response M-orthogonal, so also ``Qᵀ K Q``-orthogonal, to the chosen
-    modes) appended after them (``attachments`` counts them), each one's kind its largest kinetic-energy share.
-    Loads on held DOFs, or responses the chosen modes already span, add nothing."""
+    modes) appended after them (``attachments`` counts them), each one's kind its largest kinetic-energy share;
+    ``patterns`` ((n_dofs, p) load vectors in the nodes' frames, None: none) one more each
+    (:func:`drillstring.modal.attachment_loads`). Loads on held DOFs, or responses the chosen modes already span, add nothing."""
     from drillstring.modal import (
         DENSE_LIMIT,
+        attachment_loads,
         coupled_dofs,
         residual_flexibility_vectors,
         with_attachments,
@@ -344,11 +347,9 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
     shapes *= np.sign(shapes[pivot, np.arange(len(chosen))])
     values = values[chosen]
     found, kinds = ModeFamily("coupled", np.sign(values) * np.sqrt(np.abs(values)), shapes), kind[chosen]
-    local = np.nonzero(np.isin(dofs, np.asarray(loads, dtype=np.int64)))[0]
-    if len(local) == 0 or len(chosen) >= len(dofs):
+    load = attachment_loads(dofs, np.sort(np.asarray(loads, dtype=np.int64)), patterns)
+    if load.shape[1] == 0 or len(chosen) >= len(dofs):
         return found, kinds
-    load = np.zeros((len(dofs), len(local)))
-    load[local, np.arange(len(local))] = 1.0
     # the slide first (the rigid motion of Qᵀ K Q), the response with the top's u (local DOF 0) held
     extra = residual_flexibility_vectors(sp.csc_matrix(k), sp.csr_matrix(m), shapes[dofs], load, 1, [0])
     if extra is None:

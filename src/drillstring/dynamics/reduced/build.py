@@ -17,7 +17,15 @@ from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import ContactStations, case_contact, mesh_contact_stations
 from drillstring.forces.excitation import TurningLoads
 from drillstring.forces.motor import case_motor
-from drillstring.forces.registry import BitLaw, ContactLaw, HookLoad, Motor, StringFriction, TopBoundary
+from drillstring.forces.registry import (
+    BitLaw,
+    ContactLaw,
+    HookLoad,
+    Motor,
+    StringFriction,
+    StringFrictionContext,
+    TopBoundary,
+)
 from drillstring.forces.registry import hook_load as registered_hook_load
 from drillstring.forces.registry import string_friction as registered_string_friction
 from drillstring.forces.string_friction import FrictionStations
@@ -87,7 +95,8 @@ def reduced_model(
         rayleigh: (α [1/s], β [s]) of the Rayleigh damping ``α M + β K`` added to the above.
         truncation_correction: "none" (the modes alone) or "static" (each of the axial and torsional families
             followed by its residual-flexibility attachment modes at the bit, and at the top with a top drive:
-            :func:`drillstring.modal.compute_modes`).
+            :func:`drillstring.modal.compute_modes`; with along-string friction, one more for each of its
+            load patterns, :func:`friction_load_patterns`; not in a motor's released torsional family).
         motor: a downhole motor (:mod:`drillstring.forces.motor`), None without: the torsional family is then that
             of the string released at the motor's rotor station (:func:`drillstring.rotor.released_modes`;
             ``torsional_modes`` elastic modes plus its rigid motions).
@@ -99,10 +108,13 @@ def reduced_model(
     drive = top_drive is not None and top_drive.drives
     coupled = well_basis is not None or family_coupling(system) > 0.0
     release, damped = None, system
+    patterns = None
+    if truncation_correction == "static" and string_friction is not None and friction_stations is not None:
+        patterns = friction_load_patterns(string_friction, friction_stations, top_speed, system.mesh.n_dofs)
     if well_basis is not None:
         _check_well_basis(top_drive, motor, damping_basis, rayleigh, top_speed, hook_load)
         found, kinds = quota_modes(system, well_basis.slide, axial_modes, torsional_modes, 2 * lateral_modes,
-                                   lateral_cutoff, well_basis.loads(truncation_correction))
+                                   lateral_cutoff, well_basis.loads(truncation_correction), patterns)
         modes, basis, omega, family, residual = _as_coupled(found, kinds, system.mesh)
         released = basis
     elif coupled:
@@ -111,7 +123,7 @@ def reduced_model(
                              "supported yet: its rotor is released in the torsional family of a straight string")
         modes, basis, omega, family, residual = _coupled_basis(
             system, axial_modes + 1 + torsional_modes + 2 * lateral_modes, lateral_cutoff, truncation_correction,
-            damping_basis)
+            damping_basis, patterns)
         released = basis
     else:
         if drive:
@@ -119,7 +131,8 @@ def reduced_model(
         top_inertia = top_drive.top_inertia if drive else None
         if motor is None:
             modes = compute_modes(system, axial_modes + 1, torsional_modes, lateral_modes, lateral_cutoff,
-                                  top_inertia=top_inertia, truncation_correction=truncation_correction)
+                                  top_inertia=top_inertia, truncation_correction=truncation_correction,
+                                  load_patterns=patterns)
         else:
             modes, release, damped = released_modes(system, motor.position, axial_modes + 1, torsional_modes + 1,
                                                     lateral_modes, lateral_cutoff, top_inertia, truncation_correction)
@@ -202,6 +215,31 @@ class WellBasis:
         return ContactStations(kept.node, kept.length, gap, kept.outer_diameter)
 
 
+def friction_load_patterns(law: StringFriction, stations: FrictionStations, top_speed: float,
+                           n_dofs: int) -> np.ndarray | None:
+    """The along-string friction's two load patterns (n_dofs, 2), global DOFs (or the nodes' frames: u along the
+    string, θx about it), for the static correction (``truncation_correction = "static"``,
+    :func:`drillstring.modal.attachment_loads`): the axial one ``μ_i N_i`` at each station's u (the drag's
+    distribution) and the torsional one at each station's θx: the law's torques τ_i(Ω) with the stations turning
+    at ``top_speed`` Ω [rad/s] and no axial motion (eq. (2) of :mod:`drillstring.forces.string_friction`, ``≈ −μ_i
+    N_i r_i``: the load of the string's steady twist, :meth:`ReducedOrderModel.friction_twist`), ``μ_i N_i r_i``
+    when Ω = 0. One column per pattern, not one per station: the truncated basis then carries the static
+    response to these distributions exactly, not to any other. None without a station."""
+    if len(stations) == 0:
+        return None
+    node = np.asarray(stations.node, dtype=np.int64)
+    drag = stations.friction * stations.normal_force
+    _, torque = law.evaluate_at(StringFrictionContext(np.zeros(len(node)), np.full(len(node), float(top_speed)),
+                                                      stations.normal_force, stations.radius, stations.friction))
+    torque = np.asarray(torque, dtype=float)
+    if not np.any(torque):
+        torque = drag * stations.radius
+    patterns = np.zeros((n_dofs, 2))
+    np.add.at(patterns[:, 0], dof(node, U), drag)
+    np.add.at(patterns[:, 1], dof(node, THETA_X), torque)
+    return patterns
+
+
 def _check_well_basis(top_drive, motor, damping_basis: str, rayleigh, top_speed: float, hook_load) -> None:
     """ValueError, one line naming it, for what the well basis does not support yet."""
     problems = []
@@ -235,7 +273,7 @@ def _as_coupled(found: ModeFamily, kinds: np.ndarray, mesh):
 
 
 def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_correction: str,
-                   damping_basis: str):
+                   damping_basis: str, patterns: np.ndarray | None = None):
     """The one basis of a system whose families couple (:func:`~drillstring.modal.coupled_modes`: the ``count``
     lowest modes of the whole string and every one below ``cutoff`` [rad/s], then its attachment modes):
     ``(modes, basis, ω, labels, residual)``, labels "rigid_axial" for the rigid translation and "coupled" for
@@ -244,7 +282,7 @@ def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_c
         raise ValueError(f"damping.basis = {damping_basis!r} with coupled families (a string out of its straight "
                          "axis): the free-free damping is defined family by family; use 'constrained' (and "
                          "Rayleigh damping)")
-    found = coupled_modes(system, count, cutoff, truncation_correction)
+    found = coupled_modes(system, count, cutoff, truncation_correction, patterns)
     empty = {name: ModeFamily(name, np.zeros(0), np.zeros((system.mesh.n_dofs, 0)))
              for name in ("axial", "torsional", "lateral_y", "lateral_z")}
     n = len(found.angular_frequencies)
