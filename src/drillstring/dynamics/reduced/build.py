@@ -17,15 +17,8 @@ from drillstring.forces.bit_rock import case_bit_rock
 from drillstring.forces.contact import ContactStations, case_contact, mesh_contact_stations
 from drillstring.forces.excitation import TurningLoads
 from drillstring.forces.motor import case_motor
-from drillstring.forces.registry import (
-    BitLaw,
-    ContactLaw,
-    HookLoad,
-    Motor,
-    StringFriction,
-    StringFrictionContext,
-    TopBoundary,
-)
+from drillstring.forces.protocol import StringFrictionContext
+from drillstring.forces.registry import BitLaw, ContactLaw, HookLoad, Motor, StringFriction, TopBoundary
 from drillstring.forces.registry import hook_load as registered_hook_load
 from drillstring.forces.registry import string_friction as registered_string_friction
 from drillstring.forces.string_friction import FrictionStations
