@@ -10,7 +10,7 @@ law switched on at t = 0 with the string turning at 120 rpm and twisted by the w
 integration (tests/dynamics/full_fe_reference.py: every axial and torsional DOF, Radau IIA at rtol 1e-8, no lateral
 DOF) is the reference; the reduced model keeps ``n`` axial and ``n`` torsional modes (no lateral one), with and
 without the static truncation correction (``reduced_model.truncation_correction = "static"``: attachment modes at
-the bit), and every mode of the mesh last. Printed for each: the largest difference of the surface torque, the bit
+the bit and for the along-string friction's two load patterns), and every mode of the mesh last. Printed for each: the largest difference of the surface torque, the bit
 speed and the force on bit over the record, relative to the full integration's largest value, and the run's wall
 time, the errors from 0.5 s on and the surface torque's error at t = 0 (the steady twist under the friction,
 truncated); then the full integration's cost per simulated second; then the lateral check: the reduced model with the
