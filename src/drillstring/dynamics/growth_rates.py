@@ -7,10 +7,10 @@ matrix (121 × 121 on ``reference``, 3.6 ms of the 5.6 ms it costs) and builds a
 about steady drilling is block-diagonal after a permutation: the lateral families are uncoupled from the axial
 and torsional ones (and from each other, ``reference``: blocks of 41, 40 and 40 states), and the cost of a
 dense eigenproblem grows as the cube of its size. :func:`family_growth_rates` finds the blocks (the connected
-components of the matrix's nonzero pattern), solves each block's eigenproblem, and classifies the roots as
-:func:`~drillstring.dynamics.stability.stability` does — the family holding most of a root's modal energy
-``½(|δη̇|² + |ω²||δη|²)``, a root whose attachment modes hold :data:`~drillstring.dynamics.stability.RESIDUAL_SHARE`
-of it left out — with the energy sums vectorised over the roots (the same sums, element for element). The
+components of the matrix's nonzero pattern), solves each block's eigenproblem, and classifies the roots by
+:func:`~drillstring.dynamics.stability.energy_shares`, as :func:`~drillstring.dynamics.stability.stability` does
+— the family holding most of a root's modal energy, a root whose attachment modes hold
+:data:`~drillstring.dynamics.stability.RESIDUAL_SHARE` of it left out — without a result object per root. The
 eigenvalues of a block equal those of the whole matrix to round-off (LAPACK's order of operations differs),
 so the rates agree with :func:`~drillstring.dynamics.stability.family_growth_rates` to about 1e-12 relative
 (``tests/dynamics/test_growth_rates.py``); a model whose matrix is one block (random matrices that couple the
@@ -66,16 +66,9 @@ def family_growth_rates(model: ReducedOrderModel) -> dict[str, float]:
     if found is None:
         return stability.family_growth_rates(model)
     values, vectors = found
-    n = model.size
     full = np.zeros((model.state_size, values.size), dtype=complex)
     full[keep] = vectors
-    upper = values.imag >= 0.0  # one root of each conjugate pair, as stability() lists them
-    values = values[upper]
-    energy = np.abs(full[n:2 * n, upper]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(full[:n, upper]) ** 2
-    per_root = np.ascontiguousarray(energy.T)  # (roots, n): each root's sums over contiguous rows
-    labels = stability._family_of(model)
-    shares = np.stack([per_root[:, labels == f].sum(axis=1) for f in stability.STABILITY_FAMILIES], axis=1)
-    residual = per_root[:, model.residual_columns].sum(axis=1)
+    values, shares, residual = stability.energy_shares(model, values, full)
     total = shares.sum(axis=1)
     residual_share = np.where(total > 0.0, residual / np.where(total > 0.0, total, 1.0), 0.0)
     resolved = residual_share < stability.RESIDUAL_SHARE

@@ -572,13 +572,25 @@ def family_growth_rates(model: ReducedOrderModel) -> dict[str, float]:
     return out
 
 
+def energy_shares(model: ReducedOrderModel, values: np.ndarray, full: np.ndarray):
+    """The roots ``values`` [1/s] with Im ≥ 0, each one's modal energy ``½ Σ (|δη̇_j|² + |ω_j²| |δη_j|²)``
+    (its state vector a column of ``full``) per family of :data:`STABILITY_FAMILIES` and in the attachment modes."""
+    n = model.size
+    upper = values.imag >= 0.0
+    vectors = full[:, upper]
+    energy = np.abs(vectors[n:2 * n]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(vectors[:n]) ** 2
+    masks = [_family_of(model) == f for f in STABILITY_FAMILIES] + [model.residual_columns]
+    sums = np.array([[energy[mask, k].sum() for mask in masks] for k in range(energy.shape[1])])
+    sums = sums.reshape(-1, len(masks))  # each root's 1-D sums (summed across roots, the last bits would differ)
+    return values[upper], sums[:, :-1], sums[:, -1]
+
+
 def stability(model: ReducedOrderModel, larger: ReducedOrderModel | None = None) -> StabilityResult:
     """Steady drilling of ``model`` and the eigenvalues of the model linearised about it (for a delayed law
     the characteristic roots of eq. (3) and, for each, the null vector of ``sI − A0 − A1 e^{−sτ0}``); with
     ``larger`` (the same model on a larger basis, :func:`larger_basis`) each root that matters checked for
     convergence (:func:`check_convergence`)."""
     steady = steady_drilling(model)
-    n = model.size
     delay = None
     if model.bit_rock.delayed:
         a0, a1 = delay_matrices(model, steady)
@@ -594,15 +606,8 @@ def stability(model: ReducedOrderModel, larger: ReducedOrderModel | None = None)
         values, vectors = sla.eig(matrix)
         full = np.zeros((model.state_size, len(values)), dtype=complex)
         full[keep] = vectors
-    # modal energy of each coordinate: ½ (|δη̇|² + |ω²| |δη|²)
-    energy = np.abs(full[n:2 * n]) ** 2 + np.abs(model.omega2)[:, None] * np.abs(full[:n]) ** 2
-    labels = _family_of(model)
     modes = []
-    for k, lam in enumerate(values):
-        if lam.imag < 0.0:
-            continue
-        shares = np.array([energy[labels == f, k].sum() for f in STABILITY_FAMILIES])
-        residual = float(energy[model.residual_columns, k].sum())
+    for lam, shares, residual in zip(*energy_shares(model, values, full)):
         family = STABILITY_FAMILIES[int(np.argmax(shares))]
         total = float(shares.sum())
         magnitude = abs(lam)
@@ -611,7 +616,7 @@ def stability(model: ReducedOrderModel, larger: ReducedOrderModel | None = None)
             damping_ratio=float(-lam.real / magnitude) if magnitude > 0 else 0.0,
             growth_rate=float(lam.real),
             shares={f: float(v / total) if total > 0 else math.nan for f, v in zip(STABILITY_FAMILIES, shares)},
-            residual_share=residual / total if total > 0 else 0.0,
+            residual_share=float(residual) / total if total > 0 else 0.0,
         ))
     modes.sort(key=lambda m: (m.frequency, m.growth_rate))
     convergence = None
