@@ -322,6 +322,13 @@ def residual_flexibility_vectors(k: sp.csc_matrix, m: sp.csr_matrix, phi: np.nda
     return values, response @ q
 
 
+def check_truncation_correction(truncation_correction: str) -> None:
+    """ValueError naming ``truncation_correction`` unless it is one of :data:`TRUNCATION_CORRECTIONS`."""
+    if truncation_correction not in TRUNCATION_CORRECTIONS:
+        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
+                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
+
+
 def attachment_loads(dofs: np.ndarray, load_dofs, patterns: np.ndarray | None = None) -> np.ndarray:
     """The loads of a static correction on a family's DOFs ``dofs`` (global numbers, ascending), one column each:
     a unit load at each of ``load_dofs`` (global DOFs, in their order) the family holds, then each column of ``patterns``
@@ -406,9 +413,7 @@ def compute_modes(system: LinearSystem, axial: int, torsional: int, lateral: int
     friction's axial and torsional distributions, :func:`drillstring.dynamics.reduced.build.friction_load_patterns`)
     one more in the family it loads (:func:`attachment_loads`). The lateral families are left as they are (the
     contact acts all along them)."""
-    if truncation_correction not in TRUNCATION_CORRECTIONS:
-        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
-                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
+    check_truncation_correction(truncation_correction)
     lateral_y = family_modes_below(system, "lateral_y", lateral, lateral_cutoff)
     axial_family = family_modes(system, "axial", axial)
     torsional_family = family_modes(system, "torsional", torsional, top_inertia)
@@ -448,9 +453,7 @@ def coupled_modes(system: LinearSystem, count: int, cutoff: float = 0.0,
     "static"`` appends the residual-flexibility attachment modes (:func:`residual_flexibility_modes`) at the
     bit's u and θx, and one per column of ``load_patterns`` (as :func:`compute_modes`), computed on the whole
     system."""
-    if truncation_correction not in TRUNCATION_CORRECTIONS:
-        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
-                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
+    check_truncation_correction(truncation_correction)
     mesh = system.mesh
     dofs = coupled_dofs(mesh)
     k = system.stiffness[dofs][:, dofs]

@@ -30,10 +30,10 @@ from drillstring.fem.assembly import THETA_X, dof
 from drillstring.fem.element import element_mass, element_stiffness
 from drillstring.fem.mesh import Mesh
 from drillstring.modal import (
-    TRUNCATION_CORRECTIONS,
     LinearSystem,
     ModeFamily,
     _eigen,
+    check_truncation_correction,
     family_coupling,
     family_dofs,
     residual_flexibility_vectors,
@@ -131,9 +131,7 @@ def released_torsional_modes(released: LinearSystem, node: int, count: int,
     first balanced by the inertia of the rigid motions (inertia relief; the pair is balanced already) and solved
     with the rotor side held (and the top, when free): one held DOF per rigid motion. The attachment modes are
     M- and K-orthogonal to every kept mode (the rigid motions included, so ``lower_rotation`` is 0 on them)."""
-    if truncation_correction not in TRUNCATION_CORRECTIONS:
-        raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
-                         f"{', '.join(TRUNCATION_CORRECTIONS)}")
+    check_truncation_correction(truncation_correction)
     mesh = released.mesh
     top_free = top_inertia is not None
     rigid = 2 if top_free else 1

@@ -25,11 +25,11 @@ from drillstring.forces.string_friction import FrictionStations
 from drillstring.forces.top_drive import TopDriveParameters, case_top_drive
 from drillstring.forces.turning_loads import case_turning_loads
 from drillstring.modal import (
-    TRUNCATION_CORRECTIONS,
     LinearSystem,
     ModeFamily,
     Modes,
     case_linear_system,
+    check_truncation_correction,
     compute_modes,
     coupled_modes,
     family_coupling,
@@ -108,7 +108,9 @@ def reduced_model(
         _check_well_basis(top_drive, motor, damping_basis, rayleigh, top_speed, hook_load)
         found, kinds = quota_modes(system, well_basis.slide, axial_modes, torsional_modes, 2 * lateral_modes,
                                    lateral_cutoff, well_basis.loads(truncation_correction), patterns)
-        modes, basis, omega, family, residual = _as_coupled(found, kinds, system.mesh)
+        # the slide first (the rigid axial motion), each other column labelled by its kind
+        modes, basis, omega, family, residual = _as_coupled(found, ["rigid_axial"] + [KINDS[k] for k in kinds[1:]],
+                                                            system.mesh)
         released = basis
     elif coupled:
         if motor is not None:
@@ -192,9 +194,7 @@ class WellBasis:
         and θx (about it), the top's u and θx (the held ones add nothing). The nodes resting on the wall get
         none: across the path at each of them (45 of 55 nodes in ``deviated`` on a 60 m mesh) that is 90 more
         columns on 330 free DOFs, ω̃ up to 1640 rad/s."""
-        if truncation_correction not in TRUNCATION_CORRECTIONS:
-            raise ValueError(f"truncation_correction = {truncation_correction!r}: must be one of "
-                             f"{', '.join(TRUNCATION_CORRECTIONS)}")
+        check_truncation_correction(truncation_correction)
         if truncation_correction == "none":
             return []
         bit = len(self.resting) - 1
@@ -253,14 +253,12 @@ def _check_well_basis(top_drive, motor, damping_basis: str, rayleigh, top_speed:
         raise ValueError("reduced_model.lateral_basis = 'well' does not support yet: " + "; ".join(problems))
 
 
-def _as_coupled(found: ModeFamily, kinds: np.ndarray, mesh):
-    """``(modes, basis, ω, labels, residual)`` of one coupled family whose first column is the rigid axial
-    motion (:func:`_coupled_basis`'s form), each other column labelled by its kind (``kinds``, indices into
-    :data:`~drillstring.well.well_modes.KINDS`: what the stability analysis reports a root's family by)."""
+def _as_coupled(found: ModeFamily, family: list[str], mesh):
+    """``(modes, basis, ω, labels, residual)`` of one coupled family ``found`` whose columns are labelled
+    ``family`` (what the stability analysis reports a root's family by), its attachment modes last."""
     empty = {name: ModeFamily(name, np.zeros(0), np.zeros((mesh.n_dofs, 0)))
              for name in ("axial", "torsional", "lateral_y", "lateral_z")}
     n = len(found.angular_frequencies)
-    family = ["rigid_axial"] + [KINDS[k] for k in kinds[1:]]
     residual = np.arange(n) >= n - found.attachments
     return Modes(**empty, coupled=found), found.shapes, found.angular_frequencies, family, residual
 
@@ -276,14 +274,10 @@ def _coupled_basis(system: LinearSystem, count: int, cutoff: float, truncation_c
                          "axis): the free-free damping is defined family by family; use 'constrained' (and "
                          "Rayleigh damping)")
     found = coupled_modes(system, count, cutoff, truncation_correction, patterns)
-    empty = {name: ModeFamily(name, np.zeros(0), np.zeros((system.mesh.n_dofs, 0)))
-             for name in ("axial", "torsional", "lateral_y", "lateral_z")}
-    n = len(found.angular_frequencies)
-    family = ["coupled"] * n
-    if n and found.angular_frequencies[0] == 0.0:  # coupled_modes put the rigid axial translation first
+    family = ["coupled"] * len(found.angular_frequencies)
+    if family and found.angular_frequencies[0] == 0.0:  # coupled_modes put the rigid axial translation first
         family[0] = "rigid_axial"
-    residual = np.arange(n) >= n - found.attachments
-    return Modes(**empty, coupled=found), found.shapes, found.angular_frequencies, family, residual
+    return _as_coupled(found, family, system.mesh)
 
 
 def _lateral_cutoff(case_value: float, lateral_modes: int | None, lateral_cutoff: float | None) -> float:
