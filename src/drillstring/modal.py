@@ -262,11 +262,7 @@ def family_modes(system: LinearSystem, family: str, count: int, top_inertia: flo
         shapes[:, 0] = rigid
         values = values.copy()
         values[0] = 0.0
-    # Unit modal mass (eigh already gives it; eigsh may not) and a deterministic sign.
-    mass_norm = np.sqrt(np.einsum("ij,ij->j", shapes, mass @ shapes))
-    shapes /= mass_norm
-    pivot = np.argmax(np.abs(shapes), axis=0)
-    shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
+    mass_normalised(shapes, mass)  # eigh already gives unit modal mass; eigsh may not
     omega = np.sign(values) * np.sqrt(np.abs(values))
     return ModeFamily(family, omega, shapes)
 
@@ -320,6 +316,15 @@ def residual_flexibility_vectors(k: sp.csc_matrix, m: sp.csr_matrix, phi: np.nda
     response, k_r, m_r = response[:, keep], k_r[np.ix_(keep, keep)], m_r[np.ix_(keep, keep)]
     values, q = sla.eigh(k_r, m_r)
     return values, response @ q
+
+
+def mass_normalised(shapes: np.ndarray, mass) -> np.ndarray:
+    """``shapes`` (one mode a column) scaled in place to unit modal mass ``φᵀ M φ = 1`` with ``mass``, each
+    with a deterministic sign (its largest entry positive); returns it."""
+    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, mass @ shapes))
+    pivot = np.argmax(np.abs(shapes), axis=0)
+    shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
+    return shapes
 
 
 def check_truncation_correction(truncation_correction: str) -> None:
@@ -390,9 +395,7 @@ def with_attachments(kept: ModeFamily, dofs: np.ndarray, values: np.ndarray, vec
     with ``mass`` (global), a deterministic sign (the largest entry positive)."""
     shapes = np.zeros((kept.shapes.shape[0], vectors.shape[1]))
     shapes[dofs] = vectors
-    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, mass @ shapes))
-    pivot = np.argmax(np.abs(shapes), axis=0)
-    shapes *= np.sign(shapes[pivot, np.arange(shapes.shape[1])])
+    mass_normalised(shapes, mass)
     omega = np.sign(values) * np.sqrt(np.abs(values))
     return ModeFamily(kept.name, np.concatenate([kept.angular_frequencies, omega]),
                       np.hstack([kept.shapes, shapes]), kept.attachments + shapes.shape[1])

@@ -34,6 +34,7 @@ from drillstring.modal import (
     ModeFamily,
     _eigen,
     check_truncation_correction,
+    mass_normalised,
     family_coupling,
     family_dofs,
     residual_flexibility_vectors,
@@ -160,9 +161,7 @@ def released_torsional_modes(released: LinearSystem, node: int, count: int,
     values[:rigid] = 0.0
     elastic = vectors[:, rigid:]
     vectors[:, rigid:] = elastic - null @ (null.T @ (m @ elastic))  # round-off of the eigensolver's null space
-    vectors /= np.sqrt(np.einsum("ij,ij->j", vectors, m @ vectors))
-    pivot = np.argmax(np.abs(vectors), axis=0)
-    vectors *= np.sign(vectors[pivot, np.arange(vectors.shape[1])])
+    mass_normalised(vectors, m)
     attachments = 0
     if truncation_correction == "static" and vectors.shape[1] < len(dofs):
         values, vectors, attachments = _with_attachment_modes(k, m, values, vectors, dofs, node, rigid)
@@ -192,9 +191,7 @@ def _with_attachment_modes(k, m, values: np.ndarray, vectors: np.ndarray, dofs: 
     if found is None:
         return values, vectors, 0
     extra_values, extra = found
-    extra = extra / np.sqrt(np.einsum("ij,ij->j", extra, m @ extra))
-    pivot = np.argmax(np.abs(extra), axis=0)
-    extra *= np.sign(extra[pivot, np.arange(extra.shape[1])])
+    mass_normalised(extra, m)
     return np.concatenate([values, extra_values]), np.hstack([vectors, extra]), extra.shape[1]
 
 

@@ -54,8 +54,12 @@ from drillstring.modal import (
     DENSE_LIMIT,
     LinearSystem,
     ModeFamily,
+    attachment_loads,
     coupled_dofs,
     coupled_modes,
+    mass_normalised,
+    residual_flexibility_vectors,
+    with_attachments,
 )
 from drillstring.well.stiff_string import StiffStringState, case_stiff_string
 
@@ -306,14 +310,6 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
     modes) appended after them (``attachments`` counts them), each one's kind its largest kinetic-energy share;
     ``patterns`` ((n_dofs, p) load vectors in the nodes' frames, None: none) one more each
     (:func:`drillstring.modal.attachment_loads`). Loads on held DOFs, or responses the chosen modes already span, add nothing."""
-    from drillstring.modal import (
-        DENSE_LIMIT,
-        attachment_loads,
-        coupled_dofs,
-        residual_flexibility_vectors,
-        with_attachments,
-    )
-
     mesh = system.mesh
     dofs = coupled_dofs(mesh)
     if len(dofs) > DENSE_LIMIT:
@@ -341,10 +337,7 @@ def quota_modes(system: LinearSystem, slide: np.ndarray, axial: int, torsional: 
         below = sum(1 for j in candidates if index == 2 and values[j] < cutoff**2)
         chosen += candidates[:max(int(count), below)]
     chosen = [closest] + sorted(chosen[1:], key=lambda j: values[j])
-    shapes = shapes[:, chosen]
-    shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, system.mass @ shapes))
-    pivot = np.argmax(np.abs(shapes), axis=0)
-    shapes *= np.sign(shapes[pivot, np.arange(len(chosen))])
+    shapes = mass_normalised(shapes[:, chosen], system.mass)
     values = values[chosen]
     found, kinds = ModeFamily("coupled", np.sign(values) * np.sqrt(np.abs(values)), shapes), kind[chosen]
     load = attachment_loads(dofs, np.sort(np.asarray(loads, dtype=np.int64)), patterns)
