@@ -28,6 +28,13 @@ class Estimator(_Base):
     bit_rock_coefficient: str | None = Field(None, description="the estimated coefficient of the bit-rock law")
     coefficient_spread: Dimensionless | None = Field(None, description="its prior spread (of its logarithm) [-]")
     coefficient_walk: float | None = Field(None, description="its random walk [1/sqrt(s)]")
+    friction_factor: str | None = Field(None, description="the wall whose friction factor is estimated: open, "
+                                        "cased or none")
+    friction_spread: Dimensionless | None = Field(None, description="prior spread of its logarithm [-]")
+    friction_walk: float | None = Field(None, description="its random walk [1/sqrt(s)]")
+    relaxation: Dimensionless | None = Field(None, description="relaxation to the prior spread of the state [-]")
+    parameter_relaxation: Dimensionless | None = Field(None, description="relaxation to the prior spread of the "
+                                                       "parameters [-]")
     weight_on_bit_bias_spread: Force | None = Field(None, description="prior std of the weight-on-bit bias [N]")
     weight_on_bit_bias_walk: float | None = Field(None, description="its random walk [N/sqrt(s)]")
     stick_slip_window: Time | None = Field(None, description="window of the stick-slip index [s]")

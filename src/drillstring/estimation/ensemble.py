@@ -93,7 +93,7 @@ import numpy as np
 from drillstring.checks import integer, real_number
 from drillstring.checks import seed as checked_seed
 from drillstring.dynamics.compiled import RunState, SolverSettings, advance
-from drillstring.dynamics.reduced.build import case_reduced_model
+from drillstring.dynamics.reduced.build import case_reduced_model, in_casing
 from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
 from drillstring.estimation.results import DOWNHOLE, QUANTILES, EstimationResult
 from drillstring.estimation.surface import SurfaceRecord
@@ -107,6 +107,8 @@ _BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
 LOG_RANGE = 5.0
 #: The spin-up's longest step between the model error's kicks [s].
 SPIN_UP_STEP = 1.0
+#: ``friction_factor`` -> the well's key of that wall's friction factor (None: no friction factor estimated).
+FRICTION_WALLS = {"open": "open_hole_friction", "cased": "cased_hole_friction", "none": None}
 #: Units of the Tucker–Wang coefficients (pint spelling), for the results.
 COEFFICIENT_UNITS = {"a1": "m/s", "a2": "m/(N*s)", "a3": "m/rad", "a4": "N*rad", "a5": "N*m"}
 
@@ -137,9 +139,19 @@ class EstimatorSettings:
             phases spread by their parameters and the model error (docs/estimation.md, "The shipped record").
         assimilation_step: the assimilation window [s], > 0: one analysis per window, of the means of its samples
             (module docstring); 1 s: the rate of the twin experiments the noises were set on.
-        bit_rock_coefficient: the estimated coefficient of the case's bit–rock law (a field of its parameters).
+        bit_rock_coefficient: the estimated coefficient of the case's bit–rock law (a field of its parameters), or
+            ``"none"``: no bit–rock coefficient estimated (off bottom, where the law has none).
         coefficient_spread: prior standard deviation of its logarithm [-], in (0, 2].
         coefficient_walk: its random walk, standard deviation of the logarithm's change per √s [1/√s], >= 0.
+        friction_factor: the wall whose along-string friction factor μ is estimated: ``"open"`` (the well's
+            ``open_hole_friction``, at the stations at and below the casing shoe), ``"cased"``
+            (``cased_hole_friction``, above it) or ``"none"`` (none estimated); the case needs a ``[well]`` and a
+            ``[string_friction] law`` with stations on that wall.
+        friction_spread: prior standard deviation of log μ [-], in (0, 2].
+        friction_walk: its random walk [1/√s], >= 0.
+        relaxation: relaxation to the prior spread (RTPS, :func:`relax_to_prior_spread`) of the model state's
+            rows after each analysis [-], in [0, 1]; 0 none.
+        parameter_relaxation: the same for the parameters' rows (coefficient, μ, bias, block zero) [-], in [0, 1].
         weight_on_bit_bias_spread: prior standard deviation of the weight-on-bit bias [N], > 0.
         weight_on_bit_bias_walk: its random walk [N/√s], >= 0.
         stick_slip_window: the window of the stick-slip index [s], > 0.
@@ -164,6 +176,11 @@ class EstimatorSettings:
     bit_rock_coefficient: str = "a5"
     coefficient_spread: float = 0.3
     coefficient_walk: float = 0.003
+    friction_factor: str = "none"
+    friction_spread: float = 0.3
+    friction_walk: float = 0.003
+    relaxation: float = 0.0
+    parameter_relaxation: float = 0.0
     weight_on_bit_bias_spread: float = 20e3
     weight_on_bit_bias_walk: float = 100.0
     stick_slip_window: float = 20.0
@@ -182,10 +199,13 @@ class EstimatorSettings:
                      "assimilation_step"):
             real_number(name, getattr(self, name), low=0.0, low_open=True)
         for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk", "model_speed_noise",
-                     "spin_up"):
+                     "spin_up", "friction_walk"):
             real_number(name, getattr(self, name), low=0.0)
         real_number("inflation", self.inflation, low=1.0, high=2.0)
         real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
+        real_number("friction_spread", self.friction_spread, low=0.0, high=2.0, low_open=True)
+        real_number("relaxation", self.relaxation, low=0.0, high=1.0)
+        real_number("parameter_relaxation", self.parameter_relaxation, low=0.0, high=1.0)
         real_number("rtol", self.rtol, low=0.0, high=1e-2, low_open=True)
         real_number("divergence_speed_ratio", self.divergence_speed_ratio, low=1.0, low_open=True)
         integer("axial_modes", self.axial_modes, low=1, high=40)
@@ -194,7 +214,10 @@ class EstimatorSettings:
         checked_seed(self.seed)
         if not isinstance(self.bit_rock_coefficient, str) or not self.bit_rock_coefficient:
             raise ValueError(f"bit_rock_coefficient = {self.bit_rock_coefficient!r}: must be the name of a "
-                             "coefficient of the case's bit-rock law (e.g. 'a5')")
+                             "coefficient of the case's bit-rock law (e.g. 'a5') or 'none'")
+        if self.friction_factor not in FRICTION_WALLS:
+            raise ValueError(f"friction_factor = {self.friction_factor!r}: must be one of "
+                             f"{', '.join(repr(k) for k in FRICTION_WALLS)}")
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -222,13 +245,19 @@ def estimator_model(case, settings: EstimatorSettings = EstimatorSettings()):
                               lateral_modes=0, nonlinear="bit_and_contact")
 
 
-def member_model(model, laws: np.ndarray, weight_on_bit: float):
+def member_model(model, laws: np.ndarray, weight_on_bit: float, friction: np.ndarray | None = None):
     """A shallow copy of ``model`` (a case-2 :class:`~drillstring.dynamics.rom.ReducedOrderModel`) whose
     kernels read the numbers ``laws`` (the packed array of :func:`~drillstring.forces.registry.pack`, same
-    layout) and the weight-on-bit ``weight_on_bit`` [N]; ``model`` is not changed. The components' objects
-    (``model.bit_rock``) stay the nominal ones: only what the compiled kernels read changes."""
+    layout), the weight-on-bit ``weight_on_bit`` [N] and, if given, the along-string friction factors
+    ``friction`` [-] (one per station of ``model.friction_stations``, same order); ``model`` is not changed. The
+    components' objects (``model.bit_rock``, ``model.friction_stations``) stay the nominal ones: only what the
+    compiled kernels read changes (the stations' static normal forces do not depend on μ: the stiff string's
+    statics is frictionless, :mod:`drillstring.well.stiff_string`)."""
     other = copy.copy(model)
-    other.case2_data = model.case2_data._replace(laws=laws, weight_on_bit=float(weight_on_bit))
+    data = model.case2_data._replace(laws=laws, weight_on_bit=float(weight_on_bit))
+    if friction is not None:
+        data = data._replace(friction=data.friction._replace(friction=np.ascontiguousarray(friction, dtype=float)))
+    other.case2_data = data
     other.rhs_data = other.case2_data
     return other
 
@@ -250,6 +279,41 @@ def coefficient_slot(model, name: str) -> int:
         raise ValueError(f"bit_rock_coefficient = {name!r}: not a positive coefficient that the law "
                          f"{law.name!r} passes to its kernel unchanged")
     return model.layout.numbers["bit_law"] + int(moved[0])
+
+
+def friction_stations_of(case, model, wall: str) -> tuple[np.ndarray, float]:
+    """The stations of ``model.friction_stations`` on the wall ``wall`` (``"open"`` or ``"cased"``, as
+    ``friction_factor``) as a boolean mask, and the case's friction factor there [-]. ValueError naming
+    ``friction_factor`` for a case without along-string friction on that wall."""
+    key = FRICTION_WALLS[wall]
+    stations = model.friction_stations
+    if getattr(case, "well", None) is None or model.active_friction is None or stations is None or not len(stations):
+        raise ValueError(f"friction_factor = {wall!r}: the case has no along-string friction (it needs a [well] "
+                         "and a [string_friction] law other than 'none', with the string resting on the wall)")
+    cased = in_casing(case, model.static.mesh, stations.node)
+    mask = cased if wall == "cased" else ~cased
+    value = float(getattr(case.well, key))
+    if not np.any(mask) or not value > 0.0:
+        raise ValueError(f"friction_factor = {wall!r}: no station of the string rests on the {wall} hole's wall, or "
+                         f"well.{key} = {value!r} is not > 0 (its logarithm is estimated)")
+    return mask, value
+
+
+def relax_to_prior_spread(prior: np.ndarray, posterior: np.ndarray, relaxation: np.ndarray) -> np.ndarray:
+    """Relaxation to the prior spread (RTPS; Whitaker & Hamill 2012, Mon. Wea. Rev. 140, 3078-3089, eq. 10):
+    each row's analysis anomalies scaled by ``1 + α (σ_b − σ_a)/σ_a``, ``σ_b``, ``σ_a`` the row's ensemble
+    standard deviations before (``prior``, n × N) and after (``posterior``) the analysis, ``α`` the row's
+    ``relaxation`` (n,) in [0, 1] (0: unchanged, 1: the prior's spread back). The mean is kept; a row with no
+    spread after the analysis is left as it is."""
+    mean = posterior.mean(axis=1, keepdims=True)
+    anomalies = posterior - mean
+    sigma_b = prior.std(axis=1, ddof=1)
+    sigma_a = anomalies.std(axis=1, ddof=1)
+    alpha = np.asarray(relaxation, dtype=float)
+    factor = np.ones_like(sigma_a)
+    spread = sigma_a > 1e-12 * np.maximum(sigma_b, 1e-300)
+    factor[spread] = 1.0 + alpha[spread] * (sigma_b[spread] - sigma_a[spread]) / sigma_a[spread]
+    return mean + anomalies * factor[:, None]
 
 
 def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndarray, noise: np.ndarray,
@@ -281,7 +345,7 @@ class _Members:
 
     def __init__(self, states, parameters, window_samples):
         self.states = states
-        self.parameters = parameters  # (N, 3): log c, b, z0
+        self.parameters = parameters  # (N, p): [log c] [log μ] b z0
         self.outputs = [None] * len(states)
         self.speed = np.full((len(states), window_samples), np.nan)
 
@@ -306,6 +370,18 @@ def _hook_load_mean(record: SurfaceRecord, t: float, window: float) -> float:
     time = record.time
     keep = record.usable("hook_load") & (time <= t + 1e-12) & (time > t - window)
     return float(np.mean(record.channels["hook_load"][keep])) if np.any(keep) else math.nan
+
+
+def _correlation(parameters: np.ndarray, names: tuple[str, ...]) -> dict:
+    """The members' correlation of each pair of ``names`` (the columns of ``parameters``: the coefficient and
+    the friction factor as their logarithms, as the filter estimates them) [-]: ``{(a, b): r}``, NaN for a
+    column with no spread."""
+    out = {}
+    for (j, a), (k, b) in itertools.combinations(enumerate(names), 2):
+        x, y = parameters[:, j], parameters[:, k]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[(a, b)] = float(np.corrcoef(x, y)[0, 1]) if np.std(x) > 0 and np.std(y) > 0 else math.nan
+    return out
 
 
 def _summaries(values: np.ndarray) -> tuple[float, np.ndarray]:
@@ -333,8 +409,21 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     model = estimator_model(case, settings) if model is None else model
     if model.full:
         raise ValueError("estimate: the estimator's model must be case 2 (nonlinear = 'bit_and_contact')")
-    slot = coefficient_slot(model, settings.bit_rock_coefficient)
-    coefficient = float(getattr(model.bit_rock, settings.bit_rock_coefficient))
+    # the augmented parameters' columns: [log c] [log μ] b z0 (c, μ where estimated)
+    coefficient_name = None if settings.bit_rock_coefficient == "none" else settings.bit_rock_coefficient
+    friction_name = FRICTION_WALLS[settings.friction_factor]
+    try:
+        if coefficient_name is not None:
+            slot = coefficient_slot(model, coefficient_name)
+            coefficient = float(getattr(model.bit_rock, coefficient_name))
+        if friction_name is not None:
+            friction_mask, friction_value = friction_stations_of(case, model, settings.friction_factor)
+    except ValueError as error:
+        raise ValueError(f"estimator.{error}") from None
+    estimated = [name for name in (coefficient_name, friction_name) if name is not None]
+    column = {name: j for j, name in enumerate(estimated + ["weight_on_bit_bias", "block_zero"])}
+    n_parameters = len(column)
+    bias_column, zero_column = column["weight_on_bit_bias"], column["block_zero"]
     rng = np.random.default_rng(settings.seed)
     n_members = settings.ensemble_size
     n = model.size
@@ -354,7 +443,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
 
     # the initial ensemble: the string's speed spread, the parameters' priors
     y0 = model.initial_state(0.0, settings.seed)
-    states, parameters = [], np.zeros((n_members, 3))
+    states, parameters = [], np.zeros((n_members, n_parameters))
     block0 = math.nan
     if "block_position" in channels and np.any(usable["block_position"]):
         block0 = float(record.channels["block_position"][np.flatnonzero(usable["block_position"])[0]])
@@ -364,14 +453,19 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             r = model.rigid_rotation_column
             y[n + r] += settings.initial_speed_spread * rng.standard_normal() / model.quill_shapes[r]
         states.append(RunState.start(model, y))
-        parameters[i] = (math.log(coefficient) + settings.coefficient_spread * rng.standard_normal(),
-                         settings.weight_on_bit_bias_spread * rng.standard_normal(),
-                         (block0 if math.isfinite(block0) else 0.0)
-                         + settings.block_position_noise * rng.standard_normal())
+        if coefficient_name is not None:
+            parameters[i, column[coefficient_name]] = (math.log(coefficient)
+                                                       + settings.coefficient_spread * rng.standard_normal())
+        if friction_name is not None:
+            parameters[i, column[friction_name]] = (math.log(friction_value)
+                                                    + settings.friction_spread * rng.standard_normal())
+        parameters[i, bias_column] = settings.weight_on_bit_bias_spread * rng.standard_normal()
+        parameters[i, zero_column] = ((block0 if math.isfinite(block0) else 0.0)
+                                      + settings.block_position_noise * rng.standard_normal())
     window_samples = max(round(settings.stick_slip_window / settings.output_step), 2)
     members = _Members(states, parameters, window_samples)
 
-    names = tuple(DOWNHOLE) + (settings.bit_rock_coefficient, "weight_on_bit_bias")
+    names = tuple(DOWNHOLE) + tuple(estimated) + ("weight_on_bit_bias",)
     mean = {name: np.full(n_time, np.nan) for name in names}
     quantiles = {name: np.full((n_time, len(QUANTILES)), np.nan) for name in names}
     predicted_mean = {name: np.full(n_time, np.nan) for name in channels}
@@ -383,13 +477,27 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     t_end = min(int(model.blocks[3]), t_start + settings.model_noise_modes)
     bit_shape = np.asarray(model.bit_t[t_start:t_end], dtype=float)
     speed_noise = settings.model_speed_noise / max(float(np.linalg.norm(bit_shape)), 1e-300)
-    log_nominal = math.log(coefficient)
+    relaxation = None  # the RTPS factor of each row of the augmented state [y, parameters]
+    if settings.relaxation > 0.0 or settings.parameter_relaxation > 0.0:
+        relaxation = np.concatenate([np.full(len(y0), settings.relaxation),
+                                     np.full(n_parameters, settings.parameter_relaxation)])
+    friction_nominal = np.asarray(model.case2_data.friction.friction, dtype=float)
+
+    def clipped(log_value: float, nominal: float) -> float:
+        log_nominal = math.log(nominal)
+        return math.exp(min(max(log_value, log_nominal - LOG_RANGE), log_nominal + LOG_RANGE))
 
     def member(i, hook_mean):
-        laws = laws_nominal.copy()
-        laws[slot] = math.exp(min(max(members.parameters[i, 0], log_nominal - LOG_RANGE), log_nominal + LOG_RANGE))
+        laws = laws_nominal
+        if coefficient_name is not None:
+            laws = laws_nominal.copy()
+            laws[slot] = clipped(members.parameters[i, column[coefficient_name]], coefficient)
+        friction = None
+        if friction_name is not None:
+            friction = friction_nominal.copy()
+            friction[friction_mask] = clipped(members.parameters[i, column[friction_name]], friction_value)
         drop = 0.0 if not math.isfinite(hook_mean) else static_hook - hook_mean
-        return member_model(model, laws, weight + drop + members.parameters[i, 1])
+        return member_model(model, laws, weight + drop + members.parameters[i, bias_column], friction)
 
     # the assimilation windows (t0 + (j-1) step, t0 + j step] of the record (the first sample alone in window 0),
     # each analysed at its last sample with the means of its usable samples
@@ -403,9 +511,14 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         error's kick, the model; a failed member replaced by a copy of a good one. Returns the count replaced."""
         dt = t_to - t_from
         if walk:
-            members.parameters[:, 0] += settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members)
-            members.parameters[:, 1] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
+            if coefficient_name is not None:
+                members.parameters[:, column[coefficient_name]] += (
+                    settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members))
+            members.parameters[:, bias_column] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
                 n_members)
+            if friction_name is not None:
+                members.parameters[:, column[friction_name]] += (
+                    settings.friction_walk * math.sqrt(dt) * rng.standard_normal(n_members))
         if speed_noise > 0.0:
             for i in range(n_members):
                 y = members.states[i].y.copy()
@@ -446,7 +559,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             forecast(float(a), float(b), hook_first, walk=False)
         # the block's zero: each member's predicted block position at the record's first time is the first sample's
         top_now = np.array([top_u @ members.states[i].y[:n] for i in range(n_members)])
-        members.parameters[:, 2] += top_now
+        members.parameters[:, zero_column] += top_now
 
     for k in range(n_time):
         t = float(clock[k])
@@ -479,12 +592,15 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             for name in rows:
                 used[name][window_samples_used[name]] = True
             count = {name: len(window_samples_used[name]) for name in rows}
+            prior = z
             z = etkf_analysis(z, np.array([window_predicted[name] / count[name] for name in rows]),
                               np.array([window_observed[name] / count[name] for name in rows]),
                               np.array([noise[name] for name in rows]), settings.inflation)
+            if relaxation is not None:
+                z = relax_to_prior_spread(prior, z, relaxation)
             for i in range(n_members):
-                members.states[i] = members.states[i].updated(z[:-3, i])
-                members.parameters[i] = z[-3:, i]
+                members.states[i] = members.states[i].updated(z[:-n_parameters, i])
+                members.parameters[i] = z[-n_parameters:, i]
                 row = member(i, hook_mean).observe(t, members.states[i].y)
                 members.outputs[i] = row
                 members.speed[i, -1] = row[_BIT_SPEED]
@@ -501,19 +617,24 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             window_mean = np.nanmean(speed_window, axis=1)
             index = (np.nanmax(speed_window, axis=1) - np.nanmin(speed_window, axis=1)) / (2.0 * window_mean)
         values["stick_slip_index"] = np.where(window_mean > 0.0, index, np.nan)
-        values[settings.bit_rock_coefficient] = np.exp(members.parameters[:, 0])
-        values["weight_on_bit_bias"] = members.parameters[:, 1]
+        for name in estimated:
+            values[name] = np.exp(members.parameters[:, column[name]])
+        values["weight_on_bit_bias"] = members.parameters[:, bias_column]
         for name in names:
             mean[name][k], quantiles[name][k] = _summaries(values[name])
         if progress is not None:
             progress(float(time[k]))
 
     units = {name: unit for name, (unit, _) in DOWNHOLE.items()}
-    units[settings.bit_rock_coefficient] = COEFFICIENT_UNITS.get(settings.bit_rock_coefficient, "1")
+    if coefficient_name is not None:
+        units[coefficient_name] = COEFFICIENT_UNITS.get(coefficient_name, "1")
+    if friction_name is not None:
+        units[friction_name] = "1"
     units["weight_on_bit_bias"] = "N"
     return EstimationResult(
         time=time, mean=mean, quantiles=quantiles, units=units,
-        parameters=(settings.bit_rock_coefficient, "weight_on_bit_bias"),
+        parameters=tuple(estimated) + ("weight_on_bit_bias",), parameter_correlation=_correlation(
+            members.parameters[:, :n_parameters - 1], tuple(estimated) + ("weight_on_bit_bias",)),
         predicted_mean=predicted_mean, predicted_quantiles=predicted_quantiles,
         observed={name: np.asarray(record.channels[name], dtype=float) for name in channels},
         used=used, replaced=replaced, settings=settings.as_dict(), wall_time=_time.perf_counter() - begin,

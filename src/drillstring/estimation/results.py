@@ -45,6 +45,9 @@ class EstimationResult:
         replaced: (n_time,) members replaced at each time (a failed or diverging forecast, re-sampled from the
             others); ``stick_slip_window`` [s] the window of the stick-slip index.
         settings: the estimator's settings (a dict of case keys); ``wall_time`` [s] the run's.
+        parameter_correlation: ``{(a, b): r}`` the members' correlation of each pair of estimated parameters at
+            the record's end (the bit-rock coefficient and the friction factor by their logarithms) [-]: how far
+            the record separates them (r near ±1: only a combination of the two is known).
     """
 
     time: np.ndarray
@@ -60,6 +63,7 @@ class EstimationResult:
     settings: dict = field(default_factory=dict)
     wall_time: float = 0.0
     source: str = ""
+    parameter_correlation: dict = field(default_factory=dict)
 
     @property
     def replaced_members(self) -> int:

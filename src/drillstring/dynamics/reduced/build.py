@@ -403,8 +403,14 @@ def case_friction_stations(case, state: StiffStringState) -> FrictionStations:
     node = np.nonzero(state.in_contact)[0].astype(np.int64)
     element = np.minimum(node, mesh.n_elements - 1)
     radius = np.array([row[5] for row in table])[mesh.element_section[element]]
-    friction = np.where(mesh.nodes[node] < well.casing_shoe, well.cased_hole_friction, well.open_hole_friction)
+    friction = np.where(in_casing(case, mesh, node), well.cased_hole_friction, well.open_hole_friction)
     return FrictionStations(node, state.side_force[node], radius, friction)
+
+
+def in_casing(case, mesh, node) -> np.ndarray:
+    """True for each mesh node of ``node`` above the casing shoe of the case's well (``well.casing_shoe`` [m] of
+    measured depth: the cased hole's friction factor acts there, the open hole's at and below it)."""
+    return np.asarray(mesh.nodes[np.asarray(node, dtype=np.int64)] < case.well.casing_shoe)
 
 
 def case_hook_load(case, weight_on_bit: float) -> HookLoad:
