@@ -5,13 +5,15 @@ the deviated case off bottom, where the surface torque of the rotating string is
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from drillstring.case import load_case
 from drillstring.dynamics.compiled import RunState, SolverSettings, advance
 from drillstring.dynamics.reduced.build import case_reduced_model
-from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
 from drillstring.estimation.ensemble import (
     EstimatorSettings,
     case_estimator_settings,
@@ -23,17 +25,13 @@ from drillstring.estimation.ensemble import (
 )
 from drillstring.estimation.surface import SurfaceRecord
 
-
-def _off_bottom(case, **well):
-    update = {"bit_rock": case.bit_rock.model_copy(update={"law": "off_bottom"})}
-    if well:
-        update["well"] = case.well.model_copy(update=well)
-    return case.model_copy(update=update)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from twin import TRUE_FRICTION, friction_twin, off_bottom
 
 
 @pytest.fixture(scope="module")
 def deviated():
-    return _off_bottom(load_case("deviated"))
+    return off_bottom(load_case("deviated"))
 
 
 def test_member_friction_runs_as_a_model_built_with_that_friction_factor(deviated):
@@ -41,7 +39,8 @@ def test_member_friction_runs_as_a_model_built_with_that_friction_factor(deviate
     open_hole_friction changed: the same run bit for bit; the shared model is not changed."""
     small = {"axial_modes": 2, "torsional_modes": 3, "lateral_modes": 0, "nonlinear": "bit_and_contact"}
     model = case_reduced_model(deviated, **small)
-    built = case_reduced_model(_off_bottom(load_case("deviated"), open_hole_friction=0.24), **small)
+    built = case_reduced_model(deviated.model_copy(update={"well": deviated.well.model_copy(
+        update={"open_hole_friction": 0.24})}), **small)
     mask, value = friction_stations_of(deviated, model, "open")
     assert value == 0.30 and 0 < mask.sum() < len(mask)
     nominal = model.case2_data.friction.friction.copy()
@@ -97,35 +96,6 @@ def test_relaxation_to_prior_spread():
 # --------------------------------------------------------------------------------------------------------
 # Twin: the deviated case off bottom, the truth on a finer mesh with the open hole's μ = 0.25
 # --------------------------------------------------------------------------------------------------------
-
-TRUE_FRICTION = 0.25
-T_END = 30.0
-
-
-def friction_twin(case, seed: int, t_end: float = T_END, element: float = 5.0, torsional_modes: int = 20):
-    """The record of the off-bottom ``case`` with the open hole's μ = :data:`TRUE_FRICTION`, simulated on a mesh
-    of ``element`` [m] (the case's: 10 m) with ``torsional_modes`` torsional and 10 axial modes, no lateral
-    ones, the imposed top speed's and the surface torque's samples at 1 Hz with noise 0.05 rad/s and 300 N m."""
-    truth_case = _off_bottom(case, open_hole_friction=TRUE_FRICTION).model_copy(
-        update={"mesh": case.mesh.model_copy(update={"max_element_length": element})})
-    model = case_reduced_model(truth_case, torsional_modes=torsional_modes, lateral_modes=0,
-                               nonlinear="bit_and_contact")
-    rng = np.random.default_rng(seed)
-    state = RunState.start(model, model.initial_state(0.0, seed))
-    time = np.arange(0.0, t_end + 1e-9, 1.0)
-    rows = [model.observe(0.0, state.y)]
-    for t in time[1:]:
-        run = advance(model, SolverSettings(rtol=1e-6, atol=1e-9), state, float(t), output_times=[float(t)])
-        assert run.success, run.message
-        state = run.state
-        rows.append(run.outputs[-1])
-    rows = np.array(rows)
-    n = len(time)
-    return SurfaceRecord.from_arrays(
-        time, source="friction twin",
-        top_speed=rows[:, OBSERVABLE_COLUMN["quill_speed"]] + 0.05 * rng.standard_normal(n),
-        surface_torque=rows[:, OBSERVABLE_COLUMN["surface_torque"]] + 300.0 * rng.standard_normal(n))
-
 
 #: The twin's estimator: μ alone (no bit-rock coefficient off bottom; the weight-on-bit bias held at 0: off
 #: bottom it only shakes the members axially), 20 torsional modes (with 5, the steady surface torque of the

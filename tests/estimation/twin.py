@@ -82,3 +82,40 @@ def twin(case, t_end: float, *, coefficient: str = "a5", coefficient_factor: flo
         block_position=30.0 - np.array(top) + sigma[2] * rng.standard_normal(n_t),
         hook_load=model.static.weight_on_hook + hook_load_offset + sigma[3] * rng.standard_normal(n_t))
     return Twin(record, time, truth, fine_time, fine, getattr(truth_law, coefficient), hook_load_offset)
+
+
+#: The open hole's friction factor of the friction twin's truth [-].
+TRUE_FRICTION = 0.25
+
+
+def off_bottom(case):
+    """``case`` with the bit off bottom (``bit_rock.law = "off_bottom"``)."""
+    return case.model_copy(update={"bit_rock": case.bit_rock.model_copy(update={"law": "off_bottom"})})
+
+
+def friction_twin(case, seed: int, t_end: float = 30.0, element: float = 5.0, torsional_modes: int = 20,
+                  drilling: bool = False):
+    """The record of ``case`` (a case with a well and along-string friction: ``deviated``) off bottom (or as the
+    case is, ``drilling``) with the open hole's μ = :data:`TRUE_FRICTION`, simulated on a mesh of ``element``
+    [m] (the case's: 10 m) with ``torsional_modes`` torsional and 10 axial modes, no lateral ones: the top
+    speed's and the surface torque's samples at 1 Hz with noise 0.05 rad/s and 300 N m."""
+    truth_case = case.model_copy(update={"well": case.well.model_copy(update={"open_hole_friction": TRUE_FRICTION})})
+    truth_case = (truth_case if drilling else off_bottom(truth_case)).model_copy(
+        update={"mesh": case.mesh.model_copy(update={"max_element_length": element})})
+    model = case_reduced_model(truth_case, torsional_modes=torsional_modes, lateral_modes=0,
+                               nonlinear="bit_and_contact")
+    rng = np.random.default_rng(seed)
+    state = RunState.start(model, model.initial_state(0.0, seed))
+    time = np.arange(0.0, t_end + 1e-9, 1.0)
+    rows = [model.observe(0.0, state.y)]
+    for t in time[1:]:
+        run = advance(model, SolverSettings(rtol=1e-6, atol=1e-9), state, float(t), output_times=[float(t)])
+        assert run.success, run.message
+        state = run.state
+        rows.append(run.outputs[-1])
+    rows = np.array(rows)
+    n = len(time)
+    return SurfaceRecord.from_arrays(
+        time, source="friction twin",
+        top_speed=rows[:, OBSERVABLE_COLUMN["quill_speed"]] + 0.05 * rng.standard_normal(n),
+        surface_torque=rows[:, OBSERVABLE_COLUMN["surface_torque"]] + 300.0 * rng.standard_normal(n))

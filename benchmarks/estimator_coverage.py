@@ -1,0 +1,104 @@
+"""Coverage of the estimator's 90 % bands of bit speed and torque on bit against the truth, on the record shipped
+with the stick_slip case and on the stick-slip twin of tests/estimation/twin.py, for settings given on the
+command line (docs/estimation.md, "Coverage and relaxation").
+
+    python benchmarks/estimator_coverage.py [--shipped SECONDS] [--twin SECONDS] [--members N] [--seeds 0,1]
+        [--config "relaxation=0.5 parameter_relaxation=0.5"] ...
+
+Each ``--config`` (a space-separated list of EstimatorSettings fields over the case's defaults; "" the defaults)
+runs on both records for each seed (the estimator's seed; the twin's truth is seed 1's, as the tests'). The
+shipped record is read at 10 Hz as shipped, its first ``--shipped`` seconds, coverage over the whole record (the
+spin-up runs before it); the twin's coverage is counted after its first 10 s (its filter starts from the model's
+initial state). One line per run: coverage of bit speed and torque on bit, the bit speed's RMSE, the members
+replaced and the wall time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drillstring.api.estimates import builtin_record
+from drillstring.case import load_case
+from drillstring.estimation.ensemble import (
+    EstimatorSettings,
+    case_estimator_settings,
+    estimate,
+    estimator_model,
+)
+from drillstring.estimation.reading import read_surface_record
+from drillstring.estimation.surface import SurfaceRecord
+from drillstring.estimation.synthetic import read_truth
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "estimation"))
+from twin import twin
+
+TWIN_START = 10.0  # [s] the twin's coverage is counted from here
+
+
+def _settings(text: str) -> dict:
+    fields = {f: type(getattr(EstimatorSettings(), f)) for f in EstimatorSettings.__dataclass_fields__}
+    out = {}
+    for item in text.split():
+        key, value = item.split("=")
+        out[key] = fields[key](value)
+    return out
+
+
+def _shipped(seconds: float):
+    case = load_case("stick_slip")
+    record_path, truth_path = builtin_record("stick_slip")
+    record = read_surface_record(record_path, case=case)
+    keep = record.time <= seconds + 1e-9
+    record = SurfaceRecord(record.time[keep], {k: v[keep] for k, v in record.channels.items()},
+                           {k: v[keep] for k, v in record.flags.items()}, "shipped")
+    _, truth = read_truth(truth_path)
+    return case, record, {name: np.interp(record.time, truth["time"], truth[name])
+                          for name in ("bit_speed", "torque_on_bit")}, -np.inf
+
+
+def _twin(seconds: float):
+    case = load_case("stick_slip")
+    experiment = twin(case, seconds)
+    return case, experiment.record, experiment.truth, TWIN_START
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--shipped", type=float, default=40.0)
+    parser.add_argument("--twin", type=float, default=60.0)
+    parser.add_argument("--members", type=int, default=16)
+    parser.add_argument("--seeds", default="0,1")
+    parser.add_argument("--config", action="append", default=None)
+    options = parser.parse_args()
+    configs = options.config or [""]
+    records = {}
+    if options.shipped > 0:
+        records["shipped"] = _shipped(options.shipped)
+    if options.twin > 0:
+        records["twin"] = _twin(options.twin)
+    models = {}
+    for config in configs:
+        for name, (case, record, truth, start) in records.items():
+            for seed in (int(s) for s in options.seeds.split(",")):
+                settings = case_estimator_settings(case, ensemble_size=options.members, seed=seed,
+                                                   **({"spin_up": 0.0} if name == "twin" else {}), **_settings(config))
+                key = (settings.axial_modes, settings.torsional_modes)
+                models.setdefault(key, estimator_model(case, settings))
+                begin = time.perf_counter()
+                result = estimate(case, record, settings, model=models[key])
+                wall = time.perf_counter() - begin
+                keep = result.time >= start
+                rmse = float(np.sqrt(np.mean((result.mean["bit_speed"] - truth["bit_speed"])[keep] ** 2)))
+                print(f"{config or 'defaults':45s} {name:7s} seed {seed} N {options.members:3d} "
+                      f"bit_speed {result.coverage('bit_speed', truth['bit_speed'], start):.2f} "
+                      f"torque_on_bit {result.coverage('torque_on_bit', truth['torque_on_bit'], start):.2f} "
+                      f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
