@@ -16,17 +16,21 @@ itself), and for a linear observation its analysis mean and sample covariance ar
 forecast's sample mean and covariance (checked in tests/estimation/test_ensemble.py). The observations are few
 (at most three scalars a time) so the N × N problem is cheap.
 
-**State.** The augmented state of a member is ``[y, log c, b, z0]``: ``y`` the reduced model's state
+**State.** The augmented state of a member is ``[y, log c, log μ, b, z0]``: ``y`` the reduced model's state
 (:attr:`~drillstring.dynamics.rom.ReducedOrderModel.state_size`: modal coordinates, their rates, the top drive's
 controller states), ``log c`` the logarithm of one bit–rock coefficient of the case's law
 (``bit_rock_coefficient``, e.g. ``a5``, the frictional torque of the Tucker–Wang law; the logarithm keeps it
-positive), ``b`` the weight-on-bit bias [N] and ``z0`` the block position of the static state [m] (the record's
-zero is the driller's). The parameters follow a random walk (``coefficient_walk``, ``weight_on_bit_bias_walk``,
-per √s) between observations: they may drift, and the walk keeps the ensemble from collapsing on them.
+positive; left out for ``"none"``), ``log μ`` that of the along-string friction factor of one wall of a deviated
+well (``friction_factor``: the open or the cased hole's; left out for ``"none"``, the default), ``b`` the
+weight-on-bit bias [N] and ``z0`` the block position of the static state [m] (the record's zero is the
+driller's). The parameters follow a random walk (``coefficient_walk``, ``friction_walk``,
+``weight_on_bit_bias_walk``, per √s) between observations: they may drift, and the walk keeps the ensemble from
+collapsing on them.
 
-**Forecast.** Each member runs its own copy of the model (the shared model with the law's numbers and the
-weight-on-bit replaced in its kernel data: :func:`member_model`, a few microseconds, where building a model
-takes 0.1-0.2 s) by :func:`~drillstring.dynamics.compiled.advance` from the analysis to the next record time.
+**Forecast.** Each member runs its own copy of the model (the shared model with the law's numbers, the
+weight-on-bit and μ at the stations on its wall replaced in its kernel data: :func:`member_model`, a few
+microseconds, where building a model takes 0.1-0.2 s) by :func:`~drillstring.dynamics.compiled.advance` from
+the analysis to the next record time.
 The weight-on-bit of a member over an interval is ``W = W_case + (H_static − H̄) + b``: the case's, plus the hook
 load's drop below the static hook load (``H̄`` the mean of the usable hook-load samples over the last
 ``hook_load_window`` seconds, the hook load an input, not an observation), plus the member's bias ``b``, the
@@ -62,7 +66,10 @@ against a surface torque of 18 kN·m, and the first analyses put that on the wei
 ones) and the truth is another model: before each forecast the torsional modal velocities of every member are
 kicked by white noise scaled to ``model_speed_noise`` rad/s of bit speed per √s (additive model error).
 Multiplicative prior inflation of the anomalies (``inflation``) is available, default 1: with the additive noise
-it only widened the parameters' spread, and at 1.15 drove them off on the stick-slip twin. No localisation: the
+it only widened the parameters' spread, and at 1.15 drove them off on the stick-slip twin. Relaxation to the
+prior spread (``relaxation`` for the model state's rows, ``parameter_relaxation`` for the parameters'; default 0,
+off: :func:`relax_to_prior_spread`) after each analysis gives back part of the spread the analysis removed
+(docs/estimation.md, "Coverage and relaxation"). No localisation: the
 state is a few modal coordinates, each global along the string, and the default ensemble (64) exceeds the
 augmented state's dimension (about 25).
 
@@ -514,8 +521,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             if coefficient_name is not None:
                 members.parameters[:, column[coefficient_name]] += (
                     settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members))
-            members.parameters[:, bias_column] += settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(
-                n_members)
+            members.parameters[:, bias_column] += (
+                settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(n_members))
             if friction_name is not None:
                 members.parameters[:, column[friction_name]] += (
                     settings.friction_walk * math.sqrt(dt) * rng.standard_normal(n_members))
