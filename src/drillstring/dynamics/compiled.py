@@ -340,9 +340,35 @@ class _CompileMonitor(event.Listener):
             self.seconds += _time.perf_counter() - self.started
 
 
+def _structure(value):
+    """A key that is equal for two values Numba types alike, None for a value it cannot vouch for: an array's
+    dtype, dimensions, layout and flags, a tuple's class and members' keys, a number's class. About 15 times
+    cheaper than :func:`numba.typeof` on a model's kernel data (40 µs against 0.6 ms), which a study paid three
+    times a realization."""
+    if isinstance(value, np.ndarray):
+        flags = value.flags
+        return value.dtype.str, value.ndim, flags.c_contiguous, flags.f_contiguous, flags.writeable, flags.aligned
+    if isinstance(value, tuple):
+        members = tuple(_structure(member) for member in value)
+        return None if None in members else (type(value), members)
+    if type(value) in (float, int, bool):
+        return type(value)
+    return None
+
+
+#: (dispatcher, structure of the arguments) already compiled or loaded in this process (:func:`_prepare`).
+_PREPARED: set = set()
+
+
 def _prepare(dispatcher, *args) -> None:
-    """Compile ``dispatcher`` for the types of ``args``, or load it from the cache, without running it."""
+    """Compile ``dispatcher`` for the types of ``args``, or load it from the cache, without running it; once
+    per process and argument structure (:func:`_structure`)."""
+    key = _structure(args)
+    if key is not None and (dispatcher, key) in _PREPARED:
+        return
     dispatcher.compile(tuple(typeof(a) for a in args))
+    if key is not None:
+        _PREPARED.add((dispatcher, key))
 
 
 def _compile_kernels(model, data, work: Workspace, step, settings: StepperSettings,

@@ -46,7 +46,9 @@ def load_study(store_path: str | Path) -> xr.Dataset:
         if damaged:
             raise StoreError(f"{store_path} is damaged ({'; '.join(damaged)}); {advice}")
         try:
-            ds = xr.open_zarr(str(store_path), consolidated=False).load()
+            # read whole arrays, each in one Zarr call (its chunks concurrently), not through Dask's graph of
+            # one task per chunk: 0.66 s instead of 1.95 s for a 500-realization reference study
+            ds = xr.open_zarr(str(store_path), consolidated=False, chunks=None).load()
         except Exception as error:  # a chunk that does not decode (checksum, truncated file)
             found = "; ".join(damage(group)) or f"{type(error).__name__}: {error}"
             raise StoreError(f"{store_path} is damaged ({found}); {advice}") from None

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -194,6 +195,24 @@ def nominal_weight_on_hook(case: Case) -> float:
     return case.weight - case.operation.weight_on_bit
 
 
+#: The TOML text of the cases seen in this process, by object (a Case is frozen): the studies' cache keys
+#: (:func:`case_text`).
+_CASE_TEXTS: dict[int, tuple[weakref.ref, str]] = {}
+
+
+def case_text(case: Case) -> str:
+    """``case.to_toml()``, written once per case object in this process (0.5 ms each; a realization needs it
+    three times as the key of its study's caches)."""
+    found = _CASE_TEXTS.get(id(case))
+    if found is not None and found[0]() is case:
+        return found[1]
+    text = case.to_toml()
+    if len(_CASE_TEXTS) > 64:
+        _CASE_TEXTS.clear()
+    _CASE_TEXTS[id(case)] = (weakref.ref(case), text)
+    return text
+
+
 #: Built uncertainties (their MaxEnt laws), by study, in this process.
 _UNCERTAINTIES: dict[tuple, Uncertainty] = {}
 
@@ -204,7 +223,7 @@ def study_uncertainty(case: Case, settings: StudySettings, *, check: bool = Fals
     ``check=True`` refuses (:class:`~drillstring.stochastic.parameters.ParameterError`, one line) a law that
     puts a probability above :data:`OUT_OF_RANGE_PROBABILITY` outside its parameter's range; otherwise any
     law is accepted (draws outside the range fail their realization). Built once per process and study."""
-    key = (case.to_toml(), settings, check)
+    key = (case_text(case), settings, check)
     if key in _UNCERTAINTIES:
         return _UNCERTAINTIES[key]
     found = settings.uncertainty.law(case, tolerance=OUT_OF_RANGE_PROBABILITY if check else 1.0)
@@ -357,7 +376,7 @@ def run_realization(case: Case, settings: StudySettings, index: int) -> Realizat
         realized = law.apply(case, values)
         outcome.weight_on_hook = realized.weight_on_hook
         outcome.weight_on_bit = realized.operation.weight_on_bit
-        model = realization_model(case, (case.to_toml(), settings), law, realized, nominal=index == NOMINAL)
+        model = realization_model(case, (case_text(case), settings), law, realized, nominal=index == NOMINAL)
         if index != NOMINAL:
             model = random_reduced_model(model, settings.model, model_generator(settings.seed, index))
         outcome.lowest_lateral_eigenvalue = model.lowest_lateral_eigenvalue
@@ -526,7 +545,7 @@ def run_study(case: Case, settings: StudySettings, store_path: str | Path, engin
     runs on it). :func:`~drillstring.stochastic.execution.run_locked` does the rest.
     """
     check_study(case, settings)
-    model_note = study_model_note(case, (case.to_toml(), settings), study_uncertainty(case, settings))
+    model_note = study_model_note(case, (case_text(case), settings), study_uncertainty(case, settings))
     if model_note is not None and engine.note is not None:
         engine.note(model_note)
 
