@@ -11,10 +11,12 @@ from a named context (:class:`BitContext`: time, bit position and angle, axial v
 of cut, static weight-on-bit), never from positional arguments. A law declares ``name``, ``kernel_size``
 (how many numbers its compiled kernel reads), ``kernel_array()`` (those numbers), ``kernel`` (the compiled
 kernel, ``kernel(args, ctx) -> (axial_force, torque)``), ``evaluate_at(ctx)`` (the kernel at array
-fields, broadcast; inherited), ``jacobian_at(ctx)`` (``[[f_u, f_θ], [t_u, t_θ]]``) and ``steady_drilling(bit_speed,
+fields, broadcast; inherited), ``jacobian_kernel`` (its compiled Jacobian, ``(args, ctx) -> (f_u, f_θ, f_d, t_u,
+t_θ, t_d)``; ``jacobian_at(ctx)``, ``[[f_u, f_θ], [t_u, t_θ]]``, and ``depth_partials(ctx)`` call it, inherited)
+and ``steady_drilling(bit_speed,
 axial_load, resistance)`` (the steady state, :class:`BitSteadyState`: the stability analysis asks the law,
 it never samples it). A law that reads the depth of cut (``delayed = True``) also gives ``sector`` (the
-lag angle) and ``depth_partials(ctx)``.
+lag angle).
 
 **Top boundaries** (:class:`TopBoundary`): the top of the torsion; those that drive the string
 (``drives = True``) declare ``n_states`` (their own states, integrated with the modal coordinates),
@@ -49,10 +51,10 @@ starts off bottom (``clearance`` [m] above the rock, the string hanging from the
 
 **Downhole motors** (:class:`Motor`): a rotor between two sections (:mod:`drillstring.rotor` releases its
 rotation), ``kernel(args, ctx, states, rates) -> torque`` (+T on the rotor side, −T on the stator side; the
-named context :class:`MotorContext`; writes its states' rates), ``evaluate_at(ctx, states) -> (torque,
-rates)``, ``jacobian_at(ctx, states)`` (rows: torque then each state's rate; columns: the relative speed, then
+named context :class:`MotorContext`; writes its states' rates), ``jacobian_kernel(args, ctx, states) ->
+dT/dω_m`` (compiled), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian_at(ctx, states)`` (rows: torque then each state's rate; columns: the relative speed, then
 each state), ``steady_states(relative_speed)``, ``position`` (the rotor station [m]) and ``n_states``; the
-kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0.
+kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0 (and the stiff part :func:`motor_slope`).
 
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
 (:class:`~drillstring.case.TuckerWangKeys`, ...), and the case names it in its kind's table (``bit_rock.law``,
@@ -77,7 +79,9 @@ the offsets :func:`pack` computes from their ``n_states``.
 
 **Compiled dispatch.** The kernels call one dispatch function per kind whose components have kernels of their
 own (``_DISPATCHED`` says which; the turning-load sources share one kernel instead); when they are compiled, the registry writes the dispatch over the codes of the package's registered components, each
-component's kernel inlined into it at Numba's IR level (one compiled function per kind, not one per kernel)
+component's kernel inlined into it at Numba's IR level (one compiled function per kind, not one per kernel;
+likewise the bit laws' and motors' compiled Jacobians, :func:`bit_law_jacobian` and :func:`motor_slope`, with
+central differences of the kernel for a component that declares none)
 (:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
 same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
 component registered from **outside the package** (a test, a user's script) runs through the NumPy
