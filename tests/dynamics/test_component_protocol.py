@@ -50,6 +50,20 @@ def _weakening_kernel(args, ctx):
     return -weight, -args[2] * weight * shape
 
 
+@njit(cache=True)
+def _weakening_jacobian(args, ctx):
+    """The law's partials ``(f_u, f_ω, f_d, t_u, t_ω, t_d)`` in closed form, compiled (its ``jacobian_kernel``:
+    the protocol's ``jacobian_at`` calls it)."""
+    weight = args[0] + ctx.axial_velocity / args[1]
+    if weight <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    w = ctx.bit_speed
+    decay = args[3] * math.exp(-abs(w) / args[4])
+    tanh = math.tanh(w / args[5])
+    slope = -math.copysign(decay / args[4], w) * tanh + (1.0 + decay) * (1.0 - tanh * tanh) / args[5]
+    return -1.0 / args[1], 0.0, 0.0, -args[2] * (1.0 + decay) * tanh / args[1], -args[2] * weight * slope, 0.0
+
+
 @register
 @dataclass(frozen=True)
 class VelocityWeakeningBit(BitLaw):
@@ -61,6 +75,7 @@ class VelocityWeakeningBit(BitLaw):
     name: ClassVar[str] = "velocity_weakening_test"
     kernel_size: ClassVar[int] = 6
     kernel: ClassVar = _weakening_kernel
+    jacobian_kernel: ClassVar = _weakening_jacobian  # jacobian_at(ctx) is the protocol's: this, from Python
 
     threshold: float = 2e4  # W0 [N]
     rate: float = 4.4e-8  # a [m/(N·s)]
@@ -85,18 +100,6 @@ class VelocityWeakeningBit(BitLaw):
         weight = self.threshold + u / self.rate
         contact = weight > 0.0
         return (np.where(contact, -weight, 0.0), np.where(contact, -self.friction_arm * weight * self._shape(w), 0.0))
-
-    def jacobian_at(self, ctx: BitContext):
-        u, w = float(ctx.axial_velocity), float(ctx.bit_speed)
-        weight = self.threshold + u / self.rate
-        if weight <= 0.0:
-            return np.zeros((2, 2))
-        decay = self.weakening * math.exp(-abs(w) / self.weakening_speed)
-        tanh = math.tanh(w / self.regularization)
-        slope = -math.copysign(decay / self.weakening_speed, w) * tanh + (1.0 + decay) * (1.0 - tanh**2) / \
-            self.regularization
-        return np.array([[-1.0 / self.rate, 0.0],
-                         [-self.friction_arm * float(self._shape(w)) / self.rate, -self.friction_arm * weight * slope]])
 
     def steady_drilling(self, bit_speed, axial_load, resistance):
         rop = (axial_load - self.threshold) / (1.0 / self.rate + resistance)

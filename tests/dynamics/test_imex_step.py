@@ -98,9 +98,10 @@ def _stiff_part(data, t, y, shapes, partials):
 
 
 def test_compiled_stiff_part_is_the_laws_closed_form_jacobian(small_case):
-    """The compiled stiff part (central differences of the compiled Tucker–Wang law) equals the law's
-    closed-form partials in u̇ and θ̇ (``jacobian_at``) at a drilling state, and carries them along the bit's
-    own shapes; the law reads no position (last column 0); it returns the model's ω² and damping."""
+    """The compiled stiff part (the Tucker–Wang law's compiled Jacobian) equals the law's closed-form partials
+    in u̇ and θ̇ (``jacobian_at``, the same function called from Python) at a drilling state, and carries them
+    along the bit's own shapes; the law reads no position (last column 0); it returns the model's ω² and
+    damping."""
     from drillstring.forces.registry import bit_context
 
     model = case_reduced_model(small_case)
@@ -117,8 +118,33 @@ def test_compiled_stiff_part_is_the_laws_closed_form_jacobian(small_case):
     ctx = bit_context(model.bit_u @ y[n:2 * n], model.base_speed + model.bit_t @ y[n:2 * n], 0.0, time=0.0,
                       position=position, angle=angle, weight_on_bit=model.weight_on_bit)
     closed = np.asarray(model.bit_rock.jacobian_at(ctx), dtype=float)
-    np.testing.assert_allclose(partials[:, :2], closed, rtol=1e-6, atol=1e-9 * np.abs(closed).max())
+    np.testing.assert_allclose(partials[:, :2], closed, rtol=1e-12, atol=0.0)
+    assert np.all(closed != 0.0)
     np.testing.assert_array_equal(partials[:, 2], 0.0)
+
+
+def test_compiled_stiff_part_of_a_delayed_law_moves_the_depth_of_cut_with_the_position(torsional_case):
+    """The Detournay law (delayed): the stiff part's partials in u̇ and θ̇ are ``jacobian_at`` and its position
+    column the depth partials ``depth_partials`` (the depth of cut ``u − u(θ − 2π/n)`` moves with the position
+    at a fixed angle), at the context the stiffness diagnosis builds from the model's history."""
+    from drillstring.dynamics.stiffness import _bit_context_at
+
+    case = torsional_case.model_copy(update={
+        "bit_rock": torsional_case.bit_rock.model_copy(update={"law": "detournay"}),
+        "initial": torsional_case.initial.model_copy(update={"start": "on_bottom"})})
+    model = case_reduced_model(case)
+    n = model.size
+    y = model.initial_state(0.0, 0)
+    y[n:2 * n] += 1e-4 * model.bit_u / (model.bit_u @ model.bit_u)  # advancing below v_r: f_u ≠ 0
+    y[:n] += 1e-3 * model.bit_u / (model.bit_u @ model.bit_u)  # 1 mm below the model's (flat) prehistory
+    shapes, partials = np.zeros((2, len(y))), np.zeros((2, 3))
+    _stiff_part(model.rhs_data, 0.0, y, shapes, partials)
+    ctx = _bit_context_at(model, 0.0, y)
+    assert ctx.depth_of_cut > 0.0
+    law = model.bit_rock
+    np.testing.assert_allclose(partials[:, :2], law.jacobian_at(ctx), rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(partials[:, 2], law.depth_partials(ctx), rtol=1e-12, atol=0.0)
+    assert partials[0, 2] == -law.cutting_stiffness and partials[0, 0] < 0.0
 
 
 def test_compiled_imex_agrees_with_dopri5_on_the_reduced_model(small_case):

@@ -47,7 +47,8 @@ The law is one component of the reduced model (:mod:`drillstring.forces.registry
 :meth:`BitRockParameters.from_case`), the numbers its compiled kernel reads
 (:meth:`BitRockParameters.kernel_array`, :data:`KERNEL_SIZE` entries), the compiled kernel
 :func:`tucker_wang_kernel` (reading the named context :class:`~drillstring.forces.registry.BitContext`),
-its Jacobian :func:`bit_rock_jacobian` and its steady drilling (:meth:`BitRockParameters.steady_drilling`,
+its Jacobian :func:`tucker_wang_jacobian` (compiled; :func:`bit_rock_jacobian` calls it from Python) and its
+steady drilling (:meth:`BitRockParameters.steady_drilling`,
 closed form). The law is written once, in the kernel: :func:`evaluate_bit_rock` (the component's
 ``evaluate_at``, which the NumPy reference engine calls) applies that kernel elementwise; it is no
 independent reference. The tests check the kernel against the law as written above, the steady state's
@@ -82,6 +83,7 @@ __all__ = [
     "bit_rock_law_array",
     "bit_rock_jacobian",
     "case_bit_rock",
+    "tucker_wang_jacobian",
     "tucker_wang_kernel",
     "evaluate_bit_rock",
     "steady_state",
@@ -180,10 +182,6 @@ class BitRockParameters(BitLaw):
         """The kernel at array-valued contexts: :func:`evaluate_bit_rock` at the context's axial velocity and
         bit speed (the law's one implementation, applied elementwise)."""
         return evaluate_bit_rock(ctx.axial_velocity, ctx.bit_speed, self)
-
-    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
-        """:func:`bit_rock_jacobian` at the context's axial velocity and bit speed."""
-        return bit_rock_jacobian(ctx.axial_velocity, ctx.bit_speed, self)
 
     def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState | None:
         """Steady drilling at Ω = ``bit_speed`` [rad/s] under ``axial_load`` W [N] less ``resistance`` c
@@ -322,6 +320,44 @@ BitRockParameters.kernel = tucker_wang_kernel
 
 
 @njit(cache=True)
+def tucker_wang_jacobian(args, ctx):
+    """The component's compiled Jacobian (its ``jacobian_kernel``, the one :func:`bit_rock_jacobian`, the
+    component's ``jacobian_at`` and the compiled stiff part call): ``(f_u, f_θ, f_d, t_u, t_θ, t_d)``, the
+    partials of :func:`tucker_wang_kernel` in u̇ [m/s], θ̇ [rad/s] and the depth of cut (none: 0) at ``ctx``
+    for the numbers ``args`` of :meth:`BitRockParameters.kernel_array`, in closed form (:func:`bit_rock_jacobian`).
+    Zero where the kernel gives no force (unilateral contact); at ``θ̇ = 0`` with no floor, the kernel's own
+    limits (``1/Z²`` frozen, ``Z²/θ̇ = 0``)."""
+    u, w = ctx.axial_velocity, ctx.bit_speed
+    a2, a3, a4, a5, e, floor = args[1], args[2], args[3], args[4], args[5], args[6]
+    force, _ = bit_rock_force_floored(u, w, args[0], a2, a3, a4, a5, e, floor)
+    if force >= 0.0:  # the kernel gives (0, 0): the bit has left the rock
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    speed = max(abs(w), floor)
+    if speed > 0.0:
+        q = e / speed
+        inv_z2 = 1.0 + q * q
+    elif e == 0.0:
+        inv_z2 = 1.0
+    else:  # as bit_rock_force_floored at θ̇ = 0 with a zero floor
+        ratio = 1.0 / STICK_SPEED_FLOOR_RATIO
+        inv_z2 = 1.0 + ratio * ratio
+    h2 = w * w + e * e
+    h = math.sqrt(h2)
+    f_u = -inv_z2 / a2
+    f_theta = 0.0 if (abs(w) < floor or w == 0.0) else 2.0 * e * e * u / (a2 * w**3)  # 1/Z² frozen: none
+    t_u = 0.0
+    t_theta = 0.0
+    if h > 0.0:
+        f_theta += a3 * w / (a2 * h)
+        t_u = -a4 * w / h2
+        t_theta = -a4 * u * (e * e - w * w) / (h2 * h2) - a5 * e * e / (h2 * h)
+    return f_u, f_theta, 0.0, t_u, t_theta, 0.0
+
+
+BitRockParameters.jacobian_kernel = tucker_wang_jacobian
+
+
+@njit(cache=True)
 def bit_rock_law_array(args, bit_axial_velocity, bit_speed, axial_force, torque):
     """Loop of :func:`tucker_wang_kernel` over 1-D arrays; fills ``axial_force``/``torque`` in place."""
     for i in range(bit_axial_velocity.shape[0]):
@@ -395,21 +431,12 @@ def bit_rock_jacobian(bit_axial_velocity: float, bit_speed: float, params: BitRo
         t_u = −a4 θ̇/h²,              t_θ = −a4 u̇ (e² − θ̇²)/h⁴ − a5 e²/h³.
 
     Valid above the stick floor (where ``1/Z²`` is frozen, ``f_θ`` loses its first term). Zero where the law
-    would pull the bit (unilateral contact).
+    would pull the bit (unilateral contact). The law's one Jacobian, :func:`tucker_wang_jacobian` (compiled),
+    called from Python.
     """
-    if evaluate_bit_rock(bit_axial_velocity, bit_speed, params)[0] == 0.0:
-        return np.zeros((2, 2))
-    u, w = float(bit_axial_velocity), float(bit_speed)
-    a2, a3, a4, a5, e = params.a2, params.a3, params.a4, params.a5, params.e
-    h2 = w * w + e * e
-    h = math.sqrt(h2)
-    floored = abs(w) < params.stick_speed_floor
-    speed = max(abs(w), params.stick_speed_floor)
-    f_u = -(1.0 + (e / speed) ** 2) / a2
-    f_theta = (0.0 if floored else 2.0 * e * e * u / (a2 * w**3)) + a3 * w / (a2 * h)
-    t_u = -a4 * w / h2
-    t_theta = -a4 * u * (e * e - w * w) / h2**2 - a5 * e * e / h**3
-    return np.array([[f_u, f_theta], [t_u, t_theta]])
+    values = tucker_wang_jacobian(params.kernel_array(),
+                                  BitContext(0.0, 0.0, 0.0, float(bit_axial_velocity), float(bit_speed), 0.0, 0.0))
+    return np.array([[values[0], values[1]], [values[3], values[4]]])
 
 
 def case_bit_rock(case) -> BitLaw:

@@ -44,7 +44,8 @@ bit–rock laws (:mod:`drillstring.forces.bit_rock`): ``(−W, −T)`` while dri
 
 The component (:mod:`drillstring.forces.registry`), registered as ``"detournay"``: :class:`DetournayParameters`
 (built from the case by :meth:`DetournayParameters.from_case`), its kernel :func:`detournay_kernel` (reading
-the depth of cut of the named context), its Jacobian and steady drilling in closed form. The law is written
+the depth of cut of the named context), its Jacobian (:func:`detournay_jacobian`, compiled, which its
+``jacobian_at`` and ``depth_partials`` call from Python) and steady drilling in closed form. The law is written
 once, in :func:`detournay_force`; :meth:`DetournayParameters.evaluate` (and ``evaluate_at``) apply it
 elementwise, and the tests check it against the steady state, the saturations and the friction line above.
 """
@@ -68,7 +69,9 @@ __all__ = [
     "KERNEL_SIZE",
     "detournay_force",
     "detournay_force_array",
+    "detournay_jacobian",
     "detournay_kernel",
+    "detournay_partials",
 ]
 
 #: Numbers of :meth:`DetournayParameters.kernel_array`: ``[a ζ ε n, ½ a² ε n, a σ l, ½ μ γ a, v_r, ω_r, 2π/n]``.
@@ -146,15 +149,7 @@ class DetournayParameters(BitLaw):
         """:meth:`evaluate` (the kernel, elementwise) at the context's depth of cut, axial velocity and bit speed."""
         return self.evaluate(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
 
-    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
-        """``[[f_u, f_ω], [t_u, t_ω]]`` of :meth:`jacobian` (the partials in the depth of cut:
-        :meth:`depth_partials`)."""
-        return self.jacobian(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)[:, 1:]
-
-    def depth_partials(self, ctx: BitContext) -> tuple[float, float]:
-        """``(f_d [N/m], t_d [N·m/m])``: the partials of :meth:`jacobian` in the depth of cut per blade."""
-        jac = self.jacobian(ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
-        return float(jac[0, 0]), float(jac[1, 0])
+    # jacobian_at(ctx) and depth_partials(ctx) are inherited: detournay_jacobian, the law's compiled Jacobian
 
     def steady_depth_of_cut(self, rate_of_penetration: float, bit_speed: float) -> float:
         """The depth of cut per blade [m] of steady drilling at ``rate_of_penetration`` V [m/s] and
@@ -249,23 +244,10 @@ class DetournayParameters(BitLaw):
 
         ``s_u' = 1/v_r`` for ``0 < u̇ < v_r`` (0 outside), ``s_ω' = 1/ω_r`` for ``|ω| < ω_r`` (0 outside).
         Valid away from the kinks ``u̇ ∈ {0, v_r}``, ``|ω| = ω_r`` and ``d_n = 0``; zero for ``d_n ≤ 0``
-        (off the rock)."""
-        d, u, w = float(depth_of_cut), float(bit_axial_velocity), float(bit_speed)
-        if not d > 0.0:
-            return np.zeros((2, 3))
-        v_r, w_r = self.contact_velocity, self.friction_speed
-        advance = min(max(u / v_r, 0.0), 1.0)
-        turn = min(max(w / w_r, -1.0), 1.0)
-        advance_slope = 1.0 / v_r if 0.0 < u < v_r else 0.0
-        turn_slope = 1.0 / w_r if abs(w) < w_r else 0.0
-        contact = self.contact_force * advance
-        full_torque = self.cutting_torque_rate * d + self.friction_arm * contact
-        return np.array([
-            [-self.cutting_stiffness, -self.contact_force * advance_slope, 0.0],
-            [-self.cutting_torque_rate * turn,
-             -self.friction_arm * self.contact_force * advance_slope * turn,
-             -full_torque * turn_slope],
-        ])
+        (off the rock). The law's one Jacobian, :func:`detournay_partials` (compiled), called from Python."""
+        f_d, f_u, f_w, t_d, t_u, t_w = detournay_partials(self.kernel_array(), float(depth_of_cut),
+                                                          float(bit_axial_velocity), float(bit_speed))
+        return np.array([[f_d, f_u, f_w], [t_d, t_u, t_w]])
 
     # -- steady drilling, closed form --------------------------------------------------------------------
     def steady_state(self, rate_of_penetration: float, bit_speed: float) -> DetournaySteadyState:
@@ -336,6 +318,35 @@ def detournay_kernel(args, ctx):
 
 
 DetournayParameters.kernel = detournay_kernel
+
+
+@njit(cache=True)
+def detournay_partials(args, depth_of_cut, bit_axial_velocity, bit_speed):
+    """``(f_d, f_u, f_ω, t_d, t_u, t_ω)``: the partials of :func:`detournay_force` in the depth of cut per blade
+    [m], the axial velocity [m/s] and the spin speed [rad/s], in closed form (:meth:`DetournayParameters.jacobian`);
+    zeros off the rock (``d_n ≤ 0``)."""
+    if not depth_of_cut > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    v_r, w_r = args[4], args[5]
+    advance = min(max(bit_axial_velocity / v_r, 0.0), 1.0)
+    turn = min(max(bit_speed / w_r, -1.0), 1.0)
+    advance_slope = 1.0 / v_r if 0.0 < bit_axial_velocity < v_r else 0.0
+    turn_slope = 1.0 / w_r if abs(bit_speed) < w_r else 0.0
+    full_torque = args[1] * depth_of_cut + args[3] * (args[2] * advance)
+    return (-args[0], -args[2] * advance_slope, 0.0,
+            -args[1] * turn, -args[3] * args[2] * advance_slope * turn, -full_torque * turn_slope)
+
+
+@njit(cache=True)
+def detournay_jacobian(args, ctx):
+    """The component's compiled Jacobian (its ``jacobian_kernel``, the one its ``jacobian_at``, its
+    ``depth_partials`` and the compiled stiff part call): ``(f_u, f_ω, f_d, t_u, t_ω, t_d)`` of
+    :func:`detournay_partials` at the context's depth of cut, axial velocity and bit speed."""
+    f_d, f_u, f_w, t_d, t_u, t_w = detournay_partials(args, ctx.depth_of_cut, ctx.axial_velocity, ctx.bit_speed)
+    return f_u, f_w, f_d, t_u, t_w, t_d
+
+
+DetournayParameters.jacobian_kernel = detournay_jacobian
 
 
 @njit(cache=True)

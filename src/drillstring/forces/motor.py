@@ -48,7 +48,7 @@ from drillstring.case import DownholeMotor
 from drillstring.forces.registry import Motor, MotorContext, case_keys, register
 from drillstring.forces.registry import motor as registered_motor
 
-__all__ = ["PositiveDisplacementMotor", "case_motor", "positive_displacement_kernel"]
+__all__ = ["PositiveDisplacementMotor", "case_motor", "positive_displacement_kernel", "positive_displacement_slope"]
 
 
 @njit(cache=True)
@@ -57,6 +57,14 @@ def positive_displacement_kernel(args, ctx, states, rates):
     (:class:`~drillstring.forces.registry.MotorContext`); ``args`` = [T_s (stall torque, N·m), ω₀ (no-load
     speed, rad/s)]; no states (``states``, ``rates`` empty)."""
     return args[0] * (1.0 - ctx.relative_speed / args[1])
+
+
+@njit(cache=True)
+def positive_displacement_slope(args, ctx, states):
+    """The motor's compiled Jacobian (its ``jacobian_kernel``, the one its ``jacobian_at`` and the compiled
+    stiff part call): ``dT/dω_m = −T_s/ω₀`` [N·m·s/rad] of eq. (2), the same at every speed (the law is
+    linear); ``args`` as :func:`positive_displacement_kernel`'s."""
+    return -args[0] / args[1]
 
 
 @register
@@ -69,6 +77,7 @@ class PositiveDisplacementMotor(Motor):
     name: ClassVar[str] = "positive_displacement"
     kernel_size: ClassVar[int] = 2
     kernel: ClassVar = positive_displacement_kernel
+    jacobian_kernel: ClassVar = positive_displacement_slope
     keys: ClassVar = DownholeMotor
 
     position: float
@@ -130,9 +139,7 @@ class PositiveDisplacementMotor(Motor):
         """The kernel at ``ctx`` (:meth:`evaluate`): ``(T [N·m], no rates)``."""
         return self.evaluate(ctx.relative_speed), np.zeros(0)
 
-    def jacobian_at(self, ctx: MotorContext, states) -> np.ndarray:
-        """``[[dT/dω_m]]`` = ``[[−T_s/ω₀]]`` [N·m·s/rad] (the same at every speed: the law is linear)."""
-        return np.array([[-self.stall_torque / self.no_load_speed]])
+    # jacobian_at(ctx, states) is inherited: [[dT/dω_m]] of positive_displacement_slope, its compiled Jacobian
 
     def speed_at(self, torque):
         """The rotor's speed ω_m [rad/s] relative to the stator at which it gives ``torque`` [N·m] (eq. (2)

@@ -15,13 +15,19 @@ from numba import njit
 
 from drillstring.forces.registry import BitContext, BitLaw, BitSteadyState, register
 
-__all__ = ["OffBottom", "off_bottom_kernel"]
+__all__ = ["OffBottom", "off_bottom_jacobian", "off_bottom_kernel"]
 
 
 @njit(cache=True)
 def off_bottom_kernel(args, ctx):
     """No force, no torque: ``(0.0, 0.0)`` whatever the context."""
     return 0.0, 0.0
+
+
+@njit(cache=True)
+def off_bottom_jacobian(args, ctx):
+    """Its compiled Jacobian (``jacobian_kernel``): six zeros, ``(f_u, f_θ, f_d, t_u, t_θ, t_d)``."""
+    return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @register
@@ -32,6 +38,7 @@ class OffBottom(BitLaw):
     name: ClassVar[str] = "off_bottom"
     kernel_size: ClassVar[int] = 0
     kernel: ClassVar = off_bottom_kernel
+    jacobian_kernel: ClassVar = off_bottom_jacobian
     on_bottom: ClassVar[bool] = False
 
     @classmethod
@@ -45,9 +52,6 @@ class OffBottom(BitLaw):
         """Zeros shaped as the context's broadcast fields."""
         shape = np.broadcast(np.asarray(ctx.axial_velocity), np.asarray(ctx.bit_speed)).shape
         return np.zeros(shape), np.zeros(shape)
-
-    def jacobian_at(self, ctx: BitContext) -> np.ndarray:
-        return np.zeros((2, 2))
 
     def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState:
         """Rotation without penetration: rate of penetration 0, no force, no torque."""

@@ -8,14 +8,22 @@ SI units throughout.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-__all__ = ["BitContext", "BitLaw", "BitSteadyState", "ContactContext", "ContactLaw", "HookContext", "HookLoad",
-           "Motor", "MotorContext", "StringFriction", "StringFrictionContext", "TopBoundary", "TopContext",
-           "TurningLoadSource", "bit_context"]
+__all__ = ["BIT_LAW_SCALES", "BIT_LAW_STEP", "BitContext", "BitLaw", "BitSteadyState", "ContactContext",
+           "ContactLaw", "HookContext", "HookLoad", "Motor", "MotorContext", "StringFriction",
+           "StringFrictionContext", "TopBoundary", "TopContext", "TurningLoadSource", "bit_context",
+           "differenced_bit_jacobian", "differenced_motor_slope"]
+
+#: Relative step of the central differences that stand for the Jacobian of a law that declares none
+#: (:func:`differenced_bit_jacobian`, :func:`differenced_motor_slope`) [-], and the floors of the differenced
+#: quantities' scales: axial velocity [m/s], bit speed (and a motor's relative speed) [rad/s], depth of cut [m].
+BIT_LAW_STEP = 1e-6
+BIT_LAW_SCALES = (1e-3, 1.0, 1e-3)
 
 
 class BitContext(NamedTuple):
@@ -92,6 +100,54 @@ class HookContext(NamedTuple):
     weight_on_bit: Any
 
 
+@functools.cache
+def differenced_bit_jacobian(kernel):
+    """The fallback Jacobian of a bit law that declares no ``jacobian_kernel``: ``jacobian(args, ctx) -> (f_u,
+    f_θ, f_d, t_u, t_θ, t_d)`` by central differences of its ``kernel`` in u̇, θ̇ and the depth of cut (six
+    evaluations; the step :data:`BIT_LAW_STEP` times the value, at least its scale :data:`BIT_LAW_SCALES`).
+    Plain Python calling ``kernel``; the registry compiles it into the dispatch with the kernel inlined."""
+
+    def jacobian(args, ctx):
+        values = (ctx.axial_velocity, ctx.bit_speed, ctx.depth_of_cut)
+        f_u = f_w = f_d = t_u = t_w = t_d = 0.0
+        for k in range(3):
+            step = BIT_LAW_STEP * max(abs(values[k]), BIT_LAW_SCALES[k])
+            force_sum = 0.0
+            torque_sum = 0.0
+            for sign in (1.0, -1.0):
+                dv = sign * step if k == 0 else 0.0
+                dw = sign * step if k == 1 else 0.0
+                dd = sign * step if k == 2 else 0.0
+                force, torque = kernel(args, BitContext(ctx.time, ctx.position, ctx.angle, values[0] + dv,
+                                                        values[1] + dw, values[2] + dd, ctx.weight_on_bit))
+                force_sum += sign * force
+                torque_sum += sign * torque
+            if k == 0:
+                f_u, t_u = force_sum / (2.0 * step), torque_sum / (2.0 * step)
+            elif k == 1:
+                f_w, t_w = force_sum / (2.0 * step), torque_sum / (2.0 * step)
+            else:
+                f_d, t_d = force_sum / (2.0 * step), torque_sum / (2.0 * step)
+        return f_u, f_w, f_d, t_u, t_w, t_d
+
+    return jacobian
+
+
+@functools.cache
+def differenced_motor_slope(kernel):
+    """The fallback torque slope of a motor that declares no ``jacobian_kernel``: ``slope(args, ctx, states,
+    rates) -> dT/dω_m`` by a central difference of its ``kernel`` (step as :func:`differenced_bit_jacobian`'s;
+    ``rates`` takes the states' rates the kernel writes, not kept)."""
+
+    def slope(args, ctx, states, rates):
+        speed = ctx.relative_speed
+        step = BIT_LAW_STEP * max(abs(speed), BIT_LAW_SCALES[1])
+        return (kernel(args, MotorContext(ctx.time, speed + step), states, rates)
+                - kernel(args, MotorContext(ctx.time, speed - step), states, rates)) / (2.0 * step)
+
+    return slope
+
+
 @dataclass(frozen=True)
 class BitSteadyState:
     """Steady drilling of a bit law at a bit speed: ``rate_of_penetration`` V [m/s] (0: rotation without
@@ -122,6 +178,10 @@ class BitLaw:
     keys: ClassVar[Any] = None
     #: code in the kernels' array (set by :func:`register`)
     component_code: ClassVar[float] = 0.0
+    #: its compiled Jacobian ``jacobian_kernel(args, ctx) -> (f_u, f_θ, f_d, t_u, t_θ, t_d)``: the partials of
+    #: :attr:`kernel`'s force and torque in u̇, θ̇ and the depth of cut; None: central differences of
+    #: :attr:`kernel` stand for it (:func:`differenced_bit_jacobian`)
+    jacobian_kernel: ClassVar[Any] = None
 
     @classmethod
     def from_case(cls, case) -> "BitLaw":
@@ -143,9 +203,28 @@ class BitLaw:
         out = np.array(values, dtype=np.float64).reshape(fields[0].shape + (2,))
         return out[..., 0], out[..., 1]
 
+    def partials_at(self, ctx: BitContext) -> np.ndarray:
+        """``[[f_u, f_θ, f_d], [t_u, t_θ, t_d]]``: partials of the force [N] and torque [N·m] in u̇ [m/s], θ̇
+        [rad/s] and the depth of cut d [m] at a scalar ``ctx``: the law's compiled :attr:`jacobian_kernel`
+        called from Python (the one implementation the compiled stiff part also calls), or central
+        differences of :attr:`kernel` (:func:`differenced_bit_jacobian`) for a law that declares none."""
+        jacobian = type(self).jacobian_kernel
+        if jacobian is None:
+            jacobian = differenced_bit_jacobian(type(self).kernel)
+        values = jacobian(np.asarray(self.kernel_array(), dtype=np.float64),
+                          BitContext(*(float(field) for field in ctx)))
+        return np.array(values, dtype=np.float64).reshape(2, 3)
+
     def jacobian_at(self, ctx: BitContext) -> np.ndarray:
-        """``[[f_u, f_θ], [t_u, t_θ]]``: partials of the force and torque in u̇ and θ̇ at ``ctx``."""
-        raise NotImplementedError
+        """``[[f_u, f_θ], [t_u, t_θ]]``: partials of the force and torque in u̇ and θ̇ at ``ctx``
+        (:meth:`partials_at`)."""
+        return self.partials_at(ctx)[:, :2]
+
+    def depth_partials(self, ctx: BitContext) -> tuple[float, float]:
+        """``(f_d [N/m], t_d [N·m/m])``: the partials in the depth of cut (:meth:`partials_at`; read for a
+        ``delayed`` law, whose depth of cut moves with the bit's position)."""
+        partials = self.partials_at(ctx)
+        return float(partials[0, 2]), float(partials[1, 2])
 
     def steady_drilling(self, bit_speed: float, axial_load: float, resistance: float) -> BitSteadyState:
         """Steady drilling at ``bit_speed`` Ω [rad/s] when the string pushes the bit with ``axial_load`` W [N]
@@ -239,6 +318,9 @@ class Motor:
     name: ClassVar[str]
     kernel_size: ClassVar[int] = 0
     kernel: ClassVar[Any] = None
+    #: its compiled torque slope ``jacobian_kernel(args, ctx, states) -> dT/dω_m`` [N·m·s/rad] (its states
+    #: held); None: a central difference of :attr:`kernel` stands for it (:func:`differenced_motor_slope`)
+    jacobian_kernel: ClassVar[Any] = None
     keys: ClassVar[Any] = None
     component_code: ClassVar[float] = 0.0
     position: float
@@ -257,8 +339,23 @@ class Motor:
 
     def jacobian_at(self, ctx: MotorContext, states) -> np.ndarray:
         """``(1 + n_states, 1 + n_states)``: partials of ``(T, each state's rate)`` in ``(ω_m, each state)`` at
-        the operating point ``ctx``, ``states``."""
-        raise NotImplementedError
+        the operating point ``ctx``, ``states``; for a motor without states ``[[dT/dω_m]]``
+        (:meth:`torque_slope_at`); one with states writes its own."""
+        if self.n_states:
+            raise NotImplementedError(f"motor {self.name!r} has states: it declares its own jacobian_at")
+        return np.array([[self.torque_slope_at(ctx, states)]])
+
+    def torque_slope_at(self, ctx: MotorContext, states) -> float:
+        """``dT/dω_m`` [N·m·s/rad] at ``ctx``, its ``states`` held: the compiled :attr:`jacobian_kernel` called
+        from Python (the one implementation the compiled stiff part also calls), or a central difference of
+        :attr:`kernel` (:func:`differenced_motor_slope`) for a motor that declares none."""
+        slope = type(self).jacobian_kernel
+        states = np.ascontiguousarray(states, dtype=np.float64).reshape(-1)
+        args = np.asarray(self.kernel_array(), dtype=np.float64)
+        ctx = MotorContext(float(ctx.time), float(ctx.relative_speed))
+        if slope is None:
+            return float(differenced_motor_slope(type(self).kernel)(args, ctx, states, np.zeros(states.size)))
+        return float(slope(args, ctx, states))
 
     def steady_states(self, relative_speed: float) -> np.ndarray:
         """Its states in steady rotation at the relative speed ``relative_speed`` [rad/s] (none by default)."""

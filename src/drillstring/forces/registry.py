@@ -11,10 +11,12 @@ from a named context (:class:`BitContext`: time, bit position and angle, axial v
 of cut, static weight-on-bit), never from positional arguments. A law declares ``name``, ``kernel_size``
 (how many numbers its compiled kernel reads), ``kernel_array()`` (those numbers), ``kernel`` (the compiled
 kernel, ``kernel(args, ctx) -> (axial_force, torque)``), ``evaluate_at(ctx)`` (the kernel at array
-fields, broadcast; inherited), ``jacobian_at(ctx)`` (``[[f_u, f_θ], [t_u, t_θ]]``) and ``steady_drilling(bit_speed,
+fields, broadcast; inherited), ``jacobian_kernel`` (its compiled Jacobian, ``(args, ctx) -> (f_u, f_θ, f_d, t_u,
+t_θ, t_d)``; ``jacobian_at(ctx)``, ``[[f_u, f_θ], [t_u, t_θ]]``, and ``depth_partials(ctx)`` call it, inherited)
+and ``steady_drilling(bit_speed,
 axial_load, resistance)`` (the steady state, :class:`BitSteadyState`: the stability analysis asks the law,
 it never samples it). A law that reads the depth of cut (``delayed = True``) also gives ``sector`` (the
-lag angle) and ``depth_partials(ctx)``.
+lag angle).
 
 **Top boundaries** (:class:`TopBoundary`): the top of the torsion; those that drive the string
 (``drives = True``) declare ``n_states`` (their own states, integrated with the modal coordinates),
@@ -49,10 +51,10 @@ starts off bottom (``clearance`` [m] above the rock, the string hanging from the
 
 **Downhole motors** (:class:`Motor`): a rotor between two sections (:mod:`drillstring.rotor` releases its
 rotation), ``kernel(args, ctx, states, rates) -> torque`` (+T on the rotor side, −T on the stator side; the
-named context :class:`MotorContext`; writes its states' rates), ``evaluate_at(ctx, states) -> (torque,
-rates)``, ``jacobian_at(ctx, states)`` (rows: torque then each state's rate; columns: the relative speed, then
+named context :class:`MotorContext`; writes its states' rates), ``jacobian_kernel(args, ctx, states) ->
+dT/dω_m`` (compiled), ``evaluate_at(ctx, states) -> (torque, rates)``, ``jacobian_at(ctx, states)`` (rows: torque then each state's rate; columns: the relative speed, then
 each state), ``steady_states(relative_speed)``, ``position`` (the rotor station [m]) and ``n_states``; the
-kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0.
+kernels call :func:`motor_torque` when the header's ``motor_code`` is not 0 (and the stiff part :func:`motor_slope`).
 
 Every component also declares ``keys``, its case keys as its own pydantic model with units and bounds
 (:class:`~drillstring.case.TuckerWangKeys`, ...), and the case names it in its kind's table (``bit_rock.law``,
@@ -77,7 +79,9 @@ the offsets :func:`pack` computes from their ``n_states``.
 
 **Compiled dispatch.** The kernels call one dispatch function per kind whose components have kernels of their
 own (``_DISPATCHED`` says which; the turning-load sources share one kernel instead); when they are compiled, the registry writes the dispatch over the codes of the package's registered components, each
-component's kernel inlined into it at Numba's IR level (one compiled function per kind, not one per kernel)
+component's kernel inlined into it at Numba's IR level (one compiled function per kind, not one per kernel;
+likewise the bit laws' and motors' compiled Jacobians, :func:`bit_law_jacobian` and :func:`motor_slope`, with
+central differences of the kernel for a component that declares none)
 (:func:`package_components` imports every module of :mod:`drillstring.forces` first, so the set is the
 same in every process and the on-disk kernel cache, keyed on the package's sources, stays valid). A
 component registered from **outside the package** (a test, a user's script) runs through the NumPy
@@ -99,6 +103,8 @@ import numpy as np
 from numba.core.extending import overload
 
 from drillstring.forces.protocol import (  # noqa: F401 (the protocol's names, re-exported: documented there)
+    BIT_LAW_SCALES,
+    BIT_LAW_STEP,
     BitContext,
     BitLaw,
     BitSteadyState,
@@ -114,6 +120,8 @@ from drillstring.forces.protocol import (  # noqa: F401 (the protocol's names, r
     TopContext,
     TurningLoadSource,
     bit_context,
+    differenced_bit_jacobian,
+    differenced_motor_slope,
 )
 
 __all__ = [
@@ -140,6 +148,7 @@ __all__ = [
     "Layout",
     "bit_law",
     "bit_law_force",
+    "bit_law_jacobian",
     "bit_laws",
     "case_keys",
     "compiled",
@@ -149,6 +158,7 @@ __all__ = [
     "turning_load_source",
     "turning_load_sources",
     "motor",
+    "motor_slope",
     "motor_torque",
     "motors",
     "name_code",
@@ -507,48 +517,70 @@ def inlined(function):
     return njit(inline="always")(getattr(function, "py_func", function))
 
 
-def _dispatch_source(kind: str, signature: str, call: str, fallback: str, none: str | None = None
-                     ) -> tuple[str, dict]:
-    """The dispatch over the package's components of ``kind`` by their code; ``none``: what code 0 returns
-    (first test), when the kind has a component that adds nothing."""
+def _dispatch(kind: str, signature: str, call: str, fallback: str, none: str | None = None, member=None,
+              helpers: dict | None = None, title: str = "dispatch"):
+    """The dispatch over the package's components of ``kind`` by their code (a function written from the
+    registry's table and compiled by Numba into its callers); ``none``: what code 0 returns (first test), when
+    the kind has a component that adds nothing; ``member(cls) -> (function, call)``: what is dispatched to
+    instead of ``cls.kernel`` called with ``call`` (a component's compiled Jacobian); ``helpers``: more names
+    the source reads; ``title``: the source's name in tracebacks."""
     _check_cache_table()
     entries = sorted((c.component_code, c) for c in _REGISTRY[kind].values()
                      if _in_package(c) and c.component_code > 0.0)
-    namespace: dict[str, Any] = {"np": np}
+    namespace: dict[str, Any] = {"np": np, **(helpers or {})}
     lines = [f"def dispatch({signature}):", f"    code = laws[{_CODE_ENTRY[kind]}]"]
     if none is not None:
         lines += ["    if code == 0.0:", f"        return {none}"]
     for i, (code, cls) in enumerate(entries):
-        namespace[f"kernel_{i}"] = inlined(cls.kernel)
+        function, arguments = (cls.kernel, call) if member is None else member(cls)
+        namespace[f"kernel_{i}"] = inlined(function)
         lines.append(f"    if code == {code!r}:")
-        lines.append(f"        return kernel_{i}({call})")
+        lines.append(f"        return kernel_{i}({arguments})")
     lines.append(f"    return {fallback}")
-    return "\n".join(lines) + "\n", namespace
+    exec(compile("\n".join(lines) + "\n", f"<{title}>", "exec"), namespace)
+    return namespace["dispatch"]
 
 
 @overload(bit_law_force)
 def _bit_law_force_compiled(laws, ctx):
-    source, namespace = _dispatch_source("bit_law", "laws, ctx", f"laws[{BIT_LAW}:], ctx", "np.nan, np.nan")
-    exec(compile(source, "<bit_law_force dispatch>", "exec"), namespace)
-    return namespace["dispatch"]
+    return _dispatch("bit_law", "laws, ctx", f"laws[{BIT_LAW}:], ctx", "np.nan, np.nan",
+                     title="bit_law_force dispatch")
+
+
+def bit_law_jacobian(laws, ctx):
+    """``(f_u, f_θ, f_d, t_u, t_θ, t_d)``: the partials of :func:`bit_law_force` in the axial velocity [m/s],
+    the bit speed [rad/s] and the depth of cut [m] at ``ctx``, from the law's own compiled ``jacobian_kernel``
+    (the one its ``jacobian_at`` calls), or central differences of its kernel for a law that declares none
+    (:func:`~drillstring.forces.protocol.differenced_bit_jacobian`); NaN for a code no package law has.
+    Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+def _bit_law_jacobian_member(cls):
+    jacobian = cls.jacobian_kernel
+    if jacobian is None:
+        jacobian = differenced_bit_jacobian(inlined(cls.kernel))
+    return jacobian, f"laws[{BIT_LAW}:], ctx"
+
+
+@overload(bit_law_jacobian)
+def _bit_law_jacobian_compiled(laws, ctx):
+    return _dispatch("bit_law", "laws, ctx", "", ", ".join(["np.nan"] * 6), member=_bit_law_jacobian_member,
+                     title="bit_law_jacobian dispatch")
 
 
 @overload(top_boundary_torque)
 def _top_boundary_torque_compiled(laws, ctx, y, out):
-    source, namespace = _dispatch_source(
+    return _dispatch(
         "top_boundary", "laws, ctx, y, out",
         f"laws[int(laws[{TOP_BOUNDARY}]):], ctx, y[int(laws[{TOP_BOUNDARY_STATES}]):], "
-        f"out[int(laws[{TOP_BOUNDARY_STATES}]):]", "np.nan")
-    exec(compile(source, "<top_boundary_torque dispatch>", "exec"), namespace)
-    return namespace["dispatch"]
+        f"out[int(laws[{TOP_BOUNDARY_STATES}]):]", "np.nan", title="top_boundary_torque dispatch")
 
 
 @overload(hook_load_force)
 def _hook_load_force_compiled(laws, ctx):
-    source, namespace = _dispatch_source("hook_load", "laws, ctx", f"laws[int(laws[{HOOK_LOAD}]):], ctx", "np.nan",
-                                         none="0.0")
-    exec(compile(source, "<hook_load_force dispatch>", "exec"), namespace)
-    return namespace["dispatch"]
+    return _dispatch("hook_load", "laws, ctx", f"laws[int(laws[{HOOK_LOAD}]):], ctx", "np.nan", none="0.0",
+                     title="hook_load_force dispatch")
 
 
 def _fill(force_v, force_w, torque, value):
@@ -562,22 +594,43 @@ def _fill(force_v, force_w, torque, value):
 def _contact_law_forces_compiled(laws, ctx, force_v, force_w, torque):
     from numba import njit
 
-    source, namespace = _dispatch_source(
+    return _dispatch(
         "contact_law", "laws, ctx, force_v, force_w, torque",
         f"laws[int(laws[{CONTACT_LAW}]):], ctx, force_v, force_w, torque", "fill(force_v, force_w, torque, np.nan)",
-        none="fill(force_v, force_w, torque, 0.0)")
-    namespace["fill"] = njit(_fill)
-    exec(compile(source, "<contact_law_forces dispatch>", "exec"), namespace)
-    return namespace["dispatch"]
+        none="fill(force_v, force_w, torque, 0.0)", helpers={"fill": njit(_fill)}, title="contact_law_forces dispatch")
 
 
 @overload(motor_torque)
 def _motor_torque_compiled(laws, ctx, y, out):
-    source, namespace = _dispatch_source(
+    return _dispatch(
         "motor", "laws, ctx, y, out",
-        f"laws[int(laws[{MOTOR}]):], ctx, y[int(laws[{MOTOR_STATES}]):], out[int(laws[{MOTOR_STATES}]):]", "np.nan")
-    exec(compile(source, "<motor_torque dispatch>", "exec"), namespace)
-    return namespace["dispatch"]
+        f"laws[int(laws[{MOTOR}]):], ctx, y[int(laws[{MOTOR_STATES}]):], out[int(laws[{MOTOR_STATES}]):]", "np.nan",
+        title="motor_torque dispatch")
+
+
+def motor_slope(laws, ctx, y, out):
+    """``dT/dω_m`` [N·m·s/rad] of the downhole motor whose code and numbers ``laws`` holds at ``ctx``
+    (:class:`MotorContext`), its states in ``y`` held: its own compiled ``jacobian_kernel`` (the one its
+    ``jacobian_at`` calls), or a central difference of its kernel for a motor that declares none
+    (:func:`~drillstring.forces.protocol.differenced_motor_slope`, writing the states' rates in ``out``, not
+    kept); NaN for a code no package motor has. Compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+_MOTOR_STATES_AT = f"int(laws[{MOTOR_STATES}])"
+
+
+def _motor_slope_member(cls):
+    arguments = f"laws[int(laws[{MOTOR}]):], ctx, y[{_MOTOR_STATES_AT}:]"
+    if cls.jacobian_kernel is not None:
+        return cls.jacobian_kernel, arguments
+    return differenced_motor_slope(inlined(cls.kernel)), f"{arguments}, out[{_MOTOR_STATES_AT}:]"
+
+
+@overload(motor_slope)
+def _motor_slope_compiled(laws, ctx, y, out):
+    return _dispatch("motor", "laws, ctx, y, out", "", "np.nan", member=_motor_slope_member,
+                     title="motor_slope dispatch")
 
 
 def _fill_two(force, torque, value):
@@ -590,10 +643,7 @@ def _fill_two(force, torque, value):
 def _string_friction_forces_compiled(laws, ctx, force, torque):
     from numba import njit
 
-    source, namespace = _dispatch_source(
+    return _dispatch(
         "string_friction", "laws, ctx, force, torque",
         f"laws[int(laws[{STRING_FRICTION}]):], ctx, force, torque", "fill(force, torque, np.nan)",
-        none="fill(force, torque, 0.0)")
-    namespace["fill"] = njit(_fill_two)
-    exec(compile(source, "<string_friction_forces dispatch>", "exec"), namespace)
-    return namespace["dispatch"]
+        none="fill(force, torque, 0.0)", helpers={"fill": njit(_fill_two)}, title="string_friction_forces dispatch")

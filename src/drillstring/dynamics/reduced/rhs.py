@@ -38,7 +38,9 @@ from drillstring.dynamics.reduced.terms import (
     inner_kernel,
 )
 from drillstring.forces.nonlinear import _kinetic_forces_kernel, _strain_energy_forces_kernel
-from drillstring.forces.registry import (
+from drillstring.forces.registry import (  # noqa: F401 (BIT_LAW_SCALES, BIT_LAW_STEP: re-exported by rom)
+    BIT_LAW_SCALES,
+    BIT_LAW_STEP,
     MOTOR_CODE,
     STRING_FRICTION_CODE,
     TOP_BOUNDARY_CODE,
@@ -47,9 +49,10 @@ from drillstring.forces.registry import (
     HookContext,
     MotorContext,
     bit_law_force,
+    bit_law_jacobian,
     contact_law_forces,
     hook_load_force,
-    motor_torque,
+    motor_slope,
 )
 
 
@@ -284,12 +287,6 @@ def _evaluate_rhs_compiled(data, t, y, out):
     return None
 
 
-#: Relative step of the central differences of the bit law in :func:`stiff_part` [-], and the floors of the
-#: differenced quantities' scales: axial velocity [m/s], bit speed [rad/s], bit position [m].
-BIT_LAW_STEP = 1e-6
-BIT_LAW_SCALES = (1e-3, 1.0, 1e-3)
-
-
 @inner_kernel()
 def _stiff_bit_law(d, t, y, shapes, partials, scratch):
     """:func:`stiff_part` for case-2 data ``d``."""
@@ -305,22 +302,16 @@ def _stiff_bit_law(d, t, y, shapes, partials, scratch):
         shapes[1, j] = d.torsion_rows[_TORSION_BIT, j - t0]
     position, angle, velocity, speed = _bit_state(d, t, y)
     depth = _depth_of_cut(d, position, angle)
+    f_u, f_w, f_d, t_u, t_w, t_d = bit_law_jacobian(d.laws, BitContext(t, position, angle, velocity, speed, depth,
+                                                                       d.weight_on_bit))
+    # the position moves a delayed law's depth of cut with it (∂d/∂u = 1 at a fixed angle); no other law reads it
     moves_depth = 1.0 if _delayed(d) else 0.0
-    values = (velocity, speed, position)
-    for k in range(3):
-        step = BIT_LAW_STEP * max(abs(values[k]), BIT_LAW_SCALES[k])
-        force_sum = 0.0
-        torque_sum = 0.0
-        for sign in (1.0, -1.0):
-            dv = sign * step if k == 0 else 0.0
-            dw = sign * step if k == 1 else 0.0
-            du = sign * step if k == 2 else 0.0
-            force, torque = bit_law_force(d.laws, BitContext(t, position + du, angle, velocity + dv, speed + dw,
-                                                             depth + moves_depth * du, d.weight_on_bit))
-            force_sum += sign * force
-            torque_sum += sign * torque
-        partials[0, k] = force_sum / (2.0 * step)
-        partials[1, k] = torque_sum / (2.0 * step)
+    partials[0, 0] = f_u
+    partials[0, 1] = f_w
+    partials[0, 2] = moves_depth * f_d
+    partials[1, 0] = t_u
+    partials[1, 1] = t_w
+    partials[1, 2] = moves_depth * t_d
     if shapes.shape[0] > 2:  # a third row: the downhole motor's (zero without one)
         for j in range(n):
             shapes[2, j] = 0.0
@@ -329,11 +320,8 @@ def _stiff_bit_law(d, t, y, shapes, partials, scratch):
         if d.laws[MOTOR_CODE] != 0.0:
             for j in range(t0, t1):
                 shapes[2, j] = d.torsion_rows[_TORSION_MOTOR, j - t0]
-            relative_speed = _motor_speed(d, y)
-            step = BIT_LAW_STEP * max(abs(relative_speed), BIT_LAW_SCALES[1])
-            # the motor writes its states' rates into the scratch: not needed here
-            partials[2, 0] = (motor_torque(d.laws, MotorContext(t, relative_speed + step), y, scratch)
-                              - motor_torque(d.laws, MotorContext(t, relative_speed - step), y, scratch)) / (2.0 * step)
+            # a motor without a compiled Jacobian is differenced, its states' rates written into the scratch
+            partials[2, 0] = motor_slope(d.laws, MotorContext(t, _motor_speed(d, y)), y, scratch)
 
 
 def stiff_part(data, t, y, shapes, partials, scratch):
@@ -342,15 +330,17 @@ def stiff_part(data, t, y, shapes, partials, scratch):
     modal coordinates, zero outside their families) into ``shapes[0, :n]``, ``shapes[1, :n]``, and into
     ``partials`` (2, 3) the partial derivatives of the bit law's (axial force [N], torque [N·m]) in the bit's
     (axial velocity u̇ [m/s], speed θ̇ [rad/s], position u [m]; the position moves a delayed law's depth of
-    cut with it), by central differences of the registered compiled law (six scalar evaluations of
-    :func:`~drillstring.forces.registry.bit_law_force`). The
+    cut with it, so its column is the law's depth partial, 0 for the others): the registered law's own compiled
+    Jacobian (:func:`~drillstring.forces.registry.bit_law_jacobian`, the one its ``jacobian_at`` calls; central
+    differences of its kernel only for a law that declares none). The
     bit law's part of ``∂(η̈)/∂(η, η̇)`` is then ``Bᵀ P[:, 2] b_uᵀ`` and ``Bᵀ P[:, :2] B`` (``B = shapes``,
-    ``P = partials``): the NumPy reference is :func:`drillstring.dynamics.stiffness._bit_rock_rows`. When
+    ``P = partials``), as :func:`drillstring.dynamics.stiffness._bit_rock_rows` builds it from ``jacobian_at``. When
     ``shapes`` and ``partials`` have a third row, it gets a downhole motor's: the rotor's relative torsional row
     (:attr:`ReducedOrderModel.motor_shapes`) in ``shapes[2, :n]`` and ``dT/dω_m`` [N·m·s/rad] of the registered
-    compiled motor by a central difference in ``partials[2, 0]`` (its part of ``∂(η̈)/∂η̇`` is
-    ``m (dT/dω_m) mᵀ``; zeros without a motor; ``scratch``, of the state's size, takes the motor's state rates,
-    which are not kept: the function allocates nothing). Returns the linear part's ``(ω², Dᵀ, damping blocks)``.
+    motor's compiled Jacobian (:func:`~drillstring.forces.registry.motor_slope`) in ``partials[2, 0]`` (its part
+    of ``∂(η̈)/∂η̇`` is ``m (dT/dω_m) mᵀ``; zeros without a motor; ``scratch``, of the state's size, takes the
+    state rates of a motor differenced for want of a Jacobian, which are not kept: the function allocates
+    nothing). Returns the linear part's ``(ω², Dᵀ, damping blocks)``.
     Compiled code only; case 1 (:class:`FullModelData`) reads its case-2 part."""
     raise NotImplementedError("compiled code only")
 

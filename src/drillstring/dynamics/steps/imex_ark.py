@@ -17,12 +17,13 @@ which rates are damped implicitly. ``J`` is the reduced model's linear part and 
 - the bit–rock law, ``J_bit = U G Vᵀ`` of rank ≤ 3: its force and torque act along the bit's axial and
   torsional mode-shape rows ``b_u``, ``b_t`` (``U``) and depend on the bit's velocity ``b_uᵀη̇``, speed
   ``b_tᵀη̇`` and position ``b_uᵀη`` (``Vᵀ``; a delayed law's depth of cut moves with the position), ``G``
-  (2 × 3) the law's partial derivatives by central differences of the compiled law, at each attempt.
+  (2 × 3) the law's partial derivatives from its own compiled Jacobian (``jacobian_kernel``, the one its
+  ``jacobian_at`` calls; :func:`~drillstring.forces.registry.bit_law_jacobian`), at each attempt.
   Measured (``benchmarks/stiff_part_survey.py``): −945…−1180 1/s on ``reference`` (the axial dashpot), up to
   −1e5 1/s on ``aarsnes2019`` (the wear flats' dashpot, the regularised stick);
 - a downhole motor's torque slope across its rotor, ``m (dT/dω_m) mᵀ`` of rank 1: the rotor's relative
   torsional row ``m`` (:attr:`~drillstring.dynamics.rom.ReducedOrderModel.motor_shapes`) is a fourth column of
-  ``V`` and a third of ``U``, ``dT/dω_m`` by a central difference of the registered compiled motor (about
+  ``V`` and a third of ``U``, ``dT/dω_m`` from the registered motor's compiled Jacobian (about
   −1530 1/s on the 1.2 kg·m² below the rotor of the ``motor`` case, the model's fastest rate there).
 
 What stays explicit: the contact forces, the turning loads, the top drive's controller, the hook-load ramp,
@@ -40,8 +41,8 @@ recorded as with an explicit pair). The error estimate ``h Σ (b_i − b̂_i) f(
 ``(I − hγJ)⁻¹`` (Shampine's filter, Hairer & Wanner, *Solving ODEs II*, §IV.8): unfiltered, its stiff
 components (the bit's velocity) set steps 10–30× shorter on ``aarsnes2019``. The explicit part's last stage is
 not at the new state (it is not stiffly accurate), so the loop evaluates ``f`` there: an accepted step costs
-``s`` right-hand sides (4 for ARK3(2)4L, 6 for ARK4(3)6L) and one Jacobian (six scalar bit-law evaluations and
-O(n) work besides the block factorisation).
+``s`` right-hand sides (4 for ARK3(2)4L, 6 for ARK4(3)6L) and one Jacobian (one call of the law's compiled
+Jacobian and O(n) work besides the block factorisation).
 
 :class:`ReferenceStep` is the NumPy reference of the same step for a right-hand side in Python, with a dense
 ``J``: ``rhs.stiff_jacobian(t, y)`` when the right-hand side offers it, else forward differences of ``rhs``
