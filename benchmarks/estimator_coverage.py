@@ -3,14 +3,16 @@ with the stick_slip case and on the stick-slip twin of tests/estimation/twin.py,
 command line (docs/estimation.md, "Coverage and relaxation").
 
     python benchmarks/estimator_coverage.py [--shipped SECONDS] [--twin SECONDS] [--members N] [--seeds 0,1]
-        [--config "relaxation=0.5 parameter_relaxation=0.5"] ...
+        [--config "relaxation=0.5 parameter_relaxation=0.5"] [--config "model_dispersion=0.05"] ...
 
 Each ``--config`` (a space-separated list of EstimatorSettings fields over the case's defaults; "" the defaults)
 runs on both records for each seed (the estimator's seed; the twin's truth is seed 1's, as the tests'). The
 shipped record is read at 10 Hz as shipped, its first ``--shipped`` seconds, coverage over the whole record (the
 spin-up runs before it); the twin's coverage is counted after its first 10 s (its filter starts from the model's
-initial state). One line per run: coverage of bit speed and torque on bit, the bit speed's RMSE, the members
-replaced and the wall time.
+initial state). One line per run: coverage of bit speed and torque on bit, the torque on bit's while the truth
+sticks (bit speed below STICK rad/s) and while it slips, the bit speed's RMSE, the members replaced and the wall
+time. ``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
+members") is one of the settings a ``--config`` may set.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "estimati
 from twin import twin
 
 TWIN_START = 10.0  # [s] the twin's coverage is counted from here
+STICK = 1.0  # [rad/s] the truth sticks below this bit speed
 
 
 def _settings(text: str) -> dict:
@@ -94,9 +97,16 @@ def main() -> None:
                 wall = time.perf_counter() - begin
                 keep = result.time >= start
                 rmse = float(np.sqrt(np.mean((result.mean["bit_speed"] - truth["bit_speed"])[keep] ** 2)))
+                low, high = result.band("torque_on_bit")
+                inside = (truth["torque_on_bit"] >= low) & (truth["torque_on_bit"] <= high)
+                stick = np.abs(truth["bit_speed"]) < STICK
+                phases = " ".join(f"{label} {np.mean(inside[keep & mask]):.2f} ({np.sum(keep & mask)})"
+                                  if np.any(keep & mask) else f"{label} -"
+                                  for label, mask in (("stick", stick), ("slip", ~stick)))
                 print(f"{config or 'defaults':45s} {name:7s} seed {seed} N {options.members:3d} "
                       f"bit_speed {result.coverage('bit_speed', truth['bit_speed'], start):.2f} "
                       f"torque_on_bit {result.coverage('torque_on_bit', truth['torque_on_bit'], start):.2f} "
+                      f"[{phases}] "
                       f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s", flush=True)
 
 

@@ -1,6 +1,7 @@
 """The ensemble estimator (drillstring.estimation.ensemble): its filter core against the exact Kalman filter on
 linear Gaussian problems, its settings' checks, the members' cheap re-parametrisation, and twin experiments on the
-stick-slip case (the truth from another model: tests/estimation/twin.py)."""
+stick-slip case (the truth from another model: tests/estimation/twin.py), and the members' own random models
+(model_dispersion)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import pytest
 from drillstring.case import load_case
 from drillstring.dynamics.compiled import RunState, SolverSettings, advance
 from drillstring.dynamics.reduced.build import case_reduced_model
+from drillstring.estimation import ensemble
 from drillstring.estimation.ensemble import (
     EstimatorSettings,
     coefficient_slot,
@@ -21,6 +23,7 @@ from drillstring.estimation.ensemble import (
     estimator_model,
     etkf_analysis,
     member_model,
+    member_models,
 )
 from drillstring.estimation.surface import SPIKE, SurfaceRecord
 
@@ -237,8 +240,6 @@ def test_result_dataset_carries_units(experiment):
 def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monkeypatch):
     """A member whose advance fails (here every third call, made to fail) is replaced by a copy of one that
     succeeded and counted; the run goes on. When every member fails, the run stops with a RuntimeError."""
-    from drillstring.estimation import ensemble
-
     real = ensemble.advance
     calls = {"n": 0}
 
@@ -319,3 +320,79 @@ def test_case_table_keys_are_the_settings():
     given = Estimator(spin_up="5 s", assimilation_step="500 ms").given()
     assert given == {"spin_up": 5.0, "assimilation_step": 0.5}
     assert EstimatorSettings(**given).assimilation_step == 0.5
+
+
+# --------------------------------------------------------------------------------------------------------
+# Model uncertainty (model_dispersion): each member its own reduced model drawn once from the random-matrix
+# model, compared in the estimator's model's coordinates; 0 (the default) is the one shared model
+# --------------------------------------------------------------------------------------------------------
+
+
+def _dispersed_run(stick_slip, small_model, **changes):
+    """A 4 s record (top speed, surface torque at 1 Hz), 6 members on the small model."""
+    time = np.arange(0.0, 4.0, 1.0)
+    record = SurfaceRecord.from_arrays(time, top_speed=np.full(len(time), small_model.top_speed),
+                                       surface_torque=np.array([5000.0, 7000.0, 9000.0, 6000.0]))
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=1.0, **changes)
+    return estimate(stick_slip, record, settings, model=small_model)
+
+
+def test_zero_model_dispersion_is_the_shared_model(small_model):
+    models, transforms = member_models(small_model, 0.0, 0, 5)
+    assert all(m is small_model for m in models) and transforms == [None] * 5
+
+
+def test_members_draw_their_own_matrices_reproducibly_from_the_seed(small_model):
+    """With a dispersion each member's matrices differ from the nominal and from the other members', the same
+    seed draws the same ones (a member's draw depends on (seed, member) only), another seed others; ``X`` maps
+    the member's coordinates to the estimator's model's: the realized basis is ``Φ X``, so ``top_u`` and the
+    bit's rotation read the same displacement in both."""
+    models, transforms = member_models(small_model, 0.1, 7, 4)
+    again, _ = member_models(small_model, 0.1, 7, 6)
+    other, _ = member_models(small_model, 0.1, 8, 4)
+    for i, (model, (x, x_inv)) in enumerate(zip(models, transforms)):
+        assert not np.allclose(model.omega2, small_model.omega2)
+        np.testing.assert_array_equal(model.omega2, again[i].omega2)
+        np.testing.assert_array_equal(model.damping, again[i].damping)
+        assert not np.allclose(model.omega2, other[i].omega2)
+        np.testing.assert_allclose(model.basis, small_model.basis @ x, rtol=0, atol=1e-12 * np.abs(model.basis).max())
+        np.testing.assert_allclose(x_inv @ x, np.eye(len(x)), atol=1e-12)
+        q = np.random.default_rng(i).standard_normal(len(x))
+        assert small_model.top_u @ (x @ q) == pytest.approx(model.top_u @ q, rel=1e-12, abs=1e-15)
+        assert small_model.bit_t @ (x @ q) == pytest.approx(model.bit_t @ q, rel=1e-12, abs=1e-15)
+    assert not np.allclose(models[0].omega2, models[1].omega2)
+
+
+def test_coordinates_change_nothing_when_every_member_is_the_nominal_model(stick_slip, small_model, monkeypatch):
+    """The estimate with every member's transform the identity (the states go through ``ξ = X q`` and back) is
+    the shared model's bit for bit; drawn models (0.1) give another estimate, the same one twice."""
+    shared = _dispersed_run(stick_slip, small_model)
+    identity = np.eye(small_model.size)
+    monkeypatch.setattr(ensemble, "member_models",
+                        lambda model, dispersion, seed, n: ([model] * n, [(identity, identity)] * n))
+    through = _dispersed_run(stick_slip, small_model)
+    monkeypatch.undo()
+    for name in ("bit_speed", "torque_on_bit", "a5", "weight_on_bit_bias"):
+        np.testing.assert_array_equal(through.mean[name], shared.mean[name])
+        np.testing.assert_array_equal(through.quantiles[name], shared.quantiles[name])
+    drawn = _dispersed_run(stick_slip, small_model, model_dispersion=0.1)
+    assert np.all(np.isfinite(drawn.mean["bit_speed"]))
+    assert not np.array_equal(drawn.quantiles["torque_on_bit"], shared.quantiles["torque_on_bit"])
+    again = _dispersed_run(stick_slip, small_model, model_dispersion=0.1)
+    np.testing.assert_array_equal(again.quantiles["torque_on_bit"], drawn.quantiles["torque_on_bit"])
+
+
+def test_a_replaced_member_takes_its_source_model():
+    members = ensemble._Members([None, None], np.zeros((2, 1)), 3, ["a", "b"], ["xa", "xb"])
+    members.copy_member(0, 1)
+    assert members.models == ["b", "b"] and members.transforms == ["xb", "xb"]
+
+
+def test_bad_model_dispersion_is_refused_naming_it(stick_slip, small_model):
+    for bad in (-0.1, 1.0):
+        with pytest.raises(ValueError, match=rf"model_dispersion = {bad}: must be a number in \[0, 1\)"):
+            EstimatorSettings(model_dispersion=bad)
+    # below 1 but above the bound sqrt((n+1)/(n+5)) of a family of the estimator's model
+    with pytest.raises(ValueError, match=r"estimator\.model_dispersion = 0\.9: must be in \[0, 0\.\d+\) = "
+                                         r"\[0, sqrt\(\(n\+1\)/\(n\+5\)\)\) for the \w+ family of n = \d modes"):
+        _dispersed_run(stick_slip, small_model, model_dispersion=0.9)

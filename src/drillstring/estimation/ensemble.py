@@ -73,9 +73,16 @@ off: :func:`relax_to_prior_spread`) after each analysis gives back part of the s
 state is a few modal coordinates, each global along the string, and the default ensemble (64) exceeds the
 augmented state's dimension (about 25).
 
+**Model uncertainty.** With ``model_dispersion`` > 0 each member runs its own reduced model, its mass, stiffness
+and damping matrices drawn once from the random-matrix model of that dispersion (:func:`member_models`; the
+twin's and the shipped record's truths are such realizations) and kept for the whole record: the model's error
+as an unknown, fixed operator, not only the kicks. A member's state is in its own model's coordinates ``q``; the
+analysis (and the kicks, the block position) works on ``ξ = X q``, the estimator's model's coordinates of the
+same displacement, so that the members are compared on one footing. Default 0: one shared model.
+
 **Failures.** A member whose forecast fails (the integrator stops, a non-finite value, a bit speed beyond
 ``divergence_speed_ratio`` times the top speed) is replaced by a copy of a member drawn from those that
-succeeded (its state, parameters, outputs and recent bit speed); the count per time is returned
+succeeded (its state, parameters, outputs, recent bit speed and model); the count per time is returned
 (:attr:`~drillstring.estimation.results.EstimationResult.replaced`). The run stops (RuntimeError) only when every
 member fails at one time.
 
@@ -104,6 +111,11 @@ from drillstring.dynamics.reduced.build import case_reduced_model, in_casing
 from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
 from drillstring.estimation.results import DOWNHOLE, QUANTILES, EstimationResult
 from drillstring.estimation.surface import SurfaceRecord
+from drillstring.stochastic.random_matrices import (
+    ModelDispersion,
+    model_generator,
+    random_reduced_model_with_transform,
+)
 
 #: The channels the filter reads as observations (the hook load is an input).
 OBSERVED = ("top_speed", "surface_torque", "block_position")
@@ -156,6 +168,9 @@ class EstimatorSettings:
             ``[string_friction] law`` with stations on that wall.
         friction_spread: prior standard deviation of log μ [-], in (0, 2].
         friction_walk: its random walk [1/√s], >= 0.
+        model_dispersion: each member's own reduced model, its mass, stiffness and damping matrices drawn once
+            from the random-matrix model with this dispersion (:func:`member_models`) [-], in [0, 1) and below
+            the family sizes' bound sqrt((n+1)/(n+5)); 0 (default): every member runs the estimator's model.
         relaxation: relaxation to the prior spread (RTPS, :func:`relax_to_prior_spread`) of the model state's
             rows after each analysis [-], in [0, 1]; 0 none.
         parameter_relaxation: the same for the parameters' rows (coefficient, μ, bias, block zero) [-], in [0, 1].
@@ -186,6 +201,7 @@ class EstimatorSettings:
     friction_factor: str = "none"
     friction_spread: float = 0.3
     friction_walk: float = 0.003
+    model_dispersion: float = 0.0
     relaxation: float = 0.0
     parameter_relaxation: float = 0.0
     weight_on_bit_bias_spread: float = 20e3
@@ -212,6 +228,7 @@ class EstimatorSettings:
         real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
         real_number("friction_spread", self.friction_spread, low=0.0, high=2.0, low_open=True)
         real_number("relaxation", self.relaxation, low=0.0, high=1.0)
+        real_number("model_dispersion", self.model_dispersion, low=0.0, high=1.0, high_open=True)
         real_number("parameter_relaxation", self.parameter_relaxation, low=0.0, high=1.0)
         real_number("rtol", self.rtol, low=0.0, high=1e-2, low_open=True)
         real_number("divergence_speed_ratio", self.divergence_speed_ratio, low=1.0, low_open=True)
@@ -267,6 +284,29 @@ def member_model(model, laws: np.ndarray, weight_on_bit: float, friction: np.nda
     other.case2_data = data
     other.rhs_data = other.case2_data
     return other
+
+
+def member_models(model, dispersion: float, seed: int, n_members: int) -> tuple[list, list]:
+    """Each member's reduced model and its coordinates (model uncertainty as an unknown, fixed operator):
+    member ``i``'s mass, stiffness and damping matrices drawn once, with the dispersion ``dispersion`` [-] for
+    all three, from the random-matrix model (Soize's SE+ ensemble,
+    :func:`~drillstring.stochastic.random_matrices.random_reduced_model_with_transform`) on the stream
+    :func:`~drillstring.stochastic.random_matrices.model_generator` ``(seed, i)``, apart from the filter's
+    own (the initial ensemble, the walks and the kicks are the same draws whatever the dispersion). Returns
+    the models and, per member, ``(X, X⁻¹)`` with ``ξ = X q`` the estimator's model's coordinates of the
+    member's ``q`` (the same displacement ``Φ ξ = Φ X q``: the analysis compares the members there). With
+    ``dispersion = 0`` every member is ``model`` itself, transform None. ValueError naming
+    ``estimator.model_dispersion`` at or above a family's bound ``sqrt((n+1)/(n+5))``."""
+    if dispersion == 0.0:
+        return [model] * n_members, [None] * n_members
+    spread = ModelDispersion(dispersion, dispersion, dispersion)
+    spread.check_model(model, "estimator.model_dispersion")
+    models, transforms = [], []
+    for i in range(n_members):
+        drawn, x = random_reduced_model_with_transform(model, spread, model_generator(seed, i))
+        models.append(drawn)
+        transforms.append((x, np.linalg.inv(x)))
+    return models, transforms
 
 
 def coefficient_slot(model, name: str) -> int:
@@ -347,14 +387,25 @@ def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndar
 
 
 class _Members:
-    """The ensemble's forecast bookkeeping: per member its run state, augmented parameters, last outputs and
-    the recent bit speed (the stick-slip index's window)."""
+    """The ensemble's forecast bookkeeping: per member its run state, augmented parameters, last outputs, the
+    recent bit speed (the stick-slip index's window), its reduced model and that model's coordinate transforms
+    (:func:`member_models`; None: the estimator's model)."""
 
-    def __init__(self, states, parameters, window_samples):
+    def __init__(self, states, parameters, window_samples, models, transforms):
         self.states = states
         self.parameters = parameters  # (N, p): [log c] [log μ] b z0
         self.outputs = [None] * len(states)
         self.speed = np.full((len(states), window_samples), np.nan)
+        self.models = list(models)
+        self.transforms = list(transforms)  # (X, X⁻¹) with ξ = X q, or None
+
+    def nominal(self, i) -> np.ndarray:
+        """A copy of member ``i``'s state in the estimator's model's coordinates ``[X q, X q̇, s]``."""
+        return _transformed(self.states[i].y, None if self.transforms[i] is None else self.transforms[i][0])
+
+    def own(self, i, y) -> np.ndarray:
+        """``y`` (in the estimator's model's coordinates) in member ``i``'s own ``[X⁻¹ ξ, X⁻¹ ξ̇, s]``."""
+        return y if self.transforms[i] is None else _transformed(y, self.transforms[i][1])
 
     def push(self, i, speeds):
         speeds = np.asarray(speeds, dtype=float)[-self.speed.shape[1]:]
@@ -368,6 +419,18 @@ class _Members:
         self.parameters[target] = self.parameters[source]
         self.outputs[target] = self.outputs[source]
         self.speed[target] = self.speed[source]
+        self.models[target] = self.models[source]
+        self.transforms[target] = self.transforms[source]
+
+
+def _transformed(y: np.ndarray, matrix: np.ndarray | None) -> np.ndarray:
+    """A copy of the state ``y = [η, η̇, s]`` with ``η``, ``η̇`` multiplied by ``matrix`` (n × n; None: a copy)."""
+    out = np.array(y, dtype=float)
+    if matrix is not None:
+        n = matrix.shape[0]
+        out[:n] = matrix @ out[:n]
+        out[n:2 * n] = matrix @ out[n:2 * n]
+    return out
 
 
 def _hook_load_mean(record: SurfaceRecord, t: float, window: float) -> float:
@@ -416,6 +479,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     model = estimator_model(case, settings) if model is None else model
     if model.full:
         raise ValueError("estimate: the estimator's model must be case 2 (nonlinear = 'bit_and_contact')")
+    models, transforms = member_models(model, settings.model_dispersion, settings.seed, settings.ensemble_size)
     # the augmented parameters' columns: [log c] [log μ] b z0 (c, μ where estimated)
     coefficient_name = None if settings.bit_rock_coefficient == "none" else settings.bit_rock_coefficient
     friction_name = FRICTION_WALLS[settings.friction_factor]
@@ -455,11 +519,11 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     if "block_position" in channels and np.any(usable["block_position"]):
         block0 = float(record.channels["block_position"][np.flatnonzero(usable["block_position"])[0]])
     for i in range(n_members):
-        y = y0.copy()
+        y = y0.copy() if models[i] is model else models[i].initial_state(0.0, settings.seed)
         if model.rigid_rotation_column is not None:
             r = model.rigid_rotation_column
-            y[n + r] += settings.initial_speed_spread * rng.standard_normal() / model.quill_shapes[r]
-        states.append(RunState.start(model, y))
+            y[n + r] += settings.initial_speed_spread * rng.standard_normal() / models[i].quill_shapes[r]
+        states.append(RunState.start(models[i], y))
         if coefficient_name is not None:
             parameters[i, column[coefficient_name]] = (math.log(coefficient)
                                                        + settings.coefficient_spread * rng.standard_normal())
@@ -470,7 +534,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         parameters[i, zero_column] = ((block0 if math.isfinite(block0) else 0.0)
                                       + settings.block_position_noise * rng.standard_normal())
     window_samples = max(round(settings.stick_slip_window / settings.output_step), 2)
-    members = _Members(states, parameters, window_samples)
+    members = _Members(states, parameters, window_samples, models, transforms)
 
     names = tuple(DOWNHOLE) + tuple(estimated) + ("weight_on_bit_bias",)
     mean = {name: np.full(n_time, np.nan) for name in names}
@@ -479,7 +543,6 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     predicted_quantiles = {name: np.full((n_time, len(QUANTILES)), np.nan) for name in channels}
     used = {name: np.zeros(n_time, dtype=bool) for name in channels}
     replaced = np.zeros(n_time, dtype=np.int64)
-    laws_nominal = model.case2_data.laws
     t_start = int(model.blocks[2])
     t_end = min(int(model.blocks[3]), t_start + settings.model_noise_modes)
     bit_shape = np.asarray(model.bit_t[t_start:t_end], dtype=float)
@@ -495,16 +558,16 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         return math.exp(min(max(log_value, log_nominal - LOG_RANGE), log_nominal + LOG_RANGE))
 
     def member(i, hook_mean):
-        laws = laws_nominal
+        laws = members.models[i].case2_data.laws
         if coefficient_name is not None:
-            laws = laws_nominal.copy()
+            laws = laws.copy()
             laws[slot] = clipped(members.parameters[i, column[coefficient_name]], coefficient)
         friction = None
         if friction_name is not None:
             friction = friction_nominal.copy()
             friction[friction_mask] = clipped(members.parameters[i, column[friction_name]], friction_value)
         drop = 0.0 if not math.isfinite(hook_mean) else static_hook - hook_mean
-        return member_model(model, laws, weight + drop + members.parameters[i, bias_column], friction)
+        return member_model(members.models[i], laws, weight + drop + members.parameters[i, bias_column], friction)
 
     # the assimilation windows (t0 + (j-1) step, t0 + j step] of the record (the first sample alone in window 0),
     # each analysed at its last sample with the means of its usable samples
@@ -528,9 +591,9 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
                     settings.friction_walk * math.sqrt(dt) * rng.standard_normal(n_members))
         if speed_noise > 0.0:
             for i in range(n_members):
-                y = members.states[i].y.copy()
+                y = members.nominal(i)
                 y[n + t_start:n + t_end] += speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
-                members.states[i] = members.states[i].updated(y)
+                members.states[i] = members.states[i].updated(members.own(i, y))
         grid = np.append(np.arange(t_from + settings.output_step, t_to - 1e-9 * dt, settings.output_step), t_to)
         ok = np.zeros(n_members, dtype=bool)
         for i in range(n_members):
@@ -565,7 +628,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         for a, b in itertools.pairwise(marks):
             forecast(float(a), float(b), hook_first, walk=False)
         # the block's zero: each member's predicted block position at the record's first time is the first sample's
-        top_now = np.array([top_u @ members.states[i].y[:n] for i in range(n_members)])
+        top_now = np.array([top_u @ members.nominal(i)[:n] for i in range(n_members)])
         members.parameters[:, zero_column] += top_now
 
     for k in range(n_time):
@@ -582,7 +645,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         else:
             replaced[k] = forecast(float(clock[k - 1]), t, hook_mean)
         # the predicted surface channels, the analysis
-        z = np.array([np.concatenate([members.states[i].y, members.parameters[i]]) for i in range(n_members)]).T
+        z = np.array([np.concatenate([members.nominal(i), members.parameters[i]]) for i in range(n_members)]).T
         predicted = {"top_speed": np.array([o[_QUILL] for o in members.outputs]),
                      "surface_torque": np.array([o[_SURFACE_TORQUE] for o in members.outputs]),
                      "block_position": z[-1] - top_u @ z[:n]}
@@ -606,7 +669,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             if relaxation is not None:
                 z = relax_to_prior_spread(prior, z, relaxation)
             for i in range(n_members):
-                members.states[i] = members.states[i].updated(z[:-n_parameters, i])
+                members.states[i] = members.states[i].updated(members.own(i, z[:-n_parameters, i]))
                 members.parameters[i] = z[-n_parameters:, i]
                 row = member(i, hook_mean).observe(t, members.states[i].y)
                 members.outputs[i] = row

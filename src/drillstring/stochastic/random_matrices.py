@@ -49,6 +49,7 @@ __all__ = [
     "model_generator",
     "random_matrix",
     "random_reduced_model",
+    "random_reduced_model_with_transform",
 ]
 
 #: The families drawn independently (the ROM's contiguous blocks; rigid_axial goes with axial).
@@ -161,16 +162,17 @@ class ModelDispersion:
         """``(δ_M, δ_K, δ_D)``."""
         return (self.mass, self.stiffness, self.damping)
 
-    def check_model(self, model) -> None:
+    def check_model(self, model, field: str | None = None) -> None:
         """:meth:`check` against the germ sizes of each family of a reduced model: its columns (mass), its
-        positive ω² (stiffness) and the rank of its damping block (nothing when no dispersion is positive)."""
+        positive ω² (stiffness) and the rank of its damping block (nothing when no dispersion is positive);
+        ``field``: the name the error gives the dispersion (default ``uncertainty.model.<key>``)."""
         if not self.active:
             return
         sizes = {}
         for family, c in family_columns(model).items():
             rank = _factor(model.damping[np.ix_(c, c)])[0].shape[1] if self.damping > 0.0 else len(c)
             sizes[family] = (len(c), int(np.sum(model.omega2[c] > 0.0)), rank)
-        self.check(sizes)
+        self.check(sizes, field)
 
     def to_mapping(self) -> dict[str, float]:
         return dict(zip(self.KEYS, (self.mass, self.stiffness, self.damping)))
@@ -180,16 +182,18 @@ class ModelDispersion:
         """True when any dispersion is positive."""
         return self.mass > 0.0 or self.stiffness > 0.0 or self.damping > 0.0
 
-    def check(self, sizes: Mapping[str, int | tuple[int, int, int]]) -> None:
+    def check(self, sizes: Mapping[str, int | tuple[int, int, int]], field: str | None = None) -> None:
         """Refuse (ValueError naming the field, its value and the range) a dispersion at or above δ_max(n) of
         its germ of size ``n`` (``sizes``: family -> its number of modes, or the germ sizes ``(mass,
-        stiffness, damping)`` of the family)."""
+        stiffness, damping)`` of the family); ``field``: the field's name in the error (default
+        ``uncertainty.model.<key>``)."""
         for j, (key, value) in enumerate(self.to_mapping().items()):
             for family, size in sizes.items():
                 n = size if isinstance(size, int) else size[j]
                 if value > 0.0 and n > 0 and value >= dispersion_limit(n):
+                    name = field or f"uncertainty.model.{key}"
                     raise ValueError(
-                        f"uncertainty.model.{key} = {value:g}: must be in [0, {dispersion_limit(n):.4g}) = "
+                        f"{name} = {value:g}: must be in [0, {dispersion_limit(n):.4g}) = "
                         f"[0, sqrt((n+1)/(n+5))) for the {family} family of n = {n} modes")
 
 
@@ -208,9 +212,17 @@ def family_columns(model) -> dict[str, np.ndarray]:
 
 
 def random_reduced_model(model, dispersion: ModelDispersion, rng: np.random.Generator):
-    """A realization of ``model`` (:class:`~drillstring.dynamics.rom.ReducedOrderModel`) with random reduced
+    """:func:`random_reduced_model_with_transform` without the transform: the realized model alone."""
+    return random_reduced_model_with_transform(model, dispersion, rng)[0]
+
+
+def random_reduced_model_with_transform(model, dispersion: ModelDispersion, rng: np.random.Generator):
+    """``(realized, X)``: a realization of ``model`` (:class:`~drillstring.dynamics.rom.ReducedOrderModel`) with random reduced
     mass, stiffness and damping matrices of dispersions ``dispersion``, drawn family by family from ``rng``
-    (module docstring). Returns ``model`` itself when no dispersion is positive.
+    (module docstring), and the block-diagonal ``X`` (n × n) that takes the realized model's coordinates to the
+    nominal model's, ``ξ = X q`` (the realized basis is ``model.basis @ X``; a state of the realized model
+    ``[q, q̇, s]`` is ``[X q, X q̇, s]`` in the nominal one). Returns ``(model, I)`` when no dispersion is
+    positive.
 
     The damping matrix must be block diagonal by family (as every ROM built here is). The realized model has
     the same families, sizes and column order; within a family the columns are the realized modes in
@@ -220,7 +232,7 @@ def random_reduced_model(model, dispersion: ModelDispersion, rng: np.random.Gene
     rigid rotation stays the first torsional column with ω = 0.
     """
     if not dispersion.active:
-        return model
+        return model, np.eye(len(model.angular_frequencies))
     columns = family_columns(model)
     dispersion.check_model(model)
     n = len(model.angular_frequencies)
@@ -234,6 +246,7 @@ def random_reduced_model(model, dispersion: ModelDispersion, rng: np.random.Gene
     omega2 = model.omega2.copy()
     damping = np.zeros_like(model.damping)
     force = np.array(model.generalized_force, dtype=float)
+    transform = np.zeros((n, n))
     for c in columns.values():
         if not len(c):
             continue
@@ -246,9 +259,10 @@ def random_reduced_model(model, dispersion: ModelDispersion, rng: np.random.Gene
         omega2[c] = values
         damping[block] = x.T @ damp @ x
         force[c] = x.T @ force[c]
+        transform[block] = x
     omega = np.sign(omega2) * np.sqrt(np.abs(omega2))
     return dataclasses.replace(model, basis=basis, angular_frequencies=omega, damping=damping,
-                               generalized_force=force, residual_columns=model.residual_columns.copy())
+                               generalized_force=force, residual_columns=model.residual_columns.copy()), transform
 
 
 def _generalized_eigh(stiffness: np.ndarray, mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
