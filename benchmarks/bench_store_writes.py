@@ -8,7 +8,7 @@ again per batch, a Zarr call per row of the one-chunk-per-row arrays, the small 
 whole), the two alternating batch by batch in one run. Prints the milliseconds per realization of each and
 their ratio, and checks that both stores hold the same data. Run:
 
-    .venv/bin/python benchmarks/bench_store_writes.py [--samples 240]
+    .venv/bin/python benchmarks/bench_store_writes.py [--samples 240] [--batch 8]
 """
 
 from __future__ import annotations
@@ -55,11 +55,13 @@ def outcome(case, settings, index: int, rng: np.random.Generator) -> mc.Realizat
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--samples", type=int, default=240)
+    parser.add_argument("--batch", type=int, default=None, help="realizations per write (default: the store's "
+                        "flush_count)")
     args = parser.parse_args()
     case = load_case("reference")
     settings = mc.StudySettings(samples=args.samples, laws=(mc.weight_on_hook_normal(case, 5000.0),))
     rng = np.random.default_rng(0)
-    batch = mc.StudyStore.flush_count
+    batch = args.batch or mc.StudyStore.flush_count
     outcomes = [outcome(case, settings, i, rng) for i in range(args.samples)]
     folder = Path(tempfile.mkdtemp(prefix="bench_store_"))
     try:

@@ -429,9 +429,10 @@ class StudyStore(TaskStore):
     row_dim = "realization"
     noun = "realizations"
     #: Realizations arriving within this many seconds, at most ``flush_count``, are written together (a kill loses
-    #: at most that much work): each write rewrites the ~20 small per-realization arrays whole, 34–80 ms of the
-    #: driver's CPU for one realization alone and 3.4–16 ms each in batches of 8–25 on the reference study
-    #: (benchmarks/bench_study_parametric.py), CPU taken from the workers when there are as many as cores.
+    #: at most that much work): a write makes one Zarr call per array (~30 arrays, ~0.6 ms of CPU each, the ~22 small
+    #: per-realization arrays rewritten whole) plus Zarr's cost per chunk of the rows (0.65 ms, 7 a realization):
+    #: 4.1 ms of the driver's CPU per realization in batches of 8 on the reference study
+    #: (benchmarks/bench_store_writes.py), CPU taken from the workers when there are as many as cores.
     flush_interval = 1.0
     flush_count = 8
     differ = "case or settings differ: samples, sigma, laws, seed, t_end, output_step, model_dispersion"
