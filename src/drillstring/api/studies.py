@@ -185,6 +185,15 @@ def monte_carlo_study(
 def _finish_study(case, settings, t_transient, buckling, folder, units, stage, run):
     """Under the study's lock: its statistics, summary and (in ``folder``, unless None) files; ``stage(text)``
     is told each step."""
+    from drillstring.outputs.beside import ProcessBeside
+
+    with ProcessBeside(enabled=folder is not None) as beside:  # the figures' process, its imports starting now
+        return _finish_study_beside(case, settings, t_transient, buckling, folder, units, stage, run, beside)
+
+
+def _finish_study_beside(case, settings, t_transient, buckling, folder, units, stage, run, beside):
+    """:func:`_finish_study` with the figures drawn by ``beside`` (:class:`~drillstring.outputs.beside.
+    ProcessBeside`) while the stability boundary and the other files are computed and written here."""
     stage("reading the store")
     from drillstring.stochastic.analysis import load_study, study_statistics, study_summary
     from drillstring.stochastic.execution import computation_time
@@ -198,8 +207,11 @@ def _finish_study(case, settings, t_transient, buckling, folder, units, stage, r
         listing = "; ".join(f"{k}: {v}" for k, v in list(failures.items())[:3])
         raise StudyFailed(f"{error} ({len(failures)} failure(s)"
                           f"{': ' + listing if listing else ''})") from None
-    summary = study_summary(stats, t_transient=t_transient, boundary=_stability_boundary(case))
     sessions = run.store.sessions()
+    figures = None
+    if folder is not None:
+        figures = _study_figures(settings, stats, sessions, folder, t_transient, units, stage, beside)
+    summary = study_summary(stats, t_transient=t_transient, boundary=_stability_boundary(case))
     wall_time, used = computation_time(sessions)
     if not sessions:  # a store written before sessions were recorded
         wall_time, used = run.wall_time, run.workers
@@ -218,8 +230,33 @@ def _finish_study(case, settings, t_transient, buckling, folder, units, stage, r
     })
     files: dict[str, Path] = {}
     if folder is not None:
-        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units, stage)
+        files = _write_study_files(case, settings, stats, summary, payload, folder, t_transient, raw, units, stage,
+                                   figures)
     return stats, payload, files
+
+
+def _study_figures(settings, stats, sessions, folder: Path, t_transient, units, stage, beside):
+    """A callable giving the study's figures (name -> path): those in ``folder`` if they were drawn from the same
+    realizations, settings, window, units and plotting code (:func:`~drillstring.stochastic.analysis.figures_key`),
+    else drawn by ``beside`` (:class:`~drillstring.outputs.beside.ProcessBeside`) and recorded when asked for."""
+    from drillstring.stochastic.analysis import current_figures, figures_key, record_figures, time_convergence
+
+    key = figures_key({"n_samples": int(stats.attrs["n_samples"]), "n_failed": int(stats.attrs["n_failed"]),
+                       "sessions": sessions}, settings, t_transient, units)
+    found = current_figures(folder, key)
+    if found is not None:
+        return lambda: found
+    from drillstring.outputs.study_plots import plot_study
+
+    stage("figures")
+    drawn = beside.submit(plot_study, stats, folder, t_transient, time_convergence(stats, t_transient), units=units)
+
+    def figures() -> dict[str, Path]:
+        result = drawn()
+        record_figures(folder, key, result)
+        return result
+
+    return figures
 
 
 def _stability_boundary(case: Case) -> dict | None:
@@ -230,18 +267,18 @@ def _stability_boundary(case: Case) -> dict | None:
         return None
 
 
-def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient,
-                       raw=None, units: str | None = None, stage=lambda text: None) -> dict[str, Path]:
-    """statistics.nc, the figures, summary.json (``payload`` gets ``files``), report.html (the
-    statistics' ``summary`` and the run information from ``payload``) and interactive.html (with the first
-    finished realizations of ``raw``, the study's raw Dataset); figures and report in the unit system ``units``."""
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient, raw=None,
+                       units: str | None = None, stage=lambda text: None, figures=None) -> dict[str, Path]:
+    """statistics.nc, summary.json (``payload`` gets ``files``), report.html (the statistics' ``summary``, the
+    figures given by the callable ``figures`` (:func:`_study_figures`) and the run information from ``payload``)
+    and interactive.html (with the first finished realizations of ``raw``, the study's raw Dataset); report in the
+    unit system ``units``."""
 
     from drillstring.files import strict_json, write_text_atomic
     from drillstring.interactive import REALIZATIONS_SHOWN, study_figures
     from drillstring.quantities import stored_observables
     from drillstring.report import INTERACTIVE_PAGE, write_report
     from drillstring.results import write_netcdf
-    from drillstring.stochastic.analysis import current_figures, figures_key, record_figures
     from drillstring.stochastic.store import DONE
 
     paths = {"store": folder / "study.zarr", "summary": folder / "summary.json",
@@ -253,14 +290,8 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         shown = raw[list(stored_observables(raw))].isel(realization=finished)
     force = display_unit("force", units)
     write_netcdf(stats, paths["statistics"])
-    key = figures_key(payload, settings, t_transient, units)
-    figures = current_figures(folder, key)
-    if figures is None:  # drawn again (importing Matplotlib only then)
-        from drillstring.plots import plot_study
-
-        stage("figures")
-        figures = plot_study(stats, folder, t_transient, summary.get("time_convergence"), units=units)
-        record_figures(folder, key, figures)
+    interactive = study_figures(stats, shown, units=units)
+    figures = figures()  # waits for the drawing
     stage("report")
     payload["files"] = {**{k: str(v) for k, v in paths.items()}, **{k: str(v) for k, v in figures.items()}}
     write_text_atomic(paths["summary"], strict_json(payload) + "\n")  # undefined values: null, never NaN
@@ -292,7 +323,7 @@ def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_
         figures={_STUDY_CAPTIONS[k].format(t_transient=t_transient): figures[k]
                  for k in ("envelopes", "dispersion", "convergence", "realizations") if k in figures},
         run_info=run_info,
-        interactive=study_figures(stats, shown, units=units),
+        interactive=interactive,
         units=units,
     )
     return {**paths, **figures}
