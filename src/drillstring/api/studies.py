@@ -187,7 +187,10 @@ def _finish_study(case, settings, t_transient, buckling, folder, units, stage, r
     is told each step."""
     from drillstring.outputs.beside import ProcessBeside
 
-    with ProcessBeside(enabled=folder is not None) as beside:  # the figures' process, its imports starting now
+    # the figures' process, its imports starting now: only where this run already spawned local worker processes
+    # (a script then runs under ``if __name__ == "__main__":``, which a spawned process needs)
+    beside_ok = folder is not None and isinstance(run.workers, int) and run.workers > 1
+    with ProcessBeside(enabled=beside_ok) as beside:
         return _finish_study_beside(case, settings, t_transient, buckling, folder, units, stage, run, beside)
 
 

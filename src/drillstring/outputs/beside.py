@@ -4,7 +4,9 @@ The end of a study runs on one core: reading the store, the statistics, the nomi
 ``statistics.nc``, the interactive page and the report. Its figures (Matplotlib's rendering: 2.2 s of the 5.5 s
 that end took for the 500-realization reference study, docs/performance.md) are drawn meanwhile by
 :class:`ProcessBeside` in a spawned process, started first so that its imports overlap the store's reading. On a
-machine of one core, where no process can be started, or where the process dies, the caller draws them itself;
+machine of one core, in a run without local worker processes (a script need not then be guarded by
+``if __name__ == "__main__":``, which a spawned process needs), where no process can be started, or where the
+process dies, the caller draws them itself;
 an error of the drawing itself is raised as if the caller had drawn them. The files are the same either way (the
 same code on the same numbers).
 """
