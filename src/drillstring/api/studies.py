@@ -270,8 +270,8 @@ def _stability_boundary(case: Case) -> dict | None:
         return None
 
 
-def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient, raw=None,
-                       units: str | None = None, stage=lambda text: None, figures=None) -> dict[str, Path]:
+def _write_study_files(case, settings, stats, summary, payload, folder: Path, t_transient, raw, units: str | None,
+                       stage, figures) -> dict[str, Path]:
     """statistics.nc, summary.json (``payload`` gets ``files``), report.html (the statistics' ``summary``, the
     figures given by the callable ``figures`` (:func:`_study_figures`) and the run information from ``payload``)
     and interactive.html (with the first finished realizations of ``raw``, the study's raw Dataset); report in the

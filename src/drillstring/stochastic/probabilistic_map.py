@@ -196,10 +196,11 @@ def point_uncertainty(case: Case, settings: SampledMapSettings, point: int, *,
     load of standard deviation ``sigma`` (first, when given), then ``laws`` (see the module docstring).
     ``tolerance``: the largest probability a law may put outside its parameter's range (1 accepts any;
     draws outside fail their realization)."""
-    key = (case.to_toml(), settings, point, tolerance)
+    from drillstring.stochastic.montecarlo import case_text, weight_on_hook_normal
+
+    key = (case_text(case), settings, point, tolerance)
     if key in _LAWS:
         return _LAWS[key]
-    from drillstring.stochastic.montecarlo import weight_on_hook_normal
 
     at_point = point_case(case, settings, point)
     first = dict([weight_on_hook_normal(at_point, settings.sigma)]) if settings.sigma is not None else None

@@ -218,6 +218,7 @@ class TaskStore:
                  sizes: dict[str, int], attrs: dict | None = None) -> None:
         self.path = Path(path)
         self.total = int(sizes[self.row_dim])
+        self._arrays: dict[str, zarr.Array] = {}  # opened for writing, by name (:meth:`_writable`)
         layout = {"status": ArraySpec((self.row_dim,), "i1", PENDING),
                   "wall_time": ArraySpec((self.row_dim,), attributes={"units": "s"}), **layout}
         code = fingerprint(case_toml, settings)
@@ -506,10 +507,9 @@ class TaskStore:
 
     def _writable(self, name: str) -> zarr.Array:
         """The store's array ``name`` opened for writing, once per store object."""
-        arrays = self.__dict__.setdefault("_arrays", {})
-        if name not in arrays:
-            arrays[name] = zarr.open_array(self.group.store, path=self.group[name].path, mode="r+")
-        return arrays[name]
+        if name not in self._arrays:
+            self._arrays[name] = zarr.open_array(self.group.store, path=self.group[name].path, mode="r+")
+        return self._arrays[name]
 
     def failures(self) -> dict[str, str]:
         return dict(self.group.attrs.get("failures", {}))
