@@ -10,8 +10,9 @@ runs on both records for each seed (the estimator's seed; the twin's truth is se
 shipped record is read at 10 Hz as shipped, its first ``--shipped`` seconds, coverage over the whole record (the
 spin-up runs before it); the twin's coverage is counted after its first 10 s (its filter starts from the model's
 initial state). One line per run: coverage of bit speed and torque on bit, the torque on bit's while the truth
-sticks (bit speed below STICK rad/s) and while it slips, the bit speed's RMSE, the members replaced and the wall
-time. ``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
+sticks (bit speed below STICK rad/s) and while it slips, the bit speed's RMSE, the members replaced, the wall
+time and, where one is estimated, the bit-rock coefficient's 5/50/95 % quantiles at the record's end.
+``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
 members") is one of the settings a ``--config`` may set.
 """
 
@@ -107,7 +108,9 @@ def main() -> None:
                       f"bit_speed {result.coverage('bit_speed', truth['bit_speed'], start):.2f} "
                       f"torque_on_bit {result.coverage('torque_on_bit', truth['torque_on_bit'], start):.2f} "
                       f"[{phases}] "
-                      f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s", flush=True)
+                      f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s"
+                      + "".join(f" {p} end {'/'.join(f'{v:.0f}' for v in result.quantiles[p][-1])}"
+                                for p in result.parameters if p == settings.bit_rock_coefficient), flush=True)
 
 
 if __name__ == "__main__":
