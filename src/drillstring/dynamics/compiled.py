@@ -503,7 +503,7 @@ def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output
     or after ``t1``) — continuing from it with the same settings repeats one run to the end bit for bit,
     where landing at an intermediate time changes the steps that follow (by the integration tolerance).
     ``progress``: called with the time reached, about every ``CALL_SECONDS`` of work; ``chunks``: the number of
-    stops, evenly spaced, at which it is called at least."""
+    stops, evenly spaced, at which it is called at least (without ``progress`` the loop makes no such stops)."""
     method = _method(solver.method)
     kind_of(method)  # a clear TypeError for a method of no registered kind
     y0 = np.array(start.y, dtype=float)
@@ -574,12 +574,14 @@ def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output
 
 
 def _drive(run_chunk, work, step, settings, data, t0, t1, grid, chunks, max_steps, progress):
-    """Call the compiled loop until ``t1`` or a stop, pausing at ``chunks`` evenly spaced times and about
-    every :data:`CALL_SECONDS` (Ctrl-C, ``progress``), and stop a run whose step has collapsed. Returns the
+    """Call the compiled loop until ``t1`` or a stop, pausing at ``chunks`` evenly spaced times (where there is a
+    ``progress`` to call) and about every :data:`CALL_SECONDS` (Ctrl-C, ``progress``), and stop a run whose step has collapsed. Returns the
     status and, for a collapse, ``(recent mean step, attempts in the window, mean step, attempts needed)``."""
     state = work.state
     status, collapse = SUCCESS, None
-    stops = np.linspace(t0, t1, max(int(chunks), 1) + 1)[1:]
+    # the evenly spaced stops serve the progress callback only: without one the loop pauses on its budget alone
+    # (each call's dispatch costs ~30 µs; a study's realization made 100 of them, 4 % of its solve)
+    stops = np.linspace(t0, t1, max(int(chunks), 1) + 1)[1:] if progress is not None else np.array([t1])
     stops[-1] = t1
     output_step = float(grid[1] - grid[0]) if len(grid) > 1 else t1 - t0
     # step attempts per call; (attempts, t) at the start of the window of the collapse check

@@ -231,7 +231,7 @@ def run_locked(
     *,
     passes: Callable[[Any], Iterable[Sequence[tuple[int, Any]]]] | None = None,
     lost: LostOutcome = bare_failure,
-    prepare: Callable[[], None] | None = None,
+    prepare: Callable[[], Callable[[], None] | None] | None = None,
     finish: Callable[["StoreRun"], Any] | None = None,
     what: str = "study",
     noun: str = "realizations",
@@ -243,8 +243,10 @@ def run_locked(
     ``lock_name``, default ``what``) once, open or create it (``open_store()``), run its ``pending(store)``
     items with ``task`` (:func:`run_tasks`), then ``finish(run)`` (reading the store and writing the
     result files, still under the lock; its value is the run's ``result``) and release everything.
-    ``prepare()`` runs once before local worker processes start (compiling the kernels in this process,
-    so the workers load them).
+    ``prepare()`` runs once, in this process, before any local worker process takes an item (compiling the
+    kernels here, so the workers load them), while the workers start (their imports overlap it); it may
+    return a *setup*, a picklable callable each local worker runs once before its first item (e.g. installing
+    a model built here, instead of building it again in each worker). Not run for a Dask cluster.
 
     ``passes`` instead of ``pending``: a run in passes, each choosing its items from what the previous ones
     wrote (the optimiser's batches of design points): ``passes(store)`` yields the items of each pass, run in
@@ -264,16 +266,14 @@ def run_locked(
             for repair in getattr(store, "repairs", ()):  # damaged chunks found: their rows run again
                 notify(engine.note, repair)
             single = passes is None
-            computed, wall, used, prepared, counts = 0, 0.0, 1, False, None
+            computed, wall, used, counts = 0, 0.0, 1, None
+            preparation = _Preparation(prepare)
             for items in ([list(pending(store))] if single else passes(store)):
                 items = list(items)
                 if not items and not single:
                     continue
-                if items and client is None and prepare is not None and not prepared:
-                    prepare()
-                    prepared = True
                 report = run_tasks(store, task, items, replace(engine, scheduler=client),
-                                   address=address, lost=lost, what=what, noun=noun)
+                                   address=address, lost=lost, what=what, noun=noun, prepare=preparation)
                 computed, wall, used = computed + report.computed, wall + report.wall_time, report.workers
                 counts = report.completed, report.failed  # the whole store's
             done, failed = store.counts() if counts is None else counts
@@ -316,6 +316,7 @@ def run_tasks(
     lost: LostOutcome = bare_failure,
     what: str = "study",
     noun: str = "realizations",
+    prepare: Callable[[], Callable[[], None] | None] | None = None,
 ) -> RunReport:
     """Run ``items`` (``(index, argument)``, the store's pending ones) with ``task`` and write each
     outcome to ``store``; the caller holds the store's lock.
@@ -330,6 +331,7 @@ def run_tasks(
     processes (default one per core; 1 runs in this process); its ``progress``, ``note`` and ``worker_timeout``.
     Raises :class:`Interrupted` on Ctrl-C and :class:`WorkersLost` when no worker is left, after writing
     every outcome received; ``what`` and ``noun`` name the run and its items in those messages.
+    ``prepare``: as :func:`run_locked`'s, run (locally, when there are items) before the first item.
     """
     client, workers, progress = engine.scheduler, engine.workers, engine.progress
     if isinstance(client, str):
@@ -376,7 +378,8 @@ def run_tasks(
     try:
         try:
             execute(task, items, record, workers=used if isinstance(used, int) else None, client=client,
-                    address=address, worker_timeout=engine.worker_timeout, lost=lost, noun=noun, note=engine.note)
+                    address=address, worker_timeout=engine.worker_timeout, lost=lost, noun=noun, note=engine.note,
+                    prepare=prepare)
         finally:
             flush()
     except KeyboardInterrupt as error:
@@ -394,31 +397,57 @@ def run_tasks(
 def execute(task: Callable[[Any], Any], items: Sequence[tuple[int, Any]], record: Callable[[Any], None], *,
             workers: int | None = 1, client=None, address: str | None = None,
             worker_timeout: float = DASK_WORKER_TIMEOUT, lost: LostOutcome = bare_failure,
-            noun: str = "realizations", note: Callable[[str], None] | None = None) -> None:
+            noun: str = "realizations", note: Callable[[str], None] | None = None,
+            prepare: Callable[[], Callable[[], None] | None] | None = None) -> None:
     """Compute ``task(argument)`` for each ``(index, argument)`` of ``items`` and pass each outcome to
     ``record`` as it arrives (in completion order): on the Dask cluster of ``client``, in this process
     (``workers`` 1) or on ``workers`` spawned local processes. ``note`` receives the Dask run's notes
-    while nothing finishes."""
+    while nothing finishes. ``prepare`` (local runs with items only): run here before the first item, while
+    the worker processes start; the setup it returns runs once in each worker (:func:`run_locked`)."""
     items = list(items)
     if client is not None:
         _run_dask(client, address or "the Dask scheduler", task, items, record, worker_timeout, lost, noun,
                   note)
     elif (workers or 1) <= 1:
+        if items and prepare is not None:
+            setup = prepare()
+            if setup is not None:
+                setup()
         for _, argument in items:
             record(task(argument))
     else:
-        _run_processes(task, items, workers, record, lost=lost, noun=noun)
+        _run_processes(task, items, workers, record, lost=lost, noun=noun,
+                       prepare=prepare if items else None)
 
 
 # --- local processes -----------------------------------------------------------------------------
 
 #: In a worker process: the shared flags "item started" (one per slot, the item's position).
 _STARTED = None
+#: Put in a pool's setup queue when the parent's preparation failed: the waiting workers exit.
+_ABORT = "abort"
 
 
-def _worker_start(parent_pid: int, started=None) -> None:
+class _Preparation:
+    """A run's ``prepare()`` (:func:`run_locked`), run at most once; its setup (or None) kept for the next
+    pools of the run (a pool started again after a worker died)."""
+
+    def __init__(self, prepare: Callable[[], Callable[[], None] | None] | None):
+        self._prepare, self._done, self._setup = prepare, prepare is None, None
+
+    def __call__(self) -> Callable[[], None] | None:
+        if not self._done:
+            self._setup = self._prepare()
+            self._done = True
+        return self._setup
+
+
+def _worker_start(parent_pid: int, started=None, task=None, setups=None) -> None:
     """Worker initializer: keep the shared "started" flags, and exit as soon as the parent process is
-    gone (killed, not just interrupted), instead of computing tasks nobody will record."""
+    gone (killed, not just interrupted), instead of computing tasks nobody will record. ``task`` is only
+    unpickled (with the initializer's arguments, at the process's start): its modules are imported while the
+    parent prepares. ``setups``: a queue from which this worker takes the parent's setup (:func:`run_locked`)
+    and runs it before its first item; it waits for it (the parent's preparation runs meanwhile)."""
     import threading
 
     global _STARTED
@@ -431,6 +460,37 @@ def _worker_start(parent_pid: int, started=None) -> None:
                 os._exit(0)
 
     threading.Thread(target=watch, daemon=True).start()
+    if setups is not None:
+        setup = setups.get()
+        if isinstance(setup, str) and setup == _ABORT:
+            os._exit(0)
+        if setup is not None:
+            setup()
+
+
+def _start_pool(context, workers: int, parent_pid: int, task, started, prepare
+                ) -> tuple[cf.ProcessPoolExecutor, Callable[[], None]]:
+    """A pool of ``workers`` processes, each waiting for the setup of ``prepare`` (run here, once per run:
+    :class:`_Preparation`) before its first item, and the ``release()`` that runs the preparation and hands the
+    setup to each process (if it fails, the waiting processes are told to exit and the error is raised). The
+    processes start at the pool's first ``submit``: call ``release()`` after it, so that they start meanwhile."""
+    setups = context.SimpleQueue() if prepare is not None else None
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_worker_start,
+                                  initargs=(parent_pid, started, task, setups))
+
+    def release() -> None:
+        if setups is None:
+            return
+        try:
+            setup = prepare()
+        except BaseException:
+            for _ in range(workers):
+                setups.put(_ABORT)
+            raise
+        for _ in range(workers):
+            setups.put(setup)
+
+    return pool, release
 
 
 def _tracked(task: Callable, slot: int, argument):
@@ -442,13 +502,14 @@ def _tracked(task: Callable, slot: int, argument):
 
 
 def _run_processes(task: Callable, items: Sequence[tuple[int, Any]], workers: int, record,
-                   lost: LostOutcome = bare_failure, noun: str = "realizations") -> None:
-    """Run ``items`` on ``workers`` spawned processes (single-threaded linear algebra in each)."""
+                   lost: LostOutcome = bare_failure, noun: str = "realizations", prepare=None) -> None:
+    """Run ``items`` on ``workers`` spawned processes (single-threaded linear algebra in each), ``prepare``
+    (:func:`execute`) run here while they start."""
     context = multiprocessing.get_context("spawn")
     saved = {k: os.environ.get(k) for k in WORKER_ENVIRONMENT}
     os.environ.update(WORKER_ENVIRONMENT)  # inherited by the spawned workers only at start-up
     try:
-        _process_loop(context, task, list(items), workers, record, os.getpid(), lost, noun)
+        _process_loop(context, task, list(items), workers, record, os.getpid(), lost, noun, prepare)
     finally:
         for key, value in saved.items():
             if value is None:
@@ -457,7 +518,7 @@ def _run_processes(task: Callable, items: Sequence[tuple[int, Any]], workers: in
                 os.environ[key] = value
 
 
-def _process_loop(context, task, items, workers, record, parent_pid, lost, noun) -> None:
+def _process_loop(context, task, items, workers, record, parent_pid, lost, noun, prepare=None) -> None:
     """Run ``items`` on a pool of ``workers`` processes.
 
     If a worker dies (killed, out of memory, crash) the pool breaks and every running item is lost with
@@ -465,7 +526,9 @@ def _process_loop(context, task, items, workers, record, parent_pid, lost, noun)
     the others go on in a fresh pool of ``workers`` processes. At the end each suspect runs alone in its
     own single-process pool (up to ``workers`` such pools at once): the one that kills its worker there
     is recorded as failed with that cause (``lost``), the innocent ones finish normally. A pool that
-    breaks before any item started (workers that cannot start) raises :class:`WorkersLost`.
+    breaks before any item started (workers that cannot start) raises :class:`WorkersLost`. ``prepare`` runs
+    here once, after the first pool's items are submitted (its processes importing meanwhile); each pool's
+    processes run its setup before their first item (:func:`_start_pool`).
     """
     started = context.Array("b", max(len(items), 1), lock=False)
     remaining = list(range(len(items)))  # slots: positions in items
@@ -474,11 +537,11 @@ def _process_loop(context, task, items, workers, record, parent_pid, lost, noun)
     while remaining:
         for slot in remaining:
             started[slot] = 0
-        pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(remaining)), mp_context=context,
-                                      initializer=_worker_start, initargs=(parent_pid, started))
+        pool, release = _start_pool(context, min(workers, len(remaining)), parent_pid, task, started, prepare)
         broken = False
         try:
             futures = {pool.submit(_tracked, task, slot, items[slot][1]): slot for slot in remaining}
+            release()
             for future in cf.as_completed(futures):
                 error = future.exception()
                 if error is None:
@@ -498,10 +561,12 @@ def _process_loop(context, task, items, workers, record, parent_pid, lost, noun)
         remaining = [slot for slot in remaining if slot not in recorded and slot not in in_flight]
     for first in range(0, len(suspects), workers):
         batch = suspects[first:first + workers]
-        pools = [cf.ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=_worker_start,
-                                        initargs=(parent_pid, None)) for _ in batch]
+        started_pools = [_start_pool(context, 1, parent_pid, task, None, prepare) for _ in batch]
+        pools = [pool for pool, _ in started_pools]
         try:
             futures = {p.submit(task, items[slot][1]): slot for p, slot in zip(pools, batch)}
+            for _, release in started_pools:
+                release()
             for future in cf.as_completed(futures):
                 error = future.exception()
                 if error is None:

@@ -66,7 +66,7 @@ from drillstring.stochastic.runs import (
     realization_metrics,
     simulation_options,
 )
-from drillstring.stochastic.study_model import realization_model, study_model_note
+from drillstring.stochastic.study_model import realization_model, study_model_note, worker_setup
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes
 from drillstring.stochastic.uncertainty_settings import (
@@ -543,20 +543,37 @@ def run_study(case: Case, settings: StudySettings, store_path: str | Path, engin
     Before anything is created: the settings are checked against the case (:func:`check_study`), a
     scheduler is reached (:class:`~drillstring.stochastic.execution.SchedulerUnreachable` within about
     12 s), and the store is locked (:class:`~drillstring.stochastic.locks.StudyLocked` if another study
-    runs on it). :func:`~drillstring.stochastic.execution.run_locked` does the rest.
+    runs on it). :func:`~drillstring.stochastic.execution.run_locked` does the rest: on local processes the
+    study's model is built and the kernels compiled here while the workers start (:func:`_prepare_study`).
     """
     check_study(case, settings)
-    model_note = study_model_note(case, (case_text(case), settings), study_uncertainty(case, settings))
-    if model_note is not None and engine.note is not None:
-        engine.note(model_note)
+    key, law = (case_text(case), settings), study_uncertainty(case, settings)
+    if engine.scheduler is not None:  # a cluster's workers build their own models: the note now
+        _note_model(case, key, law, engine.note)
 
     def pending(store: StudyStore):
         return [(i, i) for i in ([] if store.nominal_done() else [NOMINAL]) + store.pending()]
 
     return run_locked(store_path, partial(StudyStore, Path(store_path), case, settings), pending,
                       partial(_realization_task, case, settings), engine, lost=partial(_worker_died, case, settings),
-                      prepare=partial(compile_kernels, case, note=engine.note), finish=finish, what="study",
+                      prepare=partial(_prepare_study, case, key, law, engine.note), finish=finish, what="study",
                       noun="realizations")
+
+
+def _note_model(case: Case, key, law: Uncertainty, note) -> None:
+    model_note = study_model_note(case, key, law)
+    if model_note is not None and note is not None:
+        note(model_note)
+
+
+def _prepare_study(case: Case, key, law: Uncertainty, note):
+    """Before the local realizations (while the worker processes start): the study's parametric model built
+    here (its note), the kernels compiled, and the setup that hands the model to each worker
+    (:func:`~drillstring.stochastic.study_model.worker_setup`: 6 MB pickled once per worker instead of a
+    0.45 s build in each)."""
+    _note_model(case, key, law, note)
+    compile_kernels(case, note=note)
+    return worker_setup(key)
 
 
 def _realization_task(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:

@@ -33,6 +33,7 @@ the worker processes) rebuilds every realization as before: for comparisons and 
 from __future__ import annotations
 
 import os
+from functools import partial
 
 from drillstring.case import Case
 from drillstring.dynamics.reduced.build import case_reduced_model
@@ -101,6 +102,20 @@ def parametric_model(case: Case, key, law: Uncertainty) -> ParametricReducedMode
         _MODELS.clear()
     _MODELS[key] = found
     return found
+
+
+def worker_setup(key):
+    """The setup that installs this process's parametric model of the study ``key`` in a worker process
+    (:func:`~drillstring.stochastic.execution.run_locked`'s ``prepare``), or None when none was built here."""
+    found = _MODELS.get(key)
+    return partial(install_model, key, found) if isinstance(found, ParametricReducedModel) else None
+
+
+def install_model(key, model: ParametricReducedModel) -> None:
+    """Keep ``model`` (built in the driver) as this process's parametric model of the study ``key``."""
+    if len(_MODELS) > 4:
+        _MODELS.clear()
+    _MODELS[key] = model
 
 
 def realization_model(case: Case, key, law: Uncertainty, realized: Case, *, nominal: bool = False
