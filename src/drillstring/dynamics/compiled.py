@@ -575,8 +575,8 @@ def advance(model, solver: SolverSettings, start: RunState, t1: float, *, output
 
 def _drive(run_chunk, work, step, settings, data, t0, t1, grid, chunks, max_steps, progress):
     """Call the compiled loop until ``t1`` or a stop, pausing at ``chunks`` evenly spaced times (where there is a
-    ``progress`` to call) and about every :data:`CALL_SECONDS` (Ctrl-C, ``progress``), and stop a run whose step has collapsed. Returns the
-    status and, for a collapse, ``(recent mean step, attempts in the window, mean step, attempts needed)``."""
+    ``progress`` to call) and about every :data:`CALL_SECONDS` (Ctrl-C, ``progress``), and stop a run whose step
+    has collapsed. Returns the status and, for a collapse, ``(recent mean step, attempts in the window, mean step, attempts needed)``."""
     state = work.state
     status, collapse = SUCCESS, None
     # the evenly spaced stops serve the progress callback only: without one the loop pauses on its budget alone

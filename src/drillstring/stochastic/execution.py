@@ -37,6 +37,7 @@ import concurrent.futures as cf
 import datetime as _dt
 import multiprocessing
 import os
+import threading
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Iterable, Sequence
@@ -448,8 +449,6 @@ def _worker_start(parent_pid: int, started=None, task=None, setups=None) -> None
     unpickled (with the initializer's arguments, at the process's start): its modules are imported while the
     parent prepares. ``setups``: a queue from which this worker takes the parent's setup (:func:`run_locked`)
     and runs it before its first item; it waits for it (the parent's preparation runs meanwhile)."""
-    import threading
-
     global _STARTED
     _STARTED = started
 
@@ -487,8 +486,9 @@ def _start_pool(context, workers: int, parent_pid: int, task, started, prepare
             for _ in range(workers):
                 setups.put(_ABORT)
             raise
-        for _ in range(workers):
-            setups.put(setup)
+        # a 6 MB setup fills the pipe until a worker reads it (after its imports): put from a thread, so that a
+        # worker dying before it reads cannot hold this process (the pool then breaks as before)
+        threading.Thread(target=lambda: [setups.put(setup) for _ in range(workers)], daemon=True).start()
 
     return pool, release
 

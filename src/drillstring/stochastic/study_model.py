@@ -98,9 +98,7 @@ def parametric_model(case: Case, key, law: Uncertainty) -> ParametricReducedMode
             found = f"{error}: every realization's reduced model is rebuilt (slower)"
     else:
         found = reason
-    if len(_MODELS) > 4:
-        _MODELS.clear()
-    _MODELS[key] = found
+    install_model(key, found)
     return found
 
 
@@ -111,8 +109,9 @@ def worker_setup(key):
     return partial(install_model, key, found) if isinstance(found, ParametricReducedModel) else None
 
 
-def install_model(key, model: ParametricReducedModel) -> None:
-    """Keep ``model`` (built in the driver) as this process's parametric model of the study ``key``."""
+def install_model(key, model: ParametricReducedModel | str) -> None:
+    """Keep ``model`` (built here or in the driver; or the reason there is none) as this process's parametric
+    model of the study ``key``."""
     if len(_MODELS) > 4:
         _MODELS.clear()
     _MODELS[key] = model
