@@ -104,7 +104,7 @@ def test_readme_is_short_and_keeps_both_quick_start_commands():
     commands = [code.strip() for code in re.findall(r"```bash\n(.*?)```", quick_start, re.S)]
     assert commands == [
         "python3 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/drillstring study reference --out study",
-        'python3 -m venv .venv && .venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest -q']
+        'python3 -m venv .venv && .venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest -q -n auto']
 
 
 def test_module_references_in_docstrings_and_docs_name_modules_that_exist():
