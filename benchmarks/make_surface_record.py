@@ -5,8 +5,9 @@ src/drillstring/cases/stick_slip_surface.csv and stick_slip_surface_truth.csv, s
     python benchmarks/make_surface_record.py --check    # regenerate and compare with the shipped files
 
 Prints the generation time (the simulation, sampled at every record step, and the noise), the files' sizes
-and, with --check, whether they are equal to the shipped ones (data rows compared number by number: equal,
-or within one unit of the last decimal written, which a different floating-point library may flip).
+and, with --check, whether they are equal to the shipped ones (data rows compared number by number: equal, within
+one unit of the last decimal written, or within TOLERANCE of the column's largest value, which another processor's
+arithmetic reaches over the stick-slip run; the largest differences are printed).
 """
 
 from __future__ import annotations
@@ -21,29 +22,44 @@ from drillstring.estimation.synthetic import make_synthetic_record, record_text,
 CASES = Path(__file__).resolve().parents[1] / "src" / "drillstring" / "cases"
 RECORD = CASES / "stick_slip_surface.csv"
 TRUTH = CASES / "stick_slip_surface_truth.csv"
+#: [-] of a column's largest value: the truth is a stick-slip run, where the last bits of the model build and the
+#: compiled loop (LAPACK's and Numba's code differ between processors) grow: on an AMD EPYC (AVX-512) the files
+#: regenerate within 5.6e-4 (the torque on bit at the record's end) of the machine's that made them.
+TOLERANCE = 1e-3
 
 
 def _rows(text: str) -> list[list[str]]:
     return [line.split(",") for line in text.splitlines() if line and not line.startswith("#")]
 
 
-def same_numbers(a: str, b: str) -> tuple[bool, str]:
-    """Whether two CSV texts hold the same header and numbers (each within one unit of its last decimal)."""
+def same_numbers(a: str, b: str, tolerance: float = TOLERANCE) -> tuple[bool, str]:
+    """Whether two CSV texts hold the same header, the same empty cells and numbers within ``tolerance`` of
+    their column's largest magnitude (or one unit of the last decimal written, where that is more); the reason
+    (the largest relative difference of each column that has one)."""
     ra, rb = _rows(a), _rows(b)
     if len(ra) != len(rb) or ra[:1] != rb[:1]:
         return False, f"{len(ra)} rows vs {len(rb)}, or another header"
-    for k, (x, y) in enumerate(zip(ra[1:], rb[1:]), start=1):
-        for cx, cy in zip(x, y):
-            if cx == cy:
-                continue
-            try:
-                fx, fy = float(cx), float(cy)
-            except ValueError:
-                return False, f"row {k}: {cx!r} vs {cy!r}"
+    header, worst = ra[0], {}
+    columns = list(zip(*ra[1:])), list(zip(*rb[1:]))
+    for name, xs, ys in zip(header, *columns):
+        filled = [(cx, cy) for cx, cy in zip(xs, ys) if cx != cy]
+        if not filled:
+            continue
+        try:
+            scale = max(abs(float(c)) for c in xs if c)
+            pairs = [(float(cx), float(cy), cx) for cx, cy in filled]
+        except ValueError:
+            return False, f"{name}: {filled[0][0]!r} vs {filled[0][1]!r}"
+        for fx, fy, cx in pairs:
             decimals = len(cx.partition(".")[2]) if "e" not in cx.lower() else 9
-            if abs(fx - fy) > 1.01 * 10.0 ** -decimals * max(1.0, abs(fx) if "e" in cx.lower() else 1.0):
-                return False, f"row {k}: {cx} vs {cy}"
-    return True, "equal"
+            allowed = max(tolerance * scale, 1.01 * 10.0 ** -decimals * (abs(fx) if "e" in cx.lower() else 1.0))
+            if abs(fx - fy) > allowed:
+                return False, f"{name}: {cx} vs {fy!r}, {abs(fx - fy) / scale:.1e} of the column's largest value"
+        worst[name] = max(abs(fx - fy) for fx, fy, _ in pairs) / scale
+    if not worst:
+        return True, "equal"
+    return True, "equal within the tolerance; largest difference / column's largest value: " + ", ".join(
+        f"{name} {value:.1e}" for name, value in worst.items())
 
 
 def main() -> None:
