@@ -10,12 +10,13 @@ machine is shared), and the indices with their largest change from N/2 to N. Goa
 machine. Run:
 
     .venv/bin/python benchmarks/bench_sensitivity.py [--samples 1024] [--t-end 20] [--dask] [--sample 8]
-        [--method ark43]
+        [--method ark43] [--rebuild]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from _engine import cores, load_average, local_dask_cluster, serial_cost, timed_in_folder  # before NumPy
@@ -23,6 +24,7 @@ from _engine import cores, load_average, local_dask_cluster, serial_cost, timed_
 from drillstring import api
 from drillstring.case import load_case
 from drillstring.stochastic.sensitivity_study import SensitivitySettings, _row_task, sensitivity_design
+from drillstring.stochastic.study_model import REBUILD_VARIABLE
 
 LAWS = {"weight_on_hook": "uniform 1033.4 1093.4 kN", "fluid.inlet_velocity": "uniform 1 2 m/s",
         "operation.top_speed": "uniform 60 140 rpm"}
@@ -43,6 +45,8 @@ def main() -> None:
     parser.add_argument("--dask", action="store_true", help="also time a local Dask cluster (2 workers)")
     parser.add_argument("--keep", type=Path, default=None, help="copy the local run's files to this folder")
     parser.add_argument("--method", default=None, help="simulation.method for every run (default: the case's)")
+    parser.add_argument("--rebuild", action="store_true",
+                        help="rebuild every run's model (the recipe before the design's parametric model)")
     args = parser.parse_args()
     case = load_case("reference")
     if args.method is not None:
@@ -50,9 +54,14 @@ def main() -> None:
     print(load_average("start"))
     settings = SensitivitySettings(args.samples, tuple(LAWS.items()), t_end=args.t_end)
     design = sensitivity_design(case, settings)
-    paths = design.uncertainty.paths
-    per_run, sampled = serial_cost(lambda i: _row_task(case, paths, settings, (i, design.values[i])),
+    # the serial baseline: every run's model rebuilt (the recipe before the parametric model)
+    os.environ[REBUILD_VARIABLE] = "1"
+    per_run, sampled = serial_cost(lambda i: _row_task(case, design.uncertainty, settings, (i, design.values[i])),
                                    design.runs, args.sample)
+    if args.rebuild:
+        print(f"every run's model rebuilt ({REBUILD_VARIABLE}=1, inherited by the workers)")
+    else:
+        del os.environ[REBUILD_VARIABLE]
     serial = per_run * design.runs
     print(f"Sobol' study: 3 parameters, N = {args.samples}, {design.runs} runs of {args.t_end:g} s, {cores()} cores,"
           f" method {case.simulation.method};"

@@ -59,8 +59,12 @@ def test_statics_affine_in_the_weight_on_bit(reference, parametric):
 @pytest.mark.parametrize("weight_on_bit", [77.5e3, 92.5e3, 103e3, 122.5e3])
 def test_reduced_matrices_equal_the_rebuild(reference, parametric, weight_on_bit):
     case = realized(reference, weight_on_bit)
-    found = parametric.model(case)
-    exact = case_reduced_model(case)
+    assert_equal_models(parametric.model(case), case_reduced_model(case))
+
+
+def assert_equal_models(found, exact):
+    """The parametric model ``found`` equals the rebuilt ``exact``: to round-off in its axial and torsional parts,
+    to RITZ_TOLERANCE in its lateral modes and damping (module docstring)."""
     assert found.family == exact.family
     lateral = np.isin(np.array(exact.family), ("lateral_y", "lateral_z"))
     fixed = ~lateral
@@ -83,6 +87,83 @@ def test_reduced_matrices_equal_the_rebuild(reference, parametric, weight_on_bit
                                atol=1e-12 * np.abs(exact.generalized_force).max())
     assert found.weight_on_bit == exact.weight_on_bit
     assert found.lowest_lateral_eigenvalue == pytest.approx(exact.lowest_lateral_eigenvalue, rel=RITZ_TOLERANCE)
+    assert found.top_speed == exact.top_speed and found.base_speed == exact.base_speed
+    assert found.top_drive == exact.top_drive
+
+
+# The reference Sobol' design's laws (benchmarks/bench_sensitivity.py): weight-on-bit 70-130 kN, inlet velocity
+# 1-2 m/s, top speed 60-140 rpm.
+RPM = 2.0 * np.pi / 60.0
+DESIGN = ((70e3, 130e3), (1.0, 2.0))
+
+
+@pytest.fixture(scope="module")
+def design_model(reference):
+    return ParametricReducedModel(reference, *DESIGN[0], flow=DESIGN[1], speed=True)
+
+
+def realized_row(case, weight_on_bit, inlet_velocity, top_speed):
+    return with_parameters(case, {"operation.weight_on_bit": weight_on_bit, "fluid.inlet_velocity": inlet_velocity,
+                                  "operation.top_speed": top_speed})
+
+
+@pytest.mark.parametrize("row", [(83e3, 1.13, 70 * RPM), (121e3, 1.91, 133 * RPM), (100e3, 2.0, 60 * RPM),
+                                 (70e3, 1.0, 140 * RPM)])
+def test_inlet_velocity_and_top_speed_equal_the_rebuild(reference, design_model, row):
+    """With the inlet velocity and the top speed parameters too (the Sobol' design's three controls), the model at
+    rows across the design's box equals the rebuild, its generalised force scaled with the imposed speed. The
+    fluid damping moves by ~1e-1 of itself across the flow's range and the generalised force by 2.3x across the
+    speed's: a model that kept the nominal fluid matrices or force fails the damping or force check."""
+    assert_equal_models(design_model.model(realized_row(reference, *row)),
+                        case_reduced_model(realized_row(reference, *row)))
+
+
+def test_the_fluid_matrices_move_with_the_inlet_velocity(reference, design_model):
+    """The fluid damping and stiffness do change across the flow's range (so the test above checks the form):
+    the damping's largest entry by more than 10 %, and the affine form equals a fresh assembly to round-off."""
+    low, high = (design_model.system_at(100e3, u) for u in DESIGN[1])
+    change = abs(high.fluid_damping - low.fluid_damping).max() / abs(low.fluid_damping).max()
+    assert change > 0.1
+    exact = case_reduced_model(realized_row(reference, 100e3, 1.7, reference.operation.top_speed)).system
+    found = design_model.system_at(100e3, 1.7)
+    for name in ("fluid_damping", "fluid_stiffness", "fluid_mass"):
+        a, b = getattr(found, name), getattr(exact, name)
+        assert abs(a - b).max() <= 1e-12 * abs(b).max(), name
+    assert design_model.ritz_error <= RITZ_TOLERANCE
+
+
+def test_short_simulation_at_another_flow_and_speed_equals_the_rebuild(reference, design_model):
+    """2 s at a row off every snapshot, with another top speed (the spin, its damping torque and the bit's speed
+    follow it): the drilling observables equal the rebuilt model's to 1e-6 of their range."""
+    case = realized_row(reference, 108.7e3, 1.23, 117 * RPM)
+    options = dict(t_end=2.0, output_step=0.01, method=case.simulation.method, rtol=case.simulation.rtol,
+                   atol=case.simulation.atol, lateral_perturbation=case.initial.lateral_perturbation,
+                   seed=case.initial.seed)
+    found = simulate_model(design_model.model(case), **options)
+    exact = simulate_model(case_reduced_model(case), **options)
+    for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
+        a, b = found.observables[name], exact.observables[name]
+        assert np.abs(a - b).max() <= 1e-6 * (np.abs(b).max() + 1e-30), name
+    # and the speed did reach the run: the bit turns faster than at the case's 100 rpm
+    slower = simulate_model(design_model.model(realized_row(reference, 108.7e3, 1.23, reference.operation.top_speed)),
+                            **options)
+    ratio = np.mean(found.observables["bit_speed"]) / np.mean(slower.observables["bit_speed"])
+    assert ratio > 1.1
+
+
+def test_a_flow_or_speed_not_covered_is_refused(reference, parametric):
+    """The weight-on-bit model refuses another inlet velocity or top speed (it holds them at the case's); a flow
+    range is refused where the mud's skin friction moves the statics."""
+    w0 = reference.operation.weight_on_bit
+    with pytest.raises(NotCovered, match="inlet_velocity"):
+        parametric.model(realized_row(reference, w0, 1.6, reference.operation.top_speed))
+    with pytest.raises(NotCovered, match="top_speed"):
+        parametric.model(realized_row(reference, w0, reference.fluid.inlet_velocity, 90 * RPM))
+    loaded = reference.model_copy(update={"fluid": reference.fluid.model_copy(update={"axial_loads": True})})
+    with pytest.raises(NotCovered, match="axial_loads"):
+        ParametricReducedModel(loaded, w0 - SPREAD, w0 + SPREAD, flow=(1.0, 2.0))
+    with pytest.raises(ValueError, match="inlet velocity range"):
+        ParametricReducedModel(reference, w0 - SPREAD, w0 + SPREAD, flow=(1.6, 2.0))
 
 
 def test_eigenfrequencies_move_with_the_prestress(reference, parametric):

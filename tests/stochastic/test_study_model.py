@@ -91,3 +91,34 @@ def test_realization_equals_the_rebuilding_recipe(small_case, monkeypatch):
             if math.isfinite(value):
                 assert found.metrics[name] == pytest.approx(value, rel=1e-6, abs=1e-12), name
         assert found.lowest_lateral_eigenvalue == pytest.approx(exact.lowest_lateral_eigenvalue, rel=1e-6)
+
+
+def test_sensitivity_rows_of_the_three_controls_equal_the_rebuilding_recipe(small_case, monkeypatch):
+    """A Saltelli design of the driller's three controls (weight-on-bit, inlet velocity, top speed: all covered)
+    runs each row on the design's parametric model: the rows' outputs equal the rebuilt models' to 1e-6; the
+    inlet velocity's range is its law's (uniform: its ends)."""
+    from drillstring.stochastic import sensitivity_study as ss
+    from drillstring.stochastic.parameters import with_parameters
+
+    laws = (("operation.weight_on_bit", "uniform 70 130 kN"), ("fluid.inlet_velocity", "uniform 1 2 m/s"),
+            ("operation.top_speed", "uniform 60 140 rpm"))
+    design_settings = ss.SensitivitySettings(8, laws, t_end=1.0, output_step=0.05)
+    design = ss.sensitivity_design(small_case, design_settings)
+    law = design.uncertainty
+    assert study_model.coverage(small_case, law) is None
+    low, high = study_model.inlet_velocity_range(small_case, law)
+    assert low == pytest.approx(1.0, rel=1e-8) and high == pytest.approx(2.0, rel=1e-8)
+    key = ss._model_key(small_case, design_settings)
+    built = study_model.parametric_model(small_case, key, law)
+    assert isinstance(built, ParametricReducedModel) and built.flow_range == (low, high) and built.speed
+    for index in (0, 5, 11):
+        item = (index, design.values[index])
+        built.model(with_parameters(small_case, dict(zip(law.paths, design.values[index]))))  # covered: no rebuild
+        found = ss._row_task(small_case, law, design_settings, item)
+        monkeypatch.setenv(study_model.REBUILD_VARIABLE, "1")
+        exact = ss._row_task(small_case, law, design_settings, item)
+        monkeypatch.delenv(study_model.REBUILD_VARIABLE)
+        assert found.status == exact.status == DONE, (found.message, exact.message)
+        for name, value in exact.values.items():
+            if np.all(np.isfinite(value)):
+                np.testing.assert_allclose(found.values[name], value, rtol=1e-6, atol=1e-12, err_msg=name)

@@ -292,12 +292,13 @@ def stability_outputs(model) -> tuple[dict[str, float], str]:
 
 def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_transient: float | None = None,
                 with_stability: bool = False, with_realization: bool = False,
-                with_top_drive: bool = False, realize_model=None) -> TaskOutcome:
+                with_top_drive: bool = False, realize_model=None, build_model=None) -> TaskOutcome:
     """Simulate ``case`` for ``t_end`` [s] and return its scalar outputs as the outcome of task ``index``
     (``values``: :data:`RUN_OUTPUTS`, plus :data:`STABILITY_OUTPUTS` when ``with_stability`` and
     :data:`REALIZATION_OUTPUTS` when ``with_realization`` and :data:`TOP_DRIVE_OUTPUTS` when
-    ``with_top_drive``: the case has a top drive); ``realize_model(model)``, when given, returns the reduced
-    model to run instead of the case's (random reduced matrices). Never
+    ``with_top_drive``: the case has a top drive); ``build_model(case)``, when given, builds the case's reduced
+    model instead of :func:`case_reduced_model` (a study's parametric model); ``realize_model(model)``, when
+    given, returns the reduced model to run instead of the case's (random reduced matrices). Never
     raises: a run that stops early is FAILED with its cause and the outputs of what it computed; a case
     that cannot be built is FAILED with NaN outputs."""
     start = time.perf_counter()
@@ -307,7 +308,7 @@ def run_outputs(case: Case, index: int, *, t_end: float, output_step: float, t_t
              + (list(TOP_DRIVE_OUTPUTS) if with_top_drive else []))
     outcome = TaskOutcome(index, FAILED, "", {name: math.nan for name in names})
     try:
-        model = case_reduced_model(case)
+        model = case_reduced_model(case) if build_model is None else build_model(case)
         if realize_model is not None:
             model = realize_model(model)
         if with_stability:

@@ -41,6 +41,7 @@ from drillstring.stochastic.sensitivity import (
     sobol_indices,
 )
 from drillstring.stochastic.store import FAILED, ArraySpec, TaskStore
+from drillstring.stochastic.study_model import realization_model, study_model_note, worker_setup
 from drillstring.stochastic.uncertainty import OUT_OF_RANGE_TOLERANCE, Uncertainty, input_attributes
 from drillstring.stochastic.uncertainty_settings import (
     UncertaintyFields,
@@ -128,16 +129,19 @@ class SensitivityStore(TaskStore):
                          attrs=attrs)
 
 
-def _row_task(case: Case, paths: tuple[str, ...], settings: SensitivitySettings, item) -> TaskOutcome:
-    """The outcome of one design row (never raises: values that give no valid case fail with the cause)."""
+def _row_task(case: Case, law: Uncertainty, settings: SensitivitySettings, item) -> TaskOutcome:
+    """The outcome of one design row (never raises: values that give no valid case fail with the cause); its
+    model from the design's parametric model where that covers the laws
+    (:func:`~drillstring.stochastic.study_model.realization_model`)."""
     index, row = item
     row = np.asarray(row, dtype=float)
     try:
-        run_case = with_parameters(case, dict(zip(paths, row)))
+        run_case = with_parameters(case, dict(zip(law.paths, row)))
     except ValueError as error:
         return TaskOutcome(index, FAILED, str(error), {"input_values": row})
     outcome = run_outputs(run_case, index, t_end=settings.t_end, output_step=settings.output_step,
-                          t_transient=settings.transient)
+                          t_transient=settings.transient,
+                          build_model=partial(realization_model, case, _model_key(case, settings), law))
     outcome.values["input_values"] = row
     return outcome
 
@@ -160,12 +164,36 @@ def run_sensitivity(case: Case, settings: SensitivitySettings, store_path: str |
     then ``finish(run)`` under the store's lock (like :func:`~drillstring.stochastic.montecarlo.run_study`:
     the laws, the scheduler and the lock are checked before anything is created)."""
     design = sensitivity_design(case, settings)
+    key = _model_key(case, settings)
+    if engine.scheduler is not None:  # a cluster's workers build their own models: the note now
+        _note_model(case, key, design.uncertainty, engine.note)
     run = run_locked(store_path, partial(SensitivityStore, Path(store_path), case, settings, design),
                      lambda store: [(i, (i, design.values[i])) for i in store.pending()],
-                     partial(_row_task, case, design.uncertainty.paths, settings), engine, lost=_lost,
-                     prepare=partial(compile_kernels, case), finish=finish, what="sensitivity run", noun="runs",
-                     lock_name="sensitivity")
+                     partial(_row_task, case, design.uncertainty, settings), engine, lost=_lost,
+                     prepare=partial(_prepare_runs, case, key, design.uncertainty, engine.note), finish=finish,
+                     what="sensitivity run", noun="runs", lock_name="sensitivity")
     return SensitivityRun(**vars(run), design=design)
+
+
+def _model_key(case: Case, settings: SensitivitySettings):
+    """The key of the design's parametric model (:mod:`drillstring.stochastic.study_model`): case and laws."""
+    from drillstring.stochastic.montecarlo import case_text
+
+    return ("sensitivity", case_text(case), settings.laws)
+
+
+def _note_model(case: Case, key, law: Uncertainty, note) -> None:
+    model_note = study_model_note(case, key, law)
+    if model_note is not None and note is not None:
+        note(model_note)
+
+
+def _prepare_runs(case: Case, key, law: Uncertainty, note):
+    """Before the local runs (while the worker processes start): the design's parametric model built here (its
+    note), the kernels compiled, and the setup that hands the model to each worker."""
+    _note_model(case, key, law, note)
+    compile_kernels(case, note=note)
+    return worker_setup(key)
 
 
 @dataclass

@@ -10,14 +10,21 @@ worker process, :func:`parametric_model`) and gives each realization's model in 
   force and the geometric stiffness affinely; the model is built over the range of weights-on-bit that the
   study's law gives with probability ``1 − 2·`` :data:`RANGE_TAIL` (about ±6 σ for a Normal law); a draw outside it
   is rebuilt;
+- **the mud's inlet velocity** (:data:`FLOW_PATH`), which moves the fluid damping affinely and the fluid
+  stiffness with its square, on the bending DOFs only; built over the range its law gives with the same
+  probability;
+- **the top speed** (:data:`SPEED_PATH`), which the linear system does not depend on: it scales the damping's
+  generalised force at an imposed speed and sets the top boundary and the turning loads, taken from the
+  realized case;
 - **force laws** (:data:`FORCE_PREFIXES`): the parameters of the bit–rock law, the contact law, the start
   (``initial``) and the integrator (``simulation``), which the model takes from the realized case as the
   rebuild does.
 
-Any other random parameter (the geometry, the materials, the mud, the top speed, the damping, the mesh, ...)
+Any other random parameter (the geometry, the materials, the mud's density, the damping, the mesh, ...)
 changes the linear system in ways the parametric form does not cover: such a study rebuilds every realization
 (:func:`coverage` says why; the study notes it once). The nominal run is always rebuilt (the deterministic run
-at the means, as ``drillstring simulate`` would build it).
+at the means, as ``drillstring simulate`` would build it). Sensitivity designs (Saltelli rows) use the same
+models (:mod:`drillstring.stochastic.sensitivity_study`).
 
 The model equals the rebuilt one to round-off in its axial and torsional parts and to the Ritz error of the
 lateral modes (below :data:`~drillstring.dynamics.reduced.parametric.RITZ_TOLERANCE`, checked when built): a
@@ -44,6 +51,10 @@ from drillstring.stochastic.uncertainty import Uncertainty
 
 #: The random parameters that enter the model through the prestress (the static axial force).
 PRESTRESS_PATHS = (WEIGHT_ON_HOOK, "operation.weight_on_bit")
+#: The random parameter that enters the model through the fluid matrices.
+FLOW_PATH = "fluid.inlet_velocity"
+#: The random parameter that enters the model through its generalised force, top boundary and turning loads.
+SPEED_PATH = "operation.top_speed"
 #: The tables whose parameters enter the model only through laws built from the realized case.
 FORCE_PREFIXES = ("bit_rock.", "contact.", "initial.", "simulation.")
 #: Probability of each tail of the weight-on-bit's law left outside the parametric model's range.
@@ -59,7 +70,7 @@ def coverage(case: Case, law: Uncertainty) -> str | None:
     """None when every random parameter of ``law`` is covered by the parametric model (module docstring), else
     why not (one sentence, naming the first parameter that is not)."""
     for path in law.paths:
-        if path in PRESTRESS_PATHS or path.startswith(FORCE_PREFIXES):
+        if path in PRESTRESS_PATHS or path in (FLOW_PATH, SPEED_PATH) or path.startswith(FORCE_PREFIXES):
             continue
         return (f"{path} changes the linear system beyond the prestress: every realization's reduced model is "
                 "rebuilt (slower)")
@@ -85,6 +96,18 @@ def weight_on_bit_range(case: Case, law: Uncertainty) -> tuple[float, float]:
     return low, high
 
 
+def inlet_velocity_range(case: Case, law: Uncertainty) -> tuple[float, float] | None:
+    """The inlet velocities [m/s] the study's law gives with probability ``1 − 2 RANGE_TAIL`` (at least 0), holding
+    the case's own; None when the inlet velocity is not random."""
+    if FLOW_PATH not in law.paths:
+        return None
+    density = law.parameters[law.paths.index(FLOW_PATH)].law.density
+    u0 = float(case.fluid.inlet_velocity)
+    low = max(min(float(density.ppf(RANGE_TAIL)), u0), 0.0)
+    high = max(float(density.ppf(1.0 - RANGE_TAIL)), u0)
+    return (low, high) if low < high else None
+
+
 def parametric_model(case: Case, key, law: Uncertainty) -> ParametricReducedModel | str:
     """The study's parametric model, built once per ``key`` (the study: case and settings) in this process, or
     the reason there is none (:func:`coverage`, or the parametric form's own refusal)."""
@@ -93,7 +116,9 @@ def parametric_model(case: Case, key, law: Uncertainty) -> ParametricReducedMode
     reason = coverage(case, law)
     if reason is None:
         try:
-            found: ParametricReducedModel | str = ParametricReducedModel(case, *weight_on_bit_range(case, law))
+            found: ParametricReducedModel | str = ParametricReducedModel(
+                case, *weight_on_bit_range(case, law), flow=inlet_velocity_range(case, law),
+                speed=SPEED_PATH in law.paths)
         except NotCovered as error:
             found = f"{error}: every realization's reduced model is rebuilt (slower)"
     else:
