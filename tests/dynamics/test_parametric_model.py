@@ -135,15 +135,7 @@ def test_the_fluid_matrices_move_with_the_inlet_velocity(reference, design_model
 def test_short_simulation_at_another_flow_and_speed_equals_the_rebuild(reference, design_model):
     """2 s at a row off every snapshot, with another top speed (the spin, its damping torque and the bit's speed
     follow it): the drilling observables equal the rebuilt model's to 1e-6 of their range."""
-    case = realized_row(reference, 108.7e3, 1.23, 117 * RPM)
-    options = dict(t_end=2.0, output_step=0.01, method=case.simulation.method, rtol=case.simulation.rtol,
-                   atol=case.simulation.atol, lateral_perturbation=case.initial.lateral_perturbation,
-                   seed=case.initial.seed)
-    found = simulate_model(design_model.model(case), **options)
-    exact = simulate_model(case_reduced_model(case), **options)
-    for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
-        a, b = found.observables[name], exact.observables[name]
-        assert np.abs(a - b).max() <= 1e-6 * (np.abs(b).max() + 1e-30), name
+    found, _, options = same_short_run(design_model, realized_row(reference, 108.7e3, 1.23, 117 * RPM))
     # and the speed did reach the run: the bit turns faster than at the case's 100 rpm
     slower = simulate_model(design_model.model(realized_row(reference, 108.7e3, 1.23, reference.operation.top_speed)),
                             **options)
@@ -180,7 +172,14 @@ def test_eigenfrequencies_move_with_the_prestress(reference, parametric):
 def test_short_simulation_equals_the_rebuild(reference, parametric):
     """2 s of the reference study's run at a weight-on-bit between snapshots: the drilling observables of the
     parametric model equal the rebuilt model's to 1e-6 of their range (the models differ by ~1e-9)."""
-    case = realized(reference, 108.7e3)
+    found, exact, _ = same_short_run(parametric, realized(reference, 108.7e3))
+    np.testing.assert_allclose(found.radial_displacement, exact.radial_displacement, rtol=0,
+                               atol=1e-6 * np.abs(exact.radial_displacement).max())
+
+
+def same_short_run(parametric, case):
+    """2 s of ``case`` on the parametric model and on the rebuilt one, their drilling observables checked equal to
+    1e-6 of their range; returns both results and the simulation's options."""
     options = dict(t_end=2.0, output_step=0.01, method=case.simulation.method, rtol=case.simulation.rtol,
                    atol=case.simulation.atol, lateral_perturbation=case.initial.lateral_perturbation,
                    seed=case.initial.seed)
@@ -189,8 +188,7 @@ def test_short_simulation_equals_the_rebuild(reference, parametric):
     for name in ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit"):
         a, b = found.observables[name], exact.observables[name]
         assert np.abs(a - b).max() <= 1e-6 * (np.abs(b).max() + 1e-30), name
-    np.testing.assert_allclose(found.radial_displacement, exact.radial_displacement, rtol=0,
-                               atol=1e-6 * np.abs(exact.radial_displacement).max())
+    return found, exact, options
 
 
 def test_outside_the_range_is_refused(reference, parametric):
