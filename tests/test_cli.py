@@ -676,13 +676,14 @@ def test_study_scheduler_refused_port(coarse_case, tmp_path, monkeypatch):
     """The engine reaches the scheduler before it creates the store or computes anything."""
     import socket
 
-    from drillstring.stochastic import montecarlo
+    from drillstring.stochastic import montecarlo, study_model
 
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the scheduler was reached")
 
-    for name in ("run_realization", "compile_kernels", "StudyStore"):
+    for name in ("run_realization", "StudyStore"):
         monkeypatch.setattr(montecarlo, name, forbidden)
+    monkeypatch.setattr(study_model, "compile_kernels", forbidden)  # the study's preparation (prepare_runs)
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

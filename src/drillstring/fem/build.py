@@ -57,16 +57,15 @@ def flow_rate(case: Case) -> float:
     return case.flow_rate
 
 
-def section_fluid_coefficients(case: Case, mesh: Mesh, flow: float | None = None) -> list[FluidCoefficients]:
-    """Fluid coefficients of each section (switched-off terms are zero); ``flow``: the mud volume flow Q
-    [m³/s] instead of the case's (:func:`flow_rate`)."""
+def section_fluid_coefficients(case: Case, mesh: Mesh) -> list[FluidCoefficients]:
+    """Fluid coefficients of each section (switched-off terms are zero)."""
     f = case.fluid
     return [
         fluid_coefficients(
             section,
             case.borehole.diameter,
             f.density,
-            flow_rate(case) if flow is None else flow,
+            flow_rate(case),
             f.friction_coefficient,
             f.viscous_coefficient,
             added_mass=f.added_mass,

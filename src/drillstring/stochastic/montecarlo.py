@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 import time
-import weakref
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -61,12 +60,11 @@ from drillstring.stochastic.parameters import WEIGHT_ON_HOOK
 from drillstring.stochastic.runs import (
     FAMILY_GROWTH_METRICS,
     REALIZATION_METRICS,
-    compile_kernels,
     metrics_transient,
     realization_metrics,
     simulation_options,
 )
-from drillstring.stochastic.study_model import realization_model, study_model_note, worker_setup
+from drillstring.stochastic.study_model import case_text, note_model, prepare_runs, realization_model
 from drillstring.stochastic.store import DONE, FAILED, PENDING, ArraySpec, StoreError, TaskStore
 from drillstring.stochastic.uncertainty import Uncertainty, input_attributes
 from drillstring.stochastic.uncertainty_settings import (
@@ -193,24 +191,6 @@ class RealizationOutcome:
 def nominal_weight_on_hook(case: Case) -> float:
     """Mean weight-on-hook [N] of the default law: the case's static hook load, weight − weight_on_bit."""
     return case.weight - case.operation.weight_on_bit
-
-
-#: The TOML text of the cases seen in this process, by object (a Case is frozen): the studies' cache keys
-#: (:func:`case_text`).
-_CASE_TEXTS: dict[int, tuple[weakref.ref, str]] = {}
-
-
-def case_text(case: Case) -> str:
-    """``case.to_toml()``, written once per case object in this process (0.5 ms each; a realization needs it
-    three times as the key of its study's caches)."""
-    found = _CASE_TEXTS.get(id(case))
-    if found is not None and found[0]() is case:
-        return found[1]
-    text = case.to_toml()
-    if len(_CASE_TEXTS) > 64:
-        _CASE_TEXTS.clear()
-    _CASE_TEXTS[id(case)] = (weakref.ref(case), text)
-    return text
 
 
 #: Built uncertainties (their MaxEnt laws), by study, in this process.
@@ -544,36 +524,21 @@ def run_study(case: Case, settings: StudySettings, store_path: str | Path, engin
     scheduler is reached (:class:`~drillstring.stochastic.execution.SchedulerUnreachable` within about
     12 s), and the store is locked (:class:`~drillstring.stochastic.locks.StudyLocked` if another study
     runs on it). :func:`~drillstring.stochastic.execution.run_locked` does the rest: on local processes the
-    study's model is built and the kernels compiled here while the workers start (:func:`_prepare_study`).
+    study's model is built and the kernels compiled here while the workers start
+    (:func:`~drillstring.stochastic.study_model.prepare_runs`).
     """
     check_study(case, settings)
     key, law = (case_text(case), settings), study_uncertainty(case, settings)
     if engine.scheduler is not None:  # a cluster's workers build their own models: the note now
-        _note_model(case, key, law, engine.note)
+        note_model(case, key, law, engine.note)
 
     def pending(store: StudyStore):
         return [(i, i) for i in ([] if store.nominal_done() else [NOMINAL]) + store.pending()]
 
     return run_locked(store_path, partial(StudyStore, Path(store_path), case, settings), pending,
                       partial(_realization_task, case, settings), engine, lost=partial(_worker_died, case, settings),
-                      prepare=partial(_prepare_study, case, key, law, engine.note), finish=finish, what="study",
+                      prepare=partial(prepare_runs, case, key, law, engine.note), finish=finish, what="study",
                       noun="realizations")
-
-
-def _note_model(case: Case, key, law: Uncertainty, note) -> None:
-    model_note = study_model_note(case, key, law)
-    if model_note is not None and note is not None:
-        note(model_note)
-
-
-def _prepare_study(case: Case, key, law: Uncertainty, note):
-    """Before the local realizations (while the worker processes start): the study's parametric model built
-    here (its note), the kernels compiled, and the setup that hands the model to each worker
-    (:func:`~drillstring.stochastic.study_model.worker_setup`: 6 MB pickled once per worker instead of a
-    0.45 s build in each)."""
-    _note_model(case, key, law, note)
-    compile_kernels(case, note=note)
-    return worker_setup(key)
 
 
 def _realization_task(case: Case, settings: StudySettings, index: int) -> RealizationOutcome:

@@ -196,7 +196,8 @@ def point_uncertainty(case: Case, settings: SampledMapSettings, point: int, *,
     load of standard deviation ``sigma`` (first, when given), then ``laws`` (see the module docstring).
     ``tolerance``: the largest probability a law may put outside its parameter's range (1 accepts any;
     draws outside fail their realization)."""
-    from drillstring.stochastic.montecarlo import case_text, weight_on_hook_normal
+    from drillstring.stochastic.montecarlo import weight_on_hook_normal
+    from drillstring.stochastic.study_model import case_text
 
     key = (case_text(case), settings, point, tolerance)
     if key in _LAWS:

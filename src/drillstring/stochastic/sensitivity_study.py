@@ -32,7 +32,7 @@ from drillstring.dynamics.simulate import run_window
 from drillstring.stochastic.execution import Engine, StoreRun, TaskOutcome, run_locked
 from drillstring.stochastic.locks import StudyLock
 from drillstring.stochastic.parameters import with_parameters
-from drillstring.stochastic.runs import RUN_OUTPUTS, compile_kernels, run_outputs
+from drillstring.stochastic.runs import RUN_OUTPUTS, run_outputs
 from drillstring.stochastic.sensitivity import (
     SaltelliDesign,
     SobolResult,
@@ -41,7 +41,7 @@ from drillstring.stochastic.sensitivity import (
     sobol_indices,
 )
 from drillstring.stochastic.store import FAILED, ArraySpec, TaskStore
-from drillstring.stochastic.study_model import realization_model, study_model_note, worker_setup
+from drillstring.stochastic.study_model import case_text, note_model, prepare_runs, realization_model
 from drillstring.stochastic.uncertainty import OUT_OF_RANGE_TOLERANCE, Uncertainty, input_attributes
 from drillstring.stochastic.uncertainty_settings import (
     UncertaintyFields,
@@ -166,34 +166,18 @@ def run_sensitivity(case: Case, settings: SensitivitySettings, store_path: str |
     design = sensitivity_design(case, settings)
     key = _model_key(case, settings)
     if engine.scheduler is not None:  # a cluster's workers build their own models: the note now
-        _note_model(case, key, design.uncertainty, engine.note)
+        note_model(case, key, design.uncertainty, engine.note)
     run = run_locked(store_path, partial(SensitivityStore, Path(store_path), case, settings, design),
                      lambda store: [(i, (i, design.values[i])) for i in store.pending()],
                      partial(_row_task, case, design.uncertainty, settings), engine, lost=_lost,
-                     prepare=partial(_prepare_runs, case, key, design.uncertainty, engine.note), finish=finish,
+                     prepare=partial(prepare_runs, case, key, design.uncertainty, engine.note), finish=finish,
                      what="sensitivity run", noun="runs", lock_name="sensitivity")
     return SensitivityRun(**vars(run), design=design)
 
 
 def _model_key(case: Case, settings: SensitivitySettings):
     """The key of the design's parametric model (:mod:`drillstring.stochastic.study_model`): case and laws."""
-    from drillstring.stochastic.montecarlo import case_text
-
     return ("sensitivity", case_text(case), settings.laws)
-
-
-def _note_model(case: Case, key, law: Uncertainty, note) -> None:
-    model_note = study_model_note(case, key, law)
-    if model_note is not None and note is not None:
-        note(model_note)
-
-
-def _prepare_runs(case: Case, key, law: Uncertainty, note):
-    """Before the local runs (while the worker processes start): the design's parametric model built here (its
-    note), the kernels compiled, and the setup that hands the model to each worker."""
-    _note_model(case, key, law, note)
-    compile_kernels(case, note=note)
-    return worker_setup(key)
 
 
 @dataclass

@@ -249,13 +249,13 @@ class ParametricReducedModel:
         square, the added mass does not depend on it (:func:`drillstring.fem.fluid.fluid_coefficients`). The
         third assembly checks that form (to 1e-9 of each matrix's largest entry), else :class:`NotCovered`."""
         system, mesh = self.nominal.system, self.nominal.static.mesh
-        area = case.sections[0].inner_area  # Q = U A_i of the top section (Case.flow_rate)
         u0, (low, high) = self.inlet_velocity, self.flow_range
         u1 = high if high != u0 else low
         u2 = 0.5 * (u0 + u1) if low in (u0, u1) else low
 
-        def at(u):
-            return fluid_matrices(mesh, section_fluid_coefficients(case, mesh, u * area))
+        def at(u):  # the case's fluid matrices at another inlet velocity (its flow rate follows: Case.flow_rate)
+            flowing = case.model_copy(update={"fluid": case.fluid.model_copy(update={"inlet_velocity": u})})
+            return fluid_matrices(mesh, section_fluid_coefficients(flowing, mesh))
 
         m1, c1, k1 = at(u1)
         damping = ((c1 - system.fluid_damping) / (u1 - u0)).tocsr()
@@ -466,7 +466,6 @@ class ParametricReducedModel:
             residual_columns=np.concatenate([nominal.residual_columns[fixed], np.zeros(2 * count, dtype=bool)]),
             coupled=False, motor=None, rotor=None,
         )
-
 
     def _stick_slip_frequency(self) -> float:
         """The first torsional natural frequency with the top held [rad/s], as the build's top boundary reads it
