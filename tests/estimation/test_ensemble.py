@@ -22,6 +22,7 @@ from drillstring.estimation.ensemble import (
     estimate,
     estimator_model,
     etkf_analysis,
+    kick_scale,
     member_model,
     member_models,
 )
@@ -396,3 +397,33 @@ def test_bad_model_dispersion_is_refused_naming_it(stick_slip, small_model):
     with pytest.raises(ValueError, match=r"estimator\.model_dispersion = 0\.9: must be in \[0, 0\.\d+\) = "
                                          r"\[0, sqrt\(\(n\+1\)/\(n\+5\)\)\) for the \w+ family of n = \d modes"):
         _dispersed_run(stick_slip, small_model, model_dispersion=0.9)
+
+
+# --------------------------------------------------------------------------------------------------------
+# The model error's kicks scaled down while the bit is slow (model_noise_stick_speed)
+# --------------------------------------------------------------------------------------------------------
+
+
+def test_kick_scale_is_the_bit_speed_over_the_stick_speed_up_to_one():
+    assert kick_scale(0.0, 2.0) == 0.0
+    assert kick_scale(-1.0, 2.0) == 0.5
+    assert kick_scale(3.0, 2.0) == 1.0
+    assert kick_scale(0.0, 0.0) == 1.0  # off
+    assert kick_scale(None, 2.0) == 1.0 and kick_scale(float("nan"), 2.0) == 1.0  # no forecast yet, or a failed one
+
+
+def test_stick_speed_off_or_below_every_bit_speed_changes_nothing_and_a_high_one_narrows_the_bands(
+        stick_slip, small_model):
+    """0 (the default) and a stick speed below every member's bit speed give the same run bit for bit (each
+    kick times 1, the same draws); one far above every bit speed all but removes the kicks, so the members'
+    bit speeds spread less (what is left is the prior's spread and the walks')."""
+    default = _dispersed_run(stick_slip, small_model)
+    below = _dispersed_run(stick_slip, small_model, model_noise_stick_speed=1e-9)
+    for name in ("bit_speed", "torque_on_bit", "a5"):
+        np.testing.assert_array_equal(below.quantiles[name], default.quantiles[name])
+    above = _dispersed_run(stick_slip, small_model, model_noise_stick_speed=1e6)
+    width = {run: np.mean(np.diff(result.quantiles["bit_speed"][:, [0, -1]], axis=1))
+             for run, result in (("default", default), ("above", above))}
+    assert width["above"] < width["default"], width  # measured 1.62 against 2.14 rad/s
+    with pytest.raises(ValueError, match=r"model_noise_stick_speed = -1\.0: must be a finite number >= 0"):
+        EstimatorSettings(model_noise_stick_speed=-1.0)

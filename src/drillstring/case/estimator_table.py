@@ -22,6 +22,8 @@ class Estimator(_Base):
     inflation: Dimensionless | None = Field(None, description="multiplicative prior inflation [-]")
     model_speed_noise: float | None = Field(None, description="model error on the bit speed [rad/s per sqrt(s)]")
     model_noise_modes: int | None = Field(None, description="torsional modes the model error is spread over")
+    model_noise_stick_speed: AngularSpeed | None = Field(None, description="bit speed below which the model "
+                                                         "error's kicks are scaled down in proportion [rad/s]")
     initial_speed_spread: AngularSpeed | None = Field(None, description="initial string-speed spread, std [rad/s]")
     spin_up: Time | None = Field(None, description="the members' run before the record's first time [s]")
     assimilation_step: Time | None = Field(None, description="assimilation window: one analysis of its means [s]")

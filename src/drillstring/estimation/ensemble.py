@@ -156,6 +156,9 @@ class EstimatorSettings:
             rotation; at most the basis's), in [1, 40]. Default all: on the stick-slip twin, noise in the lowest two
             alone gave bands covering the truth 0.6-0.7 of the time against 0.86-1.0 (the truncated higher modes are
             part of the model's error), but the ringing of the higher modes biases the stick-slip index up ~2-10 %.
+        model_noise_stick_speed: below this bit speed [rad/s] a member's kick is scaled down in proportion
+            (:func:`kick_scale`: none at a standing bit), >= 0; 0 (the default): every kick whole. Kicks while the
+            bit sticks bias the coefficient (docs/estimation.md "Long records: the kicks and the coefficient").
         initial_speed_spread: standard deviation of the members' initial string speed [rad/s], >= 0.
         spin_up: the members run this long [s] from the model's initial state, with the model error and without
             observations, before the record's first time, >= 0: a record starts in operation (in stick-slip, the
@@ -198,6 +201,7 @@ class EstimatorSettings:
     inflation: float = 1.0
     model_speed_noise: float = 2.0
     model_noise_modes: int = 40
+    model_noise_stick_speed: float = 0.0
     initial_speed_spread: float = 0.5
     spin_up: float = 20.0
     assimilation_step: float = 1.0
@@ -228,7 +232,7 @@ class EstimatorSettings:
                      "assimilation_step"):
             real_number(name, getattr(self, name), low=0.0, low_open=True)
         for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk", "model_speed_noise",
-                     "spin_up", "friction_walk"):
+                     "spin_up", "friction_walk", "model_noise_stick_speed"):
             real_number(name, getattr(self, name), low=0.0)
         real_number("inflation", self.inflation, low=1.0, high=2.0)
         real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
@@ -273,6 +277,15 @@ def estimator_model(case, settings: EstimatorSettings = EstimatorSettings()):
     ``torsional_modes``, no lateral mode), case 2 (bit and contact nonlinear)."""
     return case_reduced_model(case, axial_modes=settings.axial_modes, torsional_modes=settings.torsional_modes,
                               lateral_modes=0, nonlinear="bit_and_contact")
+
+
+def kick_scale(bit_speed: float | None, stick_speed: float) -> float:
+    """The factor of a member's model-error kick: ``min(1, |bit_speed| / stick_speed)`` [-], the member's bit
+    speed [rad/s] at the end of its last forecast against ``model_noise_stick_speed`` [rad/s]; 1 where that is 0
+    (off) or the bit speed is unknown (before the first forecast) or not finite."""
+    if stick_speed <= 0.0 or bit_speed is None or not math.isfinite(bit_speed):
+        return 1.0
+    return min(1.0, abs(bit_speed) / stick_speed)
 
 
 def member_model(model, laws: np.ndarray, weight_on_bit: float, friction: np.ndarray | None = None):
@@ -598,7 +611,10 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         if speed_noise > 0.0:
             for i in range(n_members):
                 y = members.nominal(i)
-                y[n + t_start:n + t_end] += speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
+                kick = speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
+                last = members.outputs[i]
+                y[n + t_start:n + t_end] += kick * kick_scale(None if last is None else float(last[_BIT_SPEED]),
+                                                              settings.model_noise_stick_speed)
                 members.states[i] = members.states[i].updated(members.own(i, y))
         grid = np.append(np.arange(t_from + settings.output_step, t_to - 1e-9 * dt, settings.output_step), t_to)
         ok = np.zeros(n_members, dtype=bool)
