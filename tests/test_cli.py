@@ -654,7 +654,6 @@ def test_study_run_errors_are_one_line(coarse_case, tmp_path, monkeypatch, error
     """Errors of a study that started (workers gone, too few realizations) exit 1; a lock taken by
     another study between the command's check and the engine's exits 2; one line each."""
     from drillstring import api
-    from drillstring.stochastic import montecarlo
 
     raised = {"workers_lost": execution.WorkersLost("the Dask cluster at tcp://x:1 has had no worker "
                                                           "for 30 s; the finished realizations are saved"),

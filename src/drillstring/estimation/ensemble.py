@@ -138,20 +138,21 @@ class EstimatorSettings:
     """The estimator's settings, named as the case keys they become (SI units).
 
     Attributes:
-        ensemble_size: members N, in [4, 1000] (64: on a 300 s twin, 16 and 32 gave bands too narrow, docs/estimation.md).
+        ensemble_size: members N, in [4, 1000] (64: on a 300 s twin, 16 and 32 gave bands too narrow,
+            docs/estimation.md).
         top_speed_noise: standard deviation of the top-speed measurement [rad/s], > 0.
         surface_torque_noise: of the surface torque [N·m], > 0.
         block_position_noise: of the block position [m], > 0.
         hook_load_window: the hook load's averaging window [s], > 0.
         inflation: multiplicative prior inflation of the anomalies [-], in [1, 2].
         model_speed_noise: additive model error: the torsional modal velocities of each member are perturbed before
-            each forecast, white over the lowest ``model_noise_modes`` torsional columns, scaled so that the bit speed's perturbation has this
-            standard deviation per √s of the interval [rad/s/√s], >= 0. Default 2: large kicks bias the estimated
-            coefficient (on a twin whose truth is the case's full basis on its nominal matrices, ``a5`` ended
-            13-17 % high on 3 of 4 runs at 3, within 2 % on all 4 at 1 or 0.3), small ones leave the bands too
-            narrow against another model; 2 against 3 raised the torque on bit's coverage on long records from
-            0.69-0.80 to 0.80-0.92 (pooled over seeds and truths, docs/estimation.md "Long records: the kicks and
-            the coefficient").
+            each forecast, white over the lowest ``model_noise_modes`` torsional columns, scaled so that the bit
+            speed's perturbation has this standard deviation per √s of the interval [rad/s/√s], >= 0. Default 2:
+            large kicks bias the estimated coefficient (on a twin whose truth is the case's full basis on its
+            nominal matrices, ``a5`` ended 13-17 % high on 3 of 4 runs at 3, within 2 % on all 4 at 1 or 0.3),
+            small ones leave the bands too narrow against another model; 2 against 3 raised the torque on bit's
+            coverage on long records from 0.69-0.80 to 0.80-0.92 (pooled over seeds and truths,
+            docs/estimation.md "Long records: the kicks and the coefficient").
         model_noise_modes: the torsional columns so perturbed, the lowest (with a top drive the first is the rigid
             rotation; at most the basis's), in [1, 40]. Default all: on the stick-slip twin, noise in the lowest two
             alone gave bands covering the truth 0.6-0.7 of the time against 0.86-1.0 (the truncated higher modes are
