@@ -1,6 +1,7 @@
 """Trial of another explicit pair on a case's realization: Tsitouras 5(4) (Ch. Tsitouras, "Runge–Kutta pairs of
 order 5(4) satisfying only the first column simplifying assumption", Comput. Math. Appl. 62 (2011) 770–775; the
-coefficients of its Table 1, the error weights as published with the last one's sign as in its eq. for b̂) against
+coefficients of its Table 1, the error weights as published with the last one's sign as in its eq. for b̂; its
+order conditions checked over every rooted tree with the tests' ``order_defect``) against
 DOPRI5, both in the compiled loop, at a sweep of relative tolerances (the absolute tolerance scaled with it), one
 core. Per method and tolerance: accepted and rejected steps, right-hand sides, the best CPU time of the solve, and
 the records' largest difference (ROP, bit speed, TOB, FOB, relative to each record's largest magnitude) from
@@ -15,10 +16,15 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
+from pathlib import Path
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "dynamics"))
+from test_runge_kutta import order_defect  # noqa: E402  (the tests' order conditions over all rooted trees)
 
 RECORDS = ("rate_of_penetration", "bit_speed", "torque_on_bit", "force_on_bit")
 
@@ -66,17 +72,10 @@ def main() -> None:
     from drillstring.dynamics.rom import OBSERVABLE_COLUMN, case_reduced_model
 
     trial = tsitouras_54()
-    nodes, coupling = trial.c, trial.a
-    for weights, order in ((trial.b, 5), (trial.b_hat, 4)):
-        conditions = [weights.sum() - 1, weights @ nodes - 1 / 2, weights @ nodes**2 - 1 / 3,
-                      weights @ (coupling @ nodes) - 1 / 6, weights @ nodes**3 - 1 / 4,
-                      weights @ (nodes * (coupling @ nodes)) - 1 / 8, weights @ (coupling @ nodes**2) - 1 / 12,
-                      weights @ (coupling @ coupling @ nodes) - 1 / 24]
-        if order == 5:
-            conditions += [weights @ nodes**4 - 1 / 5, weights @ (coupling @ coupling @ coupling @ nodes) - 1 / 120]
-        checked = "all 8 up to order 4" + (", 2 of the 9 of order 5" if order == 5 else "")
-        print(f"order-{order} weights: largest residual of the {len(conditions)} order conditions checked "
-              f"({checked}): {np.max(np.abs(conditions)):.1e}")
+    for weights, order in ((trial.b, trial.order), (trial.b_hat, trial.error_order)):  # every rooted tree
+        defects = [order_defect(trial, weights, q) for q in range(1, order + 2)]
+        print(f"order-{order} weights: largest order-condition defect up to order {order} "
+              f"{max(defects[:-1]):.1e}, at order {order + 1} {defects[-1]:.1e}")
     tableaus.TABLEAUS[trial.name] = trial  # the trial's name, for this process only
 
     case = load_case(args.case)
