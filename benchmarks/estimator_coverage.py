@@ -91,20 +91,20 @@ def main() -> None:
                         help="the twin truth's random-matrix dispersion (0: the case's full basis, nominal matrices)")
     options = parser.parse_args()
     configs = options.config or [""]
-    records = {}
+    records = {}  # name: (kind, (case, record, truth, start)); the runs are pooled by kind
     if options.shipped > 0:
-        records["shipped"] = _shipped(options.shipped)
+        records["shipped"] = ("shipped", _shipped(options.shipped))
     if options.twin > 0:
         truths = [int(t) for t in options.twin_truths.split(",")]
         for truth_seed in truths:
-            records["twin" if truths == [1] else f"twin{truth_seed}"] = _twin(options.twin, truth_seed,
-                                                                                      options.twin_dispersion)
+            records["twin" if truths == [1] else f"twin{truth_seed}"] = (
+                "twin", _twin(options.twin, truth_seed, options.twin_dispersion))
     models = {}
     pooled: dict[tuple[str, str], list[tuple[float, float]]] = {}  # per configuration and record kind
     for config in configs:
-        for name, (case, record, truth, start) in records.items():
+        for name, (kind, (case, record, truth, start)) in records.items():
             for seed in (int(s) for s in options.seeds.split(",")):
-                start_now = {"spin_up": 0.0} if name.startswith("twin") else {}
+                start_now = {"spin_up": 0.0} if kind == "twin" else {}
                 settings = case_estimator_settings(case, ensemble_size=options.members, seed=seed, **start_now,
                                                    **_settings(config))
                 key = (settings.axial_modes, settings.torsional_modes)
@@ -122,7 +122,7 @@ def main() -> None:
                                   for label, mask in (("stick", stick), ("slip", ~stick)))
                 coverage = (result.coverage("bit_speed", truth["bit_speed"], start),
                             result.coverage("torque_on_bit", truth["torque_on_bit"], start))
-                pooled.setdefault((config or "defaults", name.rstrip("0123456789")), []).append(coverage)
+                pooled.setdefault((config or "defaults", kind), []).append(coverage)
                 print(f"{config or 'defaults':45s} {name:7s} seed {seed} N {options.members:3d} "
                       f"bit_speed {coverage[0]:.2f} torque_on_bit {coverage[1]:.2f} "
                       f"[{phases}] "
