@@ -85,3 +85,11 @@ def test_estimate_refuses_bad_input(tmp_path):
     assert result.exit_code == 2 and "STOR" in result.output and "kg" in result.output
     result = _invoke("estimate", "stick_slip", "--ensemble-size", 2, "--out", tmp_path / "e")
     assert result.exit_code == 2 and "estimator.ensemble_size = 2" in result.output
+
+
+def test_help_states_the_estimators_default_ensemble_size():
+    from drillstring.estimation.ensemble import EstimatorSettings
+
+    result = _invoke("estimate", "--help")
+    assert result.exit_code == 0
+    assert f"else {EstimatorSettings().ensemble_size})" in " ".join(result.output.split())
