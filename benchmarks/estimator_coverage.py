@@ -3,7 +3,7 @@ with the stick_slip case and on the stick-slip twin of tests/estimation/twin.py,
 command line (docs/estimation.md, "Coverage and relaxation").
 
     python benchmarks/estimator_coverage.py [--shipped SECONDS] [--twin SECONDS] [--members N] [--seeds 0,1]
-        [--twin-truths 1] [--twin-dispersion 0.05]
+        [--twin-truths 1] [--twin-dispersion 0.05] [--own-truths 1,2,3]
         [--config "relaxation=0.5 parameter_relaxation=0.5"] [--config "model_dispersion=0.05"] ...
 
 Each ``--config`` (a space-separated list of EstimatorSettings fields over the case's defaults; "" the defaults)
@@ -20,7 +20,10 @@ the truth's dispersion (0: the case's full basis on its nominal matrices; with a
 torsional_modes=10`` nearly the estimator's own model). The last lines pool each configuration's runs per record
 kind (the mean coverage over the seeds and truths, its smallest and largest, and how many runs have both channels
 in 85-95 %): one record is one draw of the model's error, and the bands' calibration is a statement over draws
-(docs/estimation.md, "Long records: the kicks and the coefficient").
+(docs/estimation.md, "Long records: the kicks and the coefficient"). ``--own-truths`` adds perfect-model twins
+(records ``own<seed>``, kind "own"): the truth one member of each configuration's own prior model, drawn afresh
+for each configuration (tests/estimation/twin.py ``own_model_twin``), as long as ``--twin``, coverage after its
+first 10 s; there the bands' misses are the filter's own (docs/estimation.md, "The filter's own share").
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ from drillstring.estimation.surface import SurfaceRecord
 from drillstring.estimation.synthetic import read_truth
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "estimation"))
-from twin import twin
+from twin import own_model_twin, twin
 
 TWIN_START = 10.0  # [s] the twin's coverage is counted from here
 STICK = 1.0  # [rad/s] the truth sticks below this bit speed
@@ -89,22 +92,34 @@ def main() -> None:
                         help="the twin truths' seeds (its random matrices and sensor noise; the tests' is 1)")
     parser.add_argument("--twin-dispersion", type=float, default=0.05,
                         help="the twin truth's random-matrix dispersion (0: the case's full basis, nominal matrices)")
+    parser.add_argument("--own-truths", default="",
+                        help="seeds of own-model twins: truths drawn from each configuration's own estimator model "
+                             "(tests/estimation/twin.py own_model_twin), as long as --twin")
     options = parser.parse_args()
     configs = options.config or [""]
     records = {}  # name: (kind, (case, record, truth, start)); the runs are pooled by kind
     if options.shipped > 0:
         records["shipped"] = ("shipped", _shipped(options.shipped))
     if options.twin > 0:
-        truths = [int(t) for t in options.twin_truths.split(",")]
+        truths = [int(t) for t in options.twin_truths.split(",") if t]
         for truth_seed in truths:
             records["twin" if truths == [1] else f"twin{truth_seed}"] = (
                 "twin", _twin(options.twin, truth_seed, options.twin_dispersion))
+    for truth_seed in (int(t) for t in options.own_truths.split(",") if t):
+        records[f"own{truth_seed}"] = ("own", truth_seed)
     models = {}
     pooled: dict[tuple[str, str], list[tuple[float, float]]] = {}  # per configuration and record kind
     for config in configs:
-        for name, (kind, (case, record, truth, start)) in records.items():
+        for name, (kind, experiment) in records.items():
+            if kind == "own":  # the truth drawn from this configuration's own model
+                case = load_case("stick_slip")
+                own = own_model_twin(case, case_estimator_settings(case, spin_up=0.0, **_settings(config)),
+                                     options.twin, seed=experiment)
+                experiment = (case, own.record, own.truth, TWIN_START)
+                print(f"{name}: the truth's coefficient at the end {own.coefficient:.0f}, bias {own.bias:.0f} N")
+            case, record, truth, start = experiment
             for seed in (int(s) for s in options.seeds.split(",")):
-                start_now = {"spin_up": 0.0} if kind == "twin" else {}
+                start_now = {"spin_up": 0.0} if kind in ("twin", "own") else {}
                 settings = case_estimator_settings(case, ensemble_size=options.members, seed=seed, **start_now,
                                                    **_settings(config))
                 key = (settings.axial_modes, settings.torsional_modes)

@@ -15,6 +15,7 @@ import pytest
 from drillstring.case import load_case
 from drillstring.dynamics.compiled import RunState, SolverSettings, advance
 from drillstring.dynamics.reduced.build import case_reduced_model
+from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
 from drillstring.estimation import ensemble
 from drillstring.estimation.ensemble import (
     EstimatorSettings,
@@ -427,3 +428,27 @@ def test_stick_speed_off_or_below_every_bit_speed_changes_nothing_and_a_high_one
     assert width["above"] < width["default"], width  # measured 1.62 against 2.14 rad/s
     with pytest.raises(ValueError, match=r"model_noise_stick_speed = -1\.0: must be a finite number >= 0"):
         EstimatorSettings(model_noise_stick_speed=-1.0)
+
+
+def test_own_model_twin_without_its_draws_is_one_run_of_the_estimators_model(stick_slip):
+    """The perfect-model twin (benchmarks/estimator_coverage.py --own-truths) with its prior draws, walks and kicks
+    off is the estimator's model run once from its initial state: chaining the intervals, rebuilding the member's
+    model at the case's coefficient and weight on bit, and reading the observables change nothing beyond the
+    integrator's tolerance; its hook load reads the static hook load."""
+    from twin import own_model_twin
+
+    settings = EstimatorSettings(axial_modes=2, torsional_modes=3, spin_up=0.0, coefficient_spread=1e-12,
+                                 coefficient_walk=0.0, weight_on_bit_bias_spread=1e-9, weight_on_bit_bias_walk=0.0,
+                                 model_speed_noise=0.0, initial_speed_spread=0.0, rtol=1e-7, atol=1e-9)
+    own = own_model_twin(stick_slip, settings, 6.0, seed=3, sample_step=0.5, hook_load_noise=1e-6)
+    model = estimator_model(stick_slip, settings)
+    run = advance(model, SolverSettings(rtol=settings.rtol, atol=settings.atol),
+                  RunState.start(model, model.initial_state(0.0, 3)), 6.0, output_times=own.time)
+    assert run.success
+    for name in ("bit_speed", "torque_on_bit", "surface_torque", "force_on_bit"):
+        column = OBSERVABLE_COLUMN[name]
+        scale = np.max(np.abs(run.outputs[:, column]))
+        np.testing.assert_allclose(own.truth[name], run.outputs[:, column], atol=1e-4 * scale, err_msg=name)
+    assert np.ptp(own.truth["bit_speed"]) > 1.0  # the run is not at rest: the comparison compares something
+    np.testing.assert_allclose(own.truth["a5"], model.bit_rock.a5, rtol=1e-9)
+    np.testing.assert_allclose(own.record.channels["hook_load"], model.static.weight_on_hook, atol=1e-3)

@@ -119,3 +119,73 @@ def friction_twin(case, seed: int, t_end: float = 30.0, element: float = 5.0, to
         time, source="friction twin",
         top_speed=rows[:, OBSERVABLE_COLUMN["quill_speed"]] + 0.05 * rng.standard_normal(n),
         surface_torque=rows[:, OBSERVABLE_COLUMN["surface_torque"]] + 300.0 * rng.standard_normal(n))
+
+
+def own_model_twin(case, settings, t_end: float, *, seed: int = 1, sample_step: float = 1.0,
+                   hook_load_noise: float = 2e3) -> Twin:
+    """A truth drawn from the estimator's own prior model (``settings``: an
+    :class:`~drillstring.estimation.ensemble.EstimatorSettings`), the record's noise the estimator's: the perfect-model
+    twin, against which a calibrated filter's 90 % bands cover the truth 90 % of the time on average over truths.
+
+    The truth is one member of the estimator's ensemble as the estimator describes it: its model
+    (:func:`~drillstring.estimation.ensemble.estimator_model`), the initial string speed spread by
+    ``initial_speed_spread``, the coefficient's logarithm drawn from its prior (``coefficient_spread`` about the
+    case's) and the weight-on-bit bias from its (``weight_on_bit_bias_spread`` about 0), both walking
+    (``coefficient_walk``, ``weight_on_bit_bias_walk``), the torsional modal velocities kicked before each interval
+    as the members' (``model_speed_noise``, ``model_noise_modes``, ``model_noise_stick_speed``), integrated at the
+    estimator's tolerances. The hook load reads the static hook load (the truth's weight on bit is the case's plus
+    its bias), the other channels have the estimator's noise levels. ``seed``: the truth's stream."""
+    from drillstring.estimation.ensemble import coefficient_slot, estimator_model, kick_scale, member_model
+
+    model = estimator_model(case, settings)
+    rng = np.random.default_rng(seed)
+    n = model.size
+    name = settings.bit_rock_coefficient
+    slot = coefficient_slot(model, name)
+    log_coefficient = np.log(getattr(model.bit_rock, name)) + settings.coefficient_spread * rng.standard_normal()
+    bias = settings.weight_on_bit_bias_spread * rng.standard_normal()
+    y = model.initial_state(0.0, seed)
+    if model.rigid_rotation_column is not None:
+        r = model.rigid_rotation_column
+        y[n + r] += settings.initial_speed_spread * rng.standard_normal() / model.quill_shapes[r]
+    state = RunState.start(model, y)
+    t_start = int(model.blocks[2])
+    t_end_column = min(int(model.blocks[3]), t_start + settings.model_noise_modes)
+    bit_shape = np.asarray(model.bit_t[t_start:t_end_column], dtype=float)
+    speed_noise = settings.model_speed_noise / float(np.linalg.norm(bit_shape))
+    solver = SolverSettings(rtol=settings.rtol, atol=settings.atol)
+    time = np.arange(0.0, t_end + 1e-9, sample_step)
+    coefficients, biases = [np.exp(log_coefficient)], [bias]
+
+    def truth_model():
+        laws = model.case2_data.laws.copy()
+        laws[slot] = np.exp(log_coefficient)
+        return member_model(model, laws, float(model.weight_on_bit) + bias)
+
+    rows, top = [truth_model().observe(0.0, state.y)], [model.top_u @ state.y[:n]]
+    for k in range(1, len(time)):
+        dt = time[k] - time[k - 1]
+        log_coefficient += settings.coefficient_walk * np.sqrt(dt) * rng.standard_normal()
+        bias += settings.weight_on_bit_bias_walk * np.sqrt(dt) * rng.standard_normal()
+        kicked = state.y.copy()
+        kicked[n + t_start:n + t_end_column] += (speed_noise * np.sqrt(dt) * rng.standard_normal(t_end_column - t_start)
+                                                 * kick_scale(float(rows[-1][OBSERVABLE_COLUMN["bit_speed"]]),
+                                                              settings.model_noise_stick_speed))
+        run = advance(truth_model(), solver, state.updated(kicked), time[k], output_times=[time[k]])
+        assert run.success, run.message
+        state = run.state
+        rows.append(run.outputs[-1])
+        top.append(model.top_u @ state.y[:n])
+        coefficients.append(np.exp(log_coefficient))
+        biases.append(bias)
+    rows = np.array(rows)
+    truth = {key: rows[:, c] for key, c in OBSERVABLE_COLUMN.items()}
+    truth[name], truth["weight_on_bit_bias"] = np.array(coefficients), np.array(biases)
+    n_t = len(time)
+    record = SurfaceRecord.from_arrays(
+        time, source="own-model twin",
+        top_speed=truth["quill_speed"] + settings.top_speed_noise * rng.standard_normal(n_t),
+        surface_torque=truth["surface_torque"] + settings.surface_torque_noise * rng.standard_normal(n_t),
+        block_position=30.0 - np.array(top) + settings.block_position_noise * rng.standard_normal(n_t),
+        hook_load=model.static.weight_on_hook + hook_load_noise * rng.standard_normal(n_t))
+    return Twin(record, time, truth, time, truth, float(coefficients[-1]), float(biases[-1]))
