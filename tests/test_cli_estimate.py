@@ -93,3 +93,33 @@ def test_help_states_the_estimators_default_ensemble_size():
     result = _invoke("estimate", "--help")
     assert result.exit_code == 0
     assert f"else {EstimatorSettings().ensemble_size})" in " ".join(result.output.split())
+
+
+@pytest.mark.parametrize("stop, code, words", [(ValueError, 1, "every member's forecast failed between t = "),
+                                               (KeyboardInterrupt, 130, "interrupted after t = ")])
+def test_a_run_stopped_early_writes_what_it_computed_and_says_where(short_record, tmp_path, monkeypatch, stop,
+                                                                   code, words):
+    """Every forecast failing, or Ctrl-C, after the spin-up and a few samples (4 members: 20 spin-up forecasts,
+    then the record's): the files hold the samples before the stop, the message says where, the exit code is
+    the run's failure (1) or the interruption's (130)."""
+    from drillstring.estimation import ensemble
+
+    real, calls = ensemble.advance, {"n": 0}
+
+    def stopping(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] > 4 * (20 + 5):
+            raise stop("made to stop by the test")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ensemble, "advance", stopping)
+    record, truth = short_record
+    out = tmp_path / "estimate"
+    result = _invoke("estimate", "stick_slip", "--surface", record, "--truth", truth, "--out", out,
+                     "--ensemble-size", 4)
+    assert result.exit_code == code, result.output
+    message = " ".join(result.output.split())
+    assert words in message and f"(the estimate up to there is in {out})" in message
+    with xr.open_dataset(out / "estimate.nc", engine="h5netcdf") as ds:
+        assert 1 <= ds.sizes["time"] < 81 and words.split(" t = ")[0] in ds.attrs["stopped"]
+    assert "stopped early" in (out / "report.html").read_text(encoding="utf-8")

@@ -48,4 +48,6 @@ def write_estimate_report(path: str | Path, *, title: str, case_toml: str, paylo
     """Write the estimate's report page at ``path`` (``payload``: the command's JSON payload, SI); returns it."""
     run = {"wall time [s]": f"{payload['wall_time']:.1f}", "real-time factor": f"{payload['real_time_factor']:.2f}",
            "members replaced": str(payload["replaced_members"])}
+    if payload.get("stopped"):
+        run["stopped early"] = payload["stopped"]
     return _page(path, title, case_toml, [_estimate_section(payload, units)], figures, run, units=units)

@@ -241,7 +241,8 @@ def test_result_dataset_carries_units(experiment):
 
 def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monkeypatch):
     """A member whose advance fails (here every third call, made to fail) is replaced by a copy of one that
-    succeeded and counted; the run goes on. When every member fails, the run stops with a RuntimeError."""
+    succeeded and counted; the run goes on. When every member fails, the run stops (the samples before kept; in the
+    spin-up, before any, it raises EstimateDiverged)."""
     real = ensemble.advance
     calls = {"n": 0}
 
@@ -261,8 +262,79 @@ def test_failed_forecasts_are_replaced_and_counted(stick_slip, small_model, monk
     assert result.replaced.tolist() == [0, 2, 2, 2]
     assert np.all(np.isfinite(result.mean["bit_speed"]))
     monkeypatch.setattr(ensemble, "advance", lambda *a, **k: (_ for _ in ()).throw(ValueError("no")))
-    with pytest.raises(RuntimeError, match="every member's forecast failed between t = 0 s and 1 s"):
-        estimate(stick_slip, record, settings, model=small_model)
+    stopped = estimate(stick_slip, record, settings, model=small_model)
+    assert stopped.stopped == "estimate: every member's forecast failed between t = 0 s and 1 s of the record"
+    assert stopped.time.tolist() == [0.0]  # the first sample, analysed before any forecast, is kept
+    with pytest.raises(ensemble.EstimateDiverged, match="every member's forecast failed between t = -1 s and 0 s"):
+        estimate(stick_slip, record, dataclasses.replace(settings, spin_up=1.0), model=small_model)  # nothing to keep
+
+
+def _constant_record(model, seconds):
+    time = np.arange(0.0, seconds, 1.0)
+    return SurfaceRecord.from_arrays(time, top_speed=np.full(len(time), model.top_speed),
+                                     surface_torque=np.full(len(time), 5000.0))
+
+
+def test_a_run_whose_members_all_fail_later_keeps_the_samples_before(stick_slip, small_model, monkeypatch):
+    """Every forecast after the second fails: the run stops at the third forecast and returns the three samples
+    analysed before it, the reason in ``stopped`` and in the dataset's attrs."""
+    real = ensemble.advance
+    calls = {"n": 0}
+
+    def failing_later(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] > 2 * 6:  # two forecasts of six members
+            raise ValueError("made to fail by the test")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ensemble, "advance", failing_later)
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=0.0)
+    result = estimate(stick_slip, _constant_record(small_model, 6.0), settings, model=small_model)
+    assert result.stopped == "estimate: every member's forecast failed between t = 2 s and 3 s of the record"
+    assert result.time.tolist() == [0.0, 1.0, 2.0]
+    assert all(len(v) == 3 and np.all(np.isfinite(v)) for v in (result.mean["bit_speed"], result.replaced,
+                                                                   result.observed["surface_torque"]))
+    assert result.quantiles["a5"].shape == (3, 3) and result.used["top_speed"].shape == (3,)
+    assert result.to_dataset().attrs["stopped"] == result.stopped
+
+
+def test_an_interrupted_run_returns_what_it_computed(stick_slip, small_model, monkeypatch):
+    """Ctrl-C (KeyboardInterrupt, here from the progress callback after the second sample) stops the run; the
+    samples done are returned, the same as an uninterrupted run's; before the first sample (in the spin-up) it is
+    raised."""
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=0.0)
+    record = _constant_record(small_model, 5.0)
+
+    def interrupt_at(t_stop):
+        def progress(t):
+            if t >= t_stop:
+                raise KeyboardInterrupt
+        return progress
+
+    result = estimate(stick_slip, record, settings, model=small_model, progress=interrupt_at(1.0))
+    assert result.stopped == "interrupted after t = 1 s of the record"
+    whole = estimate(stick_slip, record, settings, model=small_model)
+    assert whole.stopped == "" and len(whole.time) == 5 and "stopped" not in whole.to_dataset().attrs
+    np.testing.assert_array_equal(result.quantiles["bit_speed"], whole.quantiles["bit_speed"][:2])
+    monkeypatch.setattr(ensemble, "advance", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
+    with pytest.raises(KeyboardInterrupt):
+        estimate(stick_slip, record, dataclasses.replace(settings, spin_up=1.0), model=small_model)
+
+
+def test_a_parameter_ensemble_blown_up_by_inflation_stops_the_run_saying_where(stick_slip, small_model):
+    """With inflation 2 the coefficient's spread doubles at each analysis (the record barely narrows it): the run
+    stops once its 90 % band spans more than the clip range exp(2 LOG_RANGE), naming the parameter, the time and
+    the inflation, and keeps the samples before; inflation 1 on the same record runs to the end."""
+    settings = EstimatorSettings(ensemble_size=6, axial_modes=2, torsional_modes=3, spin_up=0.0, inflation=2.0)
+    record = _constant_record(small_model, 12.0)
+    result = estimate(stick_slip, record, settings, model=small_model)
+    assert result.stopped.startswith(f"estimate: the a5 ensemble diverged at t = {result.time[-1] + 1:g} s of "
+                                     "the record"), result.stopped
+    assert "inflation = 2" in result.stopped and 2 <= len(result.time) < 12  # measured: stops at 4 s
+    low, high = np.log(result.quantiles["a5"][-1][[0, 2]])
+    assert high - low <= 2 * ensemble.LOG_RANGE
+    calm = estimate(stick_slip, record, dataclasses.replace(settings, inflation=1.0), model=small_model)
+    assert calm.stopped == "" and len(calm.time) == 12
 
 
 # --------------------------------------------------------------------------------------------------------

@@ -12,8 +12,8 @@ from rich.markup import escape
 from rich.progress import Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from drillstring.cli.options import (EXIT_INTERRUPTED, CaseArg, JsonOpt, UnitsOpt, _check_output, _console,
-                                     _err_console, _fail, _load, _print_json, app)
+from drillstring.cli.options import (EXIT_INTERRUPTED, EXIT_RUN_FAILED, CaseArg, JsonOpt, UnitsOpt, _check_output,
+                                     _console, _err_console, _fail, _load, _print_json, app)
 from drillstring.cli.tables import print_table
 from drillstring.units import display_unit
 
@@ -48,15 +48,21 @@ def estimate_command(
             task = bar.add_task("estimate", total=None)
             outcome = estimate(the_case, surface, truth=truth, **overrides,
                                progress=lambda t: bar.update(task, completed=t))
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # before the record's first sample: nothing to keep
         _fail("interrupted", EXIT_INTERRUPTED)
     except (OSError, ValueError) as error:
         _fail(str(error))
+    except RuntimeError as error:  # the ensemble diverged before the record's first sample
+        _fail(str(error), EXIT_RUN_FAILED)
     payload = _write_outputs(the_case, outcome, out, units)
     if as_json:
         _print_json(payload)
-        return
-    _print_summary(the_case, outcome, payload, units)
+    else:
+        _print_summary(the_case, outcome, payload, units)
+    stopped = outcome.result.stopped
+    if stopped:  # what was computed is written; the exit code says the record was not finished
+        _fail(f"{stopped} (the estimate up to there is in {out})",
+              EXIT_INTERRUPTED if stopped.startswith("interrupted") else EXIT_RUN_FAILED)
 
 
 def _write_outputs(case, outcome, out: Path, units: str | None) -> dict:
@@ -83,6 +89,7 @@ def _write_outputs(case, outcome, out: Path, units: str | None) -> dict:
         "wall_time": float(result.wall_time),
         "real_time_factor": float(outcome.real_time_factor),
         "replaced_members": result.replaced_members,
+        "stopped": result.stopped or None,
         "notes": list(outcome.record.notes),
         "quantities": {name: {"mean": _finite(np.nanmean(result.mean[name])),
                               "band_width": _finite(np.nanmean(np.diff(result.quantiles[name][:, [0, 2]], axis=1)))}

@@ -84,8 +84,11 @@ same displacement, so that the members are compared on one footing. Default 0: o
 **Failures.** A member whose forecast fails (the integrator stops, a non-finite value, a bit speed beyond
 ``divergence_speed_ratio`` times the top speed) is replaced by a copy of a member drawn from those that
 succeeded (its state, parameters, outputs, recent bit speed and model); the count per time is returned
-(:attr:`~drillstring.estimation.results.EstimationResult.replaced`). The run stops (RuntimeError) only when every
-member fails at one time.
+(:attr:`~drillstring.estimation.results.EstimationResult.replaced`). The run stops (:class:`EstimateDiverged`)
+when every member fails at one time, or when an analysis leaves a parameter non-finite or spreads a coefficient's
+90 % band over more than its clip range (a factor exp(2 LOG_RANGE)); interrupted (KeyboardInterrupt), it stops
+too. Either way it returns what it computed before the stop, the reason in
+:attr:`~drillstring.estimation.results.EstimationResult.stopped` (a stop at the first sample raises).
 
 **Stick-slip index.** ``(max − min)/(2 mean)`` of each member's bit speed over the last ``stick_slip_window``
 seconds (the definition of :func:`drillstring.dynamics.indicators.cycle_metrics`), sampled every
@@ -125,6 +128,13 @@ _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
 _BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
 #: The estimated coefficient stays within exp(±LOG_RANGE) of the case's (an analysis can throw a member's far out).
 LOG_RANGE = 5.0
+
+
+class EstimateDiverged(RuntimeError):
+    """The ensemble no longer describes the record (every forecast failed, or a parameter's spread blew up):
+    :func:`estimate` stops there and returns what it computed before (:attr:`EstimationResult.stopped`)."""
+
+
 #: The spin-up's longest step between the model error's kicks [s].
 SPIN_UP_STEP = 1.0
 #: ``friction_factor`` -> the well's key of that wall's friction factor (None: no friction factor estimated).
@@ -139,12 +149,15 @@ class EstimatorSettings:
 
     Attributes:
         ensemble_size: members N, in [4, 1000] (64: on a 300 s twin, 16 and 32 gave bands too narrow,
-            docs/estimation.md).
+            docs/estimation.md; on perfect-model twins 256 held the coefficient's truth 5 times of 6 against 1 of 6
+            with 64, the torque on bit .84 against .68, at four times the cost: "The filter's own share").
         top_speed_noise: standard deviation of the top-speed measurement [rad/s], > 0.
         surface_torque_noise: of the surface torque [N·m], > 0.
         block_position_noise: of the block position [m], > 0.
         hook_load_window: the hook load's averaging window [s], > 0.
-        inflation: multiplicative prior inflation of the anomalies [-], in [1, 2].
+        inflation: multiplicative prior inflation of the anomalies [-], in [1, 2]; it widens the parameters at
+            every analysis, and where the record does not narrow them as fast the run stops
+            (:class:`EstimateDiverged`; 1.1 did on a 300 s twin).
         model_speed_noise: additive model error: the torsional modal velocities of each member are perturbed before
             each forecast, white over the lowest ``model_noise_modes`` torsional columns, scaled so that the bit
             speed's perturbation has this standard deviation per √s of the interval [rad/s/√s], >= 0. Default 2:
@@ -596,6 +609,23 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     window_predicted = {name: np.zeros(n_members) for name in channels}
     window_samples_used: dict[str, list[int]] = {name: [] for name in channels}
 
+    def diverged_parameters(analysed: np.ndarray, t_record: float) -> None:
+        """Stop (:class:`EstimateDiverged`) where the analysis ``analysed`` (parameter rows × members) left a
+        parameter non-finite or spread a logarithm's 5-95 % band over more than the clip's range (2 LOG_RANGE):
+        the ensemble no longer describes it (an inflation above what the record's information holds, e.g.)."""
+        for name, j in column.items():
+            if not np.all(np.isfinite(analysed[j])):
+                raise EstimateDiverged(f"estimate: the analysis at t = {t_record:g} s of the record left {name} "
+                                       "non-finite in some members")
+        for name in estimated:
+            low, high = np.quantile(analysed[column[name]], [0.05, 0.95])
+            if high - low > 2.0 * LOG_RANGE:
+                raise EstimateDiverged(
+                    f"estimate: the {name} ensemble diverged at t = {t_record:g} s of the record: its 90 % band "
+                    f"spans a factor {math.exp(min(high - low, 700.0)):.3g} (at most exp(2 LOG_RANGE) = "
+                    f"{math.exp(2.0 * LOG_RANGE):.3g}); with inflation = {settings.inflation:g} the analyses widen "
+                    "the parameters faster than the record narrows them: lower the inflation, or use relaxation")
+
     def forecast(t_from: float, t_to: float, hook_mean: float, walk: bool = True) -> int:
         """Every member from model time ``t_from`` to ``t_to`` [s]: the parameters' walk (if ``walk``), the model
         error's kick, the model; a failed member replaced by a copy of a good one. Returns the count replaced."""
@@ -634,8 +664,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             members.outputs[i] = rows[-1]
             members.push(i, rows[:, _BIT_SPEED])
         if not ok.any():
-            raise RuntimeError(f"estimate: every member's forecast failed between t = {t_from - spin:g} s and "
-                               f"{t_to - spin:g} s of the record")
+            raise EstimateDiverged(f"estimate: every member's forecast failed between t = {t_from - spin:g} s and "
+                                   f"{t_to - spin:g} s of the record")
         good = np.flatnonzero(ok)
         for i in np.flatnonzero(~ok):
             source = int(rng.choice(good))
@@ -654,69 +684,88 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         top_now = np.array([top_u @ members.nominal(i)[:n] for i in range(n_members)])
         members.parameters[:, zero_column] += top_now
 
-    for k in range(n_time):
-        t = float(clock[k])
-        hook_mean = _hook_load_mean(record, float(time[max(k - 1, 0)]), settings.hook_load_window)
-        if k == 0:
-            for i in range(n_members):
-                row = member(i, hook_mean).observe(t, members.states[i].y)
-                members.outputs[i] = row
-                if spin > 0.0:
-                    members.speed[i, -1] = row[_BIT_SPEED]
-                else:
-                    members.push(i, [row[_BIT_SPEED]])
-        else:
-            replaced[k] = forecast(float(clock[k - 1]), t, hook_mean)
-        # the predicted surface channels, the analysis
-        z = np.array([np.concatenate([members.nominal(i), members.parameters[i]]) for i in range(n_members)]).T
-        predicted = {"top_speed": np.array([o[_QUILL] for o in members.outputs]),
-                     "surface_torque": np.array([o[_SURFACE_TORQUE] for o in members.outputs]),
-                     "block_position": z[-1] - top_u @ z[:n]}
-        for name in channels:
-            predicted_mean[name][k], predicted_quantiles[name][k] = _summaries(predicted[name])
-        # the window's sums: the usable samples of each channel and each member's predictions at their times
-        for name in channels:
-            if usable[name][k]:
-                window_observed[name] += float(record.channels[name][k])
-                window_predicted[name] += predicted[name]
-                window_samples_used[name].append(k)
-        rows = [name for name in channels if window_samples_used[name]]
-        if rows and (k == n_time - 1 or window[k + 1] != window[k]):
-            for name in rows:
-                used[name][window_samples_used[name]] = True
-            count = {name: len(window_samples_used[name]) for name in rows}
-            prior = z
-            z = etkf_analysis(z, np.array([window_predicted[name] / count[name] for name in rows]),
-                              np.array([window_observed[name] / count[name] for name in rows]),
-                              np.array([noise[name] for name in rows]), settings.inflation)
-            if relaxation is not None:
-                z = relax_to_prior_spread(prior, z, relaxation)
-            for i in range(n_members):
-                members.states[i] = members.states[i].updated(members.own(i, z[:-n_parameters, i]))
-                members.parameters[i] = z[-n_parameters:, i]
-                row = member(i, hook_mean).observe(t, members.states[i].y)
-                members.outputs[i] = row
-                members.speed[i, -1] = row[_BIT_SPEED]
-        if k == n_time - 1 or window[k + 1] != window[k]:
+    completed = 0  # the samples whose analysis and summaries are done
+    stopped = ""
+    try:
+        for k in range(n_time):
+            t = float(clock[k])
+            hook_mean = _hook_load_mean(record, float(time[max(k - 1, 0)]), settings.hook_load_window)
+            if k == 0:
+                for i in range(n_members):
+                    row = member(i, hook_mean).observe(t, members.states[i].y)
+                    members.outputs[i] = row
+                    if spin > 0.0:
+                        members.speed[i, -1] = row[_BIT_SPEED]
+                    else:
+                        members.push(i, [row[_BIT_SPEED]])
+            else:
+                replaced[k] = forecast(float(clock[k - 1]), t, hook_mean)
+            # the predicted surface channels, the analysis
+            z = np.array([np.concatenate([members.nominal(i), members.parameters[i]]) for i in range(n_members)]).T
+            predicted = {"top_speed": np.array([o[_QUILL] for o in members.outputs]),
+                         "surface_torque": np.array([o[_SURFACE_TORQUE] for o in members.outputs]),
+                         "block_position": z[-1] - top_u @ z[:n]}
             for name in channels:
-                window_observed[name] = 0.0
-                window_predicted[name] = np.zeros(n_members)
-                window_samples_used[name] = []
-        # the analysis's downhole state and parameters
-        rows_out = np.array(members.outputs)
-        values = {name: rows_out[:, OBSERVABLE_COLUMN[name]] for name in DOWNHOLE if name in OBSERVABLE_COLUMN}
-        speed_window = members.speed
-        with np.errstate(invalid="ignore", divide="ignore"):
-            window_mean = np.nanmean(speed_window, axis=1)
-            index = (np.nanmax(speed_window, axis=1) - np.nanmin(speed_window, axis=1)) / (2.0 * window_mean)
-        values["stick_slip_index"] = np.where(window_mean > 0.0, index, np.nan)
-        for name in estimated:
-            values[name] = np.exp(members.parameters[:, column[name]])
-        values["weight_on_bit_bias"] = members.parameters[:, bias_column]
-        for name in names:
-            mean[name][k], quantiles[name][k] = _summaries(values[name])
-        if progress is not None:
-            progress(float(time[k]))
+                predicted_mean[name][k], predicted_quantiles[name][k] = _summaries(predicted[name])
+            # the window's sums: the usable samples of each channel and each member's predictions at their times
+            for name in channels:
+                if usable[name][k]:
+                    window_observed[name] += float(record.channels[name][k])
+                    window_predicted[name] += predicted[name]
+                    window_samples_used[name].append(k)
+            rows = [name for name in channels if window_samples_used[name]]
+            if rows and (k == n_time - 1 or window[k + 1] != window[k]):
+                for name in rows:
+                    used[name][window_samples_used[name]] = True
+                count = {name: len(window_samples_used[name]) for name in rows}
+                prior = z
+                z = etkf_analysis(z, np.array([window_predicted[name] / count[name] for name in rows]),
+                                  np.array([window_observed[name] / count[name] for name in rows]),
+                                  np.array([noise[name] for name in rows]), settings.inflation)
+                if relaxation is not None:
+                    z = relax_to_prior_spread(prior, z, relaxation)
+                diverged_parameters(z[-n_parameters:], t - spin)
+                for i in range(n_members):
+                    members.states[i] = members.states[i].updated(members.own(i, z[:-n_parameters, i]))
+                    members.parameters[i] = z[-n_parameters:, i]
+                    row = member(i, hook_mean).observe(t, members.states[i].y)
+                    members.outputs[i] = row
+                    members.speed[i, -1] = row[_BIT_SPEED]
+            if k == n_time - 1 or window[k + 1] != window[k]:
+                for name in channels:
+                    window_observed[name] = 0.0
+                    window_predicted[name] = np.zeros(n_members)
+                    window_samples_used[name] = []
+            # the analysis's downhole state and parameters
+            rows_out = np.array(members.outputs)
+            values = {name: rows_out[:, OBSERVABLE_COLUMN[name]] for name in DOWNHOLE if name in OBSERVABLE_COLUMN}
+            speed_window = members.speed
+            with np.errstate(invalid="ignore", divide="ignore"):
+                window_mean = np.nanmean(speed_window, axis=1)
+                index = (np.nanmax(speed_window, axis=1) - np.nanmin(speed_window, axis=1)) / (2.0 * window_mean)
+            values["stick_slip_index"] = np.where(window_mean > 0.0, index, np.nan)
+            for name in estimated:
+                values[name] = np.exp(members.parameters[:, column[name]])
+            values["weight_on_bit_bias"] = members.parameters[:, bias_column]
+            for name in names:
+                mean[name][k], quantiles[name][k] = _summaries(values[name])
+            completed = k + 1
+            if progress is not None:
+                progress(float(time[k]))
+    except KeyboardInterrupt:
+        if completed == 0:
+            raise
+        stopped = f"interrupted after t = {time[completed - 1]:g} s of the record"
+    except EstimateDiverged as error:
+        if completed == 0:
+            raise
+        stopped = str(error)
+    if stopped:  # keep what was computed: the samples before the stop
+        time = time[:completed]
+        for table in (mean, quantiles, predicted_mean, predicted_quantiles, used):
+            for name in table:
+                table[name] = table[name][:completed]
+        replaced = replaced[:completed]
 
     units = {name: unit for name, (unit, _) in DOWNHOLE.items()}
     if coefficient_name is not None:
@@ -729,6 +778,6 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         parameters=tuple(estimated) + ("weight_on_bit_bias",), parameter_correlation=_correlation(
             members.parameters[:, :n_parameters - 1], tuple(estimated) + ("weight_on_bit_bias",)),
         predicted_mean=predicted_mean, predicted_quantiles=predicted_quantiles,
-        observed={name: np.asarray(record.channels[name], dtype=float) for name in channels},
+        observed={name: np.asarray(record.channels[name], dtype=float)[:len(time)] for name in channels},
         used=used, replaced=replaced, settings=settings.as_dict(), wall_time=_time.perf_counter() - begin,
-        source=record.source)
+        source=record.source, stopped=stopped)

@@ -48,6 +48,9 @@ class EstimationResult:
         parameter_correlation: ``{(a, b): r}`` the members' correlation of each pair of estimated parameters at
             the record's end (the bit-rock coefficient and the friction factor by their logarithms) [-]: how far
             the record separates them (r near ±1: only a combination of the two is known).
+        stopped: why the run stopped before the record's end ("" where it ran to the end): interrupted, or the
+            ensemble diverged (:class:`~drillstring.estimation.ensemble.EstimateDiverged`); every array then holds
+            the samples before the stop.
     """
 
     time: np.ndarray
@@ -64,6 +67,7 @@ class EstimationResult:
     wall_time: float = 0.0
     source: str = ""
     parameter_correlation: dict = field(default_factory=dict)
+    stopped: str = ""
 
     @property
     def replaced_members(self) -> int:
@@ -113,6 +117,8 @@ class EstimationResult:
                   "quantile": ("quantile", np.array(QUANTILES), {"units": "1"})}
         attrs = {"drillstring_version": __version__, "source": self.source, "wall_time": float(self.wall_time),
                  "parameters": ",".join(self.parameters)}
+        if self.stopped:
+            attrs["stopped"] = self.stopped
         attrs.update({f"estimator_{key}": value for key, value in self.settings.items()
                       if isinstance(value, (int, float, str))})
         return xr.Dataset(data, coords=coords, attrs=attrs)
