@@ -23,7 +23,9 @@ in 85-95 %): one record is one draw of the model's error, and the bands' calibra
 (docs/estimation.md, "Long records: the kicks and the coefficient"). ``--own-truths`` adds perfect-model twins
 (records ``own<seed>``, kind "own"): the truth one member of each configuration's own prior model, drawn afresh
 for each configuration (tests/estimation/twin.py ``own_model_twin``), as long as ``--twin``, coverage after its
-first 10 s; there the bands' misses are the filter's own (docs/estimation.md, "The filter's own share").
+first 10 s (``--own-model``: draw them from these settings instead, the same truths for every configuration, to
+try a filter's setting on a fixed truth); there the bands' misses are the filter's own (docs/estimation.md, "The
+filter's own share").
 """
 
 from __future__ import annotations
@@ -95,6 +97,9 @@ def main() -> None:
     parser.add_argument("--own-truths", default="",
                         help="seeds of own-model twins: truths drawn from each configuration's own estimator model "
                              "(tests/estimation/twin.py own_model_twin), as long as --twin")
+    parser.add_argument("--own-model", default=None,
+                        help="the settings the own-model truths are drawn from, as a --config (default: each "
+                             "configuration's own; \"\" the defaults: one truth for every configuration)")
     options = parser.parse_args()
     configs = options.config or [""]
     records = {}  # name: (kind, (case, record, truth, start)); the runs are pooled by kind
@@ -113,7 +118,8 @@ def main() -> None:
         for name, (kind, experiment) in records.items():
             if kind == "own":  # the truth drawn from this configuration's own model
                 case = load_case("stick_slip")
-                own = own_model_twin(case, case_estimator_settings(case, spin_up=0.0, **_settings(config)),
+                truth_config = config if options.own_model is None else options.own_model
+                own = own_model_twin(case, case_estimator_settings(case, spin_up=0.0, **_settings(truth_config)),
                                      options.twin, seed=experiment)
                 experiment = (case, own.record, own.truth, TWIN_START)
                 print(f"{name}: the truth's coefficient at the end {own.coefficient:.0f}, bias {own.bias:.0f} N")
