@@ -135,7 +135,8 @@ def own_model_twin(case, settings, t_end: float, *, seed: int = 1, sample_step: 
     as the members' (``model_speed_noise``, ``model_noise_modes``, ``model_noise_stick_speed``), integrated at the
     estimator's tolerances. The hook load reads the static hook load (the truth's weight on bit is the case's plus
     its bias), the other channels have the estimator's noise levels. ``seed``: the truth's stream."""
-    from drillstring.estimation.ensemble import coefficient_slot, estimator_model, kick_scale, member_model
+    from drillstring.estimation.ensemble import (coefficient_slot, estimator_model, kick_scale, member_model,
+                                                 model_noise_columns)
 
     model = estimator_model(case, settings)
     rng = np.random.default_rng(seed)
@@ -149,10 +150,8 @@ def own_model_twin(case, settings, t_end: float, *, seed: int = 1, sample_step: 
         r = model.rigid_rotation_column
         y[n + r] += settings.initial_speed_spread * rng.standard_normal() / model.quill_shapes[r]
     state = RunState.start(model, y)
-    t_start = int(model.blocks[2])
-    t_end_column = min(int(model.blocks[3]), t_start + settings.model_noise_modes)
-    bit_shape = np.asarray(model.bit_t[t_start:t_end_column], dtype=float)
-    speed_noise = settings.model_speed_noise / float(np.linalg.norm(bit_shape))
+    kicked, speed_noise = model_noise_columns(model, settings)
+    kicked = slice(n + kicked.start, n + kicked.stop)
     solver = SolverSettings(rtol=settings.rtol, atol=settings.atol)
     time = np.arange(0.0, t_end + 1e-9, sample_step)
     coefficients, biases = [np.exp(log_coefficient)], [bias]
@@ -167,11 +166,10 @@ def own_model_twin(case, settings, t_end: float, *, seed: int = 1, sample_step: 
         dt = time[k] - time[k - 1]
         log_coefficient += settings.coefficient_walk * np.sqrt(dt) * rng.standard_normal()
         bias += settings.weight_on_bit_bias_walk * np.sqrt(dt) * rng.standard_normal()
-        kicked = state.y.copy()
-        kicked[n + t_start:n + t_end_column] += (speed_noise * np.sqrt(dt) * rng.standard_normal(t_end_column - t_start)
-                                                 * kick_scale(float(rows[-1][OBSERVABLE_COLUMN["bit_speed"]]),
-                                                              settings.model_noise_stick_speed))
-        run = advance(truth_model(), solver, state.updated(kicked), time[k], output_times=[time[k]])
+        y = state.y.copy()
+        y[kicked] += (speed_noise * np.sqrt(dt) * rng.standard_normal(kicked.stop - kicked.start)
+                      * kick_scale(float(rows[-1][OBSERVABLE_COLUMN["bit_speed"]]), settings.model_noise_stick_speed))
+        run = advance(truth_model(), solver, state.updated(y), time[k], output_times=[time[k]])
         assert run.success, run.message
         state = run.state
         rows.append(run.outputs[-1])

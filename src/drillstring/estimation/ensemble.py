@@ -302,6 +302,16 @@ def kick_scale(bit_speed: float | None, stick_speed: float) -> float:
     return min(1.0, abs(bit_speed) / stick_speed)
 
 
+def model_noise_columns(model, settings: EstimatorSettings) -> tuple[slice, float]:
+    """Where and how hard the model error kicks (module docstring): the slice of the velocity's torsional columns
+    kicked (the lowest ``model_noise_modes`` of ``model``'s torsional block) and the standard deviation of each
+    column's kick per √s of the interval, such that the bit speed's is ``model_speed_noise`` [rad/s/√s]."""
+    first = int(model.blocks[2])
+    last = min(int(model.blocks[3]), first + settings.model_noise_modes)
+    bit_shape = np.asarray(model.bit_t[first:last], dtype=float)
+    return slice(first, last), settings.model_speed_noise / max(float(np.linalg.norm(bit_shape)), 1e-300)
+
+
 def member_model(model, laws: np.ndarray, weight_on_bit: float, friction: np.ndarray | None = None):
     """A shallow copy of ``model`` (a case-2 :class:`~drillstring.dynamics.rom.ReducedOrderModel`) whose
     kernels read the numbers ``laws`` (the packed array of :func:`~drillstring.forces.registry.pack`, same
@@ -576,10 +586,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     predicted_quantiles = {name: np.full((n_time, len(QUANTILES)), np.nan) for name in channels}
     used = {name: np.zeros(n_time, dtype=bool) for name in channels}
     replaced = np.zeros(n_time, dtype=np.int64)
-    t_start = int(model.blocks[2])
-    t_end = min(int(model.blocks[3]), t_start + settings.model_noise_modes)
-    bit_shape = np.asarray(model.bit_t[t_start:t_end], dtype=float)
-    speed_noise = settings.model_speed_noise / max(float(np.linalg.norm(bit_shape)), 1e-300)
+    kicked, speed_noise = model_noise_columns(model, settings)
+    kicked = slice(n + kicked.start, n + kicked.stop)  # in the state [displacements, velocities]
     relaxation = None  # the RTPS factor of each row of the augmented state [y, parameters]
     if settings.relaxation > 0.0 or settings.parameter_relaxation > 0.0:
         relaxation = np.concatenate([np.full(len(y0), settings.relaxation),
@@ -642,9 +650,9 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         if speed_noise > 0.0:
             for i in range(n_members):
                 y = members.nominal(i)
-                kick = speed_noise * math.sqrt(dt) * rng.standard_normal(t_end - t_start)
+                kick = speed_noise * math.sqrt(dt) * rng.standard_normal(kicked.stop - kicked.start)
                 last = members.outputs[i]
-                y[n + t_start:n + t_end] += kick * kick_scale(None if last is None else float(last[_BIT_SPEED]),
+                y[kicked] += kick * kick_scale(None if last is None else float(last[_BIT_SPEED]),
                                                               settings.model_noise_stick_speed)
                 members.states[i] = members.states[i].updated(members.own(i, y))
         grid = np.append(np.arange(t_from + settings.output_step, t_to - 1e-9 * dt, settings.output_step), t_to)
