@@ -29,7 +29,7 @@ def estimate_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder: estimate.nc, surface.png, downhole.png, "
                                       "report.html.")] = Path("estimate"),
     ensemble_size: Annotated[int | None, typer.Option("--ensemble-size", help="Members of the ensemble "
-                             "(default: the case's [estimator] ensemble_size, else 64).")] = None,
+                             "(default: the case's [estimator] ensemble_size, else 256).")] = None,
     seed: Annotated[int | None, typer.Option("--seed", help="Seed of the estimator's random stream.")] = None,
     as_json: JsonOpt = False,
     units: UnitsOpt = None,

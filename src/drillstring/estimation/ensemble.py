@@ -65,13 +65,13 @@ against a surface torque of 18 kN·m, and the first analyses put that on the wei
 **Model error, inflation, localisation.** The estimator's basis is truncated (no lateral modes, few torsional
 ones) and the truth is another model: before each forecast the torsional modal velocities of every member are
 kicked by white noise scaled to ``model_speed_noise`` rad/s of bit speed per √s (additive model error; larger
-kicks bias the estimated coefficient: hence 2, not more).
+kicks bias the estimated coefficient; 1.5 with the default 256 members, docs/estimation.md "The defaults").
 Multiplicative prior inflation of the anomalies (``inflation``) is available, default 1: with the additive noise
 it only widened the parameters' spread, and at 1.15 drove them off on the stick-slip twin. Relaxation to the
 prior spread (``relaxation`` for the model state's rows, ``parameter_relaxation`` for the parameters'; default 0,
 off: :func:`relax_to_prior_spread`) after each analysis gives back part of the spread the analysis removed
 (docs/estimation.md, "Coverage and relaxation"). No localisation: the
-state is a few modal coordinates, each global along the string, and the default ensemble (64) exceeds the
+state is a few modal coordinates, each global along the string, and the default ensemble (256) exceeds the
 augmented state's dimension (about 25).
 
 **Model uncertainty.** With ``model_dispersion`` > 0 each member runs its own reduced model, its mass, stiffness
@@ -148,9 +148,10 @@ class EstimatorSettings:
     """The estimator's settings, named as the case keys they become (SI units).
 
     Attributes:
-        ensemble_size: members N, in [4, 1000] (64: on a 300 s twin, 16 and 32 gave bands too narrow,
-            docs/estimation.md; on perfect-model twins 256 held the coefficient's truth 5 times of 6 against 1 of 6
-            with 64, the torque on bit .84 against .68, at four times the cost: "The filter's own share").
+        ensemble_size: members N, in [4, 1000]. Default 256: with fewer the analyses narrow the parameters'
+            bands beyond what the record holds (on perfect-model twins 256 held the coefficient's truth 5 times of
+            6 against 1 of 6 with 64, the torque on bit .84 against .68; docs/estimation.md "The filter's own
+            share"); 2.3-3.1 times faster than real time for a 1 Hz record on one core (four times 64's cost).
         top_speed_noise: standard deviation of the top-speed measurement [rad/s], > 0.
         surface_torque_noise: of the surface torque [N·m], > 0.
         block_position_noise: of the block position [m], > 0.
@@ -160,12 +161,13 @@ class EstimatorSettings:
             (:class:`EstimateDiverged`; 1.1 did on a 300 s twin).
         model_speed_noise: additive model error: the torsional modal velocities of each member are perturbed before
             each forecast, white over the lowest ``model_noise_modes`` torsional columns, scaled so that the bit
-            speed's perturbation has this standard deviation per √s of the interval [rad/s/√s], >= 0. Default 2:
+            speed's perturbation has this standard deviation per √s of the interval [rad/s/√s], >= 0. Default 1.5:
             large kicks bias the estimated coefficient (on a twin whose truth is the case's full basis on its
             nominal matrices, ``a5`` ended 13-17 % high on 3 of 4 runs at 3, within 2 % on all 4 at 1 or 0.3),
-            small ones leave the bands too narrow against another model; 2 against 3 raised the torque on bit's
-            coverage on long records from 0.69-0.80 to 0.80-0.92 (pooled over seeds and truths,
-            docs/estimation.md "Long records: the kicks and the coefficient").
+            small ones leave the bands too narrow against another model; with 256 members 1.5 holds seven twins'
+            truths (random-matrix models) .90 (bit speed) and .91 (torque on bit) of the time pooled over two
+            seeds, 8 of 14 runs with both in 85-95 % (docs/estimation.md "The defaults"; 64 members at 2 before:
+            1 of 12).
         model_noise_modes: the torsional columns so perturbed, the lowest (with a top drive the first is the rigid
             rotation; at most the basis's), in [1, 40]. Default all: on the stick-slip twin, noise in the lowest two
             alone gave bands covering the truth 0.6-0.7 of the time against 0.86-1.0 (the truncated higher modes are
@@ -207,13 +209,13 @@ class EstimatorSettings:
         seed: the random stream's seed (initial ensemble, random walks).
     """
 
-    ensemble_size: int = 64
+    ensemble_size: int = 256
     top_speed_noise: float = 0.05
     surface_torque_noise: float = 300.0
     block_position_noise: float = 0.005
     hook_load_window: float = 10.0
     inflation: float = 1.0
-    model_speed_noise: float = 2.0
+    model_speed_noise: float = 1.5
     model_noise_modes: int = 40
     model_noise_stick_speed: float = 0.0
     initial_speed_spread: float = 0.5
