@@ -128,19 +128,17 @@ _SURFACE_TORQUE = OBSERVABLE_COLUMN["surface_torque"]
 _BIT_SPEED = OBSERVABLE_COLUMN["bit_speed"]
 #: The estimated coefficient stays within exp(±LOG_RANGE) of the case's (an analysis can throw a member's far out).
 LOG_RANGE = 5.0
-
-
-class EstimateDiverged(RuntimeError):
-    """The ensemble no longer describes the record (every forecast failed, or a parameter's spread blew up):
-    :func:`estimate` stops there and returns what it computed before (:attr:`EstimationResult.stopped`)."""
-
-
 #: The spin-up's longest step between the model error's kicks [s].
 SPIN_UP_STEP = 1.0
 #: ``friction_factor`` -> the well's key of that wall's friction factor (None: no friction factor estimated).
 FRICTION_WALLS = {"open": "open_hole_friction", "cased": "cased_hole_friction", "none": None}
 #: Units of the Tucker–Wang coefficients (pint spelling), for the results.
 COEFFICIENT_UNITS = {"a1": "m/s", "a2": "m/(N*s)", "a3": "m/rad", "a4": "N*rad", "a5": "N*m"}
+
+
+class EstimateDiverged(RuntimeError):
+    """The ensemble no longer describes the record (every forecast failed, or a parameter's spread blew up):
+    :func:`estimate` stops there and returns what it computed before (:attr:`EstimationResult.stopped`)."""
 
 
 @dataclass(frozen=True)
@@ -630,11 +628,13 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         for name in estimated:
             low, high = np.quantile(analysed[column[name]], [0.05, 0.95])
             if high - low > 2.0 * LOG_RANGE:
+                cause = (f"with inflation = {settings.inflation:g} the analyses widen the parameters faster than "
+                         "the record narrows them: lower the inflation" if settings.inflation > 1.0 else
+                         "the record does not hold it: estimate fewer parameters, or give it a narrower prior")
                 raise EstimateDiverged(
                     f"estimate: the {name} ensemble diverged at t = {t_record:g} s of the record: its 90 % band "
                     f"spans a factor {math.exp(min(high - low, 700.0)):.3g} (at most exp(2 LOG_RANGE) = "
-                    f"{math.exp(2.0 * LOG_RANGE):.3g}); with inflation = {settings.inflation:g} the analyses widen "
-                    "the parameters faster than the record narrows them: lower the inflation, or use relaxation")
+                    f"{math.exp(2.0 * LOG_RANGE):.3g}); {cause}")
 
     def forecast(t_from: float, t_to: float, hook_mean: float, walk: bool = True) -> int:
         """Every member from model time ``t_from`` to ``t_to`` [s]: the parameters' walk (if ``walk``), the model
