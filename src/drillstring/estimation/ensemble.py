@@ -163,8 +163,8 @@ class EstimatorSettings:
             large kicks bias the estimated coefficient (on a twin whose truth is the case's full basis on its
             nominal matrices, ``a5`` ended 13-17 % high on 3 of 4 runs at 3, within 2 % on all 4 at 1 or 0.3),
             small ones leave the bands too narrow against another model; with 256 members 1.5 holds seven twins'
-            truths (random-matrix models) .90 (bit speed) and .91 (torque on bit) of the time pooled over two
-            seeds, 8 of 14 runs with both in 85-95 % (docs/estimation.md "The defaults"; 64 members at 2 before:
+            truths (random-matrix models) .90 (bit speed) and .91 (torque on bit) of the time pooled over three
+            seeds, 13 of 21 runs with both in 85-95 % (docs/estimation.md "The defaults"; 64 members at 2 before:
             1 of 12).
         model_noise_modes: the torsional columns so perturbed, the lowest (with a top drive the first is the rigid
             rotation; at most the basis's), in [1, 40]. Default all: on the stick-slip twin, noise in the lowest two
