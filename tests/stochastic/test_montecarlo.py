@@ -329,8 +329,15 @@ def test_dask_cluster_gives_the_same_result_and_stops_resumably_without_workers(
             execution.connect_scheduler(worker)
 
         def workers_leave(done, failed, total):
+            # scale() only asks: the workers close on the cluster's loop. Wait until they have, so that the
+            # realizations they finished but the study has not fetched yet leave with them (otherwise a fast
+            # machine fetches all five before the workers close, and nothing is lost).
             if done == 2 and cluster.workers:
                 cluster.scale(0)
+                deadline = time.monotonic() + 30.0
+                while cluster.workers and time.monotonic() < deadline:
+                    time.sleep(0.02)
+                assert not cluster.workers, "the local cluster's workers did not close within 30 s"
 
         with pytest.raises(execution.WorkersLost, match="no worker for 2 s.*saved.*resume"):
             mc.run_study(small_case, study5, tmp_path / "lost.zarr", execution.Engine(
