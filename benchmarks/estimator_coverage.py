@@ -148,6 +148,9 @@ def main() -> None:
                       f"bit_speed {coverage[0]:.2f} torque_on_bit {coverage[1]:.2f} "
                       f"[{phases}] "
                       f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s"
+                      + ("" if result.effective_size is None else
+                         " effective size median {:.0f} min {:.0f}".format(*np.nanquantile(result.effective_size,
+                                                                                           [0.5, 0.0])))
                       + "".join(f" {p} end {'/'.join(f'{v:.0f}' for v in result.quantiles[p][-1])}"
                                 for p in result.parameters if p == settings.bit_rock_coefficient), flush=True)
     print("pooled over the seeds: mean coverage (smallest, largest), runs with both channels in 85-95 %")

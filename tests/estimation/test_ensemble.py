@@ -22,11 +22,11 @@ from drillstring.estimation.ensemble import (
     coefficient_slot,
     estimate,
     estimator_model,
-    etkf_analysis,
     kick_scale,
     member_model,
     member_models,
 )
+from drillstring.estimation.analysis import etkf_analysis
 from drillstring.estimation.surface import SPIKE, SurfaceRecord
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -463,6 +463,44 @@ def test_a_replaced_member_takes_its_source_model():
     members = ensemble._Members([None, None], np.zeros((2, 1)), 3, ["a", "b"], ["xa", "xb"])
     members.copy_member(0, 1)
     assert members.models == ["b", "b"] and members.transforms == ["xb", "xb"]
+
+
+def test_resampled_members_take_their_parents_model_state_and_outputs_all_at_once():
+    """Member i becomes a copy of member parents[i], read before any is overwritten (a permutation swaps)."""
+    members = ensemble._Members(["s0", "s1", "s2"], np.array([[0.0], [1.0], [2.0]]), 2, ["a", "b", "c"],
+                                ["xa", "xb", "xc"])
+    members.outputs = ["o0", "o1", "o2"]
+    members.speed[:] = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])
+    members.reorder([2, 0, 0])
+    assert members.states == ["s2", "s0", "s0"] and members.models == ["c", "a", "a"]
+    assert members.transforms == ["xc", "xa", "xa"] and members.outputs == ["o2", "o0", "o0"]
+    np.testing.assert_array_equal(members.parameters[:, 0], [2.0, 0.0, 0.0])
+    np.testing.assert_array_equal(members.speed[:, 0], [2.0, 0.0, 0.0])
+
+
+def test_particle_share_runs_the_enkpf_and_reports_its_effective_sizes(stick_slip, small_model):
+    """With particle_share > 0 each analysis is the EnKPF's: the weights' effective size is reported at each
+    analysis (between 1 and N, NaN elsewhere; in the dataset too), the run is reproducible from its seed, and it
+    differs from the ETKF's; with members of their own models each resampled member carries its parent's."""
+    etkf = _dispersed_run(stick_slip, small_model)
+    assert etkf.effective_size is None and "effective_sample_size" not in etkf.to_dataset()
+    runs = [_dispersed_run(stick_slip, small_model, particle_share=0.9, model_dispersion=0.05) for _ in range(2)]
+    sizes = runs[0].effective_size
+    assert np.all(np.isfinite(sizes)) and np.all((sizes >= 1.0) & (sizes <= 6.0 + 1e-9))
+    np.testing.assert_array_equal(runs[1].quantiles["torque_on_bit"], runs[0].quantiles["torque_on_bit"])
+    assert runs[0].to_dataset()["effective_sample_size"].dims == ("time",)
+    plain = _dispersed_run(stick_slip, small_model, particle_share=0.9)
+    assert np.all(np.isfinite(plain.mean["bit_speed"]))
+    assert not np.array_equal(plain.quantiles["torque_on_bit"], etkf.quantiles["torque_on_bit"])
+    held = _dispersed_run(stick_slip, small_model, particle_share=0.999, particle_effective_size=0.9)
+    assert np.all(held.effective_size >= 0.9 * 6 - 1e-9)
+
+
+def test_bad_particle_settings_are_refused_naming_them():
+    with pytest.raises(ValueError, match=r"particle_share = 1.0: must be a number in \[0, 1\)"):
+        EstimatorSettings(particle_share=1.0)
+    with pytest.raises(ValueError, match=r"particle_effective_size = -0.1: must be a number in \[0, 1\)"):
+        EstimatorSettings(particle_effective_size=-0.1)
 
 
 def test_bad_model_dispersion_is_refused_naming_it(stick_slip, small_model):

@@ -21,8 +21,8 @@ from drillstring.estimation.ensemble import (
     estimator_model,
     friction_stations_of,
     member_model,
-    relax_to_prior_spread,
 )
+from drillstring.estimation.analysis import relax_to_prior_spread
 from drillstring.estimation.surface import SurfaceRecord
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

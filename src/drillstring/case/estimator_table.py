@@ -39,6 +39,10 @@ class Estimator(_Base):
     relaxation: Dimensionless | None = Field(None, description="relaxation to the prior spread of the state [-]")
     parameter_relaxation: Dimensionless | None = Field(None, description="relaxation to the prior spread of the "
                                                        "parameters [-]")
+    particle_share: Dimensionless | None = Field(None, description="share of each analysis's likelihood given to "
+                                                 "particle weights (ensemble Kalman particle filter), in [0, 1) [-]")
+    particle_effective_size: Dimensionless | None = Field(None, description="the particle weights' least "
+                                                          "effective sample size, a fraction of the members [-]")
     weight_on_bit_bias_spread: Force | None = Field(None, description="prior std of the weight-on-bit bias [N]")
     weight_on_bit_bias_walk: float | None = Field(None, description="its random walk [N/sqrt(s)]")
     stick_slip_window: Time | None = Field(None, description="window of the stick-slip index [s]")

@@ -1,20 +1,14 @@
 """An ensemble Kalman filter on the reduced model: from the surface channels of a record
 (:class:`~drillstring.estimation.surface.SurfaceRecord`) to the downhole state with its bands (issue 36).
 
-**Filter.** The ensemble transform Kalman filter (ETKF; Bishop, Etherton & Majumdar 2001, in the form of Hunt,
-Kostelich & Szunyogh 2007, Physica D 230, eqs. 20-24), a deterministic square-root filter: with the forecast
-anomalies ``A`` (n × N), the predicted observations' anomalies scaled by the noise, ``S = R^-1/2 (Y − ȳ)/√(N−1)``
-(m × N), and the innovation ``d = R^-1/2 (y_o − ȳ)``::
-
-    C = I + SᵀS,   w = C⁻¹ Sᵀ d / √(N−1),   x̄_a = x̄ + A w,   A_a = A C^-1/2      (C^-1/2 symmetric)
-
-(computed from the thin singular value decomposition of S, :func:`etkf_analysis`)
-
-It needs no perturbed observations (no sampling noise in the analysis, which matters at the small ensembles a
-real-time filter runs), keeps the ensemble's mean exactly (the symmetric square root maps the vector of ones to
-itself), and for a linear observation its analysis mean and sample covariance are the Kalman filter's applied to the
-forecast's sample mean and covariance (checked in tests/estimation/test_ensemble.py). The observations are few
-(at most three scalars a time) so the N × N problem is cheap.
+**Filter.** One analysis per assimilation window (:mod:`drillstring.estimation.analysis`): the ensemble transform
+Kalman filter (ETKF, :func:`~drillstring.estimation.analysis.etkf_analysis`; Hunt, Kostelich & Szunyogh 2007), a
+deterministic square-root filter that for a linear observation gives the Kalman filter's update of the forecast's
+sample mean and covariance; or, with ``particle_share`` > 0, the ensemble Kalman particle filter (EnKPF,
+:func:`~drillstring.estimation.analysis.enkpf_analysis`; Frei & Künsch 2013), that share of the likelihood given
+to a particle filter's weights and resampling: it can choose between the members that stick and those that slip
+where the ETKF moves both as one Gaussian (a resampled member takes over its parent's model and recent outputs).
+The observations are few (at most three scalars a time), so either costs little beside the forecasts.
 
 **State.** The augmented state of a member is ``[y, log c, log μ, b, z0]``: ``y`` the reduced model's state
 (:attr:`~drillstring.dynamics.rom.ReducedOrderModel.state_size`: modal coordinates, their rates, the top drive's
@@ -69,7 +63,8 @@ kicks bias the estimated coefficient; 1.5 with the default 256 members, docs/est
 Multiplicative prior inflation of the anomalies (``inflation``) is available, default 1: with the additive noise
 it only widened the parameters' spread, and at 1.15 drove them off on the stick-slip twin. Relaxation to the
 prior spread (``relaxation`` for the model state's rows, ``parameter_relaxation`` for the parameters'; default 0,
-off: :func:`relax_to_prior_spread`) after each analysis gives back part of the spread the analysis removed
+off: :func:`~drillstring.estimation.analysis.relax_to_prior_spread`) after each analysis gives back part of the
+spread the analysis removed
 (docs/estimation.md, "Coverage and relaxation"). No localisation: the
 state is a few modal coordinates, each global along the string, and the default ensemble (256) exceeds the
 augmented state's dimension (about 25).
@@ -113,6 +108,7 @@ from drillstring.checks import seed as checked_seed
 from drillstring.dynamics.compiled import RunState, SolverSettings, advance
 from drillstring.dynamics.reduced.build import case_reduced_model, in_casing
 from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
+from drillstring.estimation.analysis import enkpf_analysis, etkf_analysis, relax_to_prior_spread
 from drillstring.estimation.results import DOWNHOLE, QUANTILES, EstimationResult
 from drillstring.estimation.surface import SurfaceRecord
 from drillstring.stochastic.random_matrices import (
@@ -194,9 +190,18 @@ class EstimatorSettings:
         model_dispersion: each member's own reduced model, its mass, stiffness and damping matrices drawn once
             from the random-matrix model with this dispersion (:func:`member_models`) [-], in [0, 1) and below
             the family sizes' bound sqrt((n+1)/(n+5)); 0 (default): every member runs the estimator's model.
-        relaxation: relaxation to the prior spread (RTPS, :func:`relax_to_prior_spread`) of the model state's
-            rows after each analysis [-], in [0, 1]; 0 none.
+        relaxation: relaxation to the prior spread (RTPS,
+            :func:`~drillstring.estimation.analysis.relax_to_prior_spread`) of the model state's rows after each
+            analysis [-], in [0, 1]; 0 none.
         parameter_relaxation: the same for the parameters' rows (coefficient, μ, bias, block zero) [-], in [0, 1].
+        particle_share: the share ``1 − γ`` of each analysis's likelihood given to a particle filter, the rest to a
+            Kalman step (the ensemble Kalman particle filter,
+            :func:`~drillstring.estimation.analysis.enkpf_analysis`; members drawn by their weights, each taking
+            over its parent's model and recent outputs) [-], in [0, 1); 0 (the default): the ETKF alone
+            (:func:`~drillstring.estimation.analysis.etkf_analysis`), deterministic.
+        particle_effective_size: the least effective sample size of the particle weights, a fraction of the
+            members [-], in [0, 1): where ``particle_share`` would leave fewer, that analysis uses the largest share
+            that leaves this many (0: the share always as given).
         weight_on_bit_bias_spread: prior standard deviation of the weight-on-bit bias [N], > 0.
         weight_on_bit_bias_walk: its random walk [N/√s], >= 0.
         stick_slip_window: the window of the stick-slip index [s], > 0.
@@ -228,6 +233,8 @@ class EstimatorSettings:
     model_dispersion: float = 0.0
     relaxation: float = 0.0
     parameter_relaxation: float = 0.0
+    particle_share: float = 0.0
+    particle_effective_size: float = 0.0
     weight_on_bit_bias_spread: float = 20e3
     weight_on_bit_bias_walk: float = 100.0
     stick_slip_window: float = 20.0
@@ -254,6 +261,8 @@ class EstimatorSettings:
         real_number("relaxation", self.relaxation, low=0.0, high=1.0)
         real_number("model_dispersion", self.model_dispersion, low=0.0, high=1.0, high_open=True)
         real_number("parameter_relaxation", self.parameter_relaxation, low=0.0, high=1.0)
+        real_number("particle_share", self.particle_share, low=0.0, high=1.0, high_open=True)
+        real_number("particle_effective_size", self.particle_effective_size, low=0.0, high=1.0, high_open=True)
         real_number("rtol", self.rtol, low=0.0, high=1e-2, low_open=True)
         real_number("divergence_speed_ratio", self.divergence_speed_ratio, low=1.0, low_open=True)
         integer("axial_modes", self.axial_modes, low=1, high=40)
@@ -389,46 +398,6 @@ def friction_stations_of(case, model, wall: str) -> tuple[np.ndarray, float]:
     return mask, value
 
 
-def relax_to_prior_spread(prior: np.ndarray, posterior: np.ndarray, relaxation: np.ndarray) -> np.ndarray:
-    """Relaxation to the prior spread (RTPS; Whitaker & Hamill 2012, Mon. Wea. Rev. 140, 3078-3089, eq. 10):
-    each row's analysis anomalies scaled by ``1 + α (σ_b − σ_a)/σ_a``, ``σ_b``, ``σ_a`` the row's ensemble
-    standard deviations before (``prior``, n × N) and after (``posterior``) the analysis, ``α`` the row's
-    ``relaxation`` (n,) in [0, 1] (0: unchanged, 1: the prior's spread back). The mean is kept; a row with no
-    spread after the analysis is left as it is."""
-    mean = posterior.mean(axis=1, keepdims=True)
-    anomalies = posterior - mean
-    sigma_b = prior.std(axis=1, ddof=1)
-    sigma_a = anomalies.std(axis=1, ddof=1)
-    alpha = np.asarray(relaxation, dtype=float)
-    factor = np.ones_like(sigma_a)
-    spread = sigma_a > 1e-12 * np.maximum(sigma_b, 1e-300)
-    factor[spread] = 1.0 + alpha[spread] * (sigma_b[spread] - sigma_a[spread]) / sigma_a[spread]
-    return mean + anomalies * factor[:, None]
-
-
-def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndarray, noise: np.ndarray,
-                  inflation: float = 1.0) -> np.ndarray:
-    """The ETKF analysis (module docstring) of ``ensemble`` (n × N) given the members' ``predicted``
-    observations (m × N), the ``observed`` values (m,) and the noise standard deviations ``noise`` (m,), the
-    observation errors independent; the anomalies of both first multiplied by ``inflation``. Returns the
-    analysis ensemble (n × N)."""
-    x = np.asarray(ensemble, dtype=float)
-    y = np.asarray(predicted, dtype=float)
-    n_members = x.shape[1]
-    mean = x.mean(axis=1, keepdims=True)
-    anomalies = inflation * (x - mean)
-    y_mean = y.mean(axis=1, keepdims=True)
-    scale = 1.0 / np.asarray(noise, dtype=float)[:, None]
-    s = scale * inflation * (y - y_mean) / math.sqrt(n_members - 1)
-    d = scale[:, 0] * (np.asarray(observed, dtype=float) - y_mean[:, 0])
-    # the thin SVD S = U Σ Vᵀ (m ≤ N rows): C⁻¹Sᵀ = Sᵀ(I + SSᵀ)⁻¹ and C^-1/2 = I + V((1 + Σ²)^-1/2 − 1)Vᵀ,
-    # O(m² N) instead of the N × N eigenproblem
-    u, sigma, vt = np.linalg.svd(s, full_matrices=False)
-    weights = s.T @ (u @ ((u.T @ d) / (1.0 + sigma**2))) / math.sqrt(n_members - 1)
-    shrink = 1.0 / np.sqrt(1.0 + sigma**2) - 1.0
-    return mean + anomalies @ weights[:, None] + anomalies + ((anomalies @ vt.T) * shrink) @ vt
-
-
 class _Members:
     """The ensemble's forecast bookkeeping: per member its run state, augmented parameters, last outputs, the
     recent bit speed (the stick-slip index's window), its reduced model and that model's coordinate transforms
@@ -456,6 +425,16 @@ class _Members:
         if k:
             self.speed[i, :-k] = self.speed[i, k:]
             self.speed[i, -k:] = speeds
+
+    def reorder(self, parents):
+        """Member ``i`` becomes a copy of member ``parents[i]`` (all at once: a parent drawn twice is copied
+        twice, one not drawn is gone): its run state, parameters, outputs, recent bit speed and model."""
+        parents = [int(p) for p in parents]
+        for name in ("states", "outputs", "models", "transforms"):
+            old = getattr(self, name)
+            setattr(self, name, [old[p] for p in parents])
+        self.parameters = self.parameters[parents].copy()
+        self.speed = self.speed[parents].copy()
 
     def copy_member(self, target, source):
         self.states[target] = self.states[source]
@@ -586,6 +565,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     predicted_quantiles = {name: np.full((n_time, len(QUANTILES)), np.nan) for name in channels}
     used = {name: np.zeros(n_time, dtype=bool) for name in channels}
     replaced = np.zeros(n_time, dtype=np.int64)
+    effective_size = np.full(n_time, np.nan)  # the particle weights' effective sample size at each analysis
     kicked, speed_noise = model_noise_columns(model, settings)
     kicked = slice(n + kicked.start, n + kicked.stop)  # in the state [displacements, velocities]
     relaxation = None  # the RTPS factor of each row of the augmented state [y, parameters]
@@ -729,9 +709,16 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
                     used[name][window_samples_used[name]] = True
                 count = {name: len(window_samples_used[name]) for name in rows}
                 prior = z
-                z = etkf_analysis(z, np.array([window_predicted[name] / count[name] for name in rows]),
-                                  np.array([window_observed[name] / count[name] for name in rows]),
-                                  np.array([noise[name] for name in rows]), settings.inflation)
+                analysed = (np.array([window_predicted[name] / count[name] for name in rows]),
+                            np.array([window_observed[name] / count[name] for name in rows]),
+                            np.array([noise[name] for name in rows]))
+                if settings.particle_share > 0.0:
+                    particles = enkpf_analysis(z, *analysed, settings.particle_share, rng, settings.inflation,
+                                               settings.particle_effective_size)
+                    z, effective_size[k] = particles.ensemble, particles.effective_size
+                    members.reorder(particles.parents)
+                else:
+                    z = etkf_analysis(z, *analysed, settings.inflation)
                 if relaxation is not None:
                     z = relax_to_prior_spread(prior, z, relaxation)
                 diverged_parameters(z[-n_parameters:], t - spin)
@@ -776,6 +763,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             for name in table:
                 table[name] = table[name][:completed]
         replaced = replaced[:completed]
+        effective_size = effective_size[:completed]
 
     units = {name: unit for name, (unit, _) in DOWNHOLE.items()}
     if coefficient_name is not None:
@@ -790,4 +778,5 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         predicted_mean=predicted_mean, predicted_quantiles=predicted_quantiles,
         observed={name: np.asarray(record.channels[name], dtype=float)[:len(time)] for name in channels},
         used=used, replaced=replaced, settings=settings.as_dict(), wall_time=_time.perf_counter() - begin,
-        source=record.source, stopped=stopped)
+        source=record.source, stopped=stopped,
+        effective_size=effective_size if settings.particle_share > 0.0 else None)

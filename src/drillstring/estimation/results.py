@@ -48,6 +48,8 @@ class EstimationResult:
         parameter_correlation: ``{(a, b): r}`` the members' correlation of each pair of estimated parameters at
             the record's end (the bit-rock coefficient and the friction factor by their logarithms) [-]: how far
             the record separates them (r near ±1: only a combination of the two is known).
+        effective_size: (n_time,) the particle weights' effective sample size ``1/Σ α_i²`` at each analysis of the
+            ensemble Kalman particle filter (``particle_share`` > 0), NaN at the other times; None with the ETKF.
         stopped: why the run stopped before the record's end ("" where it ran to the end): interrupted, or the
             ensemble diverged (:class:`~drillstring.estimation.ensemble.EstimateDiverged`); every array then holds
             the samples before the stop.
@@ -68,6 +70,7 @@ class EstimationResult:
     source: str = ""
     parameter_correlation: dict = field(default_factory=dict)
     stopped: str = ""
+    effective_size: np.ndarray | None = None
 
     @property
     def replaced_members(self) -> int:
@@ -113,6 +116,9 @@ class EstimationResult:
                                        {"units": "1", "long_name": f"1 where the {channel} sample was used"})
         data["replaced_members"] = ("time", self.replaced, {"units": "1",
                                                              "long_name": "members re-sampled after a failed forecast"})
+        if self.effective_size is not None:
+            data["effective_sample_size"] = ("time", self.effective_size, {
+                "units": "1", "long_name": "effective sample size of the particle weights at each analysis"})
         coords = {"time": ("time", self.time, {"units": "s"}),
                   "quantile": ("quantile", np.array(QUANTILES), {"units": "1"})}
         attrs = {"drillstring_version": __version__, "source": self.source, "wall_time": float(self.wall_time),
