@@ -12,7 +12,8 @@ shipped record is read at 10 Hz as shipped, its first ``--shipped`` seconds, cov
 spin-up runs before it); the twin's coverage is counted after its first 10 s (its filter starts from the model's
 initial state). One line per run: coverage of bit speed and torque on bit, the torque on bit's while the truth
 sticks (bit speed below STICK rad/s) and while it slips, the bit speed's RMSE, the members replaced, the wall
-time and, where one is estimated, the bit-rock coefficient's 5/50/95 % quantiles at the record's end.
+time, with ``particle_share`` > 0 the particle weights' effective sample size over the analyses (median and
+smallest) and, where one is estimated, the bit-rock coefficient's 5/50/95 % quantiles at the record's end.
 ``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
 members") is one of the settings a ``--config`` may set. ``--twin-truths`` runs one twin per truth seed (another
 draw of the truth's random matrices and of its sensor noise; records ``twin<seed>``), ``--twin-dispersion`` sets
