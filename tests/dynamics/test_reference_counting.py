@@ -12,7 +12,11 @@ their arguments, ``delay.view`` and the stiff part's overload (:func:`~drillstri
 inlined into their compiled callers. ``benchmarks/reference_counting_scan.py`` lists, after a cold compilation of
 every kind of run, the compiled kernels that return arrays (none but those inlined). The two tests below repeat
 the two corruptions measured, each in a fresh process with glibc's heap checks (``MALLOC_CHECK_=3``); both
-aborted before the change.
+aborted before the change. Each process compiles into a cache folder of its own (``NUMBA_CACHE_DIR`` in the test's
+temporary folder): the kernels are compiled in the order the test sets, not loaded from a cache another order
+wrote, and no other process of the suite writes that folder while this one reads it (Numba's on-disk cache is not
+safe against concurrent writers, numba/numba#4807; this test, run beside the suite's other workers on a cold
+shared cache, once died of SIGSEGV in CI, most likely so).
 """
 
 from __future__ import annotations
@@ -23,13 +27,13 @@ import sys
 import textwrap
 
 
-def _run_checked(script: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, MALLOC_CHECK_="3")
+def _run_checked(script: str, cache) -> subprocess.CompletedProcess:
+    env = dict(os.environ, MALLOC_CHECK_="3", NUMBA_CACHE_DIR=str(cache))
     return subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True, text=True,
                           env=env, timeout=600)
 
 
-def test_nonlinear_kernels_after_the_case_1_right_hand_side_keep_the_heap_intact():
+def test_nonlinear_kernels_after_the_case_1_right_hand_side_keep_the_heap_intact(tmp_path):
     """Case 1's right-hand side compiled (its nonlinear kernels inside a caller without reference counting),
     then those kernels called many times from a function with reference counting."""
     run = _run_checked("""
@@ -69,11 +73,11 @@ def test_nonlinear_kernels_after_the_case_1_right_hand_side_keep_the_heap_intact
         for _ in range(200):
             drive(50, q, qd, arrays, phi_e, *buffers)
         print("heap intact")
-    """)
+    """, tmp_path / "numba")
     assert run.returncode == 0 and "heap intact" in run.stdout, run.stderr[-2000:]
 
 
-def test_the_stiff_part_after_the_implicit_explicit_loop_keeps_the_models_arrays():
+def test_the_stiff_part_after_the_implicit_explicit_loop_keeps_the_models_arrays(tmp_path):
     """The implicit-explicit loop (no reference counting) compiles the stiff part first; then the exponential
     step's linearisation (a function with reference counting) calls it many times on the same model: the model's
     ω² stays as it was and the heap intact (before: ``malloc(): unaligned tcache chunk detected``)."""
@@ -98,5 +102,5 @@ def test_the_stiff_part_after_the_implicit_explicit_loop_keeps_the_models_arrays
         gc.collect()
         junk = [np.random.rand(100) for _ in range(20000)]
         print("intact" if np.array_equal(before, data.omega2) else "changed")
-    """)
+    """, tmp_path / "numba")
     assert run.returncode == 0 and "intact" in run.stdout, run.stderr[-2000:]

@@ -10,7 +10,7 @@ filter: with the forecast anomalies ``A`` (n × N), the predicted observations' 
 
 computed from the thin singular value decomposition of S. It needs no perturbed observations, keeps the ensemble's
 mean exactly, and for a linear observation its analysis mean and sample covariance are the Kalman filter's applied
-to the forecast's sample mean and covariance (tests/estimation/test_analysis.py). Its analysis is a linear
+to the forecast's sample mean and covariance (tests/estimation/test_analysis_step.py). Its analysis is a linear
 transform of the forecast: a forecast with two modes (members sticking and members slipping) is moved as one
 Gaussian.
 
