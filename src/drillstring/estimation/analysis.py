@@ -55,6 +55,18 @@ def relax_to_prior_spread(prior: np.ndarray, posterior: np.ndarray, relaxation: 
     return mean + anomalies * factor[:, None]
 
 
+def _scaled(x: np.ndarray, y: np.ndarray, noise: np.ndarray, inflation: float):
+    """What both analyses start from (module docstring): the ensemble's mean ``x̄`` (n × 1) and its anomalies ``A``
+    times ``inflation``, the predicted observations' mean ``ȳ`` (m × 1), ``R^-1/2`` as a column (m × 1) and
+    ``S = R^-1/2 inflation (Y − ȳ)/√(N−1)`` (m × N)."""
+    mean = x.mean(axis=1, keepdims=True)
+    anomalies = inflation * (x - mean)
+    y_mean = y.mean(axis=1, keepdims=True)
+    scale = 1.0 / np.asarray(noise, dtype=float)[:, None]
+    s = scale * inflation * (y - y_mean) / math.sqrt(x.shape[1] - 1)
+    return mean, anomalies, y_mean, scale, s
+
+
 def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndarray, noise: np.ndarray,
                   inflation: float = 1.0) -> np.ndarray:
     """The ETKF analysis (module docstring, ETKF) of ``ensemble`` (n × N) given the members' ``predicted``
@@ -62,13 +74,8 @@ def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndar
     observation errors independent; the anomalies of both first multiplied by ``inflation``. Returns the
     analysis ensemble (n × N)."""
     x = np.asarray(ensemble, dtype=float)
-    y = np.asarray(predicted, dtype=float)
     n_members = x.shape[1]
-    mean = x.mean(axis=1, keepdims=True)
-    anomalies = inflation * (x - mean)
-    y_mean = y.mean(axis=1, keepdims=True)
-    scale = 1.0 / np.asarray(noise, dtype=float)[:, None]
-    s = scale * inflation * (y - y_mean) / math.sqrt(n_members - 1)
+    mean, anomalies, y_mean, scale, s = _scaled(x, np.asarray(predicted, dtype=float), noise, inflation)
     d = scale[:, 0] * (np.asarray(observed, dtype=float) - y_mean[:, 0])
     # the thin SVD S = U Σ Vᵀ (m ≤ N rows): C⁻¹Sᵀ = Sᵀ(I + SSᵀ)⁻¹ and C^-1/2 = I + V((1 + Σ²)^-1/2 − 1)Vᵀ,
     # O(m² N) instead of the N × N eigenproblem
@@ -76,7 +83,6 @@ def etkf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.ndar
     weights = s.T @ (u @ ((u.T @ d) / (1.0 + sigma**2))) / math.sqrt(n_members - 1)
     shrink = 1.0 / np.sqrt(1.0 + sigma**2) - 1.0
     return mean + anomalies @ weights[:, None] + anomalies + ((anomalies @ vt.T) * shrink) @ vt
-
 
 
 def balanced_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -107,8 +113,9 @@ def _particle_weights(s: np.ndarray, innovations: np.ndarray, share: float):
     scaled innovations (m × N)."""
     gamma = 1.0 - share
     m = s.shape[0]
-    inverse = np.linalg.inv(gamma * (s @ s.T) + np.eye(m))
-    g = gamma * (s @ s.T) @ inverse
+    covariance = s @ s.T  # R^-1/2 H P Hᵀ R^-1/2
+    inverse = np.linalg.inv(gamma * covariance + np.eye(m))
+    g = gamma * covariance @ inverse
     g = 0.5 * (g + g.T)
     residual = inverse @ innovations  # (I − G) d_i
     spread = g @ g / gamma + np.eye(m) / share  # R^-1/2 (H Q Hᵀ + R/(1−γ)) R^-1/2
@@ -135,14 +142,9 @@ def enkpf_analysis(ensemble: np.ndarray, predicted: np.ndarray, observed: np.nda
         raise ValueError(f"least_effective = {least_effective!r}: must be in [0, 1)")
     m, n_members = y.shape
     root = math.sqrt(n_members - 1)
-    x_mean = x.mean(axis=1, keepdims=True)
-    y_mean = y.mean(axis=1, keepdims=True)
-    anomalies = inflation * (x - x_mean)
-    y_anomalies = inflation * (y - y_mean)
-    scale = 1.0 / np.asarray(noise, dtype=float)[:, None]
-    s = scale * y_anomalies / root
-    # each member's innovation, scaled: R^-1/2 (y_o − y_i)
-    innovations = scale * (np.asarray(observed, dtype=float)[:, None] - (y_mean + y_anomalies))
+    x_mean, anomalies, y_mean, scale, s = _scaled(x, y, noise, inflation)
+    # each member's innovation, scaled: R^-1/2 (y_o − y_i), y_i its prediction with the anomalies inflated
+    innovations = scale * (np.asarray(observed, dtype=float)[:, None] - (y_mean + inflation * (y - y_mean)))
 
     def effective(weights: np.ndarray) -> float:
         return float(1.0 / np.sum(weights**2))

@@ -403,6 +403,9 @@ class _Members:
     recent bit speed (the stick-slip index's window), its reduced model and that model's coordinate transforms
     (:func:`member_models`; None: the estimator's model)."""
 
+    #: What each member has, indexed by member: lists, or arrays whose rows are the members.
+    PER_MEMBER = ("states", "parameters", "outputs", "speed", "models", "transforms")
+
     def __init__(self, states, parameters, window_samples, models, transforms):
         self.states = states
         self.parameters = parameters  # (N, p): [log c] [log μ] b z0
@@ -430,19 +433,14 @@ class _Members:
         """Member ``i`` becomes a copy of member ``parents[i]`` (all at once: a parent drawn twice is copied
         twice, one not drawn is gone): its run state, parameters, outputs, recent bit speed and model."""
         parents = [int(p) for p in parents]
-        for name in ("states", "outputs", "models", "transforms"):
+        for name in self.PER_MEMBER:
             old = getattr(self, name)
-            setattr(self, name, [old[p] for p in parents])
-        self.parameters = self.parameters[parents].copy()
-        self.speed = self.speed[parents].copy()
+            setattr(self, name, old[parents] if isinstance(old, np.ndarray) else [old[p] for p in parents])
 
     def copy_member(self, target, source):
-        self.states[target] = self.states[source]
-        self.parameters[target] = self.parameters[source]
-        self.outputs[target] = self.outputs[source]
-        self.speed[target] = self.speed[source]
-        self.models[target] = self.models[source]
-        self.transforms[target] = self.transforms[source]
+        for name in self.PER_MEMBER:
+            values = getattr(self, name)
+            values[target] = values[source]
 
 
 def _transformed(y: np.ndarray, matrix: np.ndarray | None) -> np.ndarray:
