@@ -1,9 +1,26 @@
-"""Shared fixtures: small sections and meshes that build in milliseconds, and the reference case."""
+"""Shared fixtures: small sections and meshes that build in milliseconds, and the reference case.
 
-import pytest
+The suite compiles its kernels into a cache folder of its own (``NUMBA_CACHE_DIR`` set here, before the package
+is imported, unless the caller set one): ``$XDG_CACHE_HOME/drillstring/tests`` (``~/.cache/drillstring/tests``),
+under which :mod:`drillstring.kernel_cache` keeps one folder per version of the sources. Tests call kernels from
+Python and in orders the package's runs never do, and a kernel compiled inside another inherits the caller's
+compilation flags (tests/dynamics/test_reference_counting.py), which Numba's cache index does not record; a step
+loop that the suite's workers cached so (its key the same as the package's own, its code not) made the next run
+of a Detournay case, the documentation's notebook, die of a segmentation fault (measured: the notebook ran on a
+cache it compiled itself, and died on the one the suite had written, through that one entry).
+"""
 
-from drillstring.case import load_case
-from drillstring.fem.sections import hollow_circle
+import os
+from pathlib import Path
+
+if not os.environ.get("NUMBA_CACHE_DIR"):
+    os.environ["NUMBA_CACHE_DIR"] = str(
+        Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "drillstring" / "tests")
+
+import pytest  # noqa: E402
+
+from drillstring.case import load_case  # noqa: E402
+from drillstring.fem.sections import hollow_circle  # noqa: E402
 
 
 @pytest.fixture
