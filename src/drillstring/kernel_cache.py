@@ -32,6 +32,14 @@ trials: entries lost in 9, an index naming another signature's code in 3; with t
 each naming its own code, in 40 of 40. :func:`configure` therefore makes every cache write of the process
 hold an exclusive lock on the cache folder (``fcntl.flock``; on a system without it Numba's own write is kept)
 and write the data before the index names it (:func:`locked_save`).
+
+**What the key does not hold.** Numba keys an entry on the function's signature and bytecode, not on the
+compilation flags its callees were compiled with; a kernel compiled inside a caller takes on the caller's flags
+unless it sets its own, so the code cached under one key can depend on what the writing process compiled
+before (tests/dynamics/test_reference_counting.py). Each of the package's entry points compiles in its own
+fixed order; the test suite, which calls kernels in many other orders, compiles into a cache of its own
+(tests/conftest.py): a loop it had cached for the Detournay case made the next run of that case die of a
+segmentation fault. Kernels that set their flags themselves would close this for any order (not done yet).
 """
 
 from __future__ import annotations
