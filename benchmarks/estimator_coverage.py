@@ -12,8 +12,11 @@ shipped record is read at 10 Hz as shipped, its first ``--shipped`` seconds, cov
 spin-up runs before it); the twin's coverage is counted after its first 10 s (its filter starts from the model's
 initial state). One line per run: coverage of bit speed and torque on bit, the torque on bit's while the truth
 sticks (bit speed below STICK rad/s) and while it slips, the bit speed's RMSE, the members replaced, the wall
-time, with ``particle_share`` > 0 the particle weights' effective sample size over the analyses (median and
-smallest) and, where one is estimated, the bit-rock coefficient's 5/50/95 % quantiles at the record's end.
+time, the number of independent samples the truth-in-band series is worth for each channel
+(:func:`effective_samples`) with the standard deviation ``sqrt(0.9 · 0.1 / n)`` that a run's coverage would have
+over records if the band were exactly calibrated, with ``particle_share`` > 0 the particle weights' effective
+sample size over the analyses (median and smallest) and, where one is estimated, the bit-rock coefficient's
+5/50/95 % quantiles at the record's end.
 ``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
 members") is one of the settings a ``--config`` may set. ``--twin-truths`` runs one twin per truth seed (another
 draw of the truth's random matrices and of its sensor noise; records ``twin<seed>``), ``--twin-dispersion`` sets
@@ -55,6 +58,24 @@ from twin import own_model_twin, twin
 
 TWIN_START = 10.0  # [s] the twin's coverage is counted from here
 STICK = 1.0  # [rad/s] the truth sticks below this bit speed
+
+
+def effective_samples(inside: np.ndarray) -> float:
+    """The number of independent samples that the series ``inside`` (the truth in the band, 0/1 at each time)
+    is worth for its mean: ``n / τ``, ``τ = 1 + 2 Σ_k ρ_k`` its integrated autocorrelation time, the sum over
+    lags up to the first window ``M ≥ 5 τ(M)`` (Sokal's automatic window). ``n`` where the series is constant."""
+    x = np.asarray(inside, dtype=float)
+    n = len(x)
+    x = x - x.mean()
+    variance = float(x @ x) / n
+    if n < 2 or variance == 0.0:
+        return float(n)
+    tau = 1.0
+    for lag in range(1, n):
+        tau += 2.0 * float(x[:-lag] @ x[lag:]) / ((n - lag) * variance)
+        if lag >= 5.0 * tau:
+            break
+    return n / max(tau, 1.0)
 
 
 def _settings(text: str) -> dict:
@@ -144,11 +165,16 @@ def main() -> None:
                                   for label, mask in (("stick", stick), ("slip", ~stick)))
                 coverage = (result.coverage("bit_speed", truth["bit_speed"], start),
                             result.coverage("torque_on_bit", truth["torque_on_bit"], start))
+                speed_low, speed_high = result.band("bit_speed")
+                speed_inside = (truth["bit_speed"] >= speed_low) & (truth["bit_speed"] <= speed_high)
+                independent = [effective_samples(series[keep]) for series in (speed_inside, inside)]
                 pooled.setdefault((config or "defaults", kind), []).append(coverage)
                 print(f"{config or 'defaults':45s} {name:7s} seed {seed} N {options.members:3d} "
                       f"bit_speed {coverage[0]:.2f} torque_on_bit {coverage[1]:.2f} "
                       f"[{phases}] "
-                      f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s"
+                      f"rmse {rmse:.2f} rad/s replaced {result.replaced_members} wall {wall:.0f} s "
+                      f"independent samples {independent[0]:.0f} / {independent[1]:.0f} (a calibrated band's "
+                      f"coverage ±{np.sqrt(0.09 / independent[0]):.3f} / ±{np.sqrt(0.09 / independent[1]):.3f})"
                       + ("" if result.effective_size is None else
                          " effective size median {:.0f} min {:.0f}".format(*np.nanquantile(result.effective_size,
                                                                                            [0.5, 0.0])))
