@@ -155,15 +155,8 @@ def locked_save(cache_file, key, data) -> None:
 
 
 def _lock(index_data_cache_file) -> None:
-    """Make ``IndexDataCacheFile.save`` (Numba's class, given) :func:`locked_save`, once."""
-    if getattr(index_data_cache_file.save, "__wrapped__", None) is locked_save:
-        return
-
-    def save(self, key, data):
-        locked_save(self, key, data)
-
-    save.__wrapped__ = locked_save
-    index_data_cache_file.save = save
+    """Make ``IndexDataCacheFile.save`` (Numba's class, given) :func:`locked_save`."""
+    index_data_cache_file.save = locked_save
 
 
 class _LockWhenImported(importlib.abc.MetaPathFinder):

@@ -14,9 +14,9 @@ every kind of run, the compiled kernels that return arrays (none but those inlin
 the two corruptions measured, each in a fresh process with glibc's heap checks (``MALLOC_CHECK_=3``); both
 aborted before the change. Each process compiles into a cache folder of its own (``NUMBA_CACHE_DIR`` in the test's
 temporary folder): the kernels are compiled in the order the test sets, not loaded from a cache another order
-wrote, and no other process of the suite writes that folder while this one reads it (Numba's on-disk cache is not
-safe against concurrent writers, numba/numba#4807; this test, run beside the suite's other workers on a cold
-shared cache, once died of SIGSEGV in CI, most likely so).
+wrote (Numba's cache key does not hold the flags a kernel's callees were compiled with: drillstring.kernel_cache,
+"What the key does not hold"), and no other process of the suite writes that folder while this one reads it
+(this test, run beside the suite's other workers on a cold shared cache, once died of SIGSEGV in CI).
 """
 
 from __future__ import annotations
