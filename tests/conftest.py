@@ -8,6 +8,13 @@ compilation flags (tests/dynamics/test_reference_counting.py), which Numba's cac
 loop that the suite's workers cached so (its key the same as the package's own, its code not) made the next run
 of a Detournay case, the documentation's notebook, die of a segmentation fault (measured: the notebook ran on a
 cache it compiled itself, and died on the one the suite had written, through that one entry).
+
+Dense linear algebra runs on one BLAS thread in every test, as it does inside the package's public functions
+(:mod:`drillstring.blas_threads`): tests call the stability analysis, the statics and the model builders
+directly, where no such limit is set, and with the suite's two xdist workers each running OpenBLAS's default
+two threads on a 2-core machine, the threads wait for each other (measured on the 2-core machine, a cold
+kernel cache, ``pytest -n auto``: the paper's stability case 93 s instead of 22 s, the whole suite 554 s instead
+of 451 s). ``OPENBLAS_NUM_THREADS`` is set too (unless the caller set it), for the processes the tests start.
 """
 
 import os
@@ -17,10 +24,20 @@ if not os.environ.get("NUMBA_CACHE_DIR"):
     os.environ["NUMBA_CACHE_DIR"] = str(
         Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "drillstring" / "tests")
 
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import pytest  # noqa: E402
 
+from drillstring.blas_threads import single_threaded_blas  # noqa: E402
 from drillstring.case import load_case  # noqa: E402
 from drillstring.fem.sections import hollow_circle  # noqa: E402
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _single_threaded_blas():
+    """One BLAS thread (``$DRILLSTRING_BLAS_THREADS``) for the whole session (module docstring)."""
+    with single_threaded_blas():
+        yield
 
 
 @pytest.fixture
