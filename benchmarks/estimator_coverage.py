@@ -15,8 +15,10 @@ sticks (bit speed below STICK rad/s) and while it slips, the bit speed's RMSE, t
 time, the number of independent samples the truth-in-band series is worth for each channel
 (:func:`effective_samples`) with the standard deviation ``sqrt(0.9 · 0.1 / n)`` that a run's coverage would have
 over records if the band were exactly calibrated, with ``particle_share`` > 0 the particle weights' effective
-sample size over the analyses (median and smallest) and, where one is estimated, the bit-rock coefficient's
-5/50/95 % quantiles at the record's end.
+sample size over the analyses (median and smallest) and the estimated parameters' 5/50/95 % quantiles at the
+record's end (the bit-rock coefficient, and the friction factor and the torsional stiffness's factor where
+estimated; the weight-on-bit bias aside). Before the runs it prints each twin truth's lowest elastic torsional
+angular frequency and the estimator's model's (docs/estimation.md "The torsional stiffness").
 ``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
 members") is one of the settings a ``--config`` may set. ``--twin-truths`` runs one twin per truth seed (another
 draw of the truth's random matrices and of its sensor noise; records ``twin<seed>``), ``--twin-dispersion`` sets
@@ -102,6 +104,8 @@ def _shipped(seconds: float):
 def _twin(seconds: float, truth_seed: int = 1, dispersion: float = 0.05):
     case = load_case("stick_slip")
     experiment = twin(case, seconds, seed=truth_seed, dispersion=dispersion)
+    print(f"twin truth {truth_seed}: lowest torsional frequency {experiment.lowest_torsional_frequency():.4f} rad/s",
+          flush=True)
     return case, experiment.record, experiment.truth, TWIN_START
 
 
@@ -151,7 +155,12 @@ def main() -> None:
                 settings = case_estimator_settings(case, ensemble_size=options.members, seed=seed, **start_now,
                                                    **_settings(config))
                 key = (settings.axial_modes, settings.torsional_modes)
-                models.setdefault(key, estimator_model(case, settings))
+                if key not in models:
+                    models[key] = estimator_model(case, settings)
+                    first, last = int(models[key].blocks[2]), int(models[key].blocks[3])
+                    omega = models[key].angular_frequencies[first:last]
+                    print(f"the estimator's model: lowest torsional frequency {np.min(omega[omega > 0]):.4f} rad/s",
+                          flush=True)
                 begin = time.perf_counter()
                 result = estimate(case, record, settings, model=models[key])
                 wall = time.perf_counter() - begin
@@ -178,8 +187,8 @@ def main() -> None:
                       + ("" if result.effective_size is None else
                          " effective size median {:.0f} min {:.0f}".format(*np.nanquantile(result.effective_size,
                                                                                            [0.5, 0.0])))
-                      + "".join(f" {p} end {'/'.join(f'{v:.0f}' for v in result.quantiles[p][-1])}"
-                                for p in result.parameters if p == settings.bit_rock_coefficient), flush=True)
+                      + "".join(f" {p} end {'/'.join(f'{v:.4g}' for v in result.quantiles[p][-1])}"
+                                for p in result.parameters if p != "weight_on_bit_bias"), flush=True)
     print("pooled over the seeds: mean coverage (smallest, largest), runs with both channels in 85-95 %")
     for (config, name), runs in pooled.items():
         values = np.array(runs)

@@ -32,6 +32,13 @@ class Twin:
     fine: dict  # observable -> values on fine_time
     coefficient: float  # the truth's coefficient
     bias: float  # the weight-on-bit bias the estimator should find [N]
+    model: object = None  # the truth's reduced model
+
+    def lowest_torsional_frequency(self) -> float:
+        """The truth's lowest elastic torsional angular frequency [rad/s] (the stick-slip mode's)."""
+        first, last = int(self.model.blocks[2]), int(self.model.blocks[3])
+        omega = np.asarray(self.model.angular_frequencies[first:last], dtype=float)
+        return float(np.min(omega[omega > 0.0]))
 
     def stick_slip_index(self, window: float) -> np.ndarray:
         """The truth's (max - min)/(2 mean) of the bit speed over the last ``window`` s at each record time."""
@@ -81,7 +88,7 @@ def twin(case, t_end: float, *, coefficient: str = "a5", coefficient_factor: flo
         surface_torque=truth["surface_torque"] + sigma[1] * rng.standard_normal(n_t),
         block_position=30.0 - np.array(top) + sigma[2] * rng.standard_normal(n_t),
         hook_load=model.static.weight_on_hook + hook_load_offset + sigma[3] * rng.standard_normal(n_t))
-    return Twin(record, time, truth, fine_time, fine, getattr(truth_law, coefficient), hook_load_offset)
+    return Twin(record, time, truth, fine_time, fine, getattr(truth_law, coefficient), hook_load_offset, model)
 
 
 #: The open hole's friction factor of the friction twin's truth [-].

@@ -34,6 +34,10 @@ class Estimator(_Base):
                                         "cased or none")
     friction_spread: Dimensionless | None = Field(None, description="prior spread of its logarithm [-]")
     friction_walk: float | None = Field(None, description="its random walk [1/sqrt(s)]")
+    stiffness_factor: str | None = Field(None, description="the stiffness whose factor is estimated: torsional or "
+                                         "none")
+    stiffness_spread: Dimensionless | None = Field(None, description="prior spread of its logarithm [-]")
+    stiffness_walk: float | None = Field(None, description="its random walk [1/sqrt(s)]")
     model_dispersion: Dimensionless | None = Field(None, description="dispersion of each member's random reduced "
                                                    "mass, stiffness and damping matrices, drawn once [-]")
     relaxation: Dimensionless | None = Field(None, description="relaxation to the prior spread of the state [-]")

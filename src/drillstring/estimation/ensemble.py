@@ -10,19 +10,21 @@ to a particle filter's weights and resampling: it can choose between the members
 where the ETKF moves both as one Gaussian (a resampled member takes over its parent's model and recent outputs).
 The observations are few (at most three scalars a time), so either costs little beside the forecasts.
 
-**State.** The augmented state of a member is ``[y, log c, log μ, b, z0]``: ``y`` the reduced model's state
+**State.** The augmented state of a member is ``[y, log c, log μ, log κ, b, z0]``: ``y`` the reduced model's state
 (:attr:`~drillstring.dynamics.rom.ReducedOrderModel.state_size`: modal coordinates, their rates, the top drive's
 controller states), ``log c`` the logarithm of one bit–rock coefficient of the case's law
 (``bit_rock_coefficient``, e.g. ``a5``, the frictional torque of the Tucker–Wang law; the logarithm keeps it
 positive; left out for ``"none"``), ``log μ`` that of the along-string friction factor of one wall of a deviated
-well (``friction_factor``: the open or the cased hole's; left out for ``"none"``, the default), ``b`` the
+well (``friction_factor``: the open or the cased hole's; left out for ``"none"``, the default), ``log κ`` that
+of a factor on the torsional stiffness (``stiffness_factor = "torsional"``; left out for ``"none"``, the
+default; :func:`member_model`), ``b`` the
 weight-on-bit bias [N] and ``z0`` the block position of the static state [m] (the record's zero is the
-driller's). The parameters follow a random walk (``coefficient_walk``, ``friction_walk``,
+driller's). The parameters follow a random walk (``coefficient_walk``, ``friction_walk``, ``stiffness_walk``,
 ``weight_on_bit_bias_walk``, per √s) between observations: they may drift, and the walk keeps the ensemble from
 collapsing on them.
 
 **Forecast.** Each member runs its own copy of the model (the shared model with the law's numbers, the
-weight-on-bit and μ at the stations on its wall replaced in its kernel data: :func:`member_model`, a few
+weight-on-bit, μ at the stations on its wall and κ replaced in its kernel data: :func:`member_model`, a few
 microseconds, where building a model takes 0.1-0.2 s) by :func:`~drillstring.dynamics.compiled.advance` from
 the analysis to the next record time.
 The weight-on-bit of a member over an interval is ``W = W_case + (H_static − H̄) + b``: the case's, plus the hook
@@ -106,6 +108,7 @@ import numpy as np
 from drillstring.checks import integer, real_number
 from drillstring.checks import seed as checked_seed
 from drillstring.dynamics.compiled import RunState, SolverSettings, advance
+from drillstring.dynamics.kernel_data import TORSION_ROW
 from drillstring.dynamics.reduced.build import case_reduced_model, in_casing
 from drillstring.dynamics.reduced.observation import OBSERVABLE_COLUMN
 from drillstring.estimation.analysis import enkpf_analysis, etkf_analysis, relax_to_prior_spread
@@ -128,6 +131,8 @@ LOG_RANGE = 5.0
 SPIN_UP_STEP = 1.0
 #: ``friction_factor`` -> the well's key of that wall's friction factor (None: no friction factor estimated).
 FRICTION_WALLS = {"open": "open_hole_friction", "cased": "cased_hole_friction", "none": None}
+#: ``stiffness_factor`` -> the estimated factor's name (None: no stiffness factor estimated).
+STIFFNESS_FAMILIES = {"torsional": "torsional_stiffness", "none": None}
 #: Units of the Tucker–Wang coefficients (pint spelling), for the results.
 COEFFICIENT_UNITS = {"a1": "m/s", "a2": "m/(N*s)", "a3": "m/rad", "a4": "N*rad", "a5": "N*m"}
 
@@ -187,6 +192,13 @@ class EstimatorSettings:
             ``[string_friction] law`` with stations on that wall.
         friction_spread: prior standard deviation of log μ [-], in (0, 2].
         friction_walk: its random walk [1/√s], >= 0.
+        stiffness_factor: ``"torsional"``: a factor κ on the torsional stiffness of the estimator's model is
+            estimated (every torsional ω² and the stiffness reaction at the top times κ, as a shear modulus κ G
+            would give: :func:`member_model`), or ``"none"`` (default). The stick-slip cycle's period is the
+            lowest torsional mode's: a model whose frequency is off by a few per cent drifts out of phase with
+            the record (docs/estimation.md "The torsional stiffness").
+        stiffness_spread: prior standard deviation of log κ [-], in (0, 2]; its prior is centred on 1.
+        stiffness_walk: its random walk [1/√s], >= 0.
         model_dispersion: each member's own reduced model, its mass, stiffness and damping matrices drawn once
             from the random-matrix model with this dispersion (:func:`member_models`) [-], in [0, 1) and below
             the family sizes' bound sqrt((n+1)/(n+5)); 0 (default): every member runs the estimator's model.
@@ -230,6 +242,9 @@ class EstimatorSettings:
     friction_factor: str = "none"
     friction_spread: float = 0.3
     friction_walk: float = 0.003
+    stiffness_factor: str = "none"
+    stiffness_spread: float = 0.05
+    stiffness_walk: float = 0.001
     model_dispersion: float = 0.0
     relaxation: float = 0.0
     parameter_relaxation: float = 0.0
@@ -253,11 +268,12 @@ class EstimatorSettings:
                      "assimilation_step"):
             real_number(name, getattr(self, name), low=0.0, low_open=True)
         for name in ("initial_speed_spread", "coefficient_walk", "weight_on_bit_bias_walk", "model_speed_noise",
-                     "spin_up", "friction_walk", "model_noise_stick_speed"):
+                     "spin_up", "friction_walk", "model_noise_stick_speed", "stiffness_walk"):
             real_number(name, getattr(self, name), low=0.0)
         real_number("inflation", self.inflation, low=1.0, high=2.0)
         real_number("coefficient_spread", self.coefficient_spread, low=0.0, high=2.0, low_open=True)
         real_number("friction_spread", self.friction_spread, low=0.0, high=2.0, low_open=True)
+        real_number("stiffness_spread", self.stiffness_spread, low=0.0, high=2.0, low_open=True)
         real_number("relaxation", self.relaxation, low=0.0, high=1.0)
         real_number("model_dispersion", self.model_dispersion, low=0.0, high=1.0, high_open=True)
         real_number("parameter_relaxation", self.parameter_relaxation, low=0.0, high=1.0)
@@ -275,6 +291,9 @@ class EstimatorSettings:
         if self.friction_factor not in FRICTION_WALLS:
             raise ValueError(f"friction_factor = {self.friction_factor!r}: must be one of "
                              f"{', '.join(repr(k) for k in FRICTION_WALLS)}")
+        if self.stiffness_factor not in STIFFNESS_FAMILIES:
+            raise ValueError(f"stiffness_factor = {self.stiffness_factor!r}: must be one of "
+                             f"{', '.join(repr(k) for k in STIFFNESS_FAMILIES)}")
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -321,18 +340,38 @@ def model_noise_columns(model, settings: EstimatorSettings) -> tuple[slice, floa
     return slice(first, last), settings.model_speed_noise / max(float(np.linalg.norm(bit_shape)), 1e-300)
 
 
-def member_model(model, laws: np.ndarray, weight_on_bit: float, friction: np.ndarray | None = None):
+def member_model(model, laws: np.ndarray, weight_on_bit: float, friction: np.ndarray | None = None,
+                 torsional_stiffness: float | None = None):
     """A shallow copy of ``model`` (a case-2 :class:`~drillstring.dynamics.rom.ReducedOrderModel`) whose
     kernels read the numbers ``laws`` (the packed array of :func:`~drillstring.forces.registry.pack`, same
-    layout), the weight-on-bit ``weight_on_bit`` [N] and, if given, the along-string friction factors
-    ``friction`` [-] (one per station of ``model.friction_stations``, same order); ``model`` is not changed. The
-    components' objects (``model.bit_rock``, ``model.friction_stations``) stay the nominal ones: only what the
-    compiled kernels read changes (the stations' static normal forces do not depend on μ: the stiff string's
-    statics is frictionless, :mod:`drillstring.well.stiff_string`)."""
+    layout), the weight-on-bit ``weight_on_bit`` [N], if given, the along-string friction factors
+    ``friction`` [-] (one per station of ``model.friction_stations``, same order) and, if given, the torsional
+    stiffness times ``torsional_stiffness`` = κ [-]; ``model`` is not changed. The components' objects
+    (``model.bit_rock``, ``model.friction_stations``) stay the nominal ones: only what the compiled kernels read
+    changes (the stations' static normal forces do not depend on μ: the stiff string's statics is frictionless,
+    :mod:`drillstring.well.stiff_string`).
+
+    κ K in place of the torsional family's stiffness K leaves its mass-normalised modes as they are and
+    multiplies their ω² by κ, the stiffness reaction at the top (the surface torque of an imposed top speed,
+    ``K[top] φ``) by κ and, the damping ratios held (the structural damping ``2 ξ M (M⁻¹K)^{1/2}``,
+    :mod:`drillstring.damping`), the elastic modes' damping block by √κ; the rigid rotation's damping, the mass
+    and the forces do not change. That is the model of the case with the shear modulus κ G (tested: the same
+    run to 1e-6 of its range)."""
     other = copy.copy(model)
     data = model.case2_data._replace(laws=laws, weight_on_bit=float(weight_on_bit))
     if friction is not None:
         data = data._replace(friction=data.friction._replace(friction=np.ascontiguousarray(friction, dtype=float)))
+    if torsional_stiffness is not None:
+        first, last = int(model.blocks[2]), int(model.blocks[3])
+        omega2 = data.omega2.copy()
+        omega2[first:last] *= torsional_stiffness
+        rows = data.torsion_rows.copy()
+        rows[TORSION_ROW["surface_torque"]] *= torsional_stiffness
+        elastic = np.arange(first, last)
+        elastic = elastic[elastic != model.rigid_rotation_column]
+        damping_t = data.damping_t.copy()
+        damping_t[np.ix_(elastic, elastic)] *= math.sqrt(torsional_stiffness)
+        data = data._replace(omega2=omega2, torsion_rows=rows, damping_t=damping_t)
     other.case2_data = data
     other.rhs_data = other.case2_data
     return other
@@ -408,7 +447,7 @@ class _Members:
 
     def __init__(self, states, parameters, window_samples, models, transforms):
         self.states = states
-        self.parameters = parameters  # (N, p): [log c] [log μ] b z0
+        self.parameters = parameters  # (N, p): [log c] [log μ] [log κ] b z0
         self.outputs = [None] * len(states)
         self.speed = np.full((len(states), window_samples), np.nan)
         self.models = list(models)
@@ -500,9 +539,10 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     if model.full:
         raise ValueError("estimate: the estimator's model must be case 2 (nonlinear = 'bit_and_contact')")
     models, transforms = member_models(model, settings.model_dispersion, settings.seed, settings.ensemble_size)
-    # the augmented parameters' columns: [log c] [log μ] b z0 (c, μ where estimated)
+    # the augmented parameters' columns: [log c] [log μ] [log κ] b z0 (c, μ, κ where estimated)
     coefficient_name = None if settings.bit_rock_coefficient == "none" else settings.bit_rock_coefficient
     friction_name = FRICTION_WALLS[settings.friction_factor]
+    stiffness_name = STIFFNESS_FAMILIES[settings.stiffness_factor]
     try:
         if coefficient_name is not None:
             slot = coefficient_slot(model, coefficient_name)
@@ -511,7 +551,7 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             friction_mask, friction_value = friction_stations_of(case, model, settings.friction_factor)
     except ValueError as error:
         raise ValueError(f"estimator.{error}") from None
-    estimated = [name for name in (coefficient_name, friction_name) if name is not None]
+    estimated = [name for name in (coefficient_name, friction_name, stiffness_name) if name is not None]
     column = {name: j for j, name in enumerate(estimated + ["weight_on_bit_bias", "block_zero"])}
     n_parameters = len(column)
     bias_column, zero_column = column["weight_on_bit_bias"], column["block_zero"]
@@ -550,6 +590,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         if friction_name is not None:
             parameters[i, column[friction_name]] = (math.log(friction_value)
                                                     + settings.friction_spread * rng.standard_normal())
+        if stiffness_name is not None:
+            parameters[i, column[stiffness_name]] = settings.stiffness_spread * rng.standard_normal()
         parameters[i, bias_column] = settings.weight_on_bit_bias_spread * rng.standard_normal()
         parameters[i, zero_column] = ((block0 if math.isfinite(block0) else 0.0)
                                       + settings.block_position_noise * rng.standard_normal())
@@ -585,8 +627,11 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         if friction_name is not None:
             friction = friction_nominal.copy()
             friction[friction_mask] = clipped(members.parameters[i, column[friction_name]], friction_value)
+        stiffness = (None if stiffness_name is None
+                     else clipped(members.parameters[i, column[stiffness_name]], 1.0))
         drop = 0.0 if not math.isfinite(hook_mean) else static_hook - hook_mean
-        return member_model(members.models[i], laws, weight + drop + members.parameters[i, bias_column], friction)
+        return member_model(members.models[i], laws, weight + drop + members.parameters[i, bias_column], friction,
+                            stiffness)
 
     # the assimilation windows (t0 + (j-1) step, t0 + j step] of the record (the first sample alone in window 0),
     # each analysed at its last sample with the means of its usable samples
@@ -627,6 +672,9 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
             if friction_name is not None:
                 members.parameters[:, column[friction_name]] += (
                     settings.friction_walk * math.sqrt(dt) * rng.standard_normal(n_members))
+            if stiffness_name is not None:
+                members.parameters[:, column[stiffness_name]] += (
+                    settings.stiffness_walk * math.sqrt(dt) * rng.standard_normal(n_members))
         if speed_noise > 0.0:
             for i in range(n_members):
                 y = members.nominal(i)
@@ -768,6 +816,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         units[coefficient_name] = COEFFICIENT_UNITS.get(coefficient_name, "1")
     if friction_name is not None:
         units[friction_name] = "1"
+    if stiffness_name is not None:
+        units[stiffness_name] = "1"
     units["weight_on_bit_bias"] = "N"
     return EstimationResult(
         time=time, mean=mean, quantiles=quantiles, units=units,
