@@ -83,7 +83,7 @@ class EstimatorSettings:
         relaxation: relaxation to the prior spread (RTPS,
             :func:`~drillstring.estimation.analysis.relax_to_prior_spread`) of the model state's rows after each
             analysis [-], in [0, 1]; 0 none.
-        parameter_relaxation: the same for the parameters' rows (coefficient, μ, bias, block zero) [-], in [0, 1].
+        parameter_relaxation: the same for the parameters' rows (coefficient, μ, κ, bias, block zero) [-], in [0, 1].
         particle_share: the share ``1 − γ`` of each analysis's likelihood given to a particle filter, the rest to a
             Kalman step (the ensemble Kalman particle filter,
             :func:`~drillstring.estimation.analysis.enkpf_analysis`; members drawn by their weights, each taking
