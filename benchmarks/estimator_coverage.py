@@ -56,7 +56,7 @@ from drillstring.estimation.surface import SurfaceRecord
 from drillstring.estimation.synthetic import read_truth
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "estimation"))
-from twin import own_model_twin, twin
+from twin import lowest_torsional_frequency, own_model_twin, twin
 
 TWIN_START = 10.0  # [s] the twin's coverage is counted from here
 STICK = 1.0  # [rad/s] the truth sticks below this bit speed
@@ -104,8 +104,8 @@ def _shipped(seconds: float):
 def _twin(seconds: float, truth_seed: int = 1, dispersion: float = 0.05):
     case = load_case("stick_slip")
     experiment = twin(case, seconds, seed=truth_seed, dispersion=dispersion)
-    print(f"twin truth {truth_seed}: lowest torsional frequency {experiment.lowest_torsional_frequency():.4f} rad/s",
-          flush=True)
+    print(f"twin truth {truth_seed}: lowest torsional frequency {lowest_torsional_frequency(experiment.model):.4f} "
+          "rad/s", flush=True)
     return case, experiment.record, experiment.truth, TWIN_START
 
 
@@ -157,10 +157,8 @@ def main() -> None:
                 key = (settings.axial_modes, settings.torsional_modes)
                 if key not in models:
                     models[key] = estimator_model(case, settings)
-                    first, last = int(models[key].blocks[2]), int(models[key].blocks[3])
-                    omega = models[key].angular_frequencies[first:last]
-                    print(f"the estimator's model: lowest torsional frequency {np.min(omega[omega > 0]):.4f} rad/s",
-                          flush=True)
+                    print("the estimator's model: lowest torsional frequency "
+                          f"{lowest_torsional_frequency(models[key]):.4f} rad/s", flush=True)
                 begin = time.perf_counter()
                 result = estimate(case, record, settings, model=models[key])
                 wall = time.perf_counter() - begin

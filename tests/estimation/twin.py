@@ -34,12 +34,6 @@ class Twin:
     bias: float  # the weight-on-bit bias the estimator should find [N]
     model: object = None  # the truth's reduced model
 
-    def lowest_torsional_frequency(self) -> float:
-        """The truth's lowest elastic torsional angular frequency [rad/s] (the stick-slip mode's)."""
-        first, last = int(self.model.blocks[2]), int(self.model.blocks[3])
-        omega = np.asarray(self.model.angular_frequencies[first:last], dtype=float)
-        return float(np.min(omega[omega > 0.0]))
-
     def stick_slip_index(self, window: float) -> np.ndarray:
         """The truth's (max - min)/(2 mean) of the bit speed over the last ``window`` s at each record time."""
         out = np.full(len(self.time), np.nan)
@@ -49,6 +43,13 @@ class Twin:
             s = speed[keep]
             out[k] = (s.max() - s.min()) / (2 * s.mean()) if s.mean() > 0 else np.nan
         return out
+
+
+def lowest_torsional_frequency(model) -> float:
+    """``model``'s lowest elastic torsional angular frequency [rad/s] (the stick-slip mode's; a reduced model)."""
+    first, last = int(model.blocks[2]), int(model.blocks[3])
+    omega = np.asarray(model.angular_frequencies[first:last], dtype=float)
+    return float(np.min(omega[omega > 0.0]))
 
 
 def twin(case, t_end: float, *, coefficient: str = "a5", coefficient_factor: float = 1.3,
