@@ -26,7 +26,9 @@ the truth's dispersion (0: the case's full basis on its nominal matrices; with a
 torsional_modes=10`` nearly the estimator's own model). The last lines pool each configuration's runs per record
 kind (the mean coverage over the seeds and truths, its smallest and largest, and how many runs have both channels
 in 85-95 %): one record is one draw of the model's error, and the bands' calibration is a statement over draws
-(docs/estimation.md, "Long records: the kicks and the coefficient"). ``--own-truths`` adds perfect-model twins
+(docs/estimation.md, "Long records: the kicks and the coefficient"); then, per channel, each record's mean
+coverage over the seeds and the spread of those means between the records against the seeds' own
+(:func:`spread_between_records`; docs/estimation.md, "Calibration on each record"). ``--own-truths`` adds perfect-model twins
 (records ``own<seed>``, kind "own"): the truth one member of each configuration's own prior model, drawn afresh
 for each configuration (tests/estimation/twin.py ``own_model_twin``), as long as ``--twin``, coverage after its
 first 10 s (``--own-model``: draw them from these settings instead, the same truths for every configuration, to
@@ -78,6 +80,21 @@ def effective_samples(inside: np.ndarray) -> float:
         if lag >= 5.0 * tau:
             break
     return n / max(tau, 1.0)
+
+
+def spread_between_records(runs: list[tuple[str, float]]) -> tuple[dict, float, float]:
+    """``(means, between, within)`` of one channel's coverage over ``runs`` (pairs of a record's name and one run's
+    coverage, several seeds per record): each record's mean over its runs, the standard deviation of those means
+    between the records and the seeds' own, the square root of the records' mean variance over their runs (both
+    with ``ddof = 1``; nan where a record, or every record, has too few runs)."""
+    by_record: dict[str, list[float]] = {}
+    for name, value in runs:
+        by_record.setdefault(name, []).append(float(value))
+    means = {name: float(np.mean(values)) for name, values in by_record.items()}
+    between = float(np.std(list(means.values()), ddof=1)) if len(means) > 1 else float("nan")
+    variances = [np.var(values, ddof=1) for values in by_record.values() if len(values) > 1]
+    within = float(np.sqrt(np.mean(variances))) if variances else float("nan")
+    return means, between, within
 
 
 def _settings(text: str) -> dict:
@@ -175,7 +192,7 @@ def main() -> None:
                 speed_low, speed_high = result.band("bit_speed")
                 speed_inside = (truth["bit_speed"] >= speed_low) & (truth["bit_speed"] <= speed_high)
                 independent = [effective_samples(series[keep]) for series in (speed_inside, inside)]
-                pooled.setdefault((config or "defaults", kind), []).append(coverage)
+                pooled.setdefault((config or "defaults", kind), []).append((name, coverage))
                 print(f"{config or 'defaults':45s} {name:7s} seed {seed} N {options.members:3d} "
                       f"bit_speed {coverage[0]:.2f} torque_on_bit {coverage[1]:.2f} "
                       f"[{phases}] "
@@ -189,11 +206,19 @@ def main() -> None:
                                 for p in result.parameters if p != "weight_on_bit_bias"), flush=True)
     print("pooled over the seeds: mean coverage (smallest, largest), runs with both channels in 85-95 %")
     for (config, name), runs in pooled.items():
-        values = np.array(runs)
+        values = np.array([coverage for _, coverage in runs])
         inside = int(np.sum(np.all((values >= 0.85) & (values <= 0.95), axis=1)))
         print(f"{config:45s} {name:7s} " + " ".join(
             f"{label} {values[:, j].mean():.3f} ({values[:, j].min():.2f}, {values[:, j].max():.2f})"
             for j, label in enumerate(("bit_speed", "torque_on_bit"))) + f" in range {inside} of {len(runs)}")
+    print("per record, the mean over the seeds; the standard deviation of those means between the records and the "
+          "seeds' own (docs/estimation.md, \"Calibration on each record\")")
+    for (config, name), runs in pooled.items():
+        for j, label in enumerate(("bit_speed", "torque_on_bit")):
+            means, between, within = spread_between_records([(record, coverage[j]) for record, coverage in runs])
+            print(f"{config:45s} {name:7s} {label:13s} "
+                  + " ".join(f"{record} {mean:.3f}" for record, mean in means.items())
+                  + f" between records {between:.3f} between seeds {within:.3f}")
 
 
 if __name__ == "__main__":
