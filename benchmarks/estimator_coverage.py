@@ -21,19 +21,19 @@ estimated; the weight-on-bit bias aside). Before the runs it prints each twin tr
 angular frequency and the estimator's model's (docs/estimation.md "The torsional stiffness").
 ``model_dispersion`` (each member its own random reduced model, docs/estimation.md "Model uncertainty in the
 members") is one of the settings a ``--config`` may set. ``--twin-truths`` runs one twin per truth seed (another
-draw of the truth's random matrices and of its sensor noise; records ``twin<seed>``), ``--twin-dispersion`` sets
-the truth's dispersion (0: the case's full basis on its nominal matrices; with an estimator of ``axial_modes=10
+draw of the truth's random matrices and of its sensor noise; records ``twin<seed>``), ``--twin-dispersion`` sets the
+truth's dispersion (0: the case's full basis on its nominal matrices; with an estimator of ``axial_modes=10
 torsional_modes=10`` nearly the estimator's own model). The last lines pool each configuration's runs per record
-kind (the mean coverage over the seeds and truths, its smallest and largest, and how many runs have both channels
-in 85-95 %): one record is one draw of the model's error, and the bands' calibration is a statement over draws
-(docs/estimation.md, "Long records: the kicks and the coefficient"); then, per channel, each record's mean
-coverage over the seeds and the spread of those means between the records against the seeds' own
-(:func:`spread_between_records`; docs/estimation.md, "Calibration on each record"). ``--own-truths`` adds perfect-model twins
-(records ``own<seed>``, kind "own"): the truth one member of each configuration's own prior model, drawn afresh
-for each configuration (tests/estimation/twin.py ``own_model_twin``), as long as ``--twin``, coverage after its
-first 10 s (``--own-model``: draw them from these settings instead, the same truths for every configuration, to
-try a filter's setting on a fixed truth); there the bands' misses are the filter's own (docs/estimation.md, "The
-filter's own share").
+kind (the mean coverage over the seeds and truths, its smallest and largest, and how many runs have both channels in
+85-95 %): one record is one draw of the model's error, and the bands' calibration is a statement over draws
+(docs/estimation.md, "Long records: the kicks and the coefficient"); then, per channel, each record's mean coverage
+over the seeds and the spread of those means between the records against the seeds' own
+(:func:`spread_between_records`; docs/estimation.md, "Calibration on each record"). ``--own-truths`` adds
+perfect-model twins (records ``own<seed>``, kind "own"): the truth one member of each configuration's own prior
+model, drawn afresh for each configuration (tests/estimation/twin.py ``own_model_twin``), as long as ``--twin``,
+coverage after its first 10 s (``--own-model``: draw them from these settings instead, the same truths for every
+configuration, to try a filter's setting on a fixed truth); there the bands' misses are the filter's own
+(docs/estimation.md, "The filter's own share").
 """
 
 from __future__ import annotations
