@@ -382,6 +382,10 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
     column = {name: j for j, name in enumerate(estimated + ["weight_on_bit_bias", "block_zero"])}
     n_parameters = len(column)
     bias_column, zero_column = column["weight_on_bit_bias"], column["block_zero"]
+    # each walking parameter's random walk per √s, in the order of the walk's draws
+    walks = {name: per_root_second for name, per_root_second in (
+        (coefficient_name, settings.coefficient_walk), ("weight_on_bit_bias", settings.weight_on_bit_bias_walk),
+        (friction_name, settings.friction_walk), (stiffness_name, settings.stiffness_walk)) if name is not None}
     rng = np.random.default_rng(settings.seed)
     n_members = settings.ensemble_size
     n = model.size
@@ -491,17 +495,8 @@ def estimate(case, record: SurfaceRecord, settings: EstimatorSettings = Estimato
         error's kick, the model; a failed member replaced by a copy of a good one. Returns the count replaced."""
         dt = t_to - t_from
         if walk:
-            if coefficient_name is not None:
-                members.parameters[:, column[coefficient_name]] += (
-                    settings.coefficient_walk * math.sqrt(dt) * rng.standard_normal(n_members))
-            members.parameters[:, bias_column] += (
-                settings.weight_on_bit_bias_walk * math.sqrt(dt) * rng.standard_normal(n_members))
-            if friction_name is not None:
-                members.parameters[:, column[friction_name]] += (
-                    settings.friction_walk * math.sqrt(dt) * rng.standard_normal(n_members))
-            if stiffness_name is not None:
-                members.parameters[:, column[stiffness_name]] += (
-                    settings.stiffness_walk * math.sqrt(dt) * rng.standard_normal(n_members))
+            for name, per_root_second in walks.items():
+                members.parameters[:, column[name]] += per_root_second * math.sqrt(dt) * rng.standard_normal(n_members)
         if speed_noise > 0.0:
             for i in range(n_members):
                 y = members.nominal(i)
